@@ -1,0 +1,169 @@
+//! An environment map in memory: linear float RGB texels in one of the four mappings.
+
+use crate::math::{Coord, Mapping};
+use glam::DVec3;
+
+/// An environment map: `layers × height × width` linear RGB texels (layer-major, then rows
+/// from the top, then columns from the left).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvMap {
+    /// How directions map to texels.
+    pub mapping: Mapping,
+    /// Width of one layer in texels.
+    pub width: u32,
+    /// Height of one layer in texels.
+    pub height: u32,
+    /// The texels.
+    pub texels: Vec<[f32; 3]>,
+}
+
+/// Statistics over the texels a map's mapping reads (see [`Mapping::texel_in_domain`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stats {
+    /// Per-channel minimum over finite texels.
+    pub min: [f32; 3],
+    /// Per-channel maximum over finite texels.
+    pub max: [f32; 3],
+    /// Solid-angle-weighted mean radiance, per channel.
+    pub mean: [f64; 3],
+    /// Maximum Rec. 709 luminance.
+    pub max_luminance: f64,
+    /// Texels with a NaN channel.
+    pub nan: usize,
+    /// Texels with an infinite channel.
+    pub inf: usize,
+    /// Texels with a negative channel.
+    pub negative: usize,
+    /// Total power ∑ L·dω per channel (W/m² for radiance in W/(m²·sr)).
+    pub power: [f64; 3],
+}
+
+/// Rec. 709 luminance of linear RGB.
+pub fn luminance(c: [f64; 3]) -> f64 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+impl EnvMap {
+    /// Wraps texels; panics if their count does not match the size (a caller bug).
+    pub fn new(mapping: Mapping, width: u32, height: u32, texels: Vec<[f32; 3]>) -> EnvMap {
+        assert_eq!(
+            texels.len(),
+            (width as usize) * (height as usize) * mapping.layers() as usize,
+            "texel count does not match {width}x{height}x{}",
+            mapping.layers()
+        );
+        EnvMap {
+            mapping,
+            width,
+            height,
+            texels,
+        }
+    }
+
+    /// Bakes an analytic function (solid-angle-weighted supersampling, `ss × ss` per texel).
+    pub fn from_fn(
+        mapping: Mapping,
+        width: u32,
+        height: u32,
+        ss: u32,
+        f: impl Fn(DVec3) -> [f64; 3] + Sync,
+    ) -> EnvMap {
+        let texels = crate::math::synth::bake(mapping, width, height, ss, f);
+        EnvMap::new(mapping, width, height, texels)
+    }
+
+    /// Number of layers.
+    pub fn layers(&self) -> u32 {
+        self.mapping.layers()
+    }
+
+    /// Index of texel (i, j) of `layer` in [`EnvMap::texels`].
+    pub fn index(&self, layer: u32, i: u32, j: u32) -> usize {
+        ((layer * self.height + j) * self.width + i) as usize
+    }
+
+    /// Texel (i, j) of `layer`.
+    pub fn texel(&self, layer: u32, i: u32, j: u32) -> [f32; 3] {
+        self.texels[self.index(layer, i, j)]
+    }
+
+    /// Calls `f(layer, i, j, texel, solid angle)` for every texel the mapping reads.
+    pub fn for_each_texel(&self, mut f: impl FnMut(u32, u32, u32, [f32; 3], f64)) {
+        let (w, h) = (self.width, self.height);
+        // Solid angles are the same on every layer; compute them once per texel.
+        let mut omega = Vec::with_capacity((w * h) as usize);
+        for j in 0..h {
+            for i in 0..w {
+                omega.push(if self.mapping.texel_in_domain(w, h, i, j) {
+                    self.mapping.texel_solid_angle(w, h, i, j)
+                } else {
+                    -1.0
+                });
+            }
+        }
+        for layer in 0..self.layers() {
+            for j in 0..h {
+                for i in 0..w {
+                    let o = omega[(j * w + i) as usize];
+                    if o >= 0.0 {
+                        f(layer, i, j, self.texel(layer, i, j), o);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Statistics over the texels this map's mapping reads.
+    pub fn stats(&self) -> Stats {
+        let mut s = Stats {
+            min: [f32::INFINITY; 3],
+            max: [f32::NEG_INFINITY; 3],
+            mean: [0.0; 3],
+            max_luminance: f64::NEG_INFINITY,
+            nan: 0,
+            inf: 0,
+            negative: 0,
+            power: [0.0; 3],
+        };
+        let mut omega_sum = 0.0;
+        self.for_each_texel(|_, _, _, t, o| {
+            if t.iter().any(|c| c.is_nan()) {
+                s.nan += 1;
+            } else if t.iter().any(|c| c.is_infinite()) {
+                s.inf += 1;
+            }
+            if t.iter().any(|&c| c < 0.0) {
+                s.negative += 1;
+            }
+            if t.iter().all(|c| c.is_finite()) {
+                for k in 0..3 {
+                    s.min[k] = s.min[k].min(t[k]);
+                    s.max[k] = s.max[k].max(t[k]);
+                    s.power[k] += t[k] as f64 * o;
+                }
+                s.max_luminance = s.max_luminance.max(luminance(t.map(f64::from)));
+                omega_sum += o;
+            }
+        });
+        if omega_sum > 0.0 {
+            s.mean = s.power.map(|p| p / omega_sum);
+        }
+        s
+    }
+
+    /// Total power ∑ L·dω per channel over the texels the mapping reads.
+    pub fn power(&self) -> [f64; 3] {
+        self.stats().power
+    }
+
+    /// Direction at the centre of texel (i, j) of `layer`.
+    pub fn texel_dir(&self, layer: u32, i: u32, j: u32) -> DVec3 {
+        self.mapping
+            .coord_to_dir(Mapping::texel_center(self.width, self.height, layer, i, j))
+    }
+
+    /// Texture coordinate of a direction in this map.
+    pub fn coord(&self, d: DVec3) -> Coord {
+        self.mapping.dir_to_coord(d)
+    }
+}

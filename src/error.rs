@@ -1,0 +1,79 @@
+//! The library's error type.
+
+use ash::vk;
+use std::path::PathBuf;
+
+/// Everything that can go wrong in envlight for reasons outside the caller's control.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A file could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the OS said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file was read but its contents are unusable.
+    #[error("{}: {problem}", path.display())]
+    BadFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it, in words.
+        problem: String,
+    },
+    /// A user-supplied parameter is out of range (a size of zero, an unknown mapping name…).
+    #[error("{0}")]
+    Invalid(String),
+    /// The Vulkan loader (libvulkan.so.1) could not be loaded.
+    #[error(
+        "no Vulkan loader found ({0}); install it with `apt-get install libvulkan1 mesa-vulkan-drivers` \
+         (or run `cargo xtask setup`)"
+    )]
+    NoLoader(String),
+    /// The loader works but no usable device is there.
+    #[error("{0}")]
+    NoDevice(String),
+    /// A Vulkan call failed.
+    #[error("Vulkan error while {what}: {result}")]
+    Vulkan {
+        /// What was being done.
+        what: &'static str,
+        /// The result code.
+        result: vk::Result,
+    },
+    /// GPU memory could not be allocated.
+    #[error("GPU memory allocation failed for {what}: {source}")]
+    Alloc {
+        /// What the memory was for.
+        what: String,
+        /// gpu-allocator's error.
+        #[source]
+        source: gpu_allocator::AllocationError,
+    },
+}
+
+/// The library's result type.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Attaches a description to a raw Vulkan result.
+pub(crate) trait VkContext<T> {
+    fn vk(self, what: &'static str) -> Result<T>;
+}
+
+impl<T> VkContext<T> for std::result::Result<T, vk::Result> {
+    fn vk(self, what: &'static str) -> Result<T> {
+        self.map_err(|result| Error::Vulkan { what, result })
+    }
+}
+
+impl Error {
+    /// A [`Error::BadFile`] for `path`.
+    pub(crate) fn bad_file(path: impl Into<PathBuf>, problem: impl Into<String>) -> Error {
+        Error::BadFile {
+            path: path.into(),
+            problem: problem.into(),
+        }
+    }
+}

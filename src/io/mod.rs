@@ -1,0 +1,260 @@
+//! Reading and writing environment maps.
+//!
+//! Formats: OpenEXR (any RGB(A) channel order, half or float), Radiance `.hdr`, PFM, DDS (2D or
+//! cube; RGBA16F, RGBA32F, RGB32F), PNG and JPEG (sRGB, decoded to linear), and six separate
+//! face files. Written: float32 EXR, and tone-mapped PNG previews.
+//!
+//! # How the mapping of a file is decided
+//! 1. the mapping the caller gives ([`LoadOptions::mapping`], `--mapping` on the command line);
+//! 2. a DDS cube map, or six face files, is a cube;
+//! 3. an EXR written by envlight carries its mapping in the `envlight.mapping` attribute;
+//! 4. otherwise the aspect ratio decides: W = 2H is lat-long, W = H an angular probe, H = 6W a
+//!    cube stored as a vertical strip of faces (+X on top, Vulkan face order), H = 2W a dual
+//!    paraboloid stored as its upper half (y ≥ 0) above its lower half;
+//! 5. any other shape is an error that asks for the mapping.
+//!
+//! These single-image layouts of cubes and dual paraboloids are also how [`save_exr`] writes
+//! them, so envlight's own output always loads back.
+
+mod dds;
+mod exr_io;
+mod pfm;
+mod png_io;
+
+use crate::envmap::EnvMap;
+use crate::error::{Error, Result};
+use crate::math::Mapping;
+use std::path::{Path, PathBuf};
+
+pub use exr_io::save_exr;
+pub use dds::write_cube_rgba16f as write_dds_cube;
+pub use pfm::write as write_pfm;
+pub use png_io::{save_png, tone_map, ToneMap};
+
+/// What to do with NaN, infinite and negative texels.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Sanitize {
+    /// Refuse the file with an error that counts them (the default: no silently wrong image).
+    #[default]
+    Reject,
+    /// Replace each such channel by 0 and go on (`--sanitize` on the command line).
+    Zero,
+}
+
+/// Options for [`load`].
+#[derive(Clone, Debug)]
+pub struct LoadOptions {
+    /// The mapping, if the caller knows it; otherwise it is inferred (see the module docs).
+    pub mapping: Option<Mapping>,
+    /// Policy for NaN, infinite and negative texels.
+    pub sanitize: Sanitize,
+    /// Largest number of texels (all layers) accepted, a guard against absurd headers.
+    pub max_texels: u64,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        LoadOptions {
+            mapping: None,
+            sanitize: Sanitize::Reject,
+            max_texels: 1 << 27,
+        }
+    }
+}
+
+/// A decoded image before a mapping is attached.
+pub(crate) struct Raster {
+    pub width: u32,
+    pub height: u32,
+    pub rgb: Vec<[f32; 3]>,
+    /// A mapping the file itself states (DDS cube flag, envlight's EXR attribute).
+    pub mapping_hint: Option<Mapping>,
+}
+
+/// Checks a header's dimensions before anything is allocated.
+pub(crate) fn check_size(path: &Path, w: u64, h: u64, layers: u64, max: u64) -> Result<()> {
+    if w == 0 || h == 0 {
+        return Err(Error::bad_file(path, format!("image has zero size ({w} x {h})")));
+    }
+    let n = w.saturating_mul(h).saturating_mul(layers);
+    if n > max {
+        return Err(Error::bad_file(
+            path,
+            format!(
+                "image is {w} x {h}{} texels, above the limit of {max} texels \
+                 (a corrupt header, or raise LoadOptions::max_texels)",
+                if layers > 1 { format!(" x {layers}") } else { String::new() }
+            ),
+        ));
+    }
+    Ok(())
+}
+
+pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Loads an environment map from a file.
+pub fn load(path: impl AsRef<Path>, opts: &LoadOptions) -> Result<EnvMap> {
+    let path = path.as_ref();
+    let raster = read_raster(path, opts)?;
+    let mapping = match opts.mapping.or(raster.mapping_hint) {
+        Some(m) => m,
+        None => infer_mapping(path, raster.width, raster.height)?,
+    };
+    into_envmap(path, raster, mapping, opts.sanitize)
+}
+
+/// Loads a cube map from six face files, in Vulkan face order +X, −X, +Y, −Y, +Z, −Z.
+pub fn load_cube_faces(paths: &[PathBuf; 6], opts: &LoadOptions) -> Result<EnvMap> {
+    let mut faces = Vec::with_capacity(6);
+    for p in paths {
+        let r = read_raster(p, opts)?;
+        if r.width != r.height {
+            return Err(Error::bad_file(
+                p,
+                format!("cube face is {} x {}, not square", r.width, r.height),
+            ));
+        }
+        if let Some(first) = faces.first() {
+            let first: &Raster = first;
+            if first.width != r.width {
+                return Err(Error::bad_file(
+                    p,
+                    format!(
+                        "cube face is {0} x {0} but {1} is {2} x {2}",
+                        r.width,
+                        paths[0].display(),
+                        first.width
+                    ),
+                ));
+            }
+        }
+        faces.push(r);
+    }
+    let n = faces[0].width;
+    let rgb = faces.into_iter().flat_map(|f| f.rgb).collect();
+    let raster = Raster {
+        width: n,
+        height: n * 6,
+        rgb,
+        mapping_hint: Some(Mapping::Cube),
+    };
+    into_envmap(&paths[0], raster, Mapping::Cube, opts.sanitize)
+}
+
+/// Expands a path holding `{face}` into the six files px, nx, py, ny, pz, nz (three.js naming).
+pub fn face_paths(pattern: &str) -> Option<[PathBuf; 6]> {
+    pattern.contains("{face}").then(|| {
+        ["px", "nx", "py", "ny", "pz", "nz"].map(|f| PathBuf::from(pattern.replace("{face}", f)))
+    })
+}
+
+fn read_raster(path: &Path, opts: &LoadOptions) -> Result<Raster> {
+    let bytes = read_file(path)?;
+    if bytes.is_empty() {
+        return Err(Error::bad_file(path, "file is empty"));
+    }
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
+        exr_io::read(path, opts.max_texels)
+    } else if bytes.starts_with(b"DDS ") {
+        dds::read(path, &bytes, opts.max_texels)
+    } else if bytes.starts_with(b"PF") || bytes.starts_with(b"Pf") {
+        pfm::read(path, &bytes, opts.max_texels)
+    } else if bytes.starts_with(b"#?") {
+        png_io::read_with_image_crate(path, &bytes, opts.max_texels, false)
+    } else if bytes.starts_with(&[0x89, b'P', b'N', b'G']) || bytes.starts_with(&[0xff, 0xd8]) {
+        png_io::read_with_image_crate(path, &bytes, opts.max_texels, true)
+    } else {
+        Err(Error::bad_file(
+            path,
+            format!(
+                "unrecognised file format (extension '{ext}'); envlight reads OpenEXR, Radiance \
+                 .hdr, PFM, DDS, PNG and JPEG"
+            ),
+        ))
+    }
+}
+
+/// The aspect-ratio rule of the module docs.
+pub fn infer_mapping(path: &Path, w: u32, h: u32) -> Result<Mapping> {
+    let m = if w == 2 * h {
+        Mapping::LatLong
+    } else if w == h {
+        Mapping::Angular
+    } else if h == 6 * w {
+        Mapping::Cube
+    } else if h == 2 * w {
+        Mapping::DualParaboloid
+    } else {
+        return Err(Error::bad_file(
+            path,
+            format!(
+                "cannot tell the mapping of a {w} x {h} image (2:1 is lat-long, 1:1 angular, \
+                 1:6 a cube strip, 1:2 a dual paraboloid); give it with --mapping"
+            ),
+        ));
+    };
+    Ok(m)
+}
+
+fn into_envmap(path: &Path, r: Raster, mapping: Mapping, sanitize: Sanitize) -> Result<EnvMap> {
+    let layers = mapping.layers();
+    if r.height % layers != 0 || (mapping != Mapping::LatLong && r.width != r.height / layers) {
+        return Err(Error::bad_file(
+            path,
+            format!(
+                "a {} x {} image cannot hold a {} map (expected {})",
+                r.width,
+                r.height,
+                mapping.name(),
+                match mapping {
+                    Mapping::LatLong => "any W x H, usually 2:1",
+                    Mapping::Angular => "a square",
+                    Mapping::Cube => "six square faces stacked vertically",
+                    Mapping::DualParaboloid => "two square halves stacked vertically",
+                }
+            ),
+        ));
+    }
+    let mut map = EnvMap::new(mapping, r.width, r.height / layers, r.rgb);
+    let s = map.stats();
+    if s.nan + s.inf + s.negative > 0 {
+        match sanitize {
+            Sanitize::Reject => {
+                return Err(Error::bad_file(
+                    path,
+                    format!(
+                        "{} NaN, {} infinite and {} negative texels; radiance must be finite and \
+                         non-negative (use --sanitize to replace them by 0)",
+                        s.nan, s.inf, s.negative
+                    ),
+                ))
+            }
+            Sanitize::Zero => {
+                for t in &mut map.texels {
+                    for c in t.iter_mut() {
+                        if !c.is_finite() || *c < 0.0 {
+                            *c = 0.0;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(map)
+}
+
+/// Splits a map into the single image [`save_exr`] and [`save_png`] write: layers stacked
+/// vertically (cube faces in Vulkan order, paraboloid upper half first).
+pub fn strip_extent(map: &EnvMap) -> (u32, u32) {
+    (map.width, map.height * map.layers())
+}

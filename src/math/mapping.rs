@@ -1,0 +1,594 @@
+//! The four parameterisations of the sphere of directions, in float64.
+//!
+//! Conventions are those of `DESIGN.md` §1: right-handed world, +Y up, a direction points from
+//! the scene to the environment. Texture coordinates `(u, v)` are in [0, 1] with v growing
+//! downwards in the image (row 0 is the top row); texel (i, j) has its centre at
+//! `((i + ½)/W, (j + ½)/H)`.
+
+use glam::{DMat3, DVec3};
+use std::f64::consts::{PI, TAU};
+
+use super::quadrature::integrate;
+
+/// A parameterisation of the sphere of directions by one or more 2D images (layers).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum Mapping {
+    /// Equirectangular (Mitsuba 3's convention): one W×H layer.
+    LatLong = 0,
+    /// Debevec's angular light probe: one square layer; texels with r > 1 are outside.
+    Angular = 1,
+    /// Cube map: six square layers in Vulkan face order +X, −X, +Y, −Y, +Z, −Z.
+    Cube = 2,
+    /// Dual paraboloid: two square layers, upper half (y ≥ 0) first.
+    DualParaboloid = 3,
+}
+
+/// A position in a map: a layer and texture coordinates in [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coord {
+    /// Layer index (cube face, paraboloid half, 0 otherwise).
+    pub layer: u32,
+    /// Horizontal texture coordinate, left to right.
+    pub u: f64,
+    /// Vertical texture coordinate, top to bottom.
+    pub v: f64,
+}
+
+impl Mapping {
+    /// All mappings, in id order.
+    pub const ALL: [Mapping; 4] = [
+        Mapping::LatLong,
+        Mapping::Angular,
+        Mapping::Cube,
+        Mapping::DualParaboloid,
+    ];
+
+    /// The id shared with GLSL (`MAPPING_*` in the generated header).
+    pub fn id(self) -> u32 {
+        self as u32
+    }
+
+    /// The name used on the command line and in file metadata.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mapping::LatLong => "latlong",
+            Mapping::Angular => "angular",
+            Mapping::Cube => "cube",
+            Mapping::DualParaboloid => "dual-paraboloid",
+        }
+    }
+
+    /// Parses a mapping name (also accepts a few common aliases).
+    pub fn parse(s: &str) -> Option<Mapping> {
+        match s.to_ascii_lowercase().as_str() {
+            "latlong" | "lat-long" | "equirect" | "equirectangular" => Some(Mapping::LatLong),
+            "angular" | "probe" | "lightprobe" => Some(Mapping::Angular),
+            "cube" | "cubemap" => Some(Mapping::Cube),
+            "dual-paraboloid" | "dualparaboloid" | "dp" | "paraboloid" => {
+                Some(Mapping::DualParaboloid)
+            }
+            _ => None,
+        }
+    }
+
+    /// Number of layers: 6 for a cube, 2 for a dual paraboloid, 1 otherwise.
+    pub fn layers(self) -> u32 {
+        match self {
+            Mapping::Cube => 6,
+            Mapping::DualParaboloid => 2,
+            _ => 1,
+        }
+    }
+
+    /// Width and height of one layer for a `--size N`: lat-long is N × N/2, the others N × N
+    /// (N is a cube's face size and each paraboloid half's size).
+    pub fn extent_for_size(self, size: u32) -> (u32, u32) {
+        match self {
+            Mapping::LatLong => (size, (size / 2).max(1)),
+            _ => (size, size),
+        }
+    }
+
+    /// Texture coordinate of a unit direction. Accurate everywhere, poles and seams included.
+    pub fn dir_to_coord(self, d: DVec3) -> Coord {
+        match self {
+            Mapping::LatLong => {
+                let mut u = d.x.atan2(-d.z) / TAU;
+                if u < 0.0 {
+                    u += 1.0;
+                }
+                if u >= 1.0 {
+                    u -= 1.0;
+                }
+                // atan2 rather than acos(d.y): acos loses half the digits at the poles.
+                let v = d.x.hypot(d.z).atan2(d.y) / PI;
+                Coord { layer: 0, u, v }
+            }
+            Mapping::Angular => {
+                let rho = d.x.hypot(d.y);
+                let r = rho.atan2(d.z) / PI;
+                let (a, b) = if rho > 0.0 {
+                    (r * d.x / rho, r * d.y / rho)
+                } else if d.z >= 0.0 {
+                    (0.0, 0.0)
+                } else {
+                    // −Z is the whole rim; any point of it decodes to −Z.
+                    (0.0, -1.0)
+                };
+                Coord {
+                    layer: 0,
+                    u: 0.5 * (a + 1.0),
+                    v: 0.5 * (1.0 - b),
+                }
+            }
+            Mapping::Cube => {
+                let (ax, ay, az) = (d.x.abs(), d.y.abs(), d.z.abs());
+                // Vulkan specification, cube map face selection table.
+                let (layer, sc, tc, ma) = if ax >= ay && ax >= az {
+                    if d.x >= 0.0 {
+                        (0, -d.z, -d.y, ax)
+                    } else {
+                        (1, d.z, -d.y, ax)
+                    }
+                } else if ay >= az {
+                    if d.y >= 0.0 {
+                        (2, d.x, d.z, ay)
+                    } else {
+                        (3, d.x, -d.z, ay)
+                    }
+                } else if d.z >= 0.0 {
+                    (4, d.x, -d.y, az)
+                } else {
+                    (5, -d.x, -d.y, az)
+                };
+                Coord {
+                    layer,
+                    u: 0.5 * (sc / ma + 1.0),
+                    v: 0.5 * (tc / ma + 1.0),
+                }
+            }
+            Mapping::DualParaboloid => {
+                let (layer, k) = if d.y >= 0.0 {
+                    (0, 1.0 / (1.0 + d.y))
+                } else {
+                    (1, 1.0 / (1.0 - d.y))
+                };
+                Coord {
+                    layer,
+                    u: 0.5 * (d.x * k + 1.0),
+                    v: 0.5 * (d.z * k + 1.0),
+                }
+            }
+        }
+    }
+
+    /// Unit direction of a texture coordinate. Outside the disc of an angular map or a
+    /// paraboloid half the formulas are continued (they still give unit directions).
+    pub fn coord_to_dir(self, c: Coord) -> DVec3 {
+        match self {
+            Mapping::LatLong => {
+                let (sp, cp) = (TAU * c.u).sin_cos();
+                let (st, ct) = (PI * c.v).sin_cos();
+                DVec3::new(st * sp, ct, -st * cp)
+            }
+            Mapping::Angular => {
+                let (a, b) = (2.0 * c.u - 1.0, 1.0 - 2.0 * c.v);
+                let r = a.hypot(b);
+                if r == 0.0 {
+                    return DVec3::Z;
+                }
+                let (s, co) = (PI * r).sin_cos();
+                DVec3::new(s * a / r, s * b / r, co)
+            }
+            Mapping::Cube => {
+                let (sc, tc) = (2.0 * c.u - 1.0, 2.0 * c.v - 1.0);
+                let d = match c.layer {
+                    0 => DVec3::new(1.0, -tc, -sc),
+                    1 => DVec3::new(-1.0, -tc, sc),
+                    2 => DVec3::new(sc, 1.0, tc),
+                    3 => DVec3::new(sc, -1.0, -tc),
+                    4 => DVec3::new(sc, -tc, 1.0),
+                    _ => DVec3::new(-sc, -tc, -1.0),
+                };
+                d.normalize()
+            }
+            Mapping::DualParaboloid => {
+                let (s, t) = (2.0 * c.u - 1.0, 2.0 * c.v - 1.0);
+                let rho2 = s * s + t * t;
+                let k = 1.0 / (1.0 + rho2);
+                let y = (1.0 - rho2) * k;
+                let y = if c.layer == 0 { y } else { -y };
+                DVec3::new(2.0 * s * k, y, 2.0 * t * k)
+            }
+        }
+    }
+
+    /// Centre of texel (i, j) of a layer of size `w × h`.
+    pub fn texel_center(w: u32, h: u32, layer: u32, i: u32, j: u32) -> Coord {
+        Coord {
+            layer,
+            u: (i as f64 + 0.5) / w as f64,
+            v: (j as f64 + 0.5) / h as f64,
+        }
+    }
+
+    /// Whether a texel is read at all. Angular texels whose centre lies outside the unit disc
+    /// are not (Debevec's files print a caption there). Paraboloid texels are read when they
+    /// overlap the disc: conversion writes the mean over the part inside into them.
+    pub fn texel_in_domain(self, w: u32, h: u32, i: u32, j: u32) -> bool {
+        match self {
+            Mapping::Angular => {
+                let a = 2.0 * (i as f64 + 0.5) / w as f64 - 1.0;
+                let b = 2.0 * (j as f64 + 0.5) / h as f64 - 1.0;
+                a * a + b * b <= 1.0
+            }
+            Mapping::DualParaboloid => {
+                // Nearest point of the texel's rectangle to the disc's centre.
+                let near = |k: u32, n: u32| {
+                    let (lo, hi) = (2.0 * k as f64 / n as f64 - 1.0, 2.0 * (k + 1) as f64 / n as f64 - 1.0);
+                    0f64.clamp(lo, hi)
+                };
+                let (a, b) = (near(i, w), near(j, h));
+                a * a + b * b < 1.0
+            }
+            _ => true,
+        }
+    }
+
+    /// Solid angle per unit area of texture coordinates, dω / (du dv), at `c`; zero outside the
+    /// disc of an angular map or paraboloid half.
+    pub fn density(self, c: Coord) -> f64 {
+        let (a, b) = (2.0 * c.u - 1.0, 2.0 * c.v - 1.0);
+        match self {
+            Mapping::LatLong => 2.0 * PI * PI * (PI * c.v).sin(),
+            Mapping::Angular => {
+                let r = a.hypot(b);
+                if r > 1.0 {
+                    0.0
+                } else if r == 0.0 {
+                    4.0 * PI * PI
+                } else {
+                    4.0 * PI * (PI * r).sin() / r
+                }
+            }
+            Mapping::Cube => 4.0 / (1.0 + a * a + b * b).powf(1.5),
+            Mapping::DualParaboloid => {
+                let rho2 = a * a + b * b;
+                if rho2 > 1.0 {
+                    0.0
+                } else {
+                    16.0 / ((1.0 + rho2) * (1.0 + rho2))
+                }
+            }
+        }
+    }
+
+    /// Exact solid angle of texel (i, j) of a `w × h` layer (the same for every layer).
+    ///
+    /// Lat-long and cube texels have closed forms; for angular and paraboloid texels the part
+    /// inside the unit disc is integrated with the divergence theorem, which is exact for the
+    /// paraboloid and leaves a smooth 1D integral (16-point Gauss–Legendre) for the angular map.
+    pub fn texel_solid_angle(self, w: u32, h: u32, i: u32, j: u32) -> f64 {
+        let (wf, hf) = (w as f64, h as f64);
+        match self {
+            Mapping::LatLong => {
+                let (t0, t1) = (PI * j as f64 / hf, PI * (j + 1) as f64 / hf);
+                // (2π/W)(cos θ0 − cos θ1) without cancellation.
+                (TAU / wf) * 2.0 * (0.5 * (t0 + t1)).sin() * (0.5 * (t1 - t0)).sin()
+            }
+            Mapping::Cube => {
+                let s0 = 2.0 * i as f64 / wf - 1.0;
+                let s1 = 2.0 * (i + 1) as f64 / wf - 1.0;
+                let t0 = 2.0 * j as f64 / hf - 1.0;
+                let t1 = 2.0 * (j + 1) as f64 / hf - 1.0;
+                let f = |x: f64, y: f64| (x * y).atan2((x * x + y * y + 1.0).sqrt());
+                f(s1, t1) - f(s0, t1) - f(s1, t0) + f(s0, t0)
+            }
+            Mapping::Angular | Mapping::DualParaboloid => {
+                let x0 = 2.0 * i as f64 / wf - 1.0;
+                let x1 = 2.0 * (i + 1) as f64 / wf - 1.0;
+                let y0 = 2.0 * j as f64 / hf - 1.0;
+                let y1 = 2.0 * (j + 1) as f64 / hf - 1.0;
+                if self == Mapping::Angular {
+                    disc_rect_flux(x0, x1, y0, y1, 2.0, &angular_edge)
+                } else {
+                    disc_rect_flux(x0, x1, y0, y1, 1.0, &paraboloid_edge)
+                }
+            }
+        }
+    }
+}
+
+/// Flux of V = h(r)·(x, y) through the segment x = c, y ∈ [a, b] for the paraboloid, whose
+/// dω/(ds dt) = 4/(1+r²)² = div V with h(r) = 2/(1+r²).
+fn paraboloid_edge(c: f64, a: f64, b: f64) -> f64 {
+    let k = (1.0 + c * c).sqrt();
+    // atan(b/k) − atan(a/k) in one atan to avoid cancellation on short segments.
+    2.0 * c / k * ((b - a) * k).atan2(k * k + a * b)
+}
+
+/// Same for the angular map: dω/(da db) = π sin(πr)/r = div V with h(r) = 2 sin²(πr/2)/r².
+fn angular_edge(c: f64, a: f64, b: f64) -> f64 {
+    integrate(a, b, |y| {
+        let r2 = c * c + y * y;
+        if r2 == 0.0 {
+            return 0.0;
+        }
+        let s = (0.5 * PI * r2.sqrt()).sin();
+        c * 2.0 * s * s / r2
+    })
+}
+
+/// ∫∫ div(h(r)(x, y)) over the rectangle [x0,x1]×[y0,y1] cut by the unit disc, by the divergence
+/// theorem: the flux through the rectangle's edges inside the disc plus h(1) times the length
+/// of the unit circle's arcs inside the rectangle.
+fn disc_rect_flux(
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+    h_at_1: f64,
+    edge: &dyn Fn(f64, f64, f64) -> f64,
+) -> f64 {
+    let clipped = |c: f64, a: f64, b: f64| -> f64 {
+        if c.abs() >= 1.0 {
+            return 0.0;
+        }
+        let m = (1.0 - c * c).sqrt();
+        let (lo, hi) = (a.max(-m), b.min(m));
+        if hi > lo {
+            edge(c, lo, hi)
+        } else {
+            0.0
+        }
+    };
+    let edges = clipped(x1, y0, y1) - clipped(x0, y0, y1) + clipped(y1, x0, x1)
+        - clipped(y0, x0, x1);
+    edges + h_at_1 * arc_inside_rect(x0, x1, y0, y1)
+}
+
+/// Total angle of the unit circle's arcs inside [x0,x1]×[y0,y1].
+fn arc_inside_rect(x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
+    let inside = |x: f64, y: f64| x >= x0 && x <= x1 && y >= y0 && y <= y1;
+    let mut angles: Vec<f64> = Vec::with_capacity(8);
+    for c in [x0, x1] {
+        if c.abs() < 1.0 {
+            let m = (1.0 - c * c).sqrt();
+            for y in [m, -m] {
+                if y >= y0 && y <= y1 {
+                    angles.push(y.atan2(c).rem_euclid(TAU));
+                }
+            }
+        }
+    }
+    for c in [y0, y1] {
+        if c.abs() < 1.0 {
+            let m = (1.0 - c * c).sqrt();
+            for x in [m, -m] {
+                if x >= x0 && x <= x1 {
+                    angles.push(c.atan2(x).rem_euclid(TAU));
+                }
+            }
+        }
+    }
+    if angles.is_empty() {
+        return if inside(1.0, 0.0) { TAU } else { 0.0 };
+    }
+    angles.sort_by(f64::total_cmp);
+    let n = angles.len();
+    let mut total = 0.0;
+    for k in 0..n {
+        let a = angles[k];
+        let b = if k + 1 < n {
+            angles[k + 1]
+        } else {
+            angles[0] + TAU
+        };
+        if b - a <= 0.0 {
+            continue;
+        }
+        let (s, c) = (0.5 * (a + b)).sin_cos();
+        if inside(c, s) {
+            total += b - a;
+        }
+    }
+    total
+}
+
+/// How a map's file is oriented relative to the world frame: applied to directions, so it is
+/// exact for every mapping (no resampling).
+///
+/// `flip_u` mirrors the image left–right (x → −x for lat-long and angular maps), `flip_v` turns
+/// it upside down (y → −y), and `rotate_y_degrees` turns the environment counter-clockwise about
+/// +Y as seen from above. The light stored at file direction f appears in the world at
+/// `R_y(θ) · S · f`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Orientation {
+    /// Mirror left–right (reflect x).
+    pub flip_u: bool,
+    /// Turn upside down (reflect y).
+    pub flip_v: bool,
+    /// Rotation about +Y in degrees.
+    pub rotate_y_degrees: f64,
+}
+
+impl Orientation {
+    /// The matrix taking a world direction to the direction at which the file stores it.
+    pub fn world_to_file(&self) -> DMat3 {
+        let s = DMat3::from_diagonal(DVec3::new(
+            if self.flip_u { -1.0 } else { 1.0 },
+            if self.flip_v { -1.0 } else { 1.0 },
+            1.0,
+        ));
+        s * DMat3::from_rotation_y(-self.rotate_y_degrees.to_radians())
+    }
+
+    /// Whether this is the identity.
+    pub fn is_identity(&self) -> bool {
+        !self.flip_u && !self.flip_v && self.rotate_y_degrees == 0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn angle(a: DVec3, b: DVec3) -> f64 {
+        // Accurate for tiny angles, unlike acos of the dot product.
+        a.cross(b).length().atan2(a.dot(b))
+    }
+
+    /// Directions that stress every mapping: axes, seams, poles, and points within 1e-7 of
+    /// them, plus a dense pseudo-random set.
+    pub(crate) fn hard_directions() -> Vec<DVec3> {
+        let mut v = Vec::new();
+        let axes = [DVec3::X, DVec3::NEG_X, DVec3::Y, DVec3::NEG_Y, DVec3::Z, DVec3::NEG_Z];
+        for a in axes {
+            v.push(a);
+            for b in axes {
+                for eps in [1e-7, -1e-7, 1e-12, 1e-3] {
+                    v.push((a + b * eps).normalize());
+                }
+                v.push((a + b).try_normalize().unwrap_or(a));
+            }
+        }
+        // Cube edges and corners, paraboloid seam (y = 0), lat-long seam (x = 0, z < 0).
+        for k in 0..2000 {
+            let t = k as f64 / 2000.0 * TAU;
+            v.push(DVec3::new(t.cos(), 0.0, t.sin()));
+            v.push(DVec3::new(t.cos(), 1e-7, t.sin()).normalize());
+            v.push(DVec3::new(1e-9 * t.cos(), t.sin(), -t.cos().abs()).normalize());
+            v.push(DVec3::new(1.0, t.cos(), t.sin()).normalize());
+        }
+        v.extend(super::super::synth::fibonacci_sphere(100_000));
+        v
+    }
+
+    #[test]
+    fn round_trip_f64_under_1e12() {
+        let dirs = hard_directions();
+        assert!(dirs.len() > 100_000);
+        for m in Mapping::ALL {
+            let mut worst = 0.0f64;
+            for &d in &dirs {
+                let c = m.dir_to_coord(d);
+                assert!((0.0..=1.0).contains(&c.u) && (0.0..=1.0).contains(&c.v), "{m:?} {d}");
+                assert!(c.layer < m.layers());
+                let e = angle(d, m.coord_to_dir(c));
+                worst = worst.max(e);
+            }
+            assert!(worst < 1e-12, "{m:?}: worst round-trip error {worst:e} rad");
+        }
+    }
+
+    #[test]
+    fn axes_land_where_design_md_says() {
+        let ll = Mapping::LatLong;
+        let c = ll.dir_to_coord(DVec3::Z);
+        assert!((c.u - 0.5).abs() < 1e-15 && (c.v - 0.5).abs() < 1e-15);
+        assert!((ll.dir_to_coord(DVec3::X).u - 0.25).abs() < 1e-15);
+        assert!(ll.dir_to_coord(DVec3::Y).v.abs() < 1e-15);
+        // θ = π/2 lies halfway to the rim: +X at the right, +Y above the centre.
+        let a = Mapping::Angular.dir_to_coord(DVec3::X);
+        assert!((a.u - 0.75).abs() < 1e-15 && (a.v - 0.5).abs() < 1e-15);
+        let a = Mapping::Angular.dir_to_coord(DVec3::Y);
+        assert!((a.v - 0.25).abs() < 1e-15);
+        assert!((Mapping::Angular.dir_to_coord(DVec3::NEG_Z).v - 1.0).abs() < 1e-15);
+        assert_eq!(Mapping::Cube.dir_to_coord(DVec3::NEG_Y).layer, 3);
+        assert_eq!(Mapping::DualParaboloid.dir_to_coord(DVec3::NEG_Y).layer, 1);
+    }
+
+    #[test]
+    fn paraboloid_seam_matches_texel_for_texel() {
+        for k in 0..360 {
+            let t = k as f64 / 360.0 * TAU;
+            let d = DVec3::new(t.cos(), 0.0, t.sin());
+            let up = Mapping::DualParaboloid.dir_to_coord(d);
+            let down = Mapping::DualParaboloid.dir_to_coord(DVec3::new(d.x, -0.0, d.z) * 1.0);
+            assert_eq!((up.u, up.v), (down.u, down.v));
+            let lower = Mapping::DualParaboloid.coord_to_dir(Coord { layer: 1, ..up });
+            assert!(angle(lower, d) < 1e-15);
+        }
+    }
+
+    fn solid_angle_sum(m: Mapping, w: u32, h: u32) -> f64 {
+        let mut s = 0.0;
+        for j in 0..h {
+            for i in 0..w {
+                s += m.texel_solid_angle(w, h, i, j);
+            }
+        }
+        s * m.layers() as f64
+    }
+
+    #[test]
+    fn solid_angles_sum_to_4pi() {
+        let fourpi = 4.0 * PI;
+        for (m, tol) in [
+            (Mapping::LatLong, 1e-9),
+            (Mapping::Cube, 1e-9),
+            (Mapping::Angular, 1e-6),
+            (Mapping::DualParaboloid, 1e-6),
+        ] {
+            for (w, h) in [(1, 1), (2, 2), (3, 3), (7, 7), (64, 64), (257, 257)] {
+                let (w, h) = if m == Mapping::LatLong { (w * 2, h) } else { (w, h) };
+                let s = solid_angle_sum(m, w, h);
+                let rel = (s / fourpi - 1.0).abs();
+                assert!(rel < tol, "{m:?} {w}x{h}: sum {s} rel err {rel:e}");
+            }
+        }
+    }
+
+    #[test]
+    fn solid_angles_match_density_quadrature() {
+        // Independent check of single texels: 64×64 midpoint quadrature of dω/(du dv).
+        for m in Mapping::ALL {
+            let (w, h) = m.extent_for_size(9);
+            for (i, j) in [(0, 0), (4, 2), (1, 3), (8, 0), (4, 4), (2, 7)] {
+                let (i, j) = (i.min(w - 1), j.min(h - 1));
+                let n = 256;
+                let mut q = 0.0;
+                for a in 0..n {
+                    for b in 0..n {
+                        let c = Coord {
+                            layer: 0,
+                            u: (i as f64 + (a as f64 + 0.5) / n as f64) / w as f64,
+                            v: (j as f64 + (b as f64 + 0.5) / n as f64) / h as f64,
+                        };
+                        q += m.density(c);
+                    }
+                }
+                q /= (n * n) as f64 * (w * h) as f64;
+                let exact = m.texel_solid_angle(w, h, i, j);
+                assert!(
+                    (q - exact).abs() <= 2e-4 * exact.max(1e-3),
+                    "{m:?} texel ({i},{j}): exact {exact} quadrature {q}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn orientation_flips_match_grace_latlong_convention() {
+        // SOURCES.md: grace_latlong.exr stores at (θ, φ) the direction
+        // (−sinθ sinφ, −cosθ, −sinθ cosφ); ours is (sinθ sinφ, cosθ, −sinθ cosφ).
+        let o = Orientation {
+            flip_u: true,
+            flip_v: true,
+            rotate_y_degrees: 0.0,
+        };
+        let m = o.world_to_file();
+        for d in super::super::synth::fibonacci_sphere(100) {
+            let f = m * d;
+            assert!((f - DVec3::new(-d.x, -d.y, d.z)).length() < 1e-15);
+        }
+        let r = Orientation {
+            rotate_y_degrees: 90.0,
+            ..Default::default()
+        };
+        // Turning the environment by +90° about +Y brings the file's +X light to world −Z.
+        let w = r.world_to_file().inverse() * DVec3::X;
+        assert!((w - DVec3::NEG_Z).length() < 1e-15, "{w}");
+    }
+}

@@ -1,0 +1,10 @@
+//! Pure float64 math: mappings, solid angles, quadrature and analytic test environments.
+//!
+//! Nothing here knows about Vulkan; these functions are the oracles the GPU passes are tested
+//! against.
+
+pub mod mapping;
+pub mod quadrature;
+pub mod synth;
+
+pub use mapping::{Coord, Mapping, Orientation};
