@@ -13,6 +13,7 @@ pub mod gpu;
 pub mod io;
 pub mod math;
 pub mod passes;
+pub mod preview;
 
 pub use envmap::EnvMap;
 pub use error::{Error, Result};

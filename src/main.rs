@@ -1,1 +1,331 @@
-fn main(){}
+//! The `envlight` command line.
+
+use anyhow::{bail, Context as _, Result};
+use clap::{Args, Parser, Subcommand};
+use envlight::gpu::{Context, ContextOptions, DeviceSelector, GpuEnvMap, Timing};
+use envlight::io::{self, LoadOptions, Sanitize, ToneMap};
+use envlight::math::synth::Sky;
+use envlight::passes::copy::CopyPass;
+use envlight::passes::{ConvertOptions, Converter};
+use envlight::{EnvMap, Mapping, Orientation};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+#[derive(Parser)]
+#[command(name = "envlight", version, about = "Environment-map lighting on explicit Vulkan passes")]
+struct Cli {
+    /// Vulkan device: auto, cpu (lavapipe), an index, or part of a name [env: ENVLIGHT_DEVICE]
+    #[arg(long, global = true)]
+    device: Option<String>,
+    /// Enable the Vulkan validation layer
+    #[arg(long, global = true)]
+    validation: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Args, Clone)]
+struct Input {
+    /// Input file; a path containing {face} names six cube faces (px, nx, py, ny, pz, nz)
+    input: String,
+    /// Mapping of the input (latlong, angular, cube, dual-paraboloid); inferred if absent
+    #[arg(long)]
+    mapping: Option<String>,
+    /// Replace NaN, infinite and negative texels by 0 instead of refusing the file
+    #[arg(long)]
+    sanitize: bool,
+}
+
+#[derive(Args, Clone, Copy)]
+struct Orient {
+    /// Mirror the input left-right (reflects x)
+    #[arg(long)]
+    flip_u: bool,
+    /// Turn the input upside down (reflects y)
+    #[arg(long)]
+    flip_v: bool,
+    /// Turn the environment by this many degrees about +Y
+    #[arg(long, value_name = "DEGREES", default_value_t = 0.0, allow_negative_numbers = true)]
+    rotate_y: f64,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print a map's mapping, size, radiance statistics and total power
+    Info {
+        #[command(flatten)]
+        input: Input,
+    },
+    /// Convert a map to another mapping and resolution on the GPU
+    Convert {
+        #[command(flatten)]
+        input: Input,
+        #[command(flatten)]
+        orient: Orient,
+        /// Output EXR (float32; a cube is six faces stacked vertically, a dual paraboloid its
+        /// upper half above its lower half)
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Output mapping
+        #[arg(long)]
+        to: String,
+        /// Output size: lat-long width, angular side, cube face, paraboloid half
+        #[arg(long)]
+        size: u32,
+        /// Samples per axis per output texel (default: chosen from the resolutions)
+        #[arg(long)]
+        supersample: Option<u32>,
+        /// Also write a tone-mapped PNG preview beside the EXR
+        #[arg(long)]
+        png: bool,
+        /// Exposure of the PNG preview, in stops
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        exposure: f32,
+    },
+    /// Convert the bundled probe to all four mappings and show what each step cost
+    Demo {
+        /// Input probe
+        #[arg(long, default_value = "assets/sky_latlong.exr")]
+        input: PathBuf,
+        /// Output folder
+        #[arg(long, default_value = "out/demo")]
+        out: PathBuf,
+        /// Size of the outputs (lat-long width; the others get half of it)
+        #[arg(long, default_value_t = 512)]
+        size: u32,
+    },
+    /// List the Vulkan devices and the one envlight would pick
+    Devices,
+    /// Write the analytic sky (gradient, sun 5·10⁴ × the zenith, ground) as a lat-long EXR
+    SynthSky {
+        /// Output EXR
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Width (height is half)
+        #[arg(long, default_value_t = 256)]
+        width: u32,
+    },
+    /// Benchmarks (GPU time from timestamp queries)
+    Bench {
+        #[command(subcommand)]
+        what: Bench,
+    },
+}
+
+#[derive(Subcommand)]
+enum Bench {
+    /// Conversion time at several source widths, against a plain copy of the same source
+    Convert {
+        /// Source lat-long widths
+        #[arg(long, value_delimiter = ',', default_value = "512,1024,2048,4096")]
+        sizes: Vec<u32>,
+        /// Timed repetitions per case (the median is reported)
+        #[arg(long, default_value_t = 5)]
+        reps: usize,
+    },
+}
+
+fn main() {
+    let cli = Cli::parse();
+    if let Err(e) = run(cli) {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn context(cli: &Cli) -> Result<Context> {
+    let mut opts = ContextOptions::default();
+    if let Some(d) = &cli.device {
+        opts.device = DeviceSelector::parse(d);
+    }
+    opts.validation |= cli.validation;
+    Ok(Context::new(&opts)?)
+}
+
+fn spinner(msg: &str) -> ProgressBar {
+    let pb = ProgressBar::new_spinner();
+    pb.set_style(ProgressStyle::with_template("{spinner} {msg} [{elapsed}]").unwrap_or_else(|_| ProgressStyle::default_spinner()));
+    pb.set_message(msg.to_string());
+    pb.enable_steady_tick(Duration::from_millis(120));
+    pb
+}
+
+fn parse_mapping(s: &str) -> Result<Mapping> {
+    Mapping::parse(s).with_context(|| format!("unknown mapping '{s}' (latlong, angular, cube, dual-paraboloid)"))
+}
+
+fn load_input(input: &Input) -> Result<EnvMap> {
+    let opts = LoadOptions {
+        mapping: input.mapping.as_deref().map(parse_mapping).transpose()?,
+        sanitize: if input.sanitize { Sanitize::Zero } else { Sanitize::Reject },
+        ..Default::default()
+    };
+    let pb = spinner(&format!("loading {}", input.input));
+    let map = match io::face_paths(&input.input) {
+        Some(paths) => io::load_cube_faces(&paths, &opts),
+        None => io::load(&input.input, &opts),
+    };
+    pb.finish_and_clear();
+    Ok(map?)
+}
+
+fn print_timings(t: &[Timing]) {
+    for t in t {
+        println!("  GPU {:>9.3} ms  {}", t.ms, t.label);
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match &cli.command {
+        Command::Info { input } => {
+            let map = load_input(input)?;
+            let s = map.stats();
+            println!("file:      {}", input.input);
+            println!("mapping:   {}", map.mapping.name());
+            println!("size:      {} x {} x {} layer(s)", map.width, map.height, map.layers());
+            println!("channels:  RGB (linear float)");
+            println!("min:       {:?}", s.min);
+            println!("max:       {:?}  (max luminance {:.6e})", s.max, s.max_luminance);
+            println!("mean:      [{:.6e}, {:.6e}, {:.6e}]  (solid-angle weighted)", s.mean[0], s.mean[1], s.mean[2]);
+            println!("nan:       {}", s.nan);
+            println!("inf:       {}", s.inf);
+            println!("negative:  {}", s.negative);
+            println!(
+                "power:     [{:.6e}, {:.6e}, {:.6e}]  (sum of L * solid angle, W/m^2 per unit radiance)",
+                s.power[0], s.power[1], s.power[2]
+            );
+        }
+        Command::Convert { input, orient, output, to, size, supersample, png, exposure } => {
+            if *size == 0 || *size > 16384 {
+                bail!("--size must be between 1 and 16384 (got {size})");
+            }
+            let to = parse_mapping(to)?;
+            let map = load_input(input)?;
+            let ctx = context(&cli)?;
+            let pb = spinner("converting on the GPU");
+            let src = GpuEnvMap::upload(&ctx, &map)?;
+            let conv = Converter::new(&ctx)?;
+            let opts = ConvertOptions {
+                to,
+                size: *size,
+                orientation: Orientation { flip_u: orient.flip_u, flip_v: orient.flip_v, rotate_y_degrees: orient.rotate_y },
+                supersample: *supersample,
+            };
+            let (dst, timings) = conv.run(&src, &opts)?;
+            let out = dst.download(&ctx)?;
+            pb.finish_and_clear();
+            io::save_exr(&out, output)?;
+            println!("wrote {}", output.display());
+            if *png {
+                let p = output.with_extension("png");
+                let tm = ToneMap { exposure: *exposure };
+                envlight::preview::preview(&out, tm).save(&p).with_context(|| p.display().to_string())?;
+                println!("wrote {} ({})", p.display(), tm.describe());
+            }
+            print_timings(&timings);
+        }
+        Command::Demo { input, out, size } => demo(&cli, input, out, *size)?,
+        Command::Devices => {
+            let ctx = context(&cli)?;
+            let i = ctx.info();
+            println!("envlight uses: {} ({:?}), driver {}", i.name, i.device_type, i.driver);
+            println!("timestamp period {} ns, {} valid bits", i.timestamp_period, i.timestamp_valid_bits);
+        }
+        Command::SynthSky { output, width } => {
+            let w = (*width).max(2);
+            let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 8, |d| Sky::default().radiance(d));
+            io::save_exr(&map, output)?;
+            let s = map.stats();
+            println!("wrote {} ({} x {}, max luminance {:.3e})", output.display(), w, w / 2, s.max_luminance);
+        }
+        Command::Bench { what: Bench::Convert { sizes, reps } } => bench_convert(&cli, sizes, *reps)?,
+    }
+    Ok(())
+}
+
+fn demo(cli: &Cli, input: &Path, out: &Path, size: u32) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
+    let t0 = std::time::Instant::now();
+    let map = io::load(input, &LoadOptions::default())?;
+    println!("loaded {} ({} {} x {}) in {:.0} ms", input.display(), map.mapping.name(), map.width, map.height, t0.elapsed().as_secs_f64() * 1e3);
+    let ctx = context(cli)?;
+    println!("device: {} ({})", ctx.info().name, ctx.info().driver.trim());
+    let src = GpuEnvMap::upload(&ctx, &map)?;
+    let conv = Converter::new(&ctx)?;
+    let tm = ToneMap::default();
+    let pb = ProgressBar::new(4);
+    pb.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    let mut previews = Vec::new();
+    let mut rows = Vec::new();
+    for to in Mapping::ALL {
+        pb.set_message(to.name());
+        let n = if to == Mapping::LatLong { size } else { size / 2 };
+        let opts = ConvertOptions { to, size: n.max(1), orientation: Orientation::default(), supersample: None };
+        let (dst, timings) = conv.run(&src, &opts)?;
+        let result = dst.download(&ctx)?;
+        let exr = out.join(format!("sky_{}.exr", to.name()));
+        let png = out.join(format!("sky_{}.png", to.name()));
+        io::save_exr(&result, &exr)?;
+        let p = envlight::preview::preview(&result, tm);
+        p.save(&png).with_context(|| png.display().to_string())?;
+        previews.push(p);
+        let pin = map.power();
+        let pout = result.power();
+        rows.push((to, exr, png, timings, (pout[1] / pin[1] - 1.0) * 100.0));
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    let sheet = out.join("contact_sheet.png");
+    envlight::preview::contact_sheet(&previews, 256).save(&sheet).with_context(|| sheet.display().to_string())?;
+    println!("\nPreviews: {}", tm.describe());
+    for (to, exr, png, timings, dp) in &rows {
+        let ms: f64 = timings.iter().map(|t| t.ms).sum();
+        println!("{:<16} {:>9.3} ms GPU  power {:+.3}%  {}  {}", to.name(), ms, dp, exr.display(), png.display());
+    }
+    println!("contact sheet: {}", sheet.display());
+    Ok(())
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn bench_convert(cli: &Cli, sizes: &[u32], reps: usize) -> Result<()> {
+    let ctx = context(cli)?;
+    println!("device: {} ({})", ctx.info().name, ctx.info().driver.trim());
+    println!("GPU time, median of {reps} runs; 'copy' reads and writes every source texel once (the floor).\n");
+    println!("| source | conversion | output | ss | copy ms | convert ms | ratio |");
+    println!("|---|---|---|---|---|---|---|");
+    let conv = Converter::new(&ctx)?;
+    let copy = CopyPass::new(&ctx)?;
+    let reps = reps.max(1);
+    for &w in sizes {
+        let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 1, |d| Sky::default().radiance(d));
+        let src = GpuEnvMap::upload(&ctx, &map)?;
+        let mut copy_ms = Vec::new();
+        for _ in 0..reps {
+            copy_ms.push(copy.run(&src)?.1.iter().map(|t| t.ms).sum());
+        }
+        let floor = median(copy_ms);
+        for (to, size) in [(Mapping::LatLong, w), (Mapping::Cube, w / 4), (Mapping::Angular, w / 2), (Mapping::DualParaboloid, w / 2)] {
+            let opts = ConvertOptions { to, size, orientation: Orientation::default(), supersample: None };
+            let (ow, oh) = to.extent_for_size(size);
+            let ss = Converter::supersampling((Mapping::LatLong, w, w / 2), (to, ow, oh));
+            let mut ms = Vec::new();
+            for _ in 0..reps {
+                ms.push(conv.run(&src, &opts)?.1.iter().map(|t| t.ms).sum());
+            }
+            let m = median(ms);
+            println!(
+                "| latlong {w}x{} | latlong -> {} | {ow}x{oh}x{} | {ss} | {floor:.3} | {m:.3} | {:.2} |",
+                w / 2,
+                to.name(),
+                to.layers(),
+                m / floor
+            );
+        }
+    }
+    Ok(())
+}

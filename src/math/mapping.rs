@@ -439,35 +439,9 @@ mod tests {
         a.cross(b).length().atan2(a.dot(b))
     }
 
-    /// Directions that stress every mapping: axes, seams, poles, and points within 1e-7 of
-    /// them, plus a dense pseudo-random set.
-    pub(crate) fn hard_directions() -> Vec<DVec3> {
-        let mut v = Vec::new();
-        let axes = [DVec3::X, DVec3::NEG_X, DVec3::Y, DVec3::NEG_Y, DVec3::Z, DVec3::NEG_Z];
-        for a in axes {
-            v.push(a);
-            for b in axes {
-                for eps in [1e-7, -1e-7, 1e-12, 1e-3] {
-                    v.push((a + b * eps).normalize());
-                }
-                v.push((a + b).try_normalize().unwrap_or(a));
-            }
-        }
-        // Cube edges and corners, paraboloid seam (y = 0), lat-long seam (x = 0, z < 0).
-        for k in 0..2000 {
-            let t = k as f64 / 2000.0 * TAU;
-            v.push(DVec3::new(t.cos(), 0.0, t.sin()));
-            v.push(DVec3::new(t.cos(), 1e-7, t.sin()).normalize());
-            v.push(DVec3::new(1e-9 * t.cos(), t.sin(), -t.cos().abs()).normalize());
-            v.push(DVec3::new(1.0, t.cos(), t.sin()).normalize());
-        }
-        v.extend(super::super::synth::fibonacci_sphere(100_000));
-        v
-    }
-
     #[test]
     fn round_trip_f64_under_1e12() {
-        let dirs = hard_directions();
+        let dirs = super::super::synth::stress_directions();
         assert!(dirs.len() > 100_000);
         for m in Mapping::ALL {
             let mut worst = 0.0f64;
@@ -582,6 +556,20 @@ mod tests {
         for d in super::super::synth::fibonacci_sphere(100) {
             let f = m * d;
             assert!((f - DVec3::new(-d.x, -d.y, d.z)).length() < 1e-15);
+        }
+        // uffizi.hdr (SOURCES.md) stores at (θ, φ = 2πu) the direction
+        // (sinθ cosφ, cosθ, −sinθ sinφ): the README's --flip-u --rotate-y -90 maps onto it.
+        let uffizi = Orientation {
+            flip_u: true,
+            flip_v: false,
+            rotate_y_degrees: -90.0,
+        };
+        for k in 0..50 {
+            let c = Coord { layer: 0, u: (k as f64 + 0.5) / 50.0, v: 0.3 + 0.01 * k as f64 };
+            let world = Mapping::LatLong.coord_to_dir(c);
+            let (phi, theta) = (TAU * c.u, PI * c.v);
+            let file = DVec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+            assert!((uffizi.world_to_file() * world - file).length() < 1e-12);
         }
         let r = Orientation {
             rotate_y_degrees: 90.0,

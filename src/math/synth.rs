@@ -18,6 +18,32 @@ pub fn fibonacci_sphere(n: usize) -> Vec<DVec3> {
         .collect()
 }
 
+/// Directions that stress every mapping: the six axes, points within 1e-7 and 1e-12 of them,
+/// cube edges, the paraboloid seam (y = 0), the lat-long seam (x = 0, z < 0), plus 100 000
+/// Fibonacci directions.
+pub fn stress_directions() -> Vec<DVec3> {
+    let mut v = Vec::new();
+    let axes = [DVec3::X, DVec3::NEG_X, DVec3::Y, DVec3::NEG_Y, DVec3::Z, DVec3::NEG_Z];
+    for a in axes {
+        v.push(a);
+        for b in axes {
+            for eps in [1e-7, -1e-7, 1e-12, 1e-3] {
+                v.push((a + b * eps).normalize());
+            }
+            v.push((a + b).try_normalize().unwrap_or(a));
+        }
+    }
+    for k in 0..2000 {
+        let t = k as f64 / 2000.0 * std::f64::consts::TAU;
+        v.push(DVec3::new(t.cos(), 0.0, t.sin()));
+        v.push(DVec3::new(t.cos(), 1e-7, t.sin()).normalize());
+        v.push(DVec3::new(1e-9 * t.cos(), t.sin(), -t.cos().abs()).normalize());
+        v.push(DVec3::new(1.0, t.cos(), t.sin()).normalize());
+    }
+    v.extend(fibonacci_sphere(100_000));
+    v
+}
+
 /// A smooth, strictly positive test environment: a few low SH bands plus a soft lobe, different
 /// in each channel. Its second derivatives are bounded (|∇²L| ≲ 3), which is what the conversion
 /// tolerances are derived from.

@@ -1,1 +1,9 @@
-//! GPU passes.
+//! GPU passes, one file each. A pass is built once and run many times; each run records
+//! timestamps and returns what it cost.
+
+pub mod convert;
+pub mod copy;
+pub mod diagnostics;
+pub mod probe;
+
+pub use convert::{ConvertOptions, Converter};

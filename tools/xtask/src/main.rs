@@ -1,1 +1,136 @@
-fn main(){}
+//! Project tasks: `cargo xtask <setup|test|demo|bench|shaders|gen-assets|lint>`.
+//!
+//! `setup` installs what the project needs on a Debian-like system (idempotently); `test` and
+//! `demo` run it first, so the README's two commands work on a fresh machine.
+
+use std::process::{Command, ExitCode};
+
+/// Debian packages: Vulkan loader, Mesa's lavapipe, validation layers; cmake, ninja and g++
+/// for building shaderc from source (only `cargo xtask shaders` needs those).
+const PACKAGES: &[&str] = &[
+    "libvulkan1",
+    "mesa-vulkan-drivers",
+    "vulkan-validationlayers",
+    "cmake",
+    "ninja-build",
+    "g++",
+    "python3",
+];
+
+fn installed(pkg: &str) -> bool {
+    Command::new("dpkg-query")
+        .args(["-W", "-f=${Status}", pkg])
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).contains("install ok installed"))
+        .unwrap_or(false)
+}
+
+fn is_root() -> bool {
+    Command::new("id")
+        .arg("-u")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+        .unwrap_or(false)
+}
+
+fn setup() -> Result<(), String> {
+    if Command::new("dpkg-query").arg("--version").output().is_err() {
+        return Err("setup: this is not a Debian-like system (no dpkg). Install a Vulkan loader, \
+                    Mesa's lavapipe driver, the Khronos validation layers, cmake and ninja with \
+                    your package manager, then run again."
+            .into());
+    }
+    let missing: Vec<&str> = PACKAGES.iter().copied().filter(|p| !installed(p)).collect();
+    if missing.is_empty() {
+        println!("setup: all system packages present ({})", PACKAGES.join(", "));
+        return Ok(());
+    }
+    let cmd = format!("apt-get update && apt-get install -y --no-install-recommends {}", missing.join(" "));
+    if !is_root() {
+        return Err(format!("setup: missing packages {missing:?}; run as root:\n  sudo sh -c '{cmd}'"));
+    }
+    println!("setup: installing {missing:?}");
+    let ok = Command::new("sh")
+        .args(["-c", &cmd])
+        .env("DEBIAN_FRONTEND", "noninteractive")
+        .status()
+        .map(|s| s.success())
+        .unwrap_or(false);
+    if !ok {
+        return Err(format!("setup: '{cmd}' failed"));
+    }
+    Ok(())
+}
+
+fn cargo(args: &[&str]) -> Result<(), String> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let status = Command::new(&cargo)
+        .args(args)
+        .status()
+        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("cargo {} failed", args.join(" ")))
+    }
+}
+
+fn run(task: &str, rest: &[String]) -> Result<(), String> {
+    let rest: Vec<&str> = rest.iter().map(String::as_str).collect();
+    match task {
+        "setup" => setup(),
+        "test" => {
+            setup()?;
+            let mut args = vec!["test"];
+            args.extend(&rest);
+            cargo(&args)
+        }
+        "demo" => {
+            setup()?;
+            let mut args = vec!["run", "--release", "--bin", "envlight", "--", "demo"];
+            args.extend(&rest);
+            cargo(&args)
+        }
+        "bench" => {
+            setup()?;
+            let mut args = vec!["run", "--release", "--bin", "envlight", "--", "bench", "convert"];
+            args.extend(&rest);
+            cargo(&args)
+        }
+        "shaders" => {
+            setup()?;
+            cargo(&["run", "--release", "-p", "envlight-shaderc"])
+        }
+        "gen-assets" => cargo(&[
+            "run", "--release", "--bin", "envlight", "--", "synth-sky", "-o", "assets/sky_latlong.exr", "--width", "512",
+        ]),
+        "lint" => {
+            cargo(&["fmt", "--all", "--", "--check"])?;
+            cargo(&["clippy", "--all-targets", "--", "-D", "warnings"])
+        }
+        _ => Err(format!(
+            "unknown task '{task}'; tasks: setup, test, demo, bench, shaders, gen-assets, lint"
+        )),
+    }
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some((task, rest)) = args.split_first() else {
+        eprintln!("usage: cargo xtask <setup|test|demo|bench|shaders|gen-assets|lint> [args]");
+        return ExitCode::FAILURE;
+    };
+    // Tasks run from the workspace root whatever the caller's directory.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    if let Err(e) = std::env::set_current_dir(&root) {
+        eprintln!("xtask: cannot enter {}: {e}", root.display());
+        return ExitCode::FAILURE;
+    }
+    match run(task, rest) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("{e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,247 @@
+// Direction <-> texture coordinate for the four mappings, texel solid angles and solid-angle
+// densities. The float64 twins are in src/math/mapping.rs; DESIGN.md §1 states the conventions.
+#ifndef ENVLIGHT_MAPPINGS_GLSL
+#define ENVLIGHT_MAPPINGS_GLSL
+#include "generated.glsl"
+
+const float PI = 3.14159265358979;
+const float TAU = 6.28318530717959;
+
+struct Coord {
+    uint layer;
+    vec2 uv;
+};
+
+// atan2 accurate to a few ulps, defined at the origin. GLSL's atan may be off by 4096 ulps
+// (lavapipe's is ~1e-6 rad off), which would show in round trips and in the short arcs of rim
+// texel solid angles. Two half-angle reductions bring |t| under 0.21, where 8 odd Taylor terms
+// are exact in float.
+float atan2_precise(float y, float x) {
+    float ax = abs(x), ay = abs(y);
+    float hi = max(ax, ay);
+    if (hi == 0.0) return 0.0;
+    float t = min(ax, ay) / hi;
+    t = t / (1.0 + sqrt(1.0 + t * t));
+    t = t / (1.0 + sqrt(1.0 + t * t));
+    float t2 = t * t;
+    float a = t * (1.0 + t2 * (-1.0 / 3.0 + t2 * (1.0 / 5.0 + t2 * (-1.0 / 7.0 + t2 * (1.0 / 9.0
+        + t2 * (-1.0 / 11.0 + t2 * (1.0 / 13.0 + t2 * (-1.0 / 15.0))))))));
+    a *= 4.0;
+    if (ay > ax) a = 0.5 * PI - a;
+    if (x < 0.0) a = PI - a;
+    return y < 0.0 ? -a : a;
+}
+
+Coord dir_to_coord(uint m, vec3 d) {
+    Coord c;
+    c.layer = 0u;
+    if (m == MAPPING_LATLONG) {
+        float u = atan2_precise(d.x, -d.z) / TAU;
+        if (u < 0.0) u += 1.0;
+        if (u >= 1.0) u -= 1.0;
+        // atan2 rather than acos(d.y): acos loses half the digits at the poles.
+        c.uv = vec2(u, atan2_precise(length(d.xz), d.y) / PI);
+    } else if (m == MAPPING_ANGULAR) {
+        float rho = length(d.xy);
+        float r = atan2_precise(rho, d.z) / PI;
+        vec2 ab = rho > 0.0 ? r * (d.xy / rho) : (d.z >= 0.0 ? vec2(0.0) : vec2(0.0, -1.0));
+        c.uv = vec2(0.5 * (ab.x + 1.0), 0.5 * (1.0 - ab.y));
+    } else if (m == MAPPING_CUBE) {
+        vec3 a = abs(d);
+        float sc, tc, ma;
+        if (a.x >= a.y && a.x >= a.z) {
+            c.layer = d.x >= 0.0 ? 0u : 1u;
+            sc = d.x >= 0.0 ? -d.z : d.z;
+            tc = -d.y;
+            ma = a.x;
+        } else if (a.y >= a.z) {
+            c.layer = d.y >= 0.0 ? 2u : 3u;
+            sc = d.x;
+            tc = d.y >= 0.0 ? d.z : -d.z;
+            ma = a.y;
+        } else {
+            c.layer = d.z >= 0.0 ? 4u : 5u;
+            sc = d.z >= 0.0 ? d.x : -d.x;
+            tc = -d.y;
+            ma = a.z;
+        }
+        c.uv = 0.5 * (vec2(sc, tc) / ma + 1.0);
+    } else {
+        c.layer = d.y >= 0.0 ? 0u : 1u;
+        float k = 1.0 / (1.0 + abs(d.y));
+        c.uv = 0.5 * (d.xz * k + 1.0);
+    }
+    return c;
+}
+
+vec3 coord_to_dir(uint m, Coord c) {
+    if (m == MAPPING_LATLONG) {
+        float phi = TAU * c.uv.x, theta = PI * c.uv.y;
+        float st = sin(theta);
+        return vec3(st * sin(phi), cos(theta), -st * cos(phi));
+    } else if (m == MAPPING_ANGULAR) {
+        vec2 ab = vec2(2.0 * c.uv.x - 1.0, 1.0 - 2.0 * c.uv.y);
+        float r = length(ab);
+        if (r == 0.0) return vec3(0.0, 0.0, 1.0);
+        float t = PI * r;
+        return vec3(sin(t) * (ab / r), cos(t));
+    } else if (m == MAPPING_CUBE) {
+        vec2 st = 2.0 * c.uv - 1.0;
+        vec3 d;
+        switch (c.layer) {
+            case 0u: d = vec3(1.0, -st.y, -st.x); break;
+            case 1u: d = vec3(-1.0, -st.y, st.x); break;
+            case 2u: d = vec3(st.x, 1.0, st.y); break;
+            case 3u: d = vec3(st.x, -1.0, -st.y); break;
+            case 4u: d = vec3(st.x, -st.y, 1.0); break;
+            default: d = vec3(-st.x, -st.y, -1.0); break;
+        }
+        return normalize(d);
+    } else {
+        vec2 st = 2.0 * c.uv - 1.0;
+        float rho2 = dot(st, st);
+        float k = 1.0 / (1.0 + rho2);
+        float y = (1.0 - rho2) * k;
+        return vec3(2.0 * st.x * k, c.layer == 0u ? y : -y, 2.0 * st.y * k);
+    }
+}
+
+// dω / (du dv) at uv; zero outside the disc of angular and paraboloid maps.
+float density(uint m, vec2 uv) {
+    vec2 ab = 2.0 * uv - 1.0;
+    float r2 = dot(ab, ab);
+    if (m == MAPPING_LATLONG) {
+        return 2.0 * PI * PI * sin(PI * uv.y);
+    } else if (m == MAPPING_ANGULAR) {
+        if (r2 > 1.0) return 0.0;
+        float r = sqrt(r2);
+        return r == 0.0 ? 4.0 * PI * PI : 4.0 * PI * sin(PI * r) / r;
+    } else if (m == MAPPING_CUBE) {
+        float q = 1.0 + r2;
+        return 4.0 / (q * sqrt(q));
+    } else {
+        if (r2 > 1.0) return 0.0;
+        float q = 1.0 + r2;
+        return 16.0 / (q * q);
+    }
+}
+
+// Whether texel (i, j) of a w x h layer is ever read (DESIGN.md: angular texels whose centre is
+// outside the disc hold captions; paraboloid texels that overlap the disc hold its mean).
+bool texel_in_domain(uint m, uvec2 size, ivec2 p) {
+    if (m == MAPPING_ANGULAR) {
+        vec2 ab = 2.0 * (vec2(p) + 0.5) / vec2(size) - 1.0;
+        return dot(ab, ab) <= 1.0;
+    } else if (m == MAPPING_DUAL_PARABOLOID) {
+        vec2 lo = 2.0 * vec2(p) / vec2(size) - 1.0;
+        vec2 hi = 2.0 * vec2(p + 1) / vec2(size) - 1.0;
+        vec2 n = clamp(vec2(0.0), lo, hi);
+        return dot(n, n) < 1.0;
+    }
+    return true;
+}
+
+// 8-point Gauss-Legendre rule on [-1, 1] (exact for degree 15).
+const float GL8_X[4] = float[4](0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363);
+const float GL8_W[4] = float[4](0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763);
+
+// dω / (dx dy) in the map's own [-1,1]² coordinates (cube face, angular disc, paraboloid disc).
+float square_density(uint m, vec2 p) {
+    float r2 = dot(p, p);
+    if (m == MAPPING_CUBE) {
+        float q = 1.0 + r2;
+        return 1.0 / (q * sqrt(q));
+    } else if (m == MAPPING_ANGULAR) {
+        float r = sqrt(r2);
+        return r == 0.0 ? PI * PI : PI * sin(PI * r) / r;
+    }
+    float q = 1.0 + r2;
+    return 4.0 / (q * q);
+}
+
+float gl8_square(uint m, vec2 lo, vec2 hi) {
+    vec2 mid = 0.5 * (lo + hi), half_ = 0.5 * (hi - lo);
+    float s = 0.0;
+    for (int a = 0; a < 8; a++) {
+        float xa = (a < 4 ? -1.0 : 1.0) * GL8_X[a & 3], wa = GL8_W[a & 3];
+        for (int b = 0; b < 8; b++) {
+            float xb = (b < 4 ? -1.0 : 1.0) * GL8_X[b & 3], wb = GL8_W[b & 3];
+            s += wa * wb * square_density(m, mid + half_ * vec2(xa, xb));
+        }
+    }
+    return s * half_.x * half_.y;
+}
+
+// ∫∫ square_density over [lo, hi] ∩ unit disc, for texels the rim cuts: Gauss-Legendre in x
+// over pieces split where the circle crosses the texel's top and bottom edges (so each piece
+// is smooth), and in y over the chord inside the disc. Unlike the divergence theorem used on
+// the CPU, nothing cancels, so slivers keep their relative precision in float.
+float clipped_square(uint m, vec2 lo, vec2 hi) {
+    float xs[6];
+    int n = 0;
+    xs[n++] = lo.x;
+    for (int k = 0; k < 2; k++) {
+        float y = k == 0 ? lo.y : hi.y;
+        if (abs(y) < 1.0) {
+            float e = sqrt((1.0 - y) * (1.0 + y));
+            if (-e > lo.x && -e < hi.x) xs[n++] = -e;
+            if (e > lo.x && e < hi.x) xs[n++] = e;
+        }
+    }
+    xs[n++] = hi.x;
+    for (int i = 1; i < n; i++) {
+        float v = xs[i];
+        int j = i - 1;
+        while (j >= 0 && xs[j] > v) { xs[j + 1] = xs[j]; j--; }
+        xs[j + 1] = v;
+    }
+    float total = 0.0;
+    for (int p = 0; p + 1 < n; p++) {
+        // Pieces wider than 1/4 (maps under 8 texels) are cut further so 8 nodes suffice.
+        int parts = int(ceil((xs[p + 1] - xs[p]) * 4.0));
+        float hx = 0.5 * (xs[p + 1] - xs[p]) / float(max(parts, 1));
+        for (int q = 0; q < parts; q++) {
+            float x0 = xs[p] + 2.0 * hx * float(q);
+            for (int a = 0; a < 8; a++) {
+                // x = x0 + (x1 - x0)(3u² - 2u³) clusters nodes at the piece's ends, where the
+                // chord may shrink like a square root (at x = ±1); the Jacobian 6u(1-u)
+                // smooths that.
+                float u = 0.5 + 0.5 * (a < 4 ? -1.0 : 1.0) * GL8_X[a & 3];
+                float x = x0 + 2.0 * hx * u * u * (3.0 - 2.0 * u);
+                float jac = 6.0 * u * (1.0 - u);
+                if (abs(x) >= 1.0) continue;
+                float e = sqrt((1.0 - x) * (1.0 + x));
+                float ya = max(lo.y, -e), yb = min(hi.y, e);
+                if (yb <= ya) continue;
+                float my = 0.5 * (ya + yb), hy = 0.5 * (yb - ya), inner = 0.0;
+                for (int b = 0; b < 8; b++) {
+                    float y = my + hy * (b < 4 ? -1.0 : 1.0) * GL8_X[b & 3];
+                    inner += GL8_W[b & 3] * square_density(m, vec2(x, y));
+                }
+                total += GL8_W[a & 3] * inner * hy * hx * jac;
+            }
+        }
+    }
+    return total;
+}
+
+bool in_rect(vec2 p, vec2 lo, vec2 hi) {
+    return all(greaterThanEqual(p, lo)) && all(lessThanEqual(p, hi));
+}
+
+// Solid angle of texel (i, j) of a w x h layer (the part inside the disc for angular and
+// paraboloid maps). Closed form for lat-long; 8x8 Gauss-Legendre for cube texels and for disc
+// texels wholly inside; clipped_square for texels the rim cuts.
+float texel_solid_angle(uint m, uvec2 size, ivec2 p) {
+    if (m == MAPPING_LATLONG) {
+        float t0 = PI * float(p.y) / float(size.y), t1 = PI * float(p.y + 1) / float(size.y);
+        return (TAU / float(size.x)) * 2.0 * sin(0.5 * (t0 + t1)) * sin(0.5 * (t1 - t0));
+    }
+    vec2 lo = 2.0 * vec2(p) / vec2(size) - 1.0;
+    vec2 hi = 2.0 * vec2(p + 1) / vec2(size) - 1.0;
+    if (m == MAPPING_CUBE) return gl8_square(m, lo, hi);
+    vec2 far_ = max(abs(lo), abs(hi));
+    if (dot(far_, far_) <= 1.0) return gl8_square(m, lo, hi);
+    return clipped_square(m, lo, hi);
+}
+#endif

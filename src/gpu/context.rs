@@ -1,0 +1,644 @@
+//! The Vulkan context: a headless instance and device that envlight creates, or an engine's own
+//! that it adopts (and then destroys nothing it did not create).
+
+use crate::error::{Error, Result, VkContext};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::ffi::{c_void, CStr};
+use std::mem::ManuallyDrop;
+use std::sync::atomic::{AtomicI64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// Which physical device to use.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum DeviceSelector {
+    /// Prefer a discrete GPU, then an integrated one, then anything else, then a CPU device.
+    #[default]
+    Auto,
+    /// A CPU implementation (Mesa's lavapipe).
+    Cpu,
+    /// The n-th device in the loader's enumeration order.
+    Index(usize),
+    /// The first device whose name contains this text (case-insensitive).
+    Name(String),
+}
+
+impl DeviceSelector {
+    /// Reads `ENVLIGHT_DEVICE`: unset or `auto`; `cpu`, `lavapipe` or `llvmpipe`; a number; or
+    /// part of a device name.
+    pub fn from_env() -> DeviceSelector {
+        match std::env::var("ENVLIGHT_DEVICE") {
+            Ok(s) => DeviceSelector::parse(&s),
+            Err(_) => DeviceSelector::Auto,
+        }
+    }
+
+    /// Parses the same syntax as `ENVLIGHT_DEVICE` and `--device`.
+    pub fn parse(s: &str) -> DeviceSelector {
+        let t = s.trim();
+        match t.to_ascii_lowercase().as_str() {
+            "" | "auto" => DeviceSelector::Auto,
+            "cpu" | "lavapipe" | "llvmpipe" => DeviceSelector::Cpu,
+            _ => match t.parse() {
+                Ok(i) => DeviceSelector::Index(i),
+                Err(_) => DeviceSelector::Name(t.to_string()),
+            },
+        }
+    }
+}
+
+/// Options for [`Context::new`].
+#[derive(Clone, Debug)]
+pub struct ContextOptions {
+    /// Enable the Khronos validation layer and record its messages (on in debug builds and
+    /// whenever `ENVLIGHT_VALIDATION=1`).
+    pub validation: bool,
+    /// Which device.
+    pub device: DeviceSelector,
+}
+
+impl Default for ContextOptions {
+    fn default() -> Self {
+        ContextOptions {
+            validation: cfg!(debug_assertions)
+                || std::env::var("ENVLIGHT_VALIDATION").is_ok_and(|v| v == "1"),
+            device: DeviceSelector::from_env(),
+        }
+    }
+}
+
+/// An engine's own Vulkan objects, for [`Context::adopt`].
+pub struct AdoptInfo {
+    /// The loader entry the engine uses.
+    pub entry: ash::Entry,
+    /// The engine's instance (API version 1.3 or later).
+    pub instance: ash::Instance,
+    /// The physical device behind `device`.
+    pub physical_device: vk::PhysicalDevice,
+    /// The engine's device, created with the Vulkan 1.3 features `synchronization2` and
+    /// `dynamicRendering` enabled.
+    pub device: ash::Device,
+    /// A queue supporting compute and graphics.
+    pub queue: vk::Queue,
+    /// Its family.
+    pub queue_family_index: u32,
+    /// Whether the instance has `VK_EXT_debug_utils` enabled (then envlight names its objects).
+    pub debug_utils: bool,
+}
+
+/// Validation messages at warning or above, kept for tests to assert on.
+#[derive(Default)]
+struct MessageSink {
+    messages: Mutex<Vec<String>>,
+}
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    if !severity.intersects(
+        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+    ) {
+        return vk::FALSE;
+    }
+    // SAFETY: the loader passes valid callback data for the duration of the call.
+    let text = unsafe {
+        data.as_ref()
+            .and_then(|d| d.message_as_c_str())
+            .map(|m| m.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    eprintln!("[vulkan {severity:?}] {text}");
+    // SAFETY: user data is the MessageSink boxed in Shared, which outlives the messenger.
+    if let Some(sink) = unsafe { (user as *const MessageSink).as_ref() } {
+        if let Ok(mut m) = sink.messages.lock() {
+            m.push(format!("{severity:?}: {text}"));
+        }
+    }
+    vk::FALSE
+}
+
+/// Device facts passes need.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    /// The device's name.
+    pub name: String,
+    /// Discrete, integrated, CPU…
+    pub device_type: vk::PhysicalDeviceType,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period: f64,
+    /// Valid bits of timestamps on the queue (0: no timestamps).
+    pub timestamp_valid_bits: u32,
+    /// Largest 2D image dimension.
+    pub max_image_dimension_2d: u32,
+    /// Driver name and version text.
+    pub driver: String,
+}
+
+pub(crate) struct Shared {
+    pub(crate) entry: ash::Entry,
+    pub(crate) instance: ash::Instance,
+    pub(crate) physical: vk::PhysicalDevice,
+    pub(crate) device: ash::Device,
+    pub(crate) queue: Mutex<vk::Queue>,
+    pub(crate) queue_family: u32,
+    pub(crate) info: DeviceInfo,
+    debug_instance: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    debug_device: Option<ash::ext::debug_utils::Device>,
+    allocator: ManuallyDrop<Mutex<Allocator>>,
+    command_pool: Mutex<vk::CommandPool>,
+    live: AtomicI64,
+    owns_device: bool,
+    sink: Box<MessageSink>,
+}
+
+/// A Vulkan device envlight runs its passes on. Cloning is cheap (shared ownership); the device
+/// is torn down when the last clone and the last resource made from it are dropped.
+#[derive(Clone)]
+pub struct Context {
+    pub(crate) shared: Arc<Shared>,
+}
+
+fn no_device_help() -> &'static str {
+    "install a Vulkan driver: `apt-get install mesa-vulkan-drivers` gives Mesa's lavapipe \
+     (CPU), or run `cargo xtask setup`"
+}
+
+impl Context {
+    /// Creates a headless instance and device.
+    pub fn new(opts: &ContextOptions) -> Result<Context> {
+        // SAFETY: loading the system's Vulkan loader runs its initialisers; nothing else to uphold.
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::NoLoader(e.to_string()))?;
+        let sink = Box::<MessageSink>::default();
+
+        let mut layers = Vec::new();
+        let mut extensions = Vec::new();
+        // SAFETY: plain enumeration calls on a loaded entry.
+        let available_layers = unsafe { entry.enumerate_instance_layer_properties() }
+            .vk("enumerating instance layers")?;
+        let available_ext = unsafe { entry.enumerate_instance_extension_properties(None) }
+            .vk("enumerating instance extensions")?;
+        let has_ext = |name: &CStr| {
+            available_ext
+                .iter()
+                .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name))
+        };
+        if opts.validation {
+            if !available_layers
+                .iter()
+                .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER))
+            {
+                return Err(Error::NoDevice(
+                    "validation was requested but VK_LAYER_KHRONOS_validation is not installed: \
+                     `apt-get install vulkan-validationlayers` (or `cargo xtask setup`)"
+                        .into(),
+                ));
+            }
+            layers.push(VALIDATION_LAYER.as_ptr());
+        }
+        let debug_utils = has_ext(ash::ext::debug_utils::NAME);
+        if debug_utils {
+            extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
+        let app = vk::ApplicationInfo::default()
+            .application_name(c"envlight")
+            .engine_name(c"envlight")
+            .api_version(vk::API_VERSION_1_3);
+        let severity = vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+            | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR;
+        let types = vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+            | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+            | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE;
+        let sink_ptr = &*sink as *const MessageSink as *mut c_void;
+        let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+            .message_severity(severity)
+            .message_type(types)
+            .pfn_user_callback(Some(debug_callback))
+            .user_data(sink_ptr);
+        let mut create = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions);
+        if debug_utils && opts.validation {
+            // Also catches messages from instance creation and destruction.
+            create = create.push_next(&mut messenger_info);
+        }
+        // SAFETY: the create info and everything it points to live across the call.
+        let instance = unsafe { entry.create_instance(&create, None) }.map_err(|r| match r {
+            vk::Result::ERROR_INCOMPATIBLE_DRIVER => {
+                Error::NoDevice(format!("no Vulkan 1.3 driver found ({r}); {}", no_device_help()))
+            }
+            r => Error::Vulkan {
+                what: "creating the instance",
+                result: r,
+            },
+        })?;
+        // From here on, a failure must destroy the instance: InstanceGuard does.
+        let guard = InstanceGuard(Some(instance.clone()));
+        let debug_instance = if debug_utils && opts.validation {
+            let di = ash::ext::debug_utils::Instance::new(&entry, &instance);
+            // SAFETY: valid instance; the sink outlives the messenger (destroyed in Shared::drop).
+            let m = unsafe { di.create_debug_utils_messenger(&messenger_info, None) }
+                .vk("creating the debug messenger")?;
+            Some((di, m))
+        } else {
+            None
+        };
+        let result = (|| {
+            let (physical, family) = pick_device(&instance, &opts.device)?;
+            let device = create_device(&instance, physical, family)?;
+            Ok((physical, family, device))
+        })();
+        let (physical, family, device) = match result {
+            Ok(v) => v,
+            Err(e) => {
+                if let Some((di, m)) = &debug_instance {
+                    // SAFETY: the messenger belongs to this instance and nothing uses it now.
+                    unsafe { di.destroy_debug_utils_messenger(*m, None) };
+                }
+                drop(guard);
+                return Err(e);
+            }
+        };
+        std::mem::forget(guard);
+        // SAFETY: queue 0 of the family was requested at device creation.
+        let queue = unsafe { device.get_device_queue(family, 0) };
+        Self::finish(
+            entry,
+            instance,
+            physical,
+            device,
+            queue,
+            family,
+            debug_instance,
+            debug_utils,
+            true,
+            sink,
+        )
+    }
+
+    /// Adopts an engine's instance, device and queue. envlight creates its own allocator,
+    /// command pool and resources on them and destroys only those.
+    ///
+    /// # Safety
+    /// The handles must be valid, `device` must have been created from `physical_device` with
+    /// the features [`AdoptInfo::device`] lists, and they must outlive this context and every
+    /// resource made from it. Submissions to `queue` from elsewhere must be externally
+    /// synchronised with envlight's (envlight waits for its own work before returning).
+    pub unsafe fn adopt(info: AdoptInfo) -> Result<Context> {
+        let AdoptInfo {
+            entry,
+            instance,
+            physical_device,
+            device,
+            queue,
+            queue_family_index,
+            debug_utils,
+        } = info;
+        Self::finish(
+            entry,
+            instance,
+            physical_device,
+            device,
+            queue,
+            queue_family_index,
+            None,
+            debug_utils,
+            false,
+            Box::default(),
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn finish(
+        entry: ash::Entry,
+        instance: ash::Instance,
+        physical: vk::PhysicalDevice,
+        device: ash::Device,
+        queue: vk::Queue,
+        family: u32,
+        debug_instance: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+        debug_utils: bool,
+        owns_device: bool,
+        sink: Box<MessageSink>,
+    ) -> Result<Context> {
+        // SAFETY: valid physical device of this instance.
+        let props = unsafe { instance.get_physical_device_properties(physical) };
+        let families =
+            unsafe { instance.get_physical_device_queue_family_properties(physical) };
+        let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
+        // SAFETY: valid physical device; props2 chain lives across the call.
+        unsafe { instance.get_physical_device_properties2(physical, &mut props2) };
+        let info = DeviceInfo {
+            name: props
+                .device_name_as_c_str()
+                .map(|c| c.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            device_type: props.device_type,
+            timestamp_period: props.limits.timestamp_period as f64,
+            timestamp_valid_bits: families
+                .get(family as usize)
+                .map(|f| f.timestamp_valid_bits)
+                .unwrap_or(0),
+            max_image_dimension_2d: props.limits.max_image_dimension2_d,
+            driver: format!(
+                "{} {}",
+                driver_props
+                    .driver_name_as_c_str()
+                    .map(|c| c.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+                driver_props
+                    .driver_info_as_c_str()
+                    .map(|c| c.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            ),
+        };
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|source| Error::Alloc {
+            what: "the allocator".into(),
+            source,
+        })?;
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(family)
+            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+        // SAFETY: valid device; family index is the queue's.
+        let command_pool =
+            unsafe { device.create_command_pool(&pool_info, None) }.vk("creating a command pool")?;
+        let debug_device = debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let shared = Shared {
+            entry,
+            instance,
+            physical,
+            device,
+            queue: Mutex::new(queue),
+            queue_family: family,
+            info,
+            debug_instance,
+            debug_device,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            command_pool: Mutex::new(command_pool),
+            live: AtomicI64::new(0),
+            owns_device,
+            sink,
+        };
+        shared.name(command_pool, "envlight command pool");
+        Ok(Context {
+            shared: Arc::new(shared),
+        })
+    }
+
+    /// Facts about the device.
+    pub fn info(&self) -> &DeviceInfo {
+        &self.shared.info
+    }
+
+    /// The queue family envlight submits to.
+    pub fn queue_family(&self) -> u32 {
+        self.shared.queue_family
+    }
+
+    /// The ash device, for callers that record their own commands around envlight's.
+    pub fn device(&self) -> &ash::Device {
+        &self.shared.device
+    }
+
+    /// Number of Vulkan objects envlight has created on this context and not yet destroyed
+    /// (buffers, images, views, samplers, pipelines, layouts, pools, fences…).
+    pub fn live_objects(&self) -> i64 {
+        self.shared.live.load(Ordering::SeqCst)
+    }
+
+    /// Validation messages at warning or above recorded so far.
+    pub fn validation_messages(&self) -> Vec<String> {
+        self.shared
+            .sink
+            .messages
+            .lock()
+            .map(|m| m.clone())
+            .unwrap_or_default()
+    }
+
+    /// Records commands with `record`, submits them, and waits for them to finish.
+    pub fn submit_and_wait(
+        &self,
+        what: &'static str,
+        record: impl FnOnce(vk::CommandBuffer) -> Result<()>,
+    ) -> Result<()> {
+        self.shared.submit_and_wait(what, record)
+    }
+}
+
+impl Shared {
+    pub(crate) fn allocator(&self) -> MutexGuard<'_, Allocator> {
+        // A poisoned lock only means another thread panicked mid-allocation; the allocator's
+        // own state is still consistent, so keep going.
+        self.allocator.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    pub(crate) fn track(&self) {
+        self.live.fetch_add(1, Ordering::SeqCst);
+    }
+
+    pub(crate) fn untrack(&self) {
+        self.live.fetch_sub(1, Ordering::SeqCst);
+    }
+
+    /// Names an object for validation messages and debuggers (no-op without debug utils).
+    pub(crate) fn name<H: vk::Handle>(&self, handle: H, name: &str) {
+        if let Some(d) = &self.debug_device {
+            let cname = std::ffi::CString::new(name.replace('\0', " ")).unwrap_or_default();
+            let info = vk::DebugUtilsObjectNameInfoEXT::default()
+                .object_handle(handle)
+                .object_name(&cname);
+            // SAFETY: the handle belongs to this device; the name lives across the call.
+            let _ = unsafe { d.set_debug_utils_object_name(&info) };
+        }
+    }
+
+    pub(crate) fn submit_and_wait(
+        &self,
+        what: &'static str,
+        record: impl FnOnce(vk::CommandBuffer) -> Result<()>,
+    ) -> Result<()> {
+        let d = &self.device;
+        let pool = self.command_pool.lock().unwrap_or_else(|e| e.into_inner());
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(*pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: pool is ours and externally synchronised by the mutex held until the end.
+        let cmd = unsafe { d.allocate_command_buffers(&alloc) }.vk("allocating a command buffer")?[0];
+        let fence_info = vk::FenceCreateInfo::default();
+        let fence = match unsafe { d.create_fence(&fence_info, None) } {
+            Ok(f) => f,
+            Err(r) => {
+                // SAFETY: cmd came from this pool and was never submitted.
+                unsafe { d.free_command_buffers(*pool, &[cmd]) };
+                return Err(Error::Vulkan { what: "creating a fence", result: r });
+            }
+        };
+        self.track();
+        self.name(cmd, what);
+        self.name(fence, what);
+        let result = (|| {
+            let begin = vk::CommandBufferBeginInfo::default()
+                .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            // SAFETY: fresh command buffer from our pool.
+            unsafe { d.begin_command_buffer(cmd, &begin) }.vk("beginning a command buffer")?;
+            record(cmd)?;
+            unsafe { d.end_command_buffer(cmd) }.vk("ending a command buffer")?;
+            let cmds = [cmd];
+            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            let queue = self.queue.lock().unwrap_or_else(|e| e.into_inner());
+            // SAFETY: the queue is externally synchronised by its mutex.
+            unsafe { d.queue_submit(*queue, &[submit], fence) }.vk(what)?;
+            drop(queue);
+            unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("waiting for the GPU")
+        })();
+        // SAFETY: the work is finished (or never submitted), so both can go.
+        unsafe {
+            if result.is_err() {
+                let _ = d.device_wait_idle();
+            }
+            d.destroy_fence(fence, None);
+            d.free_command_buffers(*pool, &[cmd]);
+        }
+        self.untrack();
+        result
+    }
+}
+
+impl Drop for Shared {
+    fn drop(&mut self) {
+        // SAFETY: every resource holds an Arc<Shared>, so none is alive now; after the wait
+        // no work is pending. Destruction runs in reverse order of creation.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            let pool = *self.command_pool.get_mut().unwrap_or_else(|e| e.into_inner());
+            self.device.destroy_command_pool(pool, None);
+            ManuallyDrop::drop(&mut self.allocator);
+            if self.owns_device {
+                self.device.destroy_device(None);
+                if let Some((di, m)) = self.debug_instance.take() {
+                    di.destroy_debug_utils_messenger(m, None);
+                }
+                self.instance.destroy_instance(None);
+            }
+        }
+        let _ = &self.entry;
+        let _ = self.physical;
+    }
+}
+
+/// Destroys an instance if device creation fails half-way.
+struct InstanceGuard(Option<ash::Instance>);
+
+impl Drop for InstanceGuard {
+    fn drop(&mut self) {
+        if let Some(i) = self.0.take() {
+            // SAFETY: no child object of the instance exists when the guard fires.
+            unsafe { i.destroy_instance(None) };
+        }
+    }
+}
+
+fn pick_device(
+    instance: &ash::Instance,
+    selector: &DeviceSelector,
+) -> Result<(vk::PhysicalDevice, u32)> {
+    // SAFETY: valid instance.
+    let devices = unsafe { instance.enumerate_physical_devices() }.vk("enumerating devices")?;
+    if devices.is_empty() {
+        return Err(Error::NoDevice(format!(
+            "the Vulkan loader found no device; {}",
+            no_device_help()
+        )));
+    }
+    let mut candidates = Vec::new();
+    let mut names = Vec::new();
+    for (index, &pd) in devices.iter().enumerate() {
+        // SAFETY: pd was just enumerated from this instance.
+        let props = unsafe { instance.get_physical_device_properties(pd) };
+        let name = props
+            .device_name_as_c_str()
+            .map(|c| c.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        names.push(format!("{index}: {name}"));
+        if props.api_version < vk::API_VERSION_1_3 {
+            continue;
+        }
+        let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+        let want = vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS;
+        let Some(family) = families.iter().position(|f| f.queue_flags.contains(want)) else {
+            continue;
+        };
+        let rank = match props.device_type {
+            vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+            vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+            vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+            vk::PhysicalDeviceType::CPU => 4,
+            _ => 3,
+        };
+        let ok = match selector {
+            DeviceSelector::Auto => true,
+            DeviceSelector::Cpu => props.device_type == vk::PhysicalDeviceType::CPU,
+            DeviceSelector::Index(i) => *i == index,
+            DeviceSelector::Name(n) => name.to_lowercase().contains(&n.to_lowercase()),
+        };
+        if ok {
+            candidates.push((rank, index, pd, family as u32));
+        }
+    }
+    candidates.sort_by_key(|c| (c.0, c.1));
+    candidates
+        .first()
+        .map(|c| (c.2, c.3))
+        .ok_or_else(|| {
+            Error::NoDevice(format!(
+                "no Vulkan 1.3 device with a graphics+compute queue matches {selector:?} \
+                 (devices: {}); {}",
+                names.join(", "),
+                no_device_help()
+            ))
+        })
+}
+
+fn create_device(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    family: u32,
+) -> Result<ash::Device> {
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
+    // SAFETY: valid physical device; the chain lives across the call.
+    unsafe { instance.get_physical_device_features2(physical, &mut f2) };
+    if f13.synchronization2 == vk::FALSE || f13.dynamic_rendering == vk::FALSE {
+        return Err(Error::NoDevice(
+            "the device lacks synchronization2 or dynamicRendering (Vulkan 1.3 core)".into(),
+        ));
+    }
+    let mut enable13 = vk::PhysicalDeviceVulkan13Features::default()
+        .synchronization2(true)
+        .dynamic_rendering(true);
+    let priorities = [1.0f32];
+    let queues = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(family)
+        .queue_priorities(&priorities)];
+    let create = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queues)
+        .push_next(&mut enable13);
+    // SAFETY: valid physical device; the create info lives across the call.
+    unsafe { instance.create_device(physical, &create, None) }.vk("creating the device")
+}

@@ -1,0 +1,160 @@
+//! What GLSL and Rust must agree on, written once: binding numbers, workgroup sizes, mapping
+//! ids, the list of shaders and how they are built.
+//!
+//! This file is self-contained (std only) because `tools/shaderc` includes it by path to write
+//! `glsl/include/generated.glsl` and `spirv/manifest.txt` without building the library.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Descriptor binding numbers, per pass (all in set 0).
+pub mod binding {
+    /// convert: the source map (sampler2DArray, or samplerCube for cube sources).
+    pub const CONVERT_SRC: u32 = 0;
+    /// convert: the destination map (rgba32f image2DArray).
+    pub const CONVERT_DST: u32 = 1;
+    /// mapping_probe: input directions (vec4 storage buffer).
+    pub const PROBE_IN: u32 = 0;
+    /// mapping_probe: results (vec4 storage buffer).
+    pub const PROBE_OUT: u32 = 1;
+    /// copy: the source image (sampler2DArray, read with texelFetch).
+    pub const COPY_SRC: u32 = 0;
+    /// copy: the destination image (rgba32f image2DArray).
+    pub const COPY_DST: u32 = 1;
+    /// busy: the buffer the costly loop writes to.
+    pub const BUSY_OUT: u32 = 0;
+}
+
+/// Workgroup size of 2D compute passes (specialization constants 0 and 1).
+pub const WORKGROUP_2D: [u32; 2] = [8, 8];
+/// Workgroup size of 1D compute passes (specialization constant 0).
+pub const WORKGROUP_1D: u32 = 64;
+/// Mapping ids, in [`crate::math::Mapping`]'s order.
+pub const MAPPING_NAMES: [&str; 4] = ["LATLONG", "ANGULAR", "CUBE", "DUAL_PARABOLOID"];
+
+/// SPIR-V target environment: Vulkan 1.2 (Vulkan 1.3 output uses LocalSizeId, which
+/// validation rejects without maintenance4).
+pub const TARGET_ENV: &str = "vulkan1.2";
+/// Optimisation level handed to shaderc.
+pub const OPTIMIZATION: &str = "performance";
+
+/// Where `generated_header` is written.
+pub const GENERATED_HEADER: &str = "glsl/include/generated.glsl";
+/// Where the hashes of the sources each SPIR-V file was built from are written.
+pub const MANIFEST: &str = "spirv/manifest.txt";
+
+/// A shader stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Compute shader.
+    Compute,
+    /// Vertex shader.
+    Vertex,
+    /// Fragment shader.
+    Fragment,
+}
+
+/// One SPIR-V module: which GLSL file, with which defines.
+#[derive(Clone, Copy, Debug)]
+pub struct ShaderSource {
+    /// File stem of the SPIR-V output in `spirv/` (`NAME.spv`).
+    pub name: &'static str,
+    /// GLSL source file in `glsl/`.
+    pub file: &'static str,
+    /// Stage.
+    pub stage: Stage,
+    /// Preprocessor defines (name, value).
+    pub defines: &'static [(&'static str, &'static str)],
+}
+
+/// Every shader the library uses.
+pub const SHADER_SOURCES: &[ShaderSource] = &[
+    ShaderSource { name: "convert_2d", file: "convert.comp", stage: Stage::Compute, defines: &[] },
+    ShaderSource {
+        name: "convert_cube",
+        file: "convert.comp",
+        stage: Stage::Compute,
+        defines: &[("SRC_CUBE", "1")],
+    },
+    ShaderSource { name: "mapping_probe", file: "mapping_probe.comp", stage: Stage::Compute, defines: &[] },
+    ShaderSource { name: "copy", file: "copy.comp", stage: Stage::Compute, defines: &[] },
+    ShaderSource { name: "busy", file: "busy.comp", stage: Stage::Compute, defines: &[] },
+    ShaderSource { name: "fullscreen_vert", file: "fullscreen.vert", stage: Stage::Vertex, defines: &[] },
+    ShaderSource { name: "flat_frag", file: "flat.frag", stage: Stage::Fragment, defines: &[] },
+];
+
+/// The GLSL header carrying the constants above.
+pub fn generated_header() -> String {
+    let mut s = String::from(
+        "// Generated from src/gpu/layout.rs by `cargo xtask shaders`; do not edit.\n\
+         #ifndef ENVLIGHT_GENERATED_GLSL\n#define ENVLIGHT_GENERATED_GLSL\n",
+    );
+    let b = [
+        ("CONVERT_SRC", binding::CONVERT_SRC),
+        ("CONVERT_DST", binding::CONVERT_DST),
+        ("PROBE_IN", binding::PROBE_IN),
+        ("PROBE_OUT", binding::PROBE_OUT),
+        ("COPY_SRC", binding::COPY_SRC),
+        ("COPY_DST", binding::COPY_DST),
+        ("BUSY_OUT", binding::BUSY_OUT),
+    ];
+    for (name, v) in b {
+        let _ = writeln!(s, "#define BINDING_{name} {v}");
+    }
+    for (i, name) in MAPPING_NAMES.iter().enumerate() {
+        let _ = writeln!(s, "#define MAPPING_{name} {i}u");
+    }
+    s.push_str("#endif\n");
+    s
+}
+
+/// Reads a GLSL file with its `#include "…"` lines expanded from `glsl/include/`.
+pub fn expand_includes(glsl_dir: &Path, file: &str, depth: u32) -> std::io::Result<String> {
+    if depth > 16 {
+        return Err(std::io::Error::other(format!("{file}: includes nest too deep")));
+    }
+    let path = if depth == 0 {
+        glsl_dir.join(file)
+    } else {
+        glsl_dir.join("include").join(file)
+    };
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
+    let mut out = String::new();
+    for line in text.lines() {
+        let t = line.trim();
+        if let Some(rest) = t.strip_prefix("#include") {
+            let name = rest.trim().trim_matches('"');
+            out.push_str(&expand_includes(glsl_dir, name, depth + 1)?);
+        } else {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    Ok(out)
+}
+
+/// FNV-1a hash of everything a SPIR-V module is built from: target, optimisation, defines and
+/// the include-expanded source. `spirv/manifest.txt` records it; a test recomputes it.
+pub fn source_hash(glsl_dir: &Path, src: &ShaderSource) -> std::io::Result<u64> {
+    let mut text = format!("{TARGET_ENV} {OPTIMIZATION} {:?}\n", src.stage);
+    for (k, v) in src.defines {
+        let _ = writeln!(text, "#define {k} {v}");
+    }
+    text.push_str(&expand_includes(glsl_dir, src.file, 0)?);
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.bytes() {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    Ok(h)
+}
+
+/// The manifest's text for the current sources.
+pub fn manifest(glsl_dir: &Path) -> std::io::Result<String> {
+    let mut s = String::new();
+    for src in SHADER_SOURCES {
+        let _ = writeln!(s, "{}.spv {:016x}", src.name, source_hash(glsl_dir, src)?);
+    }
+    Ok(s)
+}

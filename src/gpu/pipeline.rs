@@ -1,0 +1,348 @@
+//! Pipelines built from a [`ShaderId`] and its [`Interface`], and transient descriptor sets.
+
+use super::context::{Context, Shared};
+use super::resources::{Buffer, Image, Sampler};
+use super::shaders::{DescriptorKind, ShaderId};
+use crate::error::{Result, VkContext};
+use ash::vk;
+use std::sync::Arc;
+
+fn shader_module(shared: &Shared, id: ShaderId) -> Result<vk::ShaderModule> {
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(id.spirv()))
+        .map_err(|_| crate::Error::Invalid(format!("spirv/{}.spv is not SPIR-V", id.source().name)))?;
+    let info = vk::ShaderModuleCreateInfo::default().code(&words);
+    // SAFETY: valid device; the words are a SPIR-V module built for Vulkan 1.2.
+    let m = unsafe { shared.device.create_shader_module(&info, None) }.vk("creating a shader module")?;
+    shared.name(m, id.source().name);
+    Ok(m)
+}
+
+/// A descriptor set layout, pipeline layout and pipeline.
+pub struct Pipeline {
+    shared: Arc<Shared>,
+    pub(crate) pipeline: vk::Pipeline,
+    pub(crate) layout: vk::PipelineLayout,
+    pub(crate) set_layout: vk::DescriptorSetLayout,
+    pub(crate) shader: ShaderId,
+    stages: vk::ShaderStageFlags,
+}
+
+impl Pipeline {
+    fn layouts(
+        shared: &Arc<Shared>,
+        shader: ShaderId,
+        stages: vk::ShaderStageFlags,
+    ) -> Result<Pipeline> {
+        let iface = shader.interface();
+        let bindings: Vec<_> = iface
+            .bindings
+            .iter()
+            .map(|&(b, kind)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(kind.vk())
+                    .descriptor_count(1)
+                    .stage_flags(stages)
+            })
+            .collect();
+        let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+        // SAFETY: valid device and create info.
+        let set_layout = unsafe { shared.device.create_descriptor_set_layout(&info, None) }
+            .vk("creating a descriptor set layout")?;
+        shared.track();
+        let mut p = Pipeline {
+            shared: shared.clone(),
+            pipeline: vk::Pipeline::null(),
+            layout: vk::PipelineLayout::null(),
+            set_layout,
+            shader,
+            stages,
+        };
+        shared.name(set_layout, shader.source().name);
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(stages)
+            .offset(0)
+            .size(iface.push_size)];
+        let set_layouts = [set_layout];
+        let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        if iface.push_size > 0 {
+            info = info.push_constant_ranges(&ranges);
+        }
+        // SAFETY: valid device; the set layout is live.
+        p.layout = unsafe { shared.device.create_pipeline_layout(&info, None) }
+            .vk("creating a pipeline layout")?;
+        shared.track();
+        shared.name(p.layout, shader.source().name);
+        Ok(p)
+    }
+
+    /// A compute pipeline; `spec` are the u32 specialization constants 0, 1, … (workgroup
+    /// sizes from [`super::layout`]).
+    pub fn compute(ctx: &Context, shader: ShaderId, spec: &[u32]) -> Result<Pipeline> {
+        let shared = &ctx.shared;
+        let mut p = Pipeline::layouts(shared, shader, vk::ShaderStageFlags::COMPUTE)?;
+        let module = shader_module(shared, shader)?;
+        let entries: Vec<_> = (0..spec.len() as u32)
+            .map(|i| vk::SpecializationMapEntry {
+                constant_id: i,
+                offset: 4 * i,
+                size: 4,
+            })
+            .collect();
+        let data: &[u8] = bytemuck::cast_slice(spec);
+        let spec_info = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(data);
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module)
+            .name(c"main")
+            .specialization_info(&spec_info);
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(p.layout);
+        // SAFETY: valid device, module and layout; the module is destroyed right after.
+        let result = unsafe {
+            shared
+                .device
+                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+        };
+        unsafe { shared.device.destroy_shader_module(module, None) };
+        p.pipeline = result.map_err(|(_, r)| r).vk("creating a compute pipeline")?[0];
+        shared.track();
+        shared.name(p.pipeline, shader.source().name);
+        Ok(p)
+    }
+
+    /// A graphics pipeline drawing a fullscreen triangle into one colour attachment of
+    /// `format` with dynamic rendering, viewport and scissor dynamic.
+    pub fn fullscreen(ctx: &Context, vert: ShaderId, frag: ShaderId, format: vk::Format) -> Result<Pipeline> {
+        let shared = &ctx.shared;
+        assert!(vert.interface().bindings.is_empty() && vert.interface().push_size == 0);
+        let mut p = Pipeline::layouts(shared, frag, vk::ShaderStageFlags::FRAGMENT)?;
+        let vm = shader_module(shared, vert)?;
+        let fm = match shader_module(shared, frag) {
+            Ok(m) => m,
+            Err(e) => {
+                // SAFETY: vm is unused.
+                unsafe { shared.device.destroy_shader_module(vm, None) };
+                return Err(e);
+            }
+        };
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(vm)
+                .name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(fm)
+                .name(c"main"),
+        ];
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
+        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::NONE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let attachments = [vk::PipelineColorBlendAttachmentState::default()
+            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let formats = [format];
+        let mut rendering = vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&formats);
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(p.layout)
+            .push_next(&mut rendering);
+        // SAFETY: valid device, modules and layout; the modules are destroyed right after.
+        let result = unsafe {
+            shared
+                .device
+                .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+        };
+        unsafe {
+            shared.device.destroy_shader_module(vm, None);
+            shared.device.destroy_shader_module(fm, None);
+        }
+        p.pipeline = result.map_err(|(_, r)| r).vk("creating a graphics pipeline")?[0];
+        shared.track();
+        shared.name(p.pipeline, frag.source().name);
+        Ok(p)
+    }
+
+    /// Binds the pipeline, its descriptor set (if any) and push constants.
+    pub(crate) fn bind<P: bytemuck::Pod>(
+        &self,
+        cmd: vk::CommandBuffer,
+        set: Option<&DescriptorSet>,
+        push: &P,
+    ) {
+        let d = &self.shared.device;
+        let point = if self.stages == vk::ShaderStageFlags::COMPUTE {
+            vk::PipelineBindPoint::COMPUTE
+        } else {
+            vk::PipelineBindPoint::GRAPHICS
+        };
+        assert_eq!(
+            std::mem::size_of::<P>() as u32,
+            self.shader.interface().push_size,
+            "push constant type does not match {:?}",
+            self.shader
+        );
+        // SAFETY: cmd is recording; pipeline, layout and set are live and compatible.
+        unsafe {
+            d.cmd_bind_pipeline(cmd, point, self.pipeline);
+            if let Some(s) = set {
+                d.cmd_bind_descriptor_sets(cmd, point, self.layout, 0, &[s.set], &[]);
+            }
+            if std::mem::size_of::<P>() > 0 {
+                d.cmd_push_constants(cmd, self.layout, self.stages, 0, bytemuck::bytes_of(push));
+            }
+        }
+    }
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        let d = &self.shared.device;
+        // SAFETY: no pending work uses the pipeline (passes wait for their submissions).
+        unsafe {
+            if self.pipeline != vk::Pipeline::null() {
+                d.destroy_pipeline(self.pipeline, None);
+                self.shared.untrack();
+            }
+            if self.layout != vk::PipelineLayout::null() {
+                d.destroy_pipeline_layout(self.layout, None);
+                self.shared.untrack();
+            }
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+        self.shared.untrack();
+    }
+}
+
+/// What a binding points at.
+pub enum Bind<'a> {
+    /// An image read through a sampler: its array view, or its cube view when `cube`.
+    Sampled(&'a Image, &'a Sampler, bool),
+    /// A storage image (array view, layout GENERAL).
+    Storage(&'a Image),
+    /// A whole storage buffer.
+    Buffer(&'a Buffer),
+}
+
+/// A descriptor set in a pool of its own, for one submission.
+pub struct DescriptorSet {
+    shared: Arc<Shared>,
+    pool: vk::DescriptorPool,
+    pub(crate) set: vk::DescriptorSet,
+}
+
+impl DescriptorSet {
+    /// Allocates and writes a set for `pipeline`; `binds` must cover its interface exactly.
+    pub fn new(ctx: &Context, pipeline: &Pipeline, binds: &[(u32, Bind<'_>)]) -> Result<DescriptorSet> {
+        let shared = &ctx.shared;
+        let iface = pipeline.shader.interface();
+        assert_eq!(binds.len(), iface.bindings.len(), "{:?}: wrong number of bindings", pipeline.shader);
+        let sizes: Vec<_> = iface
+            .bindings
+            .iter()
+            .map(|&(_, k)| vk::DescriptorPoolSize { ty: k.vk(), descriptor_count: 1 })
+            .collect();
+        let info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(1)
+            .pool_sizes(&sizes);
+        // SAFETY: valid device and create info.
+        let pool = unsafe { shared.device.create_descriptor_pool(&info, None) }
+            .vk("creating a descriptor pool")?;
+        shared.track();
+        shared.name(pool, pipeline.shader.source().name);
+        let mut ds = DescriptorSet { shared: shared.clone(), pool, set: vk::DescriptorSet::null() };
+        let layouts = [pipeline.set_layout];
+        let alloc = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(pool)
+            .set_layouts(&layouts);
+        // SAFETY: the pool has room for exactly this set.
+        ds.set = unsafe { shared.device.allocate_descriptor_sets(&alloc) }
+            .vk("allocating a descriptor set")?[0];
+        let mut image_infos = Vec::new();
+        let mut buffer_infos = Vec::new();
+        for (b, bind) in binds {
+            let kind = iface
+                .bindings
+                .iter()
+                .find(|(n, _)| n == b)
+                .map(|&(_, k)| k)
+                .unwrap_or_else(|| panic!("{:?} has no binding {b}", pipeline.shader));
+            match (bind, kind) {
+                (Bind::Sampled(img, smp, cube), DescriptorKind::SampledImage) => {
+                    image_infos.push((*b, kind, vk::DescriptorImageInfo {
+                        sampler: smp.raw,
+                        image_view: if *cube { img.cube_view } else { img.view },
+                        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    }))
+                }
+                (Bind::Storage(img), DescriptorKind::StorageImage) => {
+                    image_infos.push((*b, kind, vk::DescriptorImageInfo {
+                        sampler: vk::Sampler::null(),
+                        image_view: img.view,
+                        image_layout: vk::ImageLayout::GENERAL,
+                    }))
+                }
+                (Bind::Buffer(buf), DescriptorKind::StorageBuffer) => {
+                    buffer_infos.push((*b, vk::DescriptorBufferInfo {
+                        buffer: buf.raw,
+                        offset: 0,
+                        range: vk::WHOLE_SIZE,
+                    }))
+                }
+                _ => panic!("{:?}: binding {b} is a {kind:?}", pipeline.shader),
+            }
+        }
+        let mut writes = Vec::new();
+        for (b, kind, info) in &image_infos {
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(ds.set)
+                    .dst_binding(*b)
+                    .descriptor_type(kind.vk())
+                    .image_info(std::slice::from_ref(info)),
+            );
+        }
+        for (b, info) in &buffer_infos {
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(ds.set)
+                    .dst_binding(*b)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(std::slice::from_ref(info)),
+            );
+        }
+        // SAFETY: the set and every resource written are live.
+        unsafe { shared.device.update_descriptor_sets(&writes, &[]) };
+        Ok(ds)
+    }
+}
+
+impl Drop for DescriptorSet {
+    fn drop(&mut self) {
+        // SAFETY: the submission using the set has completed.
+        unsafe { self.shared.device.destroy_descriptor_pool(self.pool, None) };
+        self.shared.untrack();
+    }
+}

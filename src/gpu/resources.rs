@@ -1,0 +1,295 @@
+//! RAII buffers, images and samplers holding their gpu-allocator allocation. Each keeps the
+//! context alive, so teardown order is right by construction.
+
+use super::context::{Context, Shared};
+use crate::error::{Error, Result, VkContext};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// A buffer and its memory.
+pub struct Buffer {
+    shared: Arc<Shared>,
+    pub(crate) raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    size: u64,
+}
+
+impl Buffer {
+    /// Creates a buffer of `size` bytes in `location` (CpuToGpu and GpuToCpu are mapped).
+    pub fn new(
+        ctx: &Context,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> Result<Buffer> {
+        assert!(size > 0, "zero-sized buffer {name}");
+        let s = &ctx.shared;
+        let info = vk::BufferCreateInfo::default()
+            .size(size)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid device and create info.
+        let raw = unsafe { s.device.create_buffer(&info, None) }.vk("creating a buffer")?;
+        s.track();
+        let mut buffer = Buffer {
+            shared: s.clone(),
+            raw,
+            allocation: None,
+            size,
+        };
+        s.name(raw, name);
+        // SAFETY: raw is a live buffer of this device.
+        let requirements = unsafe { s.device.get_buffer_memory_requirements(raw) };
+        let allocation = s
+            .allocator()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| Error::Alloc {
+                what: name.to_string(),
+                source,
+            })?;
+        // SAFETY: the allocation satisfies the buffer's requirements and outlives it (Drop).
+        unsafe {
+            s.device
+                .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
+        }
+        .vk("binding buffer memory")?;
+        buffer.allocation = Some(allocation);
+        Ok(buffer)
+    }
+
+    /// Size in bytes.
+    pub fn size(&self) -> u64 {
+        self.size
+    }
+
+    /// The raw handle.
+    pub fn raw(&self) -> vk::Buffer {
+        self.raw
+    }
+
+    /// Copies `data` to the start of a host-visible buffer.
+    pub fn write<T: bytemuck::Pod>(&mut self, data: &[T]) {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let slice = self
+            .allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .unwrap_or_else(|| panic!("write() needs a host-visible buffer"));
+        slice[..bytes.len()].copy_from_slice(bytes);
+    }
+
+    /// Reads `count` values of `T` from the start of a host-visible buffer.
+    pub fn read<T: bytemuck::Pod>(&self, count: usize) -> Vec<T> {
+        let slice = self
+            .allocation
+            .as_ref()
+            .and_then(|a| a.mapped_slice())
+            .unwrap_or_else(|| panic!("read() needs a host-visible buffer"));
+        let n = count * std::mem::size_of::<T>();
+        bytemuck::pod_collect_to_vec(&slice[..n])
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        // SAFETY: every submission using this buffer was waited for before returning.
+        unsafe { self.shared.device.destroy_buffer(self.raw, None) };
+        if let Some(a) = self.allocation.take() {
+            let _ = self.shared.allocator().free(a);
+        }
+        self.shared.untrack();
+    }
+}
+
+/// What kind of image to create.
+#[derive(Clone, Copy, Debug)]
+pub struct ImageDesc {
+    /// Width of one layer.
+    pub width: u32,
+    /// Height of one layer.
+    pub height: u32,
+    /// Array layers (6 for a cube).
+    pub layers: u32,
+    /// Texel format.
+    pub format: vk::Format,
+    /// Usage flags.
+    pub usage: vk::ImageUsageFlags,
+    /// Also create a cube view (needs 6 layers and square layers).
+    pub cube: bool,
+}
+
+/// A 2D array image with its memory, an array view and, for cubes, a cube view.
+pub struct Image {
+    shared: Arc<Shared>,
+    pub(crate) raw: vk::Image,
+    allocation: Option<Allocation>,
+    pub(crate) view: vk::ImageView,
+    pub(crate) cube_view: vk::ImageView,
+    desc: ImageDesc,
+}
+
+impl Image {
+    /// Creates the image, its memory and its views.
+    pub fn new(ctx: &Context, name: &str, desc: ImageDesc) -> Result<Image> {
+        assert!(desc.width > 0 && desc.height > 0 && desc.layers > 0, "empty image {name}");
+        assert!(!desc.cube || (desc.layers == 6 && desc.width == desc.height));
+        let s = &ctx.shared;
+        let max = s.info.max_image_dimension_2d;
+        if desc.width > max || desc.height > max {
+            return Err(Error::Invalid(format!(
+                "{name}: {} x {} exceeds the device's largest image side ({max})",
+                desc.width, desc.height
+            )));
+        }
+        let info = vk::ImageCreateInfo::default()
+            .flags(if desc.cube {
+                vk::ImageCreateFlags::CUBE_COMPATIBLE
+            } else {
+                vk::ImageCreateFlags::empty()
+            })
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(desc.format)
+            .extent(vk::Extent3D {
+                width: desc.width,
+                height: desc.height,
+                depth: 1,
+            })
+            .mip_levels(1)
+            .array_layers(desc.layers)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(desc.usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: valid device and create info.
+        let raw = unsafe { s.device.create_image(&info, None) }.vk("creating an image")?;
+        s.track();
+        let mut image = Image {
+            shared: s.clone(),
+            raw,
+            allocation: None,
+            view: vk::ImageView::null(),
+            cube_view: vk::ImageView::null(),
+            desc,
+        };
+        s.name(raw, name);
+        // SAFETY: raw is a live image of this device.
+        let requirements = unsafe { s.device.get_image_memory_requirements(raw) };
+        let allocation = s
+            .allocator()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| Error::Alloc {
+                what: name.to_string(),
+                source,
+            })?;
+        // SAFETY: the allocation satisfies the image's requirements and outlives it (Drop).
+        unsafe { s.device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }
+            .vk("binding image memory")?;
+        image.allocation = Some(allocation);
+        image.view = image.make_view(vk::ImageViewType::TYPE_2D_ARRAY, desc.layers, name)?;
+        if desc.cube {
+            image.cube_view = image.make_view(vk::ImageViewType::CUBE, 6, name)?;
+        }
+        Ok(image)
+    }
+
+    fn make_view(&self, ty: vk::ImageViewType, layers: u32, name: &str) -> Result<vk::ImageView> {
+        let info = vk::ImageViewCreateInfo::default()
+            .image(self.raw)
+            .view_type(ty)
+            .format(self.desc.format)
+            .subresource_range(
+                vk::ImageSubresourceRange::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .level_count(1)
+                    .layer_count(layers),
+            );
+        // SAFETY: the image is live and bound to memory.
+        let v = unsafe { self.shared.device.create_image_view(&info, None) }
+            .vk("creating an image view")?;
+        self.shared.track();
+        self.shared.name(v, &format!("{name} ({ty:?} view)"));
+        Ok(v)
+    }
+
+    /// The description it was created with.
+    pub fn desc(&self) -> &ImageDesc {
+        &self.desc
+    }
+
+    /// The raw handle.
+    pub fn raw(&self) -> vk::Image {
+        self.raw
+    }
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        let d = &self.shared.device;
+        // SAFETY: every submission using this image was waited for before returning.
+        unsafe {
+            for v in [self.cube_view, self.view] {
+                if v != vk::ImageView::null() {
+                    d.destroy_image_view(v, None);
+                    self.shared.untrack();
+                }
+            }
+            d.destroy_image(self.raw, None);
+        }
+        if let Some(a) = self.allocation.take() {
+            let _ = self.shared.allocator().free(a);
+        }
+        self.shared.untrack();
+    }
+}
+
+/// A sampler.
+pub struct Sampler {
+    shared: Arc<Shared>,
+    pub(crate) raw: vk::Sampler,
+}
+
+impl Sampler {
+    /// A bilinear sampler clamping to the edge (cube views filter across faces regardless).
+    pub fn linear_clamp(ctx: &Context, name: &str) -> Result<Sampler> {
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .max_lod(0.0);
+        // SAFETY: valid device and create info.
+        let raw = unsafe { ctx.shared.device.create_sampler(&info, None) }.vk("creating a sampler")?;
+        ctx.shared.track();
+        ctx.shared.name(raw, name);
+        Ok(Sampler {
+            shared: ctx.shared.clone(),
+            raw,
+        })
+    }
+}
+
+impl Drop for Sampler {
+    fn drop(&mut self) {
+        // SAFETY: no pending work uses it (passes wait for their submissions).
+        unsafe { self.shared.device.destroy_sampler(self.raw, None) };
+        self.shared.untrack();
+    }
+}

@@ -1,0 +1,134 @@
+//! The SPIR-V modules (committed in `spirv/`, built by `cargo xtask shaders`) and the interface
+//! each pipeline expects of them. A test checks the interface against the SPIR-V itself.
+
+use super::layout::{binding, ShaderSource, SHADER_SOURCES};
+use ash::vk;
+
+/// A shader module envlight uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ShaderId {
+    /// Resampling between mappings from a 2D-array source.
+    Convert2d,
+    /// Resampling between mappings from a cube source.
+    ConvertCube,
+    /// Mapping functions exposed for tests.
+    MappingProbe,
+    /// A plain texel copy (the benchmark floor).
+    Copy,
+    /// A deliberately costly dispatch (timestamp test).
+    Busy,
+    /// Fullscreen triangle vertex shader.
+    FullscreenVert,
+    /// Flat colour fragment shader.
+    FlatFrag,
+}
+
+/// The kind of a descriptor binding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DescriptorKind {
+    /// A combined image sampler.
+    SampledImage,
+    /// A storage image.
+    StorageImage,
+    /// A storage buffer.
+    StorageBuffer,
+}
+
+impl DescriptorKind {
+    /// The Vulkan descriptor type.
+    pub fn vk(self) -> vk::DescriptorType {
+        match self {
+            DescriptorKind::SampledImage => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            DescriptorKind::StorageImage => vk::DescriptorType::STORAGE_IMAGE,
+            DescriptorKind::StorageBuffer => vk::DescriptorType::STORAGE_BUFFER,
+        }
+    }
+}
+
+/// Descriptor bindings (set 0) and push-constant size a module expects.
+#[derive(Clone, Copy, Debug)]
+pub struct Interface {
+    /// (binding, kind) pairs.
+    pub bindings: &'static [(u32, DescriptorKind)],
+    /// Size in bytes of the push-constant block (0 for none).
+    pub push_size: u32,
+}
+
+macro_rules! spv {
+    ($name:literal) => {
+        include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/spirv/", $name, ".spv"))
+    };
+}
+
+impl ShaderId {
+    /// Every module.
+    pub const ALL: [ShaderId; 7] = [
+        ShaderId::Convert2d,
+        ShaderId::ConvertCube,
+        ShaderId::MappingProbe,
+        ShaderId::Copy,
+        ShaderId::Busy,
+        ShaderId::FullscreenVert,
+        ShaderId::FlatFrag,
+    ];
+
+    /// The build recipe of this module.
+    pub fn source(self) -> &'static ShaderSource {
+        let name = match self {
+            ShaderId::Convert2d => "convert_2d",
+            ShaderId::ConvertCube => "convert_cube",
+            ShaderId::MappingProbe => "mapping_probe",
+            ShaderId::Copy => "copy",
+            ShaderId::Busy => "busy",
+            ShaderId::FullscreenVert => "fullscreen_vert",
+            ShaderId::FlatFrag => "flat_frag",
+        };
+        SHADER_SOURCES
+            .iter()
+            .find(|s| s.name == name)
+            .unwrap_or_else(|| panic!("{name} missing from SHADER_SOURCES"))
+    }
+
+    /// The committed SPIR-V.
+    pub fn spirv(self) -> &'static [u8] {
+        match self {
+            ShaderId::Convert2d => spv!("convert_2d"),
+            ShaderId::ConvertCube => spv!("convert_cube"),
+            ShaderId::MappingProbe => spv!("mapping_probe"),
+            ShaderId::Copy => spv!("copy"),
+            ShaderId::Busy => spv!("busy"),
+            ShaderId::FullscreenVert => spv!("fullscreen_vert"),
+            ShaderId::FlatFrag => spv!("flat_frag"),
+        }
+    }
+
+    /// What the pipeline built on this module binds.
+    pub fn interface(self) -> Interface {
+        use crate::passes::{convert::ConvertPush, diagnostics::BusyPush, probe::ProbePush};
+        use crate::passes::copy::CopyPush;
+        use DescriptorKind::*;
+        let size = |n: usize| n as u32;
+        match self {
+            ShaderId::Convert2d | ShaderId::ConvertCube => Interface {
+                bindings: &[(binding::CONVERT_SRC, SampledImage), (binding::CONVERT_DST, StorageImage)],
+                push_size: size(std::mem::size_of::<ConvertPush>()),
+            },
+            ShaderId::MappingProbe => Interface {
+                bindings: &[(binding::PROBE_IN, StorageBuffer), (binding::PROBE_OUT, StorageBuffer)],
+                push_size: size(std::mem::size_of::<ProbePush>()),
+            },
+            ShaderId::Copy => Interface {
+                bindings: &[(binding::COPY_SRC, SampledImage), (binding::COPY_DST, StorageImage)],
+                push_size: size(std::mem::size_of::<CopyPush>()),
+            },
+            ShaderId::Busy => Interface {
+                bindings: &[(binding::BUSY_OUT, StorageBuffer)],
+                push_size: size(std::mem::size_of::<BusyPush>()),
+            },
+            ShaderId::FullscreenVert | ShaderId::FlatFrag => Interface {
+                bindings: &[],
+                push_size: 0,
+            },
+        }
+    }
+}

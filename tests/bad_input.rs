@@ -1,0 +1,210 @@
+//! Bad files and a missing driver get clear errors naming the file and the problem; never a
+//! panic, a hang or a silently wrong image.
+
+use envlight::io::{self, LoadOptions, Sanitize};
+use envlight::math::synth::smooth_env;
+use envlight::math::Mapping;
+use envlight::EnvMap;
+use std::path::{Path, PathBuf};
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bad_input");
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// Loads and expects an error whose text names the file and contains every `words`.
+fn expect_error(path: &Path, opts: &LoadOptions, words: &[&str]) {
+    match io::load(path, opts) {
+        Ok(m) => panic!("{} loaded ({}x{}) but should not", path.display(), m.width, m.height),
+        Err(e) => {
+            let text = e.to_string();
+            assert!(text.contains(&path.display().to_string()), "error does not name the file: {text}");
+            for w in words {
+                assert!(text.to_lowercase().contains(&w.to_lowercase()), "error '{text}' lacks '{w}'");
+            }
+        }
+    }
+}
+
+fn good_map() -> EnvMap {
+    EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, smooth_env)
+}
+
+#[test]
+fn truncated_and_corrupt_exr() {
+    let p = tmp("good.exr");
+    io::save_exr(&good_map(), &p).unwrap();
+    let bytes = std::fs::read(&p).unwrap();
+    assert!(io::load(&p, &LoadOptions::default()).is_ok());
+    for cut in [8, 100, bytes.len() / 2, bytes.len() - 10] {
+        let q = tmp(&format!("truncated_{cut}.exr"));
+        std::fs::write(&q, &bytes[..cut]).unwrap();
+        expect_error(&q, &LoadOptions::default(), &["exr"]);
+    }
+    let mut corrupt = bytes.clone();
+    for b in corrupt.iter_mut().skip(300).step_by(7) {
+        *b ^= 0x5a;
+    }
+    let q = tmp("corrupt.exr");
+    std::fs::write(&q, &corrupt).unwrap();
+    // A corrupt body either fails to decode or decodes to garbage that the NaN/Inf/negative
+    // check refuses; it must never load silently as a valid-looking image of the right power.
+    if let Ok(m) = io::load(&q, &LoadOptions::default()) {
+        let s = m.stats();
+        assert_eq!(s.nan + s.inf + s.negative, 0);
+    }
+}
+
+fn write_hdr_header(w: &str) -> Vec<u8> {
+    format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n{w}\n").into_bytes()
+}
+
+#[test]
+fn truncated_and_absurd_radiance_hdr() {
+    let good = tmp("good.hdr");
+    // A small valid file: flat RGBE scanlines (width < 8 is never run-length encoded).
+    let mut bytes = write_hdr_header("-Y 2 +X 4");
+    for _ in 0..8 {
+        bytes.extend_from_slice(&[128, 64, 32, 129]);
+    }
+    std::fs::write(&good, &bytes).unwrap();
+    let m = io::load(&good, &LoadOptions::default()).unwrap();
+    assert_eq!((m.width, m.height, m.mapping), (4, 2, Mapping::LatLong));
+    assert!((m.texel(0, 0, 0)[0] - 1.0).abs() < 1e-6);
+
+    let cut = tmp("truncated.hdr");
+    std::fs::write(&cut, &bytes[..bytes.len() - 12]).unwrap();
+    expect_error(&cut, &LoadOptions::default(), &["radiance"]);
+
+    let absurd = tmp("absurd.hdr");
+    std::fs::write(&absurd, write_hdr_header("-Y 1000000 +X 1000000")).unwrap();
+    expect_error(&absurd, &LoadOptions::default(), &["1000000", "limit"]);
+
+    let zero = tmp("zero.hdr");
+    std::fs::write(&zero, write_hdr_header("-Y 0 +X 4")).unwrap();
+    assert!(io::load(&zero, &LoadOptions::default()).is_err());
+
+    let garbage = tmp("garbage.hdr");
+    std::fs::write(&garbage, b"#?RADIANCE\nthis is not a header\x00\x01\x02").unwrap();
+    expect_error(&garbage, &LoadOptions::default(), &[]);
+}
+
+#[test]
+fn truncated_and_absurd_dds() {
+    let n = 8;
+    let faces = envlight::math::synth::bake(Mapping::Cube, n, n, 2, smooth_env);
+    let good = tmp("good.dds");
+    io::write_dds_cube(&good, n, &faces).unwrap();
+    let m = io::load(&good, &LoadOptions::default()).unwrap();
+    assert_eq!(m.mapping, Mapping::Cube);
+    // Half floats: 11 bits of mantissa.
+    for (a, b) in m.texels.iter().zip(&faces) {
+        for k in 0..3 {
+            assert!((a[k] - b[k]).abs() <= b[k].abs() * 1e-3);
+        }
+    }
+    let bytes = std::fs::read(&good).unwrap();
+    for cut in [0usize, 50, 128, bytes.len() - 1] {
+        let q = tmp(&format!("truncated_{cut}.dds"));
+        std::fs::write(&q, &bytes[..cut]).unwrap();
+        expect_error(&q, &LoadOptions::default(), &[if cut == 0 { "empty" } else { "dds" }]);
+    }
+    let mut absurd = bytes.clone();
+    absurd[12..16].copy_from_slice(&1_000_000u32.to_le_bytes());
+    absurd[16..20].copy_from_slice(&1_000_000u32.to_le_bytes());
+    let q = tmp("absurd.dds");
+    std::fs::write(&q, &absurd).unwrap();
+    expect_error(&q, &LoadOptions::default(), &["1000000", "limit"]);
+    let mut zero = bytes.clone();
+    zero[16..20].copy_from_slice(&0u32.to_le_bytes());
+    let q = tmp("zero.dds");
+    std::fs::write(&q, &zero).unwrap();
+    expect_error(&q, &LoadOptions::default(), &["zero size"]);
+    let mut fmt = bytes;
+    fmt[84..88].copy_from_slice(&71u32.to_le_bytes());
+    let q = tmp("bc1.dds");
+    std::fs::write(&q, &fmt).unwrap();
+    expect_error(&q, &LoadOptions::default(), &["unsupported"]);
+}
+
+#[test]
+fn pfm_round_trip_and_truncation() {
+    let map = good_map();
+    let p = tmp("good.pfm");
+    io::write_pfm(&p, map.width, map.height, &map.texels).unwrap();
+    let back = io::load(&p, &LoadOptions::default()).unwrap();
+    assert_eq!(back, map);
+    let bytes = std::fs::read(&p).unwrap();
+    let q = tmp("truncated.pfm");
+    std::fs::write(&q, &bytes[..bytes.len() - 4]).unwrap();
+    expect_error(&q, &LoadOptions::default(), &["truncated"]);
+    let q = tmp("absurd.pfm");
+    std::fs::write(&q, b"PF\n1000000 1000000\n-1.0\n").unwrap();
+    expect_error(&q, &LoadOptions::default(), &["limit"]);
+    let q = tmp("badheader.pfm");
+    std::fs::write(&q, b"PF\nabc 3\n-1.0\n").unwrap();
+    expect_error(&q, &LoadOptions::default(), &["width"]);
+}
+
+#[test]
+fn nan_inf_and_negative_texels_are_refused_or_sanitised() {
+    let mut map = good_map();
+    map.texels[5][0] = f32::NAN;
+    map.texels[6][1] = f32::INFINITY;
+    map.texels[7][2] = -1.0;
+    map.texels[8] = [f32::NEG_INFINITY; 3];
+    let p = tmp("invalid.pfm");
+    io::write_pfm(&p, map.width, map.height, &map.texels).unwrap();
+    expect_error(&p, &LoadOptions::default(), &["1 NaN", "2 infinite", "2 negative", "--sanitize"]);
+    let opts = LoadOptions { sanitize: Sanitize::Zero, ..Default::default() };
+    let clean = io::load(&p, &opts).unwrap();
+    let s = clean.stats();
+    assert_eq!(s.nan + s.inf + s.negative, 0);
+    assert_eq!(clean.texels[5], [0.0, map.texels[5][1], map.texels[5][2]]);
+    assert_eq!(clean.texels[8], [0.0; 3]);
+}
+
+#[test]
+fn unknown_format_and_shape_and_missing_file() {
+    let p = tmp("notes.txt");
+    std::fs::write(&p, b"hello").unwrap();
+    expect_error(&p, &LoadOptions::default(), &["unrecognised"]);
+    let q = tmp("odd.pfm");
+    io::write_pfm(&q, 5, 3, &vec![[1.0; 3]; 15]).unwrap();
+    expect_error(&q, &LoadOptions::default(), &["--mapping"]);
+    let ok = io::load(&q, &LoadOptions { mapping: Some(Mapping::LatLong), ..Default::default() });
+    assert!(ok.is_ok());
+    let bad = io::load(&q, &LoadOptions { mapping: Some(Mapping::Cube), ..Default::default() });
+    assert!(bad.unwrap_err().to_string().contains("cannot hold a cube"));
+    expect_error(&tmp("does_not_exist.exr"), &LoadOptions::default(), &[]);
+}
+
+#[test]
+fn saved_cube_and_paraboloid_load_back_with_their_mapping() {
+    for m in [Mapping::Cube, Mapping::DualParaboloid, Mapping::Angular] {
+        let map = EnvMap::from_fn(m, 8, 8, 2, smooth_env);
+        let p = tmp(&format!("saved_{}.exr", m.name()));
+        io::save_exr(&map, &p).unwrap();
+        let back = io::load(&p, &LoadOptions::default()).unwrap();
+        assert_eq!(back, map);
+    }
+}
+
+/// With no Vulkan driver the program says what to install (checked in a child process, since
+/// the loader reads its driver list from the environment once).
+#[test]
+fn missing_driver_names_what_to_install() {
+    let exe = env!("CARGO_BIN_EXE_envlight");
+    let out = std::process::Command::new(exe)
+        .arg("devices")
+        .env("VK_DRIVER_FILES", "/nonexistent/envlight_icd.json")
+        .env("VK_ICD_FILENAMES", "/nonexistent/envlight_icd.json")
+        .env_remove("ENVLIGHT_DEVICE")
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("mesa-vulkan-drivers"), "stderr: {err}");
+    assert!(!err.contains("panicked"), "stderr: {err}");
+}

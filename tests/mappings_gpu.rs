@@ -1,0 +1,105 @@
+//! The GLSL mapping functions against the float64 ones: round trips and texel solid angles.
+
+mod common;
+
+use envlight::math::synth::stress_directions;
+use envlight::math::Mapping;
+use envlight::passes::probe::MappingProbe;
+use glam::DVec3;
+
+fn angle(a: DVec3, b: DVec3) -> f64 {
+    a.cross(b).length().atan2(a.dot(b))
+}
+
+#[test]
+fn glsl_round_trip_under_1e5_rad() {
+    let ctx = common::ctx();
+    {
+        let probe = MappingProbe::new(&ctx).unwrap();
+        let dirs64 = stress_directions();
+        assert!(dirs64.len() >= 100_000);
+        let dirs: Vec<[f32; 3]> = dirs64.iter().map(|d| [d.x as f32, d.y as f32, d.z as f32]).collect();
+        for m in Mapping::ALL {
+            let out = probe.round_trip(m, &dirs).unwrap();
+            let mut worst = (0.0f64, DVec3::ZERO);
+            for (d, r) in dirs.iter().zip(&out) {
+                // The f32 input, renormalised in f64, is the truth the GPU must return.
+                let d = DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64).normalize();
+                let back = DVec3::new(r.dir[0] as f64, r.dir[1] as f64, r.dir[2] as f64);
+                assert!(back.is_finite(), "{m:?}: non-finite direction for {d}");
+                assert!((0.0..=1.0).contains(&r.uv[0]) && (0.0..=1.0).contains(&r.uv[1]), "{m:?} {d}: uv {:?}", r.uv);
+                assert!(r.layer < m.layers());
+                // The GPU's face or half must be the f64 one except on exact ties.
+                let e = angle(d, back.normalize());
+                if e > worst.0 {
+                    worst = (e, d);
+                }
+            }
+            assert!(worst.0 < 1e-5, "{m:?}: worst GLSL round trip {:e} rad at {}", worst.0, worst.1);
+            eprintln!("{m:?}: worst GLSL round trip {:.2e} rad", worst.0);
+        }
+    }
+    common::finish(ctx);
+}
+
+#[test]
+fn glsl_coordinates_match_f64() {
+    // Same texture coordinates as the float64 oracle, to f32 precision, away from ties.
+    let ctx = common::ctx();
+    {
+        let probe = MappingProbe::new(&ctx).unwrap();
+        let dirs64 = envlight::math::synth::fibonacci_sphere(20_000);
+        let dirs: Vec<[f32; 3]> = dirs64.iter().map(|d| [d.x as f32, d.y as f32, d.z as f32]).collect();
+        for m in Mapping::ALL {
+            let out = probe.round_trip(m, &dirs).unwrap();
+            for (d, r) in dirs.iter().zip(&out) {
+                let d = DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64).normalize();
+                let c = m.dir_to_coord(d);
+                if c.layer != r.layer {
+                    continue; // a face/half tie decided by the last bit
+                }
+                let du = (c.u - r.uv[0] as f64).abs();
+                let du = du.min(1.0 - du); // the lat-long seam wraps
+                let dv = (c.v - r.uv[1] as f64).abs();
+                assert!(du < 2e-6 && dv < 2e-6, "{m:?} {d}: f64 ({}, {}) GLSL {:?}", c.u, c.v, r.uv);
+            }
+        }
+    }
+    common::finish(ctx);
+}
+
+#[test]
+fn glsl_solid_angles_sum_to_4pi_and_match_f64() {
+    let ctx = common::ctx();
+    {
+        let probe = MappingProbe::new(&ctx).unwrap();
+        for m in Mapping::ALL {
+            for n in [1u32, 2, 3, 7, 64, 255, 512] {
+                let (w, h) = if m == Mapping::LatLong { (2 * n, n) } else { (n, n) };
+                let gpu = probe.solid_angles(m, w, h).unwrap();
+                let mut sum = 0.0f64;
+                let mut worst_rel = 0.0f64;
+                let mut worst_at = (0, 0, 0.0, 0.0);
+                for j in 0..h {
+                    for i in 0..w {
+                        let g = gpu[(j * w + i) as usize] as f64;
+                        let f = m.texel_solid_angle(w, h, i, j);
+                        assert!(g.is_finite() && g >= 0.0, "{m:?} {w}x{h} ({i},{j}): {g}");
+                        sum += g;
+                        // Rim texels can hold slivers; compare them against the texel scale.
+                        let scale = f.max(4.0 * std::f64::consts::PI / (w * h * m.layers()) as f64 * 1e-2);
+                        if (g - f).abs() / scale > worst_rel {
+                            worst_rel = (g - f).abs() / scale;
+                            worst_at = (i, j, g, f);
+                        }
+                    }
+                }
+                let total = sum * m.layers() as f64;
+                let rel = (total / (4.0 * std::f64::consts::PI) - 1.0).abs();
+                assert!(rel < 1e-5, "{m:?} {w}x{h}: GPU sum {total} rel err {rel:e}");
+                assert!(worst_rel < 2e-3, "{m:?} {w}x{h}: worst texel rel err {worst_rel:e} at {worst_at:?}");
+            }
+        }
+    }
+    common::finish(ctx);
+}
