@@ -1,7 +1,8 @@
 #version 460
 // Resamples an environment map into another mapping. Each output texel is the solid-angle-
-// weighted mean of ss x ss samples spread over its footprint (inside the disc for angular and
-// paraboloid outputs), so minification filters instead of aliasing. Built twice: with SRC_CUBE
+// weighted mean of ss x ss samples spread over its footprint, so minification filters instead
+// of aliasing. Angular and paraboloid footprints use the mapping continued past the disc's rim
+// (see density_continued). Built twice: with SRC_CUBE
 // the source is a cube view (hardware filtering crosses faces), otherwise a 2D array read with
 // masked bilinear filtering that never touches texels outside the source's domain.
 #extension GL_GOOGLE_include_directive : require
@@ -26,6 +27,16 @@ layout(push_constant) uniform Push {
     uint pad;
 } pc;
 
+// Polar angle of the solid-angle centroid of lat-long row j (rows of height h; rows -1 and H
+// are rows 0 and H-1 seen across the pole): θm + cot θm · (1 - x cot x), x = h/2, with the
+// bracket's series so nothing cancels.
+float row_centroid(int j, float h) {
+    float tm = (float(j) + 0.5) * h;
+    float x2 = 0.25 * h * h;
+    float k = x2 * (1.0 / 3.0 + x2 * (1.0 / 45.0 + x2 * (2.0 / 945.0)));
+    return tm + cos(tm) / sin(tm) * k;
+}
+
 vec3 sample_src(vec3 d) {
     vec3 f = vec3(dot(pc.world_to_file[0].xyz, d), dot(pc.world_to_file[1].xyz, d),
                   dot(pc.world_to_file[2].xyz, d));
@@ -37,12 +48,35 @@ vec3 sample_src(vec3 d) {
     vec2 p = c.uv * vec2(size) - 0.5;
     ivec2 i0 = ivec2(floor(p));
     vec2 t = p - vec2(i0);
+    if (pc.src_mapping == MAPPING_LATLONG) {
+        // A lat-long texel holds the mean of its footprint, whose centroid lies nearer the
+        // equator than its centre (by h/6 in the polar rows). Interpolating between centroids
+        // keeps reconstruction second-order accurate up to the poles.
+        float h = PI / float(size.y), theta = PI * c.uv.y;
+        float c0 = row_centroid(i0.y, h), c1 = row_centroid(i0.y + 1, h);
+        if (theta < c0) {
+            i0.y -= 1;
+            c1 = c0;
+            c0 = row_centroid(i0.y, h);
+        } else if (theta >= c1) {
+            i0.y += 1;
+            c0 = c1;
+            c1 = row_centroid(i0.y + 1, h);
+        }
+        t.y = clamp((theta - c0) / (c1 - c0), 0.0, 1.0);
+    }
     vec3 acc = vec3(0.0);
     float wsum = 0.0;
     vec3 nearest = vec3(0.0);
     for (int k = 0; k < 4; k++) {
         ivec2 q = i0 + ivec2(k & 1, k >> 1);
         if (pc.src_mapping == MAPPING_LATLONG) {
+            // Over a pole the neighbouring row is the same row half a turn away.
+            if (q.y < 0) {
+                q = ivec2(q.x + size.x / 2, -1 - q.y);
+            } else if (q.y >= size.y) {
+                q = ivec2(q.x + size.x / 2, 2 * size.y - 1 - q.y);
+            }
             q.x = (q.x % size.x + size.x) % size.x;  // u wraps around the seam
         }
         q = clamp(q, ivec2(0), size - 1);
@@ -61,29 +95,23 @@ vec3 sample_src(vec3 d) {
 void main() {
     uvec3 id = gl_GlobalInvocationID;
     if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
-    vec3 acc = vec3(0.0);
-    float wsum = 0.0;
-    float inv = 1.0 / float(pc.ss);
-    for (uint b = 0u; b < pc.ss; b++) {
-        for (uint a = 0u; a < pc.ss; a++) {
-            Coord c;
-            c.layer = id.z;
-            c.uv = (vec2(id.xy) + (vec2(a, b) + 0.5) * inv) / vec2(pc.dst_size);
-            float w = density(pc.dst_mapping, c.uv);
-            if (w <= 0.0) continue;
-            acc += w * sample_src(coord_to_dir(pc.dst_mapping, c));
-            wsum += w;
-        }
-    }
     vec3 result = vec3(0.0);
-    if (wsum > 0.0) {
-        result = acc / wsum;
-    } else if (pc.dst_mapping == MAPPING_DUAL_PARABOLOID) {
-        // Outside the disc a paraboloid texel holds the continuation, so rim reads stay sane.
-        Coord c;
-        c.layer = id.z;
-        c.uv = (vec2(id.xy) + 0.5) / vec2(pc.dst_size);
-        result = sample_src(coord_to_dir(pc.dst_mapping, c));
+    // Angular texels centred outside the disc are never read: they stay black.
+    if (texel_in_domain(pc.dst_mapping, pc.dst_size, ivec2(id.xy)) || pc.dst_mapping != MAPPING_ANGULAR) {
+        vec3 acc = vec3(0.0);
+        float wsum = 0.0;
+        float inv = 1.0 / float(pc.ss);
+        for (uint b = 0u; b < pc.ss; b++) {
+            for (uint a = 0u; a < pc.ss; a++) {
+                Coord c;
+                c.layer = id.z;
+                c.uv = (vec2(id.xy) + (vec2(a, b) + 0.5) * inv) / vec2(pc.dst_size);
+                float w = density_continued(pc.dst_mapping, c.uv);
+                acc += w * sample_src(coord_to_dir(pc.dst_mapping, c));
+                wsum += w;
+            }
+        }
+        result = wsum > 0.0 ? acc / wsum : vec3(0.0);
     }
     imageStore(dst, ivec3(id), vec4(result, 1.0));
 }

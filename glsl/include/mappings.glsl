@@ -126,6 +126,22 @@ float density(uint m, vec2 uv) {
     }
 }
 
+// |dω / (du dv)| of the mapping continued beyond the disc (angular and paraboloid formulas
+// extend smoothly past their rim). Weights of a texel's footprint mean: rim texels then hold a
+// mean centred on their centre, so bilinear reads across the rim stay second-order accurate.
+float density_continued(uint m, vec2 uv) {
+    vec2 ab = 2.0 * uv - 1.0;
+    float r2 = dot(ab, ab);
+    if (m == MAPPING_ANGULAR) {
+        float r = sqrt(r2);
+        return r == 0.0 ? 4.0 * PI * PI : abs(4.0 * PI * sin(PI * r) / r);
+    } else if (m == MAPPING_DUAL_PARABOLOID) {
+        float q = 1.0 + r2;
+        return 16.0 / (q * q);
+    }
+    return density(m, uv);
+}
+
 // Whether texel (i, j) of a w x h layer is ever read (DESIGN.md: angular texels whose centre is
 // outside the disc hold captions; paraboloid texels that overlap the disc hold its mean).
 bool texel_in_domain(uint m, uvec2 size, ivec2 p) {

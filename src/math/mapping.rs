@@ -264,6 +264,27 @@ impl Mapping {
         }
     }
 
+    /// |dω / (du dv)| of the mapping continued past the rim of the disc (the angular and
+    /// paraboloid formulas extend smoothly there); equal to [`Mapping::density`] inside.
+    pub fn continued_density(self, c: Coord) -> f64 {
+        let (a, b) = (2.0 * c.u - 1.0, 2.0 * c.v - 1.0);
+        match self {
+            Mapping::Angular => {
+                let r = a.hypot(b);
+                if r == 0.0 {
+                    4.0 * PI * PI
+                } else {
+                    (4.0 * PI * (PI * r).sin() / r).abs()
+                }
+            }
+            Mapping::DualParaboloid => {
+                let q = 1.0 + a * a + b * b;
+                16.0 / (q * q)
+            }
+            _ => self.density(c),
+        }
+    }
+
     /// Exact solid angle of texel (i, j) of a `w × h` layer (the same for every layer).
     ///
     /// Lat-long and cube texels have closed forms; for angular and paraboloid texels the part

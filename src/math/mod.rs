@@ -5,6 +5,7 @@
 
 pub mod mapping;
 pub mod quadrature;
+pub mod resample;
 pub mod synth;
 
 pub use mapping::{Coord, Mapping, Orientation};

@@ -111,8 +111,10 @@ impl Sky {
 }
 
 /// Bakes `f` into a map: each texel is the solid-angle-weighted mean of `f` over `ss × ss`
-/// points of the texel (inside the disc for angular and paraboloid maps). Returns RGB texels,
-/// layer-major then row-major.
+/// points of the texel, the same footprint mean the conversion pass computes. Angular and
+/// paraboloid footprints use the mapping continued past the rim
+/// ([`Mapping::continued_density`]); angular texels centred outside the disc are black.
+/// Returns RGB texels, layer-major then row-major.
 pub fn bake(
     mapping: Mapping,
     w: u32,
@@ -124,6 +126,10 @@ pub fn bake(
     for layer in 0..mapping.layers() {
         for j in 0..h {
             for i in 0..w {
+                if mapping == Mapping::Angular && !mapping.texel_in_domain(w, h, i, j) {
+                    out.push([0.0; 3]);
+                    continue;
+                }
                 let mut acc = [0.0f64; 3];
                 let mut wsum = 0.0;
                 for b in 0..ss {
@@ -133,10 +139,7 @@ pub fn bake(
                             u: (i as f64 + (a as f64 + 0.5) / ss as f64) / w as f64,
                             v: (j as f64 + (b as f64 + 0.5) / ss as f64) / h as f64,
                         };
-                        let wt = mapping.density(c);
-                        if wt <= 0.0 {
-                            continue;
-                        }
+                        let wt = mapping.continued_density(c);
                         let l = f(mapping.coord_to_dir(c));
                         for k in 0..3 {
                             acc[k] += wt * l[k];
@@ -144,19 +147,7 @@ pub fn bake(
                         wsum += wt;
                     }
                 }
-                if wsum > 0.0 {
-                    out.push(acc.map(|x| (x / wsum) as f32));
-                } else {
-                    // Outside the disc: angular maps are black there; paraboloid texels hold the
-                    // continuation so bilinear reads at the rim stay meaningful.
-                    let c = Mapping::texel_center(w, h, layer, i, j);
-                    let l = if mapping == Mapping::DualParaboloid {
-                        f(mapping.coord_to_dir(c))
-                    } else {
-                        [0.0; 3]
-                    };
-                    out.push(l.map(|x| x as f32));
-                }
+                out.push(acc.map(|x| if wsum > 0.0 { (x / wsum) as f32 } else { 0.0 }));
             }
         }
     }
