@@ -1,8 +1,7 @@
 #version 460
 // Resamples an environment map into another mapping. Each output texel is the solid-angle-
 // weighted mean of ss x ss samples spread over its footprint, so minification filters instead
-// of aliasing. Angular and paraboloid footprints use the mapping continued past the disc's rim
-// (see density_continued). Built twice: with SRC_CUBE
+// of aliasing (see footprint_weight for the angular and paraboloid rims). Built twice: with SRC_CUBE
 // the source is a cube view (hardware filtering crosses faces), otherwise a 2D array read with
 // masked bilinear filtering that never touches texels outside the source's domain.
 #extension GL_GOOGLE_include_directive : require
@@ -106,12 +105,22 @@ void main() {
                 Coord c;
                 c.layer = id.z;
                 c.uv = (vec2(id.xy) + (vec2(a, b) + 0.5) * inv) / vec2(pc.dst_size);
-                float w = density_continued(pc.dst_mapping, c.uv);
+                float w = footprint_weight(pc.dst_mapping, c.uv);
+                if (w <= 0.0) continue;
                 acc += w * sample_src(coord_to_dir(pc.dst_mapping, c));
                 wsum += w;
             }
         }
-        result = wsum > 0.0 ? acc / wsum : vec3(0.0);
+        if (wsum > 0.0) {
+            result = acc / wsum;
+        } else {
+            // A paraboloid texel wholly outside its disc is never read; it holds the
+            // continuation at its centre so that previews and hardware filtering stay sane.
+            Coord c;
+            c.layer = id.z;
+            c.uv = (vec2(id.xy) + 0.5) / vec2(pc.dst_size);
+            result = sample_src(coord_to_dir(pc.dst_mapping, c));
+        }
     }
     imageStore(dst, ivec3(id), vec4(result, 1.0));
 }

@@ -136,8 +136,10 @@ fn derivative_bounds(f: impl Fn(glam::DVec3) -> [f64; 3]) -> (f64, f64) {
 /// sin(πr), varying by more than 30% across a texel within 6 texels of the rim, so texel
 /// centroids sit off their centres and footprint quadrature is coarse. Near −Z (within 3
 /// source texels, 3·h_s, when reading an angular map; within 6 texels of the rim when writing
-/// one) the error is first order; those texels are held to G·(h_s + h_d)/2 plus the
-/// tolerance of 2.
+/// one) the error is first order. So it is next to a dual paraboloid's seam (within 1.5
+/// source texels of the horizon when reading one): its rim texels hold the mean over their part
+/// inside the disc, so that ∑ L·Ω is the power, and that mean's centroid is off the texel's
+/// centre. Those texels are held to G·(h_s + h_d)/2 plus the tolerance of 2.
 #[test]
 fn every_mapping_to_every_other_matches_the_analytic_environment() {
     let ctx = common::ctx();
@@ -161,12 +163,15 @@ fn every_mapping_to_every_other_matches_the_analytic_environment() {
                     let c = Mapping::texel_center(out.width, out.height, layer, i, j);
                     let r = (2.0 * c.u - 1.0).hypot(2.0 * c.v - 1.0);
                     let near_rim_dst = to == Mapping::Angular && r > 1.0 - 12.0 / out.width as f64;
-                    near_rim_src || near_rim_dst
+                    // Paraboloid rim texels hold the mean over their part inside the disc,
+                    // whose centroid is off their centre: reading next to the seam is first order.
+                    let near_seam_src = from == Mapping::DualParaboloid && d.y.abs() < 1.5 * hs;
+                    near_rim_src || near_rim_dst || near_seam_src
                 };
                 let mean = EnvMap::from_fn(to, out.width, out.height, 16, smooth_env);
                 let em = compare(&out, singular, |l, i, j| Some(mean.texel(l, i, j).map(f64::from)));
                 let ec = compare(&out, singular, |l, i, j| {
-                    // A paraboloid texel centred outside the disc holds the continuation.
+                    // A paraboloid texel centred outside the disc holds its part inside.
                     let c = Mapping::texel_center(out.width, out.height, l, i, j);
                     let outside = (2.0 * c.u - 1.0).hypot(2.0 * c.v - 1.0) > 1.0;
                     (!(to == Mapping::DualParaboloid && outside)).then(|| smooth_env(out.texel_dir(l, i, j)))
@@ -176,7 +181,7 @@ fn every_mapping_to_every_other_matches_the_analytic_environment() {
                 let tol_s = g * (hs + hd) / 2.0 + tol_c;
                 eprintln!(
                     "{from:?} -> {to:?}: vs mean max {:.2e} at {:?} rms {:.2e} (tol {tol_m:.2e}); vs centre max {:.2e} \
-                     rms {:.2e} (tol {tol_c:.2e}); near -Z {:.2e} (tol {tol_s:.2e})",
+                     rms {:.2e} (tol {tol_c:.2e}); near -Z or the seam {:.2e} (tol {tol_s:.2e})",
                     em.max, em.at, em.rms(), ec.max, ec.rms(), em.max_singular.max(ec.max_singular)
                 );
                 let ok = em.max <= tol_m

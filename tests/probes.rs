@@ -72,6 +72,7 @@ fn conversion_preserves_power_of_every_real_probe() {
     let ctx = common::ctx();
     {
         let conv = Converter::new(&ctx).unwrap();
+        let mut failures = Vec::new();
         for (spec, _) in all_probes(&dir) {
             let map = load(&spec);
             let pin = map.power();
@@ -86,13 +87,15 @@ fn conversion_preserves_power_of_every_real_probe() {
                         .unwrap();
                     let out = out.download(&ctx).unwrap();
                     let pout = out.power();
-                    for k in 0..3 {
-                        let rel = pout[k] / pin[k] - 1.0;
-                        assert!(rel.abs() < 5e-3, "{spec} -> {} {size}: power channel {k} off by {:.3}%", to.name(), rel * 100.0);
+                    let worst = (0..3).map(|k| pout[k] / pin[k] - 1.0).fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
+                    eprintln!("{spec} -> {} {size}: power {:+.3}%", to.name(), worst * 100.0);
+                    if worst.abs() >= 5e-3 {
+                        failures.push(format!("{spec} -> {} {size}: {:+.3}%", to.name(), worst * 100.0));
                     }
                 }
             }
         }
+        assert!(failures.is_empty(), "power not preserved within 0.5%: {failures:#?}");
     }
     common::finish(ctx);
 }
@@ -111,8 +114,8 @@ fn correlation(a: &[f64], b: &[f64]) -> f64 {
 
 /// grace_probe.hdr (angular) and grace_latlong.exr (upside down and mirrored, ≈1/32 of the
 /// radiance) give the same lat-long at 256×128 after --flip-u --flip-v on the latter and one
-/// scale factor. Correlation is of log luminance, since linear luminance is dominated by a few
-/// windows.
+/// scale factor: Pearson correlation of luminance at least 0.98 (log luminance is reported too,
+/// since linear luminance is dominated by a few windows; the unflipped file must do worse).
 #[test]
 fn grace_probe_and_latlong_agree_after_flips() {
     let Some(dir) = common::probes() else { return };
@@ -141,7 +144,7 @@ fn grace_probe_and_latlong_agree_after_flips() {
         let r_log = correlation(&log(&a), &log(&b));
         let r_wrong = correlation(&log(&a), &log(&c));
         eprintln!("grace: scale {scale:.2} correlation linear {r_lin:.4} log {r_log:.4} (unflipped log {r_wrong:.4})");
-        assert!(r_lin >= 0.98 || r_log >= 0.98, "linear {r_lin}, log {r_log}");
+        assert!(r_lin >= 0.98, "linear correlation {r_lin} (log {r_log})");
         assert!(r_wrong < r_log - 0.1, "the flips should matter: {r_wrong} vs {r_log}");
         assert!((20.0..50.0).contains(&scale), "scale {scale}, expected about 32");
     }

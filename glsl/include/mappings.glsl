@@ -126,18 +126,16 @@ float density(uint m, vec2 uv) {
     }
 }
 
-// |dω / (du dv)| of the mapping continued beyond the disc (angular and paraboloid formulas
-// extend smoothly past their rim). Weights of a texel's footprint mean: rim texels then hold a
-// mean centred on their centre, so bilinear reads across the rim stay second-order accurate.
-float density_continued(uint m, vec2 uv) {
-    vec2 ab = 2.0 * uv - 1.0;
-    float r2 = dot(ab, ab);
+// Weight of a point of a texel's footprint when the conversion pass averages over it. Angular
+// footprints use |dω/(du dv)| of the mapping continued past the rim: the rim is the single
+// direction −Z, the continuation covers directions next to it, and rim texels then hold a mean
+// centred on their centre. Paraboloid footprints stop at the rim, so that each half's texels
+// hold the mean over their part of the hemisphere and ∑ L·Ω over both halves is the power.
+float footprint_weight(uint m, vec2 uv) {
     if (m == MAPPING_ANGULAR) {
-        float r = sqrt(r2);
+        vec2 ab = 2.0 * uv - 1.0;
+        float r = length(ab);
         return r == 0.0 ? 4.0 * PI * PI : abs(4.0 * PI * sin(PI * r) / r);
-    } else if (m == MAPPING_DUAL_PARABOLOID) {
-        float q = 1.0 + r2;
-        return 16.0 / (q * q);
     }
     return density(m, uv);
 }

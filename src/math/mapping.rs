@@ -264,24 +264,21 @@ impl Mapping {
         }
     }
 
-    /// |dω / (du dv)| of the mapping continued past the rim of the disc (the angular and
-    /// paraboloid formulas extend smoothly there); equal to [`Mapping::density`] inside.
-    pub fn continued_density(self, c: Coord) -> f64 {
-        let (a, b) = (2.0 * c.u - 1.0, 2.0 * c.v - 1.0);
-        match self {
-            Mapping::Angular => {
-                let r = a.hypot(b);
-                if r == 0.0 {
-                    4.0 * PI * PI
-                } else {
-                    (4.0 * PI * (PI * r).sin() / r).abs()
-                }
+    /// Weight of a point of a texel's footprint in the mean a texel holds: |dω/(du dv)| of
+    /// the angular mapping continued past its rim (the rim is the single direction −Z, so the
+    /// continuation covers its neighbours), and [`Mapping::density`] otherwise, so that each
+    /// paraboloid half's rim texels hold the mean over their part of the hemisphere and
+    /// ∑ L·Ω over both halves is the power.
+    pub fn footprint_weight(self, c: Coord) -> f64 {
+        if self == Mapping::Angular {
+            let r = (2.0 * c.u - 1.0).hypot(2.0 * c.v - 1.0);
+            if r == 0.0 {
+                4.0 * PI * PI
+            } else {
+                (4.0 * PI * (PI * r).sin() / r).abs()
             }
-            Mapping::DualParaboloid => {
-                let q = 1.0 + a * a + b * b;
-                16.0 / (q * q)
-            }
-            _ => self.density(c),
+        } else {
+            self.density(c)
         }
     }
 

@@ -118,7 +118,7 @@ pub fn convert(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3, ss: u
                             u: (i as f64 + (a as f64 + 0.5) / ss as f64) / w as f64,
                             v: (j as f64 + (b as f64 + 0.5) / ss as f64) / h as f64,
                         };
-                        let wt = to.continued_density(c);
+                        let wt = to.footprint_weight(c);
                         let l = sample(map, world_to_file * to.coord_to_dir(c));
                         for k in 0..3 {
                             acc[k] += wt * l[k];
@@ -126,7 +126,12 @@ pub fn convert(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3, ss: u
                         wsum += wt;
                     }
                 }
-                texels.push(acc.map(|x| if wsum > 0.0 { (x / wsum) as f32 } else { 0.0 }));
+                if wsum > 0.0 {
+                    texels.push(acc.map(|x| (x / wsum) as f32));
+                } else {
+                    let c = Mapping::texel_center(w, h, layer, i, j);
+                    texels.push(sample(map, world_to_file * to.coord_to_dir(c)).map(|x| x as f32));
+                }
             }
         }
     }

@@ -111,9 +111,9 @@ impl Sky {
 }
 
 /// Bakes `f` into a map: each texel is the solid-angle-weighted mean of `f` over `ss × ss`
-/// points of the texel, the same footprint mean the conversion pass computes. Angular and
-/// paraboloid footprints use the mapping continued past the rim
-/// ([`Mapping::continued_density`]); angular texels centred outside the disc are black.
+/// points of the texel, the same footprint mean the conversion pass computes (weights from
+/// [`Mapping::footprint_weight`]); angular texels centred outside the disc are black and
+/// paraboloid texels wholly outside hold the continuation at their centre.
 /// Returns RGB texels, layer-major then row-major.
 pub fn bake(
     mapping: Mapping,
@@ -139,7 +139,7 @@ pub fn bake(
                             u: (i as f64 + (a as f64 + 0.5) / ss as f64) / w as f64,
                             v: (j as f64 + (b as f64 + 0.5) / ss as f64) / h as f64,
                         };
-                        let wt = mapping.continued_density(c);
+                        let wt = mapping.footprint_weight(c);
                         let l = f(mapping.coord_to_dir(c));
                         for k in 0..3 {
                             acc[k] += wt * l[k];
@@ -147,7 +147,12 @@ pub fn bake(
                         wsum += wt;
                     }
                 }
-                out.push(acc.map(|x| if wsum > 0.0 { (x / wsum) as f32 } else { 0.0 }));
+                if wsum > 0.0 {
+                    out.push(acc.map(|x| (x / wsum) as f32));
+                } else {
+                    let c = Mapping::texel_center(w, h, layer, i, j);
+                    out.push(f(mapping.coord_to_dir(c)).map(|x| x as f32));
+                }
             }
         }
     }

@@ -91,7 +91,7 @@ impl Converter {
     /// minification averages every source texel the footprint covers (1 when magnifying).
     pub fn supersampling(src: (Mapping, u32, u32), dst: (Mapping, u32, u32)) -> u32 {
         let ratio = (texels_on_sphere(src.0, src.1, src.2) / texels_on_sphere(dst.0, dst.1, dst.2)).sqrt();
-        ((2.0 * ratio).ceil() as u32).clamp(1, 32)
+        ((4.0 * ratio).ceil() as u32).clamp(1, 64)
     }
 
     /// Converts `src` to `opts.to` at `opts.size`; returns the new map and the GPU time.
