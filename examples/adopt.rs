@@ -19,7 +19,10 @@ unsafe extern "system" fn engine_callback(
     data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
     _: *mut std::ffi::c_void,
 ) -> vk::Bool32 {
-    if severity.intersects(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+    if severity.intersects(
+        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+            | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+    ) {
         ENGINE_WARNINGS.fetch_add(1, Ordering::SeqCst);
         // SAFETY: the loader passes valid callback data for the duration of the call.
         if let Some(m) = unsafe { data.as_ref().and_then(|d| d.message_as_c_str()) } {
@@ -45,8 +48,14 @@ pub fn run() -> Result<usize, Box<dyn std::error::Error>> {
     let instance = unsafe { entry.create_instance(&ci, None)? };
     let du = ash::ext::debug_utils::Instance::new(&entry, &instance);
     let mi = vk::DebugUtilsMessengerCreateInfoEXT::default()
-        .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
-        .message_type(vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL)
+        .message_severity(
+            vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+        )
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL,
+        )
         .pfn_user_callback(Some(engine_callback));
     // SAFETY: valid instance and create info.
     let messenger = unsafe { du.create_debug_utils_messenger(&mi, None)? };
@@ -54,12 +63,21 @@ pub fn run() -> Result<usize, Box<dyn std::error::Error>> {
     let physical = unsafe { instance.enumerate_physical_devices()? }[0];
     let family = unsafe { instance.get_physical_device_queue_family_properties(physical) }
         .iter()
-        .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS))
+        .position(|f| {
+            f.queue_flags
+                .contains(vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS)
+        })
         .ok_or("no graphics+compute queue")? as u32;
-    let mut f13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true).dynamic_rendering(true);
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
+        .synchronization2(true)
+        .dynamic_rendering(true);
     let prio = [1.0];
-    let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&prio)];
-    let dci = vk::DeviceCreateInfo::default().queue_create_infos(&queues).push_next(&mut f13);
+    let queues = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(family)
+        .queue_priorities(&prio)];
+    let dci = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queues)
+        .push_next(&mut f13);
     // SAFETY: valid physical device and create info.
     let device = unsafe { instance.create_device(physical, &dci, None)? };
     let queue = unsafe { device.get_device_queue(family, 0) };
@@ -81,16 +99,27 @@ pub fn run() -> Result<usize, Box<dyn std::error::Error>> {
         let map = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, smooth_env);
         let gpu = GpuEnvMap::upload(&ctx, &map)?;
         let conv = Converter::new(&ctx)?;
-        let opts = ConvertOptions { to: Mapping::Cube, size: 16, orientation: Default::default(), supersample: None };
+        let opts = ConvertOptions {
+            to: Mapping::Cube,
+            size: 16,
+            orientation: Default::default(),
+            supersample: None,
+        };
         let (cube, timings) = conv.run(&gpu, &opts)?;
         let back = cube.download(&ctx)?;
-        println!("converted on the engine's device: {} ({:.3} ms GPU)", back.mapping.name(), timings.iter().map(|t| t.ms).sum::<f64>());
+        println!(
+            "converted on the engine's device: {} ({:.3} ms GPU)",
+            back.mapping.name(),
+            timings.iter().map(|t| t.ms).sum::<f64>()
+        );
         drop((gpu, cube, conv));
         assert_eq!(ctx.live_objects(), 0, "envlight left objects behind");
     }
 
     // --- The engine carries on with its device, then tears it down itself. ---
-    let bi = vk::BufferCreateInfo::default().size(256).usage(vk::BufferUsageFlags::STORAGE_BUFFER);
+    let bi = vk::BufferCreateInfo::default()
+        .size(256)
+        .usage(vk::BufferUsageFlags::STORAGE_BUFFER);
     // SAFETY: the device is still alive: envlight did not destroy it.
     unsafe {
         let b = device.create_buffer(&bi, None)?;

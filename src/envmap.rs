@@ -136,10 +136,10 @@ impl EnvMap {
                 s.negative += 1;
             }
             if t.iter().all(|c| c.is_finite()) {
-                for k in 0..3 {
-                    s.min[k] = s.min[k].min(t[k]);
-                    s.max[k] = s.max[k].max(t[k]);
-                    s.power[k] += t[k] as f64 * o;
+                for (k, &c) in t.iter().enumerate() {
+                    s.min[k] = s.min[k].min(c);
+                    s.max[k] = s.max[k].max(c);
+                    s.power[k] += c as f64 * o;
                 }
                 s.max_luminance = s.max_luminance.max(luminance(t.map(f64::from)));
                 omega_sum += o;

@@ -13,7 +13,11 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 #[derive(Parser)]
-#[command(name = "envlight", version, about = "Environment-map lighting on explicit Vulkan passes")]
+#[command(
+    name = "envlight",
+    version,
+    about = "Environment-map lighting on explicit Vulkan passes"
+)]
 struct Cli {
     /// Vulkan device: auto, cpu (lavapipe), an index, or part of a name [env: ENVLIGHT_DEVICE]
     #[arg(long, global = true)]
@@ -46,7 +50,12 @@ struct Orient {
     #[arg(long)]
     flip_v: bool,
     /// Turn the environment by this many degrees about +Y
-    #[arg(long, value_name = "DEGREES", default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "DEGREES",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
     rotate_y: f64,
 }
 
@@ -145,20 +154,28 @@ fn context(cli: &Cli) -> Result<Context> {
 
 fn spinner(msg: &str) -> ProgressBar {
     let pb = ProgressBar::new_spinner();
-    pb.set_style(ProgressStyle::with_template("{spinner} {msg} [{elapsed}]").unwrap_or_else(|_| ProgressStyle::default_spinner()));
+    pb.set_style(
+        ProgressStyle::with_template("{spinner} {msg} [{elapsed}]")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
     pb.set_message(msg.to_string());
     pb.enable_steady_tick(Duration::from_millis(120));
     pb
 }
 
 fn parse_mapping(s: &str) -> Result<Mapping> {
-    Mapping::parse(s).with_context(|| format!("unknown mapping '{s}' (latlong, angular, cube, dual-paraboloid)"))
+    Mapping::parse(s)
+        .with_context(|| format!("unknown mapping '{s}' (latlong, angular, cube, dual-paraboloid)"))
 }
 
 fn load_input(input: &Input) -> Result<EnvMap> {
     let opts = LoadOptions {
         mapping: input.mapping.as_deref().map(parse_mapping).transpose()?,
-        sanitize: if input.sanitize { Sanitize::Zero } else { Sanitize::Reject },
+        sanitize: if input.sanitize {
+            Sanitize::Zero
+        } else {
+            Sanitize::Reject
+        },
         ..Default::default()
     };
     let pb = spinner(&format!("loading {}", input.input));
@@ -183,11 +200,22 @@ fn run(cli: Cli) -> Result<()> {
             let s = map.stats();
             println!("file:      {}", input.input);
             println!("mapping:   {}", map.mapping.name());
-            println!("size:      {} x {} x {} layer(s)", map.width, map.height, map.layers());
+            println!(
+                "size:      {} x {} x {} layer(s)",
+                map.width,
+                map.height,
+                map.layers()
+            );
             println!("channels:  RGB (linear float)");
             println!("min:       {:?}", s.min);
-            println!("max:       {:?}  (max luminance {:.6e})", s.max, s.max_luminance);
-            println!("mean:      [{:.6e}, {:.6e}, {:.6e}]  (solid-angle weighted)", s.mean[0], s.mean[1], s.mean[2]);
+            println!(
+                "max:       {:?}  (max luminance {:.6e})",
+                s.max, s.max_luminance
+            );
+            println!(
+                "mean:      [{:.6e}, {:.6e}, {:.6e}]  (solid-angle weighted)",
+                s.mean[0], s.mean[1], s.mean[2]
+            );
             println!("nan:       {}", s.nan);
             println!("inf:       {}", s.inf);
             println!("negative:  {}", s.negative);
@@ -196,7 +224,16 @@ fn run(cli: Cli) -> Result<()> {
                 s.power[0], s.power[1], s.power[2]
             );
         }
-        Command::Convert { input, orient, output, to, size, supersample, png, exposure } => {
+        Command::Convert {
+            input,
+            orient,
+            output,
+            to,
+            size,
+            supersample,
+            png,
+            exposure,
+        } => {
             if *size == 0 || *size > 16384 {
                 bail!("--size must be between 1 and 16384 (got {size})");
             }
@@ -209,7 +246,11 @@ fn run(cli: Cli) -> Result<()> {
             let opts = ConvertOptions {
                 to,
                 size: *size,
-                orientation: Orientation { flip_u: orient.flip_u, flip_v: orient.flip_v, rotate_y_degrees: orient.rotate_y },
+                orientation: Orientation {
+                    flip_u: orient.flip_u,
+                    flip_v: orient.flip_v,
+                    rotate_y_degrees: orient.rotate_y,
+                },
                 supersample: *supersample,
             };
             let (dst, timings) = conv.run(&src, &opts)?;
@@ -219,8 +260,12 @@ fn run(cli: Cli) -> Result<()> {
             println!("wrote {}", output.display());
             if *png {
                 let p = output.with_extension("png");
-                let tm = ToneMap { exposure: *exposure };
-                envlight::preview::preview(&out, tm).save(&p).with_context(|| p.display().to_string())?;
+                let tm = ToneMap {
+                    exposure: *exposure,
+                };
+                envlight::preview::preview(&out, tm)
+                    .save(&p)
+                    .with_context(|| p.display().to_string())?;
                 println!("wrote {} ({})", p.display(), tm.describe());
             }
             print_timings(&timings);
@@ -229,17 +274,33 @@ fn run(cli: Cli) -> Result<()> {
         Command::Devices => {
             let ctx = context(&cli)?;
             let i = ctx.info();
-            println!("envlight uses: {} ({:?}), driver {}", i.name, i.device_type, i.driver);
-            println!("timestamp period {} ns, {} valid bits", i.timestamp_period, i.timestamp_valid_bits);
+            println!(
+                "envlight uses: {} ({:?}), driver {}",
+                i.name, i.device_type, i.driver
+            );
+            println!(
+                "timestamp period {} ns, {} valid bits",
+                i.timestamp_period, i.timestamp_valid_bits
+            );
         }
         Command::SynthSky { output, width } => {
             let w = (*width).max(2);
-            let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 8, |d| Sky::default().radiance(d));
+            let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 8, |d| {
+                Sky::default().radiance(d)
+            });
             io::save_exr(&map, output)?;
             let s = map.stats();
-            println!("wrote {} ({} x {}, max luminance {:.3e})", output.display(), w, w / 2, s.max_luminance);
+            println!(
+                "wrote {} ({} x {}, max luminance {:.3e})",
+                output.display(),
+                w,
+                w / 2,
+                s.max_luminance
+            );
         }
-        Command::Bench { what: Bench::Convert { sizes, reps } } => bench_convert(&cli, sizes, *reps)?,
+        Command::Bench {
+            what: Bench::Convert { sizes, reps },
+        } => bench_convert(&cli, sizes, *reps)?,
     }
     Ok(())
 }
@@ -248,20 +309,39 @@ fn demo(cli: &Cli, input: &Path, out: &Path, size: u32) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
     let t0 = std::time::Instant::now();
     let map = io::load(input, &LoadOptions::default())?;
-    println!("loaded {} ({} {} x {}) in {:.0} ms", input.display(), map.mapping.name(), map.width, map.height, t0.elapsed().as_secs_f64() * 1e3);
+    println!(
+        "loaded {} ({} {} x {}) in {:.0} ms",
+        input.display(),
+        map.mapping.name(),
+        map.width,
+        map.height,
+        t0.elapsed().as_secs_f64() * 1e3
+    );
     let ctx = context(cli)?;
     println!("device: {} ({})", ctx.info().name, ctx.info().driver.trim());
     let src = GpuEnvMap::upload(&ctx, &map)?;
     let conv = Converter::new(&ctx)?;
     let tm = ToneMap::default();
     let pb = ProgressBar::new(4);
-    pb.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    pb.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
     let mut previews = Vec::new();
     let mut rows = Vec::new();
     for to in Mapping::ALL {
         pb.set_message(to.name());
-        let n = if to == Mapping::LatLong { size } else { size / 2 };
-        let opts = ConvertOptions { to, size: n.max(1), orientation: Orientation::default(), supersample: None };
+        let n = if to == Mapping::LatLong {
+            size
+        } else {
+            size / 2
+        };
+        let opts = ConvertOptions {
+            to,
+            size: n.max(1),
+            orientation: Orientation::default(),
+            supersample: None,
+        };
         let (dst, timings) = conv.run(&src, &opts)?;
         let result = dst.download(&ctx)?;
         let exr = out.join(format!("sky_{}.exr", to.name()));
@@ -277,11 +357,20 @@ fn demo(cli: &Cli, input: &Path, out: &Path, size: u32) -> Result<()> {
     }
     pb.finish_and_clear();
     let sheet = out.join("contact_sheet.png");
-    envlight::preview::contact_sheet(&previews, 256).save(&sheet).with_context(|| sheet.display().to_string())?;
+    envlight::preview::contact_sheet(&previews, 256)
+        .save(&sheet)
+        .with_context(|| sheet.display().to_string())?;
     println!("\nPreviews: {}", tm.describe());
     for (to, exr, png, timings, dp) in &rows {
         let ms: f64 = timings.iter().map(|t| t.ms).sum();
-        println!("{:<16} {:>9.3} ms GPU  power {:+.3}%  {}  {}", to.name(), ms, dp, exr.display(), png.display());
+        println!(
+            "{:<16} {:>9.3} ms GPU  power {:+.3}%  {}  {}",
+            to.name(),
+            ms,
+            dp,
+            exr.display(),
+            png.display()
+        );
     }
     println!("contact sheet: {}", sheet.display());
     Ok(())
@@ -295,35 +384,66 @@ fn median(mut v: Vec<f64>) -> f64 {
 fn bench_convert(cli: &Cli, sizes: &[u32], reps: usize) -> Result<()> {
     let ctx = context(cli)?;
     println!("device: {} ({})", ctx.info().name, ctx.info().driver.trim());
-    println!("GPU time, median of {reps} runs; 'copy' reads and writes every source texel once (the floor).\n");
-    println!("| source | conversion | output | ss | copy ms | convert ms | ratio |");
-    println!("|---|---|---|---|---|---|---|");
+    println!(
+        "GPU time from timestamps, median of {reps} runs. 'copy' reads and writes every source texel \
+         once: the floor. Source: the analytic sky (sun ~1e5 x zenith) as a lat-long.\n"
+    );
+    println!("| source | conversion | output | ss | copy ms | convert ms | ratio to copy | power error |");
+    println!("|---|---|---|---|---|---|---|---|");
     let conv = Converter::new(&ctx)?;
     let copy = CopyPass::new(&ctx)?;
     let reps = reps.max(1);
     for &w in sizes {
-        let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 1, |d| Sky::default().radiance(d));
+        let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 2, |d| {
+            Sky::default().radiance(d)
+        });
+        let pin = map.power()[1];
         let src = GpuEnvMap::upload(&ctx, &map)?;
+        // One untimed run of each pass first: pipeline and driver warm-up.
+        copy.run(&src)?;
         let mut copy_ms = Vec::new();
         for _ in 0..reps {
             copy_ms.push(copy.run(&src)?.1.iter().map(|t| t.ms).sum());
         }
         let floor = median(copy_ms);
-        for (to, size) in [(Mapping::LatLong, w), (Mapping::Cube, w / 4), (Mapping::Angular, w / 2), (Mapping::DualParaboloid, w / 2)] {
-            let opts = ConvertOptions { to, size, orientation: Orientation::default(), supersample: None };
+        let cases = [
+            (Mapping::LatLong, w, None),
+            (Mapping::Cube, w / 4, Some(1)),
+            (Mapping::Cube, w / 4, Some(2)),
+            (Mapping::Cube, w / 4, None),
+            (Mapping::Angular, w / 2, None),
+            (Mapping::DualParaboloid, w / 2, None),
+        ];
+        for (to, size, supersample) in cases {
+            let opts = ConvertOptions {
+                to,
+                size,
+                orientation: Orientation::default(),
+                supersample,
+            };
             let (ow, oh) = to.extent_for_size(size);
-            let ss = Converter::supersampling((Mapping::LatLong, w, w / 2), (to, ow, oh));
+            let ss = supersample.unwrap_or_else(|| {
+                Converter::supersampling((Mapping::LatLong, w, w / 2), (to, ow, oh))
+            });
+            conv.run(&src, &opts)?;
             let mut ms = Vec::new();
-            for _ in 0..reps {
-                ms.push(conv.run(&src, &opts)?.1.iter().map(|t| t.ms).sum());
+            let mut power = 0.0;
+            for r in 0..reps {
+                let (out, t) = conv.run(&src, &opts)?;
+                ms.push(t.iter().map(|t| t.ms).sum());
+                if r == 0 {
+                    power = out.download(&ctx)?.power()[1] / pin - 1.0;
+                }
             }
             let m = median(ms);
             println!(
-                "| latlong {w}x{} | latlong -> {} | {ow}x{oh}x{} | {ss} | {floor:.3} | {m:.3} | {:.2} |",
+                "| latlong {w}x{} | -> {}{} | {ow}x{oh}x{} | {ss} | {floor:.3} | {m:.3} | {:.1} | {:+.3}% |",
                 w / 2,
                 to.name(),
+                if supersample.is_some() { " (forced ss)" } else { "" },
                 to.layers(),
-                m / floor
+                m / floor,
+                power * 100.0
             );
         }
     }

@@ -12,7 +12,11 @@ pub fn preview(map: &EnvMap, tm: ToneMap) -> RgbImage {
     let put = |img: &mut RgbImage, layer: u32, ox: u32, oy: u32| {
         for j in 0..h {
             for i in 0..w {
-                img.put_pixel(ox + i, oy + j, image::Rgb(tone_map(map.texel(layer, i, j), tm)));
+                img.put_pixel(
+                    ox + i,
+                    oy + j,
+                    image::Rgb(tone_map(map.texel(layer, i, j), tm)),
+                );
             }
         }
     };
@@ -25,7 +29,14 @@ pub fn preview(map: &EnvMap, tm: ToneMap) -> RgbImage {
         Mapping::Cube => {
             // Middle row −X, +Z, +X, −Z; +Y above +Z and −Y below: edges meet as on the cube.
             let mut img = RgbImage::new(4 * w, 3 * h);
-            for (layer, (cx, cy)) in [(1, (0, 1)), (4, (1, 1)), (0, (2, 1)), (5, (3, 1)), (2, (1, 0)), (3, (1, 2))] {
+            for (layer, (cx, cy)) in [
+                (1, (0, 1)),
+                (4, (1, 1)),
+                (0, (2, 1)),
+                (5, (3, 1)),
+                (2, (1, 0)),
+                (3, (1, 2)),
+            ] {
                 put(&mut img, layer, cx * w, cy * h);
             }
             img

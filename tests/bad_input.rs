@@ -16,12 +16,23 @@ fn tmp(name: &str) -> PathBuf {
 /// Loads and expects an error whose text names the file and contains every `words`.
 fn expect_error(path: &Path, opts: &LoadOptions, words: &[&str]) {
     match io::load(path, opts) {
-        Ok(m) => panic!("{} loaded ({}x{}) but should not", path.display(), m.width, m.height),
+        Ok(m) => panic!(
+            "{} loaded ({}x{}) but should not",
+            path.display(),
+            m.width,
+            m.height
+        ),
         Err(e) => {
             let text = e.to_string();
-            assert!(text.contains(&path.display().to_string()), "error does not name the file: {text}");
+            assert!(
+                text.contains(&path.display().to_string()),
+                "error does not name the file: {text}"
+            );
             for w in words {
-                assert!(text.to_lowercase().contains(&w.to_lowercase()), "error '{text}' lacks '{w}'");
+                assert!(
+                    text.to_lowercase().contains(&w.to_lowercase()),
+                    "error '{text}' lacks '{w}'"
+                );
             }
         }
     }
@@ -108,7 +119,11 @@ fn truncated_and_absurd_dds() {
     for cut in [0usize, 50, 128, bytes.len() - 1] {
         let q = tmp(&format!("truncated_{cut}.dds"));
         std::fs::write(&q, &bytes[..cut]).unwrap();
-        expect_error(&q, &LoadOptions::default(), &[if cut == 0 { "empty" } else { "dds" }]);
+        expect_error(
+            &q,
+            &LoadOptions::default(),
+            &[if cut == 0 { "empty" } else { "dds" }],
+        );
     }
     let mut absurd = bytes.clone();
     absurd[12..16].copy_from_slice(&1_000_000u32.to_le_bytes());
@@ -156,8 +171,15 @@ fn nan_inf_and_negative_texels_are_refused_or_sanitised() {
     map.texels[8] = [f32::NEG_INFINITY; 3];
     let p = tmp("invalid.pfm");
     io::write_pfm(&p, map.width, map.height, &map.texels).unwrap();
-    expect_error(&p, &LoadOptions::default(), &["1 NaN", "2 infinite", "2 negative", "--sanitize"]);
-    let opts = LoadOptions { sanitize: Sanitize::Zero, ..Default::default() };
+    expect_error(
+        &p,
+        &LoadOptions::default(),
+        &["1 NaN", "2 infinite", "2 negative", "--sanitize"],
+    );
+    let opts = LoadOptions {
+        sanitize: Sanitize::Zero,
+        ..Default::default()
+    };
     let clean = io::load(&p, &opts).unwrap();
     let s = clean.stats();
     assert_eq!(s.nan + s.inf + s.negative, 0);
@@ -171,11 +193,23 @@ fn unknown_format_and_shape_and_missing_file() {
     std::fs::write(&p, b"hello").unwrap();
     expect_error(&p, &LoadOptions::default(), &["unrecognised"]);
     let q = tmp("odd.pfm");
-    io::write_pfm(&q, 5, 3, &vec![[1.0; 3]; 15]).unwrap();
+    io::write_pfm(&q, 5, 3, &[[1.0; 3]; 15]).unwrap();
     expect_error(&q, &LoadOptions::default(), &["--mapping"]);
-    let ok = io::load(&q, &LoadOptions { mapping: Some(Mapping::LatLong), ..Default::default() });
+    let ok = io::load(
+        &q,
+        &LoadOptions {
+            mapping: Some(Mapping::LatLong),
+            ..Default::default()
+        },
+    );
     assert!(ok.is_ok());
-    let bad = io::load(&q, &LoadOptions { mapping: Some(Mapping::Cube), ..Default::default() });
+    let bad = io::load(
+        &q,
+        &LoadOptions {
+            mapping: Some(Mapping::Cube),
+            ..Default::default()
+        },
+    );
     assert!(bad.unwrap_err().to_string().contains("cannot hold a cube"));
     expect_error(&tmp("does_not_exist.exr"), &LoadOptions::default(), &[]);
 }

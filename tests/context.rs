@@ -22,20 +22,38 @@ fn costly_dispatch_after_graphics_work_measures_nonzero_time() {
         // measure about nothing, less than even the 1-iteration dispatch (4000× less work).
         for t in [&costly[1], &costly2[1]] {
             assert!(t.ms > 0.0, "costly dispatch measured {} ms", t.ms);
-            assert!(t.ms > cheap[1].ms, "costly {} ms vs cheap {} ms", t.ms, cheap[1].ms);
+            assert!(
+                t.ms > cheap[1].ms,
+                "costly {} ms vs cheap {} ms",
+                t.ms,
+                cheap[1].ms
+            );
         }
-        eprintln!("draw {:.3} ms, busy {:.3} ms (cheap busy {:.3} ms)", costly[0].ms, costly[1].ms, cheap[1].ms);
+        eprintln!(
+            "draw {:.3} ms, busy {:.3} ms (cheap busy {:.3} ms)",
+            costly[0].ms, costly[1].ms, cheap[1].ms
+        );
     }
     common::finish(ctx);
 }
 
 #[test]
 fn cpu_device_can_be_forced() {
-    let ctx = Context::new(&ContextOptions { validation: true, device: DeviceSelector::Cpu }).unwrap();
+    let ctx = Context::new(&ContextOptions {
+        validation: true,
+        device: DeviceSelector::Cpu,
+    })
+    .unwrap();
     assert_eq!(ctx.info().device_type, ash::vk::PhysicalDeviceType::CPU);
-    let by_name = Context::new(&ContextOptions { validation: true, device: DeviceSelector::Name("llvmpipe".into()) });
+    let by_name = Context::new(&ContextOptions {
+        validation: true,
+        device: DeviceSelector::Name("llvmpipe".into()),
+    });
     assert!(by_name.is_ok());
-    let missing = Context::new(&ContextOptions { validation: true, device: DeviceSelector::Name("no such gpu".into()) });
+    let missing = Context::new(&ContextOptions {
+        validation: true,
+        device: DeviceSelector::Name("no such gpu".into()),
+    });
     let e = missing.err().unwrap().to_string();
     assert!(e.contains("no such gpu") && e.contains("devices:"), "{e}");
     common::finish(ctx);
@@ -46,7 +64,10 @@ fn selector_parses_env_syntax() {
     assert_eq!(DeviceSelector::parse("lavapipe"), DeviceSelector::Cpu);
     assert_eq!(DeviceSelector::parse(" 1 "), DeviceSelector::Index(1));
     assert_eq!(DeviceSelector::parse(""), DeviceSelector::Auto);
-    assert_eq!(DeviceSelector::parse("H100"), DeviceSelector::Name("H100".into()));
+    assert_eq!(
+        DeviceSelector::parse("H100"),
+        DeviceSelector::Name("H100".into())
+    );
 }
 
 #[test]
@@ -54,10 +75,21 @@ fn live_objects_return_to_zero() {
     let ctx = common::ctx();
     {
         let conv = envlight::passes::Converter::new(&ctx).unwrap();
-        let map = envlight::EnvMap::from_fn(envlight::Mapping::Cube, 4, 4, 1, envlight::math::synth::smooth_env);
+        let map = envlight::EnvMap::from_fn(
+            envlight::Mapping::Cube,
+            4,
+            4,
+            1,
+            envlight::math::synth::smooth_env,
+        );
         let g = envlight::gpu::GpuEnvMap::upload(&ctx, &map).unwrap();
         assert!(ctx.live_objects() > 0);
-        let opts = envlight::passes::ConvertOptions { to: envlight::Mapping::LatLong, size: 8, orientation: Default::default(), supersample: None };
+        let opts = envlight::passes::ConvertOptions {
+            to: envlight::Mapping::LatLong,
+            size: 8,
+            orientation: Default::default(),
+            supersample: None,
+        };
         let (out, _) = conv.run(&g, &opts).unwrap();
         drop(g);
         let back = out.download(&ctx).unwrap();

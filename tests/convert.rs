@@ -33,9 +33,26 @@ fn texel_angle(m: Mapping, size: u32) -> f64 {
     }
 }
 
-fn convert(ctx: &Context, conv: &Converter, src: &EnvMap, to: Mapping, size: u32, o: Orientation) -> EnvMap {
+fn convert(
+    ctx: &Context,
+    conv: &Converter,
+    src: &EnvMap,
+    to: Mapping,
+    size: u32,
+    o: Orientation,
+) -> EnvMap {
     let g = GpuEnvMap::upload(ctx, src).unwrap();
-    let (out, t) = conv.run(&g, &ConvertOptions { to, size, orientation: o, supersample: None }).unwrap();
+    let (out, t) = conv
+        .run(
+            &g,
+            &ConvertOptions {
+                to,
+                size,
+                orientation: o,
+                supersample: None,
+            },
+        )
+        .unwrap();
     assert!(t.iter().all(|t| t.ms >= 0.0 && t.ms.is_finite()));
     out.download(ctx).unwrap()
 }
@@ -71,7 +88,11 @@ impl Errors {
 
 /// Compares every texel the output mapping reads against `truth(layer, i, j)`. `singular`
 /// marks texels near the angular map's rim (−Z), whose errors are first-order (see below).
-fn compare(out: &EnvMap, singular: impl Fn(u32, u32, u32) -> bool, truth: impl Fn(u32, u32, u32) -> Option<[f64; 3]>) -> Errors {
+fn compare(
+    out: &EnvMap,
+    singular: impl Fn(u32, u32, u32) -> bool,
+    truth: impl Fn(u32, u32, u32) -> Option<[f64; 3]>,
+) -> Errors {
     let mut e = Errors::default();
     for layer in 0..out.layers() {
         for j in 0..out.height {
@@ -81,9 +102,15 @@ fn compare(out: &EnvMap, singular: impl Fn(u32, u32, u32) -> bool, truth: impl F
                 }
                 let t = out.texel(layer, i, j);
                 assert!(t.iter().all(|c| c.is_finite()), "non-finite texel");
-                let Some(x) = truth(layer, i, j) else { continue };
+                let Some(x) = truth(layer, i, j) else {
+                    continue;
+                };
                 for k in 0..3 {
-                    e.add((t[k] as f64 - x[k]).abs(), singular(layer, i, j), (layer, i, j));
+                    e.add(
+                        (t[k] as f64 - x[k]).abs(),
+                        singular(layer, i, j),
+                        (layer, i, j),
+                    );
                 }
             }
         }
@@ -159,7 +186,8 @@ fn every_mapping_to_every_other_matches_the_analytic_environment() {
                 let hd = texel_angle(to, m_out);
                 let singular = |layer: u32, i: u32, j: u32| {
                     let d = out.texel_dir(layer, i, j);
-                    let near_rim_src = from == Mapping::Angular && d.angle_between(-glam::DVec3::Z) < 3.0 * hs;
+                    let near_rim_src =
+                        from == Mapping::Angular && d.angle_between(-glam::DVec3::Z) < 3.0 * hs;
                     let c = Mapping::texel_center(out.width, out.height, layer, i, j);
                     let r = (2.0 * c.u - 1.0).hypot(2.0 * c.v - 1.0);
                     let near_rim_dst = to == Mapping::Angular && r > 1.0 - 12.0 / out.width as f64;
@@ -169,12 +197,15 @@ fn every_mapping_to_every_other_matches_the_analytic_environment() {
                     near_rim_src || near_rim_dst || near_seam_src
                 };
                 let mean = EnvMap::from_fn(to, out.width, out.height, 16, smooth_env);
-                let em = compare(&out, singular, |l, i, j| Some(mean.texel(l, i, j).map(f64::from)));
+                let em = compare(&out, singular, |l, i, j| {
+                    Some(mean.texel(l, i, j).map(f64::from))
+                });
                 let ec = compare(&out, singular, |l, i, j| {
                     // A paraboloid texel centred outside the disc holds its part inside.
                     let c = Mapping::texel_center(out.width, out.height, l, i, j);
                     let outside = (2.0 * c.u - 1.0).hypot(2.0 * c.v - 1.0) > 1.0;
-                    (!(to == Mapping::DualParaboloid && outside)).then(|| smooth_env(out.texel_dir(l, i, j)))
+                    (!(to == Mapping::DualParaboloid && outside))
+                        .then(|| smooth_env(out.texel_dir(l, i, j)))
                 });
                 let tol_m = (m + 2.0 * g) * hs * hs / 4.0;
                 let tol_c = g * hd / 6.0 + m * (hs * hs / 6.0 + hd * hd / 12.0);
@@ -190,7 +221,11 @@ fn every_mapping_to_every_other_matches_the_analytic_environment() {
                     && ec.rms() <= tol_c / 4.0
                     && em.max_singular.max(ec.max_singular) <= tol_s;
                 if !ok {
-                    common::dump_pair(&format!("convert_{}_{}", from.name(), to.name()), &out, &mean);
+                    common::dump_pair(
+                        &format!("convert_{}_{}", from.name(), to.name()),
+                        &out,
+                        &mean,
+                    );
                     failures.push(format!("{from:?} -> {to:?}"));
                 }
             }
@@ -212,7 +247,11 @@ fn gpu_matches_the_float64_reference_conversion() {
     let ctx = common::ctx();
     {
         let conv = Converter::new(&ctx).unwrap();
-        let o = Orientation { flip_u: false, flip_v: true, rotate_y_degrees: 17.0 };
+        let o = Orientation {
+            flip_u: false,
+            flip_v: true,
+            rotate_y_degrees: 17.0,
+        };
         for from in Mapping::ALL {
             let n = src_size(from) / 2;
             let (w, h) = from.extent_for_size(n);
@@ -247,7 +286,10 @@ fn gpu_matches_the_float64_reference_conversion() {
                 if worst > tol {
                     common::dump_pair(&format!("ref_{}_{}", from.name(), to.name()), &gpu, &cpu);
                 }
-                assert!(worst <= tol, "{from:?} -> {to:?}: GPU vs f64 {worst:e} > {tol:e} at {at:?}");
+                assert!(
+                    worst <= tol,
+                    "{from:?} -> {to:?}: GPU vs f64 {worst:e} > {tol:e} at {at:?}"
+                );
             }
         }
     }
@@ -266,10 +308,38 @@ fn chain_of_conversions_returns_the_original() {
     {
         let conv = Converter::new(&ctx).unwrap();
         let start = EnvMap::from_fn(Mapping::LatLong, 256, 128, 6, smooth_env);
-        let cube = convert(&ctx, &conv, &start, Mapping::Cube, 96, Orientation::default());
-        let dp = convert(&ctx, &conv, &cube, Mapping::DualParaboloid, 160, Orientation::default());
-        let ang = convert(&ctx, &conv, &dp, Mapping::Angular, 320, Orientation::default());
-        let back = convert(&ctx, &conv, &ang, Mapping::LatLong, 256, Orientation::default());
+        let cube = convert(
+            &ctx,
+            &conv,
+            &start,
+            Mapping::Cube,
+            96,
+            Orientation::default(),
+        );
+        let dp = convert(
+            &ctx,
+            &conv,
+            &cube,
+            Mapping::DualParaboloid,
+            160,
+            Orientation::default(),
+        );
+        let ang = convert(
+            &ctx,
+            &conv,
+            &dp,
+            Mapping::Angular,
+            320,
+            Orientation::default(),
+        );
+        let back = convert(
+            &ctx,
+            &conv,
+            &ang,
+            Mapping::LatLong,
+            256,
+            Orientation::default(),
+        );
         let (mut worst, mut sq, mut n) = (0.0f64, 0.0, 0);
         for j in 0..back.height {
             for i in 0..back.width {
@@ -291,7 +361,10 @@ fn chain_of_conversions_returns_the_original() {
         if worst > 1e-2 {
             common::dump_pair("chain", &back, &start);
         }
-        assert!(worst < 1e-2 && rms < 2e-3, "chain: max {worst:e} rms {rms:e}");
+        assert!(
+            worst < 1e-2 && rms < 2e-3,
+            "chain: max {worst:e} rms {rms:e}"
+        );
     }
     common::finish(ctx);
 }
@@ -302,16 +375,32 @@ fn orientation_options_transform_directions() {
     let ctx = common::ctx();
     {
         let conv = Converter::new(&ctx).unwrap();
-        let o = Orientation { flip_u: true, flip_v: true, rotate_y_degrees: 30.0 };
+        let o = Orientation {
+            flip_u: true,
+            flip_v: true,
+            rotate_y_degrees: 30.0,
+        };
         let m = o.world_to_file();
         for from in [Mapping::LatLong, Mapping::Cube] {
             let (w, h) = from.extent_for_size(src_size(from));
             let src = EnvMap::from_fn(from, w, h, 6, smooth_env);
             let out = convert(&ctx, &conv, &src, Mapping::LatLong, 128, o);
             // The world sees at d what the file stores at world_to_file · d.
-            let oriented = compare(&out, |_, _, _| false, |l, i, j| Some(smooth_env(m * out.texel_dir(l, i, j))));
-            assert!(oriented.max < 0.02, "{from:?}: oriented conversion off by {:e}", oriented.max);
-            let plain = compare(&out, |_, _, _| false, |l, i, j| Some(smooth_env(out.texel_dir(l, i, j))));
+            let oriented = compare(
+                &out,
+                |_, _, _| false,
+                |l, i, j| Some(smooth_env(m * out.texel_dir(l, i, j))),
+            );
+            assert!(
+                oriented.max < 0.02,
+                "{from:?}: oriented conversion off by {:e}",
+                oriented.max
+            );
+            let plain = compare(
+                &out,
+                |_, _, _| false,
+                |l, i, j| Some(smooth_env(out.texel_dir(l, i, j))),
+            );
             assert!(plain.max > 0.1, "{from:?}: orientation had no effect");
         }
     }
@@ -335,8 +424,11 @@ fn tiny_and_odd_sizes() {
                         assert_eq!(s.nan + s.inf + s.negative, 0, "{from:?}{n} -> {to:?}{size}");
                         // Everything lies within the range of the source's texels.
                         let smax = src.stats().max;
-                        for k in 0..3 {
-                            assert!(s.max[k] <= smax[k] * 1.0001, "{from:?}{n} -> {to:?}{size}: overshoot");
+                        for (out_max, src_max) in s.max.iter().zip(smax) {
+                            assert!(
+                                *out_max <= src_max * 1.0001,
+                                "{from:?}{n} -> {to:?}{size}: overshoot"
+                            );
                         }
                     }
                 }

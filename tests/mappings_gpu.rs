@@ -18,7 +18,10 @@ fn glsl_round_trip_under_1e5_rad() {
         let probe = MappingProbe::new(&ctx).unwrap();
         let dirs64 = stress_directions();
         assert!(dirs64.len() >= 100_000);
-        let dirs: Vec<[f32; 3]> = dirs64.iter().map(|d| [d.x as f32, d.y as f32, d.z as f32]).collect();
+        let dirs: Vec<[f32; 3]> = dirs64
+            .iter()
+            .map(|d| [d.x as f32, d.y as f32, d.z as f32])
+            .collect();
         for m in Mapping::ALL {
             let out = probe.round_trip(m, &dirs).unwrap();
             let mut worst = (0.0f64, DVec3::ZERO);
@@ -27,7 +30,11 @@ fn glsl_round_trip_under_1e5_rad() {
                 let d = DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64).normalize();
                 let back = DVec3::new(r.dir[0] as f64, r.dir[1] as f64, r.dir[2] as f64);
                 assert!(back.is_finite(), "{m:?}: non-finite direction for {d}");
-                assert!((0.0..=1.0).contains(&r.uv[0]) && (0.0..=1.0).contains(&r.uv[1]), "{m:?} {d}: uv {:?}", r.uv);
+                assert!(
+                    (0.0..=1.0).contains(&r.uv[0]) && (0.0..=1.0).contains(&r.uv[1]),
+                    "{m:?} {d}: uv {:?}",
+                    r.uv
+                );
                 assert!(r.layer < m.layers());
                 // The GPU's face or half must be the f64 one except on exact ties.
                 let e = angle(d, back.normalize());
@@ -35,7 +42,12 @@ fn glsl_round_trip_under_1e5_rad() {
                     worst = (e, d);
                 }
             }
-            assert!(worst.0 < 1e-5, "{m:?}: worst GLSL round trip {:e} rad at {}", worst.0, worst.1);
+            assert!(
+                worst.0 < 1e-5,
+                "{m:?}: worst GLSL round trip {:e} rad at {}",
+                worst.0,
+                worst.1
+            );
             eprintln!("{m:?}: worst GLSL round trip {:.2e} rad", worst.0);
         }
     }
@@ -49,7 +61,10 @@ fn glsl_coordinates_match_f64() {
     {
         let probe = MappingProbe::new(&ctx).unwrap();
         let dirs64 = envlight::math::synth::fibonacci_sphere(20_000);
-        let dirs: Vec<[f32; 3]> = dirs64.iter().map(|d| [d.x as f32, d.y as f32, d.z as f32]).collect();
+        let dirs: Vec<[f32; 3]> = dirs64
+            .iter()
+            .map(|d| [d.x as f32, d.y as f32, d.z as f32])
+            .collect();
         for m in Mapping::ALL {
             let out = probe.round_trip(m, &dirs).unwrap();
             for (d, r) in dirs.iter().zip(&out) {
@@ -61,7 +76,13 @@ fn glsl_coordinates_match_f64() {
                 let du = (c.u - r.uv[0] as f64).abs();
                 let du = du.min(1.0 - du); // the lat-long seam wraps
                 let dv = (c.v - r.uv[1] as f64).abs();
-                assert!(du < 2e-6 && dv < 2e-6, "{m:?} {d}: f64 ({}, {}) GLSL {:?}", c.u, c.v, r.uv);
+                assert!(
+                    du < 2e-6 && dv < 2e-6,
+                    "{m:?} {d}: f64 ({}, {}) GLSL {:?}",
+                    c.u,
+                    c.v,
+                    r.uv
+                );
             }
         }
     }
@@ -75,7 +96,11 @@ fn glsl_solid_angles_sum_to_4pi_and_match_f64() {
         let probe = MappingProbe::new(&ctx).unwrap();
         for m in Mapping::ALL {
             for n in [1u32, 2, 3, 7, 64, 255, 512] {
-                let (w, h) = if m == Mapping::LatLong { (2 * n, n) } else { (n, n) };
+                let (w, h) = if m == Mapping::LatLong {
+                    (2 * n, n)
+                } else {
+                    (n, n)
+                };
                 let gpu = probe.solid_angles(m, w, h).unwrap();
                 let mut sum = 0.0f64;
                 let mut worst_rel = 0.0f64;
@@ -87,7 +112,8 @@ fn glsl_solid_angles_sum_to_4pi_and_match_f64() {
                         assert!(g.is_finite() && g >= 0.0, "{m:?} {w}x{h} ({i},{j}): {g}");
                         sum += g;
                         // Rim texels can hold slivers; compare them against the texel scale.
-                        let scale = f.max(4.0 * std::f64::consts::PI / (w * h * m.layers()) as f64 * 1e-2);
+                        let scale =
+                            f.max(4.0 * std::f64::consts::PI / (w * h * m.layers()) as f64 * 1e-2);
                         if (g - f).abs() / scale > worst_rel {
                             worst_rel = (g - f).abs() / scale;
                             worst_at = (i, j, g, f);
@@ -97,7 +123,10 @@ fn glsl_solid_angles_sum_to_4pi_and_match_f64() {
                 let total = sum * m.layers() as f64;
                 let rel = (total / (4.0 * std::f64::consts::PI) - 1.0).abs();
                 assert!(rel < 1e-5, "{m:?} {w}x{h}: GPU sum {total} rel err {rel:e}");
-                assert!(worst_rel < 2e-3, "{m:?} {w}x{h}: worst texel rel err {worst_rel:e} at {worst_at:?}");
+                assert!(
+                    worst_rel < 2e-3,
+                    "{m:?} {w}x{h}: worst texel rel err {worst_rel:e} at {worst_at:?}"
+                );
             }
         }
     }

@@ -13,13 +13,19 @@ use std::path::{Path, PathBuf};
 /// Every probe file (the six pisaHDR faces as one `{face}` pattern) with its expected mapping.
 fn all_probes(dir: &Path) -> Vec<(String, Mapping)> {
     let mut v = Vec::new();
-    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
     entries.sort();
     for p in entries {
         let name = p.file_name().unwrap().to_string_lossy().to_string();
         if p.is_dir() {
             if p.join("px.hdr").exists() {
-                v.push((p.join("{face}.hdr").to_string_lossy().to_string(), Mapping::Cube));
+                v.push((
+                    p.join("{face}.hdr").to_string_lossy().to_string(),
+                    Mapping::Cube,
+                ));
             }
             continue;
         }
@@ -50,15 +56,35 @@ fn load(spec: &str) -> EnvMap {
 fn every_real_probe_loads_with_sane_statistics() {
     let Some(dir) = common::probes() else { return };
     let probes = all_probes(&dir);
-    assert!(probes.len() >= 20, "only {} probes found in {}", probes.len(), dir.display());
+    assert!(
+        probes.len() >= 20,
+        "only {} probes found in {}",
+        probes.len(),
+        dir.display()
+    );
     for (spec, mapping) in probes {
         let map = load(&spec);
         assert_eq!(map.mapping, mapping, "{spec}: mapping inferred wrongly");
         let s = map.stats();
-        eprintln!("{spec}: {}x{}x{} max lum {:.3e} power {:.3e}", map.width, map.height, map.layers(), s.max_luminance, s.power[1]);
+        eprintln!(
+            "{spec}: {}x{}x{} max lum {:.3e} power {:.3e}",
+            map.width,
+            map.height,
+            map.layers(),
+            s.max_luminance,
+            s.power[1]
+        );
         assert_eq!(s.nan + s.inf + s.negative, 0, "{spec}: invalid texels");
-        assert!(s.max_luminance > 1.0 && s.max_luminance < 1e6, "{spec}: max luminance {}", s.max_luminance);
-        assert!(s.power.iter().all(|&p| p > 0.0 && p.is_finite()), "{spec}: power {:?}", s.power);
+        assert!(
+            s.max_luminance > 1.0 && s.max_luminance < 1e6,
+            "{spec}: max luminance {}",
+            s.max_luminance
+        );
+        assert!(
+            s.power.iter().all(|&p| p > 0.0 && p.is_finite()),
+            "{spec}: power {:?}",
+            s.power
+        );
         assert!(s.min.iter().all(|&m| m >= 0.0));
     }
 }
@@ -81,21 +107,53 @@ fn conversion_preserves_power_of_every_real_probe() {
                 if to == map.mapping {
                     continue;
                 }
-                for size in [match to { Mapping::LatLong => 512, Mapping::Cube => 128, _ => 256 }, 32] {
+                for size in [
+                    match to {
+                        Mapping::LatLong => 512,
+                        Mapping::Cube => 128,
+                        _ => 256,
+                    },
+                    32,
+                ] {
                     let (out, _) = conv
-                        .run(&g, &ConvertOptions { to, size, orientation: Orientation::default(), supersample: None })
+                        .run(
+                            &g,
+                            &ConvertOptions {
+                                to,
+                                size,
+                                orientation: Orientation::default(),
+                                supersample: None,
+                            },
+                        )
                         .unwrap();
                     let out = out.download(&ctx).unwrap();
                     let pout = out.power();
-                    let worst = (0..3).map(|k| pout[k] / pin[k] - 1.0).fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
-                    eprintln!("{spec} -> {} {size}: power {:+.3}%", to.name(), worst * 100.0);
+                    let worst = (0..3).map(|k| pout[k] / pin[k] - 1.0).fold(0.0f64, |a, b| {
+                        if b.abs() > a.abs() {
+                            b
+                        } else {
+                            a
+                        }
+                    });
+                    eprintln!(
+                        "{spec} -> {} {size}: power {:+.3}%",
+                        to.name(),
+                        worst * 100.0
+                    );
                     if worst.abs() >= 5e-3 {
-                        failures.push(format!("{spec} -> {} {size}: {:+.3}%", to.name(), worst * 100.0));
+                        failures.push(format!(
+                            "{spec} -> {} {size}: {:+.3}%",
+                            to.name(),
+                            worst * 100.0
+                        ));
                     }
                 }
             }
         }
-        assert!(failures.is_empty(), "power not preserved within 0.5%: {failures:#?}");
+        assert!(
+            failures.is_empty(),
+            "power not preserved within 0.5%: {failures:#?}"
+        );
     }
     common::finish(ctx);
 }
@@ -126,16 +184,31 @@ fn grace_probe_and_latlong_agree_after_flips() {
             let map = load(dir.join(file).to_str().unwrap());
             let g = GpuEnvMap::upload(&ctx, &map).unwrap();
             let (out, _) = conv
-                .run(&g, &ConvertOptions { to: Mapping::LatLong, size: 256, orientation: o, supersample: None })
+                .run(
+                    &g,
+                    &ConvertOptions {
+                        to: Mapping::LatLong,
+                        size: 256,
+                        orientation: o,
+                        supersample: None,
+                    },
+                )
                 .unwrap();
             out.download(&ctx).unwrap()
         };
         let probe = run("grace_probe.hdr", Orientation::default());
-        let flips = Orientation { flip_u: true, flip_v: true, rotate_y_degrees: 0.0 };
+        let flips = Orientation {
+            flip_u: true,
+            flip_v: true,
+            rotate_y_degrees: 0.0,
+        };
         let latlong = run("grace_latlong.exr", flips);
         let unflipped = run("grace_latlong.exr", Orientation::default());
         let lum = |m: &EnvMap| -> Vec<f64> {
-            m.texels.iter().map(|t| envlight::envmap::luminance(t.map(f64::from))).collect()
+            m.texels
+                .iter()
+                .map(|t| envlight::envmap::luminance(t.map(f64::from)))
+                .collect()
         };
         let (a, b, c) = (lum(&probe), lum(&latlong), lum(&unflipped));
         let scale = probe.power()[1] / latlong.power()[1];
@@ -145,8 +218,14 @@ fn grace_probe_and_latlong_agree_after_flips() {
         let r_wrong = correlation(&log(&a), &log(&c));
         eprintln!("grace: scale {scale:.2} correlation linear {r_lin:.4} log {r_log:.4} (unflipped log {r_wrong:.4})");
         assert!(r_lin >= 0.98, "linear correlation {r_lin} (log {r_log})");
-        assert!(r_wrong < r_log - 0.1, "the flips should matter: {r_wrong} vs {r_log}");
-        assert!((20.0..50.0).contains(&scale), "scale {scale}, expected about 32");
+        assert!(
+            r_wrong < r_log - 0.1,
+            "the flips should matter: {r_wrong} vs {r_log}"
+        );
+        assert!(
+            (20.0..50.0).contains(&scale),
+            "scale {scale}, expected about 32"
+        );
     }
     common::finish(ctx);
 }

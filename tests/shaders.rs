@@ -21,11 +21,18 @@ fn spirv_is_not_stale() {
     );
     let manifest = std::fs::read_to_string(root().join(layout::MANIFEST)).unwrap();
     let now = layout::manifest(&root().join("glsl")).unwrap();
-    assert_eq!(manifest, now, "spirv/ is stale against glsl/: run `cargo xtask shaders`");
+    assert_eq!(
+        manifest, now,
+        "spirv/ is stale against glsl/: run `cargo xtask shaders`"
+    );
     for s in SHADER_SOURCES {
         let p = root().join("spirv").join(format!("{}.spv", s.name));
         let bytes = std::fs::read(&p).unwrap();
-        assert!(bytes.len() > 20 && bytes[..4] == [0x03, 0x02, 0x23, 0x07], "{} is not SPIR-V", p.display());
+        assert!(
+            bytes.len() > 20 && bytes[..4] == [0x03, 0x02, 0x23, 0x07],
+            "{} is not SPIR-V",
+            p.display()
+        );
     }
 }
 
@@ -33,7 +40,13 @@ fn spirv_is_not_stale() {
 fn every_shader_is_registered_once() {
     assert_eq!(ShaderId::ALL.len(), SHADER_SOURCES.len());
     for id in ShaderId::ALL {
-        assert_eq!(ShaderId::ALL.iter().filter(|o| o.source().name == id.source().name).count(), 1);
+        assert_eq!(
+            ShaderId::ALL
+                .iter()
+                .filter(|o| o.source().name == id.source().name)
+                .count(),
+            1
+        );
     }
 }
 
@@ -44,10 +57,15 @@ fn bindings_and_push_constants_match_the_spirv() {
         let sets = refl.get_descriptor_sets().unwrap();
         let iface = id.interface();
         let set0 = sets.get(&0).cloned().unwrap_or_default();
-        assert!(sets.keys().all(|&s| s == 0), "{id:?} uses a set other than 0");
+        assert!(
+            sets.keys().all(|&s| s == 0),
+            "{id:?} uses a set other than 0"
+        );
         assert_eq!(set0.len(), iface.bindings.len(), "{id:?}: binding count");
         for &(b, kind) in iface.bindings {
-            let info = set0.get(&b).unwrap_or_else(|| panic!("{id:?}: SPIR-V has no binding {b}"));
+            let info = set0
+                .get(&b)
+                .unwrap_or_else(|| panic!("{id:?}: SPIR-V has no binding {b}"));
             let want = match kind {
                 DescriptorKind::SampledImage => DescriptorType::COMBINED_IMAGE_SAMPLER,
                 DescriptorKind::StorageImage => DescriptorType::STORAGE_IMAGE,
@@ -57,13 +75,23 @@ fn bindings_and_push_constants_match_the_spirv() {
         }
         let push = refl.get_push_constant_range().unwrap();
         match push {
-            Some(p) => assert_eq!(p.offset + p.size, iface.push_size, "{id:?}: push constant size"),
-            None => assert_eq!(iface.push_size, 0, "{id:?}: Rust pushes constants the shader lacks"),
+            Some(p) => assert_eq!(
+                p.offset + p.size,
+                iface.push_size,
+                "{id:?}: push constant size"
+            ),
+            None => assert_eq!(
+                iface.push_size, 0,
+                "{id:?}: Rust pushes constants the shader lacks"
+            ),
         }
         // Compute workgroup sizes come from specialization constants, never literals.
         if id.source().stage == layout::Stage::Compute {
             let text = std::fs::read_to_string(root().join("glsl").join(id.source().file)).unwrap();
-            assert!(text.contains("local_size_x_id"), "{id:?}: workgroup size must be a specialization constant");
+            assert!(
+                text.contains("local_size_x_id"),
+                "{id:?}: workgroup size must be a specialization constant"
+            );
         }
     }
 }

@@ -45,7 +45,11 @@ pub fn usage_info(u: Usage) -> UsageInfo {
     let (stage, access, layout) = match u {
         Usage::Undefined => (S::TOP_OF_PIPE, A::NONE, L::UNDEFINED),
         Usage::TransferSrc => (S::COPY, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL),
-        Usage::TransferDst => (S::COPY | S::CLEAR, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL),
+        Usage::TransferDst => (
+            S::COPY | S::CLEAR,
+            A::TRANSFER_WRITE,
+            L::TRANSFER_DST_OPTIMAL,
+        ),
         Usage::ComputeSampled => (
             S::COMPUTE_SHADER,
             A::SHADER_SAMPLED_READ,
@@ -147,7 +151,12 @@ mod tests {
 
     #[test]
     fn upload_then_sample_transitions_layouts() {
-        let b = image_barrier(vk::Image::null(), 6, Usage::TransferDst, Usage::ComputeSampled);
+        let b = image_barrier(
+            vk::Image::null(),
+            6,
+            Usage::TransferDst,
+            Usage::ComputeSampled,
+        );
         assert_eq!(b.old_layout, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
         assert_eq!(b.new_layout, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
         assert!(b.src_access_mask.contains(vk::AccessFlags2::TRANSFER_WRITE));
@@ -178,7 +187,13 @@ mod tests {
         for u in writes {
             assert!(usage_info(u).access.intersects(write_bits), "{u:?}");
         }
-        for u in [Usage::TransferSrc, Usage::ComputeSampled, Usage::ComputeRead, Usage::FragmentSampled, Usage::HostRead] {
+        for u in [
+            Usage::TransferSrc,
+            Usage::ComputeSampled,
+            Usage::ComputeRead,
+            Usage::FragmentSampled,
+            Usage::HostRead,
+        ] {
             assert!(!usage_info(u).access.intersects(write_bits), "{u:?}");
         }
     }

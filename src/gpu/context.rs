@@ -101,7 +101,8 @@ unsafe extern "system" fn debug_callback(
     user: *mut c_void,
 ) -> vk::Bool32 {
     if !severity.intersects(
-        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+            | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
     ) {
         return vk::FALSE;
     }
@@ -229,9 +230,10 @@ impl Context {
         }
         // SAFETY: the create info and everything it points to live across the call.
         let instance = unsafe { entry.create_instance(&create, None) }.map_err(|r| match r {
-            vk::Result::ERROR_INCOMPATIBLE_DRIVER => {
-                Error::NoDevice(format!("no Vulkan 1.3 driver found ({r}); {}", no_device_help()))
-            }
+            vk::Result::ERROR_INCOMPATIBLE_DRIVER => Error::NoDevice(format!(
+                "no Vulkan 1.3 driver found ({r}); {}",
+                no_device_help()
+            )),
             r => Error::Vulkan {
                 what: "creating the instance",
                 result: r,
@@ -328,8 +330,7 @@ impl Context {
     ) -> Result<Context> {
         // SAFETY: valid physical device of this instance.
         let props = unsafe { instance.get_physical_device_properties(physical) };
-        let families =
-            unsafe { instance.get_physical_device_queue_family_properties(physical) };
+        let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
         let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
         // SAFETY: valid physical device; props2 chain lives across the call.
@@ -374,9 +375,10 @@ impl Context {
             .queue_family_index(family)
             .flags(vk::CommandPoolCreateFlags::TRANSIENT);
         // SAFETY: valid device; family index is the queue's.
-        let command_pool =
-            unsafe { device.create_command_pool(&pool_info, None) }.vk("creating a command pool")?;
-        let debug_device = debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let command_pool = unsafe { device.create_command_pool(&pool_info, None) }
+            .vk("creating a command pool")?;
+        let debug_device =
+            debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
         let shared = Shared {
             entry,
             instance,
@@ -479,14 +481,18 @@ impl Shared {
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
         // SAFETY: pool is ours and externally synchronised by the mutex held until the end.
-        let cmd = unsafe { d.allocate_command_buffers(&alloc) }.vk("allocating a command buffer")?[0];
+        let cmd =
+            unsafe { d.allocate_command_buffers(&alloc) }.vk("allocating a command buffer")?[0];
         let fence_info = vk::FenceCreateInfo::default();
         let fence = match unsafe { d.create_fence(&fence_info, None) } {
             Ok(f) => f,
             Err(r) => {
                 // SAFETY: cmd came from this pool and was never submitted.
                 unsafe { d.free_command_buffers(*pool, &[cmd]) };
-                return Err(Error::Vulkan { what: "creating a fence", result: r });
+                return Err(Error::Vulkan {
+                    what: "creating a fence",
+                    result: r,
+                });
             }
         };
         self.track();
@@ -526,7 +532,10 @@ impl Drop for Shared {
         // no work is pending. Destruction runs in reverse order of creation.
         unsafe {
             let _ = self.device.device_wait_idle();
-            let pool = *self.command_pool.get_mut().unwrap_or_else(|e| e.into_inner());
+            let pool = *self
+                .command_pool
+                .get_mut()
+                .unwrap_or_else(|e| e.into_inner());
             self.device.destroy_command_pool(pool, None);
             ManuallyDrop::drop(&mut self.allocator);
             if self.owns_device {
@@ -602,17 +611,14 @@ fn pick_device(
         }
     }
     candidates.sort_by_key(|c| (c.0, c.1));
-    candidates
-        .first()
-        .map(|c| (c.2, c.3))
-        .ok_or_else(|| {
-            Error::NoDevice(format!(
-                "no Vulkan 1.3 device with a graphics+compute queue matches {selector:?} \
+    candidates.first().map(|c| (c.2, c.3)).ok_or_else(|| {
+        Error::NoDevice(format!(
+            "no Vulkan 1.3 device with a graphics+compute queue matches {selector:?} \
                  (devices: {}); {}",
-                names.join(", "),
-                no_device_help()
-            ))
-        })
+            names.join(", "),
+            no_device_help()
+        ))
+    })
 }
 
 fn create_device(

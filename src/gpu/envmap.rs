@@ -1,7 +1,9 @@
 //! Environment maps resident on the GPU as RGBA32F 2D array images (cube-compatible for cubes).
 //! At rest an image is in `SHADER_READ_ONLY_OPTIMAL`; passes leave their outputs so.
 
-use super::barrier::{cmd_image_barriers, cmd_memory_barrier, image_barrier, memory_barrier, Usage};
+use super::barrier::{
+    cmd_image_barriers, cmd_memory_barrier, image_barrier, memory_barrier, Usage,
+};
 use super::context::Context;
 use super::resources::{Buffer, Image, ImageDesc};
 use crate::envmap::EnvMap;
@@ -28,9 +30,17 @@ pub struct GpuEnvMap {
 
 impl GpuEnvMap {
     /// An uninitialised map for a pass to write (storage + sampled + transfer source).
-    pub fn new(ctx: &Context, name: &str, mapping: Mapping, width: u32, height: u32) -> Result<GpuEnvMap> {
+    pub fn new(
+        ctx: &Context,
+        name: &str,
+        mapping: Mapping,
+        width: u32,
+        height: u32,
+    ) -> Result<GpuEnvMap> {
         if width == 0 || height == 0 {
-            return Err(Error::Invalid(format!("{name}: a map needs a non-zero size")));
+            return Err(Error::Invalid(format!(
+                "{name}: a map needs a non-zero size"
+            )));
         }
         let image = Image::new(
             ctx,
@@ -47,7 +57,12 @@ impl GpuEnvMap {
                 cube: mapping == Mapping::Cube,
             },
         )?;
-        Ok(GpuEnvMap { mapping, width, height, image })
+        Ok(GpuEnvMap {
+            mapping,
+            width,
+            height,
+            image,
+        })
     }
 
     /// Uploads a map.
@@ -66,7 +81,16 @@ impl GpuEnvMap {
         let d = ctx.device();
         let layers = map.layers();
         ctx.submit_and_wait("uploading a map", |cmd| {
-            cmd_image_barriers(d, cmd, &[image_barrier(g.image.raw, layers, Usage::Undefined, Usage::TransferDst)]);
+            cmd_image_barriers(
+                d,
+                cmd,
+                &[image_barrier(
+                    g.image.raw,
+                    layers,
+                    Usage::Undefined,
+                    Usage::TransferDst,
+                )],
+            );
             let region = g.copy_region();
             // SAFETY: cmd is recording; buffer and image are live and large enough.
             unsafe {
@@ -78,7 +102,16 @@ impl GpuEnvMap {
                     &[region],
                 )
             };
-            cmd_image_barriers(d, cmd, &[image_barrier(g.image.raw, layers, Usage::TransferDst, Usage::ComputeSampled)]);
+            cmd_image_barriers(
+                d,
+                cmd,
+                &[image_barrier(
+                    g.image.raw,
+                    layers,
+                    Usage::TransferDst,
+                    Usage::ComputeSampled,
+                )],
+            );
             Ok(())
         })?;
         Ok(g)
@@ -91,7 +124,11 @@ impl GpuEnvMap {
                     .aspect_mask(vk::ImageAspectFlags::COLOR)
                     .layer_count(self.mapping.layers()),
             )
-            .image_extent(vk::Extent3D { width: self.width, height: self.height, depth: 1 })
+            .image_extent(vk::Extent3D {
+                width: self.width,
+                height: self.height,
+                depth: 1,
+            })
     }
 
     /// Reads the map back.
@@ -107,7 +144,16 @@ impl GpuEnvMap {
         let d = ctx.device();
         let layers = self.mapping.layers();
         ctx.submit_and_wait("downloading a map", |cmd| {
-            cmd_image_barriers(d, cmd, &[image_barrier(self.image.raw, layers, Usage::ComputeSampled, Usage::TransferSrc)]);
+            cmd_image_barriers(
+                d,
+                cmd,
+                &[image_barrier(
+                    self.image.raw,
+                    layers,
+                    Usage::ComputeSampled,
+                    Usage::TransferSrc,
+                )],
+            );
             // SAFETY: cmd is recording; image and buffer are live and large enough.
             unsafe {
                 d.cmd_copy_image_to_buffer(
@@ -118,7 +164,16 @@ impl GpuEnvMap {
                     &[self.copy_region()],
                 )
             };
-            cmd_image_barriers(d, cmd, &[image_barrier(self.image.raw, layers, Usage::TransferSrc, Usage::ComputeSampled)]);
+            cmd_image_barriers(
+                d,
+                cmd,
+                &[image_barrier(
+                    self.image.raw,
+                    layers,
+                    Usage::TransferSrc,
+                    Usage::ComputeSampled,
+                )],
+            );
             cmd_memory_barrier(d, cmd, memory_barrier(Usage::TransferDst, Usage::HostRead));
             Ok(())
         })?;

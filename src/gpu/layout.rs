@@ -69,18 +69,48 @@ pub struct ShaderSource {
 
 /// Every shader the library uses.
 pub const SHADER_SOURCES: &[ShaderSource] = &[
-    ShaderSource { name: "convert_2d", file: "convert.comp", stage: Stage::Compute, defines: &[] },
+    ShaderSource {
+        name: "convert_2d",
+        file: "convert.comp",
+        stage: Stage::Compute,
+        defines: &[],
+    },
     ShaderSource {
         name: "convert_cube",
         file: "convert.comp",
         stage: Stage::Compute,
         defines: &[("SRC_CUBE", "1")],
     },
-    ShaderSource { name: "mapping_probe", file: "mapping_probe.comp", stage: Stage::Compute, defines: &[] },
-    ShaderSource { name: "copy", file: "copy.comp", stage: Stage::Compute, defines: &[] },
-    ShaderSource { name: "busy", file: "busy.comp", stage: Stage::Compute, defines: &[] },
-    ShaderSource { name: "fullscreen_vert", file: "fullscreen.vert", stage: Stage::Vertex, defines: &[] },
-    ShaderSource { name: "flat_frag", file: "flat.frag", stage: Stage::Fragment, defines: &[] },
+    ShaderSource {
+        name: "mapping_probe",
+        file: "mapping_probe.comp",
+        stage: Stage::Compute,
+        defines: &[],
+    },
+    ShaderSource {
+        name: "copy",
+        file: "copy.comp",
+        stage: Stage::Compute,
+        defines: &[],
+    },
+    ShaderSource {
+        name: "busy",
+        file: "busy.comp",
+        stage: Stage::Compute,
+        defines: &[],
+    },
+    ShaderSource {
+        name: "fullscreen_vert",
+        file: "fullscreen.vert",
+        stage: Stage::Vertex,
+        defines: &[],
+    },
+    ShaderSource {
+        name: "flat_frag",
+        file: "flat.frag",
+        stage: Stage::Fragment,
+        defines: &[],
+    },
 ];
 
 /// The GLSL header carrying the constants above.
@@ -111,7 +141,9 @@ pub fn generated_header() -> String {
 /// Reads a GLSL file with its `#include "…"` lines expanded from `glsl/include/`.
 pub fn expand_includes(glsl_dir: &Path, file: &str, depth: u32) -> std::io::Result<String> {
     if depth > 16 {
-        return Err(std::io::Error::other(format!("{file}: includes nest too deep")));
+        return Err(std::io::Error::other(format!(
+            "{file}: includes nest too deep"
+        )));
     }
     let path = if depth == 0 {
         glsl_dir.join(file)

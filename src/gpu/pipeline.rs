@@ -8,11 +8,13 @@ use ash::vk;
 use std::sync::Arc;
 
 fn shader_module(shared: &Shared, id: ShaderId) -> Result<vk::ShaderModule> {
-    let words = ash::util::read_spv(&mut std::io::Cursor::new(id.spirv()))
-        .map_err(|_| crate::Error::Invalid(format!("spirv/{}.spv is not SPIR-V", id.source().name)))?;
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(id.spirv())).map_err(|_| {
+        crate::Error::Invalid(format!("spirv/{}.spv is not SPIR-V", id.source().name))
+    })?;
     let info = vk::ShaderModuleCreateInfo::default().code(&words);
     // SAFETY: valid device; the words are a SPIR-V module built for Vulkan 1.2.
-    let m = unsafe { shared.device.create_shader_module(&info, None) }.vk("creating a shader module")?;
+    let m = unsafe { shared.device.create_shader_module(&info, None) }
+        .vk("creating a shader module")?;
     shared.name(m, id.source().name);
     Ok(m)
 }
@@ -108,7 +110,9 @@ impl Pipeline {
                 .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
         };
         unsafe { shared.device.destroy_shader_module(module, None) };
-        p.pipeline = result.map_err(|(_, r)| r).vk("creating a compute pipeline")?[0];
+        p.pipeline = result
+            .map_err(|(_, r)| r)
+            .vk("creating a compute pipeline")?[0];
         shared.track();
         shared.name(p.pipeline, shader.source().name);
         Ok(p)
@@ -116,7 +120,12 @@ impl Pipeline {
 
     /// A graphics pipeline drawing a fullscreen triangle into one colour attachment of
     /// `format` with dynamic rendering, viewport and scissor dynamic.
-    pub fn fullscreen(ctx: &Context, vert: ShaderId, frag: ShaderId, format: vk::Format) -> Result<Pipeline> {
+    pub fn fullscreen(
+        ctx: &Context,
+        vert: ShaderId,
+        frag: ShaderId,
+        format: vk::Format,
+    ) -> Result<Pipeline> {
         let shared = &ctx.shared;
         assert!(vert.interface().bindings.is_empty() && vert.interface().push_size == 0);
         let mut p = Pipeline::layouts(shared, frag, vk::ShaderStageFlags::FRAGMENT)?;
@@ -157,7 +166,8 @@ impl Pipeline {
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let formats = [format];
-        let mut rendering = vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&formats);
+        let mut rendering =
+            vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&formats);
         let info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&stages)
             .vertex_input_state(&vertex_input)
@@ -179,7 +189,9 @@ impl Pipeline {
             shared.device.destroy_shader_module(vm, None);
             shared.device.destroy_shader_module(fm, None);
         }
-        p.pipeline = result.map_err(|(_, r)| r).vk("creating a graphics pipeline")?[0];
+        p.pipeline = result
+            .map_err(|(_, r)| r)
+            .vk("creating a graphics pipeline")?[0];
         shared.track();
         shared.name(p.pipeline, frag.source().name);
         Ok(p)
@@ -255,14 +267,26 @@ pub struct DescriptorSet {
 
 impl DescriptorSet {
     /// Allocates and writes a set for `pipeline`; `binds` must cover its interface exactly.
-    pub fn new(ctx: &Context, pipeline: &Pipeline, binds: &[(u32, Bind<'_>)]) -> Result<DescriptorSet> {
+    pub fn new(
+        ctx: &Context,
+        pipeline: &Pipeline,
+        binds: &[(u32, Bind<'_>)],
+    ) -> Result<DescriptorSet> {
         let shared = &ctx.shared;
         let iface = pipeline.shader.interface();
-        assert_eq!(binds.len(), iface.bindings.len(), "{:?}: wrong number of bindings", pipeline.shader);
+        assert_eq!(
+            binds.len(),
+            iface.bindings.len(),
+            "{:?}: wrong number of bindings",
+            pipeline.shader
+        );
         let sizes: Vec<_> = iface
             .bindings
             .iter()
-            .map(|&(_, k)| vk::DescriptorPoolSize { ty: k.vk(), descriptor_count: 1 })
+            .map(|&(_, k)| vk::DescriptorPoolSize {
+                ty: k.vk(),
+                descriptor_count: 1,
+            })
             .collect();
         let info = vk::DescriptorPoolCreateInfo::default()
             .max_sets(1)
@@ -272,7 +296,11 @@ impl DescriptorSet {
             .vk("creating a descriptor pool")?;
         shared.track();
         shared.name(pool, pipeline.shader.source().name);
-        let mut ds = DescriptorSet { shared: shared.clone(), pool, set: vk::DescriptorSet::null() };
+        let mut ds = DescriptorSet {
+            shared: shared.clone(),
+            pool,
+            set: vk::DescriptorSet::null(),
+        };
         let layouts = [pipeline.set_layout];
         let alloc = vk::DescriptorSetAllocateInfo::default()
             .descriptor_pool(pool)
@@ -291,26 +319,33 @@ impl DescriptorSet {
                 .unwrap_or_else(|| panic!("{:?} has no binding {b}", pipeline.shader));
             match (bind, kind) {
                 (Bind::Sampled(img, smp, cube), DescriptorKind::SampledImage) => {
-                    image_infos.push((*b, kind, vk::DescriptorImageInfo {
-                        sampler: smp.raw,
-                        image_view: if *cube { img.cube_view } else { img.view },
-                        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    }))
+                    image_infos.push((
+                        *b,
+                        kind,
+                        vk::DescriptorImageInfo {
+                            sampler: smp.raw,
+                            image_view: if *cube { img.cube_view } else { img.view },
+                            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                        },
+                    ))
                 }
-                (Bind::Storage(img), DescriptorKind::StorageImage) => {
-                    image_infos.push((*b, kind, vk::DescriptorImageInfo {
+                (Bind::Storage(img), DescriptorKind::StorageImage) => image_infos.push((
+                    *b,
+                    kind,
+                    vk::DescriptorImageInfo {
                         sampler: vk::Sampler::null(),
                         image_view: img.view,
                         image_layout: vk::ImageLayout::GENERAL,
-                    }))
-                }
-                (Bind::Buffer(buf), DescriptorKind::StorageBuffer) => {
-                    buffer_infos.push((*b, vk::DescriptorBufferInfo {
+                    },
+                )),
+                (Bind::Buffer(buf), DescriptorKind::StorageBuffer) => buffer_infos.push((
+                    *b,
+                    vk::DescriptorBufferInfo {
                         buffer: buf.raw,
                         offset: 0,
                         range: vk::WHOLE_SIZE,
-                    }))
-                }
+                    },
+                )),
                 _ => panic!("{:?}: binding {b} is a {kind:?}", pipeline.shader),
             }
         }

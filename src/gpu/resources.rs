@@ -140,7 +140,10 @@ pub struct Image {
 impl Image {
     /// Creates the image, its memory and its views.
     pub fn new(ctx: &Context, name: &str, desc: ImageDesc) -> Result<Image> {
-        assert!(desc.width > 0 && desc.height > 0 && desc.layers > 0, "empty image {name}");
+        assert!(
+            desc.width > 0 && desc.height > 0 && desc.layers > 0,
+            "empty image {name}"
+        );
         assert!(!desc.cube || (desc.layers == 6 && desc.width == desc.height));
         let s = &ctx.shared;
         let max = s.info.max_image_dimension_2d;
@@ -198,8 +201,11 @@ impl Image {
                 source,
             })?;
         // SAFETY: the allocation satisfies the image's requirements and outlives it (Drop).
-        unsafe { s.device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }
-            .vk("binding image memory")?;
+        unsafe {
+            s.device
+                .bind_image_memory(raw, allocation.memory(), allocation.offset())
+        }
+        .vk("binding image memory")?;
         image.allocation = Some(allocation);
         image.view = image.make_view(vk::ImageViewType::TYPE_2D_ARRAY, desc.layers, name)?;
         if desc.cube {
@@ -276,7 +282,8 @@ impl Sampler {
             .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .max_lod(0.0);
         // SAFETY: valid device and create info.
-        let raw = unsafe { ctx.shared.device.create_sampler(&info, None) }.vk("creating a sampler")?;
+        let raw =
+            unsafe { ctx.shared.device.create_sampler(&info, None) }.vk("creating a sampler")?;
         ctx.shared.track();
         ctx.shared.name(raw, name);
         Ok(Sampler {

@@ -56,7 +56,12 @@ pub struct Interface {
 
 macro_rules! spv {
     ($name:literal) => {
-        include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/spirv/", $name, ".spv"))
+        include_bytes!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/spirv/",
+            $name,
+            ".spv"
+        ))
     };
 }
 
@@ -104,21 +109,30 @@ impl ShaderId {
 
     /// What the pipeline built on this module binds.
     pub fn interface(self) -> Interface {
-        use crate::passes::{convert::ConvertPush, diagnostics::BusyPush, probe::ProbePush};
         use crate::passes::copy::CopyPush;
+        use crate::passes::{convert::ConvertPush, diagnostics::BusyPush, probe::ProbePush};
         use DescriptorKind::*;
         let size = |n: usize| n as u32;
         match self {
             ShaderId::Convert2d | ShaderId::ConvertCube => Interface {
-                bindings: &[(binding::CONVERT_SRC, SampledImage), (binding::CONVERT_DST, StorageImage)],
+                bindings: &[
+                    (binding::CONVERT_SRC, SampledImage),
+                    (binding::CONVERT_DST, StorageImage),
+                ],
                 push_size: size(std::mem::size_of::<ConvertPush>()),
             },
             ShaderId::MappingProbe => Interface {
-                bindings: &[(binding::PROBE_IN, StorageBuffer), (binding::PROBE_OUT, StorageBuffer)],
+                bindings: &[
+                    (binding::PROBE_IN, StorageBuffer),
+                    (binding::PROBE_OUT, StorageBuffer),
+                ],
                 push_size: size(std::mem::size_of::<ProbePush>()),
             },
             ShaderId::Copy => Interface {
-                bindings: &[(binding::COPY_SRC, SampledImage), (binding::COPY_DST, StorageImage)],
+                bindings: &[
+                    (binding::COPY_SRC, SampledImage),
+                    (binding::COPY_DST, StorageImage),
+                ],
                 push_size: size(std::mem::size_of::<CopyPush>()),
             },
             ShaderId::Busy => Interface {

@@ -102,7 +102,11 @@ impl GpuTimer {
         }
         .vk("reading timestamps")?;
         let bits = self.shared.info.timestamp_valid_bits;
-        let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
+        let mask = if bits >= 64 {
+            u64::MAX
+        } else {
+            (1u64 << bits) - 1
+        };
         let period = self.shared.info.timestamp_period;
         Ok(self
             .labels

@@ -36,7 +36,10 @@ pub(crate) fn read(path: &Path, bytes: &[u8], max_texels: u64) -> Result<Raster>
     if bytes.len() < HEADER {
         return Err(Error::bad_file(
             path,
-            format!("truncated DDS: header needs {HEADER} bytes, file has {}", bytes.len()),
+            format!(
+                "truncated DDS: header needs {HEADER} bytes, file has {}",
+                bytes.len()
+            ),
         ));
     }
     if u32_at(bytes, 4) != 124 {
@@ -87,7 +90,10 @@ pub(crate) fn read(path: &Path, bytes: &[u8], max_texels: u64) -> Result<Raster>
     let faces: u64 = if cube { 6 } else { 1 };
     check_size(path, width, height, faces, max_texels)?;
     if mips > 32 {
-        return Err(Error::bad_file(path, format!("corrupt DDS: {mips} mip levels")));
+        return Err(Error::bad_file(
+            path,
+            format!("corrupt DDS: {mips} mip levels"),
+        ));
     }
     if cube && width != height {
         return Err(Error::bad_file(
@@ -142,7 +148,8 @@ pub(crate) fn read(path: &Path, bytes: &[u8], max_texels: u64) -> Result<Raster>
 pub fn write_cube_rgba16f(path: &Path, n: u32, faces: &[[f32; 3]]) -> std::io::Result<()> {
     let mut h = vec![0u8; HEADER];
     h[..4].copy_from_slice(b"DDS ");
-    let put = |h: &mut Vec<u8>, off: usize, v: u32| h[off..off + 4].copy_from_slice(&v.to_le_bytes());
+    let put =
+        |h: &mut Vec<u8>, off: usize, v: u32| h[off..off + 4].copy_from_slice(&v.to_le_bytes());
     put(&mut h, 4, 124);
     put(&mut h, 8, 0x1 | 0x2 | 0x4 | 0x1000);
     put(&mut h, 12, n);

@@ -12,7 +12,9 @@ use std::path::Path;
 pub const MAPPING_ATTRIBUTE: &str = "envlight.mapping";
 
 pub(crate) fn read(path: &Path, max_texels: u64) -> Result<Raster> {
-    let bad = |e: exr::error::Error| Error::bad_file(path, format!("corrupt or unsupported OpenEXR: {e}"));
+    let bad = |e: exr::error::Error| {
+        Error::bad_file(path, format!("corrupt or unsupported OpenEXR: {e}"))
+    };
     // Read the header first so an absurd data window is refused before any allocation.
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(bad)?;
     let header = meta
@@ -20,7 +22,13 @@ pub(crate) fn read(path: &Path, max_texels: u64) -> Result<Raster> {
         .first()
         .ok_or_else(|| Error::bad_file(path, "OpenEXR file has no layer"))?;
     let size = header.layer_size;
-    check_size(path, size.width() as u64, size.height() as u64, 1, max_texels)?;
+    check_size(
+        path,
+        size.width() as u64,
+        size.height() as u64,
+        1,
+        max_texels,
+    )?;
     let hint = header
         .own_attributes
         .other

@@ -26,8 +26,8 @@ use crate::error::{Error, Result};
 use crate::math::Mapping;
 use std::path::{Path, PathBuf};
 
-pub use exr_io::save_exr;
 pub use dds::write_cube_rgba16f as write_dds_cube;
+pub use exr_io::save_exr;
 pub use pfm::write as write_pfm;
 pub use png_io::{save_png, tone_map, ToneMap};
 
@@ -74,7 +74,10 @@ pub(crate) struct Raster {
 /// Checks a header's dimensions before anything is allocated.
 pub(crate) fn check_size(path: &Path, w: u64, h: u64, layers: u64, max: u64) -> Result<()> {
     if w == 0 || h == 0 {
-        return Err(Error::bad_file(path, format!("image has zero size ({w} x {h})")));
+        return Err(Error::bad_file(
+            path,
+            format!("image has zero size ({w} x {h})"),
+        ));
     }
     let n = w.saturating_mul(h).saturating_mul(layers);
     if n > max {
@@ -83,7 +86,11 @@ pub(crate) fn check_size(path: &Path, w: u64, h: u64, layers: u64, max: u64) -> 
             format!(
                 "image is {w} x {h}{} texels, above the limit of {max} texels \
                  (a corrupt header, or raise LoadOptions::max_texels)",
-                if layers > 1 { format!(" x {layers}") } else { String::new() }
+                if layers > 1 {
+                    format!(" x {layers}")
+                } else {
+                    String::new()
+                }
             ),
         ));
     }

@@ -28,9 +28,15 @@ pub(crate) fn read(path: &Path, bytes: &[u8], max_texels: u64) -> Result<Raster>
         tokens.push(String::from_utf8_lossy(&bytes[start..pos]).into_owned());
     }
     pos += 1;
-    let w: u64 = tokens[0].parse().map_err(|_| bad("width is not a number"))?;
-    let h: u64 = tokens[1].parse().map_err(|_| bad("height is not a number"))?;
-    let scale: f32 = tokens[2].parse().map_err(|_| bad("scale is not a number"))?;
+    let w: u64 = tokens[0]
+        .parse()
+        .map_err(|_| bad("width is not a number"))?;
+    let h: u64 = tokens[1]
+        .parse()
+        .map_err(|_| bad("height is not a number"))?;
+    let scale: f32 = tokens[2]
+        .parse()
+        .map_err(|_| bad("scale is not a number"))?;
     if scale == 0.0 || !scale.is_finite() {
         return Err(bad("scale must be a non-zero number"));
     }

@@ -13,7 +13,8 @@ pub(crate) fn read_with_image_crate(
     srgb: bool,
 ) -> Result<Raster> {
     let kind = if srgb { "image" } else { "Radiance .hdr" };
-    let bad = |e: image::ImageError| Error::bad_file(path, format!("corrupt or truncated {kind}: {e}"));
+    let bad =
+        |e: image::ImageError| Error::bad_file(path, format!("corrupt or truncated {kind}: {e}"));
     let reader = || {
         image::ImageReader::new(Cursor::new(bytes))
             .with_guessed_format()

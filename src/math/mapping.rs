@@ -226,7 +226,10 @@ impl Mapping {
             Mapping::DualParaboloid => {
                 // Nearest point of the texel's rectangle to the disc's centre.
                 let near = |k: u32, n: u32| {
-                    let (lo, hi) = (2.0 * k as f64 / n as f64 - 1.0, 2.0 * (k + 1) as f64 / n as f64 - 1.0);
+                    let (lo, hi) = (
+                        2.0 * k as f64 / n as f64 - 1.0,
+                        2.0 * (k + 1) as f64 / n as f64 - 1.0,
+                    );
                     0f64.clamp(lo, hi)
                 };
                 let (a, b) = (near(i, w), near(j, h));
@@ -361,8 +364,8 @@ fn disc_rect_flux(
             0.0
         }
     };
-    let edges = clipped(x1, y0, y1) - clipped(x0, y0, y1) + clipped(y1, x0, x1)
-        - clipped(y0, x0, x1);
+    let edges =
+        clipped(x1, y0, y1) - clipped(x0, y0, y1) + clipped(y1, x0, x1) - clipped(y0, x0, x1);
     edges + h_at_1 * arc_inside_rect(x0, x1, y0, y1)
 }
 
@@ -465,7 +468,10 @@ mod tests {
             let mut worst = 0.0f64;
             for &d in &dirs {
                 let c = m.dir_to_coord(d);
-                assert!((0.0..=1.0).contains(&c.u) && (0.0..=1.0).contains(&c.v), "{m:?} {d}");
+                assert!(
+                    (0.0..=1.0).contains(&c.u) && (0.0..=1.0).contains(&c.v),
+                    "{m:?} {d}"
+                );
                 assert!(c.layer < m.layers());
                 let e = angle(d, m.coord_to_dir(c));
                 worst = worst.max(e);
@@ -524,7 +530,11 @@ mod tests {
             (Mapping::DualParaboloid, 1e-6),
         ] {
             for (w, h) in [(1, 1), (2, 2), (3, 3), (7, 7), (64, 64), (257, 257)] {
-                let (w, h) = if m == Mapping::LatLong { (w * 2, h) } else { (w, h) };
+                let (w, h) = if m == Mapping::LatLong {
+                    (w * 2, h)
+                } else {
+                    (w, h)
+                };
                 let s = solid_angle_sum(m, w, h);
                 let rel = (s / fourpi - 1.0).abs();
                 assert!(rel < tol, "{m:?} {w}x{h}: sum {s} rel err {rel:e}");
@@ -583,10 +593,18 @@ mod tests {
             rotate_y_degrees: -90.0,
         };
         for k in 0..50 {
-            let c = Coord { layer: 0, u: (k as f64 + 0.5) / 50.0, v: 0.3 + 0.01 * k as f64 };
+            let c = Coord {
+                layer: 0,
+                u: (k as f64 + 0.5) / 50.0,
+                v: 0.3 + 0.01 * k as f64,
+            };
             let world = Mapping::LatLong.coord_to_dir(c);
             let (phi, theta) = (TAU * c.u, PI * c.v);
-            let file = DVec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+            let file = DVec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                -theta.sin() * phi.sin(),
+            );
             assert!((uffizi.world_to_file() * world - file).length() < 1e-12);
         }
         let r = Orientation {

@@ -23,7 +23,14 @@ pub fn fibonacci_sphere(n: usize) -> Vec<DVec3> {
 /// Fibonacci directions.
 pub fn stress_directions() -> Vec<DVec3> {
     let mut v = Vec::new();
-    let axes = [DVec3::X, DVec3::NEG_X, DVec3::Y, DVec3::NEG_Y, DVec3::Z, DVec3::NEG_Z];
+    let axes = [
+        DVec3::X,
+        DVec3::NEG_X,
+        DVec3::Y,
+        DVec3::NEG_Y,
+        DVec3::Z,
+        DVec3::NEG_Z,
+    ];
     for a in axes {
         v.push(a);
         for b in axes {

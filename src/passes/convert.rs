@@ -90,17 +90,26 @@ impl Converter {
     /// Samples per axis for an output texel: about two per source texel spacing, so that
     /// minification averages every source texel the footprint covers (1 when magnifying).
     pub fn supersampling(src: (Mapping, u32, u32), dst: (Mapping, u32, u32)) -> u32 {
-        let ratio = (texels_on_sphere(src.0, src.1, src.2) / texels_on_sphere(dst.0, dst.1, dst.2)).sqrt();
+        let ratio =
+            (texels_on_sphere(src.0, src.1, src.2) / texels_on_sphere(dst.0, dst.1, dst.2)).sqrt();
         ((4.0 * ratio).ceil() as u32).clamp(1, 64)
     }
 
     /// Converts `src` to `opts.to` at `opts.size`; returns the new map and the GPU time.
     pub fn run(&self, src: &GpuEnvMap, opts: &ConvertOptions) -> Result<(GpuEnvMap, Vec<Timing>)> {
         let (w, h) = opts.to.extent_for_size(opts.size);
-        let dst = GpuEnvMap::new(&self.ctx, &format!("{} {}", opts.to.name(), opts.size), opts.to, w, h)?;
+        let dst = GpuEnvMap::new(
+            &self.ctx,
+            &format!("{} {}", opts.to.name(), opts.size),
+            opts.to,
+            w,
+            h,
+        )?;
         let ss = opts
             .supersample
-            .unwrap_or_else(|| Converter::supersampling((src.mapping, src.width, src.height), (opts.to, w, h)))
+            .unwrap_or_else(|| {
+                Converter::supersampling((src.mapping, src.width, src.height), (opts.to, w, h))
+            })
             .max(1);
         let m = opts.orientation.world_to_file();
         let row = |r: usize| {
@@ -122,29 +131,64 @@ impl Converter {
             &self.ctx,
             pipeline,
             &[
-                (crate::gpu::layout::binding::CONVERT_SRC, Bind::Sampled(&src.image, &self.sampler, cube)),
-                (crate::gpu::layout::binding::CONVERT_DST, Bind::Storage(&dst.image)),
+                (
+                    crate::gpu::layout::binding::CONVERT_SRC,
+                    Bind::Sampled(&src.image, &self.sampler, cube),
+                ),
+                (
+                    crate::gpu::layout::binding::CONVERT_DST,
+                    Bind::Storage(&dst.image),
+                ),
             ],
         )?;
         let mut timer = GpuTimer::new(&self.ctx, 1)?;
         let d = self.ctx.device();
-        let label = format!("convert {} -> {} {}x{}", src.mapping.name(), opts.to.name(), w, h);
+        let label = format!(
+            "convert {} -> {} {}x{}",
+            src.mapping.name(),
+            opts.to.name(),
+            w,
+            h
+        );
         let layers = opts.to.layers();
         self.ctx.submit_and_wait("converting a map", |cmd| {
             if let Some(t) = timer.as_mut() {
                 t.reset(cmd);
             }
-            cmd_image_barriers(d, cmd, &[image_barrier(dst.image.raw, layers, Usage::Undefined, Usage::ComputeWrite)]);
+            cmd_image_barriers(
+                d,
+                cmd,
+                &[image_barrier(
+                    dst.image.raw,
+                    layers,
+                    Usage::Undefined,
+                    Usage::ComputeWrite,
+                )],
+            );
             let span = timer.as_mut().map(|t| t.begin(cmd, &label));
             pipeline.bind(cmd, Some(&set), &push);
             // SAFETY: cmd is recording with a compute pipeline bound.
             unsafe {
-                d.cmd_dispatch(cmd, groups(w, WORKGROUP_2D[0]), groups(h, WORKGROUP_2D[1]), layers)
+                d.cmd_dispatch(
+                    cmd,
+                    groups(w, WORKGROUP_2D[0]),
+                    groups(h, WORKGROUP_2D[1]),
+                    layers,
+                )
             };
             if let (Some(t), Some(s)) = (timer.as_mut(), span) {
                 t.end(cmd, s);
             }
-            cmd_image_barriers(d, cmd, &[image_barrier(dst.image.raw, layers, Usage::ComputeWrite, Usage::ComputeSampled)]);
+            cmd_image_barriers(
+                d,
+                cmd,
+                &[image_barrier(
+                    dst.image.raw,
+                    layers,
+                    Usage::ComputeWrite,
+                    Usage::ComputeSampled,
+                )],
+            );
             Ok(())
         })?;
         let timings = match &timer {
@@ -154,4 +198,3 @@ impl Converter {
         Ok((dst, timings))
     }
 }
-

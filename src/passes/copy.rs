@@ -42,11 +42,17 @@ impl CopyPass {
             &self.ctx,
             &self.pipeline,
             &[
-                (binding::COPY_SRC, Bind::Sampled(&src.image, &self.sampler, false)),
+                (
+                    binding::COPY_SRC,
+                    Bind::Sampled(&src.image, &self.sampler, false),
+                ),
                 (binding::COPY_DST, Bind::Storage(&dst.image)),
             ],
         )?;
-        let push = CopyPush { size: [src.width, src.height], pad: [0; 2] };
+        let push = CopyPush {
+            size: [src.width, src.height],
+            pad: [0; 2],
+        };
         let mut timer = GpuTimer::new(&self.ctx, 1)?;
         let d = self.ctx.device();
         let layers = src.mapping.layers();
@@ -54,15 +60,40 @@ impl CopyPass {
             if let Some(t) = timer.as_mut() {
                 t.reset(cmd);
             }
-            cmd_image_barriers(d, cmd, &[image_barrier(dst.image.raw, layers, Usage::Undefined, Usage::ComputeWrite)]);
+            cmd_image_barriers(
+                d,
+                cmd,
+                &[image_barrier(
+                    dst.image.raw,
+                    layers,
+                    Usage::Undefined,
+                    Usage::ComputeWrite,
+                )],
+            );
             let span = timer.as_mut().map(|t| t.begin(cmd, "copy"));
             self.pipeline.bind(cmd, Some(&set), &push);
             // SAFETY: cmd is recording with the compute pipeline bound.
-            unsafe { d.cmd_dispatch(cmd, groups(src.width, WORKGROUP_2D[0]), groups(src.height, WORKGROUP_2D[1]), layers) };
+            unsafe {
+                d.cmd_dispatch(
+                    cmd,
+                    groups(src.width, WORKGROUP_2D[0]),
+                    groups(src.height, WORKGROUP_2D[1]),
+                    layers,
+                )
+            };
             if let (Some(t), Some(s)) = (timer.as_mut(), span) {
                 t.end(cmd, s);
             }
-            cmd_image_barriers(d, cmd, &[image_barrier(dst.image.raw, layers, Usage::ComputeWrite, Usage::ComputeSampled)]);
+            cmd_image_barriers(
+                d,
+                cmd,
+                &[image_barrier(
+                    dst.image.raw,
+                    layers,
+                    Usage::ComputeWrite,
+                    Usage::ComputeSampled,
+                )],
+            );
             Ok(())
         })?;
         let timings = match &timer {

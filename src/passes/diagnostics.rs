@@ -2,7 +2,9 @@
 //! test that timestamps bracket compute work after graphics work has run.
 
 use crate::error::Result;
-use crate::gpu::barrier::{cmd_image_barriers, cmd_memory_barrier, image_barrier, memory_barrier, Usage};
+use crate::gpu::barrier::{
+    cmd_image_barriers, cmd_memory_barrier, image_barrier, memory_barrier, Usage,
+};
 use crate::gpu::layout::{binding, WORKGROUP_1D};
 use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
 use crate::gpu::shaders::ShaderId;
@@ -37,13 +39,23 @@ impl Diagnostics {
         Ok(Diagnostics {
             ctx: ctx.clone(),
             busy: Pipeline::compute(ctx, ShaderId::Busy, &[WORKGROUP_1D])?,
-            draw: Pipeline::fullscreen(ctx, ShaderId::FullscreenVert, ShaderId::FlatFrag, DRAW_FORMAT)?,
+            draw: Pipeline::fullscreen(
+                ctx,
+                ShaderId::FullscreenVert,
+                ShaderId::FlatFrag,
+                DRAW_FORMAT,
+            )?,
         })
     }
 
     /// Draws into a `size²` image, then runs `count` invocations of `iterations` loop steps;
     /// returns the timings of both ("draw", then "busy") and the checksum of the results.
-    pub fn draw_then_busy(&self, size: u32, iterations: u32, count: u32) -> Result<(Vec<Timing>, f64)> {
+    pub fn draw_then_busy(
+        &self,
+        size: u32,
+        iterations: u32,
+        count: u32,
+    ) -> Result<(Vec<Timing>, f64)> {
         let target = Image::new(
             &self.ctx,
             "diagnostics target",
@@ -63,21 +75,40 @@ impl Diagnostics {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::GpuToCpu,
         )?;
-        let set = DescriptorSet::new(&self.ctx, &self.busy, &[(binding::BUSY_OUT, Bind::Buffer(&out))])?;
+        let set = DescriptorSet::new(
+            &self.ctx,
+            &self.busy,
+            &[(binding::BUSY_OUT, Bind::Buffer(&out))],
+        )?;
         let mut timer = GpuTimer::new(&self.ctx, 2)?;
         let d = self.ctx.device();
         self.ctx.submit_and_wait("diagnostics", |cmd| {
             if let Some(t) = timer.as_mut() {
                 t.reset(cmd);
             }
-            cmd_image_barriers(d, cmd, &[image_barrier(target.raw(), 1, Usage::Undefined, Usage::ColorAttachment)]);
+            cmd_image_barriers(
+                d,
+                cmd,
+                &[image_barrier(
+                    target.raw(),
+                    1,
+                    Usage::Undefined,
+                    Usage::ColorAttachment,
+                )],
+            );
             let span = timer.as_mut().map(|t| t.begin(cmd, "draw"));
             let attachment = [vk::RenderingAttachmentInfo::default()
                 .image_view(target.view)
                 .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
                 .load_op(vk::AttachmentLoadOp::CLEAR)
                 .store_op(vk::AttachmentStoreOp::STORE)];
-            let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: vk::Extent2D { width: size, height: size } };
+            let area = vk::Rect2D {
+                offset: vk::Offset2D::default(),
+                extent: vk::Extent2D {
+                    width: size,
+                    height: size,
+                },
+            };
             let rendering = vk::RenderingInfo::default()
                 .render_area(area)
                 .layer_count(1)
@@ -86,7 +117,18 @@ impl Diagnostics {
             unsafe {
                 d.cmd_begin_rendering(cmd, &rendering);
                 self.draw.bind(cmd, None, &());
-                d.cmd_set_viewport(cmd, 0, &[vk::Viewport { x: 0.0, y: 0.0, width: size as f32, height: size as f32, min_depth: 0.0, max_depth: 1.0 }]);
+                d.cmd_set_viewport(
+                    cmd,
+                    0,
+                    &[vk::Viewport {
+                        x: 0.0,
+                        y: 0.0,
+                        width: size as f32,
+                        height: size as f32,
+                        min_depth: 0.0,
+                        max_depth: 1.0,
+                    }],
+                );
                 d.cmd_set_scissor(cmd, 0, &[area]);
                 d.cmd_draw(cmd, 3, 1, 0, 0);
                 d.cmd_end_rendering(cmd);
@@ -95,7 +137,15 @@ impl Diagnostics {
                 t.end(cmd, s);
             }
             let span = timer.as_mut().map(|t| t.begin(cmd, "busy"));
-            self.busy.bind(cmd, Some(&set), &BusyPush { iterations, count, pad: [0; 2] });
+            self.busy.bind(
+                cmd,
+                Some(&set),
+                &BusyPush {
+                    iterations,
+                    count,
+                    pad: [0; 2],
+                },
+            );
             // SAFETY: cmd is recording with the compute pipeline bound.
             unsafe { d.cmd_dispatch(cmd, groups(count, WORKGROUP_1D), 1, 1) };
             if let (Some(t), Some(s)) = (timer.as_mut(), span) {
@@ -104,7 +154,11 @@ impl Diagnostics {
             cmd_memory_barrier(d, cmd, memory_barrier(Usage::ComputeWrite, Usage::HostRead));
             Ok(())
         })?;
-        let sum: f64 = out.read::<f32>(count as usize).iter().map(|&v| v as f64).sum();
+        let sum: f64 = out
+            .read::<f32>(count as usize)
+            .iter()
+            .map(|&v| v as f64)
+            .sum();
         let timings = match &timer {
             Some(t) => t.read()?,
             None => Vec::new(),

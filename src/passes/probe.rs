@@ -76,7 +76,10 @@ impl MappingProbe {
         let set = DescriptorSet::new(
             &self.ctx,
             &self.pipeline,
-            &[(binding::PROBE_IN, Bind::Buffer(&inb)), (binding::PROBE_OUT, Bind::Buffer(&outb))],
+            &[
+                (binding::PROBE_IN, Bind::Buffer(&inb)),
+                (binding::PROBE_OUT, Bind::Buffer(&outb)),
+            ],
         )?;
         let d = self.ctx.device();
         self.ctx.submit_and_wait("mapping probe", |cmd| {
@@ -92,17 +95,37 @@ impl MappingProbe {
     /// Runs `dir_to_coord` then `coord_to_dir` on each direction.
     pub fn round_trip(&self, mapping: Mapping, dirs: &[[f32; 3]]) -> Result<Vec<RoundTrip>> {
         let input: Vec<[f32; 4]> = dirs.iter().map(|d| [d[0], d[1], d[2], 0.0]).collect();
-        let push = ProbePush { mode: 0, mapping: mapping.id(), count: dirs.len() as u32, ..Default::default() };
+        let push = ProbePush {
+            mode: 0,
+            mapping: mapping.id(),
+            count: dirs.len() as u32,
+            ..Default::default()
+        };
         let out = self.run(push, &input, 2 * dirs.len())?;
         Ok(out
             .chunks_exact(2)
-            .map(|c| RoundTrip { layer: c[0][2] as u32, uv: [c[0][0], c[0][1]], dir: [c[1][0], c[1][1], c[1][2]] })
+            .map(|c| RoundTrip {
+                layer: c[0][2] as u32,
+                uv: [c[0][0], c[0][1]],
+                dir: [c[1][0], c[1][1], c[1][2]],
+            })
             .collect())
     }
 
     /// The GLSL texel solid angles of a `w × h` layer, row-major.
     pub fn solid_angles(&self, mapping: Mapping, w: u32, h: u32) -> Result<Vec<f32>> {
-        let push = ProbePush { mode: 1, mapping: mapping.id(), count: w * h, width: w, height: h, ..Default::default() };
-        Ok(self.run(push, &[], (w * h) as usize)?.into_iter().map(|v| v[0]).collect())
+        let push = ProbePush {
+            mode: 1,
+            mapping: mapping.id(),
+            count: w * h,
+            width: w,
+            height: h,
+            ..Default::default()
+        };
+        Ok(self
+            .run(push, &[], (w * h) as usize)?
+            .into_iter()
+            .map(|v| v[0])
+            .collect())
     }
 }

@@ -6,7 +6,10 @@ use std::path::PathBuf;
 
 /// A context with validation on (any message at warning or above fails the test in `finish`).
 pub fn ctx() -> Context {
-    match Context::new(&ContextOptions { validation: true, device: DeviceSelector::from_env() }) {
+    match Context::new(&ContextOptions {
+        validation: true,
+        device: DeviceSelector::from_env(),
+    }) {
         Ok(c) => c,
         Err(e) => panic!("no Vulkan context ({e}); run `cargo xtask setup`"),
     }
@@ -16,7 +19,11 @@ pub fn ctx() -> Context {
 /// dropping all passes and resources.
 pub fn finish(ctx: Context) {
     let messages = ctx.validation_messages();
-    assert!(messages.is_empty(), "validation messages:\n{}", messages.join("\n"));
+    assert!(
+        messages.is_empty(),
+        "validation messages:\n{}",
+        messages.join("\n")
+    );
     assert_eq!(ctx.live_objects(), 0, "Vulkan objects leaked");
 }
 
@@ -26,7 +33,11 @@ pub fn probes() -> Option<PathBuf> {
     match std::env::var_os("ENVLIGHT_PROBES") {
         Some(p) => {
             let p = PathBuf::from(p);
-            assert!(p.is_dir(), "ENVLIGHT_PROBES={} is not a folder", p.display());
+            assert!(
+                p.is_dir(),
+                "ENVLIGHT_PROBES={} is not a folder",
+                p.display()
+            );
             Some(p)
         }
         None => {

@@ -19,8 +19,11 @@ fn main() -> Result<()> {
     let glsl = root.join("glsl");
     let spirv = root.join("spirv");
     std::fs::create_dir_all(&spirv)?;
-    std::fs::write(root.join(layout::GENERATED_HEADER), layout::generated_header())
-        .context("writing the generated header")?;
+    std::fs::write(
+        root.join(layout::GENERATED_HEADER),
+        layout::generated_header(),
+    )
+    .context("writing the generated header")?;
 
     let compiler = shaderc::Compiler::new().context("shaderc unavailable")?;
     for src in layout::SHADER_SOURCES {
@@ -39,7 +42,8 @@ fn main() -> Result<()> {
         let include_dir = glsl.join("include");
         opts.set_include_callback(move |name, _ty, _from, _depth| {
             let p = include_dir.join(name);
-            let content = std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+            let content =
+                std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?;
             Ok(shaderc::ResolvedInclude {
                 resolved_name: p.display().to_string(),
                 content,

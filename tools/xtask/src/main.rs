@@ -34,20 +34,34 @@ fn is_root() -> bool {
 }
 
 fn setup() -> Result<(), String> {
-    if Command::new("dpkg-query").arg("--version").output().is_err() {
-        return Err("setup: this is not a Debian-like system (no dpkg). Install a Vulkan loader, \
+    if Command::new("dpkg-query")
+        .arg("--version")
+        .output()
+        .is_err()
+    {
+        return Err(
+            "setup: this is not a Debian-like system (no dpkg). Install a Vulkan loader, \
                     Mesa's lavapipe driver, the Khronos validation layers, cmake and ninja with \
                     your package manager, then run again."
-            .into());
+                .into(),
+        );
     }
     let missing: Vec<&str> = PACKAGES.iter().copied().filter(|p| !installed(p)).collect();
     if missing.is_empty() {
-        println!("setup: all system packages present ({})", PACKAGES.join(", "));
+        println!(
+            "setup: all system packages present ({})",
+            PACKAGES.join(", ")
+        );
         return Ok(());
     }
-    let cmd = format!("apt-get update && apt-get install -y --no-install-recommends {}", missing.join(" "));
+    let cmd = format!(
+        "apt-get update && apt-get install -y --no-install-recommends {}",
+        missing.join(" ")
+    );
     if !is_root() {
-        return Err(format!("setup: missing packages {missing:?}; run as root:\n  sudo sh -c '{cmd}'"));
+        return Err(format!(
+            "setup: missing packages {missing:?}; run as root:\n  sudo sh -c '{cmd}'"
+        ));
     }
     println!("setup: installing {missing:?}");
     let ok = Command::new("sh")
@@ -93,7 +107,15 @@ fn run(task: &str, rest: &[String]) -> Result<(), String> {
         }
         "bench" => {
             setup()?;
-            let mut args = vec!["run", "--release", "--bin", "envlight", "--", "bench", "convert"];
+            let mut args = vec![
+                "run",
+                "--release",
+                "--bin",
+                "envlight",
+                "--",
+                "bench",
+                "convert",
+            ];
             args.extend(&rest);
             cargo(&args)
         }
@@ -102,7 +124,16 @@ fn run(task: &str, rest: &[String]) -> Result<(), String> {
             cargo(&["run", "--release", "-p", "envlight-shaderc"])
         }
         "gen-assets" => cargo(&[
-            "run", "--release", "--bin", "envlight", "--", "synth-sky", "-o", "assets/sky_latlong.exr", "--width", "512",
+            "run",
+            "--release",
+            "--bin",
+            "envlight",
+            "--",
+            "synth-sky",
+            "-o",
+            "assets/sky_latlong.exr",
+            "--width",
+            "512",
         ]),
         "lint" => {
             cargo(&["fmt", "--all", "--", "--check"])?;
