@@ -72,6 +72,38 @@ fn write_hdr_header(w: &str) -> Vec<u8> {
 }
 
 #[test]
+fn exr_with_luminance_only_or_bgr_half_channels_loads() {
+    let (w, h) = (16u32, 8u32);
+    let y: Vec<f32> = (0..w * h).map(|i| 0.25 + i as f32 / 64.0).collect();
+    let g: Vec<f32> = y.iter().map(|v| v * 2.0).collect();
+    let b: Vec<f32> = y.iter().map(|v| v * 3.0).collect();
+    // Half precision keeps 11 significant bits.
+    let close = |a: f32, e: f32| (a - e).abs() <= e * 1e-3;
+
+    let p = tmp("luminance.exr");
+    io::write_exr_half_channels(&p, w, h, &[("Y", &y)]).unwrap();
+    let m = io::load(&p, &LoadOptions::default()).unwrap();
+    assert_eq!((m.width, m.height, m.mapping), (w, h, Mapping::LatLong));
+    for (t, v) in m.texels.iter().zip(&y) {
+        assert!(close(t[0], *v) && t[0] == t[1] && t[1] == t[2]);
+    }
+
+    let p = tmp("bgr_half.exr");
+    io::write_exr_half_channels(&p, w, h, &[("B", &b), ("G", &g), ("R", &y), ("A", &y)]).unwrap();
+    let m = io::load(&p, &LoadOptions::default()).unwrap();
+    for (k, t) in m.texels.iter().enumerate() {
+        assert!(
+            close(t[0], y[k]) && close(t[1], g[k]) && close(t[2], b[k]),
+            "texel {k}: {t:?}"
+        );
+    }
+
+    let p = tmp("uv.exr");
+    io::write_exr_half_channels(&p, w, h, &[("U", &y), ("V", &y)]).unwrap();
+    expect_error(&p, &LoadOptions::default(), &["channels", "R, G and B"]);
+}
+
+#[test]
 fn truncated_and_absurd_radiance_hdr() {
     let good = tmp("good.hdr");
     // A small valid file: flat RGBE scanlines (width < 8 is never run-length encoded).
@@ -136,6 +168,22 @@ fn truncated_and_absurd_dds() {
     let q = tmp("zero.dds");
     std::fs::write(&q, &zero).unwrap();
     expect_error(&q, &LoadOptions::default(), &["zero size"]);
+    // Half-float overflow: a sun of 1e5 stored as RGBA16F becomes infinite; it is refused
+    // (or zeroed on request), never passed on.
+    let mut hot = faces.clone();
+    hot[10] = [1e5, 9e4, 8e4];
+    let q = tmp("overflow.dds");
+    io::write_dds_cube(&q, n, &hot).unwrap();
+    expect_error(&q, &LoadOptions::default(), &["1 infinite", "--sanitize"]);
+    let fixed = io::load(
+        &q,
+        &LoadOptions {
+            sanitize: Sanitize::Zero,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(fixed.texels[10], [0.0; 3]);
     let mut fmt = bytes;
     fmt[84..88].copy_from_slice(&71u32.to_le_bytes());
     let q = tmp("bc1.dds");

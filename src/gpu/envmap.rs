@@ -65,8 +65,20 @@ impl GpuEnvMap {
         })
     }
 
-    /// Uploads a map.
+    /// Uploads a map. Texels must be finite and non-negative (what [`crate::io::load`]
+    /// guarantees); anything else is refused so that no pass ever sees or makes NaN.
     pub fn upload(ctx: &Context, map: &EnvMap) -> Result<GpuEnvMap> {
+        if let Some(k) = map
+            .texels
+            .iter()
+            .position(|t| t.iter().any(|c| !c.is_finite() || *c < 0.0))
+        {
+            return Err(Error::Invalid(format!(
+                "texel {k} of the {} map is {:?}; radiance must be finite and non-negative",
+                map.mapping.name(),
+                map.texels[k]
+            )));
+        }
         let g = GpuEnvMap::new(ctx, "uploaded map", map.mapping, map.width, map.height)?;
         let rgba: Vec<[f32; 4]> = map.texels.iter().map(|t| [t[0], t[1], t[2], 1.0]).collect();
         let bytes = (rgba.len() * 16) as u64;

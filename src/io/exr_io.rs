@@ -1,5 +1,6 @@
-//! OpenEXR through the `exr` crate: any layout with R, G and B channels (in any order, half or
-//! float; A is ignored), written back as float32 RGB with the mapping in an attribute.
+//! OpenEXR through the `exr` crate: R, G and B channels in any order and precision (A and other
+//! channels ignored), or a Y or single channel read as grey; written back as float32 RGB with
+//! the mapping in an attribute.
 
 use super::{check_size, strip_extent, Raster};
 use crate::envmap::EnvMap;
@@ -37,22 +38,99 @@ pub(crate) fn read(path: &Path, max_texels: u64) -> Result<Raster> {
             AttributeValue::Text(t) => Mapping::parse(&t.to_string()),
             _ => None,
         });
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |res, _| (res.width(), vec![[0.0f32; 3]; res.width() * res.height()]),
-        |px: &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            let w = px.0;
-            px.1[pos.y() * w + pos.x()] = [r, g, b];
-        },
-    )
-    .map_err(bad)?;
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(bad)?;
     let layer = image.layer_data;
+    let (w, h) = (layer.size.width(), layer.size.height());
+    let channels = &layer.channel_data.list;
+    // Channel names may carry a layer prefix ("diffuse.R"); match on the last component.
+    let find = |want: &str| {
+        channels.iter().find(|c| {
+            let name = c.name.to_string();
+            name.rsplit('.')
+                .next()
+                .is_some_and(|n| n.eq_ignore_ascii_case(want))
+        })
+    };
+    let as_f32 = |c: &AnyChannel<FlatSamples>| -> Result<Vec<f32>> {
+        if c.sampling != Vec2(1, 1) {
+            return Err(Error::bad_file(
+                path,
+                format!(
+                    "OpenEXR channel {} is subsampled; envlight reads full-resolution channels",
+                    c.name
+                ),
+            ));
+        }
+        Ok(match &c.sample_data {
+            FlatSamples::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
+            FlatSamples::F32(v) => v.clone(),
+            FlatSamples::U32(v) => v.iter().map(|&x| x as f32).collect(),
+        })
+    };
+    let planes: [Vec<f32>; 3] = match (find("R"), find("G"), find("B"), find("Y")) {
+        (Some(r), Some(g), Some(b), _) => [as_f32(r)?, as_f32(g)?, as_f32(b)?],
+        (_, _, _, Some(y)) => {
+            let y = as_f32(y)?;
+            [y.clone(), y.clone(), y]
+        }
+        _ if channels.len() == 1 => {
+            let y = as_f32(&channels[0])?;
+            [y.clone(), y.clone(), y]
+        }
+        _ => {
+            let names: Vec<String> = channels.iter().map(|c| c.name.to_string()).collect();
+            return Err(Error::bad_file(
+                path,
+                format!("OpenEXR has channels {names:?}; envlight needs R, G and B, or Y, or a single channel"),
+            ));
+        }
+    };
+    if planes.iter().any(|p| p.len() != w * h) {
+        return Err(Error::bad_file(
+            path,
+            "OpenEXR channel sizes do not match the data window",
+        ));
+    }
+    let rgb = (0..w * h)
+        .map(|i| [planes[0][i], planes[1][i], planes[2][i]])
+        .collect();
     Ok(Raster {
-        width: layer.size.width() as u32,
-        height: layer.size.height() as u32,
-        rgb: layer.channel_data.pixels.1,
+        width: w as u32,
+        height: h as u32,
+        rgb,
         mapping_hint: hint,
     })
+}
+
+/// Writes named channels as half floats (for tests of "any channel layout", such as B, G, R
+/// half like pbrt's grace_latlong.exr, or Y alone).
+pub fn write_half_channels(path: &Path, w: u32, h: u32, channels: &[(&str, &[f32])]) -> Result<()> {
+    let list: Vec<_> = channels
+        .iter()
+        .map(|(name, v)| {
+            AnyChannel::new(
+                *name,
+                FlatSamples::F16(v.iter().map(|&x| f16::from_f32(x)).collect()),
+            )
+        })
+        .collect();
+    let layer = Layer::new(
+        (w as usize, h as usize),
+        LayerAttributes::named("test"),
+        Encoding::SMALL_FAST_LOSSLESS,
+        AnyChannels::sort(SmallVec::from_vec(list)),
+    );
+    Image::from_layer(layer)
+        .write()
+        .to_file(path)
+        .map_err(|e| Error::bad_file(path, format!("cannot write OpenEXR: {e}")))
 }
 
 /// Writes a map as a float32 RGB EXR (ZIP compressed); cubes and dual paraboloids are stored

@@ -27,7 +27,7 @@ use crate::math::Mapping;
 use std::path::{Path, PathBuf};
 
 pub use dds::write_cube_rgba16f as write_dds_cube;
-pub use exr_io::save_exr;
+pub use exr_io::{save_exr, write_half_channels as write_exr_half_channels};
 pub use pfm::write as write_pfm;
 pub use png_io::{save_png, tone_map, ToneMap};
 
