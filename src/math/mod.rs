@@ -6,6 +6,7 @@
 pub mod mapping;
 pub mod quadrature;
 pub mod resample;
+pub mod sh;
 pub mod synth;
 
 pub use mapping::{Coord, Mapping, Orientation};

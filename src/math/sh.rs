@@ -1,0 +1,275 @@
+//! Real spherical harmonics in the convention of `DESIGN.md` §1, and what Ramamoorthi &
+//! Hanrahan (2001) build on them: projection, the clamped-cosine convolution, and the 4×4
+//! irradiance matrix.
+//!
+//! Orthonormal on the sphere, flat index k = l(l+1)+m, θ from +Z and φ = atan2(y, x), no
+//! Condon–Shortley phase: for l ≤ 2 these are R&H's eq. 3 on world (x, y, z).
+
+use super::mapping::Mapping;
+use crate::envmap::EnvMap;
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// Number of coefficients up to and including band `lmax`.
+pub fn count(lmax: u32) -> usize {
+    ((lmax + 1) * (lmax + 1)) as usize
+}
+
+/// Flat index of (l, m).
+pub fn index(l: u32, m: i32) -> usize {
+    (l as i32 * (l as i32 + 1) + m) as usize
+}
+
+fn factorial(n: u32) -> f64 {
+    (1..=n).map(|k| k as f64).product()
+}
+
+/// K_lm = √((2l+1)/4π · (l−|m|)!/(l+|m|)!).
+pub fn k_lm(l: u32, m: u32) -> f64 {
+    ((2 * l + 1) as f64 / (4.0 * PI) * factorial(l - m) / factorial(l + m)).sqrt()
+}
+
+/// All basis functions up to `lmax` at unit direction `d`.
+///
+/// Uses the associated Legendre functions divided by sinᵐθ (polynomials in z, so nothing is
+/// singular at the poles) times Re/Im((x + iy)ᵐ) = sinᵐθ·cos/sin(mφ).
+pub fn basis(lmax: u32, d: DVec3) -> Vec<f64> {
+    let mut y = vec![0.0; count(lmax)];
+    let z = d.z;
+    // (x + iy)^m, built up as m grows.
+    let (mut re, mut im) = (1.0, 0.0);
+    let mut pmm = 1.0; // P̃_m^m = (2m−1)!!
+    for m in 0..=lmax {
+        if m > 0 {
+            let (r, i) = (re * d.x - im * d.y, re * d.y + im * d.x);
+            re = r;
+            im = i;
+            pmm *= (2 * m - 1) as f64;
+        }
+        // P̃_l^m for l = m, m+1, … by the three-term recurrence.
+        let mut p_prev = 0.0;
+        let mut p = pmm;
+        for l in m..=lmax {
+            if l == m + 1 {
+                p_prev = p;
+                p = z * (2 * m + 1) as f64 * pmm;
+            } else if l > m + 1 {
+                let next = ((2 * l - 1) as f64 * z * p - (l + m - 1) as f64 * p_prev) / (l - m) as f64;
+                p_prev = p;
+                p = next;
+            }
+            let k = k_lm(l, m);
+            if m == 0 {
+                y[index(l, 0)] = k * p;
+            } else {
+                let s = std::f64::consts::SQRT_2 * k * p;
+                y[index(l, m as i32)] = s * re;
+                y[index(l, -(m as i32))] = s * im;
+            }
+        }
+    }
+    y
+}
+
+/// Projects a map onto the basis up to `lmax`: ∑ L(d_i)·Y_k(d_i)·Ω_i over the texels the
+/// mapping reads, at texel centres with exact texel solid angles.
+pub fn project(map: &EnvMap, lmax: u32) -> Vec<[f64; 3]> {
+    let mut c = vec![[0.0; 3]; count(lmax)];
+    map.for_each_texel(|layer, i, j, t, omega| {
+        let d = map.texel_dir(layer, i, j);
+        let y = basis(lmax, d);
+        for (ck, yk) in c.iter_mut().zip(&y) {
+            for ch in 0..3 {
+                ck[ch] += t[ch] as f64 * yk * omega;
+            }
+        }
+    });
+    c
+}
+
+/// Evaluates an SH expansion at `d`.
+pub fn eval(coeffs: &[[f64; 3]], d: DVec3) -> [f64; 3] {
+    let lmax = (coeffs.len() as f64).sqrt() as u32 - 1;
+    let y = basis(lmax, d);
+    let mut out = [0.0; 3];
+    for (c, yk) in coeffs.iter().zip(&y) {
+        for ch in 0..3 {
+            out[ch] += c[ch] * yk;
+        }
+    }
+    out
+}
+
+/// Â_l of the clamped cosine (R&H 2001 eq. 8): π, 2π/3, then for even l
+/// 2π·(−1)^(l/2−1)/((l+2)(l−1)) · l!/(2^l·((l/2)!)²); zero for odd l > 1.
+pub fn cosine_lobe(l: u32) -> f64 {
+    match l {
+        0 => PI,
+        1 => 2.0 * PI / 3.0,
+        _ if l % 2 == 1 => 0.0,
+        _ => {
+            let sign = if (l / 2 - 1) % 2 == 0 { 1.0 } else { -1.0 };
+            let h = l / 2;
+            2.0 * PI * sign / ((l + 2) as f64 * (l - 1) as f64) * factorial(l)
+                / (2f64.powi(l as i32) * factorial(h) * factorial(h))
+        }
+    }
+}
+
+/// Irradiance coefficients E_lm = Â_l·L_lm.
+pub fn irradiance_coeffs(radiance: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let lmax = (radiance.len() as f64).sqrt() as u32 - 1;
+    let mut out = radiance.to_vec();
+    for l in 0..=lmax {
+        for m in -(l as i32)..=(l as i32) {
+            out[index(l, m)] = radiance[index(l, m)].map(|c| c * cosine_lobe(l));
+        }
+    }
+    out
+}
+
+/// R&H 2001 eq. 12: the symmetric 4×4 matrix M of one channel such that E(n) = nᵀMn with
+/// n = (x, y, z, 1), from the first nine radiance coefficients of that channel. The constants
+/// are computed from Â_l and the basis constants rather than taken from the paper's six
+/// printed digits (c1 = π·√(15/4π)/8 = 0.429043…, c2 = π·√(3/4π)/3 = 0.511664…,
+/// c3 = 3π·√(5/16π)/4 = 0.743125…, c4 = π/(2√π) = 0.886227…, c5 = π·√(5/16π)/4 = 0.247708…).
+pub fn irradiance_matrix(l: &[f64]) -> [[f64; 4]; 4] {
+    assert!(l.len() >= 9, "the matrix needs the nine coefficients up to l = 2");
+    let k20 = (5.0 / (16.0 * PI)).sqrt();
+    let c1 = PI * (15.0 / (4.0 * PI)).sqrt() / 8.0;
+    let c2 = PI * (3.0 / (4.0 * PI)).sqrt() / 3.0;
+    let c3 = 3.0 * PI * k20 / 4.0;
+    let c4 = PI / (2.0 * PI.sqrt());
+    let c5 = PI * k20 / 4.0;
+    let (l00, l1m1, l10, l11, l2m2, l2m1, l20, l21, l22) =
+        (l[0], l[1], l[2], l[3], l[4], l[5], l[6], l[7], l[8]);
+    [
+        [c1 * l22, c1 * l2m2, c1 * l21, c2 * l11],
+        [c1 * l2m2, -c1 * l22, c1 * l2m1, c2 * l1m1],
+        [c1 * l21, c1 * l2m1, c3 * l20, c2 * l10],
+        [c2 * l11, c2 * l1m1, c2 * l10, c4 * l00 - c5 * l20],
+    ]
+}
+
+/// nᵀMn for n = (d, 1).
+pub fn eval_matrix(m: &[[f64; 4]; 4], d: DVec3) -> f64 {
+    let n = [d.x, d.y, d.z, 1.0];
+    let mut e = 0.0;
+    for i in 0..4 {
+        for j in 0..4 {
+            e += n[i] * m[i][j] * n[j];
+        }
+    }
+    e
+}
+
+/// Exposes the mapping used for quadrature tests.
+#[doc(hidden)]
+pub fn gram_matrix(lmax: u32, mapping: Mapping, size: u32) -> Vec<Vec<f64>> {
+    let n = count(lmax);
+    let mut g = vec![vec![0.0; n]; n];
+    let (w, h) = mapping.extent_for_size(size);
+    for layer in 0..mapping.layers() {
+        for j in 0..h {
+            for i in 0..w {
+                // 3×3 Gauss points per texel keep the quadrature exact enough for l ≤ 8.
+                for (a, wa) in [(-0.7745966692414834, 5.0 / 9.0), (0.0, 8.0 / 9.0), (0.7745966692414834, 5.0 / 9.0)] {
+                    for (b, wb) in [(-0.7745966692414834, 5.0 / 9.0), (0.0, 8.0 / 9.0), (0.7745966692414834, 5.0 / 9.0)] {
+                        let c = super::Coord {
+                            layer,
+                            u: (i as f64 + 0.5 + 0.5 * a) / w as f64,
+                            v: (j as f64 + 0.5 + 0.5 * b) / h as f64,
+                        };
+                        let wt = wa * wb / 4.0 * mapping.density(c) / (w * h) as f64;
+                        let y = basis(lmax, mapping.coord_to_dir(c));
+                        for p in 0..n {
+                            for q in 0..n {
+                                g[p][q] += wt * y[p] * y[q];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    g
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn low_bands_equal_ramamoorthi_hanrahan_eq3() {
+        for d in super::super::synth::fibonacci_sphere(500) {
+            let (x, y, z) = (d.x, d.y, d.z);
+            let rh = [
+                0.282095,
+                0.488603 * y,
+                0.488603 * z,
+                0.488603 * x,
+                1.092548 * x * y,
+                1.092548 * y * z,
+                0.315392 * (3.0 * z * z - 1.0),
+                1.092548 * x * z,
+                0.546274 * (x * x - y * y),
+            ];
+            let b = basis(2, d);
+            for k in 0..9 {
+                // R&H print six digits.
+                assert!((b[k] - rh[k]).abs() < 2e-6, "k={k} at {d}: {} vs {}", b[k], rh[k]);
+            }
+        }
+    }
+
+    #[test]
+    fn bands_up_to_8_are_orthonormal() {
+        let g = gram_matrix(8, Mapping::Cube, 48);
+        for (p, row) in g.iter().enumerate() {
+            for (q, v) in row.iter().enumerate() {
+                let want = if p == q { 1.0 } else { 0.0 };
+                assert!((v - want).abs() < 1e-6, "G[{p}][{q}] = {v}");
+            }
+        }
+    }
+
+    #[test]
+    fn cosine_lobe_matches_quadrature() {
+        // Â_l = 2π ∫₀^{π/2} P_l(cos θ) cos θ sin θ dθ (Y_l0 normalisation cancels).
+        for l in 0..=8u32 {
+            let n = 20000;
+            let mut s = 0.0;
+            for k in 0..n {
+                let t = (k as f64 + 0.5) / n as f64 * PI / 2.0;
+                let y = basis(l, DVec3::new(t.sin(), 0.0, t.cos()))[index(l, 0)];
+                s += y / k_lm(l, 0) * t.cos() * t.sin();
+            }
+            let a = 2.0 * PI * s * (PI / 2.0) / n as f64;
+            assert!((a - cosine_lobe(l)).abs() < 1e-7, "l={l}: {a} vs {}", cosine_lobe(l));
+        }
+    }
+
+    #[test]
+    fn matrix_constants_round_to_the_papers() {
+        let m = irradiance_matrix(&[1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0]);
+        // The paper's digits are its rounding of products of rounded basis constants.
+        let near = |x: f64, paper: f64| assert!((x - paper).abs() < 1.5e-6, "{x} vs {paper}");
+        near(m[0][1], 0.429043);
+        near(m[0][3], 0.511664);
+        near(m[2][2], 0.743125);
+        near(m[3][3] + 0.247708, 0.886227);
+    }
+
+    #[test]
+    fn matrix_form_equals_polynomial_form() {
+        let coeffs: Vec<f64> = (0..9).map(|k| 0.3 + 0.17 * k as f64 - 0.05 * (k * k) as f64).collect();
+        let rgb: Vec<[f64; 3]> = coeffs.iter().map(|&c| [c, 0.0, 0.0]).collect();
+        let e = irradiance_coeffs(&rgb);
+        let m = irradiance_matrix(&coeffs);
+        for d in super::super::synth::fibonacci_sphere(300) {
+            let poly = eval(&e, d)[0];
+            let mat = eval_matrix(&m, d);
+            assert!((poly - mat).abs() <= 1e-12 * poly.abs().max(1.0), "{d}: {poly} vs {mat}");
+        }
+    }
+}
