@@ -17,7 +17,7 @@ pub struct EnvMap {
     pub texels: Vec<[f32; 3]>,
 }
 
-/// Statistics over the texels a map's mapping reads (see [`Mapping::texel_in_domain`]).
+/// Statistics over the texels that hold the sphere (see [`EnvMap::for_each_texel`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stats {
     /// Per-channel minimum over finite texels.
@@ -87,26 +87,27 @@ impl EnvMap {
         self.texels[self.index(layer, i, j)]
     }
 
-    /// Calls `f(layer, i, j, texel, solid angle)` for every texel the mapping reads.
+    /// Calls `f(layer, i, j, texel, solid angle)` for every texel that holds part of the
+    /// sphere, with the value that stands for it ([`Mapping::integration_source`]): the texels
+    /// the mapping reads, and the rim slivers of an angular map. The solid angles sum to 4π.
     pub fn for_each_texel(&self, mut f: impl FnMut(u32, u32, u32, [f32; 3], f64)) {
         let (w, h) = (self.width, self.height);
-        // Solid angles are the same on every layer; compute them once per texel.
-        let mut omega = Vec::with_capacity((w * h) as usize);
+        // Solid angles and sources are the same on every layer; find them once per texel.
+        let mut table = Vec::with_capacity((w * h) as usize);
         for j in 0..h {
             for i in 0..w {
-                omega.push(if self.mapping.texel_in_domain(w, h, i, j) {
-                    self.mapping.texel_solid_angle(w, h, i, j)
-                } else {
-                    -1.0
-                });
+                table.push(
+                    self.mapping
+                        .integration_source(w, h, i, j)
+                        .map(|src| (src, self.mapping.texel_solid_angle(w, h, i, j))),
+                );
             }
         }
         for layer in 0..self.layers() {
             for j in 0..h {
                 for i in 0..w {
-                    let o = omega[(j * w + i) as usize];
-                    if o >= 0.0 {
-                        f(layer, i, j, self.texel(layer, i, j), o);
+                    if let Some(((si, sj), o)) = table[(j * w + i) as usize] {
+                        f(layer, i, j, self.texel(layer, si, sj), o);
                     }
                 }
             }

@@ -155,6 +155,26 @@ bool texel_in_domain(uint m, uvec2 size, ivec2 p) {
     return true;
 }
 
+// Which texel stands for texel p in integrals over the sphere (twin of
+// Mapping::integration_source): p itself when read; for an angular texel centred outside the
+// disc that overlaps it, the texel just inside the rim on the same radius; (-1, -1) otherwise.
+ivec2 integration_source(uint m, uvec2 size, ivec2 p) {
+    if (texel_in_domain(m, size, p)) return p;
+    if (m != MAPPING_ANGULAR) return ivec2(-1);
+    vec2 lo = 2.0 * vec2(p) / vec2(size) - 1.0;
+    vec2 hi = 2.0 * vec2(p + 1) / vec2(size) - 1.0;
+    vec2 n = clamp(vec2(0.0), lo, hi);
+    if (dot(n, n) >= 1.0) return ivec2(-1);
+    vec2 ab = 2.0 * (vec2(p) + 0.5) / vec2(size) - 1.0;
+    float r = length(ab);
+    for (int step = 1; step < 4; step++) {
+        float k = (1.0 - float(step) / float(min(size.x, size.y))) / r;
+        ivec2 q = min(ivec2(floor((ab * k + 1.0) * 0.5 * vec2(size))), ivec2(size) - 1);
+        if (texel_in_domain(m, size, q)) return q;
+    }
+    return ivec2(-1);
+}
+
 // 8-point Gauss-Legendre rule on [-1, 1] (exact for degree 15).
 const float GL8_X[4] = float[4](0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363);
 const float GL8_W[4] = float[4](0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763);

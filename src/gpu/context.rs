@@ -138,6 +138,12 @@ pub struct DeviceInfo {
     pub max_image_dimension_2d: u32,
     /// Driver name and version text.
     pub driver: String,
+    /// Subgroup size of compute shaders.
+    pub subgroup_size: u32,
+    /// Whether compute shaders have subgroup arithmetic (subgroupAdd).
+    pub subgroup_arithmetic: bool,
+    /// Largest workgroup count in one dispatch dimension.
+    pub max_workgroup_count: u32,
 }
 
 pub(crate) struct Shared {
@@ -332,7 +338,10 @@ impl Context {
         let props = unsafe { instance.get_physical_device_properties(physical) };
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
         let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
-        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
+        let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default()
+            .push_next(&mut driver_props)
+            .push_next(&mut subgroup);
         // SAFETY: valid physical device; props2 chain lives across the call.
         unsafe { instance.get_physical_device_properties2(physical, &mut props2) };
         let info = DeviceInfo {
@@ -347,6 +356,14 @@ impl Context {
                 .map(|f| f.timestamp_valid_bits)
                 .unwrap_or(0),
             max_image_dimension_2d: props.limits.max_image_dimension2_d,
+            subgroup_size: subgroup.subgroup_size,
+            subgroup_arithmetic: subgroup
+                .supported_stages
+                .contains(vk::ShaderStageFlags::COMPUTE)
+                && subgroup.supported_operations.contains(
+                    vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC,
+                ),
+            max_workgroup_count: props.limits.max_compute_work_group_count[0],
             driver: format!(
                 "{} {}",
                 driver_props

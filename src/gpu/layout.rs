@@ -23,7 +23,20 @@ pub mod binding {
     pub const COPY_DST: u32 = 1;
     /// busy: the buffer the costly loop writes to.
     pub const BUSY_OUT: u32 = 0;
+    /// sh_project: the map (sampler2DArray, read with texelFetch).
+    pub const SH_SRC: u32 = 0;
+    /// sh_project: per-workgroup partial sums (storage buffer).
+    pub const SH_PARTIALS: u32 = 1;
+    /// sh_reduce: partial sums in.
+    pub const SH_REDUCE_IN: u32 = 0;
+    /// sh_reduce: partial sums out.
+    pub const SH_REDUCE_OUT: u32 = 1;
 }
+
+/// Highest SH band the GPU projection supports.
+pub const SH_MAX_LMAX: u32 = 8;
+/// Workgroup size of the SH passes: one texel (or partial sum) per invocation.
+pub const SH_WORKGROUP: u32 = 64;
 
 /// Workgroup size of 2D compute passes (specialization constants 0 and 1).
 pub const WORKGROUP_2D: [u32; 2] = [8, 8];
@@ -111,6 +124,30 @@ pub const SHADER_SOURCES: &[ShaderSource] = &[
         stage: Stage::Fragment,
         defines: &[],
     },
+    ShaderSource {
+        name: "sh_project_subgroup",
+        file: "sh_project.comp",
+        stage: Stage::Compute,
+        defines: &[("USE_SUBGROUPS", "1")],
+    },
+    ShaderSource {
+        name: "sh_project_shared",
+        file: "sh_project.comp",
+        stage: Stage::Compute,
+        defines: &[],
+    },
+    ShaderSource {
+        name: "sh_reduce_subgroup",
+        file: "sh_reduce.comp",
+        stage: Stage::Compute,
+        defines: &[("USE_SUBGROUPS", "1")],
+    },
+    ShaderSource {
+        name: "sh_reduce_shared",
+        file: "sh_reduce.comp",
+        stage: Stage::Compute,
+        defines: &[],
+    },
 ];
 
 /// The GLSL header carrying the constants above.
@@ -127,10 +164,35 @@ pub fn generated_header() -> String {
         ("COPY_SRC", binding::COPY_SRC),
         ("COPY_DST", binding::COPY_DST),
         ("BUSY_OUT", binding::BUSY_OUT),
+        ("SH_SRC", binding::SH_SRC),
+        ("SH_PARTIALS", binding::SH_PARTIALS),
+        ("SH_REDUCE_IN", binding::SH_REDUCE_IN),
+        ("SH_REDUCE_OUT", binding::SH_REDUCE_OUT),
     ];
     for (name, v) in b {
         let _ = writeln!(s, "#define BINDING_{name} {v}");
     }
+    let _ = writeln!(s, "#define SH_MAX_LMAX {SH_MAX_LMAX}");
+    let n = (SH_MAX_LMAX + 1) * (SH_MAX_LMAX + 1);
+    let _ = writeln!(s, "#define SH_MAX_COEFFS {n}");
+    let _ = writeln!(s, "#define SH_WORKGROUP {SH_WORKGROUP}");
+    // K_lm for m ≥ 0, l ≤ SH_MAX_LMAX, at index l(l+1)/2 + m (see src/math/sh.rs).
+    let mut k = Vec::new();
+    for l in 0..=SH_MAX_LMAX {
+        for m in 0..=l {
+            let f = |a: u32| (1..=a).map(|x| x as f64).product::<f64>();
+            let v =
+                ((2 * l + 1) as f64 / (4.0 * std::f64::consts::PI) * f(l - m) / f(l + m)).sqrt();
+            k.push(format!("{v:.9e}"));
+        }
+    }
+    let _ = writeln!(
+        s,
+        "const float SH_K[{}] = float[{}]({});",
+        k.len(),
+        k.len(),
+        k.join(", ")
+    );
     for (i, name) in MAPPING_NAMES.iter().enumerate() {
         let _ = writeln!(s, "#define MAPPING_{name} {i}u");
     }

@@ -21,6 +21,14 @@ pub enum ShaderId {
     FullscreenVert,
     /// Flat colour fragment shader.
     FlatFrag,
+    /// SH projection, first level, with subgroup arithmetic.
+    ShProjectSubgroup,
+    /// SH projection, first level, shared-memory tree.
+    ShProjectShared,
+    /// SH partial-sum reduction with subgroup arithmetic.
+    ShReduceSubgroup,
+    /// SH partial-sum reduction, shared-memory tree.
+    ShReduceShared,
 }
 
 /// The kind of a descriptor binding.
@@ -67,7 +75,7 @@ macro_rules! spv {
 
 impl ShaderId {
     /// Every module.
-    pub const ALL: [ShaderId; 7] = [
+    pub const ALL: [ShaderId; 11] = [
         ShaderId::Convert2d,
         ShaderId::ConvertCube,
         ShaderId::MappingProbe,
@@ -75,6 +83,10 @@ impl ShaderId {
         ShaderId::Busy,
         ShaderId::FullscreenVert,
         ShaderId::FlatFrag,
+        ShaderId::ShProjectSubgroup,
+        ShaderId::ShProjectShared,
+        ShaderId::ShReduceSubgroup,
+        ShaderId::ShReduceShared,
     ];
 
     /// The build recipe of this module.
@@ -87,6 +99,10 @@ impl ShaderId {
             ShaderId::Busy => "busy",
             ShaderId::FullscreenVert => "fullscreen_vert",
             ShaderId::FlatFrag => "flat_frag",
+            ShaderId::ShProjectSubgroup => "sh_project_subgroup",
+            ShaderId::ShProjectShared => "sh_project_shared",
+            ShaderId::ShReduceSubgroup => "sh_reduce_subgroup",
+            ShaderId::ShReduceShared => "sh_reduce_shared",
         };
         SHADER_SOURCES
             .iter()
@@ -104,12 +120,17 @@ impl ShaderId {
             ShaderId::Busy => spv!("busy"),
             ShaderId::FullscreenVert => spv!("fullscreen_vert"),
             ShaderId::FlatFrag => spv!("flat_frag"),
+            ShaderId::ShProjectSubgroup => spv!("sh_project_subgroup"),
+            ShaderId::ShProjectShared => spv!("sh_project_shared"),
+            ShaderId::ShReduceSubgroup => spv!("sh_reduce_subgroup"),
+            ShaderId::ShReduceShared => spv!("sh_reduce_shared"),
         }
     }
 
     /// What the pipeline built on this module binds.
     pub fn interface(self) -> Interface {
         use crate::passes::copy::CopyPush;
+        use crate::passes::sh_project::{ShProjectPush, ShReducePush};
         use crate::passes::{convert::ConvertPush, diagnostics::BusyPush, probe::ProbePush};
         use DescriptorKind::*;
         let size = |n: usize| n as u32;
@@ -138,6 +159,20 @@ impl ShaderId {
             ShaderId::Busy => Interface {
                 bindings: &[(binding::BUSY_OUT, StorageBuffer)],
                 push_size: size(std::mem::size_of::<BusyPush>()),
+            },
+            ShaderId::ShProjectSubgroup | ShaderId::ShProjectShared => Interface {
+                bindings: &[
+                    (binding::SH_SRC, SampledImage),
+                    (binding::SH_PARTIALS, StorageBuffer),
+                ],
+                push_size: size(std::mem::size_of::<ShProjectPush>()),
+            },
+            ShaderId::ShReduceSubgroup | ShaderId::ShReduceShared => Interface {
+                bindings: &[
+                    (binding::SH_REDUCE_IN, StorageBuffer),
+                    (binding::SH_REDUCE_OUT, StorageBuffer),
+                ],
+                push_size: size(std::mem::size_of::<ShReducePush>()),
             },
             ShaderId::FullscreenVert | ShaderId::FlatFrag => Interface {
                 bindings: &[],

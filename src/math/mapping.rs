@@ -239,6 +239,34 @@ impl Mapping {
         }
     }
 
+    /// Which texel's value stands for texel (i, j) in integrals over the sphere (power, SH
+    /// projection): the texel itself when it is read; for an angular texel centred outside the
+    /// disc but overlapping it, the texel just inside the rim on the same radius, so that the
+    /// slivers of the disc such texels hold are counted without reading outside the probe;
+    /// `None` for texels wholly outside.
+    pub fn integration_source(self, w: u32, h: u32, i: u32, j: u32) -> Option<(u32, u32)> {
+        if self.texel_in_domain(w, h, i, j) {
+            return Some((i, j));
+        }
+        if self != Mapping::Angular || self.texel_solid_angle(w, h, i, j) <= 0.0 {
+            return None;
+        }
+        let a = 2.0 * (i as f64 + 0.5) / w as f64 - 1.0;
+        let b = 2.0 * (j as f64 + 0.5) / h as f64 - 1.0;
+        let r = a.hypot(b);
+        for step in 1..4 {
+            let k = (1.0 - step as f64 / w.min(h) as f64) / r;
+            let (ii, jj) = (
+                (((a * k + 1.0) * 0.5 * w as f64).floor() as u32).min(w - 1),
+                (((b * k + 1.0) * 0.5 * h as f64).floor() as u32).min(h - 1),
+            );
+            if self.texel_in_domain(w, h, ii, jj) {
+                return Some((ii, jj));
+            }
+        }
+        None
+    }
+
     /// Solid angle per unit area of texture coordinates, dω / (du dv), at `c`; zero outside the
     /// disc of an angular map or paraboloid half.
     pub fn density(self, c: Coord) -> f64 {

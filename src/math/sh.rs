@@ -35,6 +35,12 @@ pub fn k_lm(l: u32, m: u32) -> f64 {
 /// singular at the poles) times Re/Im((x + iy)ᵐ) = sinᵐθ·cos/sin(mφ).
 pub fn basis(lmax: u32, d: DVec3) -> Vec<f64> {
     let mut y = vec![0.0; count(lmax)];
+    basis_into(lmax, d, &mut y);
+    y
+}
+
+/// [`basis`] into a caller's buffer of at least (lmax+1)² values.
+pub fn basis_into(lmax: u32, d: DVec3, y: &mut [f64]) {
     let z = d.z;
     // (x + iy)^m, built up as m grows.
     let (mut re, mut im) = (1.0, 0.0);
@@ -54,7 +60,8 @@ pub fn basis(lmax: u32, d: DVec3) -> Vec<f64> {
                 p_prev = p;
                 p = z * (2 * m + 1) as f64 * pmm;
             } else if l > m + 1 {
-                let next = ((2 * l - 1) as f64 * z * p - (l + m - 1) as f64 * p_prev) / (l - m) as f64;
+                let next =
+                    ((2 * l - 1) as f64 * z * p - (l + m - 1) as f64 * p_prev) / (l - m) as f64;
                 p_prev = p;
                 p = next;
             }
@@ -68,19 +75,122 @@ pub fn basis(lmax: u32, d: DVec3) -> Vec<f64> {
             }
         }
     }
-    y
 }
 
-/// Projects a map onto the basis up to `lmax`: ∑ L(d_i)·Y_k(d_i)·Ω_i over the texels the
-/// mapping reads, at texel centres with exact texel solid angles.
+/// Accumulates ∫ Y_k over the part of the rectangle [lo, hi] (disc coordinates, [-1,1]²)
+/// inside the unit disc into `acc`, and the weights into the return value: the clipped
+/// Gauss–Legendre rule of the GPU's `clipped_square` (8 nodes a piece in x with the smoothing
+/// substitution x = x0 + (x1−x0)(3u²−2u³), 8 along each chord).
+fn clipped_basis_integral(
+    mapping: Mapping,
+    layer: u32,
+    lo: [f64; 2],
+    hi: [f64; 2],
+    lmax: u32,
+    acc: &mut [f64],
+    y: &mut [f64],
+) -> f64 {
+    let (gx, gw) = super::quadrature::gauss_legendre(8);
+    let mut xs = vec![lo[0]];
+    for yy in [lo[1], hi[1]] {
+        if yy.abs() < 1.0 {
+            let e = ((1.0 - yy) * (1.0 + yy)).sqrt();
+            for v in [-e, e] {
+                if v > lo[0] && v < hi[0] {
+                    xs.push(v);
+                }
+            }
+        }
+    }
+    xs.push(hi[0]);
+    xs.sort_by(f64::total_cmp);
+    let mut wsum = 0.0;
+    for piece in xs.windows(2) {
+        let parts = ((piece[1] - piece[0]) * 4.0).ceil().max(1.0) as usize;
+        let hx = 0.5 * (piece[1] - piece[0]) / parts as f64;
+        for q in 0..parts {
+            let x0 = piece[0] + 2.0 * hx * q as f64;
+            for (ta, wa) in gx.iter().zip(&gw) {
+                let u = 0.5 + 0.5 * ta;
+                let x = x0 + 2.0 * hx * u * u * (3.0 - 2.0 * u);
+                let jac = 6.0 * u * (1.0 - u);
+                if x.abs() >= 1.0 {
+                    continue;
+                }
+                let e = ((1.0 - x) * (1.0 + x)).sqrt();
+                let (ya, yb) = (lo[1].max(-e), hi[1].min(e));
+                if yb <= ya {
+                    continue;
+                }
+                let (my, hy) = (0.5 * (ya + yb), 0.5 * (yb - ya));
+                for (tb, wb) in gx.iter().zip(&gw) {
+                    let c = super::Coord {
+                        layer,
+                        u: 0.5 * (x + 1.0),
+                        v: 0.5 * (my + hy * tb + 1.0),
+                    };
+                    // density is per unit (u, v) area; disc coordinates have 4× the area.
+                    let w = wa * wb * hx * hy * jac * mapping.density(c) / 4.0;
+                    basis_into(lmax, mapping.coord_to_dir(c), y);
+                    for (a, yk) in acc.iter_mut().zip(y.iter()) {
+                        *a += w * yk;
+                    }
+                    wsum += w;
+                }
+            }
+        }
+    }
+    wsum
+}
+
+/// Projects a map onto the basis up to `lmax`: ∑ L_i·∫_texel Y_k dω over the texels that hold
+/// the sphere ([`EnvMap::for_each_texel`]). Each texel's integral uses 2×2 Gauss points
+/// weighted by the density (fourth order); texels the rim of an angular or paraboloid disc
+/// cuts use a clipped Gauss–Legendre rule. The weights are scaled to the texel's exact solid
+/// angle, so a constant map gives exactly L·∑Ω for L00. The GPU pass
+/// (`glsl/sh_project.comp`) does the same.
 pub fn project(map: &EnvMap, lmax: u32) -> Vec<[f64; 3]> {
-    let mut c = vec![[0.0; 3]; count(lmax)];
+    let n = count(lmax);
+    let mut c = vec![[0.0; 3]; n];
+    let mut y = vec![0.0; n];
+    let mut acc = vec![0.0; n];
+    let g = 0.5 / 3f64.sqrt();
+    let (w, h) = (map.width as f64, map.height as f64);
+    let disc = matches!(map.mapping, Mapping::Angular | Mapping::DualParaboloid);
     map.for_each_texel(|layer, i, j, t, omega| {
-        let d = map.texel_dir(layer, i, j);
-        let y = basis(lmax, d);
-        for (ck, yk) in c.iter_mut().zip(&y) {
+        acc.iter_mut().for_each(|a| *a = 0.0);
+        let lo = [2.0 * i as f64 / w - 1.0, 2.0 * j as f64 / h - 1.0];
+        let hi = [
+            2.0 * (i + 1) as f64 / w - 1.0,
+            2.0 * (j + 1) as f64 / h - 1.0,
+        ];
+        let far = [lo[0].abs().max(hi[0].abs()), lo[1].abs().max(hi[1].abs())];
+        let mut wsum = 0.0;
+        if disc && far[0] * far[0] + far[1] * far[1] > 1.0 {
+            wsum = clipped_basis_integral(map.mapping, layer, lo, hi, lmax, &mut acc, &mut y);
+        } else {
+            for (du, dv) in [(-g, -g), (g, -g), (-g, g), (g, g)] {
+                let q = super::Coord {
+                    layer,
+                    u: (i as f64 + 0.5 + du) / w,
+                    v: (j as f64 + 0.5 + dv) / h,
+                };
+                let wq = map.mapping.density(q);
+                basis_into(lmax, map.mapping.coord_to_dir(q), &mut y);
+                for (a, yk) in acc.iter_mut().zip(&y) {
+                    *a += wq * yk;
+                }
+                wsum += wq;
+            }
+        }
+        if wsum <= 0.0 {
+            basis_into(lmax, map.texel_dir(layer, i, j), &mut acc);
+            wsum = 1.0;
+        }
+        let scale = omega / wsum;
+        for (ck, ak) in c.iter_mut().zip(&acc) {
             for ch in 0..3 {
-                ck[ch] += t[ch] as f64 * yk * omega;
+                ck[ch] += t[ch] as f64 * ak * scale;
             }
         }
     });
@@ -134,7 +244,10 @@ pub fn irradiance_coeffs(radiance: &[[f64; 3]]) -> Vec<[f64; 3]> {
 /// printed digits (c1 = π·√(15/4π)/8 = 0.429043…, c2 = π·√(3/4π)/3 = 0.511664…,
 /// c3 = 3π·√(5/16π)/4 = 0.743125…, c4 = π/(2√π) = 0.886227…, c5 = π·√(5/16π)/4 = 0.247708…).
 pub fn irradiance_matrix(l: &[f64]) -> [[f64; 4]; 4] {
-    assert!(l.len() >= 9, "the matrix needs the nine coefficients up to l = 2");
+    assert!(
+        l.len() >= 9,
+        "the matrix needs the nine coefficients up to l = 2"
+    );
     let k20 = (5.0 / (16.0 * PI)).sqrt();
     let c1 = PI * (15.0 / (4.0 * PI)).sqrt() / 8.0;
     let c2 = PI * (3.0 / (4.0 * PI)).sqrt() / 3.0;
@@ -173,8 +286,16 @@ pub fn gram_matrix(lmax: u32, mapping: Mapping, size: u32) -> Vec<Vec<f64>> {
         for j in 0..h {
             for i in 0..w {
                 // 3×3 Gauss points per texel keep the quadrature exact enough for l ≤ 8.
-                for (a, wa) in [(-0.7745966692414834, 5.0 / 9.0), (0.0, 8.0 / 9.0), (0.7745966692414834, 5.0 / 9.0)] {
-                    for (b, wb) in [(-0.7745966692414834, 5.0 / 9.0), (0.0, 8.0 / 9.0), (0.7745966692414834, 5.0 / 9.0)] {
+                for (a, wa) in [
+                    (-0.7745966692414834, 5.0 / 9.0),
+                    (0.0, 8.0 / 9.0),
+                    (0.7745966692414834, 5.0 / 9.0),
+                ] {
+                    for (b, wb) in [
+                        (-0.7745966692414834, 5.0 / 9.0),
+                        (0.0, 8.0 / 9.0),
+                        (0.7745966692414834, 5.0 / 9.0),
+                    ] {
                         let c = super::Coord {
                             layer,
                             u: (i as f64 + 0.5 + 0.5 * a) / w as f64,
@@ -217,7 +338,12 @@ mod tests {
             let b = basis(2, d);
             for k in 0..9 {
                 // R&H print six digits.
-                assert!((b[k] - rh[k]).abs() < 2e-6, "k={k} at {d}: {} vs {}", b[k], rh[k]);
+                assert!(
+                    (b[k] - rh[k]).abs() < 2e-6,
+                    "k={k} at {d}: {} vs {}",
+                    b[k],
+                    rh[k]
+                );
             }
         }
     }
@@ -245,7 +371,11 @@ mod tests {
                 s += y / k_lm(l, 0) * t.cos() * t.sin();
             }
             let a = 2.0 * PI * s * (PI / 2.0) / n as f64;
-            assert!((a - cosine_lobe(l)).abs() < 1e-7, "l={l}: {a} vs {}", cosine_lobe(l));
+            assert!(
+                (a - cosine_lobe(l)).abs() < 1e-7,
+                "l={l}: {a} vs {}",
+                cosine_lobe(l)
+            );
         }
     }
 
@@ -262,14 +392,19 @@ mod tests {
 
     #[test]
     fn matrix_form_equals_polynomial_form() {
-        let coeffs: Vec<f64> = (0..9).map(|k| 0.3 + 0.17 * k as f64 - 0.05 * (k * k) as f64).collect();
+        let coeffs: Vec<f64> = (0..9)
+            .map(|k| 0.3 + 0.17 * k as f64 - 0.05 * (k * k) as f64)
+            .collect();
         let rgb: Vec<[f64; 3]> = coeffs.iter().map(|&c| [c, 0.0, 0.0]).collect();
         let e = irradiance_coeffs(&rgb);
         let m = irradiance_matrix(&coeffs);
         for d in super::super::synth::fibonacci_sphere(300) {
             let poly = eval(&e, d)[0];
             let mat = eval_matrix(&m, d);
-            assert!((poly - mat).abs() <= 1e-12 * poly.abs().max(1.0), "{d}: {poly} vs {mat}");
+            assert!(
+                (poly - mat).abs() <= 1e-12 * poly.abs().max(1.0),
+                "{d}: {poly} vs {mat}"
+            );
         }
     }
 }

@@ -5,5 +5,6 @@ pub mod convert;
 pub mod copy;
 pub mod diagnostics;
 pub mod probe;
+pub mod sh_project;
 
 pub use convert::{ConvertOptions, Converter};

@@ -1,0 +1,207 @@
+//! GPU SH projection against the float64 projection and analytic truths.
+
+mod common;
+
+use envlight::gpu::{Context, GpuEnvMap};
+use envlight::math::sh;
+use envlight::math::synth::Sky;
+use envlight::math::Mapping;
+use envlight::passes::sh_project::{ShProjector, Subgroups};
+use envlight::EnvMap;
+use std::f64::consts::PI;
+
+fn gpu_project(ctx: &Context, p: &ShProjector, map: &EnvMap, lmax: u32) -> Vec<[f64; 3]> {
+    let g = GpuEnvMap::upload(ctx, map).unwrap();
+    let (c, t) = p.run(&g, lmax).unwrap();
+    assert_eq!(t.len(), 2);
+    c.coeffs
+}
+
+/// Largest |GPU − f64| over all coefficients and channels, relative to |L00|.
+fn worst_vs_cpu(gpu: &[[f64; 3]], cpu: &[[f64; 3]]) -> f64 {
+    let l00 = cpu[0].iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    gpu.iter()
+        .zip(cpu)
+        .flat_map(|(g, c)| (0..3).map(move |k| (g[k] - c[k]).abs()))
+        .fold(0.0, f64::max)
+        / l00
+}
+
+/// A constant environment L projects to L00 = 2√π·L and nothing else, in every mapping and
+/// with both reductions. The texel solid angles sum to 4π to 1e-5 in f32 (tests/mappings_gpu),
+/// which bounds L00's error; every other coefficient is ∑ L·∫_texel Y_k, whose exact sum is
+/// zero, left with the 2×2 Gauss rule's fourth-order error and f32 rounding.
+#[test]
+fn constant_environment_projects_to_l00_only() {
+    let ctx = common::ctx();
+    {
+        for sg in [Subgroups::Auto, Subgroups::Off] {
+            let p = ShProjector::new(&ctx, sg).unwrap();
+            for m in Mapping::ALL {
+                // The angular rim, where the density vanishes, needs finer texels for 1e-6.
+                let size = if matches!(m, Mapping::LatLong | Mapping::Angular) {
+                    128
+                } else {
+                    48
+                };
+                let (w, h) = m.extent_for_size(size);
+                let l = 1.7f32;
+                let map = EnvMap::new(
+                    m,
+                    w,
+                    h,
+                    vec![[l, 2.0 * l, 0.5 * l]; (w * h * m.layers()) as usize],
+                );
+                let c = gpu_project(&ctx, &p, &map, 8);
+                let expect = 2.0 * PI.sqrt() * l as f64;
+                assert!(
+                    (c[0][0] / expect - 1.0).abs() < 1e-5,
+                    "{m:?} {sg:?}: L00 {} vs {expect}",
+                    c[0][0]
+                );
+                assert!((c[0][1] / (2.0 * expect) - 1.0).abs() < 1e-5);
+                for (k, ck) in c.iter().enumerate().skip(1) {
+                    for v in ck {
+                        assert!(
+                            v.abs() < 1e-6 * 2.0 * expect,
+                            "{m:?} {sg:?}: coefficient {k} = {v}"
+                        );
+                    }
+                }
+            }
+            eprintln!("subgroups used: {}", p.uses_subgroups());
+        }
+    }
+    common::finish(ctx);
+}
+
+/// A single band (plus a constant to keep radiance non-negative) projects onto that band. The
+/// map holds point values at texel centres, so the f64 projection differs from the analytic
+/// coefficients by the texels' piecewise-constant reading of a smooth function: a band-l
+/// function varies on the scale 1/l, so the error is about (l·h)²/24 of its amplitude with h
+/// the largest texel angle; we allow (l·h)²/12. The GPU must match the f64 projection within
+/// 1e-5 of |L00|.
+#[test]
+fn single_band_projects_onto_that_band() {
+    let ctx = common::ctx();
+    {
+        let p = ShProjector::new(&ctx, Subgroups::Auto).unwrap();
+        for (l, m) in [(1u32, 1i32), (2, -2), (3, 0), (5, 4), (8, -7)] {
+            let k = sh::index(l, m);
+            let f = |d: glam::DVec3| {
+                let y = sh::basis(8, d);
+                let v = 3.0 + y[k];
+                [v, 0.5 * v, 2.0 * v]
+            };
+            for mapping in [Mapping::Cube, Mapping::LatLong] {
+                let (w, h) =
+                    mapping.extent_for_size(if mapping == Mapping::Cube { 64 } else { 256 });
+                let map = EnvMap::from_fn(mapping, w, h, 1, f);
+                let cpu = sh::project(&map, 8);
+                let gpu = gpu_project(&ctx, &p, &map, 8);
+                let e = worst_vs_cpu(&gpu, &cpu);
+                assert!(e < 1e-5, "({l},{m}) {mapping:?}: GPU vs f64 {e:e}");
+                let c00 = 3.0 * 2.0 * PI.sqrt();
+                let hmax = if mapping == Mapping::Cube {
+                    2.0 / w as f64
+                } else {
+                    2.0 * PI / w as f64
+                };
+                let tol = (l as f64 * hmax).powi(2) / 12.0;
+                for (j, cj) in cpu.iter().enumerate() {
+                    let want = if j == k {
+                        1.0
+                    } else if j == 0 {
+                        c00
+                    } else {
+                        0.0
+                    };
+                    let scale = if j == 0 { c00 } else { 1.0 };
+                    assert!(
+                        (cj[0] - want).abs() < tol * scale,
+                        "({l},{m}) {mapping:?}: coefficient {j} = {} (want {want}, tol {tol:e})",
+                        cj[0]
+                    );
+                }
+            }
+        }
+    }
+    common::finish(ctx);
+}
+
+/// The reduction stays accurate in f32 on a 4096×2048 map whose sun is ~1e5 times the sky.
+#[test]
+fn four_k_sun_map_projects_accurately() {
+    let ctx = common::ctx();
+    {
+        let p = ShProjector::new(&ctx, Subgroups::Auto).unwrap();
+        let map = EnvMap::from_fn(Mapping::LatLong, 4096, 2048, 1, |d| {
+            Sky::default().radiance(d)
+        });
+        assert!(map.stats().max_luminance > 1e4);
+        let cpu = sh::project(&map, 2);
+        let gpu = gpu_project(&ctx, &p, &map, 2);
+        let e = worst_vs_cpu(&gpu, &cpu);
+        eprintln!("4k sun map, lmax 2: worst |GPU - f64| / |L00| = {e:.2e}");
+        assert!(e < 1e-5, "{e:e}");
+    }
+    common::finish(ctx);
+}
+
+/// Every real probe, in its native mapping, to l = 8: GPU within 1e-5 of |L00| of the f64
+/// projection, and R&H's matrix from the GPU coefficients agrees with the polynomial.
+#[test]
+fn real_probes_match_the_float64_projection() {
+    let Some(dir) = common::probes() else { return };
+    let ctx = common::ctx();
+    {
+        let p = ShProjector::new(&ctx, Subgroups::Auto).unwrap();
+        let mut files: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        files.sort();
+        let mut n = 0;
+        for f in files {
+            let spec = if f.is_dir() {
+                f.join("{face}.hdr")
+            } else {
+                f.clone()
+            };
+            let s = spec.to_string_lossy().to_string();
+            if !(s.ends_with(".hdr") || s.ends_with(".exr") || s.ends_with(".dds")) {
+                continue;
+            }
+            let opts = envlight::io::LoadOptions::default();
+            let map = match envlight::io::face_paths(&s) {
+                Some(paths) => envlight::io::load_cube_faces(&paths, &opts),
+                None => envlight::io::load(&s, &opts),
+            }
+            .unwrap();
+            let cpu = sh::project(&map, 8);
+            let gpu = gpu_project(&ctx, &p, &map, 8);
+            let e = worst_vs_cpu(&gpu, &cpu);
+            eprintln!("{s}: worst |GPU - f64| / |L00| = {e:.2e}");
+            assert!(e < 1e-5, "{s}: {e:e}");
+            let coeffs = envlight::passes::sh_project::ShCoefficients {
+                lmax: 8,
+                coeffs: gpu.clone(),
+            };
+            let mats = coeffs.irradiance_matrices();
+            let e9: Vec<[f64; 3]> = sh::irradiance_coeffs(&gpu[..9]);
+            for d in envlight::math::synth::fibonacci_sphere(200) {
+                let poly = sh::eval(&e9, d);
+                for c in 0..3 {
+                    let mat = sh::eval_matrix(&mats[c], d);
+                    assert!(
+                        (poly[c] - mat).abs() <= 1e-6 * poly[c].abs().max(1e-3 * e9[0][c].abs()),
+                        "{s}"
+                    );
+                }
+            }
+            n += 1;
+        }
+        assert!(n >= 20, "only {n} probes");
+    }
+    common::finish(ctx);
+}
