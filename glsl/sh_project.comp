@@ -18,6 +18,7 @@ layout(set = 0, binding = BINDING_SH_SRC) uniform sampler2DArray src;
 layout(std430, set = 0, binding = BINDING_SH_PARTIALS) writeonly buffer Partials { float partials[]; };
 
 layout(push_constant) uniform Push {
+    vec4 file_to_world[3];  // orientation: the world direction of a file direction (rows)
     uvec2 size;
     uint mapping;
     uint lmax;
@@ -26,6 +27,10 @@ layout(push_constant) uniform Push {
     uint pad1;
     uint pad2;
 } pc;
+
+vec3 to_world(vec3 f) {
+    return vec3(dot(pc.file_to_world[0].xyz, f), dot(pc.file_to_world[1].xyz, f), dot(pc.file_to_world[2].xyz, f));
+}
 
 // ∫ Y_k over a texel the rim of an angular or paraboloid disc cuts: the clipped Gauss-Legendre
 // rule of clipped_square (mappings.glsl), evaluating the basis at every node. Only rim texels
@@ -72,7 +77,7 @@ void sh_clipped(uint m, uint layer, vec2 lo, vec2 hi, uint lmax, uint n,
                     Coord c;
                     c.layer = layer;
                     c.uv = 0.5 * (pt + 1.0);
-                    sh_basis(lmax, coord_to_dir(m, c), y);
+                    sh_basis(lmax, to_world(coord_to_dir(m, c)), y);
                     for (uint k = 0u; k < n; k++) acc[k] += w * y[k];
                     wsum += w;
                 }
@@ -120,7 +125,7 @@ void main() {
                     c.layer = layer;
                     c.uv = (vec2(p) + 0.5 + off) / vec2(pc.size);
                     float w = density(pc.mapping, c.uv);
-                    sh_basis(pc.lmax, coord_to_dir(pc.mapping, c), y);
+                    sh_basis(pc.lmax, to_world(coord_to_dir(pc.mapping, c)), y);
                     for (uint k = 0u; k < n; k++) acc[k] += w * y[k];
                     wsum += w;
                 }
@@ -130,7 +135,7 @@ void main() {
                 Coord c;
                 c.layer = layer;
                 c.uv = (vec2(p) + 0.5) / vec2(pc.size);
-                sh_basis(pc.lmax, coord_to_dir(pc.mapping, c), y);
+                sh_basis(pc.lmax, to_world(coord_to_dir(pc.mapping, c)), y);
                 for (uint k = 0u; k < n; k++) acc[k] = y[k];
                 wsum = 1.0;
             }

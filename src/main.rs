@@ -6,6 +6,7 @@ use envlight::gpu::{Context, ContextOptions, DeviceSelector, GpuEnvMap, Timing};
 use envlight::io::{self, LoadOptions, Sanitize, ToneMap};
 use envlight::math::synth::Sky;
 use envlight::passes::copy::CopyPass;
+use envlight::passes::sh_project::{ShProjector, Subgroups};
 use envlight::passes::{ConvertOptions, Converter};
 use envlight::{EnvMap, Mapping, Orientation};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -92,6 +93,19 @@ enum Command {
         #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
         exposure: f32,
     },
+    /// Project a map onto spherical harmonics on the GPU and write them as JSON
+    Sh {
+        #[command(flatten)]
+        input: Input,
+        #[command(flatten)]
+        orient: Orient,
+        /// Highest band l (0 to 8)
+        #[arg(long, default_value_t = 2)]
+        order: u32,
+        /// Output JSON: {"order", "coefficients": [[r,g,b], ...], "irradiance_matrices"}
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Convert the bundled probe to all four mappings and show what each step cost
     Demo {
         /// Input probe
@@ -124,6 +138,15 @@ enum Command {
 
 #[derive(Subcommand)]
 enum Bench {
+    /// SH projection time at several widths, against a plain copy of the same map
+    Sh {
+        /// Lat-long widths
+        #[arg(long, value_delimiter = ',', default_value = "512,1024,2048,4096")]
+        sizes: Vec<u32>,
+        /// Timed repetitions per case (the median is reported)
+        #[arg(long, default_value_t = 5)]
+        reps: usize,
+    },
     /// Conversion time at several source widths, against a plain copy of the same source
     Convert {
         /// Source lat-long widths
@@ -270,6 +293,33 @@ fn run(cli: Cli) -> Result<()> {
             }
             print_timings(&timings);
         }
+        Command::Sh {
+            input,
+            orient,
+            order,
+            output,
+        } => {
+            let map = load_input(input)?;
+            let ctx = context(&cli)?;
+            let pb = spinner("projecting onto SH on the GPU");
+            let proj = ShProjector::new(&ctx, Subgroups::Auto)?;
+            let g = GpuEnvMap::upload(&ctx, &map)?;
+            let o = Orientation {
+                flip_u: orient.flip_u,
+                flip_v: orient.flip_v,
+                rotate_y_degrees: orient.rotate_y,
+            };
+            let (coeffs, timings) = proj.run_oriented(&g, *order, &o)?;
+            pb.finish_and_clear();
+            let text = serde_json::to_string_pretty(&coeffs.to_json())?;
+            std::fs::write(output, text).with_context(|| output.display().to_string())?;
+            println!(
+                "wrote {} ({} coefficients per channel)",
+                output.display(),
+                coeffs.coeffs.len()
+            );
+            print_timings(&timings);
+        }
         Command::Demo { input, out, size } => demo(&cli, input, out, *size)?,
         Command::Devices => {
             let ctx = context(&cli)?;
@@ -301,6 +351,9 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bench {
             what: Bench::Convert { sizes, reps },
         } => bench_convert(&cli, sizes, *reps)?,
+        Command::Bench {
+            what: Bench::Sh { sizes, reps },
+        } => bench_sh(&cli, sizes, *reps)?,
     }
     Ok(())
 }
@@ -445,6 +498,51 @@ fn bench_convert(cli: &Cli, sizes: &[u32], reps: usize) -> Result<()> {
                 m / floor,
                 power * 100.0
             );
+        }
+    }
+    Ok(())
+}
+
+fn bench_sh(cli: &Cli, sizes: &[u32], reps: usize) -> Result<()> {
+    let ctx = context(cli)?;
+    println!("device: {} ({})", ctx.info().name, ctx.info().driver.trim());
+    println!("GPU time from timestamps, median of {reps} runs after one untimed run; 'copy' reads and writes every texel once.\n");
+    println!("| map | reduction | lmax | copy ms | project + reduce ms | ratio to copy |");
+    println!("|---|---|---|---|---|---|");
+    let copy = CopyPass::new(&ctx)?;
+    let reps = reps.max(1);
+    let projectors = [
+        ("subgroups", ShProjector::new(&ctx, Subgroups::Auto)?),
+        ("shared tree", ShProjector::new(&ctx, Subgroups::Off)?),
+    ];
+    for &w in sizes {
+        let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 1, |d| {
+            Sky::default().radiance(d)
+        });
+        let src = GpuEnvMap::upload(&ctx, &map)?;
+        copy.run(&src)?;
+        let mut c = Vec::new();
+        for _ in 0..reps {
+            c.push(copy.run(&src)?.1.iter().map(|t| t.ms).sum());
+        }
+        let floor = median(c);
+        for (name, p) in &projectors {
+            if *name == "subgroups" && !p.uses_subgroups() {
+                continue;
+            }
+            for lmax in [2, 8] {
+                p.run(&src, lmax)?;
+                let mut ms = Vec::new();
+                for _ in 0..reps {
+                    ms.push(p.run(&src, lmax)?.1.iter().map(|t| t.ms).sum());
+                }
+                let m = median(ms);
+                println!(
+                    "| latlong {w}x{} | {name} | {lmax} | {floor:.3} | {m:.3} | {:.1} |",
+                    w / 2,
+                    m / floor
+                );
+            }
         }
     }
     Ok(())

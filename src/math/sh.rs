@@ -7,7 +7,7 @@
 
 use super::mapping::Mapping;
 use crate::envmap::EnvMap;
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
 
 /// Number of coefficients up to and including band `lmax`.
@@ -81,8 +81,10 @@ pub fn basis_into(lmax: u32, d: DVec3, y: &mut [f64]) {
 /// inside the unit disc into `acc`, and the weights into the return value: the clipped
 /// Gauss–Legendre rule of the GPU's `clipped_square` (8 nodes a piece in x with the smoothing
 /// substitution x = x0 + (x1−x0)(3u²−2u³), 8 along each chord).
+#[allow(clippy::too_many_arguments)]
 fn clipped_basis_integral(
     mapping: Mapping,
+    file_to_world: DMat3,
     layer: u32,
     lo: [f64; 2],
     hi: [f64; 2],
@@ -131,7 +133,7 @@ fn clipped_basis_integral(
                     };
                     // density is per unit (u, v) area; disc coordinates have 4× the area.
                     let w = wa * wb * hx * hy * jac * mapping.density(c) / 4.0;
-                    basis_into(lmax, mapping.coord_to_dir(c), y);
+                    basis_into(lmax, file_to_world * mapping.coord_to_dir(c), y);
                     for (a, yk) in acc.iter_mut().zip(y.iter()) {
                         *a += w * yk;
                     }
@@ -150,6 +152,12 @@ fn clipped_basis_integral(
 /// angle, so a constant map gives exactly L·∑Ω for L00. The GPU pass
 /// (`glsl/sh_project.comp`) does the same.
 pub fn project(map: &EnvMap, lmax: u32) -> Vec<[f64; 3]> {
+    project_oriented(map, lmax, DMat3::IDENTITY)
+}
+
+/// [`project`] of a map whose file directions map to world directions by `file_to_world`
+/// (orthogonal: the transpose of [`super::Orientation::world_to_file`]).
+pub fn project_oriented(map: &EnvMap, lmax: u32, file_to_world: DMat3) -> Vec<[f64; 3]> {
     let n = count(lmax);
     let mut c = vec![[0.0; 3]; n];
     let mut y = vec![0.0; n];
@@ -167,7 +175,16 @@ pub fn project(map: &EnvMap, lmax: u32) -> Vec<[f64; 3]> {
         let far = [lo[0].abs().max(hi[0].abs()), lo[1].abs().max(hi[1].abs())];
         let mut wsum = 0.0;
         if disc && far[0] * far[0] + far[1] * far[1] > 1.0 {
-            wsum = clipped_basis_integral(map.mapping, layer, lo, hi, lmax, &mut acc, &mut y);
+            wsum = clipped_basis_integral(
+                map.mapping,
+                file_to_world,
+                layer,
+                lo,
+                hi,
+                lmax,
+                &mut acc,
+                &mut y,
+            );
         } else {
             for (du, dv) in [(-g, -g), (g, -g), (-g, g), (g, g)] {
                 let q = super::Coord {
@@ -176,7 +193,7 @@ pub fn project(map: &EnvMap, lmax: u32) -> Vec<[f64; 3]> {
                     v: (j as f64 + 0.5 + dv) / h,
                 };
                 let wq = map.mapping.density(q);
-                basis_into(lmax, map.mapping.coord_to_dir(q), &mut y);
+                basis_into(lmax, file_to_world * map.mapping.coord_to_dir(q), &mut y);
                 for (a, yk) in acc.iter_mut().zip(&y) {
                     *a += wq * yk;
                 }
@@ -184,7 +201,7 @@ pub fn project(map: &EnvMap, lmax: u32) -> Vec<[f64; 3]> {
             }
         }
         if wsum <= 0.0 {
-            basis_into(lmax, map.texel_dir(layer, i, j), &mut acc);
+            basis_into(lmax, file_to_world * map.texel_dir(layer, i, j), &mut acc);
             wsum = 1.0;
         }
         let scale = omega / wsum;

@@ -8,6 +8,7 @@ use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
 use crate::gpu::shaders::ShaderId;
 use crate::gpu::{Buffer, Context, GpuEnvMap, GpuTimer, Sampler, Timing};
 use crate::math::sh;
+use crate::Orientation;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -15,6 +16,8 @@ use gpu_allocator::MemoryLocation;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShProjectPush {
+    /// Rows of the file → world matrix (the inverse of [`crate::Orientation::world_to_file`]).
+    pub file_to_world: [[f32; 4]; 3],
     /// Layer size.
     pub size: [u32; 2],
     /// Mapping id.
@@ -40,7 +43,7 @@ pub struct ShReducePush {
 }
 
 /// SH coefficients of radiance, RGB, flat index k = l(l+1)+m.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ShCoefficients {
     /// Highest band.
     pub lmax: u32,
@@ -48,7 +51,43 @@ pub struct ShCoefficients {
     pub coeffs: Vec<[f64; 3]>,
 }
 
+/// What `envlight sh` writes (documented in the README): the order, the RGB coefficients in
+/// flat index k = l(l+1)+m, and R&H's 4×4 irradiance matrix per channel (needs order ≥ 2).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ShJson {
+    /// Highest band l.
+    pub order: u32,
+    /// (order+1)² RGB radiance coefficients.
+    pub coefficients: Vec<[f64; 3]>,
+    /// M per channel such that E(n) = nᵀMn with n = (x, y, z, 1); absent below order 2.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub irradiance_matrices: Option<IrradianceMatrices>,
+}
+
+/// R&H's matrices for the three channels.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct IrradianceMatrices {
+    /// Red.
+    pub r: [[f64; 4]; 4],
+    /// Green.
+    pub g: [[f64; 4]; 4],
+    /// Blue.
+    pub b: [[f64; 4]; 4],
+}
+
 impl ShCoefficients {
+    /// The JSON document of `envlight sh`.
+    pub fn to_json(&self) -> ShJson {
+        ShJson {
+            order: self.lmax,
+            coefficients: self.coeffs.clone(),
+            irradiance_matrices: (self.lmax >= 2).then(|| {
+                let [r, g, b] = self.irradiance_matrices();
+                IrradianceMatrices { r, g, b }
+            }),
+        }
+    }
+
     /// R&H's irradiance matrix M per channel (R, G, B): E(n) = nᵀMn with n = (x, y, z, 1).
     /// Needs lmax ≥ 2.
     pub fn irradiance_matrices(&self) -> [[[f64; 4]; 4]; 3] {
@@ -112,6 +151,16 @@ impl ShProjector {
 
     /// Projects `map` up to band `lmax`; returns the coefficients and the GPU time.
     pub fn run(&self, map: &GpuEnvMap, lmax: u32) -> Result<(ShCoefficients, Vec<Timing>)> {
+        self.run_oriented(map, lmax, &Orientation::default())
+    }
+
+    /// Projects `map`, whose file is oriented by `orientation`, in the world frame.
+    pub fn run_oriented(
+        &self,
+        map: &GpuEnvMap,
+        lmax: u32,
+        orientation: &Orientation,
+    ) -> Result<(ShCoefficients, Vec<Timing>)> {
         if lmax > SH_MAX_LMAX {
             return Err(Error::Invalid(format!(
                 "SH order {lmax} is above the maximum, {SH_MAX_LMAX}"
@@ -174,7 +223,13 @@ impl ShProjector {
                 (binding::SH_REDUCE_OUT, Bind::Buffer(&a)),
             ],
         )?;
+        let m = orientation.world_to_file().transpose();
+        let row = |r: usize| {
+            let v = m.row(r);
+            [v.x as f32, v.y as f32, v.z as f32, 0.0]
+        };
         let push = ShProjectPush {
+            file_to_world: [row(0), row(1), row(2)],
             size: [map.width, map.height],
             mapping: map.mapping.id(),
             lmax,
