@@ -130,3 +130,41 @@ impl Drop for GpuTimer {
         self.shared.untrack();
     }
 }
+
+/// A [`GpuTimer`] where the device has timestamps, and nothing where it has none: passes record
+/// spans through it without caring which.
+pub struct Spans(Option<GpuTimer>);
+
+impl Spans {
+    /// Room for `spans` spans.
+    pub fn new(ctx: &Context, spans: u32) -> Result<Spans> {
+        Ok(Spans(GpuTimer::new(ctx, spans)?))
+    }
+
+    /// Resets the queries; record first in the command buffer.
+    pub fn reset(&mut self, cmd: vk::CommandBuffer) {
+        if let Some(t) = self.0.as_mut() {
+            t.reset(cmd);
+        }
+    }
+
+    /// Starts a span.
+    pub fn begin(&mut self, cmd: vk::CommandBuffer, label: &str) -> Option<usize> {
+        self.0.as_mut().map(|t| t.begin(cmd, label))
+    }
+
+    /// Ends a span started by [`Spans::begin`].
+    pub fn end(&mut self, cmd: vk::CommandBuffer, span: Option<usize>) {
+        if let (Some(t), Some(s)) = (self.0.as_mut(), span) {
+            t.end(cmd, s);
+        }
+    }
+
+    /// The spans' times, after the submission completed (empty without timestamps).
+    pub fn read(&self) -> Result<Vec<Timing>> {
+        match &self.0 {
+            Some(t) => t.read(),
+            None => Ok(Vec::new()),
+        }
+    }
+}

@@ -5,7 +5,8 @@ use crate::gpu::barrier::{cmd_image_barriers, image_barrier, Usage};
 use crate::gpu::layout::WORKGROUP_2D;
 use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
 use crate::gpu::shaders::ShaderId;
-use crate::gpu::{groups, Context, GpuEnvMap, GpuTimer, Sampler, Timing};
+use crate::gpu::timing::Spans;
+use crate::gpu::{groups, Context, GpuEnvMap, Sampler, Timing};
 use crate::math::{Mapping, Orientation};
 use std::sync::OnceLock;
 
@@ -141,7 +142,7 @@ impl Converter {
                 ),
             ],
         )?;
-        let mut timer = GpuTimer::new(&self.ctx, 1)?;
+        let mut spans = Spans::new(&self.ctx, 1)?;
         let d = self.ctx.device();
         let label = format!(
             "convert {} -> {} {}x{}",
@@ -152,9 +153,7 @@ impl Converter {
         );
         let layers = opts.to.layers();
         self.ctx.submit_and_wait("converting a map", |cmd| {
-            if let Some(t) = timer.as_mut() {
-                t.reset(cmd);
-            }
+            spans.reset(cmd);
             cmd_image_barriers(
                 d,
                 cmd,
@@ -165,7 +164,7 @@ impl Converter {
                     Usage::ComputeWrite,
                 )],
             );
-            let span = timer.as_mut().map(|t| t.begin(cmd, &label));
+            let span = spans.begin(cmd, &label);
             pipeline.bind(cmd, Some(&set), &push);
             // SAFETY: cmd is recording with a compute pipeline bound.
             unsafe {
@@ -176,9 +175,7 @@ impl Converter {
                     layers,
                 )
             };
-            if let (Some(t), Some(s)) = (timer.as_mut(), span) {
-                t.end(cmd, s);
-            }
+            spans.end(cmd, span);
             cmd_image_barriers(
                 d,
                 cmd,
@@ -191,10 +188,7 @@ impl Converter {
             );
             Ok(())
         })?;
-        let timings = match &timer {
-            Some(t) => t.read()?,
-            None => Vec::new(),
-        };
+        let timings = spans.read()?;
         Ok((dst, timings))
     }
 }

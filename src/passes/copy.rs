@@ -6,7 +6,8 @@ use crate::gpu::barrier::{cmd_image_barriers, image_barrier, Usage};
 use crate::gpu::layout::{binding, WORKGROUP_2D};
 use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
 use crate::gpu::shaders::ShaderId;
-use crate::gpu::{groups, Context, GpuEnvMap, GpuTimer, Sampler, Timing};
+use crate::gpu::timing::Spans;
+use crate::gpu::{groups, Context, GpuEnvMap, Sampler, Timing};
 
 /// Push constants of `glsl/copy.comp`.
 #[repr(C)]
@@ -53,13 +54,11 @@ impl CopyPass {
             size: [src.width, src.height],
             pad: [0; 2],
         };
-        let mut timer = GpuTimer::new(&self.ctx, 1)?;
+        let mut spans = Spans::new(&self.ctx, 1)?;
         let d = self.ctx.device();
         let layers = src.mapping.layers();
         self.ctx.submit_and_wait("copying a map", |cmd| {
-            if let Some(t) = timer.as_mut() {
-                t.reset(cmd);
-            }
+            spans.reset(cmd);
             cmd_image_barriers(
                 d,
                 cmd,
@@ -70,7 +69,7 @@ impl CopyPass {
                     Usage::ComputeWrite,
                 )],
             );
-            let span = timer.as_mut().map(|t| t.begin(cmd, "copy"));
+            let span = spans.begin(cmd, "copy");
             self.pipeline.bind(cmd, Some(&set), &push);
             // SAFETY: cmd is recording with the compute pipeline bound.
             unsafe {
@@ -81,9 +80,7 @@ impl CopyPass {
                     layers,
                 )
             };
-            if let (Some(t), Some(s)) = (timer.as_mut(), span) {
-                t.end(cmd, s);
-            }
+            spans.end(cmd, span);
             cmd_image_barriers(
                 d,
                 cmd,
@@ -96,10 +93,7 @@ impl CopyPass {
             );
             Ok(())
         })?;
-        let timings = match &timer {
-            Some(t) => t.read()?,
-            None => Vec::new(),
-        };
+        let timings = spans.read()?;
         Ok((dst, timings))
     }
 }

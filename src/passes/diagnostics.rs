@@ -8,7 +8,8 @@ use crate::gpu::barrier::{
 use crate::gpu::layout::{binding, WORKGROUP_1D};
 use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
 use crate::gpu::shaders::ShaderId;
-use crate::gpu::{groups, Buffer, Context, GpuTimer, Image, ImageDesc, Timing};
+use crate::gpu::timing::Spans;
+use crate::gpu::{groups, Buffer, Context, Image, ImageDesc, Timing};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -80,12 +81,10 @@ impl Diagnostics {
             &self.busy,
             &[(binding::BUSY_OUT, Bind::Buffer(&out))],
         )?;
-        let mut timer = GpuTimer::new(&self.ctx, 2)?;
+        let mut spans = Spans::new(&self.ctx, 2)?;
         let d = self.ctx.device();
         self.ctx.submit_and_wait("diagnostics", |cmd| {
-            if let Some(t) = timer.as_mut() {
-                t.reset(cmd);
-            }
+            spans.reset(cmd);
             cmd_image_barriers(
                 d,
                 cmd,
@@ -96,7 +95,7 @@ impl Diagnostics {
                     Usage::ColorAttachment,
                 )],
             );
-            let span = timer.as_mut().map(|t| t.begin(cmd, "draw"));
+            let span = spans.begin(cmd, "draw");
             let attachment = [vk::RenderingAttachmentInfo::default()
                 .image_view(target.view)
                 .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
@@ -133,10 +132,8 @@ impl Diagnostics {
                 d.cmd_draw(cmd, 3, 1, 0, 0);
                 d.cmd_end_rendering(cmd);
             }
-            if let (Some(t), Some(s)) = (timer.as_mut(), span) {
-                t.end(cmd, s);
-            }
-            let span = timer.as_mut().map(|t| t.begin(cmd, "busy"));
+            spans.end(cmd, span);
+            let span = spans.begin(cmd, "busy");
             self.busy.bind(
                 cmd,
                 Some(&set),
@@ -148,9 +145,7 @@ impl Diagnostics {
             );
             // SAFETY: cmd is recording with the compute pipeline bound.
             unsafe { d.cmd_dispatch(cmd, groups(count, WORKGROUP_1D), 1, 1) };
-            if let (Some(t), Some(s)) = (timer.as_mut(), span) {
-                t.end(cmd, s);
-            }
+            spans.end(cmd, span);
             cmd_memory_barrier(d, cmd, memory_barrier(Usage::ComputeWrite, Usage::HostRead));
             Ok(())
         })?;
@@ -159,10 +154,7 @@ impl Diagnostics {
             .iter()
             .map(|&v| v as f64)
             .sum();
-        let timings = match &timer {
-            Some(t) => t.read()?,
-            None => Vec::new(),
-        };
+        let timings = spans.read()?;
         Ok((timings, sum))
     }
 }

@@ -6,7 +6,8 @@ use crate::gpu::barrier::{cmd_memory_barrier, memory_barrier, Usage};
 use crate::gpu::layout::{binding, SH_MAX_LMAX, SH_WORKGROUP};
 use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
 use crate::gpu::shaders::ShaderId;
-use crate::gpu::{Buffer, Context, GpuEnvMap, GpuTimer, Sampler, Timing};
+use crate::gpu::timing::Spans;
+use crate::gpu::{Buffer, Context, GpuEnvMap, Sampler, Timing};
 use crate::math::sh;
 use crate::Orientation;
 use ash::vk;
@@ -236,21 +237,17 @@ impl ShProjector {
             texels,
             pad: [0; 3],
         };
-        let mut timer = GpuTimer::new(&self.ctx, 2)?;
+        let mut spans = Spans::new(&self.ctx, 2)?;
         let d = self.ctx.device();
         let result_in_a = (levels.len() - 1) % 2 == 0;
         self.ctx.submit_and_wait("projecting onto SH", |cmd| {
-            if let Some(t) = timer.as_mut() {
-                t.reset(cmd);
-            }
-            let span = timer.as_mut().map(|t| t.begin(cmd, "sh project"));
+            spans.reset(cmd);
+            let span = spans.begin(cmd, "sh project");
             self.project.bind(cmd, Some(&project_set), &push);
             // SAFETY: cmd is recording with the compute pipeline bound.
             unsafe { d.cmd_dispatch(cmd, gx, gy, 1) };
-            if let (Some(t), Some(s)) = (timer.as_mut(), span) {
-                t.end(cmd, s);
-            }
-            let span = timer.as_mut().map(|t| t.begin(cmd, "sh reduce"));
+            spans.end(cmd, span);
+            let span = spans.begin(cmd, "sh reduce");
             for (lvl, rows) in levels.iter().enumerate().take(levels.len() - 1) {
                 cmd_memory_barrier(
                     d,
@@ -271,9 +268,7 @@ impl ShProjector {
                 // SAFETY: as above.
                 unsafe { d.cmd_dispatch(cmd, x, y, 1) };
             }
-            if let (Some(t), Some(s)) = (timer.as_mut(), span) {
-                t.end(cmd, s);
-            }
+            spans.end(cmd, span);
             cmd_memory_barrier(
                 d,
                 cmd,
@@ -295,10 +290,7 @@ impl ShProjector {
             .chunks_exact(3)
             .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
             .collect();
-        let timings = match &timer {
-            Some(t) => t.read()?,
-            None => Vec::new(),
-        };
+        let timings = spans.read()?;
         Ok((ShCoefficients { lmax, coeffs }, timings))
     }
 }
