@@ -437,3 +437,21 @@ fn tiny_and_odd_sizes() {
     }
     common::finish(ctx);
 }
+
+/// The benchmark's floor, the copy pass, returns its input bit for bit in every mapping.
+#[test]
+fn copy_pass_is_exact() {
+    let ctx = common::ctx();
+    {
+        let copy = envlight::passes::copy::CopyPass::new(&ctx).unwrap();
+        for m in Mapping::ALL {
+            let (w, h) = m.extent_for_size(17);
+            let map = EnvMap::from_fn(m, w, h, 2, smooth_env);
+            let g = GpuEnvMap::upload(&ctx, &map).unwrap();
+            let (out, t) = copy.run(&g).unwrap();
+            assert_eq!(t.len(), 1);
+            assert_eq!(out.download(&ctx).unwrap(), map, "{m:?}");
+        }
+    }
+    common::finish(ctx);
+}
