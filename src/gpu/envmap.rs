@@ -5,7 +5,11 @@ use super::barrier::{
     cmd_image_barriers, cmd_memory_barrier, image_barrier, memory_barrier, Usage,
 };
 use super::context::Context;
+use super::groups;
+use super::layout::WORKGROUP_2D;
+use super::pipeline::{DescriptorSet, Pipeline};
 use super::resources::{Buffer, Image, ImageDesc};
+use super::timing::{Spans, Timing};
 use crate::envmap::EnvMap;
 use crate::error::{Error, Result};
 use crate::math::Mapping;
@@ -63,6 +67,51 @@ impl GpuEnvMap {
             height,
             image,
         })
+    }
+
+    /// Records one timed dispatch of `pipeline` over every texel of every layer of this map
+    /// (2D workgroups of [`WORKGROUP_2D`]), with the barriers that take it from undefined to
+    /// written to ready for sampling; submits, waits, and returns the span's time.
+    pub(crate) fn fill<P: bytemuck::Pod>(
+        &self,
+        ctx: &Context,
+        what: &'static str,
+        label: &str,
+        pipeline: &Pipeline,
+        set: &DescriptorSet,
+        push: &P,
+    ) -> Result<Vec<Timing>> {
+        let mut spans = Spans::new(ctx, 1)?;
+        let d = ctx.device();
+        let layers = self.mapping.layers();
+        ctx.submit_and_wait(what, |cmd| {
+            spans.reset(cmd);
+            let before = image_barrier(
+                self.image.raw,
+                layers,
+                Usage::Undefined,
+                Usage::ComputeWrite,
+            );
+            cmd_image_barriers(d, cmd, &[before]);
+            let span = spans.begin(cmd, label);
+            pipeline.bind(cmd, Some(set), push);
+            let (gx, gy) = (
+                groups(self.width, WORKGROUP_2D[0]),
+                groups(self.height, WORKGROUP_2D[1]),
+            );
+            // SAFETY: cmd is recording with a compute pipeline bound.
+            unsafe { d.cmd_dispatch(cmd, gx, gy, layers) };
+            spans.end(cmd, span);
+            let after = image_barrier(
+                self.image.raw,
+                layers,
+                Usage::ComputeWrite,
+                Usage::ComputeSampled,
+            );
+            cmd_image_barriers(d, cmd, &[after]);
+            Ok(())
+        })?;
+        spans.read()
     }
 
     /// Uploads a map. Texels must be finite and non-negative (what [`crate::io::load`]

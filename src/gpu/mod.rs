@@ -18,3 +18,11 @@ pub use timing::{GpuTimer, Timing};
 pub fn groups(n: u32, size: u32) -> u32 {
     n.div_ceil(size)
 }
+
+/// A 3×3 matrix as the three rows of `vec4 m[3]` in a push-constant block (w unused).
+pub fn mat3_rows(m: glam::DMat3) -> [[f32; 4]; 3] {
+    [0, 1, 2].map(|r| {
+        let v = m.row(r);
+        [v.x as f32, v.y as f32, v.z as f32, 0.0]
+    })
+}

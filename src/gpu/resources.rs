@@ -8,6 +8,29 @@ use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
+/// Allocates memory for `requirements` (named for leak reports).
+fn allocate(
+    shared: &Shared,
+    name: &str,
+    requirements: vk::MemoryRequirements,
+    location: MemoryLocation,
+    linear: bool,
+) -> Result<Allocation> {
+    shared
+        .allocator()
+        .allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location,
+            linear,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        })
+        .map_err(|source| Error::Alloc {
+            what: name.to_string(),
+            source,
+        })
+}
+
 /// A buffer and its memory.
 pub struct Buffer {
     shared: Arc<Shared>,
@@ -43,19 +66,7 @@ impl Buffer {
         s.name(raw, name);
         // SAFETY: raw is a live buffer of this device.
         let requirements = unsafe { s.device.get_buffer_memory_requirements(raw) };
-        let allocation = s
-            .allocator()
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|source| Error::Alloc {
-                what: name.to_string(),
-                source,
-            })?;
+        let allocation = allocate(s, name, requirements, location, true)?;
         // SAFETY: the allocation satisfies the buffer's requirements and outlives it (Drop).
         unsafe {
             s.device
@@ -187,19 +198,7 @@ impl Image {
         s.name(raw, name);
         // SAFETY: raw is a live image of this device.
         let requirements = unsafe { s.device.get_image_memory_requirements(raw) };
-        let allocation = s
-            .allocator()
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|source| Error::Alloc {
-                what: name.to_string(),
-                source,
-            })?;
+        let allocation = allocate(s, name, requirements, MemoryLocation::GpuOnly, false)?;
         // SAFETY: the allocation satisfies the image's requirements and outlives it (Drop).
         unsafe {
             s.device

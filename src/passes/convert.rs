@@ -1,12 +1,10 @@
 //! Conversion of an environment map from any mapping to any other, at any resolution.
 
 use crate::error::Result;
-use crate::gpu::barrier::{cmd_image_barriers, image_barrier, Usage};
 use crate::gpu::layout::WORKGROUP_2D;
 use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
 use crate::gpu::shaders::ShaderId;
-use crate::gpu::timing::Spans;
-use crate::gpu::{groups, Context, GpuEnvMap, Sampler, Timing};
+use crate::gpu::{mat3_rows, Context, GpuEnvMap, Sampler, Timing};
 use crate::math::{Mapping, Orientation};
 use std::sync::OnceLock;
 
@@ -112,13 +110,8 @@ impl Converter {
                 Converter::supersampling((src.mapping, src.width, src.height), (opts.to, w, h))
             })
             .max(1);
-        let m = opts.orientation.world_to_file();
-        let row = |r: usize| {
-            let v = m.row(r);
-            [v.x as f32, v.y as f32, v.z as f32, 0.0]
-        };
         let push = ConvertPush {
-            world_to_file: [row(0), row(1), row(2)],
+            world_to_file: mat3_rows(opts.orientation.world_to_file()),
             src_size: [src.width, src.height],
             dst_size: [w, h],
             src_mapping: src.mapping.id(),
@@ -142,53 +135,12 @@ impl Converter {
                 ),
             ],
         )?;
-        let mut spans = Spans::new(&self.ctx, 1)?;
-        let d = self.ctx.device();
         let label = format!(
-            "convert {} -> {} {}x{}",
+            "convert {} -> {} {w}x{h}",
             src.mapping.name(),
-            opts.to.name(),
-            w,
-            h
+            opts.to.name()
         );
-        let layers = opts.to.layers();
-        self.ctx.submit_and_wait("converting a map", |cmd| {
-            spans.reset(cmd);
-            cmd_image_barriers(
-                d,
-                cmd,
-                &[image_barrier(
-                    dst.image.raw,
-                    layers,
-                    Usage::Undefined,
-                    Usage::ComputeWrite,
-                )],
-            );
-            let span = spans.begin(cmd, &label);
-            pipeline.bind(cmd, Some(&set), &push);
-            // SAFETY: cmd is recording with a compute pipeline bound.
-            unsafe {
-                d.cmd_dispatch(
-                    cmd,
-                    groups(w, WORKGROUP_2D[0]),
-                    groups(h, WORKGROUP_2D[1]),
-                    layers,
-                )
-            };
-            spans.end(cmd, span);
-            cmd_image_barriers(
-                d,
-                cmd,
-                &[image_barrier(
-                    dst.image.raw,
-                    layers,
-                    Usage::ComputeWrite,
-                    Usage::ComputeSampled,
-                )],
-            );
-            Ok(())
-        })?;
-        let timings = spans.read()?;
+        let timings = dst.fill(&self.ctx, "converting a map", &label, pipeline, &set, &push)?;
         Ok((dst, timings))
     }
 }

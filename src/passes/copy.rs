@@ -2,12 +2,10 @@
 //! map once, against which their times are reported as ratios.
 
 use crate::error::Result;
-use crate::gpu::barrier::{cmd_image_barriers, image_barrier, Usage};
 use crate::gpu::layout::{binding, WORKGROUP_2D};
 use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
 use crate::gpu::shaders::ShaderId;
-use crate::gpu::timing::Spans;
-use crate::gpu::{groups, Context, GpuEnvMap, Sampler, Timing};
+use crate::gpu::{Context, GpuEnvMap, Sampler, Timing};
 
 /// Push constants of `glsl/copy.comp`.
 #[repr(C)]
@@ -54,46 +52,14 @@ impl CopyPass {
             size: [src.width, src.height],
             pad: [0; 2],
         };
-        let mut spans = Spans::new(&self.ctx, 1)?;
-        let d = self.ctx.device();
-        let layers = src.mapping.layers();
-        self.ctx.submit_and_wait("copying a map", |cmd| {
-            spans.reset(cmd);
-            cmd_image_barriers(
-                d,
-                cmd,
-                &[image_barrier(
-                    dst.image.raw,
-                    layers,
-                    Usage::Undefined,
-                    Usage::ComputeWrite,
-                )],
-            );
-            let span = spans.begin(cmd, "copy");
-            self.pipeline.bind(cmd, Some(&set), &push);
-            // SAFETY: cmd is recording with the compute pipeline bound.
-            unsafe {
-                d.cmd_dispatch(
-                    cmd,
-                    groups(src.width, WORKGROUP_2D[0]),
-                    groups(src.height, WORKGROUP_2D[1]),
-                    layers,
-                )
-            };
-            spans.end(cmd, span);
-            cmd_image_barriers(
-                d,
-                cmd,
-                &[image_barrier(
-                    dst.image.raw,
-                    layers,
-                    Usage::ComputeWrite,
-                    Usage::ComputeSampled,
-                )],
-            );
-            Ok(())
-        })?;
-        let timings = spans.read()?;
+        let timings = dst.fill(
+            &self.ctx,
+            "copying a map",
+            "copy",
+            &self.pipeline,
+            &set,
+            &push,
+        )?;
         Ok((dst, timings))
     }
 }

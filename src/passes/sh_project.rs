@@ -7,7 +7,7 @@ use crate::gpu::layout::{binding, SH_MAX_LMAX, SH_WORKGROUP};
 use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
 use crate::gpu::shaders::ShaderId;
 use crate::gpu::timing::Spans;
-use crate::gpu::{Buffer, Context, GpuEnvMap, Sampler, Timing};
+use crate::gpu::{mat3_rows, Buffer, Context, GpuEnvMap, Sampler, Timing};
 use crate::math::sh;
 use crate::Orientation;
 use ash::vk;
@@ -224,13 +224,8 @@ impl ShProjector {
                 (binding::SH_REDUCE_OUT, Bind::Buffer(&a)),
             ],
         )?;
-        let m = orientation.world_to_file().transpose();
-        let row = |r: usize| {
-            let v = m.row(r);
-            [v.x as f32, v.y as f32, v.z as f32, 0.0]
-        };
         let push = ShProjectPush {
-            file_to_world: [row(0), row(1), row(2)],
+            file_to_world: mat3_rows(orientation.world_to_file().transpose()),
             size: [map.width, map.height],
             mapping: map.mapping.id(),
             lmax,
