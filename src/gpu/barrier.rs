@@ -18,6 +18,8 @@ pub enum Usage {
     ComputeWrite,
     /// Read as a storage buffer by a compute shader.
     ComputeRead,
+    /// Read and written as storage (an accumulation across dispatches).
+    ComputeReadWrite,
     /// Sampled by a fragment shader.
     FragmentSampled,
     /// Written as a colour attachment.
@@ -57,6 +59,11 @@ pub fn usage_info(u: Usage) -> UsageInfo {
         ),
         Usage::ComputeWrite => (S::COMPUTE_SHADER, A::SHADER_STORAGE_WRITE, L::GENERAL),
         Usage::ComputeRead => (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ, L::GENERAL),
+        Usage::ComputeReadWrite => (
+            S::COMPUTE_SHADER,
+            A::SHADER_STORAGE_READ | A::SHADER_STORAGE_WRITE,
+            L::GENERAL,
+        ),
         Usage::FragmentSampled => (
             S::FRAGMENT_SHADER,
             A::SHADER_SAMPLED_READ,
@@ -177,6 +184,7 @@ mod tests {
         let writes = [
             Usage::TransferDst,
             Usage::ComputeWrite,
+            Usage::ComputeReadWrite,
             Usage::ColorAttachment,
             Usage::HostWrite,
         ];

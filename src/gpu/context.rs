@@ -144,6 +144,11 @@ pub struct DeviceInfo {
     pub subgroup_arithmetic: bool,
     /// Largest workgroup count in one dispatch dimension.
     pub max_workgroup_count: u32,
+    /// Most loop iterations one shader invocation may run before the driver cuts its loops
+    /// short: llvmpipe (lavapipe) stops any loop after 65535 iterations, counted over all of
+    /// an invocation's passes through that loop. Passes with long loops split their work
+    /// into dispatches under this budget. `None` where there is no such limit.
+    pub loop_iteration_limit: Option<u32>,
 }
 
 pub(crate) struct Shared {
@@ -364,6 +369,8 @@ impl Context {
                     vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC,
                 ),
             max_workgroup_count: props.limits.max_compute_work_group_count[0],
+            loop_iteration_limit: (driver_props.driver_id == vk::DriverId::MESA_LLVMPIPE)
+                .then_some(65535),
             driver: format!(
                 "{} {}",
                 driver_props

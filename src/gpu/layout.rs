@@ -31,6 +31,39 @@ pub mod binding {
     pub const SH_REDUCE_IN: u32 = 0;
     /// sh_reduce: partial sums out.
     pub const SH_REDUCE_OUT: u32 = 1;
+    /// brute_prepare: the source map (sampler2DArray, read with texelFetch).
+    pub const BRUTE_PREP_SRC: u32 = 0;
+    /// brute_prepare: per-texel centre direction and cos of angular radius (vec4 buffer).
+    pub const BRUTE_PREP_CONES: u32 = 1;
+    /// brute_prepare: per-texel radiance and solid angle (vec4 buffer).
+    pub const BRUTE_PREP_RADIANCE: u32 = 2;
+    /// brute: the cones written by brute_prepare.
+    pub const BRUTE_CONES: u32 = 0;
+    /// brute: the radiance and solid angles written by brute_prepare.
+    pub const BRUTE_RADIANCE: u32 = 1;
+    /// brute: the output map (rgba32f image2DArray), accumulated over chunks.
+    pub const BRUTE_DST: u32 = 2;
+    /// brute: the Kahan compensation per output texel, carried between chunks (vec4 buffer).
+    pub const BRUTE_COMP: u32 = 3;
+    /// sh_eval: the coefficients, Â_l and window folded in (vec4 buffer).
+    pub const SH_EVAL_COEFFS: u32 = 0;
+    /// sh_eval: the output map (rgba32f image2DArray).
+    pub const SH_EVAL_DST: u32 = 1;
+}
+
+/// The per-texel quadrature rule of the brute-force convolution, shared by
+/// `src/math/filter.rs` and `glsl/brute.comp` (see the former for what each does).
+pub mod filter_rule {
+    /// Fewest cells per side for a texel the kernel's horizon cuts (the kink of max(0, cos)).
+    pub const EDGE_CELLS: u32 = 4;
+    /// Most cells per side of one texel.
+    pub const MAX_CELLS: u32 = 16;
+    /// Cells per side per unit of ρ·√n.
+    pub const CELLS_PER_WIDTH: f64 = 2.0;
+    /// Below this n·ρ² a texel away from the horizon takes one node.
+    pub const CENTRE_LIMIT: f64 = 1e-5;
+    /// Lobe values below this fraction of the peak are dropped (ln 1e-10).
+    pub const LOG_CUTOFF: f64 = -23.025_850_929_940_457;
 }
 
 /// Highest SH band the GPU projection supports.
@@ -148,6 +181,24 @@ pub const SHADER_SOURCES: &[ShaderSource] = &[
         stage: Stage::Compute,
         defines: &[],
     },
+    ShaderSource {
+        name: "brute_prepare",
+        file: "brute.comp",
+        stage: Stage::Compute,
+        defines: &[("PREPARE", "1")],
+    },
+    ShaderSource {
+        name: "brute",
+        file: "brute.comp",
+        stage: Stage::Compute,
+        defines: &[],
+    },
+    ShaderSource {
+        name: "sh_eval",
+        file: "sh_eval.comp",
+        stage: Stage::Compute,
+        defines: &[],
+    },
 ];
 
 /// The GLSL header carrying the constants above.
@@ -168,6 +219,15 @@ pub fn generated_header() -> String {
         ("SH_PARTIALS", binding::SH_PARTIALS),
         ("SH_REDUCE_IN", binding::SH_REDUCE_IN),
         ("SH_REDUCE_OUT", binding::SH_REDUCE_OUT),
+        ("BRUTE_PREP_SRC", binding::BRUTE_PREP_SRC),
+        ("BRUTE_PREP_CONES", binding::BRUTE_PREP_CONES),
+        ("BRUTE_PREP_RADIANCE", binding::BRUTE_PREP_RADIANCE),
+        ("BRUTE_CONES", binding::BRUTE_CONES),
+        ("BRUTE_RADIANCE", binding::BRUTE_RADIANCE),
+        ("BRUTE_DST", binding::BRUTE_DST),
+        ("BRUTE_COMP", binding::BRUTE_COMP),
+        ("SH_EVAL_COEFFS", binding::SH_EVAL_COEFFS),
+        ("SH_EVAL_DST", binding::SH_EVAL_DST),
     ];
     for (name, v) in b {
         let _ = writeln!(s, "#define BINDING_{name} {v}");
@@ -176,6 +236,23 @@ pub fn generated_header() -> String {
     let n = (SH_MAX_LMAX + 1) * (SH_MAX_LMAX + 1);
     let _ = writeln!(s, "#define SH_MAX_COEFFS {n}");
     let _ = writeln!(s, "#define SH_WORKGROUP {SH_WORKGROUP}");
+    let _ = writeln!(s, "#define FILTER_EDGE_CELLS {}u", filter_rule::EDGE_CELLS);
+    let _ = writeln!(s, "#define FILTER_MAX_CELLS {}u", filter_rule::MAX_CELLS);
+    let _ = writeln!(
+        s,
+        "#define FILTER_CELLS_PER_WIDTH {:?}",
+        filter_rule::CELLS_PER_WIDTH
+    );
+    let _ = writeln!(
+        s,
+        "#define FILTER_CENTRE_LIMIT {:e}",
+        filter_rule::CENTRE_LIMIT
+    );
+    let _ = writeln!(
+        s,
+        "#define FILTER_LOG_CUTOFF {:?}",
+        filter_rule::LOG_CUTOFF as f32
+    );
     // K_lm for m ≥ 0, l ≤ SH_MAX_LMAX, at index l(l+1)/2 + m (see src/math/sh.rs).
     let mut k = Vec::new();
     for l in 0..=SH_MAX_LMAX {

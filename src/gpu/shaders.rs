@@ -29,6 +29,12 @@ pub enum ShaderId {
     ShReduceSubgroup,
     /// SH partial-sum reduction, shared-memory tree.
     ShReduceShared,
+    /// Brute-force convolution: per-texel cones, radiance and solid angles.
+    BrutePrepare,
+    /// Brute-force convolution with the cosine or a Phong lobe.
+    Brute,
+    /// Irradiance from SH coefficients into a map.
+    ShEval,
 }
 
 /// The kind of a descriptor binding.
@@ -75,7 +81,7 @@ macro_rules! spv {
 
 impl ShaderId {
     /// Every module.
-    pub const ALL: [ShaderId; 11] = [
+    pub const ALL: [ShaderId; 14] = [
         ShaderId::Convert2d,
         ShaderId::ConvertCube,
         ShaderId::MappingProbe,
@@ -87,6 +93,9 @@ impl ShaderId {
         ShaderId::ShProjectShared,
         ShaderId::ShReduceSubgroup,
         ShaderId::ShReduceShared,
+        ShaderId::BrutePrepare,
+        ShaderId::Brute,
+        ShaderId::ShEval,
     ];
 
     /// The build recipe of this module.
@@ -103,6 +112,9 @@ impl ShaderId {
             ShaderId::ShProjectShared => "sh_project_shared",
             ShaderId::ShReduceSubgroup => "sh_reduce_subgroup",
             ShaderId::ShReduceShared => "sh_reduce_shared",
+            ShaderId::BrutePrepare => "brute_prepare",
+            ShaderId::Brute => "brute",
+            ShaderId::ShEval => "sh_eval",
         };
         SHADER_SOURCES
             .iter()
@@ -124,12 +136,16 @@ impl ShaderId {
             ShaderId::ShProjectShared => spv!("sh_project_shared"),
             ShaderId::ShReduceSubgroup => spv!("sh_reduce_subgroup"),
             ShaderId::ShReduceShared => spv!("sh_reduce_shared"),
+            ShaderId::BrutePrepare => spv!("brute_prepare"),
+            ShaderId::Brute => spv!("brute"),
+            ShaderId::ShEval => spv!("sh_eval"),
         }
     }
 
     /// What the pipeline built on this module binds.
     pub fn interface(self) -> Interface {
         use crate::passes::copy::CopyPush;
+        use crate::passes::filter::{BrutePush, ShEvalPush};
         use crate::passes::sh_project::{ShProjectPush, ShReducePush};
         use crate::passes::{convert::ConvertPush, diagnostics::BusyPush, probe::ProbePush};
         use DescriptorKind::*;
@@ -173,6 +189,30 @@ impl ShaderId {
                     (binding::SH_REDUCE_OUT, StorageBuffer),
                 ],
                 push_size: size(std::mem::size_of::<ShReducePush>()),
+            },
+            ShaderId::BrutePrepare => Interface {
+                bindings: &[
+                    (binding::BRUTE_PREP_SRC, SampledImage),
+                    (binding::BRUTE_PREP_CONES, StorageBuffer),
+                    (binding::BRUTE_PREP_RADIANCE, StorageBuffer),
+                ],
+                push_size: size(std::mem::size_of::<BrutePush>()),
+            },
+            ShaderId::Brute => Interface {
+                bindings: &[
+                    (binding::BRUTE_CONES, StorageBuffer),
+                    (binding::BRUTE_RADIANCE, StorageBuffer),
+                    (binding::BRUTE_DST, StorageImage),
+                    (binding::BRUTE_COMP, StorageBuffer),
+                ],
+                push_size: size(std::mem::size_of::<BrutePush>()),
+            },
+            ShaderId::ShEval => Interface {
+                bindings: &[
+                    (binding::SH_EVAL_COEFFS, StorageBuffer),
+                    (binding::SH_EVAL_DST, StorageImage),
+                ],
+                push_size: size(std::mem::size_of::<ShEvalPush>()),
             },
             ShaderId::FullscreenVert | ShaderId::FlatFrag => Interface {
                 bindings: &[],

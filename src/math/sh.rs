@@ -235,10 +235,13 @@ pub fn cosine_lobe(l: u32) -> f64 {
         1 => 2.0 * PI / 3.0,
         _ if l % 2 == 1 => 0.0,
         _ => {
-            let sign = if (l / 2 - 1) % 2 == 0 { 1.0 } else { -1.0 };
             let h = l / 2;
-            2.0 * PI * sign / ((l + 2) as f64 * (l - 1) as f64) * factorial(l)
-                / (2f64.powi(l as i32) * factorial(h) * factorial(h))
+            let sign = if (h - 1) % 2 == 0 { 1.0 } else { -1.0 };
+            // l!/(2^l·((l/2)!)²) = Π_{k=1}^{l/2} (2k−1)/(2k): no overflow at any l.
+            let central: f64 = (1..=h)
+                .map(|k| (2 * k - 1) as f64 / (2 * k) as f64)
+                .product();
+            2.0 * PI * sign / ((l + 2) as f64 * (l - 1) as f64) * central
         }
     }
 }
@@ -291,6 +294,138 @@ pub fn eval_matrix(m: &[[f64; 4]; 4], d: DVec3) -> f64 {
         }
     }
     e
+}
+
+/// A window on SH bands, against ringing: coefficient band l is scaled by w_l.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Window {
+    /// w_l = 1.
+    None,
+    /// Hanning of a given width w: w_l = (1 + cos(π·l/w))/2 for l < w, else 0 (Sloan 2008,
+    /// "Stupid SH tricks"). A width of lmax+1 damps band lmax hard; 2·(lmax+1) is gentler.
+    Hanning {
+        /// Width w in bands.
+        width: f64,
+    },
+    /// Sloan's w_l = 1/(1 + λ·l²(l+1)²), which damps band l like a Laplacian-squared penalty.
+    Sloan {
+        /// Strength.
+        lambda: f64,
+    },
+}
+
+impl Window {
+    /// w_l for l = 0..=lmax.
+    pub fn weights(self, lmax: u32) -> Vec<f64> {
+        (0..=lmax)
+            .map(|l| {
+                let lf = l as f64;
+                match self {
+                    Window::None => 1.0,
+                    Window::Hanning { width } if lf < width => {
+                        0.5 * (1.0 + (PI * lf / width).cos())
+                    }
+                    Window::Hanning { .. } => 0.0,
+                    Window::Sloan { lambda } => 1.0 / (1.0 + lambda * lf * lf * (lf + 1.0).powi(2)),
+                }
+            })
+            .collect()
+    }
+
+    /// `coeffs` with band l scaled by w_l.
+    pub fn apply(self, coeffs: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        let lmax = (coeffs.len() as f64).sqrt() as u32 - 1;
+        let w = self.weights(lmax);
+        let mut out = coeffs.to_vec();
+        for l in 0..=lmax {
+            for m in -(l as i32)..=(l as i32) {
+                out[index(l, m)] = coeffs[index(l, m)].map(|c| c * w[l as usize]);
+            }
+        }
+        out
+    }
+}
+
+/// Where an SH reconstruction goes negative, over a set of directions.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Negativity {
+    /// The most negative value over all channels relative to the mean of that channel's
+    /// values (0 when nothing is negative).
+    pub worst: f64,
+    /// The direction of the worst value.
+    pub at: DVec3,
+    /// The fraction of directions with any channel negative.
+    pub fraction: f64,
+}
+
+/// Evaluates `coeffs` at `dirs` and reports where and by how much it is negative.
+pub fn negativity(coeffs: &[[f64; 3]], dirs: &[DVec3]) -> Negativity {
+    let lmax = (coeffs.len() as f64).sqrt() as u32 - 1;
+    let mut y = vec![0.0; count(lmax)];
+    let values: Vec<[f64; 3]> = dirs
+        .iter()
+        .map(|&d| {
+            basis_into(lmax, d, &mut y);
+            let mut v = [0.0; 3];
+            for (c, yk) in coeffs.iter().zip(&y) {
+                for ch in 0..3 {
+                    v[ch] += c[ch] * yk;
+                }
+            }
+            v
+        })
+        .collect();
+    let mean = [0, 1, 2].map(|ch| values.iter().map(|v| v[ch]).sum::<f64>() / dirs.len() as f64);
+    let mut out = Negativity {
+        worst: 0.0,
+        at: DVec3::Y,
+        fraction: 0.0,
+    };
+    let mut negative = 0usize;
+    for (v, &d) in values.iter().zip(dirs) {
+        if v.iter().any(|&c| c < 0.0) {
+            negative += 1;
+        }
+        for ch in 0..3 {
+            let rel = v[ch] / mean[ch].abs().max(f64::MIN_POSITIVE);
+            if rel < out.worst {
+                out.worst = rel;
+                out.at = d;
+            }
+        }
+    }
+    out.fraction = negative as f64 / dirs.len() as f64;
+    out
+}
+
+/// The smallest λ of [`Window::Sloan`] for which the windowed irradiance of `radiance` is
+/// non-negative at every one of `dirs` (bisection to 1% of λ; 0 when it already is). The
+/// irradiance of l = 0 alone is non-negative whenever L00 is, so a λ always exists.
+pub fn smallest_nonnegative_window(radiance: &[[f64; 3]], dirs: &[DVec3]) -> f64 {
+    let ok = |lambda: f64| {
+        let e = irradiance_coeffs(&Window::Sloan { lambda }.apply(radiance));
+        negativity(&e, dirs).fraction == 0.0
+    };
+    if ok(0.0) {
+        return 0.0;
+    }
+    let mut hi = 1e-4;
+    while !ok(hi) {
+        hi *= 4.0;
+        if hi > 1e12 {
+            return hi;
+        }
+    }
+    let mut lo = hi / 4.0;
+    while hi - lo > 0.01 * hi {
+        let mid = 0.5 * (lo + hi);
+        if ok(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
 }
 
 /// Exposes the mapping used for quadrature tests.

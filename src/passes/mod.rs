@@ -4,6 +4,7 @@
 pub mod convert;
 pub mod copy;
 pub mod diagnostics;
+pub mod filter;
 pub mod probe;
 pub mod sh_project;
 

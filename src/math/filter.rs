@@ -1,0 +1,469 @@
+//! Brute-force convolution of a whole map with a kernel of the angle to an axis (Miller &
+//! Hoffman 1984): the clamped cosine (irradiance, indexed by the normal) and the normalised
+//! Phong lobe (indexed by the reflection direction). This is the float64 twin of
+//! `glsl/brute.comp`, using the same per-texel rules, and the reference SH irradiance is
+//! measured against.
+//!
+//! The map is taken as what it stores: constant radiance over each texel. The convolution is
+//! then the exact sum over every texel of `L_t · ∫_t K(axis·ω) dω`, and the only
+//! approximation is how each texel's integral of the kernel is computed:
+//! - texels wholly below the kernel's horizon, or where the lobe is below 1e-10 of its peak,
+//!   are skipped;
+//! - texels small next to the kernel's width (`n·ρ² < 1e-5`, ρ the texel's angular radius)
+//!   and not cut by the horizon take one node at their centre;
+//! - the rest are split into s×s cells with 3×3 Gauss points each, s = ⌈ρ·√n·c⌉ (at least
+//!   [`EDGE_CELLS`] where the horizon cuts the texel, at most [`MAX_CELLS`]);
+//! - texels the rim of an angular or paraboloid disc cuts take the clipped rule of the SH
+//!   projection, with pieces split the same way.
+//!
+//! Each texel's node weights are scaled to its exact solid angle, so a constant map gives
+//! `L·∫K` up to the kernel's quadrature error, which the tests bound (1e-4 for the cosine and
+//! for Phong lobes up to n = 10⁴).
+
+use super::mapping::{Coord, Mapping};
+use crate::envmap::EnvMap;
+use glam::{DMat3, DVec3};
+use std::f64::consts::PI;
+
+pub use crate::gpu::layout::filter_rule::{
+    CELLS_PER_WIDTH, CENTRE_LIMIT, EDGE_CELLS, LOG_CUTOFF, MAX_CELLS,
+};
+
+/// A convolution kernel of x = axis·ω.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Kernel {
+    /// max(0, x): irradiance E(n) = ∫ L(ω) max(0, n·ω) dω.
+    Cosine,
+    /// (n+1)/(2π)·max(0, x)^n, normalised so that ∫ over the sphere is 1.
+    Phong {
+        /// The exponent, at least 1.
+        n: f64,
+    },
+}
+
+impl Kernel {
+    /// The exponent (1 for the cosine).
+    pub fn exponent(self) -> f64 {
+        match self {
+            Kernel::Cosine => 1.0,
+            Kernel::Phong { n } => n,
+        }
+    }
+
+    /// The normalisation in front of max(0, x)^n.
+    pub fn scale(self) -> f64 {
+        match self {
+            Kernel::Cosine => 1.0,
+            Kernel::Phong { n } => (n + 1.0) / (2.0 * PI),
+        }
+    }
+
+    /// K at a direction ω given `half_chord2` = |axis − ω|²/2 = 1 − axis·ω, which keeps its
+    /// digits where ω is close to the axis (x itself rounds to 1 there, and x^10⁴ with it).
+    pub fn eval_from_gap(self, half_chord2: f64) -> f64 {
+        let x = 1.0 - half_chord2;
+        if x <= 0.0 {
+            return 0.0;
+        }
+        match self {
+            Kernel::Cosine => x,
+            Kernel::Phong { n } => self.scale() * (n * (-half_chord2).ln_1p()).exp(),
+        }
+    }
+
+    /// K(axis·ω) for unit vectors.
+    pub fn eval(self, axis: DVec3, w: DVec3) -> f64 {
+        self.eval_from_gap(0.5 * (axis - w).length_squared())
+    }
+}
+
+/// How one texel's integral of the kernel is taken.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rule {
+    /// The kernel is zero (or below the cut-off) over the whole texel.
+    Skip,
+    /// One node at the texel's centre.
+    Centre,
+    /// s×s cells of 3×3 Gauss points.
+    Cells(u32),
+}
+
+/// The rule for a texel whose centre direction c has x = axis·c and whose directions are
+/// within angle ρ of c (`cos_rho`, `sin_rho`). Shared with the GLSL, decision for decision.
+pub fn rule(kernel: Kernel, x: f64, cos_rho: f64, sin_rho: f64) -> Rule {
+    let sin_c = (1.0 - x * x).max(0.0).sqrt();
+    // cos(θc − ρ) and cos(θc + ρ): the largest and smallest x over the texel.
+    let x_max = if x >= cos_rho {
+        1.0
+    } else {
+        x * cos_rho + sin_c * sin_rho
+    };
+    let x_min = x * cos_rho - sin_c * sin_rho;
+    if x_max <= 0.0 {
+        return Rule::Skip;
+    }
+    let n = kernel.exponent();
+    if n > 1.0 && n * x_max.ln() < LOG_CUTOFF {
+        return Rule::Skip;
+    }
+    let rho2 = 2.0 * (1.0 - cos_rho);
+    let straddles = x_min < 0.0;
+    if !straddles && n * rho2 < CENTRE_LIMIT {
+        return Rule::Centre;
+    }
+    let mut s = (CELLS_PER_WIDTH * (n * rho2).sqrt()).ceil().max(1.0);
+    if straddles {
+        s = s.max(EDGE_CELLS as f64);
+    }
+    Rule::Cells(s.min(MAX_CELLS as f64) as u32)
+}
+
+/// Whether the rim of an angular or paraboloid disc cuts texel (i, j).
+pub fn rim_cut(mapping: Mapping, w: u32, h: u32, i: u32, j: u32) -> bool {
+    if !matches!(mapping, Mapping::Angular | Mapping::DualParaboloid) {
+        return false;
+    }
+    let (lo, hi) = texel_square(w, h, i, j);
+    let fx = lo[0].abs().max(hi[0].abs());
+    let fy = lo[1].abs().max(hi[1].abs());
+    fx * fx + fy * fy > 1.0
+}
+
+fn texel_square(w: u32, h: u32, i: u32, j: u32) -> ([f64; 2], [f64; 2]) {
+    let (wf, hf) = (w as f64, h as f64);
+    (
+        [2.0 * i as f64 / wf - 1.0, 2.0 * j as f64 / hf - 1.0],
+        [
+            2.0 * (i + 1) as f64 / wf - 1.0,
+            2.0 * (j + 1) as f64 / hf - 1.0,
+        ],
+    )
+}
+
+/// The cosine of texel (i, j)'s angular radius about its centre direction: the smallest
+/// c·ω over its corners and edge midpoints (pulled into the disc for disc mappings), less a
+/// margin for the bulge of the edges between them.
+pub fn texel_cos_radius(mapping: Mapping, w: u32, h: u32, layer: u32, i: u32, j: u32) -> f64 {
+    let c = mapping.coord_to_dir(Mapping::texel_center(w, h, layer, i, j));
+    let disc = matches!(mapping, Mapping::Angular | Mapping::DualParaboloid);
+    let mut min_dot: f64 = 1.0;
+    for (a, b) in [
+        (0.0, 0.0),
+        (0.5, 0.0),
+        (1.0, 0.0),
+        (0.0, 0.5),
+        (1.0, 0.5),
+        (0.0, 1.0),
+        (0.5, 1.0),
+        (1.0, 1.0),
+    ] {
+        let mut u = (i as f64 + a) / w as f64;
+        let mut v = (j as f64 + b) / h as f64;
+        if disc {
+            let (x, y) = (2.0 * u - 1.0, 2.0 * v - 1.0);
+            let r = x.hypot(y);
+            if r > 1.0 {
+                u = 0.5 * (x / r + 1.0);
+                v = 0.5 * (y / r + 1.0);
+            }
+        }
+        let d = mapping.coord_to_dir(Coord { layer, u, v });
+        min_dot = min_dot.min(c.dot(d));
+    }
+    // Edges bulge between the sampled points by at most a fraction of the spacing: take the
+    // angle 25% wider.
+    let rho = min_dot.clamp(-1.0, 1.0).acos() * 1.25;
+    rho.min(PI).cos()
+}
+
+/// Calls `f(coord, weight)` for the quadrature nodes of texel (i, j) split into `cells`²
+/// cells of 3×3 Gauss points, or for the clipped rule when the rim of a disc cuts it. The
+/// weights are proportional to solid angle (they are not yet scaled to the texel's Ω).
+pub fn for_each_node(
+    mapping: Mapping,
+    (w, h): (u32, u32),
+    (layer, i, j): (u32, u32, u32),
+    cells: u32,
+    mut f: impl FnMut(Coord, f64),
+) {
+    if rim_cut(mapping, w, h, i, j) {
+        clipped_nodes(mapping, w, h, layer, i, j, cells.min(4), &mut f);
+        return;
+    }
+    // 3-point Gauss–Legendre on [0, 1] (sixth order): nodes ½ ± ½√(3/5) and ½, weights
+    // 5/18, 5/18, 8/18.
+    let g = 0.5 * 0.6f64.sqrt();
+    let rule = [(-g, 5.0 / 18.0), (0.0, 8.0 / 18.0), (g, 5.0 / 18.0)];
+    let s = cells as f64;
+    for cy in 0..cells {
+        for cx in 0..cells {
+            for (dv, wv) in rule {
+                for (du, wu) in rule {
+                    let c = Coord {
+                        layer,
+                        u: (i as f64 + (cx as f64 + 0.5 + du) / s) / w as f64,
+                        v: (j as f64 + (cy as f64 + 0.5 + dv) / s) / h as f64,
+                    };
+                    f(c, wu * wv * mapping.density(c));
+                }
+            }
+        }
+    }
+}
+
+/// The clipped Gauss–Legendre rule (see `clipped_square` in `glsl/include/mappings.glsl`),
+/// with every piece cut into `split` more parts in x and every chord into `split` parts.
+#[allow(clippy::too_many_arguments)]
+fn clipped_nodes(
+    mapping: Mapping,
+    w: u32,
+    h: u32,
+    layer: u32,
+    i: u32,
+    j: u32,
+    split: u32,
+    f: &mut impl FnMut(Coord, f64),
+) {
+    let (gx, gw) = super::quadrature::gauss_legendre(8);
+    let (lo, hi) = texel_square(w, h, i, j);
+    let mut xs = vec![lo[0]];
+    for yy in [lo[1], hi[1]] {
+        if yy.abs() < 1.0 {
+            let e = ((1.0 - yy) * (1.0 + yy)).sqrt();
+            for v in [-e, e] {
+                if v > lo[0] && v < hi[0] {
+                    xs.push(v);
+                }
+            }
+        }
+    }
+    xs.push(hi[0]);
+    xs.sort_by(f64::total_cmp);
+    for piece in xs.windows(2) {
+        let parts = ((piece[1] - piece[0]) * 4.0).ceil().max(1.0) as u32 * split;
+        let hx = 0.5 * (piece[1] - piece[0]) / parts as f64;
+        for q in 0..parts {
+            let x0 = piece[0] + 2.0 * hx * q as f64;
+            for (ta, wa) in gx.iter().zip(&gw) {
+                let u = 0.5 + 0.5 * ta;
+                let x = x0 + 2.0 * hx * u * u * (3.0 - 2.0 * u);
+                let jac = 6.0 * u * (1.0 - u);
+                if x.abs() >= 1.0 {
+                    continue;
+                }
+                let e = ((1.0 - x) * (1.0 + x)).sqrt();
+                let (ya, yb) = (lo[1].max(-e), hi[1].min(e));
+                if yb <= ya {
+                    continue;
+                }
+                let hy = 0.5 * (yb - ya) / split as f64;
+                for p in 0..split {
+                    let my = ya + hy * (2 * p + 1) as f64;
+                    for (tb, wb) in gx.iter().zip(&gw) {
+                        let c = Coord {
+                            layer,
+                            u: 0.5 * (x + 1.0),
+                            v: 0.5 * (my + hy * tb + 1.0),
+                        };
+                        f(c, wa * wb * hx * hy * jac * mapping.density(c));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A source map prepared for convolution: per texel that holds part of the sphere, its
+/// centre direction (world), the cosine of its angular radius, its radiance and solid angle.
+pub struct Prepared<'a> {
+    map: &'a EnvMap,
+    file_to_world: DMat3,
+    texels: Vec<PreparedTexel>,
+}
+
+struct PreparedTexel {
+    layer: u32,
+    i: u32,
+    j: u32,
+    dir: DVec3,
+    cos_rho: f64,
+    sin_rho: f64,
+    radiance: [f64; 3],
+    omega: f64,
+}
+
+impl<'a> Prepared<'a> {
+    /// Prepares `map`, whose file directions reach the world through `file_to_world`.
+    pub fn new(map: &'a EnvMap, file_to_world: DMat3) -> Prepared<'a> {
+        let (w, h) = (map.width, map.height);
+        let mut texels = Vec::new();
+        map.for_each_texel(|layer, i, j, t, omega| {
+            let cos_rho = texel_cos_radius(map.mapping, w, h, layer, i, j);
+            texels.push(PreparedTexel {
+                layer,
+                i,
+                j,
+                dir: file_to_world * map.texel_dir(layer, i, j),
+                cos_rho,
+                sin_rho: (1.0 - cos_rho * cos_rho).max(0.0).sqrt(),
+                radiance: t.map(f64::from),
+                omega,
+            });
+        });
+        Prepared {
+            map,
+            file_to_world,
+            texels,
+        }
+    }
+
+    /// ∑ over texels of L_t·∫_t K(axis·ω) dω.
+    pub fn convolve(&self, kernel: Kernel, axis: DVec3) -> [f64; 3] {
+        let m = self.map.mapping;
+        let (w, h) = (self.map.width, self.map.height);
+        let mut out = [0.0; 3];
+        for t in &self.texels {
+            let x = axis.dot(t.dir);
+            let k = match rule(kernel, x, t.cos_rho, t.sin_rho) {
+                Rule::Skip => continue,
+                Rule::Centre => kernel.eval(axis, t.dir),
+                Rule::Cells(s) => {
+                    let (mut acc, mut wsum) = (0.0, 0.0);
+                    for_each_node(m, (w, h), (t.layer, t.i, t.j), s, |c, wq| {
+                        acc += wq * kernel.eval(axis, self.file_to_world * m.coord_to_dir(c));
+                        wsum += wq;
+                    });
+                    if wsum > 0.0 {
+                        acc / wsum
+                    } else {
+                        kernel.eval(axis, t.dir)
+                    }
+                }
+            };
+            for (o, l) in out.iter_mut().zip(t.radiance) {
+                *o += l * t.omega * k;
+            }
+        }
+        out
+    }
+}
+
+/// `f` at the centre direction of every texel of a `to` map of `w × h` per layer, layer-major
+/// then row-major (what the GPU's filter passes write); angular texels centred outside the
+/// disc are 0. Rows are shared among threads.
+pub fn at_centres(
+    to: Mapping,
+    w: u32,
+    h: u32,
+    f: impl Fn(DVec3) -> [f64; 3] + Sync,
+) -> Vec<[f64; 3]> {
+    let rows = (to.layers() * h) as usize;
+    let mut out = vec![[0.0; 3]; rows * w as usize];
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let per = rows.div_ceil(threads).max(1) * w as usize;
+    std::thread::scope(|scope| {
+        for (chunk_index, chunk) in out.chunks_mut(per).enumerate() {
+            let f = &f;
+            scope.spawn(move || {
+                for (k, v) in chunk.iter_mut().enumerate() {
+                    let idx = chunk_index * per + k;
+                    let (row, i) = ((idx / w as usize) as u32, (idx % w as usize) as u32);
+                    let (layer, j) = (row / h, row % h);
+                    if to == Mapping::Angular && !to.texel_in_domain(w, h, i, j) {
+                        continue;
+                    }
+                    *v = f(to.coord_to_dir(Mapping::texel_center(w, h, layer, i, j)));
+                }
+            });
+        }
+    });
+    out
+}
+
+/// Convolves `map` with `kernel` at the centre of every texel of a `to` map of `w × h` per
+/// layer (world frame), as [`at_centres`] lays them out.
+pub fn filter_map(
+    map: &EnvMap,
+    file_to_world: DMat3,
+    kernel: Kernel,
+    to: Mapping,
+    w: u32,
+    h: u32,
+) -> Vec<[f64; 3]> {
+    let prepared = Prepared::new(map, file_to_world);
+    at_centres(to, w, h, |d| prepared.convolve(kernel, d))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::synth::fibonacci_sphere;
+
+    fn constant(m: Mapping, size: u32) -> EnvMap {
+        let (w, h) = m.extent_for_size(size);
+        EnvMap::new(m, w, h, vec![[1.0; 3]; (w * h * m.layers()) as usize])
+    }
+
+    /// A constant map of 1 convolves to ∫K: π for the cosine, 1 for any normalised Phong lobe,
+    /// whatever the axis. This bounds the per-texel kernel quadrature.
+    #[test]
+    fn constant_map_gives_the_kernels_integral() {
+        let axes: Vec<DVec3> = fibonacci_sphere(40)
+            .into_iter()
+            .chain([
+                DVec3::Y,
+                DVec3::NEG_Z,
+                DVec3::new(1.0, 1e-7, 0.0).normalize(),
+            ])
+            .collect();
+        for (m, size) in [
+            (Mapping::LatLong, 64),
+            (Mapping::Cube, 12),
+            (Mapping::Angular, 48),
+            (Mapping::DualParaboloid, 24),
+        ] {
+            let map = constant(m, size);
+            let p = Prepared::new(&map, DMat3::IDENTITY);
+            for (kernel, truth) in [
+                (Kernel::Cosine, PI),
+                (Kernel::Phong { n: 1.0 }, 1.0),
+                (Kernel::Phong { n: 10.0 }, 1.0),
+                (Kernel::Phong { n: 100.0 }, 1.0),
+                (Kernel::Phong { n: 1e3 }, 1.0),
+                (Kernel::Phong { n: 1e4 }, 1.0),
+            ] {
+                let mut worst: f64 = 0.0;
+                for &a in &axes {
+                    let v = p.convolve(kernel, a)[0];
+                    worst = worst.max((v / truth - 1.0).abs());
+                }
+                eprintln!("{m:?} {size} {kernel:?}: worst relative error {worst:.2e}");
+                assert!(worst < 1e-4, "{m:?} {kernel:?}: {worst:e}");
+            }
+        }
+    }
+
+    #[test]
+    fn kernel_is_accurate_near_its_peak() {
+        let k = Kernel::Phong { n: 1e6 };
+        let axis = DVec3::Y;
+        let w = DVec3::new(1e-3, 1.0, 0.0).normalize();
+        let x = axis.dot(w);
+        let naive = k.scale() * x.powf(1e6);
+        let exact = k.scale() * (1e6 * ((1.0 + 1e-6f64).sqrt().recip()).ln()).exp();
+        assert!((k.eval(axis, w) / exact - 1.0).abs() < 1e-9);
+        assert!((naive / exact - 1.0).abs() < 1e-6);
+        assert_eq!(Kernel::Cosine.eval(axis, -axis), 0.0);
+    }
+
+    #[test]
+    fn rules_skip_below_the_horizon_and_refine_near_it() {
+        let (c, s) = (0.999f64, (1.0 - 0.999f64 * 0.999).sqrt());
+        assert_eq!(rule(Kernel::Cosine, -0.5, c, s), Rule::Skip);
+        assert_eq!(rule(Kernel::Cosine, 0.0, c, s), Rule::Cells(EDGE_CELLS));
+        assert!(matches!(rule(Kernel::Cosine, 0.9, c, s), Rule::Cells(1)));
+        assert_eq!(rule(Kernel::Phong { n: 1e4 }, 0.5, c, s), Rule::Skip);
+        let (c2, s2) = (1.0 - 1e-8, (2e-8f64).sqrt());
+        assert_eq!(rule(Kernel::Cosine, 0.9, c2, s2), Rule::Centre);
+    }
+}
