@@ -41,6 +41,29 @@ impl GpuEnvMap {
         width: u32,
         height: u32,
     ) -> Result<GpuEnvMap> {
+        GpuEnvMap::with_usage(
+            ctx,
+            name,
+            mapping,
+            width,
+            height,
+            vk::ImageUsageFlags::STORAGE
+                | vk::ImageUsageFlags::SAMPLED
+                | vk::ImageUsageFlags::TRANSFER_SRC
+                | vk::ImageUsageFlags::TRANSFER_DST,
+        )
+    }
+
+    /// An uninitialised map with the given usage (transfer source is always added, for
+    /// [`GpuEnvMap::download`]).
+    pub fn with_usage(
+        ctx: &Context,
+        name: &str,
+        mapping: Mapping,
+        width: u32,
+        height: u32,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<GpuEnvMap> {
         if width == 0 || height == 0 {
             return Err(Error::Invalid(format!(
                 "{name}: a map needs a non-zero size"
@@ -54,10 +77,7 @@ impl GpuEnvMap {
                 height,
                 layers: mapping.layers(),
                 format: FORMAT,
-                usage: vk::ImageUsageFlags::STORAGE
-                    | vk::ImageUsageFlags::SAMPLED
-                    | vk::ImageUsageFlags::TRANSFER_SRC
-                    | vk::ImageUsageFlags::TRANSFER_DST,
+                usage: usage | vk::ImageUsageFlags::TRANSFER_SRC,
                 cube: mapping == Mapping::Cube,
             },
         )?;

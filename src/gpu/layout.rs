@@ -49,6 +49,18 @@ pub mod binding {
     pub const SH_EVAL_COEFFS: u32 = 0;
     /// sh_eval: the output map (rgba32f image2DArray).
     pub const SH_EVAL_DST: u32 = 1;
+    /// gbuffer: the scene's objects (storage buffer of `Object`).
+    pub const GBUF_OBJECTS: u32 = 0;
+    /// shade_sh: G-buffer normals and object indices.
+    pub const SHADE_NORMAL: u32 = 0;
+    /// shade_sh: G-buffer directions to the eye.
+    pub const SHADE_VIEW: u32 = 1;
+    /// shade_sh: the scene's objects (albedo).
+    pub const SHADE_OBJECTS: u32 = 2;
+    /// shade_sh: SH irradiance coefficients (vec4 buffer).
+    pub const SHADE_COEFFS: u32 = 3;
+    /// shade_sh: the environment map, for the background.
+    pub const SHADE_ENV: u32 = 4;
 }
 
 /// The per-texel quadrature rule of the brute-force convolution, shared by
@@ -194,6 +206,18 @@ pub const SHADER_SOURCES: &[ShaderSource] = &[
         defines: &[],
     },
     ShaderSource {
+        name: "gbuffer",
+        file: "gbuffer.frag",
+        stage: Stage::Fragment,
+        defines: &[],
+    },
+    ShaderSource {
+        name: "shade_sh",
+        file: "shade_sh.frag",
+        stage: Stage::Fragment,
+        defines: &[],
+    },
+    ShaderSource {
         name: "sh_eval",
         file: "sh_eval.comp",
         stage: Stage::Compute,
@@ -228,6 +252,12 @@ pub fn generated_header() -> String {
         ("BRUTE_COMP", binding::BRUTE_COMP),
         ("SH_EVAL_COEFFS", binding::SH_EVAL_COEFFS),
         ("SH_EVAL_DST", binding::SH_EVAL_DST),
+        ("GBUF_OBJECTS", binding::GBUF_OBJECTS),
+        ("SHADE_NORMAL", binding::SHADE_NORMAL),
+        ("SHADE_VIEW", binding::SHADE_VIEW),
+        ("SHADE_OBJECTS", binding::SHADE_OBJECTS),
+        ("SHADE_COEFFS", binding::SHADE_COEFFS),
+        ("SHADE_ENV", binding::SHADE_ENV),
     ];
     for (name, v) in b {
         let _ = writeln!(s, "#define BINDING_{name} {v}");

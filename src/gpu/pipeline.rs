@@ -118,13 +118,13 @@ impl Pipeline {
         Ok(p)
     }
 
-    /// A graphics pipeline drawing a fullscreen triangle into one colour attachment of
-    /// `format` with dynamic rendering, viewport and scissor dynamic.
+    /// A graphics pipeline drawing a fullscreen triangle into colour attachments of
+    /// `formats` with dynamic rendering, viewport and scissor dynamic.
     pub fn fullscreen(
         ctx: &Context,
         vert: ShaderId,
         frag: ShaderId,
-        format: vk::Format,
+        formats: &[vk::Format],
     ) -> Result<Pipeline> {
         let shared = &ctx.shared;
         assert!(vert.interface().bindings.is_empty() && vert.interface().push_size == 0);
@@ -160,14 +160,18 @@ impl Pipeline {
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let attachments = [vk::PipelineColorBlendAttachmentState::default()
-            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+        let attachments: Vec<_> = formats
+            .iter()
+            .map(|_| {
+                vk::PipelineColorBlendAttachmentState::default()
+                    .color_write_mask(vk::ColorComponentFlags::RGBA)
+            })
+            .collect();
         let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let formats = [format];
         let mut rendering =
-            vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&formats);
+            vk::PipelineRenderingCreateInfo::default().color_attachment_formats(formats);
         let info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&stages)
             .vertex_input_state(&vertex_input)

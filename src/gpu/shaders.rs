@@ -35,6 +35,10 @@ pub enum ShaderId {
     Brute,
     /// Irradiance from SH coefficients into a map.
     ShEval,
+    /// G-buffer of analytic spheres and planes.
+    GBuffer,
+    /// Diffuse shading from SH irradiance per fragment.
+    ShadeSh,
 }
 
 /// The kind of a descriptor binding.
@@ -81,7 +85,7 @@ macro_rules! spv {
 
 impl ShaderId {
     /// Every module.
-    pub const ALL: [ShaderId; 14] = [
+    pub const ALL: [ShaderId; 16] = [
         ShaderId::Convert2d,
         ShaderId::ConvertCube,
         ShaderId::MappingProbe,
@@ -96,6 +100,8 @@ impl ShaderId {
         ShaderId::BrutePrepare,
         ShaderId::Brute,
         ShaderId::ShEval,
+        ShaderId::GBuffer,
+        ShaderId::ShadeSh,
     ];
 
     /// The build recipe of this module.
@@ -115,6 +121,8 @@ impl ShaderId {
             ShaderId::BrutePrepare => "brute_prepare",
             ShaderId::Brute => "brute",
             ShaderId::ShEval => "sh_eval",
+            ShaderId::GBuffer => "gbuffer",
+            ShaderId::ShadeSh => "shade_sh",
         };
         SHADER_SOURCES
             .iter()
@@ -139,6 +147,8 @@ impl ShaderId {
             ShaderId::BrutePrepare => spv!("brute_prepare"),
             ShaderId::Brute => spv!("brute"),
             ShaderId::ShEval => spv!("sh_eval"),
+            ShaderId::GBuffer => spv!("gbuffer"),
+            ShaderId::ShadeSh => spv!("shade_sh"),
         }
     }
 
@@ -146,7 +156,9 @@ impl ShaderId {
     pub fn interface(self) -> Interface {
         use crate::passes::copy::CopyPush;
         use crate::passes::filter::{BrutePush, ShEvalPush};
+        use crate::passes::gbuffer::GBufferPush;
         use crate::passes::sh_project::{ShProjectPush, ShReducePush};
+        use crate::passes::shade_sh::ShadeShPush;
         use crate::passes::{convert::ConvertPush, diagnostics::BusyPush, probe::ProbePush};
         use DescriptorKind::*;
         let size = |n: usize| n as u32;
@@ -213,6 +225,20 @@ impl ShaderId {
                     (binding::SH_EVAL_DST, StorageImage),
                 ],
                 push_size: size(std::mem::size_of::<ShEvalPush>()),
+            },
+            ShaderId::GBuffer => Interface {
+                bindings: &[(binding::GBUF_OBJECTS, StorageBuffer)],
+                push_size: size(std::mem::size_of::<GBufferPush>()),
+            },
+            ShaderId::ShadeSh => Interface {
+                bindings: &[
+                    (binding::SHADE_NORMAL, SampledImage),
+                    (binding::SHADE_VIEW, SampledImage),
+                    (binding::SHADE_OBJECTS, StorageBuffer),
+                    (binding::SHADE_COEFFS, StorageBuffer),
+                    (binding::SHADE_ENV, SampledImage),
+                ],
+                push_size: size(std::mem::size_of::<ShadeShPush>()),
             },
             ShaderId::FullscreenVert | ShaderId::FlatFrag => Interface {
                 bindings: &[],

@@ -3,6 +3,7 @@
 //! Nothing here knows about Vulkan; these functions are the oracles the GPU passes are tested
 //! against.
 
+pub mod camera;
 pub mod filter;
 pub mod mapping;
 pub mod quadrature;

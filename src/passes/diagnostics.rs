@@ -44,7 +44,7 @@ impl Diagnostics {
                 ctx,
                 ShaderId::FullscreenVert,
                 ShaderId::FlatFrag,
-                DRAW_FORMAT,
+                &[DRAW_FORMAT],
             )?,
         })
     }

@@ -5,7 +5,9 @@ pub mod convert;
 pub mod copy;
 pub mod diagnostics;
 pub mod filter;
+pub mod gbuffer;
 pub mod probe;
 pub mod sh_project;
+pub mod shade_sh;
 
 pub use convert::{ConvertOptions, Converter};

@@ -1,0 +1,78 @@
+#version 460
+// G-buffer of analytic spheres and planes, ray cast per pixel centre (twin of
+// src/math/camera.rs): the normal and object index, the hit position, and the unit direction
+// back to the eye. Misses hold object index -1 and the direction the ray went out along.
+#extension GL_GOOGLE_include_directive : require
+#include "generated.glsl"
+#include "scene.glsl"
+
+layout(std430, set = 0, binding = BINDING_GBUF_OBJECTS) readonly buffer Objects { Object objects[]; };
+
+layout(push_constant) uniform Push {
+    vec4 eye;
+    vec4 forward;
+    vec4 right;   // scaled by the half width of the image plane
+    vec4 up;      // scaled by the half height
+    uvec2 size;
+    uint ortho;
+    uint count;
+} pc;
+
+layout(location = 0) out vec4 out_normal;    // normal, object index (-1: miss)
+layout(location = 1) out vec4 out_position;  // hit position, distance
+layout(location = 2) out vec4 out_view;      // unit direction to the eye (misses: -ray)
+
+void main() {
+    vec2 ndc = vec2(2.0 * gl_FragCoord.x / float(pc.size.x) - 1.0, 1.0 - 2.0 * gl_FragCoord.y / float(pc.size.y));
+    vec3 o, d;
+    if (pc.ortho != 0u) {
+        o = pc.eye.xyz + ndc.x * pc.right.xyz + ndc.y * pc.up.xyz;
+        d = pc.forward.xyz;
+    } else {
+        o = pc.eye.xyz;
+        d = normalize(pc.forward.xyz + ndc.x * pc.right.xyz + ndc.y * pc.up.xyz);
+    }
+    float best = 1e30;
+    int index = -1;
+    vec3 normal = vec3(0.0);
+    for (uint k = 0u; k < pc.count; k++) {
+        Object ob = objects[k];
+        float t = -1.0;
+        vec3 n;
+        if (ob.b.x == 0.0) {
+            vec3 oc = o - ob.a.xyz;
+            float b = dot(oc, d);
+            vec3 h = oc - b * d;
+            float disc = ob.a.w * ob.a.w - dot(h, h);
+            if (disc >= 0.0) {
+                float s = sqrt(disc);
+                t = -b - s > 0.0 ? -b - s : -b + s;
+                n = (o + t * d - ob.a.xyz) / ob.a.w;
+            }
+        } else {
+            float dn = dot(d, ob.a.xyz);
+            if (dn < 0.0) {
+                t = (ob.a.w - dot(o, ob.a.xyz)) / dn;
+                n = ob.a.xyz;
+                if (ob.b.y > 0.0) {
+                    vec3 p = o + t * d - ob.a.w * ob.a.xyz;
+                    if (dot(p, p) > ob.b.y * ob.b.y) t = -1.0;
+                }
+            }
+        }
+        if (t > 0.0 && t < best) {
+            best = t;
+            index = int(k);
+            normal = n;
+        }
+    }
+    if (index < 0) {
+        out_normal = vec4(0.0, 0.0, 0.0, -1.0);
+        out_position = vec4(0.0, 0.0, 0.0, -1.0);
+        out_view = vec4(-d, 0.0);
+        return;
+    }
+    out_normal = vec4(normal, float(index));
+    out_position = vec4(o + best * d, best);
+    out_view = vec4(-d, 0.0);
+}
