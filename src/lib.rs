@@ -7,6 +7,7 @@
 
 #![warn(missing_docs)]
 
+pub mod accuracy;
 pub mod envmap;
 pub mod error;
 pub mod gpu;

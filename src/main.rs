@@ -2,10 +2,14 @@
 
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
+use envlight::accuracy::{self, Accuracy};
 use envlight::gpu::{Context, ContextOptions, DeviceSelector, GpuEnvMap, Timing};
 use envlight::io::{self, LoadOptions, Sanitize, ToneMap};
+use envlight::math::filter::Kernel;
+use envlight::math::sh::{self, Window};
 use envlight::math::synth::Sky;
 use envlight::passes::copy::CopyPass;
+use envlight::passes::filter::{BruteFilter, FilterTarget, ShEvaluator};
 use envlight::passes::sh_project::{ShProjector, Subgroups};
 use envlight::passes::{ConvertOptions, Converter};
 use envlight::{EnvMap, Mapping, Orientation};
@@ -106,6 +110,66 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// Irradiance map E(n) of a map, from SH (R&H 2001) or by brute-force convolution
+    Irradiance {
+        #[command(flatten)]
+        input: Input,
+        #[command(flatten)]
+        orient: Orient,
+        /// sh (projection + evaluation) or brute (every source texel)
+        #[arg(long, default_value = "sh")]
+        method: String,
+        /// Highest SH band (sh only; 0 to 8)
+        #[arg(long, default_value_t = 2)]
+        order: u32,
+        /// Window against ringing (sh only): none, hanning, sloan (with --lambda), or auto (the
+        /// smallest Sloan window that makes E non-negative)
+        #[arg(long, default_value = "none")]
+        window: String,
+        /// Strength of the Sloan window, or width of the Hanning window (default 2·(order+1))
+        #[arg(long)]
+        lambda: Option<f64>,
+        /// Output mapping
+        #[arg(long, default_value = "cube")]
+        to: String,
+        /// Output size: lat-long width, angular side, cube face, paraboloid half
+        #[arg(long, default_value_t = 32)]
+        size: u32,
+        /// Output EXR (float32)
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Also write a tone-mapped PNG preview beside the EXR
+        #[arg(long)]
+        png: bool,
+    },
+    /// Prefilter a map with a normalised Phong lobe (Miller & Hoffman 1984), brute force,
+    /// indexed by the reflection direction
+    Prefilter {
+        #[command(flatten)]
+        input: Input,
+        #[command(flatten)]
+        orient: Orient,
+        /// Phong exponent n (1 to 1e6)
+        #[arg(long)]
+        phong: f64,
+        /// Output mapping
+        #[arg(long, default_value = "cube")]
+        to: String,
+        /// Output size
+        #[arg(long, default_value_t = 32)]
+        size: u32,
+        /// Output EXR (float32)
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Also write a tone-mapped PNG preview beside the EXR
+        #[arg(long)]
+        png: bool,
+    },
+    /// What accuracy costs: SH irradiance of orders 0–8 against brute force, with GPU times
+    Accuracy {
+        #[command(subcommand)]
+        what: AccuracyWhat,
+    },
     /// Convert the bundled probe to all four mappings and show what each step cost
     Demo {
         /// Input probe
@@ -137,6 +201,22 @@ enum Command {
 }
 
 #[derive(Subcommand)]
+enum AccuracyWhat {
+    /// SH irradiance against brute force on maps or folders of maps
+    Sh {
+        /// Maps, or folders whose .hdr/.exr/.dds/.pfm files are all taken
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// Output folder for accuracy.md, accuracy.csv and accuracy.png
+        #[arg(long, default_value = "out/accuracy")]
+        out: PathBuf,
+        /// Cube face size of the set of normals compared
+        #[arg(long, default_value_t = 8)]
+        size: u32,
+    },
+}
+
+#[derive(Subcommand)]
 enum Bench {
     /// SH projection time at several widths, against a plain copy of the same map
     Sh {
@@ -145,6 +225,18 @@ enum Bench {
         sizes: Vec<u32>,
         /// Timed repetitions per case (the median is reported)
         #[arg(long, default_value_t = 5)]
+        reps: usize,
+    },
+    /// Brute-force irradiance against SH (projection + evaluation) at equal output sizes
+    Irradiance {
+        /// Output sizes N (angular maps of N×N texels)
+        #[arg(long, value_delimiter = ',', default_value = "32,64,128")]
+        sizes: Vec<u32>,
+        /// Width of the lat-long source (the bundled sky, resampled)
+        #[arg(long, default_value_t = 128)]
+        source: u32,
+        /// Timed repetitions per case (the median is reported)
+        #[arg(long, default_value_t = 3)]
         reps: usize,
     },
     /// Conversion time at several source widths, against a plain copy of the same source
@@ -208,6 +300,89 @@ fn load_input(input: &Input) -> Result<EnvMap> {
     };
     pb.finish_and_clear();
     Ok(map?)
+}
+
+fn orientation(o: &Orient) -> Orientation {
+    Orientation {
+        flip_u: o.flip_u,
+        flip_v: o.flip_v,
+        rotate_y_degrees: o.rotate_y,
+    }
+}
+
+fn write_map(ctx: &Context, map: &GpuEnvMap, output: &Path, png: bool) -> Result<()> {
+    let out = map.download(ctx)?;
+    io::save_exr(&out, output)?;
+    println!("wrote {}", output.display());
+    if png {
+        let p = output.with_extension("png");
+        let tm = ToneMap::default();
+        envlight::preview::preview(&out, tm)
+            .save(&p)
+            .with_context(|| p.display().to_string())?;
+        println!("wrote {} ({})", p.display(), tm.describe());
+    }
+    Ok(())
+}
+
+fn accuracy_sh(cli: &Cli, inputs: &[PathBuf], out: &Path, size: u32) -> Result<()> {
+    let mut files = Vec::new();
+    for i in inputs {
+        if i.is_dir() {
+            let mut v: Vec<PathBuf> = std::fs::read_dir(i)
+                .with_context(|| i.display().to_string())?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| {
+                    p.is_file()
+                        && matches!(
+                            p.extension().and_then(|e| e.to_str()),
+                            Some("hdr" | "exr" | "dds" | "pfm")
+                        )
+                })
+                .collect();
+            v.sort();
+            files.extend(v);
+        } else {
+            files.push(i.clone());
+        }
+    }
+    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
+    let ctx = context(cli)?;
+    let acc = Accuracy::new(&ctx)?;
+    let pb = ProgressBar::new(files.len() as u64);
+    let mut reports = Vec::new();
+    for f in &files {
+        let name = f
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        pb.set_message(name.clone());
+        let map = io::load(f, &LoadOptions::default())?;
+        reports.push(acc.run(&name, &map, size)?);
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    let device = format!("{}, {}", ctx.info().name, ctx.info().driver.trim());
+    let mut md = accuracy::markdown(&reports, &device);
+    md.push_str("\nPlot `accuracy.png`: unwindowed RMS error (log scale, 1e-4 to 1, a gridline per decade) against order 0–8; black squares are the seed's 25%, 8%, 1%. Curves:\n\n");
+    for (i, r) in reports.iter().enumerate() {
+        let [cr, cg, cb] = accuracy::plot_colour(i);
+        md.push_str(&format!("- rgb({cr}, {cg}, {cb}): {}\n", r.name));
+    }
+    print!("{md}");
+    for (name, text) in [
+        ("accuracy.md", md),
+        ("accuracy.csv", accuracy::csv(&reports)),
+    ] {
+        let p = out.join(name);
+        std::fs::write(&p, text).with_context(|| p.display().to_string())?;
+    }
+    let p = out.join("accuracy.png");
+    accuracy::plot(&reports)
+        .save(&p)
+        .with_context(|| p.display().to_string())?;
+    println!("wrote {}", out.display());
+    Ok(())
 }
 
 fn print_timings(t: &[Timing]) {
@@ -320,6 +495,110 @@ fn run(cli: Cli) -> Result<()> {
             );
             print_timings(&timings);
         }
+        Command::Irradiance {
+            input,
+            orient,
+            method,
+            order,
+            window,
+            lambda,
+            to,
+            size,
+            output,
+            png,
+        } => {
+            let map = load_input(input)?;
+            let ctx = context(&cli)?;
+            let g = GpuEnvMap::upload(&ctx, &map)?;
+            let target = FilterTarget {
+                to: parse_mapping(to)?,
+                size: *size,
+            };
+            let o = orientation(orient);
+            let (out, timings) = match method.as_str() {
+                "brute" => {
+                    let pb = spinner("brute-force irradiance on the GPU");
+                    let r = BruteFilter::new(&ctx)?.run(&g, &o, Kernel::Cosine, target)?;
+                    pb.finish_and_clear();
+                    r
+                }
+                "sh" => {
+                    let (c, mut timings) =
+                        ShProjector::new(&ctx, Subgroups::Auto)?.run_oriented(&g, *order, &o)?;
+                    let dirs = envlight::math::synth::fibonacci_sphere(20_000);
+                    let raw = sh::negativity(&sh::irradiance_coeffs(&c.coeffs), &dirs);
+                    if raw.fraction > 0.0 {
+                        println!(
+                            "unwindowed order-{order} irradiance is negative on {:.1}% of the sphere, down to {:.2}% of its mean, at ({:.3}, {:.3}, {:.3})",
+                            100.0 * raw.fraction,
+                            100.0 * raw.worst,
+                            raw.at.x,
+                            raw.at.y,
+                            raw.at.z
+                        );
+                    } else {
+                        println!("unwindowed order-{order} irradiance is non-negative");
+                    }
+                    let w = match window.as_str() {
+                        "none" => Window::None,
+                        "hanning" => Window::Hanning {
+                            width: lambda.unwrap_or(2.0 * (*order as f64 + 1.0)),
+                        },
+                        "sloan" => Window::Sloan {
+                            lambda: lambda.context("--window sloan needs --lambda")?,
+                        },
+                        "auto" => Window::Sloan {
+                            lambda: sh::smallest_nonnegative_window(&c.coeffs, &dirs),
+                        },
+                        other => bail!("unknown window {other:?} (none, hanning, sloan, auto)"),
+                    };
+                    if w != Window::None {
+                        let n = sh::negativity(&sh::irradiance_coeffs(&w.apply(&c.coeffs)), &dirs);
+                        println!(
+                            "window {w:?}: negative on {:.1}% of the sphere",
+                            100.0 * n.fraction
+                        );
+                    }
+                    let irr = sh::irradiance_coeffs(&w.apply(&c.coeffs));
+                    let (out, t) = ShEvaluator::new(&ctx)?.run(&irr, target)?;
+                    timings.extend(t);
+                    (out, timings)
+                }
+                other => bail!("unknown method {other:?} (sh or brute)"),
+            };
+            write_map(&ctx, &out, output, *png)?;
+            print_timings(&timings);
+        }
+        Command::Prefilter {
+            input,
+            orient,
+            phong,
+            to,
+            size,
+            output,
+            png,
+        } => {
+            let map = load_input(input)?;
+            let ctx = context(&cli)?;
+            let g = GpuEnvMap::upload(&ctx, &map)?;
+            let target = FilterTarget {
+                to: parse_mapping(to)?,
+                size: *size,
+            };
+            let pb = spinner("brute-force Phong prefiltering on the GPU");
+            let (out, timings) = BruteFilter::new(&ctx)?.run(
+                &g,
+                &orientation(orient),
+                Kernel::Phong { n: *phong },
+                target,
+            )?;
+            pb.finish_and_clear();
+            write_map(&ctx, &out, output, *png)?;
+            print_timings(&timings);
+        }
+        Command::Accuracy {
+            what: AccuracyWhat::Sh { inputs, out, size },
+        } => accuracy_sh(&cli, inputs, out, *size)?,
         Command::Demo { input, out, size } => demo(&cli, input, out, *size)?,
         Command::Devices => {
             let ctx = context(&cli)?;
@@ -351,6 +630,14 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bench {
             what: Bench::Convert { sizes, reps },
         } => bench_convert(&cli, sizes, *reps)?,
+        Command::Bench {
+            what:
+                Bench::Irradiance {
+                    sizes,
+                    source,
+                    reps,
+                },
+        } => bench_irradiance(&cli, sizes, *source, *reps)?,
         Command::Bench {
             what: Bench::Sh { sizes, reps },
         } => bench_sh(&cli, sizes, *reps)?,
@@ -426,6 +713,61 @@ fn demo(cli: &Cli, input: &Path, out: &Path, size: u32) -> Result<()> {
         );
     }
     println!("contact sheet: {}", sheet.display());
+    demo_diffuse(&ctx, &src, out)?;
+    Ok(())
+}
+
+/// Three diffuse spheres on a ground disc lit by the probe's order-2 SH irradiance (the
+/// smallest Sloan window that keeps it non-negative), per fragment.
+fn demo_diffuse(ctx: &Context, src: &GpuEnvMap, out: &Path) -> Result<()> {
+    use envlight::math::camera::{Camera, Projection, Shape};
+    use envlight::passes::gbuffer::{GBufferPass, Object};
+    use envlight::passes::shade_sh::ShadeSh;
+    let (c, mut timings) = ShProjector::new(ctx, Subgroups::Auto)?.run(src, 2)?;
+    let dirs = envlight::math::synth::fibonacci_sphere(4000);
+    let lambda = sh::smallest_nonnegative_window(&c.coeffs, &dirs);
+    let irr = sh::irradiance_coeffs(&Window::Sloan { lambda }.apply(&c.coeffs));
+    let sphere = |center: [f64; 3], radius: f64, albedo: [f64; 3]| Object {
+        shape: Shape::Sphere { center, radius },
+        albedo,
+    };
+    let objects = [
+        sphere([0.0, 0.0, 0.0], 1.0, [0.8, 0.8, 0.8]),
+        sphere([-2.3, -0.4, 0.3], 0.6, [0.8, 0.3, 0.2]),
+        sphere([2.2, -0.5, 0.6], 0.5, [0.2, 0.5, 0.8]),
+        Object {
+            shape: Shape::Plane {
+                normal: [0.0, 1.0, 0.0],
+                offset: -1.0,
+                extent: 5.0,
+            },
+            albedo: [0.5, 0.5, 0.5],
+        },
+    ];
+    let camera = Camera {
+        projection: Projection::Perspective { fov_y: 40.0 },
+        eye: [0.0, 1.2, 7.0],
+        target: [0.0, -0.2, 0.0],
+        up: [0.0, 1.0, 0.0],
+        width: 480,
+        height: 270,
+    };
+    let (gbuf, t) = GBufferPass::new(ctx)?.run(&camera, &objects)?;
+    timings.extend(t);
+    let (frame, t) = ShadeSh::new(ctx)?.run(&gbuf, &irr, src, &Orientation::default())?;
+    timings.extend(t);
+    let img = frame.download(ctx)?;
+    let p = out.join("diffuse_sh.png");
+    let tm = ToneMap::default();
+    // The frame is a one-layer image; its preview is the image itself.
+    envlight::preview::preview(&img, tm)
+        .save(&p)
+        .with_context(|| p.display().to_string())?;
+    println!(
+        "\ndiffuse spheres, order-2 SH irradiance per fragment (Sloan window λ = {lambda:.3}): {}",
+        p.display()
+    );
+    print_timings(&timings);
     Ok(())
 }
 
@@ -497,6 +839,54 @@ fn bench_convert(cli: &Cli, sizes: &[u32], reps: usize) -> Result<()> {
                 to.layers(),
                 m / floor,
                 power * 100.0
+            );
+        }
+    }
+    Ok(())
+}
+
+fn bench_irradiance(cli: &Cli, sizes: &[u32], source: u32, reps: usize) -> Result<()> {
+    let ctx = context(cli)?;
+    println!("device: {} ({})", ctx.info().name, ctx.info().driver.trim());
+    let w = source.max(4);
+    let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 2, |d| {
+        Sky::default().radiance(d)
+    });
+    println!("source: the analytic sky, lat-long {w}x{}; GPU time from timestamps, median of {reps} runs after one untimed run.\n", w / 2);
+    println!("| output | brute ms | SH order | project ms | eval ms | brute / (project + eval) | brute / eval |");
+    println!("|---|---|---|---|---|---|---|");
+    let src = GpuEnvMap::upload(&ctx, &map)?;
+    let brute = BruteFilter::new(&ctx)?;
+    let proj = ShProjector::new(&ctx, Subgroups::Auto)?;
+    let eval = ShEvaluator::new(&ctx)?;
+    let reps = reps.max(1);
+    let o = Orientation::default();
+    let total = |t: &[Timing]| t.iter().map(|t| t.ms).sum::<f64>();
+    for &n in sizes {
+        let target = FilterTarget {
+            to: Mapping::Angular,
+            size: n,
+        };
+        brute.run(&src, &o, Kernel::Cosine, target)?;
+        let mut b = Vec::new();
+        for _ in 0..reps {
+            b.push(total(&brute.run(&src, &o, Kernel::Cosine, target)?.1));
+        }
+        let b = median(b);
+        for order in [2u32, 8] {
+            let (c, _) = proj.run(&src, order)?;
+            let irr = sh::irradiance_coeffs(&c.coeffs);
+            eval.run(&irr, target)?;
+            let (mut p, mut e) = (Vec::new(), Vec::new());
+            for _ in 0..reps {
+                p.push(total(&proj.run(&src, order)?.1));
+                e.push(total(&eval.run(&irr, target)?.1));
+            }
+            let (p, e) = (median(p), median(e));
+            println!(
+                "| angular {n}x{n} | {b:.1} | {order} | {p:.3} | {e:.3} | {:.0}x | {:.0}x |",
+                b / (p + e),
+                b / e
             );
         }
     }
