@@ -262,7 +262,7 @@ impl BruteFilter {
     /// ([`crate::gpu::DeviceInfo::loop_iteration_limit`]), as many as keep every invocation's
     /// loop iterations within 90% of the limit: one for the texel loop plus, per texel, at
     /// most s² cell iterations (s from the rule for the source's widest texel) or ~130 for a
-    /// clipped rim texel.
+    /// clipped rim texel of an angular or paraboloid source.
     fn chunk_size(&self, src: &GpuEnvMap, kernel: Kernel) -> u32 {
         let Some(limit) = self.ctx.info().loop_iteration_limit else {
             return u32::MAX;
@@ -281,7 +281,12 @@ impl BruteFilter {
         let s = (filter::CELLS_PER_WIDTH * (kernel.exponent() * 2.0 * (1.0 - min_cos)).sqrt())
             .ceil()
             .clamp(filter::EDGE_CELLS as f64, filter::MAX_CELLS as f64);
-        let per_texel = 1.0 + (s * s).max(130.0);
+        let rim = if matches!(src.mapping, Mapping::Angular | Mapping::DualParaboloid) {
+            130.0
+        } else {
+            0.0
+        };
+        let per_texel = 1.0 + (s * s).max(rim);
         ((0.9 * limit as f64 / per_texel) as u32).max(1)
     }
 }
