@@ -221,7 +221,7 @@ pub fn plot_colour(i: usize) -> [u8; 3] {
     C[i % C.len()]
 }
 
-/// A plot of unwindowed RMS error (log scale, 1e-4 to 1, gridlines at each decade) against
+/// A plot of unwindowed RMS error (log scale, 1e-4 to 10, gridlines at each decade) against
 /// SH order (0 to 8), one polyline per map in [`plot_colour`], with the seed's quoted 25%, 8%
 /// and 1% at orders 0, 1, 2 as black squares.
 pub fn plot(reports: &[MapReport]) -> image::RgbImage {
@@ -229,15 +229,15 @@ pub fn plot(reports: &[MapReport]) -> image::RgbImage {
     let mut img = image::RgbImage::from_pixel(w, h, image::Rgb([255, 255, 255]));
     let x_of = |order: f64| m as f64 + order / 8.0 * (w as f64 - 2.0 * m as f64);
     let y_of = |err: f64| {
-        let l = err.max(1e-4).log10(); // -4..0
-        m as f64 + (-l) / 4.0 * (h as f64 - 2.0 * m as f64)
+        let l = err.clamp(1e-4, 10.0).log10(); // -4..1
+        m as f64 + (1.0 - l) / 5.0 * (h as f64 - 2.0 * m as f64)
     };
     let put = |img: &mut image::RgbImage, x: i32, y: i32, c: [u8; 3]| {
         if x >= 0 && y >= 0 && (x as u32) < w && (y as u32) < h {
             img.put_pixel(x as u32, y as u32, image::Rgb(c));
         }
     };
-    for dec in 0..=4 {
+    for dec in -1..=4 {
         let y = y_of(10f64.powi(-dec)) as i32;
         for x in m..(w as i32 - m) {
             put(&mut img, x, y, [210, 210, 210]);

@@ -364,7 +364,7 @@ fn accuracy_sh(cli: &Cli, inputs: &[PathBuf], out: &Path, size: u32) -> Result<(
     pb.finish_and_clear();
     let device = format!("{}, {}", ctx.info().name, ctx.info().driver.trim());
     let mut md = accuracy::markdown(&reports, &device);
-    md.push_str("\nPlot `accuracy.png`: unwindowed RMS error (log scale, 1e-4 to 1, a gridline per decade) against order 0–8; black squares are the seed's 25%, 8%, 1%. Curves:\n\n");
+    md.push_str("\nPlot `accuracy.png`: unwindowed RMS error (log scale, 1e-4 to 10, a gridline per decade) against order 0–8; black squares are the seed's 25%, 8%, 1%. Curves:\n\n");
     for (i, r) in reports.iter().enumerate() {
         let [cr, cg, cb] = accuracy::plot_colour(i);
         md.push_str(&format!("- rgb({cr}, {cg}, {cb}): {}\n", r.name));
