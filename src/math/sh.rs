@@ -77,74 +77,6 @@ pub fn basis_into(lmax: u32, d: DVec3, y: &mut [f64]) {
     }
 }
 
-/// Accumulates ∫ Y_k over the part of the rectangle [lo, hi] (disc coordinates, [-1,1]²)
-/// inside the unit disc into `acc`, and the weights into the return value: the clipped
-/// Gauss–Legendre rule of the GPU's `clipped_square` (8 nodes a piece in x with the smoothing
-/// substitution x = x0 + (x1−x0)(3u²−2u³), 8 along each chord).
-#[allow(clippy::too_many_arguments)]
-fn clipped_basis_integral(
-    mapping: Mapping,
-    file_to_world: DMat3,
-    layer: u32,
-    lo: [f64; 2],
-    hi: [f64; 2],
-    lmax: u32,
-    acc: &mut [f64],
-    y: &mut [f64],
-) -> f64 {
-    let (gx, gw) = super::quadrature::gauss_legendre(8);
-    let mut xs = vec![lo[0]];
-    for yy in [lo[1], hi[1]] {
-        if yy.abs() < 1.0 {
-            let e = ((1.0 - yy) * (1.0 + yy)).sqrt();
-            for v in [-e, e] {
-                if v > lo[0] && v < hi[0] {
-                    xs.push(v);
-                }
-            }
-        }
-    }
-    xs.push(hi[0]);
-    xs.sort_by(f64::total_cmp);
-    let mut wsum = 0.0;
-    for piece in xs.windows(2) {
-        let parts = ((piece[1] - piece[0]) * 4.0).ceil().max(1.0) as usize;
-        let hx = 0.5 * (piece[1] - piece[0]) / parts as f64;
-        for q in 0..parts {
-            let x0 = piece[0] + 2.0 * hx * q as f64;
-            for (ta, wa) in gx.iter().zip(&gw) {
-                let u = 0.5 + 0.5 * ta;
-                let x = x0 + 2.0 * hx * u * u * (3.0 - 2.0 * u);
-                let jac = 6.0 * u * (1.0 - u);
-                if x.abs() >= 1.0 {
-                    continue;
-                }
-                let e = ((1.0 - x) * (1.0 + x)).sqrt();
-                let (ya, yb) = (lo[1].max(-e), hi[1].min(e));
-                if yb <= ya {
-                    continue;
-                }
-                let (my, hy) = (0.5 * (ya + yb), 0.5 * (yb - ya));
-                for (tb, wb) in gx.iter().zip(&gw) {
-                    let c = super::Coord {
-                        layer,
-                        u: 0.5 * (x + 1.0),
-                        v: 0.5 * (my + hy * tb + 1.0),
-                    };
-                    // density is per unit (u, v) area; disc coordinates have 4× the area.
-                    let w = wa * wb * hx * hy * jac * mapping.density(c) / 4.0;
-                    basis_into(lmax, file_to_world * mapping.coord_to_dir(c), y);
-                    for (a, yk) in acc.iter_mut().zip(y.iter()) {
-                        *a += w * yk;
-                    }
-                    wsum += w;
-                }
-            }
-        }
-    }
-    wsum
-}
-
 /// Projects a map onto the basis up to `lmax`: ∑ L_i·∫_texel Y_k dω over the texels that hold
 /// the sphere ([`EnvMap::for_each_texel`]). Each texel's integral uses 2×2 Gauss points
 /// weighted by the density (fourth order); texels the rim of an angular or paraboloid disc
@@ -175,15 +107,19 @@ pub fn project_oriented(map: &EnvMap, lmax: u32, file_to_world: DMat3) -> Vec<[f
         let far = [lo[0].abs().max(hi[0].abs()), lo[1].abs().max(hi[1].abs())];
         let mut wsum = 0.0;
         if disc && far[0] * far[0] + far[1] * far[1] > 1.0 {
-            wsum = clipped_basis_integral(
+            // The clipped rule of the GPU's `clipped_square` (filter::for_each_node).
+            super::filter::for_each_node(
                 map.mapping,
-                file_to_world,
-                layer,
-                lo,
-                hi,
-                lmax,
-                &mut acc,
-                &mut y,
+                (map.width, map.height),
+                (layer, i, j),
+                1,
+                |q, wq| {
+                    basis_into(lmax, file_to_world * map.mapping.coord_to_dir(q), &mut y);
+                    for (a, yk) in acc.iter_mut().zip(&y) {
+                        *a += wq * yk;
+                    }
+                    wsum += wq;
+                },
             );
         } else {
             for (du, dv) in [(-g, -g), (g, -g), (-g, g), (g, g)] {
