@@ -64,6 +64,32 @@ struct Orient {
     rotate_y: f64,
 }
 
+/// Where a filtered map (irradiance, prefilter) goes.
+#[derive(Args, Clone)]
+struct FilterOut {
+    /// Output mapping
+    #[arg(long, default_value = "cube")]
+    to: String,
+    /// Output size: lat-long width, angular side, cube face, paraboloid half
+    #[arg(long, default_value_t = 32)]
+    size: u32,
+    /// Output EXR (float32)
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Also write a tone-mapped PNG preview beside the EXR
+    #[arg(long)]
+    png: bool,
+}
+
+impl FilterOut {
+    fn target(&self) -> Result<FilterTarget> {
+        Ok(FilterTarget {
+            to: parse_mapping(&self.to)?,
+            size: self.size,
+        })
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Print a map's mapping, size, radiance statistics and total power
@@ -129,18 +155,8 @@ enum Command {
         /// Strength of the Sloan window, or width of the Hanning window (default 2·(order+1))
         #[arg(long)]
         lambda: Option<f64>,
-        /// Output mapping
-        #[arg(long, default_value = "cube")]
-        to: String,
-        /// Output size: lat-long width, angular side, cube face, paraboloid half
-        #[arg(long, default_value_t = 32)]
-        size: u32,
-        /// Output EXR (float32)
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Also write a tone-mapped PNG preview beside the EXR
-        #[arg(long)]
-        png: bool,
+        #[command(flatten)]
+        out: FilterOut,
     },
     /// Prefilter a map with a normalised Phong lobe (Miller & Hoffman 1984), brute force,
     /// indexed by the reflection direction
@@ -152,18 +168,8 @@ enum Command {
         /// Phong exponent n (1 to 1e6)
         #[arg(long)]
         phong: f64,
-        /// Output mapping
-        #[arg(long, default_value = "cube")]
-        to: String,
-        /// Output size
-        #[arg(long, default_value_t = 32)]
-        size: u32,
-        /// Output EXR (float32)
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Also write a tone-mapped PNG preview beside the EXR
-        #[arg(long)]
-        png: bool,
+        #[command(flatten)]
+        out: FilterOut,
     },
     /// What accuracy costs: SH irradiance of orders 0–8 against brute force, with GPU times
     Accuracy {
@@ -502,18 +508,12 @@ fn run(cli: Cli) -> Result<()> {
             order,
             window,
             lambda,
-            to,
-            size,
-            output,
-            png,
+            out: dest,
         } => {
             let map = load_input(input)?;
             let ctx = context(&cli)?;
             let g = GpuEnvMap::upload(&ctx, &map)?;
-            let target = FilterTarget {
-                to: parse_mapping(to)?,
-                size: *size,
-            };
+            let target = dest.target()?;
             let o = orientation(orient);
             let (out, timings) = match method.as_str() {
                 "brute" => {
@@ -566,25 +566,19 @@ fn run(cli: Cli) -> Result<()> {
                 }
                 other => bail!("unknown method {other:?} (sh or brute)"),
             };
-            write_map(&ctx, &out, output, *png)?;
+            write_map(&ctx, &out, &dest.output, dest.png)?;
             print_timings(&timings);
         }
         Command::Prefilter {
             input,
             orient,
             phong,
-            to,
-            size,
-            output,
-            png,
+            out: dest,
         } => {
             let map = load_input(input)?;
             let ctx = context(&cli)?;
             let g = GpuEnvMap::upload(&ctx, &map)?;
-            let target = FilterTarget {
-                to: parse_mapping(to)?,
-                size: *size,
-            };
+            let target = dest.target()?;
             let pb = spinner("brute-force Phong prefiltering on the GPU");
             let (out, timings) = BruteFilter::new(&ctx)?.run(
                 &g,
@@ -593,7 +587,7 @@ fn run(cli: Cli) -> Result<()> {
                 target,
             )?;
             pb.finish_and_clear();
-            write_map(&ctx, &out, output, *png)?;
+            write_map(&ctx, &out, &dest.output, dest.png)?;
             print_timings(&timings);
         }
         Command::Accuracy {

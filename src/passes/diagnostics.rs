@@ -2,14 +2,13 @@
 //! test that timestamps bracket compute work after graphics work has run.
 
 use crate::error::Result;
-use crate::gpu::barrier::{
-    cmd_image_barriers, cmd_memory_barrier, image_barrier, memory_barrier, Usage,
-};
+use crate::gpu::barrier::{cmd_memory_barrier, memory_barrier, Usage};
 use crate::gpu::layout::{binding, WORKGROUP_1D};
 use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
 use crate::gpu::shaders::ShaderId;
 use crate::gpu::timing::Spans;
 use crate::gpu::{groups, Buffer, Context, Image, ImageDesc, Timing};
+use crate::passes::gbuffer::record_fullscreen;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -65,7 +64,7 @@ impl Diagnostics {
                 height: size,
                 layers: 1,
                 format: DRAW_FORMAT,
-                usage: vk::ImageUsageFlags::COLOR_ATTACHMENT,
+                usage: vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
                 cube: false,
             },
         )?;
@@ -85,54 +84,16 @@ impl Diagnostics {
         let d = self.ctx.device();
         self.ctx.submit_and_wait("diagnostics", |cmd| {
             spans.reset(cmd);
-            cmd_image_barriers(
-                d,
+            record_fullscreen(
+                &self.ctx,
                 cmd,
-                &[image_barrier(
-                    target.raw(),
-                    1,
-                    Usage::Undefined,
-                    Usage::ColorAttachment,
-                )],
+                &mut spans,
+                "draw",
+                &self.draw,
+                None,
+                &(),
+                &[&target],
             );
-            let span = spans.begin(cmd, "draw");
-            let attachment = [vk::RenderingAttachmentInfo::default()
-                .image_view(target.view)
-                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .load_op(vk::AttachmentLoadOp::CLEAR)
-                .store_op(vk::AttachmentStoreOp::STORE)];
-            let area = vk::Rect2D {
-                offset: vk::Offset2D::default(),
-                extent: vk::Extent2D {
-                    width: size,
-                    height: size,
-                },
-            };
-            let rendering = vk::RenderingInfo::default()
-                .render_area(area)
-                .layer_count(1)
-                .color_attachments(&attachment);
-            // SAFETY: cmd is recording; the attachment is live and in the right layout.
-            unsafe {
-                d.cmd_begin_rendering(cmd, &rendering);
-                self.draw.bind(cmd, None, &());
-                d.cmd_set_viewport(
-                    cmd,
-                    0,
-                    &[vk::Viewport {
-                        x: 0.0,
-                        y: 0.0,
-                        width: size as f32,
-                        height: size as f32,
-                        min_depth: 0.0,
-                        max_depth: 1.0,
-                    }],
-                );
-                d.cmd_set_scissor(cmd, 0, &[area]);
-                d.cmd_draw(cmd, 3, 1, 0, 0);
-                d.cmd_end_rendering(cmd);
-            }
-            spans.end(cmd, span);
             let span = spans.begin(cmd, "busy");
             self.busy.bind(
                 cmd,

@@ -8,7 +8,7 @@ use crate::gpu::layout::binding;
 use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
 use crate::gpu::shaders::ShaderId;
 use crate::gpu::timing::Spans;
-use crate::gpu::{Buffer, Context, GpuEnvMap, Timing};
+use crate::gpu::{Buffer, Context, GpuEnvMap, Image, Timing};
 use crate::math::camera::{Camera, Projection, Shape};
 use crate::math::Mapping;
 use ash::vk;
@@ -124,7 +124,8 @@ pub(crate) fn target(ctx: &Context, name: &str, w: u32, h: u32) -> Result<GpuEnv
     )
 }
 
-/// Records a timed fullscreen draw of `pipeline` into `targets` (from undefined to sampled).
+/// Records a timed fullscreen draw of `pipeline` into `targets`, one-layer images of equal
+/// size with SAMPLED usage (from undefined to sampled by fragment shaders).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn record_fullscreen<P: bytemuck::Pod>(
     ctx: &Context,
@@ -132,15 +133,15 @@ pub(crate) fn record_fullscreen<P: bytemuck::Pod>(
     spans: &mut Spans,
     label: &str,
     pipeline: &Pipeline,
-    set: &DescriptorSet,
+    set: Option<&DescriptorSet>,
     push: &P,
-    targets: &[&GpuEnvMap],
+    targets: &[&Image],
 ) {
     let d = ctx.device();
-    let (w, h) = (targets[0].width, targets[0].height);
+    let (w, h) = (targets[0].desc().width, targets[0].desc().height);
     let before: Vec<_> = targets
         .iter()
-        .map(|t| image_barrier(t.image.raw(), 1, Usage::Undefined, Usage::ColorAttachment))
+        .map(|t| image_barrier(t.raw(), 1, Usage::Undefined, Usage::ColorAttachment))
         .collect();
     cmd_image_barriers(d, cmd, &before);
     let span = spans.begin(cmd, label);
@@ -148,7 +149,7 @@ pub(crate) fn record_fullscreen<P: bytemuck::Pod>(
         .iter()
         .map(|t| {
             vk::RenderingAttachmentInfo::default()
-                .image_view(t.image.view)
+                .image_view(t.view)
                 .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
                 .load_op(vk::AttachmentLoadOp::DONT_CARE)
                 .store_op(vk::AttachmentStoreOp::STORE)
@@ -168,7 +169,7 @@ pub(crate) fn record_fullscreen<P: bytemuck::Pod>(
     // SAFETY: cmd is recording; the attachments are live and in the right layout.
     unsafe {
         d.cmd_begin_rendering(cmd, &rendering);
-        pipeline.bind(cmd, Some(set), push);
+        pipeline.bind(cmd, set, push);
         d.cmd_set_viewport(
             cmd,
             0,
@@ -188,14 +189,7 @@ pub(crate) fn record_fullscreen<P: bytemuck::Pod>(
     spans.end(cmd, span);
     let after: Vec<_> = targets
         .iter()
-        .map(|t| {
-            image_barrier(
-                t.image.raw(),
-                1,
-                Usage::ColorAttachment,
-                Usage::FragmentSampled,
-            )
-        })
+        .map(|t| image_barrier(t.raw(), 1, Usage::ColorAttachment, Usage::FragmentSampled))
         .collect();
     cmd_image_barriers(d, cmd, &after);
 }
@@ -272,9 +266,9 @@ impl GBufferPass {
                 &mut spans,
                 "gbuffer",
                 &self.pipeline,
-                &set,
+                Some(&set),
                 &push,
-                &[&g.normal, &g.position, &g.view],
+                &[&g.normal.image, &g.position.image, &g.view.image],
             );
             Ok(())
         })?;

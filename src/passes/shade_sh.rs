@@ -114,9 +114,9 @@ impl ShadeSh {
                     &mut spans,
                     "shade sh",
                     &self.pipeline,
-                    &set,
+                    Some(&set),
                     &push,
-                    &[&frame],
+                    &[&frame.image],
                 );
                 Ok(())
             })?;
