@@ -109,23 +109,7 @@ float texel_mean(vec3 axis, uint t, uint s) {
         vec2 lo = 2.0 * vec2(p) / vec2(pc.src_size) - 1.0;
         vec2 hi = 2.0 * vec2(p + 1) / vec2(pc.src_size) - 1.0;
         float xs[6];
-        int cnt = 0;
-        xs[cnt++] = lo.x;
-        for (int k = 0; k < 2; k++) {
-            float yy = k == 0 ? lo.y : hi.y;
-            if (abs(yy) < 1.0) {
-                float e = sqrt((1.0 - yy) * (1.0 + yy));
-                if (-e > lo.x && -e < hi.x) xs[cnt++] = -e;
-                if (e > lo.x && e < hi.x) xs[cnt++] = e;
-            }
-        }
-        xs[cnt++] = hi.x;
-        for (int i = 1; i < cnt; i++) {
-            float v = xs[i];
-            int j = i - 1;
-            while (j >= 0 && xs[j] > v) { xs[j + 1] = xs[j]; j--; }
-            xs[j + 1] = v;
-        }
+        int cnt = clipped_breaks(lo, hi, xs);
         for (int pi = 0; pi + 1 < cnt; pi++) {
             int parts = max(int(ceil((xs[pi + 1] - xs[pi]) * 4.0)), 1) * int(split);
             float hx = 0.5 * (xs[pi + 1] - xs[pi]) / float(parts);

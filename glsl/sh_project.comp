@@ -40,23 +40,7 @@ void sh_clipped(uint m, uint layer, vec2 lo, vec2 hi, uint lmax, uint n,
                 inout float acc[SH_MAX_COEFFS], inout float wsum) {
     float y[SH_MAX_COEFFS];
     float xs[6];
-    int cnt = 0;
-    xs[cnt++] = lo.x;
-    for (int k = 0; k < 2; k++) {
-        float yy = k == 0 ? lo.y : hi.y;
-        if (abs(yy) < 1.0) {
-            float e = sqrt((1.0 - yy) * (1.0 + yy));
-            if (-e > lo.x && -e < hi.x) xs[cnt++] = -e;
-            if (e > lo.x && e < hi.x) xs[cnt++] = e;
-        }
-    }
-    xs[cnt++] = hi.x;
-    for (int i = 1; i < cnt; i++) {
-        float v = xs[i];
-        int j = i - 1;
-        while (j >= 0 && xs[j] > v) { xs[j + 1] = xs[j]; j--; }
-        xs[j + 1] = v;
-    }
+    int cnt = clipped_breaks(lo, hi, xs);
     for (int p = 0; p + 1 < cnt; p++) {
         int parts = int(ceil((xs[p + 1] - xs[p]) * 4.0));
         float hx = 0.5 * (xs[p + 1] - xs[p]) / float(max(parts, 1));

@@ -206,12 +206,10 @@ float gl8_square(uint m, vec2 lo, vec2 hi) {
     return s * half_.x * half_.y;
 }
 
-// ∫∫ square_density over [lo, hi] ∩ unit disc, for texels the rim cuts: Gauss-Legendre in x
-// over pieces split where the circle crosses the texel's top and bottom edges (so each piece
-// is smooth), and in y over the chord inside the disc. Unlike the divergence theorem used on
-// the CPU, nothing cancels, so slivers keep their relative precision in float.
-float clipped_square(uint m, vec2 lo, vec2 hi) {
-    float xs[6];
+// Where a texel [lo, hi] (disc coordinates) must be cut in x so that each piece's chord
+// through the unit disc is smooth: its ends and the circle's crossings of its top and bottom
+// edges, sorted. Returns how many of xs hold them (2 to 6).
+int clipped_breaks(vec2 lo, vec2 hi, out float xs[6]) {
     int n = 0;
     xs[n++] = lo.x;
     for (int k = 0; k < 2; k++) {
@@ -229,6 +227,16 @@ float clipped_square(uint m, vec2 lo, vec2 hi) {
         while (j >= 0 && xs[j] > v) { xs[j + 1] = xs[j]; j--; }
         xs[j + 1] = v;
     }
+    return n;
+}
+
+// ∫∫ square_density over [lo, hi] ∩ unit disc, for texels the rim cuts: Gauss-Legendre in x
+// over pieces split where the circle crosses the texel's top and bottom edges (so each piece
+// is smooth), and in y over the chord inside the disc. Unlike the divergence theorem used on
+// the CPU, nothing cancels, so slivers keep their relative precision in float.
+float clipped_square(uint m, vec2 lo, vec2 hi) {
+    float xs[6];
+    int n = clipped_breaks(lo, hi, xs);
     float total = 0.0;
     for (int p = 0; p + 1 < n; p++) {
         // Pieces wider than 1/4 (maps under 8 texels) are cut further so 8 nodes suffice.
