@@ -114,11 +114,17 @@ void main() {
         if (wsum > 0.0) {
             result = acc / wsum;
         } else {
-            // A paraboloid texel wholly outside its disc is never read; it holds the
-            // continuation at its centre so that previews and hardware filtering stay sane.
+            // A paraboloid texel whose samples all fall outside its disc holds its own half's
+            // rim nearest its centre (not the other half, which the centre's continuation
+            // would be): bilinear taps and the MIP chain's partly covered texels read it.
             Coord c;
             c.layer = id.z;
             c.uv = (vec2(id.xy) + 0.5) / vec2(pc.dst_size);
+            if (pc.dst_mapping == MAPPING_DUAL_PARABOLOID) {
+                vec2 st = 2.0 * c.uv - 1.0;
+                st *= (1.0 - 1e-4) / max(length(st), 1.0 - 1e-4);
+                c.uv = 0.5 * (st + 1.0);
+            }
             result = sample_src(coord_to_dir(pc.dst_mapping, c));
         }
     }

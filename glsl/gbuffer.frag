@@ -36,30 +36,8 @@ void main() {
     int index = -1;
     vec3 normal = vec3(0.0);
     for (uint k = 0u; k < pc.count; k++) {
-        Object ob = objects[k];
-        float t = -1.0;
         vec3 n;
-        if (ob.b.x == 0.0) {
-            vec3 oc = o - ob.a.xyz;
-            float b = dot(oc, d);
-            vec3 h = oc - b * d;
-            float disc = ob.a.w * ob.a.w - dot(h, h);
-            if (disc >= 0.0) {
-                float s = sqrt(disc);
-                t = -b - s > 0.0 ? -b - s : -b + s;
-                n = (o + t * d - ob.a.xyz) / ob.a.w;
-            }
-        } else {
-            float dn = dot(d, ob.a.xyz);
-            if (dn < 0.0) {
-                t = (ob.a.w - dot(o, ob.a.xyz)) / dn;
-                n = ob.a.xyz;
-                if (ob.b.y > 0.0) {
-                    vec3 p = o + t * d - ob.a.w * ob.a.xyz;
-                    if (dot(p, p) > ob.b.y * ob.b.y) t = -1.0;
-                }
-            }
-        }
+        float t = object_hit(objects[k], o, d, n);
         if (t > 0.0 && t < best) {
             best = t;
             index = int(k);

@@ -15,6 +15,8 @@ pub mod io;
 pub mod math;
 pub mod passes;
 pub mod preview;
+pub mod render;
+pub mod scene;
 
 pub use envmap::EnvMap;
 pub use error::{Error, Result};

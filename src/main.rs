@@ -188,6 +188,19 @@ enum Command {
         #[arg(long, default_value_t = 512)]
         size: u32,
     },
+    /// Render a scene file: an HDR EXR, a tone-mapped PNG beside it, and a per-pass timing table
+    Render {
+        /// The scene (TOML)
+        scene: PathBuf,
+        /// Output EXR (the PNG gets the same name with .png)
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Print the GPU passes a render of a scene will run, and why
+    Plan {
+        /// The scene (TOML)
+        scene: PathBuf,
+    },
     /// List the Vulkan devices and the one envlight would pick
     Devices,
     /// Write the analytic sky (gradient, sun 5·10⁴ × the zenith, ground) as a lat-long EXR
@@ -594,6 +607,25 @@ fn run(cli: Cli) -> Result<()> {
             what: AccuracyWhat::Sh { inputs, out, size },
         } => accuracy_sh(&cli, inputs, out, *size)?,
         Command::Demo { input, out, size } => demo(&cli, input, out, *size)?,
+        Command::Render { scene, output } => render_scene(&cli, scene, output)?,
+        Command::Plan { scene } => {
+            let sc = envlight::scene::Scene::load(scene)?;
+            let base = scene.parent().unwrap_or(Path::new("."));
+            let path = base.join(&sc.environment.file);
+            let mapping = match &sc.environment.mapping {
+                Some(m) => Mapping::parse(m)
+                    .with_context(|| format!("{}: unknown mapping '{m}'", scene.display()))?,
+                None => envlight::render::load_environment(&sc, base)?.mapping,
+            };
+            let plan = envlight::scene::plan(&sc, mapping);
+            println!("{} ({}, {})", scene.display(), path.display(), mapping.name());
+            for (k, p) in plan.passes.iter().enumerate() {
+                println!("{:>2}. {:<16} {}", k + 1, p.kind.name(), p.why);
+            }
+            for n in &plan.notes {
+                println!("    note: {n}");
+            }
+        }
         Command::Devices => {
             let ctx = context(&cli)?;
             let i = ctx.info();
@@ -707,61 +739,51 @@ fn demo(cli: &Cli, input: &Path, out: &Path, size: u32) -> Result<()> {
         );
     }
     println!("contact sheet: {}", sheet.display());
-    demo_diffuse(&ctx, &src, out)?;
+    drop(src);
+    drop(ctx);
+    demo_scene(cli, out)?;
     Ok(())
 }
 
-/// Three diffuse spheres on a ground disc lit by the probe's order-2 SH irradiance (the
-/// smallest Sloan window that keeps it non-negative), per fragment.
-fn demo_diffuse(ctx: &Context, src: &GpuEnvMap, out: &Path) -> Result<()> {
-    use envlight::math::camera::{Camera, Projection, Shape};
-    use envlight::passes::gbuffer::{GBufferPass, Object};
-    use envlight::passes::shade_sh::ShadeSh;
-    let (c, mut timings) = ShProjector::new(ctx, Subgroups::Auto)?.run(src, 2)?;
-    let dirs = envlight::math::synth::fibonacci_sphere(4000);
-    let lambda = sh::smallest_nonnegative_window(&c.coeffs, &dirs);
-    let irr = sh::irradiance_coeffs(&Window::Sloan { lambda }.apply(&c.coeffs));
-    let sphere = |center: [f64; 3], radius: f64, albedo: [f64; 3]| Object {
-        shape: Shape::Sphere { center, radius },
-        albedo,
-    };
-    let objects = [
-        sphere([0.0, 0.0, 0.0], 1.0, [0.8, 0.8, 0.8]),
-        sphere([-2.3, -0.4, 0.3], 0.6, [0.8, 0.3, 0.2]),
-        sphere([2.2, -0.5, 0.6], 0.5, [0.2, 0.5, 0.8]),
-        Object {
-            shape: Shape::Plane {
-                normal: [0.0, 1.0, 0.0],
-                offset: -1.0,
-                extent: 5.0,
-            },
-            albedo: [0.5, 0.5, 0.5],
-        },
-    ];
-    let camera = Camera {
-        projection: Projection::Perspective { fov_y: 40.0 },
-        eye: [0.0, 1.2, 7.0],
-        target: [0.0, -0.2, 0.0],
-        up: [0.0, 1.0, 0.0],
-        width: 480,
-        height: 270,
-    };
-    let (gbuf, t) = GBufferPass::new(ctx)?.run(&camera, &objects)?;
-    timings.extend(t);
-    let (frame, t) = ShadeSh::new(ctx)?.run(&gbuf, &irr, src, &Orientation::default())?;
-    timings.extend(t);
-    let img = frame.download(ctx)?;
-    let p = out.join("diffuse_sh.png");
+/// Renders `assets/scenes/materials.toml`: every material side by side.
+fn demo_scene(cli: &Cli, out: &Path) -> Result<()> {
+    let scene = Path::new("assets/scenes/materials.toml");
+    println!("\nevery material side by side ({}):", scene.display());
+    render_scene(cli, scene, &out.join("materials.exr"))
+}
+
+fn render_scene(cli: &Cli, scene: &Path, output: &Path) -> Result<()> {
+    let sc = envlight::scene::Scene::load(scene)?;
+    let base = scene.parent().unwrap_or(Path::new("."));
+    let env = envlight::render::load_environment(&sc, base)?;
+    let ctx = context(cli)?;
+    let t0 = std::time::Instant::now();
+    let r = envlight::render::render(&ctx, &sc, &env)?;
+    let wall = t0.elapsed().as_secs_f64();
+    if let Some(dir) = output.parent() {
+        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+    }
+    envlight::io::save_exr(&r.frame, output)?;
+    let png = output.with_extension("png");
     let tm = ToneMap::default();
-    // The frame is a one-layer image; its preview is the image itself.
-    envlight::preview::preview(&img, tm)
-        .save(&p)
-        .with_context(|| p.display().to_string())?;
-    println!(
-        "\ndiffuse spheres, order-2 SH irradiance per fragment (Sloan window λ = {lambda:.3}): {}",
-        p.display()
-    );
-    print_timings(&timings);
+    envlight::preview::preview(&r.frame, tm)
+        .save(&png)
+        .with_context(|| png.display().to_string())?;
+    println!("{}  {}", output.display(), png.display());
+    println!("{:<16} {:>11}  spans", "pass", "GPU ms");
+    let mut total = 0.0;
+    for rec in &r.records {
+        println!("{:<16} {:>11.3}  {}", rec.kind.name(), rec.ms(), rec.timings.len());
+        total += rec.ms();
+    }
+    println!("{:<16} {:>11.3}  (wall {wall:.2} s)", "total", total);
+    if let Some((n, e)) = r.mc {
+        match e {
+            Some(e) => println!("monte carlo: {n} samples per pixel, relative error {e:.2e}"),
+            None => println!("monte carlo: {n} samples per pixel"),
+        }
+    }
+    println!("tone map: {tm:?} (PNG only; the EXR is linear)");
     Ok(())
 }
 

@@ -1,10 +1,45 @@
-// Scene objects and camera rays (twin of src/math/camera.rs).
+// Scene objects, their materials, and ray casting (twin of src/math/camera.rs and
+// src/scene.rs's GPU records).
 #ifndef ENVLIGHT_SCENE_GLSL
 #define ENVLIGHT_SCENE_GLSL
 
 struct Object {
     vec4 a;       // sphere: centre, radius; plane: unit normal, offset
     vec4 b;       // x: 0 sphere, 1 plane; y: plane extent (0: unbounded)
-    vec4 albedo;  // rgb
+    vec4 albedo;  // rgb: albedo (diffuse) or specular colour; w: technique id
+    vec4 brdf;    // x: BRDF id; y, z: its parameters; w: FIS sample count
+    vec4 extra;   // x: FIS lod bias; y: offset of its data (SH, prefiltered); z: SH lmax or
+                  // prefiltered width; w: flags (bit 0: rotate FIS samples per pixel)
 };
+
+// Distance along unit d from o to object ob, or -1 when the ray misses it; n gets the normal.
+float object_hit(Object ob, vec3 o, vec3 d, out vec3 n) {
+    n = vec3(0.0);
+    if (ob.b.x == 0.0) {
+        vec3 oc = o - ob.a.xyz;
+        float b = dot(oc, d);
+        vec3 h = oc - b * d;
+        float disc = ob.a.w * ob.a.w - dot(h, h);
+        if (disc < 0.0) return -1.0;
+        float s = sqrt(disc);
+        float t = -b - s > 0.0 ? -b - s : -b + s;
+        n = (o + t * d - ob.a.xyz) / ob.a.w;
+        return t;
+    }
+    float dn = dot(d, ob.a.xyz);
+    if (dn >= 0.0) return -1.0;
+    float t = (ob.a.w - dot(o, ob.a.xyz)) / dn;
+    n = ob.a.xyz;
+    if (ob.b.y > 0.0) {
+        vec3 p = o + t * d - ob.a.w * ob.a.xyz;
+        if (dot(p, p) > ob.b.y * ob.b.y) return -1.0;
+    }
+    return t;
+}
+
+// Where a shadow ray starts: off the surface by a margin relative to the scene's scale, so
+// the surface it leaves never shadows itself.
+vec3 shadow_origin(vec3 p, vec3 n) {
+    return p + n * (1e-4 * (1.0 + length(p)));
+}
 #endif

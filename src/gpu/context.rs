@@ -166,6 +166,8 @@ pub(crate) struct Shared {
     live: AtomicI64,
     owns_device: bool,
     sink: Box<MessageSink>,
+    /// The shader of every pipeline created, in order (what `envlight plan` is checked by).
+    pub(crate) pipelines: Mutex<Vec<&'static str>>,
 }
 
 /// A Vulkan device envlight runs its passes on. Cloning is cheap (shared ownership); the device
@@ -416,6 +418,7 @@ impl Context {
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             command_pool: Mutex::new(command_pool),
             live: AtomicI64::new(0),
+            pipelines: Mutex::new(Vec::new()),
             owns_device,
             sink,
         };
@@ -444,6 +447,15 @@ impl Context {
     /// (buffers, images, views, samplers, pipelines, layouts, pools, fences…).
     pub fn live_objects(&self) -> i64 {
         self.shared.live.load(Ordering::SeqCst)
+    }
+
+    /// The shader module name of every pipeline created on this context so far, in order.
+    pub fn pipelines_created(&self) -> Vec<&'static str> {
+        self.shared
+            .pipelines
+            .lock()
+            .map(|p| p.clone())
+            .unwrap_or_default()
     }
 
     /// Validation messages at warning or above recorded so far.

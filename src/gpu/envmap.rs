@@ -64,6 +64,37 @@ impl GpuEnvMap {
         height: u32,
         usage: vk::ImageUsageFlags,
     ) -> Result<GpuEnvMap> {
+        GpuEnvMap::create(ctx, name, mapping, (width, height, 1), usage)
+    }
+
+    /// An uninitialised map with a full MIP chain (Vulkan's sizes: level k is
+    /// max(1, size >> k)), for passes to write level by level.
+    pub fn with_mips(
+        ctx: &Context,
+        name: &str,
+        mapping: Mapping,
+        width: u32,
+        height: u32,
+    ) -> Result<GpuEnvMap> {
+        let mips = 32 - width.max(height).max(1).leading_zeros();
+        GpuEnvMap::create(
+            ctx,
+            name,
+            mapping,
+            (width, height, mips),
+            vk::ImageUsageFlags::STORAGE
+                | vk::ImageUsageFlags::SAMPLED
+                | vk::ImageUsageFlags::TRANSFER_DST,
+        )
+    }
+
+    fn create(
+        ctx: &Context,
+        name: &str,
+        mapping: Mapping,
+        (width, height, mips): (u32, u32, u32),
+        usage: vk::ImageUsageFlags,
+    ) -> Result<GpuEnvMap> {
         if width == 0 || height == 0 {
             return Err(Error::Invalid(format!(
                 "{name}: a map needs a non-zero size"
@@ -79,6 +110,7 @@ impl GpuEnvMap {
                 format: FORMAT,
                 usage: usage | vk::ImageUsageFlags::TRANSFER_SRC,
                 cube: mapping == Mapping::Cube,
+                mips,
             },
         )?;
         Ok(GpuEnvMap {
@@ -87,6 +119,11 @@ impl GpuEnvMap {
             height,
             image,
         })
+    }
+
+    /// Its MIP levels.
+    pub fn mips(&self) -> u32 {
+        self.image.desc().mips
     }
 
     /// Records one timed dispatch of `pipeline` over every texel of every layer of this map
@@ -137,6 +174,16 @@ impl GpuEnvMap {
     /// Uploads a map. Texels must be finite and non-negative (what [`crate::io::load`]
     /// guarantees); anything else is refused so that no pass ever sees or makes NaN.
     pub fn upload(ctx: &Context, map: &EnvMap) -> Result<GpuEnvMap> {
+        GpuEnvMap::upload_into(ctx, map, false)
+    }
+
+    /// As [`GpuEnvMap::upload`], into level 0 of a map with a full MIP chain (the other
+    /// levels undefined, for a pass to fill).
+    pub fn upload_mipped(ctx: &Context, map: &EnvMap) -> Result<GpuEnvMap> {
+        GpuEnvMap::upload_into(ctx, map, true)
+    }
+
+    fn upload_into(ctx: &Context, map: &EnvMap, mips: bool) -> Result<GpuEnvMap> {
         if let Some(k) = map
             .texels
             .iter()
@@ -148,7 +195,11 @@ impl GpuEnvMap {
                 map.texels[k]
             )));
         }
-        let g = GpuEnvMap::new(ctx, "uploaded map", map.mapping, map.width, map.height)?;
+        let g = if mips {
+            GpuEnvMap::with_mips(ctx, "uploaded map", map.mapping, map.width, map.height)?
+        } else {
+            GpuEnvMap::new(ctx, "uploaded map", map.mapping, map.width, map.height)?
+        };
         let rgba: Vec<[f32; 4]> = map.texels.iter().map(|t| [t[0], t[1], t[2], 1.0]).collect();
         let bytes = (rgba.len() * 16) as u64;
         let mut staging = Buffer::new(
@@ -199,22 +250,46 @@ impl GpuEnvMap {
     }
 
     fn copy_region(&self) -> vk::BufferImageCopy {
+        self.level_region(0)
+    }
+
+    fn level_region(&self, level: u32) -> vk::BufferImageCopy {
+        let (w, h) = self.level_size(level);
         vk::BufferImageCopy::default()
             .image_subresource(
                 vk::ImageSubresourceLayers::default()
                     .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .mip_level(level)
                     .layer_count(self.mapping.layers()),
             )
             .image_extent(vk::Extent3D {
-                width: self.width,
-                height: self.height,
+                width: w,
+                height: h,
                 depth: 1,
             })
     }
 
+    /// The size of MIP level `level`.
+    pub fn level_size(&self, level: u32) -> (u32, u32) {
+        ((self.width >> level).max(1), (self.height >> level).max(1))
+    }
+
     /// Reads the map back.
     pub fn download(&self, ctx: &Context) -> Result<EnvMap> {
-        let n = (self.width * self.height * self.mapping.layers()) as usize;
+        let rgba = self.download_level(ctx, 0)?;
+        Ok(EnvMap::new(
+            self.mapping,
+            self.width,
+            self.height,
+            rgba.into_iter().map(|t| [t[0], t[1], t[2]]).collect(),
+        ))
+    }
+
+    /// Reads one MIP level back with its alpha channel, layer after layer, row after row.
+    pub fn download_level(&self, ctx: &Context, level: u32) -> Result<Vec<[f32; 4]>> {
+        assert!(level < self.mips(), "level {level} of {}", self.mips());
+        let (w, h) = self.level_size(level);
+        let n = (w * h * self.mapping.layers()) as usize;
         let readback = Buffer::new(
             ctx,
             "download staging",
@@ -242,7 +317,7 @@ impl GpuEnvMap {
                     self.image.raw,
                     vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                     readback.raw,
-                    &[self.copy_region()],
+                    &[self.level_region(level)],
                 )
             };
             cmd_image_barriers(
@@ -258,12 +333,6 @@ impl GpuEnvMap {
             cmd_memory_barrier(d, cmd, memory_barrier(Usage::TransferDst, Usage::HostRead));
             Ok(())
         })?;
-        let rgba: Vec<[f32; 4]> = readback.read(n);
-        Ok(EnvMap::new(
-            self.mapping,
-            self.width,
-            self.height,
-            rgba.into_iter().map(|t| [t[0], t[1], t[2]]).collect(),
-        ))
+        Ok(readback.read(n))
     }
 }

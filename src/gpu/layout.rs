@@ -59,8 +59,70 @@ pub mod binding {
     pub const SHADE_OBJECTS: u32 = 2;
     /// shade_sh: SH irradiance coefficients (vec4 buffer).
     pub const SHADE_COEFFS: u32 = 3;
-    /// shade_sh: the environment map, for the background.
+    /// shade: the environment map in its own mapping (background, mirror lookups).
     pub const SHADE_ENV: u32 = 4;
+    /// shade: G-buffer hit positions (shadow rays).
+    pub const SHADE_POSITION: u32 = 5;
+    /// shade: the dual-paraboloid MIP chain (FIS).
+    pub const SHADE_DP: u32 = 6;
+    /// shade: prefiltered lat-long maps, texel after texel (vec4 buffer).
+    pub const SHADE_PREFILTERED: u32 = 7;
+    /// shade: the Monte Carlo accumulation (rgb sum, luminance² sum), read for MC pixels.
+    pub const SHADE_MC: u32 = 8;
+    /// mip: the finer level (storage image, read).
+    pub const MIP_SRC: u32 = 0;
+    /// mip: the coarser level (storage image, written).
+    pub const MIP_DST: u32 = 1;
+    /// mc: G-buffer normals and object indices.
+    pub const MC_NORMAL: u32 = 0;
+    /// mc: G-buffer directions to the eye.
+    pub const MC_VIEW: u32 = 1;
+    /// mc: G-buffer hit positions.
+    pub const MC_POSITION: u32 = 2;
+    /// mc: the scene's objects and materials.
+    pub const MC_OBJECTS: u32 = 3;
+    /// mc: the full-resolution lat-long map (texelFetch).
+    pub const MC_ENV: u32 = 4;
+    /// mc: the environment sampling tables (float buffer, see `math::envsample`).
+    pub const MC_TABLES: u32 = 5;
+    /// mc: the accumulation image (rgba32f storage: rgb sum, luminance² sum).
+    pub const MC_ACCUM: u32 = 6;
+}
+
+/// Ids of BRDFs and shading techniques, and the constants their twins share.
+pub mod brdf {
+    /// BRDF ids (`Object.brdf.x`).
+    pub mod ids {
+        /// Lambertian diffuse.
+        pub const LAMBERT: u32 = 0;
+        /// Perfect mirror.
+        pub const MIRROR: u32 = 1;
+        /// Normalised Phong lobe about the reflected direction.
+        pub const PHONG: u32 = 2;
+        /// Blinn-Phong.
+        pub const BLINN: u32 = 3;
+        /// GGX.
+        pub const GGX: u32 = 4;
+        /// Ward anisotropic.
+        pub const WARD: u32 = 5;
+    }
+    /// Technique ids (`Object.albedo.w`).
+    pub mod technique {
+        /// One lookup of the reflected direction (mirrors).
+        pub const LOOKUP: u32 = 0;
+        /// Filtered importance sampling.
+        pub const FIS: u32 = 1;
+        /// SH irradiance (diffuse).
+        pub const SH: u32 = 2;
+        /// A prefiltered map (irradiance by the normal, Phong by the reflected direction).
+        pub const PREFILTERED: u32 = 3;
+        /// The Monte Carlo reference.
+        pub const MC: u32 = 4;
+    }
+    /// GGX roughness below this is taken as this (the mirror limit with finite numbers).
+    pub const GGX_ALPHA_MIN: f64 = 1e-4;
+    /// Smallest Ward roughness accepted.
+    pub const WARD_ALPHA_MIN: f64 = 1e-3;
 }
 
 /// The per-texel quadrature rule of the brute-force convolution, shared by
@@ -212,9 +274,21 @@ pub const SHADER_SOURCES: &[ShaderSource] = &[
         defines: &[],
     },
     ShaderSource {
-        name: "shade_sh",
-        file: "shade_sh.frag",
+        name: "shade",
+        file: "shade.frag",
         stage: Stage::Fragment,
+        defines: &[],
+    },
+    ShaderSource {
+        name: "mip",
+        file: "mip.comp",
+        stage: Stage::Compute,
+        defines: &[],
+    },
+    ShaderSource {
+        name: "mc",
+        file: "mc.comp",
+        stage: Stage::Compute,
         defines: &[],
     },
     ShaderSource {
@@ -258,6 +332,19 @@ pub fn generated_header() -> String {
         ("SHADE_OBJECTS", binding::SHADE_OBJECTS),
         ("SHADE_COEFFS", binding::SHADE_COEFFS),
         ("SHADE_ENV", binding::SHADE_ENV),
+        ("SHADE_POSITION", binding::SHADE_POSITION),
+        ("SHADE_DP", binding::SHADE_DP),
+        ("SHADE_PREFILTERED", binding::SHADE_PREFILTERED),
+        ("SHADE_MC", binding::SHADE_MC),
+        ("MIP_SRC", binding::MIP_SRC),
+        ("MIP_DST", binding::MIP_DST),
+        ("MC_NORMAL", binding::MC_NORMAL),
+        ("MC_VIEW", binding::MC_VIEW),
+        ("MC_POSITION", binding::MC_POSITION),
+        ("MC_OBJECTS", binding::MC_OBJECTS),
+        ("MC_ENV", binding::MC_ENV),
+        ("MC_TABLES", binding::MC_TABLES),
+        ("MC_ACCUM", binding::MC_ACCUM),
     ];
     for (name, v) in b {
         let _ = writeln!(s, "#define BINDING_{name} {v}");
@@ -300,6 +387,23 @@ pub fn generated_header() -> String {
         k.len(),
         k.join(", ")
     );
+    let ids = [
+        ("BRDF_LAMBERT", brdf::ids::LAMBERT),
+        ("BRDF_MIRROR", brdf::ids::MIRROR),
+        ("BRDF_PHONG", brdf::ids::PHONG),
+        ("BRDF_BLINN", brdf::ids::BLINN),
+        ("BRDF_GGX", brdf::ids::GGX),
+        ("BRDF_WARD", brdf::ids::WARD),
+        ("TECH_LOOKUP", brdf::technique::LOOKUP),
+        ("TECH_FIS", brdf::technique::FIS),
+        ("TECH_SH", brdf::technique::SH),
+        ("TECH_PREFILTERED", brdf::technique::PREFILTERED),
+        ("TECH_MC", brdf::technique::MC),
+    ];
+    for (name, v) in ids {
+        let _ = writeln!(s, "#define {name} {v}u");
+    }
+    let _ = writeln!(s, "#define GGX_ALPHA_MIN {:e}", brdf::GGX_ALPHA_MIN);
     for (i, name) in MAPPING_NAMES.iter().enumerate() {
         let _ = writeln!(s, "#define MAPPING_{name} {i}u");
     }

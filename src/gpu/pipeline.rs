@@ -115,6 +115,9 @@ impl Pipeline {
             .vk("creating a compute pipeline")?[0];
         shared.track();
         shared.name(p.pipeline, shader.source().name);
+        if let Ok(mut log) = shared.pipelines.lock() {
+            log.push(shader.source().name);
+        }
         Ok(p)
     }
 
@@ -198,6 +201,9 @@ impl Pipeline {
             .vk("creating a graphics pipeline")?[0];
         shared.track();
         shared.name(p.pipeline, frag.source().name);
+        if let Ok(mut log) = shared.pipelines.lock() {
+            log.push(frag.source().name);
+        }
         Ok(p)
     }
 
@@ -258,6 +264,8 @@ pub enum Bind<'a> {
     Sampled(&'a Image, &'a Sampler, bool),
     /// A storage image (array view, layout GENERAL).
     Storage(&'a Image),
+    /// One MIP level of an image as a storage image (layout GENERAL).
+    StorageLevel(&'a Image, u32),
     /// A whole storage buffer.
     Buffer(&'a Buffer),
 }
@@ -338,10 +346,20 @@ impl DescriptorSet {
                     kind,
                     vk::DescriptorImageInfo {
                         sampler: vk::Sampler::null(),
-                        image_view: img.view,
+                        image_view: img.level_view(0),
                         image_layout: vk::ImageLayout::GENERAL,
                     },
                 )),
+                (Bind::StorageLevel(img, level), DescriptorKind::StorageImage) => image_infos
+                    .push((
+                        *b,
+                        kind,
+                        vk::DescriptorImageInfo {
+                            sampler: vk::Sampler::null(),
+                            image_view: img.level_view(*level),
+                            image_layout: vk::ImageLayout::GENERAL,
+                        },
+                    )),
                 (Bind::Buffer(buf), DescriptorKind::StorageBuffer) => buffer_infos.push((
                     *b,
                     vk::DescriptorBufferInfo {

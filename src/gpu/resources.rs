@@ -136,6 +136,9 @@ pub struct ImageDesc {
     pub usage: vk::ImageUsageFlags,
     /// Also create a cube view (needs 6 layers and square layers).
     pub cube: bool,
+    /// MIP levels (1: none). With more, each level also gets an array view of its own, for
+    /// storage access.
+    pub mips: u32,
 }
 
 /// A 2D array image with its memory, an array view and, for cubes, a cube view.
@@ -145,6 +148,7 @@ pub struct Image {
     allocation: Option<Allocation>,
     pub(crate) view: vk::ImageView,
     pub(crate) cube_view: vk::ImageView,
+    pub(crate) level_views: Vec<vk::ImageView>,
     desc: ImageDesc,
 }
 
@@ -177,7 +181,7 @@ impl Image {
                 height: desc.height,
                 depth: 1,
             })
-            .mip_levels(1)
+            .mip_levels(desc.mips)
             .array_layers(desc.layers)
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
@@ -193,6 +197,7 @@ impl Image {
             allocation: None,
             view: vk::ImageView::null(),
             cube_view: vk::ImageView::null(),
+            level_views: Vec::new(),
             desc,
         };
         s.name(raw, name);
@@ -206,14 +211,34 @@ impl Image {
         }
         .vk("binding image memory")?;
         image.allocation = Some(allocation);
-        image.view = image.make_view(vk::ImageViewType::TYPE_2D_ARRAY, desc.layers, name)?;
+        image.view =
+            image.make_view(vk::ImageViewType::TYPE_2D_ARRAY, desc.layers, 0, desc.mips, name)?;
         if desc.cube {
-            image.cube_view = image.make_view(vk::ImageViewType::CUBE, 6, name)?;
+            image.cube_view = image.make_view(vk::ImageViewType::CUBE, 6, 0, desc.mips, name)?;
+        }
+        if desc.mips > 1 {
+            for level in 0..desc.mips {
+                let v = image.make_view(
+                    vk::ImageViewType::TYPE_2D_ARRAY,
+                    desc.layers,
+                    level,
+                    1,
+                    &format!("{name} level {level}"),
+                )?;
+                image.level_views.push(v);
+            }
         }
         Ok(image)
     }
 
-    fn make_view(&self, ty: vk::ImageViewType, layers: u32, name: &str) -> Result<vk::ImageView> {
+    fn make_view(
+        &self,
+        ty: vk::ImageViewType,
+        layers: u32,
+        base_level: u32,
+        levels: u32,
+        name: &str,
+    ) -> Result<vk::ImageView> {
         let info = vk::ImageViewCreateInfo::default()
             .image(self.raw)
             .view_type(ty)
@@ -221,7 +246,8 @@ impl Image {
             .subresource_range(
                 vk::ImageSubresourceRange::default()
                     .aspect_mask(vk::ImageAspectFlags::COLOR)
-                    .level_count(1)
+                    .base_mip_level(base_level)
+                    .level_count(levels)
                     .layer_count(layers),
             );
         // SAFETY: the image is live and bound to memory.
@@ -241,6 +267,16 @@ impl Image {
     pub fn raw(&self) -> vk::Image {
         self.raw
     }
+
+    /// An array view of one MIP level alone (level 0 of a single-level image is its view).
+    pub(crate) fn level_view(&self, level: u32) -> vk::ImageView {
+        if self.desc.mips == 1 {
+            assert_eq!(level, 0);
+            self.view
+        } else {
+            self.level_views[level as usize]
+        }
+    }
 }
 
 impl Drop for Image {
@@ -248,7 +284,7 @@ impl Drop for Image {
         let d = &self.shared.device;
         // SAFETY: every submission using this image was waited for before returning.
         unsafe {
-            for v in [self.cube_view, self.view] {
+            for v in self.level_views.drain(..).chain([self.cube_view, self.view]) {
                 if v != vk::ImageView::null() {
                     d.destroy_image_view(v, None);
                     self.shared.untrack();
@@ -280,6 +316,29 @@ impl Sampler {
             .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .max_lod(0.0);
+        // SAFETY: valid device and create info.
+        let raw =
+            unsafe { ctx.shared.device.create_sampler(&info, None) }.vk("creating a sampler")?;
+        ctx.shared.track();
+        ctx.shared.name(raw, name);
+        Ok(Sampler {
+            shared: ctx.shared.clone(),
+            raw,
+        })
+    }
+}
+
+impl Sampler {
+    /// A trilinear sampler clamping to the edge, over every MIP level.
+    pub fn trilinear_clamp(ctx: &Context, name: &str) -> Result<Sampler> {
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .max_lod(vk::LOD_CLAMP_NONE);
         // SAFETY: valid device and create info.
         let raw =
             unsafe { ctx.shared.device.create_sampler(&info, None) }.vk("creating a sampler")?;

@@ -37,8 +37,12 @@ pub enum ShaderId {
     ShEval,
     /// G-buffer of analytic spheres and planes.
     GBuffer,
-    /// Diffuse shading from SH irradiance per fragment.
-    ShadeSh,
+    /// Shading of every material but the Monte Carlo ones, and the frame's composite.
+    Shade,
+    /// One level of the dual-paraboloid MIP chain.
+    Mip,
+    /// One progressive frame of the Monte Carlo reference.
+    Mc,
 }
 
 /// The kind of a descriptor binding.
@@ -85,7 +89,7 @@ macro_rules! spv {
 
 impl ShaderId {
     /// Every module.
-    pub const ALL: [ShaderId; 16] = [
+    pub const ALL: [ShaderId; 18] = [
         ShaderId::Convert2d,
         ShaderId::ConvertCube,
         ShaderId::MappingProbe,
@@ -101,7 +105,9 @@ impl ShaderId {
         ShaderId::Brute,
         ShaderId::ShEval,
         ShaderId::GBuffer,
-        ShaderId::ShadeSh,
+        ShaderId::Shade,
+        ShaderId::Mip,
+        ShaderId::Mc,
     ];
 
     /// The build recipe of this module.
@@ -122,7 +128,9 @@ impl ShaderId {
             ShaderId::Brute => "brute",
             ShaderId::ShEval => "sh_eval",
             ShaderId::GBuffer => "gbuffer",
-            ShaderId::ShadeSh => "shade_sh",
+            ShaderId::Shade => "shade",
+            ShaderId::Mip => "mip",
+            ShaderId::Mc => "mc",
         };
         SHADER_SOURCES
             .iter()
@@ -148,7 +156,9 @@ impl ShaderId {
             ShaderId::Brute => spv!("brute"),
             ShaderId::ShEval => spv!("sh_eval"),
             ShaderId::GBuffer => spv!("gbuffer"),
-            ShaderId::ShadeSh => spv!("shade_sh"),
+            ShaderId::Shade => spv!("shade"),
+            ShaderId::Mip => spv!("mip"),
+            ShaderId::Mc => spv!("mc"),
         }
     }
 
@@ -158,7 +168,9 @@ impl ShaderId {
         use crate::passes::filter::{BrutePush, ShEvalPush};
         use crate::passes::gbuffer::GBufferPush;
         use crate::passes::sh_project::{ShProjectPush, ShReducePush};
-        use crate::passes::shade_sh::ShadeShPush;
+        use crate::passes::mc::McPush;
+        use crate::passes::mip::MipPush;
+        use crate::passes::shade::ShadePush;
         use crate::passes::{convert::ConvertPush, diagnostics::BusyPush, probe::ProbePush};
         use DescriptorKind::*;
         let size = |n: usize| n as u32;
@@ -230,15 +242,38 @@ impl ShaderId {
                 bindings: &[(binding::GBUF_OBJECTS, StorageBuffer)],
                 push_size: size(std::mem::size_of::<GBufferPush>()),
             },
-            ShaderId::ShadeSh => Interface {
+            ShaderId::Shade => Interface {
                 bindings: &[
                     (binding::SHADE_NORMAL, SampledImage),
                     (binding::SHADE_VIEW, SampledImage),
                     (binding::SHADE_OBJECTS, StorageBuffer),
                     (binding::SHADE_COEFFS, StorageBuffer),
                     (binding::SHADE_ENV, SampledImage),
+                    (binding::SHADE_POSITION, SampledImage),
+                    (binding::SHADE_DP, SampledImage),
+                    (binding::SHADE_PREFILTERED, StorageBuffer),
+                    (binding::SHADE_MC, SampledImage),
                 ],
-                push_size: size(std::mem::size_of::<ShadeShPush>()),
+                push_size: size(std::mem::size_of::<ShadePush>()),
+            },
+            ShaderId::Mip => Interface {
+                bindings: &[
+                    (binding::MIP_SRC, StorageImage),
+                    (binding::MIP_DST, StorageImage),
+                ],
+                push_size: size(std::mem::size_of::<MipPush>()),
+            },
+            ShaderId::Mc => Interface {
+                bindings: &[
+                    (binding::MC_NORMAL, SampledImage),
+                    (binding::MC_VIEW, SampledImage),
+                    (binding::MC_POSITION, SampledImage),
+                    (binding::MC_OBJECTS, StorageBuffer),
+                    (binding::MC_ENV, SampledImage),
+                    (binding::MC_TABLES, StorageBuffer),
+                    (binding::MC_ACCUM, StorageImage),
+                ],
+                push_size: size(std::mem::size_of::<McPush>()),
             },
             ShaderId::FullscreenVert | ShaderId::FlatFrag => Interface {
                 bindings: &[],

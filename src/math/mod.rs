@@ -3,11 +3,16 @@
 //! Nothing here knows about Vulkan; these functions are the oracles the GPU passes are tested
 //! against.
 
+pub mod brdf;
 pub mod camera;
+pub mod envsample;
 pub mod filter;
 pub mod mapping;
+pub mod mc;
+pub mod mip;
 pub mod quadrature;
 pub mod resample;
+pub mod sequence;
 pub mod sh;
 pub mod synth;
 

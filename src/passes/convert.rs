@@ -96,14 +96,32 @@ impl Converter {
 
     /// Converts `src` to `opts.to` at `opts.size`; returns the new map and the GPU time.
     pub fn run(&self, src: &GpuEnvMap, opts: &ConvertOptions) -> Result<(GpuEnvMap, Vec<Timing>)> {
+        self.run_into(src, opts, false)
+    }
+
+    /// As [`Converter::run`], into a map with a full MIP chain of which only level 0 is
+    /// written (for [`crate::passes::mip::MipChain`] to fill).
+    pub fn run_mipped(
+        &self,
+        src: &GpuEnvMap,
+        opts: &ConvertOptions,
+    ) -> Result<(GpuEnvMap, Vec<Timing>)> {
+        self.run_into(src, opts, true)
+    }
+
+    fn run_into(
+        &self,
+        src: &GpuEnvMap,
+        opts: &ConvertOptions,
+        mips: bool,
+    ) -> Result<(GpuEnvMap, Vec<Timing>)> {
         let (w, h) = opts.to.extent_for_size(opts.size);
-        let dst = GpuEnvMap::new(
-            &self.ctx,
-            &format!("{} {}", opts.to.name(), opts.size),
-            opts.to,
-            w,
-            h,
-        )?;
+        let name = format!("{} {}", opts.to.name(), opts.size);
+        let dst = if mips {
+            GpuEnvMap::with_mips(&self.ctx, &name, opts.to, w, h)?
+        } else {
+            GpuEnvMap::new(&self.ctx, &name, opts.to, w, h)?
+        };
         let ss = opts
             .supersample
             .unwrap_or_else(|| {

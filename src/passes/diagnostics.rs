@@ -66,6 +66,7 @@ impl Diagnostics {
                 format: DRAW_FORMAT,
                 usage: vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
                 cube: false,
+                mips: 1,
             },
         )?;
         let out = Buffer::new(

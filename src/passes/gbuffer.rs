@@ -37,7 +37,8 @@ pub struct GBufferPush {
     pub count: u32,
 }
 
-/// An object of the scene as the GPU reads it (`Object` in `glsl/include/scene.glsl`).
+/// An object of the scene as the GPU reads it (`Object` in `glsl/include/scene.glsl`): its
+/// shape, and its material and technique for the shading passes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuObject {
@@ -45,11 +46,17 @@ pub struct GpuObject {
     pub a: [f32; 4],
     /// x: 0 sphere, 1 plane; y: plane extent.
     pub b: [f32; 4],
-    /// Albedo (rgb).
+    /// Albedo or specular colour (rgb); w: technique id.
     pub albedo: [f32; 4],
+    /// x: BRDF id; y, z: its parameters; w: FIS sample count.
+    pub brdf: [f32; 4],
+    /// x: FIS lod bias; y: offset of the object's data; z: SH lmax or prefiltered width;
+    /// w: flags (bit 0: rotate FIS samples per pixel).
+    pub extra: [f32; 4],
 }
 
-/// A shape and its diffuse albedo.
+/// A shape and its albedo: a Lambertian object, shaded by SH irradiance unless its GPU record
+/// says otherwise.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Object {
     /// The shape.
@@ -59,14 +66,27 @@ pub struct Object {
 }
 
 impl Object {
-    fn gpu(&self) -> GpuObject {
+    /// Its GPU record: Lambert, SH technique with coefficients at offset 0 of order `lmax`.
+    pub fn gpu(&self, lmax: u32) -> GpuObject {
         let albedo = [
             self.albedo[0] as f32,
             self.albedo[1] as f32,
             self.albedo[2] as f32,
-            0.0,
+            crate::gpu::layout::brdf::technique::SH as f32,
         ];
-        match self.shape {
+        let mut g = shape_record(&self.shape);
+        g.albedo = albedo;
+        g.brdf = [crate::gpu::layout::brdf::ids::LAMBERT as f32, 0.0, 0.0, 0.0];
+        g.extra = [0.0, 0.0, lmax as f32, 0.0];
+        g
+    }
+}
+
+/// The shape part of a GPU record (material fields zero).
+pub fn shape_record(shape: &Shape) -> GpuObject {
+    {
+        let albedo = [0.0; 4];
+        match *shape {
             Shape::Sphere { center, radius } => GpuObject {
                 a: [
                     center[0] as f32,
@@ -76,6 +96,7 @@ impl Object {
                 ],
                 b: [0.0; 4],
                 albedo,
+                ..Default::default()
             },
             Shape::Plane {
                 normal,
@@ -87,6 +108,7 @@ impl Object {
                     a: [n.x as f32, n.y as f32, n.z as f32, offset as f32],
                     b: [1.0, extent as f32, 0.0, 0.0],
                     albedo,
+                    ..Default::default()
                 }
             }
         }
@@ -107,6 +129,8 @@ pub struct GBuffer {
     pub view: GpuEnvMap,
     /// The objects, as the shaders read them.
     pub objects: Buffer,
+    /// How many.
+    pub count: u32,
 }
 
 /// A colour target: a one-layer image stored as a [`GpuEnvMap`] (its mapping field is
@@ -216,14 +240,14 @@ impl GBufferPass {
 
     /// Casts the camera's rays against `objects`. The images end up ready for sampling by
     /// fragment shaders.
-    pub fn run(&self, camera: &Camera, objects: &[Object]) -> Result<(GBuffer, Vec<Timing>)> {
+    pub fn run(&self, camera: &Camera, objects: &[GpuObject]) -> Result<(GBuffer, Vec<Timing>)> {
         let (w, h) = (camera.width, camera.height);
         if w == 0 || h == 0 || objects.is_empty() {
             return Err(crate::Error::Invalid(
                 "a G-buffer needs a non-empty image and at least one object".into(),
             ));
         }
-        let data: Vec<GpuObject> = objects.iter().map(Object::gpu).collect();
+        let data = objects;
         let mut buf = Buffer::new(
             &self.ctx,
             "scene objects",
@@ -231,7 +255,7 @@ impl GBufferPass {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        buf.write(&data);
+        buf.write(data);
         let g = GBuffer {
             width: w,
             height: h,
@@ -239,6 +263,7 @@ impl GBufferPass {
             position: target(&self.ctx, "gbuffer position", w, h)?,
             view: target(&self.ctx, "gbuffer view", w, h)?,
             objects: buf,
+            count: objects.len() as u32,
         };
         let set = DescriptorSet::new(
             &self.ctx,

@@ -6,8 +6,10 @@ pub mod copy;
 pub mod diagnostics;
 pub mod filter;
 pub mod gbuffer;
+pub mod mc;
+pub mod mip;
 pub mod probe;
 pub mod sh_project;
-pub mod shade_sh;
+pub mod shade;
 
 pub use convert::{ConvertOptions, Converter};

@@ -1,6 +1,8 @@
 //! Shared test helpers: a validated context, the clean-teardown check, the probes folder.
 #![allow(dead_code)]
 
+pub mod scenes;
+
 use envlight::gpu::{Context, ContextOptions, DeviceSelector};
 use std::path::PathBuf;
 

@@ -1,0 +1,147 @@
+#version 460
+// Shades every G-buffer pixel by its material's technique and composites the frame:
+// - LOOKUP: the mirror, one nearest-texel lookup of the reflected direction;
+// - SH: albedo·E(n)/π from SH irradiance coefficients (R&H 2001), clamped at 0;
+// - PREFILTERED: a prefiltered lat-long map (#3), irradiance by n or Phong by r, bilinear;
+// - FIS: filtered importance sampling (Colbert & Křivánek 2007): N Hammersley samples of the
+//   BRDF, each read from the dual-paraboloid MIP chain at lod ½·log2(Ωs/Ωp) + bias;
+// - MC: the mean the Monte Carlo pass accumulated.
+// Misses show the environment along the ray. Shadows (V_em) apply to LOOKUP and FIS.
+#extension GL_GOOGLE_include_directive : require
+#include "mappings.glsl"
+#include "sh.glsl"
+#include "scene.glsl"
+#include "sequence.glsl"
+#include "brdf.glsl"
+
+layout(set = 0, binding = BINDING_SHADE_NORMAL) uniform sampler2DArray gbuf_normal;
+layout(set = 0, binding = BINDING_SHADE_VIEW) uniform sampler2DArray gbuf_view;
+layout(std430, set = 0, binding = BINDING_SHADE_OBJECTS) readonly buffer Objects { Object objects[]; };
+layout(std430, set = 0, binding = BINDING_SHADE_COEFFS) readonly buffer Coeffs { vec4 coeffs[]; };
+layout(set = 0, binding = BINDING_SHADE_ENV) uniform sampler2DArray env;
+layout(set = 0, binding = BINDING_SHADE_POSITION) uniform sampler2DArray gbuf_position;
+layout(set = 0, binding = BINDING_SHADE_DP) uniform sampler2DArray dp;
+layout(std430, set = 0, binding = BINDING_SHADE_PREFILTERED) readonly buffer Pre { vec4 pre[]; };
+layout(set = 0, binding = BINDING_SHADE_MC) uniform sampler2DArray mc_accum;
+
+layout(push_constant) uniform Push {
+    vec4 world_to_file[3];  // the environment file's orientation (rows)
+    uvec2 env_size;
+    uint env_mapping;
+    uint count;       // objects
+    uint dp_size;     // dual paraboloid level-0 side
+    float max_lod;    // its last level
+    uint shadows;
+    uint mc_samples;  // samples in the MC accumulation
+} pc;
+
+layout(location = 0) out vec4 out_color;
+
+vec3 env_lookup(vec3 d) {
+    vec3 f = vec3(dot(pc.world_to_file[0].xyz, d), dot(pc.world_to_file[1].xyz, d), dot(pc.world_to_file[2].xyz, d));
+    Coord c = dir_to_coord(pc.env_mapping, f);
+    ivec2 texel = min(ivec2(c.uv * vec2(pc.env_size)), ivec2(pc.env_size) - 1);
+    return texelFetch(env, ivec3(texel, int(c.layer)), 0).rgb;
+}
+
+bool occluded(vec3 o, vec3 d) {
+    for (uint k = 0u; k < pc.count; k++) {
+        vec3 n;
+        if (object_hit(objects[k], o, d, n) > 0.0) return true;
+    }
+    return false;
+}
+
+// Texels are premultiplied by their solid-angle weight (glsl/mip.comp).
+vec3 dp_lookup(vec3 d, float lod) {
+    Coord c = dir_to_coord(MAPPING_DUAL_PARABOLOID, d);
+    vec4 v = textureLod(dp, vec3(c.uv, float(c.layer)), lod);
+    return v.a > 0.0 ? v.rgb / v.a : vec3(0.0);
+}
+
+// Solid angle of a level-0 texel at d: 4/(1+s²+t²)² · (2/size)², and 1+s²+t² = 2/(1+|d.y|).
+float dp_texel_solid_angle(vec3 d) {
+    float k = 2.0 / float(pc.dp_size), y1 = 1.0 + abs(d.y);
+    return y1 * y1 * k * k;
+}
+
+// Bilinear lookup in a w x w/2 lat-long map stored at pre[off...], wrapping in u.
+vec3 prefiltered_lookup(uint off, int w, vec3 d) {
+    int h = w / 2;
+    Coord c = dir_to_coord(MAPPING_LATLONG, d);
+    vec2 p = c.uv * vec2(w, h) - 0.5;
+    ivec2 i0 = ivec2(floor(p));
+    vec2 t = p - vec2(i0);
+    vec3 acc = vec3(0.0);
+    for (int k = 0; k < 4; k++) {
+        ivec2 q = i0 + ivec2(k & 1, k >> 1);
+        q.x = (q.x % w + w) % w;
+        q.y = clamp(q.y, 0, h - 1);
+        float wgt = ((k & 1) == 1 ? t.x : 1.0 - t.x) * ((k >> 1) == 1 ? t.y : 1.0 - t.y);
+        acc += wgt * pre[off + uint(q.y * w + q.x)].rgb;
+    }
+    return acc;
+}
+
+vec3 fis(Object ob, vec3 n, vec3 v, vec3 p, uvec2 pix) {
+    Brdf b = Brdf(uint(ob.brdf.x), ob.brdf.y, ob.brdf.z);
+    uint count = uint(ob.brdf.w);
+    vec3 t, bt;
+    shading_frame(n, t, bt);
+    vec3 wo = local_view(v, t, bt, n);
+    vec2 offset = (uint(ob.extra.w) & 1u) != 0u ? pixel_offset(pix) : vec2(0.0);
+    vec3 origin = shadow_origin(p, n);
+    vec3 sum = vec3(0.0);
+    for (uint i = 0u; i < count; i++) {
+        vec3 wi = brdf_sample(b, wo, rotate_sample(hammersley(i, count), offset));
+        if (wi.z <= 0.0) continue;  // below the horizon: no light, still one of the N
+        float w = brdf_weight(b, wo, wi);
+        float pdf = brdf_pdf(b, wo, wi);
+        vec3 d = normalize(t * wi.x + bt * wi.y + n * wi.z);
+        float lod = pc.max_lod;
+        if (pdf > 0.0) {
+            float omega_s = 1.0 / (float(count) * pdf);
+            lod = clamp(0.5 * log2(omega_s / dp_texel_solid_angle(d)) + ob.extra.x, 0.0, pc.max_lod);
+        }
+        if (pc.shadows != 0u && occluded(origin, d)) continue;
+        sum += w * dp_lookup(d, lod);
+    }
+    return sum / float(count);
+}
+
+void main() {
+    uvec2 pix = uvec2(gl_FragCoord.xy);
+    ivec3 q = ivec3(pix, 0);
+    vec4 nrm = texelFetch(gbuf_normal, q, 0);
+    vec3 v = texelFetch(gbuf_view, q, 0).xyz;
+    if (nrm.w < 0.0) {
+        out_color = vec4(env_lookup(-v), 1.0);
+        return;
+    }
+    Object ob = objects[uint(nrm.w)];
+    uint tech = uint(ob.albedo.w);
+    vec3 n = normalize(nrm.xyz);
+    vec3 p = texelFetch(gbuf_position, q, 0).xyz;
+    vec3 r = 2.0 * dot(v, n) * n - v;
+    vec3 color;
+    if (tech == TECH_MC) {
+        color = texelFetch(mc_accum, q, 0).rgb / float(max(pc.mc_samples, 1u));
+    } else if (tech == TECH_SH) {
+        float y[SH_MAX_COEFFS];
+        uint lmax = uint(ob.extra.z), off = uint(ob.extra.y);
+        sh_basis(lmax, n, y);
+        vec3 e = vec3(0.0);
+        for (uint k = 0u; k < (lmax + 1u) * (lmax + 1u); k++) e += coeffs[off + k].rgb * y[k];
+        color = ob.albedo.rgb * max(e, vec3(0.0)) / PI;
+    } else if (tech == TECH_PREFILTERED) {
+        bool diffuse = uint(ob.brdf.x) == BRDF_LAMBERT;
+        vec3 l = prefiltered_lookup(uint(ob.extra.y), int(ob.extra.z), diffuse ? n : r);
+        color = ob.albedo.rgb * (diffuse ? l / PI : l);
+    } else if (tech == TECH_LOOKUP) {
+        bool dark = pc.shadows != 0u && occluded(shadow_origin(p, n), r);
+        color = dark ? vec3(0.0) : ob.albedo.rgb * env_lookup(r);
+    } else {
+        color = ob.albedo.rgb * fis(ob, n, v, p, pix);
+    }
+    out_color = vec4(color, 1.0);
+}

@@ -1,0 +1,630 @@
+//! Scenes: a TOML file naming the environment, a camera, objects with materials and the
+//! technique each material is shaded by, and whether shadows are wanted; and the plan of the
+//! GPU passes a render of it runs, each with the reason it is needed.
+
+use crate::error::{Error, Result};
+use crate::math::brdf::Brdf;
+use crate::math::camera::{Camera, Shape};
+use crate::math::Orientation;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// A scene file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// The distant light.
+    pub environment: Environment,
+    /// The camera.
+    pub camera: Camera,
+    /// Test environment visibility (V_em) against the scene's objects.
+    #[serde(default)]
+    pub shadows: bool,
+    /// Settings of filtered importance sampling.
+    #[serde(default)]
+    pub fis: FisSettings,
+    /// Settings of the Monte Carlo reference.
+    #[serde(default)]
+    pub mc: McSettings,
+    /// The objects.
+    pub objects: Vec<SceneObject>,
+}
+
+/// The environment map and how to read it.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Environment {
+    /// The file, relative to the scene file.
+    pub file: PathBuf,
+    /// Its mapping (`latlong`, `angular`, `cube`, `dual-paraboloid`); inferred when absent.
+    #[serde(default)]
+    pub mapping: Option<String>,
+    /// Mirror the file left–right.
+    #[serde(default)]
+    pub flip_u: bool,
+    /// Turn it upside down.
+    #[serde(default)]
+    pub flip_v: bool,
+    /// Rotate it about +Y, degrees.
+    #[serde(default)]
+    pub rotate_y: f64,
+    /// A scale on its radiance.
+    #[serde(default = "one")]
+    pub intensity: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl Environment {
+    /// Its orientation.
+    pub fn orientation(&self) -> Orientation {
+        Orientation {
+            flip_u: self.flip_u,
+            flip_v: self.flip_v,
+            rotate_y_degrees: self.rotate_y,
+        }
+    }
+}
+
+/// Settings of filtered importance sampling shared by its materials.
+#[derive(Clone, Copy, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FisSettings {
+    /// Side of each dual-paraboloid half; by default about as many texels as the source.
+    #[serde(default)]
+    pub size: Option<u32>,
+}
+
+/// Settings of the Monte Carlo reference.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct McSettings {
+    /// Combine BRDF and environment sampling (otherwise BRDF sampling alone).
+    #[serde(default = "yes")]
+    pub mis: bool,
+    /// Random seed.
+    #[serde(default = "seed")]
+    pub seed: u32,
+    /// Samples per pixel per dispatch.
+    #[serde(default = "per_frame")]
+    pub per_frame: u32,
+}
+
+fn yes() -> bool {
+    true
+}
+fn seed() -> u32 {
+    1
+}
+fn per_frame() -> u32 {
+    64
+}
+
+impl Default for McSettings {
+    fn default() -> Self {
+        McSettings {
+            mis: true,
+            seed: 1,
+            per_frame: 64,
+        }
+    }
+}
+
+/// An object: a shape and a material.
+#[derive(Clone, Debug, Deserialize)]
+pub struct SceneObject {
+    /// The shape (`shape = "sphere"` or `"plane"` with its fields).
+    #[serde(flatten)]
+    pub shape: Shape,
+    /// Its material.
+    pub material: Material,
+}
+
+/// A material: a BRDF, a colour and a technique.
+#[derive(Clone, Debug, Deserialize)]
+pub struct Material {
+    /// The BRDF and its parameters.
+    #[serde(flatten)]
+    pub kind: MaterialKind,
+    /// Albedo (diffuse) or specular colour (glossy), RGB.
+    #[serde(default = "white")]
+    pub albedo: [f64; 3],
+    /// How it is shaded; by default `lookup` for mirrors, `sh` for diffuse, `fis` otherwise.
+    #[serde(default)]
+    pub technique: Option<Technique>,
+}
+
+fn white() -> [f64; 3] {
+    [1.0; 3]
+}
+
+/// The BRDFs a material can have.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum MaterialKind {
+    /// A perfect mirror.
+    Mirror,
+    /// Lambertian.
+    Diffuse,
+    /// Normalised Phong lobe about the reflected direction.
+    Phong {
+        /// Exponent, 1 to 10⁶.
+        n: f64,
+    },
+    /// Blinn-Phong.
+    Blinn {
+        /// Exponent.
+        n: f64,
+    },
+    /// GGX, Fresnel 1.
+    Ggx {
+        /// Roughness α in [0, 1].
+        alpha: f64,
+        /// Height-correlated Smith masking.
+        #[serde(default)]
+        correlated: bool,
+    },
+    /// Ward anisotropic.
+    Ward {
+        /// Roughness along the tangent (ŷ × n).
+        alpha_x: f64,
+        /// Roughness along the bitangent.
+        alpha_y: f64,
+    },
+}
+
+impl MaterialKind {
+    /// The BRDF.
+    pub fn brdf(&self) -> Brdf {
+        match *self {
+            MaterialKind::Mirror => Brdf::Mirror,
+            MaterialKind::Diffuse => Brdf::Lambert,
+            MaterialKind::Phong { n } => Brdf::Phong { n },
+            MaterialKind::Blinn { n } => Brdf::Blinn { n },
+            MaterialKind::Ggx { alpha, correlated } => Brdf::Ggx { alpha, correlated },
+            MaterialKind::Ward { alpha_x, alpha_y } => Brdf::Ward {
+                ax: alpha_x,
+                ay: alpha_y,
+            },
+        }
+    }
+}
+
+/// The default lod bias of filtered importance sampling (see docs/BENCHMARKS.md for the
+/// measurement that chose it).
+pub const DEFAULT_FIS_BIAS: f64 = 1.0;
+
+/// How a material is shaded.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Technique {
+    /// One lookup of the reflected direction (mirrors).
+    Lookup,
+    /// Filtered importance sampling.
+    Fis {
+        /// Samples per pixel.
+        #[serde(default = "fis_samples")]
+        samples: u32,
+        /// Lod bias; [`DEFAULT_FIS_BIAS`] when absent.
+        #[serde(default)]
+        bias: Option<f64>,
+        /// Rotate the sample set per pixel (noise instead of banding).
+        #[serde(default)]
+        rotate: bool,
+    },
+    /// SH irradiance (diffuse only).
+    Sh {
+        /// Highest band, 0 to 8.
+        #[serde(default = "sh_order")]
+        order: u32,
+    },
+    /// A prefiltered lat-long map: irradiance (diffuse) or the Phong lobe (phong).
+    Prefiltered {
+        /// Width of the map.
+        #[serde(default = "prefiltered_size")]
+        size: u32,
+    },
+    /// The Monte Carlo reference.
+    Mc {
+        /// Samples per pixel.
+        #[serde(default = "mc_samples")]
+        samples: u32,
+        /// Stop once the relative error estimate is below this.
+        #[serde(default)]
+        error: Option<f64>,
+    },
+}
+
+fn fis_samples() -> u32 {
+    64
+}
+fn sh_order() -> u32 {
+    2
+}
+fn prefiltered_size() -> u32 {
+    64
+}
+fn mc_samples() -> u32 {
+    1024
+}
+
+impl Technique {
+    /// Its name in scene files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Technique::Lookup => "lookup",
+            Technique::Fis { .. } => "fis",
+            Technique::Sh { .. } => "sh",
+            Technique::Prefiltered { .. } => "prefiltered",
+            Technique::Mc { .. } => "mc",
+        }
+    }
+}
+
+impl Material {
+    /// The technique, explicit or by default.
+    pub fn technique(&self) -> Technique {
+        self.technique.unwrap_or(match self.kind {
+            MaterialKind::Mirror => Technique::Lookup,
+            MaterialKind::Diffuse => Technique::Sh { order: 2 },
+            _ => Technique::Fis {
+                samples: 64,
+                bias: None,
+                rotate: false,
+            },
+        })
+    }
+}
+
+/// Most FIS samples per pixel.
+pub const MAX_FIS_SAMPLES: u32 = 16384;
+
+impl Scene {
+    /// Reads and checks a scene file.
+    pub fn load(path: &Path) -> Result<Scene> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let scene: Scene =
+            toml::from_str(&text).map_err(|e| Error::bad_file(path, e.to_string()))?;
+        scene
+            .validate()
+            .map_err(|m| Error::bad_file(path, m))?;
+        Ok(scene)
+    }
+
+    /// Parses a scene from TOML text (paths stay relative to the caller's directory).
+    pub fn parse(text: &str) -> Result<Scene> {
+        let scene: Scene =
+            toml::from_str(text).map_err(|e| Error::Invalid(format!("scene: {e}")))?;
+        scene.validate().map_err(Error::Invalid)?;
+        Ok(scene)
+    }
+
+    /// Checks every value a render depends on; the message names the object.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        let c = &self.camera;
+        if c.width == 0 || c.height == 0 || c.width > 16384 || c.height > 16384 {
+            return Err(format!(
+                "camera resolution {} x {} is outside 1 to 16384",
+                c.width, c.height
+            ));
+        }
+        if !(self.environment.intensity.is_finite() && self.environment.intensity >= 0.0) {
+            return Err(format!(
+                "environment intensity {} must be finite and non-negative",
+                self.environment.intensity
+            ));
+        }
+        if self.objects.is_empty() {
+            return Err("a scene needs at least one object".into());
+        }
+        if let Some(s) = self.fis.size {
+            if !(1..=4096).contains(&s) {
+                return Err(format!("fis size {s} is outside 1 to 4096"));
+            }
+        }
+        if self.mc.per_frame == 0 {
+            return Err("mc per_frame must be at least 1".into());
+        }
+        for (k, o) in self.objects.iter().enumerate() {
+            let what = format!("object {k} ({:?})", o.material.kind);
+            o.material.kind.brdf().validate().map_err(|m| format!("{what}: {m}"))?;
+            if o.material.albedo.iter().any(|a| !a.is_finite() || *a < 0.0) {
+                return Err(format!("{what}: albedo must be finite and non-negative"));
+            }
+            let t = o.material.technique();
+            let allowed = match o.material.kind {
+                MaterialKind::Mirror => matches!(t, Technique::Lookup | Technique::Mc { .. }),
+                MaterialKind::Diffuse => !matches!(t, Technique::Lookup),
+                MaterialKind::Phong { .. } => !matches!(t, Technique::Lookup | Technique::Sh { .. }),
+                _ => matches!(t, Technique::Fis { .. } | Technique::Mc { .. }),
+            };
+            if !allowed {
+                return Err(format!("{what}: technique {} does not apply to it", t.name()));
+            }
+            match t {
+                Technique::Fis { samples, bias, .. } => {
+                    if !(1..=MAX_FIS_SAMPLES).contains(&samples) {
+                        return Err(format!("{what}: fis samples {samples} outside 1 to {MAX_FIS_SAMPLES}"));
+                    }
+                    if bias.is_some_and(|b| !b.is_finite() || b.abs() > 16.0) {
+                        return Err(format!("{what}: fis bias must be within ±16"));
+                    }
+                }
+                Technique::Sh { order } if order > crate::gpu::layout::SH_MAX_LMAX => {
+                    return Err(format!("{what}: SH order {order} is above 8"));
+                }
+                Technique::Prefiltered { size } if !(4..=4096).contains(&size) || size % 2 == 1 => {
+                    return Err(format!("{what}: prefiltered size {size} must be even, 4 to 4096"));
+                }
+                Technique::Prefiltered { .. } => {
+                    if let MaterialKind::Phong { n } = o.material.kind {
+                        if n < 1.0 {
+                            return Err(format!("{what}: a prefiltered Phong map needs n ≥ 1"));
+                        }
+                    }
+                }
+                Technique::Mc { samples, error } => {
+                    if samples == 0 || samples > 1 << 24 {
+                        return Err(format!("{what}: mc samples {samples} outside 1 to 2^24"));
+                    }
+                    if error.is_some_and(|e| !(e > 0.0 && e.is_finite())) {
+                        return Err(format!("{what}: mc error target must be positive"));
+                    }
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A GPU pass a render may run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum PassKind {
+    /// Ray casting the objects.
+    GBuffer,
+    /// Converting the environment to a dual paraboloid.
+    DualParaboloid,
+    /// Its MIP chain.
+    MipChain,
+    /// SH projection.
+    ShProjection,
+    /// Brute-force prefiltering of one map.
+    Prefilter,
+    /// Converting the environment to lat-long for Monte Carlo sampling.
+    LatLong,
+    /// Monte Carlo frames.
+    MonteCarlo,
+    /// Shading and compositing.
+    Shade,
+}
+
+impl PassKind {
+    /// A short name.
+    pub fn name(self) -> &'static str {
+        match self {
+            PassKind::GBuffer => "gbuffer",
+            PassKind::DualParaboloid => "dual paraboloid",
+            PassKind::MipChain => "mip chain",
+            PassKind::ShProjection => "sh projection",
+            PassKind::Prefilter => "prefilter",
+            PassKind::LatLong => "lat-long",
+            PassKind::MonteCarlo => "monte carlo",
+            PassKind::Shade => "shade",
+        }
+    }
+
+    /// The shader modules whose pipelines the pass creates (either of a pair where the
+    /// device decides: cube or 2D sources, subgroups or shared memory).
+    pub fn pipelines(self) -> &'static [&'static str] {
+        match self {
+            PassKind::GBuffer => &["gbuffer"],
+            PassKind::DualParaboloid | PassKind::LatLong => &["convert_2d", "convert_cube"],
+            PassKind::MipChain => &["mip"],
+            PassKind::ShProjection => &[
+                "sh_project_subgroup",
+                "sh_reduce_subgroup",
+                "sh_project_shared",
+                "sh_reduce_shared",
+            ],
+            PassKind::Prefilter => &["brute_prepare", "brute"],
+            PassKind::MonteCarlo => &["mc"],
+            PassKind::Shade => &["shade"],
+        }
+    }
+}
+
+/// One planned pass and why.
+#[derive(Clone, Debug)]
+pub struct PlannedPass {
+    /// Which.
+    pub kind: PassKind,
+    /// Why the scene needs it.
+    pub why: String,
+}
+
+/// What a render will run.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// GPU passes, in order (a pass appears once however many times it runs).
+    pub passes: Vec<PlannedPass>,
+    /// Remarks: CPU work, and effects a technique leaves out.
+    pub notes: Vec<String>,
+}
+
+impl Plan {
+    /// The pass kinds, in order.
+    pub fn kinds(&self) -> Vec<PassKind> {
+        self.passes.iter().map(|p| p.kind).collect()
+    }
+}
+
+/// Plans a render of `scene` whose environment file holds a `source` map (the mapping
+/// decides whether Monte Carlo needs a lat-long conversion).
+pub fn plan(scene: &Scene, source: crate::math::Mapping) -> Plan {
+    let users = |f: &dyn Fn(&Technique) -> bool| -> Vec<String> {
+        scene
+            .objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| f(&o.material.technique()))
+            .map(|(k, o)| format!("{k} ({})", kind_name(&o.material.kind)))
+            .collect()
+    };
+    let fis = users(&|t| matches!(t, Technique::Fis { .. }));
+    let sh = users(&|t| matches!(t, Technique::Sh { .. }));
+    let pre = users(&|t| matches!(t, Technique::Prefiltered { .. }));
+    let mc = users(&|t| matches!(t, Technique::Mc { .. }));
+    let lookup = users(&|t| matches!(t, Technique::Lookup));
+    let mut passes = Vec::new();
+    let list = |v: &[String]| v.join(", ");
+    if !sh.is_empty() {
+        passes.push(PlannedPass {
+            kind: PassKind::ShProjection,
+            why: format!("objects {} use SH irradiance", list(&sh)),
+        });
+    }
+    if !fis.is_empty() {
+        passes.push(PlannedPass {
+            kind: PassKind::DualParaboloid,
+            why: format!("objects {} use filtered importance sampling", list(&fis)),
+        });
+        passes.push(PlannedPass {
+            kind: PassKind::MipChain,
+            why: "FIS reads each sample at the MIP level its pdf calls for".into(),
+        });
+    }
+    if !pre.is_empty() {
+        passes.push(PlannedPass {
+            kind: PassKind::Prefilter,
+            why: format!("objects {} use prefiltered maps (brute force, once per distinct map)", list(&pre)),
+        });
+    }
+    passes.push(PlannedPass {
+        kind: PassKind::GBuffer,
+        why: "every render casts its camera rays".into(),
+    });
+    let mut notes = Vec::new();
+    if !mc.is_empty() {
+        if source != crate::math::Mapping::LatLong {
+            passes.push(PlannedPass {
+                kind: PassKind::LatLong,
+                why: "Monte Carlo samples a lat-long map by its luminance".into(),
+            });
+        }
+        passes.push(PlannedPass {
+            kind: PassKind::MonteCarlo,
+            why: format!("objects {} use the Monte Carlo reference", list(&mc)),
+        });
+        notes.push("CPU: the luminance CDF of the lat-long map, for environment sampling".into());
+    }
+    passes.push(PlannedPass {
+        kind: PassKind::Shade,
+        why: "shades every pixel and shows the environment behind".into(),
+    });
+    if scene.shadows {
+        let mut traced = Vec::new();
+        if !lookup.is_empty() {
+            traced.push("mirror lookups");
+        }
+        if !fis.is_empty() {
+            traced.push("FIS samples");
+        }
+        if !mc.is_empty() {
+            traced.push("Monte Carlo samples");
+        }
+        notes.push(format!(
+            "shadows: {} trace visibility against the scene's objects{}",
+            if traced.is_empty() { "nothing".to_string() } else { traced.join(", ") },
+            if sh.is_empty() && pre.is_empty() {
+                String::new()
+            } else {
+                "; SH and prefiltered maps integrate the whole environment and stay unshadowed".into()
+            }
+        ));
+    }
+    if fis.is_empty() {
+        notes.push("no dual paraboloid or MIP chain: no material uses FIS".into());
+    }
+    Plan { passes, notes }
+}
+
+fn kind_name(k: &MaterialKind) -> &'static str {
+    match k {
+        MaterialKind::Mirror => "mirror",
+        MaterialKind::Diffuse => "diffuse",
+        MaterialKind::Phong { .. } => "phong",
+        MaterialKind::Blinn { .. } => "blinn",
+        MaterialKind::Ggx { .. } => "ggx",
+        MaterialKind::Ward { .. } => "ward",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GLOSSY: &str = r#"
+        [environment]
+        file = "sky.exr"
+        [camera]
+        projection = { kind = "perspective", fov_y = 40.0 }
+        eye = [0, 1, 5]
+        target = [0, 0, 0]
+        width = 64
+        height = 48
+        [[objects]]
+        shape = "sphere"
+        center = [0, 0, 0]
+        radius = 1
+        material = { type = "ggx", alpha = 0.3, technique = { kind = "fis", samples = 32 } }
+        [[objects]]
+        shape = "plane"
+        normal = [0, 1, 0]
+        offset = -1
+        extent = 5
+        material = { type = "diffuse", albedo = [0.5, 0.5, 0.5] }
+    "#;
+
+    #[test]
+    fn parses_and_plans() {
+        let s = Scene::parse(GLOSSY).unwrap();
+        assert_eq!(s.objects.len(), 2);
+        assert_eq!(
+            s.objects[0].material.technique(),
+            Technique::Fis {
+                samples: 32,
+                bias: None,
+                rotate: false
+            }
+        );
+        let p = plan(&s, crate::math::Mapping::LatLong);
+        assert_eq!(
+            p.kinds(),
+            vec![
+                PassKind::ShProjection,
+                PassKind::DualParaboloid,
+                PassKind::MipChain,
+                PassKind::GBuffer,
+                PassKind::Shade
+            ]
+        );
+    }
+
+    #[test]
+    fn rejects_what_does_not_apply() {
+        let bad = GLOSSY.replace("kind = \"fis\", samples = 32", "kind = \"sh\"");
+        let e = Scene::parse(&bad).unwrap_err().to_string();
+        assert!(e.contains("object 0") && e.contains("sh"), "{e}");
+        let bad = GLOSSY.replace("alpha = 0.3", "alpha = 1.5");
+        let e = Scene::parse(&bad).unwrap_err().to_string();
+        assert!(e.contains("GGX alpha"), "{e}");
+        let bad = GLOSSY.replace("width = 64", "width = 0");
+        assert!(Scene::parse(&bad).is_err());
+    }
+}
