@@ -618,7 +618,12 @@ fn run(cli: Cli) -> Result<()> {
                 None => envlight::render::load_environment(&sc, base)?.mapping,
             };
             let plan = envlight::scene::plan(&sc, mapping);
-            println!("{} ({}, {})", scene.display(), path.display(), mapping.name());
+            println!(
+                "{} ({}, {})",
+                scene.display(),
+                path.display(),
+                mapping.name()
+            );
             for (k, p) in plan.passes.iter().enumerate() {
                 println!("{:>2}. {:<16} {}", k + 1, p.kind.name(), p.why);
             }
@@ -773,7 +778,12 @@ fn render_scene(cli: &Cli, scene: &Path, output: &Path) -> Result<()> {
     println!("{:<16} {:>11}  spans", "pass", "GPU ms");
     let mut total = 0.0;
     for rec in &r.records {
-        println!("{:<16} {:>11.3}  {}", rec.kind.name(), rec.ms(), rec.timings.len());
+        println!(
+            "{:<16} {:>11.3}  {}",
+            rec.kind.name(),
+            rec.ms(),
+            rec.timings.len()
+        );
         total += rec.ms();
     }
     println!("{:<16} {:>11.3}  (wall {wall:.2} s)", "total", total);

@@ -13,7 +13,9 @@ use crate::passes::mip::MipChain;
 use crate::passes::sh_project::{ShProjector, Subgroups};
 use crate::passes::shade::{Shade, ShadeInputs};
 use crate::passes::{ConvertOptions, Converter};
-use crate::scene::{plan, MaterialKind, PassKind, Plan, Scene, Technique, DEFAULT_FIS_BIAS};
+use crate::scene::{
+    plan, MaterialKind, PassKind, Plan, Scene, SceneObject, Technique, DEFAULT_FIS_BIAS,
+};
 use crate::EnvMap;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -65,7 +67,9 @@ pub fn load_environment(scene: &Scene, base: &Path) -> Result<EnvMap> {
     let env = &scene.environment;
     let mapping = match &env.mapping {
         Some(m) => Some(Mapping::parse(m).ok_or_else(|| {
-            Error::Invalid(format!("environment mapping '{m}' is not one of latlong, angular, cube, dual-paraboloid"))
+            Error::Invalid(format!(
+                "environment mapping '{m}' is not one of latlong, angular, cube, dual-paraboloid"
+            ))
         })?),
         None => None,
     };
@@ -92,6 +96,43 @@ pub fn default_dp_size(map: &EnvMap) -> u32 {
     let n = (map.width as f64) * (map.height as f64) * map.layers() as f64;
     let side = (2.0 * n / std::f64::consts::PI).sqrt();
     (side.max(1.0) as u32).next_power_of_two().clamp(16, 1024)
+}
+
+/// The GPU record of a scene object; `data_offset` locates its SH coefficients or its
+/// prefiltered map (0 for other techniques).
+pub fn object_record(o: &SceneObject, data_offset: u32) -> GpuObject {
+    let mut g = shape_record(&o.shape);
+    let m = &o.material;
+    let brdf = m.kind.brdf();
+    let p = brdf.params();
+    let a = m.albedo;
+    let off = data_offset as f32;
+    let (tech, samples, extra) = match m.technique() {
+        Technique::Lookup => (technique::LOOKUP, 0, [0.0; 4]),
+        Technique::Fis {
+            samples,
+            bias,
+            rotate,
+        } => (
+            technique::FIS,
+            samples,
+            [
+                bias.unwrap_or(DEFAULT_FIS_BIAS) as f32,
+                0.0,
+                0.0,
+                rotate as u32 as f32,
+            ],
+        ),
+        Technique::Sh { order } => (technique::SH, 0, [0.0, off, order as f32, 0.0]),
+        Technique::Prefiltered { size } => {
+            (technique::PREFILTERED, 0, [0.0, off, size as f32, 0.0])
+        }
+        Technique::Mc { .. } => (technique::MC, 0, [0.0; 4]),
+    };
+    g.albedo = [a[0] as f32, a[1] as f32, a[2] as f32, tech as f32];
+    g.brdf = [brdf.id() as f32, p[0] as f32, p[1] as f32, samples as f32];
+    g.extra = extra;
+    g
 }
 
 /// Renders `scene` with `env` (from [`load_environment`]) on `ctx`.
@@ -122,8 +163,12 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
             })
             .max()
             .unwrap_or(2);
-        let (c, t) = ShProjector::new(ctx, Subgroups::Auto)?.run_oriented(&env_gpu, lmax, &orientation)?;
-        records.push(PassRecord { kind: PassKind::ShProjection, timings: t });
+        let (c, t) =
+            ShProjector::new(ctx, Subgroups::Auto)?.run_oriented(&env_gpu, lmax, &orientation)?;
+        records.push(PassRecord {
+            kind: PassKind::ShProjection,
+            timings: t,
+        });
         for (k, o) in scene.objects.iter().enumerate() {
             if let Technique::Sh { order } = o.material.technique() {
                 sh_offsets[k] = sh_coeffs.len() as u32;
@@ -136,7 +181,9 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
     let mut dp = None;
     if needs(PassKind::DualParaboloid) {
         let size = scene.fis.size.unwrap_or_else(|| default_dp_size(env));
-        let conv = converter.as_ref().unwrap_or_else(|| unreachable!("made above"));
+        let conv = converter
+            .as_ref()
+            .unwrap_or_else(|| unreachable!("made above"));
         let (map, t) = conv.run_mipped(
             &env_gpu,
             &ConvertOptions {
@@ -146,9 +193,15 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
                 supersample: None,
             },
         )?;
-        records.push(PassRecord { kind: PassKind::DualParaboloid, timings: t });
+        records.push(PassRecord {
+            kind: PassKind::DualParaboloid,
+            timings: t,
+        });
         let t = MipChain::new(ctx)?.run(&map)?;
-        records.push(PassRecord { kind: PassKind::MipChain, timings: t });
+        records.push(PassRecord {
+            kind: PassKind::MipChain,
+            timings: t,
+        });
         dp = Some(map);
     }
 
@@ -175,10 +228,26 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
                 pre_offsets[k] = off;
                 continue;
             }
-            let (map, t) = brute.run(&env_gpu, &orientation, kernel, FilterTarget { to: Mapping::LatLong, size })?;
-            records.push(PassRecord { kind: PassKind::Prefilter, timings: t });
+            let (map, t) = brute.run(
+                &env_gpu,
+                &orientation,
+                kernel,
+                FilterTarget {
+                    to: Mapping::LatLong,
+                    size,
+                },
+            )?;
+            records.push(PassRecord {
+                kind: PassKind::Prefilter,
+                timings: t,
+            });
             let off = texels.len() as u32;
-            texels.extend(map.download(ctx)?.texels.iter().map(|t| [t[0], t[1], t[2], 0.0]));
+            texels.extend(
+                map.download(ctx)?
+                    .texels
+                    .iter()
+                    .map(|t| [t[0], t[1], t[2], 0.0]),
+            );
             made.push((key, size, off));
             pre_offsets[k] = off;
         }
@@ -198,34 +267,13 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
         .objects
         .iter()
         .enumerate()
-        .map(|(k, o)| {
-            let mut g = shape_record(&o.shape);
-            let m = &o.material;
-            let brdf = m.kind.brdf();
-            let p = brdf.params();
-            let a = m.albedo;
-            let t = m.technique();
-            let (tech, samples, extra) = match t {
-                Technique::Lookup => (technique::LOOKUP, 0, [0.0; 4]),
-                Technique::Fis { samples, bias, rotate } => (
-                    technique::FIS,
-                    samples,
-                    [bias.unwrap_or(DEFAULT_FIS_BIAS) as f32, 0.0, 0.0, rotate as u32 as f32],
-                ),
-                Technique::Sh { order } => (technique::SH, 0, [0.0, sh_offsets[k] as f32, order as f32, 0.0]),
-                Technique::Prefiltered { size } => {
-                    (technique::PREFILTERED, 0, [0.0, pre_offsets[k] as f32, size as f32, 0.0])
-                }
-                Technique::Mc { .. } => (technique::MC, 0, [0.0; 4]),
-            };
-            g.albedo = [a[0] as f32, a[1] as f32, a[2] as f32, tech as f32];
-            g.brdf = [brdf.id() as f32, p[0] as f32, p[1] as f32, samples as f32];
-            g.extra = extra;
-            g
-        })
+        .map(|(k, o)| object_record(o, sh_offsets[k].max(pre_offsets[k])))
         .collect();
     let (gbuf, t) = GBufferPass::new(ctx)?.run(&scene.camera, &objects)?;
-    records.push(PassRecord { kind: PassKind::GBuffer, timings: t });
+    records.push(PassRecord {
+        kind: PassKind::GBuffer,
+        timings: t,
+    });
 
     // Monte Carlo: one accumulation for every MC material, at the most samples any asks.
     let mut mc = None;
@@ -239,22 +287,35 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
                 _ => None,
             })
             .fold((0, None::<f64>), |(s, e), (s2, e2)| {
-                (s.max(s2), match (e, e2) {
-                    (Some(a), Some(b)) => Some(a.min(b)),
-                    (a, b) => a.or(b),
-                })
+                (
+                    s.max(s2),
+                    match (e, e2) {
+                        (Some(a), Some(b)) => Some(a.min(b)),
+                        (a, b) => a.or(b),
+                    },
+                )
             });
         let mc_env = if env.mapping == Mapping::LatLong {
             McEnv::new(ctx, env, &orientation)?
         } else {
             let n = env.width as f64 * env.height as f64 * env.layers() as f64;
             let width = (((2.0 * n).sqrt() as u32).max(8) / 2 * 2).min(8192);
-            let conv = converter.as_ref().unwrap_or_else(|| unreachable!("made above"));
+            let conv = converter
+                .as_ref()
+                .unwrap_or_else(|| unreachable!("made above"));
             let (ll, t) = conv.run(
                 &env_gpu,
-                &ConvertOptions { to: Mapping::LatLong, size: width, orientation, supersample: None },
+                &ConvertOptions {
+                    to: Mapping::LatLong,
+                    size: width,
+                    orientation,
+                    supersample: None,
+                },
             )?;
-            records.push(PassRecord { kind: PassKind::LatLong, timings: t });
+            records.push(PassRecord {
+                kind: PassKind::LatLong,
+                timings: t,
+            });
             McEnv::new(ctx, &ll.download(ctx)?, &Orientation::default())?
         };
         let (res, t) = MonteCarlo::new(ctx)?.run(
@@ -269,7 +330,10 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
                 per_frame: scene.mc.per_frame,
             },
         )?;
-        records.push(PassRecord { kind: PassKind::MonteCarlo, timings: t });
+        records.push(PassRecord {
+            kind: PassKind::MonteCarlo,
+            timings: t,
+        });
         mc_summary = Some((res.samples, res.error));
         mc = Some(res);
     }
@@ -279,16 +343,27 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
         &ShadeInputs {
             env: &env_gpu,
             orientation,
-            sh: if sh_coeffs.is_empty() { None } else { Some(&sh_coeffs) },
+            sh: if sh_coeffs.is_empty() {
+                None
+            } else {
+                Some(&sh_coeffs)
+            },
             dp: dp.as_ref(),
             prefiltered: pre_buffer.as_ref(),
             mc: mc.as_ref().map(|m| (&m.accum, m.samples)),
             shadows: scene.shadows,
         },
     )?;
-    records.push(PassRecord { kind: PassKind::Shade, timings: t });
+    records.push(PassRecord {
+        kind: PassKind::Shade,
+        timings: t,
+    });
     let frame = frame.download(ctx)?;
-    if let Some(k) = frame.texels.iter().position(|t| t.iter().any(|c| !c.is_finite())) {
+    if let Some(k) = frame
+        .texels
+        .iter()
+        .position(|t| t.iter().any(|c| !c.is_finite()))
+    {
         return Err(Error::Invalid(format!(
             "pixel ({}, {}) of the frame is not finite: {:?}",
             k as u32 % frame.width,
@@ -296,5 +371,10 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
             frame.texels[k]
         )));
     }
-    Ok(Rendered { frame, records, plan, mc: mc_summary })
+    Ok(Rendered {
+        frame,
+        records,
+        plan,
+        mc: mc_summary,
+    })
 }

@@ -290,9 +290,7 @@ impl Scene {
         })?;
         let scene: Scene =
             toml::from_str(&text).map_err(|e| Error::bad_file(path, e.to_string()))?;
-        scene
-            .validate()
-            .map_err(|m| Error::bad_file(path, m))?;
+        scene.validate().map_err(|m| Error::bad_file(path, m))?;
         Ok(scene)
     }
 
@@ -332,7 +330,11 @@ impl Scene {
         }
         for (k, o) in self.objects.iter().enumerate() {
             let what = format!("object {k} ({:?})", o.material.kind);
-            o.material.kind.brdf().validate().map_err(|m| format!("{what}: {m}"))?;
+            o.material
+                .kind
+                .brdf()
+                .validate()
+                .map_err(|m| format!("{what}: {m}"))?;
             if o.material.albedo.iter().any(|a| !a.is_finite() || *a < 0.0) {
                 return Err(format!("{what}: albedo must be finite and non-negative"));
             }
@@ -340,16 +342,23 @@ impl Scene {
             let allowed = match o.material.kind {
                 MaterialKind::Mirror => matches!(t, Technique::Lookup | Technique::Mc { .. }),
                 MaterialKind::Diffuse => !matches!(t, Technique::Lookup),
-                MaterialKind::Phong { .. } => !matches!(t, Technique::Lookup | Technique::Sh { .. }),
+                MaterialKind::Phong { .. } => {
+                    !matches!(t, Technique::Lookup | Technique::Sh { .. })
+                }
                 _ => matches!(t, Technique::Fis { .. } | Technique::Mc { .. }),
             };
             if !allowed {
-                return Err(format!("{what}: technique {} does not apply to it", t.name()));
+                return Err(format!(
+                    "{what}: technique {} does not apply to it",
+                    t.name()
+                ));
             }
             match t {
                 Technique::Fis { samples, bias, .. } => {
                     if !(1..=MAX_FIS_SAMPLES).contains(&samples) {
-                        return Err(format!("{what}: fis samples {samples} outside 1 to {MAX_FIS_SAMPLES}"));
+                        return Err(format!(
+                            "{what}: fis samples {samples} outside 1 to {MAX_FIS_SAMPLES}"
+                        ));
                     }
                     if bias.is_some_and(|b| !b.is_finite() || b.abs() > 16.0) {
                         return Err(format!("{what}: fis bias must be within ±16"));
@@ -359,7 +368,9 @@ impl Scene {
                     return Err(format!("{what}: SH order {order} is above 8"));
                 }
                 Technique::Prefiltered { size } if !(4..=4096).contains(&size) || size % 2 == 1 => {
-                    return Err(format!("{what}: prefiltered size {size} must be even, 4 to 4096"));
+                    return Err(format!(
+                        "{what}: prefiltered size {size} must be even, 4 to 4096"
+                    ));
                 }
                 Technique::Prefiltered { .. } => {
                     if let MaterialKind::Phong { n } = o.material.kind {
@@ -502,7 +513,10 @@ pub fn plan(scene: &Scene, source: crate::math::Mapping) -> Plan {
     if !pre.is_empty() {
         passes.push(PlannedPass {
             kind: PassKind::Prefilter,
-            why: format!("objects {} use prefiltered maps (brute force, once per distinct map)", list(&pre)),
+            why: format!(
+                "objects {} use prefiltered maps (brute force, once per distinct map)",
+                list(&pre)
+            ),
         });
     }
     passes.push(PlannedPass {
@@ -540,11 +554,16 @@ pub fn plan(scene: &Scene, source: crate::math::Mapping) -> Plan {
         }
         notes.push(format!(
             "shadows: {} trace visibility against the scene's objects{}",
-            if traced.is_empty() { "nothing".to_string() } else { traced.join(", ") },
+            if traced.is_empty() {
+                "nothing".to_string()
+            } else {
+                traced.join(", ")
+            },
             if sh.is_empty() && pre.is_empty() {
                 String::new()
             } else {
-                "; SH and prefiltered maps integrate the whole environment and stay unshadowed".into()
+                "; SH and prefiltered maps integrate the whole environment and stay unshadowed"
+                    .into()
             }
         ));
     }

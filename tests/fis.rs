@@ -31,13 +31,31 @@ fn furnace_renders_each_brdfs_albedo() {
             MaterialKind::Phong { n: 10.0 },
             MaterialKind::Phong { n: 1e3 },
             MaterialKind::Phong { n: 1e6 },
-            MaterialKind::Ggx { alpha: 0.0, correlated: false },
-            MaterialKind::Ggx { alpha: 0.01, correlated: false },
-            MaterialKind::Ggx { alpha: 0.3, correlated: false },
-            MaterialKind::Ggx { alpha: 1.0, correlated: false },
-            MaterialKind::Ggx { alpha: 0.5, correlated: true },
+            MaterialKind::Ggx {
+                alpha: 0.0,
+                correlated: false,
+            },
+            MaterialKind::Ggx {
+                alpha: 0.01,
+                correlated: false,
+            },
+            MaterialKind::Ggx {
+                alpha: 0.3,
+                correlated: false,
+            },
+            MaterialKind::Ggx {
+                alpha: 1.0,
+                correlated: false,
+            },
+            MaterialKind::Ggx {
+                alpha: 0.5,
+                correlated: true,
+            },
             MaterialKind::Blinn { n: 50.0 },
-            MaterialKind::Ward { alpha_x: 0.5, alpha_y: 0.05 },
+            MaterialKind::Ward {
+                alpha_x: 0.5,
+                alpha_y: 0.05,
+            },
         ];
         for kind in materials {
             let sc = scene(
@@ -52,9 +70,14 @@ fn furnace_renders_each_brdfs_albedo() {
             for j in 0..cam.height {
                 for i in 0..cam.width {
                     let px = r.frame.texels[(j * cam.width + i) as usize];
-                    assert!(px.iter().all(|v| v.is_finite() && *v >= 0.0), "{kind:?} ({i}, {j}): {px:?}");
+                    assert!(
+                        px.iter().all(|v| v.is_finite() && *v >= 0.0),
+                        "{kind:?} ({i}, {j}): {px:?}"
+                    );
                     let (o, d) = cam.ray(i, j);
-                    let Some(hit) = trace(&[unit_sphere()], o, d) else { continue };
+                    let Some(hit) = trace(&[unit_sphere()], o, d) else {
+                        continue;
+                    };
                     if hit.margin < 1e-3 {
                         continue;
                     }
@@ -68,7 +91,10 @@ fn furnace_renders_each_brdfs_albedo() {
                     }
                 }
             }
-            eprintln!("{kind:?}: {n} pixels, worst {worst:.1e}, mean {:.1e}", sum / n as f64);
+            eprintln!(
+                "{kind:?}: {n} pixels, worst {worst:.1e}, mean {:.1e}",
+                sum / n as f64
+            );
             assert!(n > 200);
             assert!(worst < 1e-3, "{kind:?}: worst error {worst}");
         }
@@ -88,7 +114,12 @@ fn mirror_is_the_lookup_and_the_glossy_limits_reach_it() {
     {
         let env = EnvMap::from_fn(Mapping::LatLong, 512, 256, 2, smooth_env);
         let cam = sphere_camera(24);
-        let mirror = object(unit_sphere(), MaterialKind::Mirror, [1.0; 3], Technique::Lookup);
+        let mirror = object(
+            unit_sphere(),
+            MaterialKind::Mirror,
+            [1.0; 3],
+            Technique::Lookup,
+        );
         let r = render(&ctx, &scene(cam, vec![mirror], false, 256), &env).unwrap();
         let (mut exact, mut edge) = (0, 0);
         for j in 0..cam.height {
@@ -114,7 +145,10 @@ fn mirror_is_the_lookup_and_the_glossy_limits_reach_it() {
                     let near = [(-1e-4, 0.0), (1e-4, 0.0), (0.0, -1e-4), (0.0, 1e-4)]
                         .iter()
                         .any(|(du, dv)| px == texel_at(&env, c.u + du, c.v + dv));
-                    assert!(near, "mirror pixel ({i}, {j}) {px:?} is not the lookup of {r}");
+                    assert!(
+                        near,
+                        "mirror pixel ({i}, {j}) {px:?} is not the lookup of {r}"
+                    );
                     edge += 1;
                 }
             }
@@ -122,12 +156,20 @@ fn mirror_is_the_lookup_and_the_glossy_limits_reach_it() {
         eprintln!("mirror: {exact} pixels exact, {edge} at a texel edge");
         assert!(exact > 300 && edge * 20 < exact);
         for kind in [
-            MaterialKind::Ggx { alpha: 0.0, correlated: false },
+            MaterialKind::Ggx {
+                alpha: 0.0,
+                correlated: false,
+            },
             MaterialKind::Phong { n: 1e6 },
         ] {
             let g = render(
                 &ctx,
-                &scene(cam, vec![object(unit_sphere(), kind, [1.0; 3], fis(16))], false, 256),
+                &scene(
+                    cam,
+                    vec![object(unit_sphere(), kind, [1.0; 3], fis(16))],
+                    false,
+                    256,
+                ),
                 &env,
             )
             .unwrap();
@@ -183,7 +225,10 @@ fn mip_levels_match_the_float64_box_filter() {
                             let g = got[((layer * l.size + j) * l.size + i) as usize];
                             assert!(g.iter().all(|v| v.is_finite()));
                             if g[3] <= 0.0 {
-                                assert!(l.texels[((layer * l.size + j) * l.size + i) as usize][3] == 0.0);
+                                assert!(
+                                    l.texels[((layer * l.size + j) * l.size + i) as usize][3]
+                                        == 0.0
+                                );
                                 continue;
                             }
                             let want = if size.is_power_of_two() {
@@ -194,7 +239,12 @@ fn mip_levels_match_the_float64_box_filter() {
                             for c in 0..3 {
                                 let rel = ((g[c] / g[3]) as f64 - want[c]).abs() / want[c];
                                 worst = worst.max(rel);
-                                assert!(rel < 2e-6, "size {size} level {k} ({layer}, {i}, {j}) ch {c}: {} vs {}", g[c] / g[3], want[c]);
+                                assert!(
+                                    rel < 2e-6,
+                                    "size {size} level {k} ({layer}, {i}, {j}) ch {c}: {} vs {}",
+                                    g[c] / g[3],
+                                    want[c]
+                                );
                             }
                         }
                     }
@@ -215,7 +265,12 @@ fn mip_chain_has_no_step_at_the_rim() {
     let ctx = common::ctx();
     {
         let size = 32u32;
-        let mut map = EnvMap::new(Mapping::DualParaboloid, size, size, vec![[1.0; 3]; (2 * size * size) as usize]);
+        let mut map = EnvMap::new(
+            Mapping::DualParaboloid,
+            size,
+            size,
+            vec![[1.0; 3]; (2 * size * size) as usize],
+        );
         for j in 0..size {
             for i in 0..size {
                 let k = map.index(1, i, j);
@@ -237,7 +292,10 @@ fn mip_chain_has_no_step_at_the_rim() {
                     let g = got[(layer * s * s + idx) as usize];
                     if g[3] > 0.0 {
                         let v = g[1] / g[3];
-                        assert!(((v - c) / c).abs() < 1e-6, "level {k} layer {layer} texel {idx}: {v}");
+                        assert!(
+                            ((v - c) / c).abs() < 1e-6,
+                            "level {k} layer {layer} texel {idx}: {v}"
+                        );
                     }
                 }
             }
@@ -256,21 +314,49 @@ fn fis_stays_finite_with_a_sun() {
         let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, |d| sky.radiance(d));
         let cam = sphere_camera(16);
         for kind in [
-            MaterialKind::Ggx { alpha: 1e-6, correlated: true },
-            MaterialKind::Ggx { alpha: 1.0, correlated: false },
+            MaterialKind::Ggx {
+                alpha: 1e-6,
+                correlated: true,
+            },
+            MaterialKind::Ggx {
+                alpha: 1.0,
+                correlated: false,
+            },
             MaterialKind::Phong { n: 1e6 },
             MaterialKind::Blinn { n: 1e6 },
-            MaterialKind::Ward { alpha_x: 1e-3, alpha_y: 1.0 },
+            MaterialKind::Ward {
+                alpha_x: 1e-3,
+                alpha_y: 1.0,
+            },
         ] {
             for n in [1, 64] {
                 let sc = scene(
                     cam,
-                    vec![object(Shape::Sphere { center: [0.0; 3], radius: 1.0 }, kind, [1.0; 3], Technique::Fis { samples: n, bias: Some(1.0), rotate: true })],
+                    vec![object(
+                        Shape::Sphere {
+                            center: [0.0; 3],
+                            radius: 1.0,
+                        },
+                        kind,
+                        [1.0; 3],
+                        Technique::Fis {
+                            samples: n,
+                            bias: Some(1.0),
+                            rotate: true,
+                        },
+                    )],
                     true,
                     16,
                 );
                 let r = render(&ctx, &sc, &env).unwrap();
-                assert!(r.frame.texels.iter().flatten().all(|v| v.is_finite() && *v >= 0.0), "{kind:?} N={n}");
+                assert!(
+                    r.frame
+                        .texels
+                        .iter()
+                        .flatten()
+                        .all(|v| v.is_finite() && *v >= 0.0),
+                    "{kind:?} N={n}"
+                );
             }
         }
     }

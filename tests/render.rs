@@ -10,7 +10,7 @@ use envlight::math::synth::smooth_env;
 use envlight::math::{Mapping, Orientation};
 use envlight::passes::gbuffer::{GBufferPass, Object};
 use envlight::passes::sh_project::{ShProjector, Subgroups};
-use envlight::passes::shade_sh::ShadeSh;
+use envlight::passes::shade::{Shade, ShadeInputs};
 use envlight::EnvMap;
 use std::f64::consts::PI;
 
@@ -63,7 +63,7 @@ fn diffuse_spheres_match_float64_irradiance() {
         let g = GpuEnvMap::upload(&ctx, &map).unwrap();
         let projector = ShProjector::new(&ctx, Subgroups::Auto).unwrap();
         let gpass = GBufferPass::new(&ctx).unwrap();
-        let shade = ShadeSh::new(&ctx).unwrap();
+        let shade = Shade::new(&ctx).unwrap();
         let objects = scene();
         let shapes: Vec<Shape> = objects.iter().map(|o| o.shape).collect();
         let cameras = [
@@ -89,12 +89,24 @@ fn diffuse_spheres_match_float64_irradiance() {
             let irr_gpu = sh::irradiance_coeffs(&c.coeffs);
             let irr_cpu = sh::irradiance_coeffs(&sh::project(&map, lmax));
             for cam in &cameras {
-                let (gbuf, t) = gpass.run(cam, &objects).unwrap();
+                let records: Vec<_> = objects.iter().map(|o| o.gpu(lmax)).collect();
+                let (gbuf, t) = gpass.run(cam, &records).unwrap();
                 assert_eq!(t[0].label, "gbuffer");
                 let (frame, t) = shade
-                    .run(&gbuf, &irr_gpu, &g, &Orientation::default())
+                    .run(
+                        &gbuf,
+                        &ShadeInputs {
+                            env: &g,
+                            orientation: Orientation::default(),
+                            sh: Some(&irr_gpu),
+                            dp: None,
+                            prefiltered: None,
+                            mc: None,
+                            shadows: false,
+                        },
+                    )
                     .unwrap();
-                assert_eq!(t[0].label, "shade sh");
+                assert_eq!(t[0].label, "shade");
                 let img = frame.download(&ctx).unwrap();
                 let (mut compared, mut skipped, mut misses) = (0, 0, 0);
                 let mut seen = vec![0usize; objects.len()];

@@ -350,8 +350,8 @@ impl DescriptorSet {
                         image_layout: vk::ImageLayout::GENERAL,
                     },
                 )),
-                (Bind::StorageLevel(img, level), DescriptorKind::StorageImage) => image_infos
-                    .push((
+                (Bind::StorageLevel(img, level), DescriptorKind::StorageImage) => {
+                    image_infos.push((
                         *b,
                         kind,
                         vk::DescriptorImageInfo {
@@ -359,7 +359,8 @@ impl DescriptorSet {
                             image_view: img.level_view(*level),
                             image_layout: vk::ImageLayout::GENERAL,
                         },
-                    )),
+                    ))
+                }
                 (Bind::Buffer(buf), DescriptorKind::StorageBuffer) => buffer_infos.push((
                     *b,
                     vk::DescriptorBufferInfo {

@@ -211,8 +211,13 @@ impl Image {
         }
         .vk("binding image memory")?;
         image.allocation = Some(allocation);
-        image.view =
-            image.make_view(vk::ImageViewType::TYPE_2D_ARRAY, desc.layers, 0, desc.mips, name)?;
+        image.view = image.make_view(
+            vk::ImageViewType::TYPE_2D_ARRAY,
+            desc.layers,
+            0,
+            desc.mips,
+            name,
+        )?;
         if desc.cube {
             image.cube_view = image.make_view(vk::ImageViewType::CUBE, 6, 0, desc.mips, name)?;
         }
@@ -284,7 +289,11 @@ impl Drop for Image {
         let d = &self.shared.device;
         // SAFETY: every submission using this image was waited for before returning.
         unsafe {
-            for v in self.level_views.drain(..).chain([self.cube_view, self.view]) {
+            for v in self
+                .level_views
+                .drain(..)
+                .chain([self.cube_view, self.view])
+            {
                 if v != vk::ImageView::null() {
                     d.destroy_image_view(v, None);
                     self.shared.untrack();

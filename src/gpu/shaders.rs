@@ -167,9 +167,9 @@ impl ShaderId {
         use crate::passes::copy::CopyPush;
         use crate::passes::filter::{BrutePush, ShEvalPush};
         use crate::passes::gbuffer::GBufferPush;
-        use crate::passes::sh_project::{ShProjectPush, ShReducePush};
         use crate::passes::mc::McPush;
         use crate::passes::mip::MipPush;
+        use crate::passes::sh_project::{ShProjectPush, ShReducePush};
         use crate::passes::shade::ShadePush;
         use crate::passes::{convert::ConvertPush, diagnostics::BusyPush, probe::ProbePush};
         use DescriptorKind::*;

@@ -70,7 +70,11 @@ pub struct Frame {
 impl Frame {
     /// The frame of unit normal `n`.
     pub fn new(n: DVec3) -> Frame {
-        let a = if n.y.abs() < 0.999 { DVec3::Y } else { DVec3::X };
+        let a = if n.y.abs() < 0.999 {
+            DVec3::Y
+        } else {
+            DVec3::X
+        };
         let t = a.cross(n).normalize();
         Frame {
             t,
@@ -515,7 +519,10 @@ mod tests {
                 let (f, p, w) = (b.eval_cos(o, i), b.pdf(o, i), b.weight(o, i));
                 assert!((i.length() - 1.0).abs() < 1e-12);
                 assert!(p > 0.0, "{b:?}");
-                assert!((f / p - w).abs() <= 1e-9 * w.max(1.0), "{b:?}: {f}/{p} vs {w}");
+                assert!(
+                    (f / p - w).abs() <= 1e-9 * w.max(1.0),
+                    "{b:?}: {f}/{p} vs {w}"
+                );
             }
         }
     }

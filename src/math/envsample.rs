@@ -188,7 +188,7 @@ mod tests {
         };
         let mut rng = Rng::new(1, 2, 3, 4);
         for _ in 0..2000 {
-            let u = [rng.next(), rng.next(), rng.next(), rng.next()];
+            let u = [rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform()];
             let (d, pdf, l) = s.sample(u);
             assert!((d.length() - 1.0).abs() < 1e-12);
             // The sampled direction lies in the texel whose density it reports.

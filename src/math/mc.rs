@@ -75,7 +75,7 @@ pub fn estimate(setup: &McSetup<'_>, p: &McPoint, first: u32, samples: u32) -> E
     let (mut sum, mut sum2) = ([0.0; 3], 0.0);
     for s in 0..samples {
         let mut rng = Rng::new(p.pixel.0, p.pixel.1, first + s, setup.seed);
-        let u = [rng.next(), rng.next()];
+        let u = [rng.uniform(), rng.uniform()];
         let mut x = [0.0; 3];
         let wi = p.brdf.sample(wo, u);
         if wi.z > 0.0 {
@@ -92,7 +92,7 @@ pub fn estimate(setup: &McSetup<'_>, p: &McPoint, first: u32, samples: u32) -> E
                 }
             }
         }
-        let ue = [rng.next(), rng.next(), rng.next(), rng.next()];
+        let ue = [rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform()];
         if setup.mis && !delta {
             let (d, pe, l) = setup.env.sample(ue);
             let wl = frame.to_local(d);

@@ -54,11 +54,13 @@ pub struct Rng(u32);
 impl Rng {
     /// The stream of pixel (x, y), sample `index`, seed `seed`.
     pub fn new(x: u32, y: u32, index: u32, seed: u32) -> Rng {
-        Rng(pcg(pcg(pcg(x.wrapping_add(pcg(y))).wrapping_add(index)) ^ seed))
+        Rng(pcg(
+            pcg(pcg(x.wrapping_add(pcg(y))).wrapping_add(index)) ^ seed
+        ))
     }
 
     /// The next uniform in [0, 1).
-    pub fn next(&mut self) -> f64 {
+    pub fn uniform(&mut self) -> f64 {
         self.0 = pcg(self.0);
         unit(self.0)
     }
@@ -92,7 +94,7 @@ mod tests {
         let n = 200_000;
         for i in 0..n {
             let mut r = Rng::new(i % 37, i / 37, i, 7);
-            let u = r.next();
+            let u = r.uniform();
             assert!((0.0..1.0).contains(&u));
             sums[0] += u;
             sums[1] += u * u;

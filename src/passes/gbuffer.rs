@@ -251,7 +251,7 @@ impl GBufferPass {
         let mut buf = Buffer::new(
             &self.ctx,
             "scene objects",
-            (data.len() * std::mem::size_of::<GpuObject>()) as u64,
+            std::mem::size_of_val(data) as u64,
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;

@@ -4,7 +4,9 @@
 
 use crate::envmap::luminance;
 use crate::error::{Error, Result};
-use crate::gpu::barrier::{cmd_image_barriers, cmd_memory_barrier, image_barrier, memory_barrier, Usage};
+use crate::gpu::barrier::{
+    cmd_image_barriers, cmd_memory_barrier, image_barrier, memory_barrier, Usage,
+};
 use crate::gpu::layout::{binding, WORKGROUP_2D};
 use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
 use crate::gpu::shaders::ShaderId;
@@ -172,7 +174,9 @@ impl MonteCarlo {
     /// searches and shadow rays of each sample.
     pub fn frame_samples(&self, env: &McEnv, objects: u32, shadows: bool, wanted: u32) -> u32 {
         let (w, h) = env.sampler.size();
-        let per_sample = 8 + (32 - w.leading_zeros()) + (32 - h.leading_zeros())
+        let per_sample = 8
+            + (32 - w.leading_zeros())
+            + (32 - h.leading_zeros())
             + if shadows { 2 * objects } else { 0 };
         match self.ctx.info().loop_iteration_limit {
             Some(limit) => wanted.min(limit / 2 / per_sample).max(1),
@@ -182,20 +186,45 @@ impl MonteCarlo {
 
     /// Accumulates samples for every pixel of `gbuf` whose material asks for MC, until
     /// `opts.samples` or `opts.target_error`. Timings are labelled "mc frame k".
-    pub fn run(&self, gbuf: &GBuffer, env: &McEnv, opts: &McOptions) -> Result<(McResult, Vec<Timing>)> {
+    pub fn run(
+        &self,
+        gbuf: &GBuffer,
+        env: &McEnv,
+        opts: &McOptions,
+    ) -> Result<(McResult, Vec<Timing>)> {
         if opts.samples == 0 {
-            return Err(Error::Invalid("Monte Carlo needs at least one sample".into()));
+            return Err(Error::Invalid(
+                "Monte Carlo needs at least one sample".into(),
+            ));
         }
-        let accum = GpuEnvMap::new(&self.ctx, "mc accumulation", Mapping::LatLong, gbuf.width, gbuf.height)?;
+        let accum = GpuEnvMap::new(
+            &self.ctx,
+            "mc accumulation",
+            Mapping::LatLong,
+            gbuf.width,
+            gbuf.height,
+        )?;
         let set = DescriptorSet::new(
             &self.ctx,
             &self.pipeline,
             &[
-                (binding::MC_NORMAL, Bind::Sampled(&gbuf.normal.image, &self.sampler, false)),
-                (binding::MC_VIEW, Bind::Sampled(&gbuf.view.image, &self.sampler, false)),
-                (binding::MC_POSITION, Bind::Sampled(&gbuf.position.image, &self.sampler, false)),
+                (
+                    binding::MC_NORMAL,
+                    Bind::Sampled(&gbuf.normal.image, &self.sampler, false),
+                ),
+                (
+                    binding::MC_VIEW,
+                    Bind::Sampled(&gbuf.view.image, &self.sampler, false),
+                ),
+                (
+                    binding::MC_POSITION,
+                    Bind::Sampled(&gbuf.position.image, &self.sampler, false),
+                ),
                 (binding::MC_OBJECTS, Bind::Buffer(&gbuf.objects)),
-                (binding::MC_ENV, Bind::Sampled(&env.map.image, &self.sampler, false)),
+                (
+                    binding::MC_ENV,
+                    Bind::Sampled(&env.map.image, &self.sampler, false),
+                ),
                 (binding::MC_TABLES, Bind::Buffer(&env.tables)),
                 (binding::MC_ACCUM, Bind::Storage(&accum.image)),
             ],
@@ -207,7 +236,11 @@ impl MonteCarlo {
         let mut error = None;
         let mut frame = 0u32;
         // With an error target, check after every batch of this many samples.
-        let batch = if opts.target_error.is_some() { (per_frame * 4).max(256) } else { opts.samples };
+        let batch = if opts.target_error.is_some() {
+            (per_frame * 4).max(256)
+        } else {
+            opts.samples
+        };
         while done < opts.samples {
             let this_batch = batch.min(opts.samples - done);
             let frames = this_batch.div_ceil(per_frame);
@@ -216,7 +249,16 @@ impl MonteCarlo {
             self.ctx.submit_and_wait("Monte Carlo frames", |cmd| {
                 spans.reset(cmd);
                 if start == 0 {
-                    cmd_image_barriers(d, cmd, &[image_barrier(accum.image.raw, 1, Usage::Undefined, Usage::TransferDst)]);
+                    cmd_image_barriers(
+                        d,
+                        cmd,
+                        &[image_barrier(
+                            accum.image.raw,
+                            1,
+                            Usage::Undefined,
+                            Usage::TransferDst,
+                        )],
+                    );
                     let range = vk::ImageSubresourceRange::default()
                         .aspect_mask(vk::ImageAspectFlags::COLOR)
                         .level_count(1)
@@ -231,9 +273,27 @@ impl MonteCarlo {
                             &[range],
                         )
                     };
-                    cmd_image_barriers(d, cmd, &[image_barrier(accum.image.raw, 1, Usage::TransferDst, Usage::ComputeReadWrite)]);
+                    cmd_image_barriers(
+                        d,
+                        cmd,
+                        &[image_barrier(
+                            accum.image.raw,
+                            1,
+                            Usage::TransferDst,
+                            Usage::ComputeReadWrite,
+                        )],
+                    );
                 } else {
-                    cmd_image_barriers(d, cmd, &[image_barrier(accum.image.raw, 1, Usage::ComputeSampled, Usage::ComputeReadWrite)]);
+                    cmd_image_barriers(
+                        d,
+                        cmd,
+                        &[image_barrier(
+                            accum.image.raw,
+                            1,
+                            Usage::ComputeSampled,
+                            Usage::ComputeReadWrite,
+                        )],
+                    );
                 }
                 let mut first = start;
                 for k in 0..frames {
@@ -254,13 +314,31 @@ impl MonteCarlo {
                     self.pipeline.bind(cmd, Some(&set), &push);
                     // SAFETY: cmd is recording with the compute pipeline bound.
                     unsafe {
-                        d.cmd_dispatch(cmd, groups(gbuf.width, WORKGROUP_2D[0]), groups(gbuf.height, WORKGROUP_2D[1]), 1)
+                        d.cmd_dispatch(
+                            cmd,
+                            groups(gbuf.width, WORKGROUP_2D[0]),
+                            groups(gbuf.height, WORKGROUP_2D[1]),
+                            1,
+                        )
                     };
                     spans.end(cmd, span);
-                    cmd_memory_barrier(d, cmd, memory_barrier(Usage::ComputeReadWrite, Usage::ComputeReadWrite));
+                    cmd_memory_barrier(
+                        d,
+                        cmd,
+                        memory_barrier(Usage::ComputeReadWrite, Usage::ComputeReadWrite),
+                    );
                     first += samples;
                 }
-                cmd_image_barriers(d, cmd, &[image_barrier(accum.image.raw, 1, Usage::ComputeReadWrite, Usage::ComputeSampled)]);
+                cmd_image_barriers(
+                    d,
+                    cmd,
+                    &[image_barrier(
+                        accum.image.raw,
+                        1,
+                        Usage::ComputeReadWrite,
+                        Usage::ComputeSampled,
+                    )],
+                );
                 Ok(())
             })?;
             frame += frames;
@@ -274,6 +352,13 @@ impl MonteCarlo {
                 }
             }
         }
-        Ok((McResult { accum, samples: done, error }, timings))
+        Ok((
+            McResult {
+                accum,
+                samples: done,
+                error,
+            },
+            timings,
+        ))
     }
 }

@@ -83,7 +83,11 @@ impl MipChain {
                 let k = k as u32;
                 let size = (dp.width >> k).max(1);
                 let push = MipPush {
-                    src_size: if k == 0 { size } else { (dp.width >> (k - 1)).max(1) },
+                    src_size: if k == 0 {
+                        size
+                    } else {
+                        (dp.width >> (k - 1)).max(1)
+                    },
                     dst_size: size,
                     mode: (k > 0) as u32,
                     pad: 0,

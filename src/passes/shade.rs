@@ -77,7 +77,12 @@ impl Shade {
         dummy_buffer.write(&[0.0f32; 4]);
         Ok(Shade {
             ctx: ctx.clone(),
-            pipeline: Pipeline::fullscreen(ctx, ShaderId::FullscreenVert, ShaderId::Shade, &[FORMAT])?,
+            pipeline: Pipeline::fullscreen(
+                ctx,
+                ShaderId::FullscreenVert,
+                ShaderId::Shade,
+                &[FORMAT],
+            )?,
             plain: Sampler::linear_clamp(ctx, "shade sampler")?,
             trilinear: Sampler::trilinear_clamp(ctx, "shade trilinear sampler")?,
             dummy_image: GpuEnvMap::upload(
@@ -89,7 +94,11 @@ impl Shade {
     }
 
     /// Shades `gbuf`; returns the frame (linear RGB) and its GPU time ("shade").
-    pub fn run(&self, gbuf: &GBuffer, inputs: &ShadeInputs<'_>) -> Result<(GpuEnvMap, Vec<Timing>)> {
+    pub fn run(
+        &self,
+        gbuf: &GBuffer,
+        inputs: &ShadeInputs<'_>,
+    ) -> Result<(GpuEnvMap, Vec<Timing>)> {
         let coeffs = match inputs.sh {
             Some(c) if !c.is_empty() => {
                 let data: Vec<[f32; 4]> = c

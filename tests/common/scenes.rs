@@ -26,7 +26,12 @@ pub fn unit_sphere() -> Shape {
     }
 }
 
-pub fn object(shape: Shape, kind: MaterialKind, albedo: [f64; 3], technique: Technique) -> SceneObject {
+pub fn object(
+    shape: Shape,
+    kind: MaterialKind,
+    albedo: [f64; 3],
+    technique: Technique,
+) -> SceneObject {
     SceneObject {
         shape,
         material: Material {

@@ -1,0 +1,104 @@
+//! A render runs exactly the passes its plan lists and creates no other pipeline.
+
+mod common;
+
+use envlight::math::synth::Sky;
+use envlight::math::Mapping;
+use envlight::render::render;
+use envlight::scene::{plan, PassKind, Scene};
+use envlight::EnvMap;
+use std::path::Path;
+
+/// The shipped example scenes (diffuse only, mirror only, glossy, mixed with shadows, and
+/// every material), at a small resolution on a small sky: the passes the timing records show
+/// equal the plan; each planned pass created its pipelines; no pipeline outside the plan was
+/// created (each scene on a fresh context, whose log lists every pipeline made on it).
+#[test]
+fn renders_run_exactly_the_planned_passes() {
+    let sky = Sky::default();
+    let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, |d| sky.radiance(d));
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    let expect: [(&str, &[PassKind]); 5] = [
+        (
+            "diffuse.toml",
+            &[PassKind::ShProjection, PassKind::GBuffer, PassKind::Shade],
+        ),
+        ("mirror.toml", &[PassKind::GBuffer, PassKind::Shade]),
+        (
+            "glossy.toml",
+            &[
+                PassKind::DualParaboloid,
+                PassKind::MipChain,
+                PassKind::GBuffer,
+                PassKind::Shade,
+            ],
+        ),
+        (
+            "mixed_shadows.toml",
+            &[
+                PassKind::DualParaboloid,
+                PassKind::MipChain,
+                PassKind::GBuffer,
+                PassKind::MonteCarlo,
+                PassKind::Shade,
+            ],
+        ),
+        (
+            "materials.toml",
+            &[
+                PassKind::ShProjection,
+                PassKind::DualParaboloid,
+                PassKind::MipChain,
+                PassKind::Prefilter,
+                PassKind::GBuffer,
+                PassKind::MonteCarlo,
+                PassKind::Shade,
+            ],
+        ),
+    ];
+    for (file, kinds) in expect {
+        let mut sc = Scene::load(&dir.join(file)).unwrap();
+        let p = plan(&sc, Mapping::LatLong);
+        assert_eq!(p.kinds(), kinds, "{file}: plan");
+        // Small and quick: the plan does not depend on resolution or sample counts.
+        sc.camera.width = 24;
+        sc.camera.height = 16;
+        sc.fis.size = Some(16);
+        for o in &mut sc.objects {
+            match &mut o.material.technique {
+                Some(envlight::scene::Technique::Mc { samples, .. }) => *samples = 8,
+                Some(envlight::scene::Technique::Prefiltered { size }) => *size = 8,
+                _ => {}
+            }
+        }
+        let ctx = common::ctx();
+        {
+            let r = render(&ctx, &sc, &env).unwrap();
+            assert_eq!(r.kinds(), kinds, "{file}: passes run");
+            assert!(r
+                .records
+                .iter()
+                .all(|rec| !rec.timings.is_empty() || ctx.info().timestamp_valid_bits == 0));
+            let created = ctx.pipelines_created();
+            let allowed: Vec<&str> = kinds
+                .iter()
+                .flat_map(|k| k.pipelines().iter().copied())
+                .collect();
+            for name in &created {
+                assert!(
+                    allowed.contains(name),
+                    "{file}: pipeline {name} is outside the plan {kinds:?}"
+                );
+            }
+            for k in kinds {
+                assert!(
+                    k.pipelines().iter().any(|n| created.contains(n)),
+                    "{file}: {k:?} created none of {:?}",
+                    k.pipelines()
+                );
+            }
+            eprintln!("{file}: {:?} -> pipelines {created:?}", r.kinds());
+        }
+        common::finish(ctx);
+    }
+}
