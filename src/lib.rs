@@ -10,6 +10,7 @@
 pub mod accuracy;
 pub mod envmap;
 pub mod error;
+pub mod fisbench;
 pub mod gpu;
 pub mod io;
 pub mod math;

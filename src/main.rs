@@ -258,6 +258,31 @@ enum Bench {
         #[arg(long, default_value_t = 3)]
         reps: usize,
     },
+    /// What accuracy costs in time: FIS and plain BRDF-sampled MC against a converged MIS
+    /// reference, on a studio and a sun map (CSV, markdown and a PNG plot)
+    Fis {
+        /// Environment maps (default: the bundled sky)
+        #[arg(long, value_delimiter = ',')]
+        maps: Vec<PathBuf>,
+        /// Image sides
+        #[arg(long, value_delimiter = ',', default_value = "512,1024")]
+        sizes: Vec<u32>,
+        /// FIS sample counts
+        #[arg(long, value_delimiter = ',', default_value = "1,4,16,64,256")]
+        fis: Vec<u32>,
+        /// Plain MC sample counts
+        #[arg(long, value_delimiter = ',', default_value = "1,4,16,64,256,1024,4096")]
+        mc: Vec<u32>,
+        /// Samples per pixel of the MIS reference
+        #[arg(long, default_value_t = 16384)]
+        reference: u32,
+        /// Lod biases swept at FIS 16 and 64
+        #[arg(long, value_delimiter = ',', default_value = "-1,0,0.5,1,1.5,2,3")]
+        biases: Vec<f64>,
+        /// Output folder
+        #[arg(long, default_value = "docs/fis")]
+        out: PathBuf,
+    },
     /// Conversion time at several source widths, against a plain copy of the same source
     Convert {
         /// Source lat-long widths
@@ -659,6 +684,18 @@ fn run(cli: Cli) -> Result<()> {
             );
         }
         Command::Bench {
+            what:
+                Bench::Fis {
+                    maps,
+                    sizes,
+                    fis,
+                    mc,
+                    reference,
+                    biases,
+                    out,
+                },
+        } => bench_fis(&cli, maps, sizes, fis, mc, *reference, biases, out)?,
+        Command::Bench {
             what: Bench::Convert { sizes, reps },
         } => bench_convert(&cli, sizes, *reps)?,
         Command::Bench {
@@ -794,6 +831,54 @@ fn render_scene(cli: &Cli, scene: &Path, output: &Path) -> Result<()> {
         }
     }
     println!("tone map: {tm:?} (PNG only; the EXR is linear)");
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn bench_fis(
+    cli: &Cli,
+    maps: &[PathBuf],
+    sizes: &[u32],
+    fis: &[u32],
+    mc: &[u32],
+    reference: u32,
+    biases: &[f64],
+    out: &Path,
+) -> Result<()> {
+    let ctx = context(cli)?;
+    let default = [PathBuf::from("assets/sky_latlong.exr")];
+    let paths = if maps.is_empty() { &default[..] } else { maps };
+    let mut loaded = Vec::new();
+    for p in paths {
+        let m = envlight::io::load(p, &Default::default())?;
+        let name = p
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        loaded.push((name, m));
+    }
+    let cfg = envlight::fisbench::FisBench {
+        sizes: sizes.to_vec(),
+        fis: fis.to_vec(),
+        mc: mc.to_vec(),
+        reference,
+        biases: biases.to_vec(),
+        bias_at: vec![16, 64],
+        bias: envlight::scene::DEFAULT_FIS_BIAS,
+    };
+    let bar = indicatif::ProgressBar::new_spinner();
+    let rows = envlight::fisbench::run(&ctx, &loaded, &cfg, |m| bar.set_message(m.to_string()))?;
+    bar.finish_and_clear();
+    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
+    let device = format!("{} ({})", ctx.info().name, ctx.info().driver);
+    std::fs::write(out.join("fis_vs_mc.csv"), envlight::fisbench::csv(&rows))?;
+    let md = envlight::fisbench::markdown(&rows, &device);
+    std::fs::write(out.join("fis_vs_mc.md"), &md)?;
+    let png = out.join("fis_vs_mc.png");
+    envlight::fisbench::plot(&rows)
+        .save(&png)
+        .with_context(|| png.display().to_string())?;
+    println!("{md}");
     Ok(())
 }
 

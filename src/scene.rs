@@ -194,7 +194,7 @@ impl MaterialKind {
 
 /// The default lod bias of filtered importance sampling (see docs/BENCHMARKS.md for the
 /// measurement that chose it).
-pub const DEFAULT_FIS_BIAS: f64 = 1.0;
+pub const DEFAULT_FIS_BIAS: f64 = 0.25;
 
 /// How a material is shaded.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
