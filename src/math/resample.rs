@@ -131,7 +131,15 @@ pub fn convert(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3, ss: u
                 if wsum > 0.0 {
                     texels.push(acc.map(|x| (x / wsum) as f32));
                 } else {
-                    let c = Mapping::texel_center(w, h, layer, i, j);
+                    // A paraboloid texel whose samples all miss its disc holds its own half's
+                    // rim nearest its centre (as glsl/convert.comp).
+                    let mut c = Mapping::texel_center(w, h, layer, i, j);
+                    if to == Mapping::DualParaboloid {
+                        let (s, t) = (2.0 * c.u - 1.0, 2.0 * c.v - 1.0);
+                        let k = (1.0 - 1e-4) / (s * s + t * t).sqrt().max(1.0 - 1e-4);
+                        c.u = 0.5 * (s * k + 1.0);
+                        c.v = 0.5 * (t * k + 1.0);
+                    }
                     texels.push(sample(map, world_to_file * to.coord_to_dir(c)).map(|x| x as f32));
                 }
             }
