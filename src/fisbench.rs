@@ -5,6 +5,7 @@
 use crate::envmap::luminance;
 use crate::error::Result;
 use crate::gpu::{Context, GpuEnvMap};
+use crate::math::brdf::Brdf;
 use crate::math::camera::{Camera, Projection, Shape};
 use crate::math::{Mapping, Orientation};
 use crate::passes::gbuffer::{GBuffer, GBufferPass};
@@ -13,7 +14,7 @@ use crate::passes::mip::MipChain;
 use crate::passes::shade::{Shade, ShadeInputs};
 use crate::passes::{ConvertOptions, Converter};
 use crate::render::{default_dp_size, object_record};
-use crate::scene::{Material, MaterialKind, SceneObject, Technique};
+use crate::scene::{Material, SceneObject, Technique};
 use crate::EnvMap;
 
 /// What to measure.
@@ -57,28 +58,30 @@ pub struct Row {
 }
 
 /// The materials measured: GGX α ∈ {0.05, 0.3}, Phong n ∈ {10, 1000}.
-pub fn materials() -> Vec<(String, MaterialKind)> {
+pub fn materials() -> Vec<(String, Brdf)> {
     vec![
         (
             "ggx 0.05".into(),
-            MaterialKind::Ggx {
+            Brdf::Ggx {
                 alpha: 0.05,
                 correlated: false,
             },
         ),
         (
             "ggx 0.3".into(),
-            MaterialKind::Ggx {
+            Brdf::Ggx {
                 alpha: 0.3,
                 correlated: false,
             },
         ),
-        ("phong 10".into(), MaterialKind::Phong { n: 10.0 }),
-        ("phong 1000".into(), MaterialKind::Phong { n: 1000.0 }),
+        ("phong 10".into(), Brdf::Phong { n: 10.0 }),
+        ("phong 1000".into(), Brdf::Phong { n: 1000.0 }),
     ]
 }
 
-fn camera(size: u32) -> Camera {
+/// An orthographic camera whose `size`² image a unit sphere at the origin fills, so that the
+/// view angle runs from normal incidence to grazing.
+pub fn sphere_camera(size: u32) -> Camera {
     Camera {
         projection: Projection::Orthographic { height: 2.1 },
         eye: [0.0, 0.3, 5.0],
@@ -89,7 +92,7 @@ fn camera(size: u32) -> Camera {
     }
 }
 
-fn object(kind: MaterialKind, technique: Technique) -> SceneObject {
+fn object(kind: Brdf, technique: Technique) -> SceneObject {
     SceneObject {
         shape: Shape::Sphere {
             center: [0.0; 3],
@@ -140,22 +143,9 @@ pub fn run(
             },
         )?;
         mip.run(&dp)?;
-        let mc_env = if map.mapping == Mapping::LatLong {
-            McEnv::new(ctx, map, &Orientation::default())?
-        } else {
-            let (ll, _) = conv.run(
-                &env_gpu,
-                &ConvertOptions {
-                    to: Mapping::LatLong,
-                    size: 1024,
-                    orientation: Orientation::default(),
-                    supersample: None,
-                },
-            )?;
-            McEnv::new(ctx, &ll.download(ctx)?, &Orientation::default())?
-        };
+        let (mc_env, _) = McEnv::for_map(ctx, &conv, map, &env_gpu, &Orientation::default())?;
         for &size in &cfg.sizes {
-            let cam = camera(size);
+            let cam = sphere_camera(size);
             for (mname, kind) in materials() {
                 let gbuf = |t: Technique| -> Result<GBuffer> {
                     Ok(gpass.run(&cam, &[object_record(&object(kind, t), 0)])?.0)

@@ -4,6 +4,7 @@
 use crate::error::{Error, Result};
 use crate::gpu::layout::brdf::technique;
 use crate::gpu::{Buffer, Context, GpuEnvMap, Timing};
+use crate::math::brdf::Brdf;
 use crate::math::filter::Kernel;
 use crate::math::{sh, Mapping, Orientation};
 use crate::passes::filter::{BruteFilter, FilterTarget};
@@ -13,12 +14,8 @@ use crate::passes::mip::MipChain;
 use crate::passes::sh_project::{ShProjector, Subgroups};
 use crate::passes::shade::{Shade, ShadeInputs};
 use crate::passes::{ConvertOptions, Converter};
-use crate::scene::{
-    plan, MaterialKind, PassKind, Plan, Scene, SceneObject, Technique, DEFAULT_FIS_BIAS,
-};
+use crate::scene::{plan, PassKind, Plan, Scene, SceneObject, Technique, DEFAULT_FIS_BIAS};
 use crate::EnvMap;
-use ash::vk;
-use gpu_allocator::MemoryLocation;
 use std::path::Path;
 
 /// The GPU time of one pass of a render.
@@ -103,7 +100,7 @@ pub fn default_dp_size(map: &EnvMap) -> u32 {
 pub fn object_record(o: &SceneObject, data_offset: u32) -> GpuObject {
     let mut g = shape_record(&o.shape);
     let m = &o.material;
-    let brdf = m.kind.brdf();
+    let brdf = m.kind;
     let p = brdf.params();
     let a = m.albedo;
     let off = data_offset as f32;
@@ -144,7 +141,8 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
     let orientation: Orientation = scene.environment.orientation();
     let mut records = Vec::new();
     let env_gpu = GpuEnvMap::upload(ctx, env)?;
-    let converter = if needs(PassKind::DualParaboloid) || needs(PassKind::LatLong) {
+    // Building a converter makes no pipeline: each is made on its first run.
+    let converter = if needs(PassKind::DualParaboloid) || needs(PassKind::MonteCarlo) {
         Some(Converter::new(ctx)?)
     } else {
         None
@@ -217,7 +215,7 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
                 continue;
             };
             let kernel = match o.material.kind {
-                MaterialKind::Phong { n } => Kernel::Phong { n },
+                Brdf::Phong { n } => Kernel::Phong { n },
                 _ => Kernel::Cosine,
             };
             let key = match kernel {
@@ -251,15 +249,7 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
             made.push((key, size, off));
             pre_offsets[k] = off;
         }
-        let mut b = Buffer::new(
-            ctx,
-            "prefiltered maps",
-            (texels.len() * 16) as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::CpuToGpu,
-        )?;
-        b.write(&texels);
-        pre_buffer = Some(b);
+        pre_buffer = Some(Buffer::storage(ctx, "prefiltered maps", &texels)?);
     }
 
     // The objects' GPU records.
@@ -295,29 +285,16 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
                     },
                 )
             });
-        let mc_env = if env.mapping == Mapping::LatLong {
-            McEnv::new(ctx, env, &orientation)?
-        } else {
-            let n = env.width as f64 * env.height as f64 * env.layers() as f64;
-            let width = (((2.0 * n).sqrt() as u32).max(8) / 2 * 2).min(8192);
-            let conv = converter
-                .as_ref()
-                .unwrap_or_else(|| unreachable!("made above"));
-            let (ll, t) = conv.run(
-                &env_gpu,
-                &ConvertOptions {
-                    to: Mapping::LatLong,
-                    size: width,
-                    orientation,
-                    supersample: None,
-                },
-            )?;
+        let conv = converter
+            .as_ref()
+            .unwrap_or_else(|| unreachable!("made above"));
+        let (mc_env, t) = McEnv::for_map(ctx, conv, env, &env_gpu, &orientation)?;
+        if !t.is_empty() {
             records.push(PassRecord {
                 kind: PassKind::LatLong,
                 timings: t,
             });
-            McEnv::new(ctx, &ll.download(ctx)?, &Orientation::default())?
-        };
+        }
         let (res, t) = MonteCarlo::new(ctx)?.run(
             &gbuf,
             &mc_env,

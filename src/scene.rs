@@ -127,7 +127,7 @@ pub struct SceneObject {
 pub struct Material {
     /// The BRDF and its parameters.
     #[serde(flatten)]
-    pub kind: MaterialKind,
+    pub kind: Brdf,
     /// Albedo (diffuse) or specular colour (glossy), RGB.
     #[serde(default = "white")]
     pub albedo: [f64; 3],
@@ -138,58 +138,6 @@ pub struct Material {
 
 fn white() -> [f64; 3] {
     [1.0; 3]
-}
-
-/// The BRDFs a material can have.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
-#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
-pub enum MaterialKind {
-    /// A perfect mirror.
-    Mirror,
-    /// Lambertian.
-    Diffuse,
-    /// Normalised Phong lobe about the reflected direction.
-    Phong {
-        /// Exponent, 1 to 10⁶.
-        n: f64,
-    },
-    /// Blinn-Phong.
-    Blinn {
-        /// Exponent.
-        n: f64,
-    },
-    /// GGX, Fresnel 1.
-    Ggx {
-        /// Roughness α in [0, 1].
-        alpha: f64,
-        /// Height-correlated Smith masking.
-        #[serde(default)]
-        correlated: bool,
-    },
-    /// Ward anisotropic.
-    Ward {
-        /// Roughness along the tangent (ŷ × n).
-        alpha_x: f64,
-        /// Roughness along the bitangent.
-        alpha_y: f64,
-    },
-}
-
-impl MaterialKind {
-    /// The BRDF.
-    pub fn brdf(&self) -> Brdf {
-        match *self {
-            MaterialKind::Mirror => Brdf::Mirror,
-            MaterialKind::Diffuse => Brdf::Lambert,
-            MaterialKind::Phong { n } => Brdf::Phong { n },
-            MaterialKind::Blinn { n } => Brdf::Blinn { n },
-            MaterialKind::Ggx { alpha, correlated } => Brdf::Ggx { alpha, correlated },
-            MaterialKind::Ward { alpha_x, alpha_y } => Brdf::Ward {
-                ax: alpha_x,
-                ay: alpha_y,
-            },
-        }
-    }
 }
 
 /// The default lod bias of filtered importance sampling (see docs/BENCHMARKS.md for the
@@ -267,8 +215,8 @@ impl Material {
     /// The technique, explicit or by default.
     pub fn technique(&self) -> Technique {
         self.technique.unwrap_or(match self.kind {
-            MaterialKind::Mirror => Technique::Lookup,
-            MaterialKind::Diffuse => Technique::Sh { order: 2 },
+            Brdf::Mirror => Technique::Lookup,
+            Brdf::Lambert => Technique::Sh { order: 2 },
             _ => Technique::Fis {
                 samples: 64,
                 bias: None,
@@ -332,7 +280,6 @@ impl Scene {
             let what = format!("object {k} ({:?})", o.material.kind);
             o.material
                 .kind
-                .brdf()
                 .validate()
                 .map_err(|m| format!("{what}: {m}"))?;
             if o.material.albedo.iter().any(|a| !a.is_finite() || *a < 0.0) {
@@ -340,11 +287,9 @@ impl Scene {
             }
             let t = o.material.technique();
             let allowed = match o.material.kind {
-                MaterialKind::Mirror => matches!(t, Technique::Lookup | Technique::Mc { .. }),
-                MaterialKind::Diffuse => !matches!(t, Technique::Lookup),
-                MaterialKind::Phong { .. } => {
-                    !matches!(t, Technique::Lookup | Technique::Sh { .. })
-                }
+                Brdf::Mirror => matches!(t, Technique::Lookup | Technique::Mc { .. }),
+                Brdf::Lambert => !matches!(t, Technique::Lookup),
+                Brdf::Phong { .. } => !matches!(t, Technique::Lookup | Technique::Sh { .. }),
                 _ => matches!(t, Technique::Fis { .. } | Technique::Mc { .. }),
             };
             if !allowed {
@@ -373,7 +318,7 @@ impl Scene {
                     ));
                 }
                 Technique::Prefiltered { .. } => {
-                    if let MaterialKind::Phong { n } = o.material.kind {
+                    if let Brdf::Phong { n } = o.material.kind {
                         if n < 1.0 {
                             return Err(format!("{what}: a prefiltered Phong map needs n ≥ 1"));
                         }
@@ -573,14 +518,14 @@ pub fn plan(scene: &Scene, source: crate::math::Mapping) -> Plan {
     Plan { passes, notes }
 }
 
-fn kind_name(k: &MaterialKind) -> &'static str {
+fn kind_name(k: &Brdf) -> &'static str {
     match k {
-        MaterialKind::Mirror => "mirror",
-        MaterialKind::Diffuse => "diffuse",
-        MaterialKind::Phong { .. } => "phong",
-        MaterialKind::Blinn { .. } => "blinn",
-        MaterialKind::Ggx { .. } => "ggx",
-        MaterialKind::Ward { .. } => "ward",
+        Brdf::Mirror => "mirror",
+        Brdf::Lambert => "diffuse",
+        Brdf::Phong { .. } => "phong",
+        Brdf::Blinn { .. } => "blinn",
+        Brdf::Ggx { .. } => "ggx",
+        Brdf::Ward { .. } => "ward",
     }
 }
 

@@ -4,13 +4,14 @@ mod common;
 
 use common::scenes::{fis, object, scene, sphere_camera, unit_sphere};
 use envlight::gpu::GpuEnvMap;
+use envlight::math::brdf::Brdf;
 use envlight::math::brdf::{local_view, Frame};
 use envlight::math::camera::{trace, Shape};
 use envlight::math::synth::smooth_env;
 use envlight::math::{mip, Mapping};
 use envlight::passes::mip::MipChain;
 use envlight::render::render;
-use envlight::scene::{MaterialKind, Technique};
+use envlight::scene::Technique;
 use envlight::EnvMap;
 
 /// Each BRDF's directional albedo under a white environment, per pixel, against float64
@@ -27,35 +28,32 @@ fn furnace_renders_each_brdfs_albedo() {
         let env = EnvMap::new(Mapping::LatLong, 8, 4, vec![[1.0; 3]; 32]);
         let cam = sphere_camera(20);
         let materials = [
-            MaterialKind::Phong { n: 1.0 },
-            MaterialKind::Phong { n: 10.0 },
-            MaterialKind::Phong { n: 1e3 },
-            MaterialKind::Phong { n: 1e6 },
-            MaterialKind::Ggx {
+            Brdf::Phong { n: 1.0 },
+            Brdf::Phong { n: 10.0 },
+            Brdf::Phong { n: 1e3 },
+            Brdf::Phong { n: 1e6 },
+            Brdf::Ggx {
                 alpha: 0.0,
                 correlated: false,
             },
-            MaterialKind::Ggx {
+            Brdf::Ggx {
                 alpha: 0.01,
                 correlated: false,
             },
-            MaterialKind::Ggx {
+            Brdf::Ggx {
                 alpha: 0.3,
                 correlated: false,
             },
-            MaterialKind::Ggx {
+            Brdf::Ggx {
                 alpha: 1.0,
                 correlated: false,
             },
-            MaterialKind::Ggx {
+            Brdf::Ggx {
                 alpha: 0.5,
                 correlated: true,
             },
-            MaterialKind::Blinn { n: 50.0 },
-            MaterialKind::Ward {
-                alpha_x: 0.5,
-                alpha_y: 0.05,
-            },
+            Brdf::Blinn { n: 50.0 },
+            Brdf::Ward { ax: 0.5, ay: 0.05 },
         ];
         for kind in materials {
             let sc = scene(
@@ -65,7 +63,7 @@ fn furnace_renders_each_brdfs_albedo() {
                 8,
             );
             let r = render(&ctx, &sc, &env).unwrap();
-            let brdf = kind.brdf();
+            let brdf = kind;
             let (mut worst, mut n, mut sum) = (0.0f64, 0, 0.0);
             for j in 0..cam.height {
                 for i in 0..cam.width {
@@ -114,12 +112,7 @@ fn mirror_is_the_lookup_and_the_glossy_limits_reach_it() {
     {
         let env = EnvMap::from_fn(Mapping::LatLong, 512, 256, 2, smooth_env);
         let cam = sphere_camera(24);
-        let mirror = object(
-            unit_sphere(),
-            MaterialKind::Mirror,
-            [1.0; 3],
-            Technique::Lookup,
-        );
+        let mirror = object(unit_sphere(), Brdf::Mirror, [1.0; 3], Technique::Lookup);
         let r = render(&ctx, &scene(cam, vec![mirror], false, 256), &env).unwrap();
         let (mut exact, mut edge) = (0, 0);
         for j in 0..cam.height {
@@ -156,11 +149,11 @@ fn mirror_is_the_lookup_and_the_glossy_limits_reach_it() {
         eprintln!("mirror: {exact} pixels exact, {edge} at a texel edge");
         assert!(exact > 300 && edge * 20 < exact);
         for kind in [
-            MaterialKind::Ggx {
+            Brdf::Ggx {
                 alpha: 0.0,
                 correlated: false,
             },
-            MaterialKind::Phong { n: 1e6 },
+            Brdf::Phong { n: 1e6 },
         ] {
             let g = render(
                 &ctx,
@@ -314,20 +307,17 @@ fn fis_stays_finite_with_a_sun() {
         let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, |d| sky.radiance(d));
         let cam = sphere_camera(16);
         for kind in [
-            MaterialKind::Ggx {
+            Brdf::Ggx {
                 alpha: 1e-6,
                 correlated: true,
             },
-            MaterialKind::Ggx {
+            Brdf::Ggx {
                 alpha: 1.0,
                 correlated: false,
             },
-            MaterialKind::Phong { n: 1e6 },
-            MaterialKind::Blinn { n: 1e6 },
-            MaterialKind::Ward {
-                alpha_x: 1e-3,
-                alpha_y: 1.0,
-            },
+            Brdf::Phong { n: 1e6 },
+            Brdf::Blinn { n: 1e6 },
+            Brdf::Ward { ax: 1e-3, ay: 1.0 },
         ] {
             for n in [1, 64] {
                 let sc = scene(

@@ -5,13 +5,14 @@ mod common;
 
 use common::scenes::{fis, object, scene, sphere_camera, unit_sphere};
 use envlight::envmap::luminance;
+use envlight::math::brdf::Brdf;
 use envlight::math::camera::{trace, Camera, Projection, Shape};
 use envlight::math::mc::{estimate, McPoint, McSetup};
 use envlight::math::{Mapping, Orientation};
 use envlight::passes::gbuffer::GBufferPass;
 use envlight::passes::mc::{pixel_stats, McEnv, McOptions, MonteCarlo};
 use envlight::render::{object_record, render};
-use envlight::scene::{MaterialKind, Technique};
+use envlight::scene::Technique;
 use envlight::EnvMap;
 
 /// GPU and CPU estimates of the same pixels with independent seeds agree within their
@@ -39,7 +40,7 @@ fn gpu_monte_carlo_matches_the_float64_estimator() {
                     center: [-0.6, 0.0, 0.0],
                     radius: 0.6,
                 },
-                MaterialKind::Ggx {
+                Brdf::Ggx {
                     alpha: 0.3,
                     correlated: false,
                 },
@@ -51,7 +52,7 @@ fn gpu_monte_carlo_matches_the_float64_estimator() {
                     center: [0.7, -0.1, 0.2],
                     radius: 0.5,
                 },
-                MaterialKind::Diffuse,
+                Brdf::Lambert,
                 [0.7, 0.7, 0.7],
                 mc(512),
             ),
@@ -60,7 +61,7 @@ fn gpu_monte_carlo_matches_the_float64_estimator() {
                     center: [0.2, 0.6, -0.8],
                     radius: 0.35,
                 },
-                MaterialKind::Phong { n: 10.0 },
+                Brdf::Phong { n: 10.0 },
                 [1.0; 3],
                 mc(512),
             ),
@@ -70,10 +71,7 @@ fn gpu_monte_carlo_matches_the_float64_estimator() {
                     offset: -0.6,
                     extent: 4.0,
                 },
-                MaterialKind::Ward {
-                    alpha_x: 0.3,
-                    alpha_y: 0.1,
-                },
+                Brdf::Ward { ax: 0.3, ay: 0.1 },
                 [0.6, 0.6, 0.6],
                 mc(512),
             ),
@@ -130,7 +128,7 @@ fn gpu_monte_carlo_matches_the_float64_estimator() {
                     position: o + hit.t * d,
                     normal: hit.normal,
                     view: -d,
-                    brdf: m.kind.brdf(),
+                    brdf: m.kind,
                     albedo: m.albedo,
                 };
                 let cpu = estimate(&setup, &p, 0, 512);
@@ -173,16 +171,16 @@ fn fis_converges_towards_monte_carlo_on_real_probes() {
         for (file, tol) in [("photo_studio_01_1k.hdr", 0.15), ("quarry_01_1k.hdr", 0.40)] {
             let env = envlight::io::load(probes.join(file), &Default::default()).unwrap();
             for kind in [
-                MaterialKind::Ggx {
+                Brdf::Ggx {
                     alpha: 0.05,
                     correlated: false,
                 },
-                MaterialKind::Ggx {
+                Brdf::Ggx {
                     alpha: 0.3,
                     correlated: false,
                 },
-                MaterialKind::Phong { n: 10.0 },
-                MaterialKind::Phong { n: 1000.0 },
+                Brdf::Phong { n: 10.0 },
+                Brdf::Phong { n: 1000.0 },
             ] {
                 let f = render(
                     &ctx,

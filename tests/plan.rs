@@ -102,3 +102,38 @@ fn renders_run_exactly_the_planned_passes() {
         common::finish(ctx);
     }
 }
+
+/// Monte Carlo alone: on a lat-long map it needs nothing but the G-buffer, its frames and the
+/// shading; on a cube map it first converts to lat-long (and so builds that pipeline only).
+#[test]
+fn monte_carlo_alone_plans_and_runs_its_passes() {
+    let sky = Sky::default();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    let mut sc = Scene::load(&dir.join("diffuse.toml")).unwrap();
+    sc.camera.width = 16;
+    sc.camera.height = 12;
+    for o in &mut sc.objects {
+        o.material.technique = Some(envlight::scene::Technique::Mc {
+            samples: 8,
+            error: None,
+        });
+    }
+    for (mapping, w, h) in [(Mapping::LatLong, 32, 16), (Mapping::Cube, 8, 8)] {
+        let env = EnvMap::from_fn(mapping, w, h, 2, |d| sky.radiance(d));
+        let mut kinds = vec![PassKind::GBuffer, PassKind::MonteCarlo, PassKind::Shade];
+        let mut pipelines = vec!["gbuffer", "mc", "shade"];
+        if mapping == Mapping::Cube {
+            kinds.insert(1, PassKind::LatLong);
+            pipelines.insert(1, "convert_cube");
+        }
+        assert_eq!(plan(&sc, mapping).kinds(), kinds);
+        let ctx = common::ctx();
+        {
+            let r = render(&ctx, &sc, &env).unwrap();
+            assert_eq!(r.kinds(), kinds);
+            assert_eq!(r.mc.map(|m| m.0), Some(8));
+            assert_eq!(ctx.pipelines_created(), pipelines);
+        }
+        common::finish(ctx);
+    }
+}

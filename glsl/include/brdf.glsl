@@ -55,6 +55,12 @@ vec3 sample_power_lobe(vec3 axis, float k, vec2 u) {
     return axis * (1.0 - om) + (e1 * cos(phi) + e2 * sin(phi)) * s;
 }
 
+// The Phong lobe about the reflection of wo: its f·cos θᵢ and its pdf alike.
+float phong_lobe(float n, vec3 wo, vec3 wi) {
+    vec3 r = vec3(-wo.x, -wo.y, wo.z);
+    return (n + 1.0) / TAU * pow_from_gap(n, gap(r, wi));
+}
+
 vec3 reflect_about(vec3 wo, vec3 h) {
     return h * (2.0 * dot(wo, h)) - wo;
 }
@@ -82,10 +88,7 @@ float ward_exponent(float ax, float ay, vec3 h) {
 float brdf_eval_cos(Brdf b, vec3 wo, vec3 wi) {
     if (wo.z <= 0.0 || wi.z <= 0.0) return 0.0;
     if (b.id == BRDF_LAMBERT) return wi.z / PI;
-    if (b.id == BRDF_PHONG) {
-        vec3 r = vec3(-wo.x, -wo.y, wo.z);
-        return (b.p0 + 1.0) / TAU * pow_from_gap(b.p0, gap(r, wi));
-    }
+    if (b.id == BRDF_PHONG) return phong_lobe(b.p0, wo, wi);
     if (b.id == BRDF_BLINN) {
         vec3 h = normalize(wo + wi);
         return (b.p0 + 8.0) / (8.0 * PI) * pow_from_gap(b.p0, gap(h, vec3(0.0, 0.0, 1.0))) * wi.z;
@@ -140,10 +143,7 @@ vec3 brdf_sample(Brdf b, vec3 wo, vec2 u) {
 
 float brdf_pdf(Brdf b, vec3 wo, vec3 wi) {
     if (b.id == BRDF_LAMBERT) return max(wi.z, 0.0) / PI;
-    if (b.id == BRDF_PHONG) {
-        vec3 r = vec3(-wo.x, -wo.y, wo.z);
-        return (b.p0 + 1.0) / TAU * pow_from_gap(b.p0, gap(r, wi));
-    }
+    if (b.id == BRDF_PHONG) return phong_lobe(b.p0, wo, wi);
     if (b.id == BRDF_BLINN) {
         vec3 h = normalize(wo + wi);
         float oh = dot(wo, h);

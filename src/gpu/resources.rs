@@ -77,6 +77,21 @@ impl Buffer {
         Ok(buffer)
     }
 
+    /// A host-written storage buffer holding `data` (at least 16 bytes, so that an empty
+    /// list still binds).
+    pub fn storage<T: bytemuck::Pod>(ctx: &Context, name: &str, data: &[T]) -> Result<Buffer> {
+        let bytes = std::mem::size_of_val(data).max(16) as u64;
+        let mut b = Buffer::new(
+            ctx,
+            name,
+            bytes,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        b.write(data);
+        Ok(b)
+    }
+
     /// Size in bytes.
     pub fn size(&self) -> u64 {
         self.size
@@ -317,37 +332,28 @@ pub struct Sampler {
 impl Sampler {
     /// A bilinear sampler clamping to the edge (cube views filter across faces regardless).
     pub fn linear_clamp(ctx: &Context, name: &str) -> Result<Sampler> {
-        let info = vk::SamplerCreateInfo::default()
-            .mag_filter(vk::Filter::LINEAR)
-            .min_filter(vk::Filter::LINEAR)
-            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
-            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .max_lod(0.0);
-        // SAFETY: valid device and create info.
-        let raw =
-            unsafe { ctx.shared.device.create_sampler(&info, None) }.vk("creating a sampler")?;
-        ctx.shared.track();
-        ctx.shared.name(raw, name);
-        Ok(Sampler {
-            shared: ctx.shared.clone(),
-            raw,
-        })
+        Sampler::clamped(ctx, name, vk::SamplerMipmapMode::NEAREST, 0.0)
     }
-}
 
-impl Sampler {
     /// A trilinear sampler clamping to the edge, over every MIP level.
     pub fn trilinear_clamp(ctx: &Context, name: &str) -> Result<Sampler> {
+        Sampler::clamped(ctx, name, vk::SamplerMipmapMode::LINEAR, vk::LOD_CLAMP_NONE)
+    }
+
+    fn clamped(
+        ctx: &Context,
+        name: &str,
+        mipmap: vk::SamplerMipmapMode,
+        max_lod: f32,
+    ) -> Result<Sampler> {
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(vk::Filter::LINEAR)
             .min_filter(vk::Filter::LINEAR)
-            .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+            .mipmap_mode(mipmap)
             .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .max_lod(vk::LOD_CLAMP_NONE);
+            .max_lod(max_lod);
         // SAFETY: valid device and create info.
         let raw =
             unsafe { ctx.shared.device.create_sampler(&info, None) }.vk("creating a sampler")?;

@@ -22,10 +22,13 @@ use std::f64::consts::PI;
 
 pub use crate::gpu::layout::brdf::{ids, GGX_ALPHA_MIN, WARD_ALPHA_MIN};
 
-/// A BRDF and its parameters.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A BRDF and its parameters. In scene files it is tagged by `type`: `mirror`, `diffuse`,
+/// `phong {n}`, `blinn {n}`, `ggx {alpha, correlated}`, `ward {alpha_x, alpha_y}`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum Brdf {
     /// Lambertian diffuse.
+    #[serde(rename = "diffuse")]
     Lambert,
     /// Perfect mirror.
     Mirror,
@@ -44,13 +47,16 @@ pub enum Brdf {
         /// Roughness α.
         alpha: f64,
         /// Height-correlated Smith masking instead of the uncorrelated product.
+        #[serde(default)]
         correlated: bool,
     },
     /// Ward anisotropic.
     Ward {
         /// Roughness along the tangent.
+        #[serde(rename = "alpha_x")]
         ax: f64,
         /// Roughness along the bitangent.
+        #[serde(rename = "alpha_y")]
         ay: f64,
     },
 }
@@ -142,6 +148,12 @@ fn sample_power_lobe(axis: DVec3, k: f64, u: [f64; 2]) -> (DVec3, f64) {
     )
 }
 
+/// The Phong lobe (n+1)/2π·cosⁿα about the reflection of wo: both its f·cos θᵢ and its pdf.
+fn phong_lobe(n: f64, wo: DVec3, wi: DVec3) -> f64 {
+    let r = DVec3::new(-wo.x, -wo.y, wo.z);
+    (n + 1.0) / (2.0 * PI) * pow_from_gap(n, gap(r, wi))
+}
+
 fn reflect(wo: DVec3, h: DVec3) -> DVec3 {
     h * (2.0 * wo.dot(h)) - wo
 }
@@ -227,10 +239,7 @@ impl Brdf {
         match *self {
             Brdf::Lambert => wi.z / PI,
             Brdf::Mirror => 0.0,
-            Brdf::Phong { n } => {
-                let r = DVec3::new(-wo.x, -wo.y, wo.z);
-                (n + 1.0) / (2.0 * PI) * pow_from_gap(n, gap(r, wi))
-            }
+            Brdf::Phong { n } => phong_lobe(n, wo, wi),
             Brdf::Blinn { n } => {
                 let h = (wo + wi).normalize();
                 (n + 8.0) / (8.0 * PI) * pow_from_gap(n, gap(h, DVec3::Z)) * wi.z
@@ -301,10 +310,7 @@ impl Brdf {
         match *self {
             Brdf::Lambert => wi.z.max(0.0) / PI,
             Brdf::Mirror => 0.0,
-            Brdf::Phong { n } => {
-                let r = DVec3::new(-wo.x, -wo.y, wo.z);
-                (n + 1.0) / (2.0 * PI) * pow_from_gap(n, gap(r, wi))
-            }
+            Brdf::Phong { n } => phong_lobe(n, wo, wi),
             Brdf::Blinn { n } => {
                 let h = (wo + wi).normalize();
                 let oh = wo.dot(h);

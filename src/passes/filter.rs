@@ -325,14 +325,7 @@ impl ShEvaluator {
             .iter()
             .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 0.0])
             .collect();
-        let mut buf = Buffer::new(
-            &self.ctx,
-            "sh eval coefficients",
-            (data.len() * 16) as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::CpuToGpu,
-        )?;
-        buf.write(&data);
+        let buf = Buffer::storage(&self.ctx, "sh eval coefficients", &data)?;
         let (w, h) = target.extent();
         let dst = GpuEnvMap::new(&self.ctx, "sh irradiance", target.to, w, h)?;
         let set = DescriptorSet::new(

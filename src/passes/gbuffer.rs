@@ -12,7 +12,6 @@ use crate::gpu::{Buffer, Context, GpuEnvMap, Image, Timing};
 use crate::math::camera::{Camera, Projection, Shape};
 use crate::math::Mapping;
 use ash::vk;
-use gpu_allocator::MemoryLocation;
 
 /// Format of the G-buffer images and of shaded frames.
 pub const FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -247,15 +246,7 @@ impl GBufferPass {
                 "a G-buffer needs a non-empty image and at least one object".into(),
             ));
         }
-        let data = objects;
-        let mut buf = Buffer::new(
-            &self.ctx,
-            "scene objects",
-            std::mem::size_of_val(data) as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::CpuToGpu,
-        )?;
-        buf.write(data);
+        let buf = Buffer::storage(&self.ctx, "scene objects", objects)?;
         let g = GBuffer {
             width: w,
             height: h,

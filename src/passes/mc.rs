@@ -15,9 +15,9 @@ use crate::gpu::{groups, mat3_rows, Buffer, Context, GpuEnvMap, Sampler, Timing}
 use crate::math::envsample::EnvSampler;
 use crate::math::{Mapping, Orientation};
 use crate::passes::gbuffer::GBuffer;
+use crate::passes::{ConvertOptions, Converter};
 use crate::EnvMap;
 use ash::vk;
-use gpu_allocator::MemoryLocation;
 
 /// Push constants of `glsl/mc.comp`.
 #[repr(C)]
@@ -63,20 +63,45 @@ impl McEnv {
     pub fn new(ctx: &Context, map: &EnvMap, orientation: &Orientation) -> Result<McEnv> {
         let sampler = EnvSampler::new(map, orientation)?;
         let data = sampler.tables_f32();
-        let mut tables = Buffer::new(
-            ctx,
-            "environment sampling tables",
-            (data.len() * 4) as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::CpuToGpu,
-        )?;
-        tables.write(&data);
+        let tables = Buffer::storage(ctx, "environment sampling tables", &data)?;
         Ok(McEnv {
             map: GpuEnvMap::upload(ctx, map)?,
             tables,
             sampler,
             orientation: *orientation,
         })
+    }
+}
+
+impl McEnv {
+    /// The environment for any map: a lat-long map is read as it is; another is first
+    /// converted on the GPU (`gpu` is `map` uploaded) to a world-frame lat-long with about as
+    /// many texels, and the conversion's timings are returned.
+    pub fn for_map(
+        ctx: &Context,
+        converter: &Converter,
+        map: &EnvMap,
+        gpu: &GpuEnvMap,
+        orientation: &Orientation,
+    ) -> Result<(McEnv, Vec<Timing>)> {
+        if map.mapping == Mapping::LatLong {
+            return Ok((McEnv::new(ctx, map, orientation)?, Vec::new()));
+        }
+        let n = map.width as f64 * map.height as f64 * map.layers() as f64;
+        let width = (((2.0 * n).sqrt() as u32).max(8) / 2 * 2).min(8192);
+        let (ll, t) = converter.run(
+            gpu,
+            &ConvertOptions {
+                to: Mapping::LatLong,
+                size: width,
+                orientation: *orientation,
+                supersample: None,
+            },
+        )?;
+        Ok((
+            McEnv::new(ctx, &ll.download(ctx)?, &Orientation::default())?,
+            t,
+        ))
     }
 }
 

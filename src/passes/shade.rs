@@ -11,8 +11,6 @@ use crate::gpu::{mat3_rows, Buffer, Context, GpuEnvMap, Sampler, Timing};
 use crate::math::{Mapping, Orientation};
 use crate::passes::gbuffer::{record_fullscreen, target, GBuffer, FORMAT};
 use crate::EnvMap;
-use ash::vk;
-use gpu_allocator::MemoryLocation;
 
 /// Push constants of `glsl/shade.frag`.
 #[repr(C)]
@@ -67,14 +65,7 @@ pub struct Shade {
 impl Shade {
     /// Builds the pipeline.
     pub fn new(ctx: &Context) -> Result<Shade> {
-        let mut dummy_buffer = Buffer::new(
-            ctx,
-            "shade: unused buffer",
-            16,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::CpuToGpu,
-        )?;
-        dummy_buffer.write(&[0.0f32; 4]);
+        let dummy_buffer = Buffer::storage(ctx, "shade: unused buffer", &[0.0f32; 4])?;
         Ok(Shade {
             ctx: ctx.clone(),
             pipeline: Pipeline::fullscreen(
@@ -105,15 +96,7 @@ impl Shade {
                     .iter()
                     .map(|v| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0])
                     .collect();
-                let mut b = Buffer::new(
-                    &self.ctx,
-                    "shade SH coefficients",
-                    (data.len() * 16) as u64,
-                    vk::BufferUsageFlags::STORAGE_BUFFER,
-                    MemoryLocation::CpuToGpu,
-                )?;
-                b.write(&data);
-                Some(b)
+                Some(Buffer::storage(&self.ctx, "shade SH coefficients", &data)?)
             }
             _ => None,
         };

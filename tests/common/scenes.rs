@@ -1,23 +1,13 @@
 //! Scenes built in code for the rendering tests.
 #![allow(dead_code)]
 
-use envlight::math::camera::{Camera, Projection, Shape};
+use envlight::math::camera::{Camera, Shape};
 use envlight::scene::{
-    Environment, FisSettings, Material, MaterialKind, McSettings, Scene, SceneObject, Technique,
+    Environment, FisSettings, Material, McSettings, Scene, SceneObject, Technique,
 };
 
-/// An orthographic camera whose n × n image a unit sphere at the origin fills, so that the
-/// view angle runs from normal incidence to grazing.
-pub fn sphere_camera(n: u32) -> Camera {
-    Camera {
-        projection: Projection::Orthographic { height: 2.1 },
-        eye: [0.0, 0.3, 5.0],
-        target: [0.0, 0.0, 0.0],
-        up: [0.0, 1.0, 0.0],
-        width: n,
-        height: n,
-    }
-}
+#[allow(unused_imports)]
+pub use envlight::fisbench::sphere_camera;
 
 pub fn unit_sphere() -> Shape {
     Shape::Sphere {
@@ -28,7 +18,7 @@ pub fn unit_sphere() -> Shape {
 
 pub fn object(
     shape: Shape,
-    kind: MaterialKind,
+    kind: envlight::math::brdf::Brdf,
     albedo: [f64; 3],
     technique: Technique,
 ) -> SceneObject {
