@@ -5,9 +5,10 @@
 //! envlight destroyed only what it created. `tests/adopt.rs` runs this same code.
 
 use ash::vk;
-use envlight::gpu::{AdoptInfo, Context, GpuEnvMap};
+use envlight::gpu::{AdoptInfo, Context};
 use envlight::math::synth::smooth_env;
 use envlight::passes::{ConvertOptions, Converter};
+use envlight::GpuEnvMap;
 use envlight::{EnvMap, Mapping};
 use std::sync::atomic::{AtomicUsize, Ordering};
 

@@ -27,19 +27,8 @@ layout(set = 0, binding = BINDING_BRUTE_DST, rgba32f) uniform image2DArray dst;
 layout(std430, set = 0, binding = BINDING_BRUTE_COMP) buffer Comp { vec4 comp_buf[]; };
 #endif
 
-layout(push_constant) uniform Push {
-    vec4 file_to_world[3];
-    uvec2 src_size;
-    uvec2 dst_size;
-    uint src_mapping;
-    uint dst_mapping;
-    uint texels;      // source texels in all layers
-    float exponent;   // 0: cosine; n: Phong
-    uint chunk_begin; // this dispatch sums source texels [chunk_begin, chunk_end) into dst
-    uint chunk_end;
-    uint pad0;
-    uint pad1;
-} pc;
+// The push block, generated from src/abi.rs.
+PUSH_BrutePush
 
 vec3 to_world(vec3 f) {
     return vec3(dot(pc.file_to_world[0].xyz, f), dot(pc.file_to_world[1].xyz, f), dot(pc.file_to_world[2].xyz, f));
@@ -90,7 +79,7 @@ void main() {
     }
     // acos via atan2 so a tiny radius keeps its digits.
     float md = clamp(min_dot, -1.0, 1.0);
-    float rho = min(1.25 * atan2_precise(sqrt(max(0.0, (1.0 - md) * (1.0 + md))), md), PI);
+    float rho = min(FILTER_CONE_MARGIN * atan2_precise(sqrt(max(0.0, (1.0 - md) * (1.0 + md))), md), PI);
     cones[i] = vec4(c, cos(rho));
     float omega = texel_solid_angle(pc.src_mapping, pc.src_size, p);
     rad[i] = vec4(texelFetch(src, ivec3(source, int(layer)), 0).rgb, omega);

@@ -5,7 +5,8 @@
 
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_BUSY_OUT) writeonly buffer Out { float values[]; };
-layout(push_constant) uniform Push { uint iterations; uint count; uint pad0; uint pad1; } pc;
+// The push block, generated from src/abi.rs.
+PUSH_BusyPush
 
 void main() {
     uint i = gl_GlobalInvocationID.x;

@@ -16,15 +16,8 @@ layout(set = 0, binding = BINDING_CONVERT_SRC) uniform sampler2DArray src;
 #endif
 layout(set = 0, binding = BINDING_CONVERT_DST, rgba32f) uniform writeonly image2DArray dst;
 
-layout(push_constant) uniform Push {
-    vec4 world_to_file[3];
-    uvec2 src_size;
-    uvec2 dst_size;
-    uint src_mapping;
-    uint dst_mapping;
-    uint ss;
-    uint pad;
-} pc;
+// The push block, generated from src/abi.rs.
+PUSH_ConvertPush
 
 // Polar angle of the solid-angle centroid of lat-long row j (rows of height h; rows -1 and H
 // are rows 0 and H-1 seen across the pole): θm + cot θm · (1 - x cot x), x = h/2, with the
@@ -122,7 +115,7 @@ void main() {
             c.uv = (vec2(id.xy) + 0.5) / vec2(pc.dst_size);
             if (pc.dst_mapping == MAPPING_DUAL_PARABOLOID) {
                 vec2 st = 2.0 * c.uv - 1.0;
-                st *= (1.0 - 1e-4) / max(length(st), 1.0 - 1e-4);
+                st *= (1.0 - RIM_PULL_IN) / max(length(st), 1.0 - RIM_PULL_IN);
                 c.uv = 0.5 * (st + 1.0);
             }
             result = sample_src(coord_to_dir(pc.dst_mapping, c));

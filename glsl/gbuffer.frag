@@ -8,15 +8,8 @@
 
 layout(std430, set = 0, binding = BINDING_GBUF_OBJECTS) readonly buffer Objects { Object objects[]; };
 
-layout(push_constant) uniform Push {
-    vec4 eye;
-    vec4 forward;
-    vec4 right;   // scaled by the half width of the image plane
-    vec4 up;      // scaled by the half height
-    uvec2 size;
-    uint ortho;
-    uint count;
-} pc;
+// The push block, generated from src/abi.rs.
+PUSH_GBufferPush
 
 layout(location = 0) out vec4 out_normal;    // normal, object index (-1: miss)
 layout(location = 1) out vec4 out_position;  // hit position, distance

@@ -9,16 +9,8 @@ layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_PROBE_IN) readonly buffer In { vec4 dirs[]; };
 layout(std430, set = 0, binding = BINDING_PROBE_OUT) writeonly buffer Out { vec4 results[]; };
 
-layout(push_constant) uniform Push {
-    uint mode;
-    uint mapping;
-    uint count;
-    uint width;
-    uint height;
-    uint pad0;
-    uint pad1;
-    uint pad2;
-} pc;
+// The push block, generated from src/abi.rs.
+PUSH_ProbePush
 
 void main() {
     uint i = gl_GlobalInvocationID.x;

@@ -21,19 +21,8 @@ layout(set = 0, binding = BINDING_MC_ENV) uniform sampler2DArray env;
 layout(std430, set = 0, binding = BINDING_MC_TABLES) readonly buffer Tables { float tables[]; };
 layout(set = 0, binding = BINDING_MC_ACCUM, rgba32f) uniform image2DArray accum;
 
-layout(push_constant) uniform Push {
-    vec4 world_to_file[3];
-    uvec2 env_size;   // lat-long W x H
-    uint count;       // objects
-    uint shadows;
-    uvec2 size;       // frame
-    uint first;       // index of this frame's first sample
-    uint samples;     // samples this frame
-    uint seed;
-    uint mis;
-    uint pad0;
-    uint pad1;
-} pc;
+// The push block, generated from src/abi.rs.
+PUSH_McPush
 
 vec3 to_file(vec3 d) {
     return vec3(dot(pc.world_to_file[0].xyz, d), dot(pc.world_to_file[1].xyz, d), dot(pc.world_to_file[2].xyz, d));
@@ -129,7 +118,7 @@ void main() {
         }
         x *= ob.albedo.rgb;
         sum += x;
-        float l = dot(x, vec3(0.2126, 0.7152, 0.0722));
+        float l = dot(x, LUMINANCE);
         sum2 += l * l;
     }
     imageStore(accum, q, imageLoad(accum, q) + vec4(sum, sum2));

@@ -13,12 +13,8 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 layout(set = 0, binding = BINDING_MIP_SRC, rgba32f) uniform readonly image2DArray src;
 layout(set = 0, binding = BINDING_MIP_DST, rgba32f) uniform writeonly image2DArray dst;
 
-layout(push_constant) uniform Push {
-    uint src_size;
-    uint dst_size;
-    uint mode;
-    uint pad;
-} pc;
+// The push block, generated from src/abi.rs.
+PUSH_MipPush
 
 void main() {
     uvec3 id = gl_GlobalInvocationID;

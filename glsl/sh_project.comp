@@ -17,16 +17,8 @@ layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(set = 0, binding = BINDING_SH_SRC) uniform sampler2DArray src;
 layout(std430, set = 0, binding = BINDING_SH_PARTIALS) writeonly buffer Partials { float partials[]; };
 
-layout(push_constant) uniform Push {
-    vec4 file_to_world[3];  // orientation: the world direction of a file direction (rows)
-    uvec2 size;
-    uint mapping;
-    uint lmax;
-    uint texels;   // width * height * layers
-    uint pad0;
-    uint pad1;
-    uint pad2;
-} pc;
+// The push block, generated from src/abi.rs.
+PUSH_ShProjectPush
 
 vec3 to_world(vec3 f) {
     return vec3(dot(pc.file_to_world[0].xyz, f), dot(pc.file_to_world[1].xyz, f), dot(pc.file_to_world[2].xyz, f));
@@ -104,7 +96,7 @@ void main() {
                 sh_clipped(pc.mapping, layer, lo, hi, pc.lmax, n, acc, wsum);
             } else {
                 for (uint q = 0u; q < 4u; q++) {
-                    vec2 off = vec2((q & 1u) == 0u ? -0.288675135 : 0.288675135, q < 2u ? -0.288675135 : 0.288675135);
+                    vec2 off = vec2((q & 1u) == 0u ? -GAUSS2_OFFSET : GAUSS2_OFFSET, q < 2u ? -GAUSS2_OFFSET : GAUSS2_OFFSET);
                     Coord c;
                     c.layer = layer;
                     c.uv = (vec2(p) + 0.5 + off) / vec2(pc.size);

@@ -14,12 +14,8 @@ layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_SH_REDUCE_IN) readonly buffer In { float rows_in[]; };
 layout(std430, set = 0, binding = BINDING_SH_REDUCE_OUT) writeonly buffer Out { float rows_out[]; };
 
-layout(push_constant) uniform Push {
-    uint rows;     // rows in the input
-    uint coeffs;   // coefficients per row (RGB each)
-    uint pad0;
-    uint pad1;
-} pc;
+// The push block, generated from src/abi.rs.
+PUSH_ShReducePush
 
 #ifdef USE_SUBGROUPS
 shared vec3 sums[SH_WORKGROUP];

@@ -24,16 +24,8 @@ layout(set = 0, binding = BINDING_SHADE_DP) uniform sampler2DArray dp;
 layout(std430, set = 0, binding = BINDING_SHADE_PREFILTERED) readonly buffer Pre { vec4 pre[]; };
 layout(set = 0, binding = BINDING_SHADE_MC) uniform sampler2DArray mc_accum;
 
-layout(push_constant) uniform Push {
-    vec4 world_to_file[3];  // the environment file's orientation (rows)
-    uvec2 env_size;
-    uint env_mapping;
-    uint count;       // objects
-    uint dp_size;     // dual paraboloid level-0 side
-    float max_lod;    // its last level
-    uint shadows;
-    uint mc_samples;  // samples in the MC accumulation
-} pc;
+// The push block, generated from src/abi.rs.
+PUSH_ShadePush
 
 layout(location = 0) out vec4 out_color;
 

@@ -40,7 +40,8 @@ pub struct Stats {
 
 /// Rec. 709 luminance of linear RGB.
 pub fn luminance(c: [f64; 3]) -> f64 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+    let w = crate::abi::constants::LUMINANCE;
+    w[0] * c[0] + w[1] * c[1] + w[2] * c[2]
 }
 
 impl EnvMap {

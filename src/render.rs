@@ -1,21 +1,25 @@
 //! Rendering a [`Scene`]: runs exactly the passes its [`plan`] lists, and records what each
 //! cost.
 
+use crate::abi::brdf::technique;
 use crate::error::{Error, Result};
-use crate::gpu::layout::brdf::technique;
-use crate::gpu::{Buffer, Context, GpuEnvMap, Timing};
+use crate::gpu::{Buffer, Context, Recorder, Timing, Usage};
 use crate::math::brdf::Brdf;
 use crate::math::filter::Kernel;
 use crate::math::{sh, Mapping, Orientation};
-use crate::passes::filter::{BruteFilter, FilterTarget};
-use crate::passes::gbuffer::{shape_record, GBufferPass, GpuObject};
-use crate::passes::mc::{McEnv, McOptions, MonteCarlo};
-use crate::passes::mip::MipChain;
-use crate::passes::sh_project::{ShProjector, Subgroups};
-use crate::passes::shade::{Shade, ShadeInputs};
-use crate::passes::{ConvertOptions, Converter};
+use crate::passes::gbuffer::{shape_record, target, GBuffer, GpuObject};
+use crate::passes::mc::{McEnv, McOptions};
+use crate::passes::sh_project::Subgroups;
+use crate::passes::shade::ShadeInputs;
+use crate::passes::{
+    BruteFilter, ConvertOptions, Converter, GBufferPass, GpuEnvMap, MipChain, MonteCarlo,
+    ShProjector, Shade,
+};
 use crate::scene::{plan, PassKind, Plan, Scene, SceneObject, Technique, DEFAULT_FIS_BIAS};
 use crate::EnvMap;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+use std::cell::OnceCell;
 use std::path::Path;
 
 /// The GPU time of one pass of a render.
@@ -132,26 +136,108 @@ pub fn object_record(o: &SceneObject, data_offset: u32) -> GpuObject {
     g
 }
 
-/// Renders `scene` with `env` (from [`load_environment`]) on `ctx`.
-pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
-    scene.validate().map_err(Error::Invalid)?;
-    let plan = plan(scene, env.mapping);
-    let kinds = plan.kinds();
-    let needs = |k: PassKind| kinds.contains(&k);
-    let orientation: Orientation = scene.environment.orientation();
-    let mut records = Vec::new();
-    let env_gpu = GpuEnvMap::upload(ctx, env)?;
-    // Building a converter makes no pipeline: each is made on its first run.
-    let converter = if needs(PassKind::DualParaboloid) || needs(PassKind::MonteCarlo) {
-        Some(Converter::new(ctx)?)
-    } else {
-        None
-    };
+/// Renders scenes: holds each pass, built the first time a scene needs it and reused by
+/// every later render on the same context.
+pub struct Renderer {
+    ctx: Context,
+    converter: OnceCell<Converter>,
+    mip: OnceCell<MipChain>,
+    sh: OnceCell<ShProjector>,
+    brute: OnceCell<BruteFilter>,
+    gbuffer: OnceCell<GBufferPass>,
+    mc: OnceCell<MonteCarlo>,
+    shade: OnceCell<Shade>,
+}
 
-    // SH: one projection at the highest order asked; each object gets its own truncation.
-    let mut sh_coeffs: Vec<[f64; 3]> = Vec::new();
-    let mut sh_offsets = vec![0u32; scene.objects.len()];
-    if needs(PassKind::ShProjection) {
+/// The pass in `cell`, built by `make` on first use.
+fn pass<'a, T>(cell: &'a OnceCell<T>, make: impl FnOnce() -> Result<T>) -> Result<&'a T> {
+    if cell.get().is_none() {
+        let _ = cell.set(make()?);
+    }
+    Ok(cell.get().unwrap_or_else(|| unreachable!("set above")))
+}
+
+/// Spans recorded per pass within one recording, to split its timings by pass.
+struct Marks(Vec<(PassKind, usize, usize)>);
+
+impl Marks {
+    fn record<R>(
+        &mut self,
+        rec: &mut Recorder,
+        kind: PassKind,
+        f: impl FnOnce(&mut Recorder) -> Result<R>,
+    ) -> Result<R> {
+        let a = rec.spans();
+        let r = f(rec)?;
+        self.0.push((kind, a, rec.spans()));
+        Ok(r)
+    }
+
+    fn split(&self, timings: &[Timing], into: &mut Vec<PassRecord>) {
+        for &(kind, a, b) in &self.0 {
+            into.push(PassRecord {
+                kind,
+                timings: timings
+                    .get(a..b)
+                    .map(<[Timing]>::to_vec)
+                    .unwrap_or_default(),
+            });
+        }
+    }
+}
+
+impl Renderer {
+    /// A renderer on `ctx` (no pass is built yet).
+    pub fn new(ctx: &Context) -> Renderer {
+        Renderer {
+            ctx: ctx.clone(),
+            converter: OnceCell::new(),
+            mip: OnceCell::new(),
+            sh: OnceCell::new(),
+            brute: OnceCell::new(),
+            gbuffer: OnceCell::new(),
+            mc: OnceCell::new(),
+            shade: OnceCell::new(),
+        }
+    }
+
+    fn converter(&self) -> Result<&Converter> {
+        pass(&self.converter, || Converter::new(&self.ctx))
+    }
+
+    /// Renders `scene` with `env` (from [`load_environment`]). Everything up to the shading
+    /// is recorded into one submission and stays on the GPU; only SH coefficients (a few
+    /// hundred bytes) and, for Monte Carlo on a map that is not lat-long, the converted map
+    /// (its sampling tables are built on the CPU) come back to the host before shading.
+    pub fn render(&self, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
+        scene.validate().map_err(Error::Invalid)?;
+        let ctx = &self.ctx;
+        let plan = plan(scene, env.mapping);
+        let kinds = plan.kinds();
+        let needs = |k: PassKind| kinds.contains(&k);
+        let orientation: Orientation = scene.environment.orientation();
+        let mut records = Vec::new();
+        let env_gpu = GpuEnvMap::new(ctx, "environment", env.mapping, env.width, env.height)?;
+
+        // Build the passes first: pipeline creation is not GPU work.
+        let sh_pass = if needs(PassKind::ShProjection) {
+            Some(pass(&self.sh, || ShProjector::new(ctx, Subgroups::Auto))?)
+        } else {
+            None
+        };
+        let dp_passes = if needs(PassKind::DualParaboloid) {
+            Some((self.converter()?, pass(&self.mip, || MipChain::new(ctx))?))
+        } else {
+            None
+        };
+        let brute = if needs(PassKind::Prefilter) {
+            Some(pass(&self.brute, || BruteFilter::new(ctx))?)
+        } else {
+            None
+        };
+        let gbuffer_pass = pass(&self.gbuffer, || GBufferPass::new(ctx))?;
+
+        // SH: one projection at the highest order asked; each object gets its own truncation.
         let lmax = scene
             .objects
             .iter()
@@ -161,197 +247,234 @@ pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
             })
             .max()
             .unwrap_or(2);
-        let (c, t) =
-            ShProjector::new(ctx, Subgroups::Auto)?.run_oriented(&env_gpu, lmax, &orientation)?;
-        records.push(PassRecord {
-            kind: PassKind::ShProjection,
-            timings: t,
-        });
-        for (k, o) in scene.objects.iter().enumerate() {
-            if let Technique::Sh { order } = o.material.technique() {
-                sh_offsets[k] = sh_coeffs.len() as u32;
-                sh_coeffs.extend(sh::irradiance_coeffs(&c.coeffs[..sh::count(order)]));
+        let sh_out = match sh_pass {
+            Some(_) => Some(Buffer::new(
+                ctx,
+                "sh coefficients",
+                ShProjector::output_bytes(lmax),
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )?),
+            None => None,
+        };
+
+        // FIS: the dual paraboloid and its MIP chain.
+        let dp = match dp_passes {
+            Some(_) => {
+                let size = scene.fis.size.unwrap_or_else(|| default_dp_size(env));
+                let (w, h) = Mapping::DualParaboloid.extent_for_size(size);
+                Some((
+                    GpuEnvMap::with_mips(ctx, "fis paraboloid", Mapping::DualParaboloid, w, h)?,
+                    size,
+                ))
+            }
+            None => None,
+        };
+
+        // Prefiltered maps, one per distinct (kernel, size), concatenated into one buffer on
+        // the GPU; each object's record holds its map's offset.
+        let mut pre_offsets = vec![0u32; scene.objects.len()];
+        let mut pre_maps: Vec<(Kernel, GpuEnvMap, u32)> = Vec::new();
+        let mut pre_texels = 0u32;
+        if brute.is_some() {
+            let mut made: Vec<(u64, u32, u32)> = Vec::new();
+            for (k, o) in scene.objects.iter().enumerate() {
+                let Technique::Prefiltered { size } = o.material.technique() else {
+                    continue;
+                };
+                let kernel = match o.material.kind {
+                    Brdf::Phong { n } => Kernel::Phong { n },
+                    _ => Kernel::Cosine,
+                };
+                let key = match kernel {
+                    Kernel::Phong { n } => n.to_bits(),
+                    Kernel::Cosine => u64::MAX,
+                };
+                if let Some(&(_, _, off)) = made.iter().find(|m| m.0 == key && m.1 == size) {
+                    pre_offsets[k] = off;
+                    continue;
+                }
+                let (w, h) = Mapping::LatLong.extent_for_size(size);
+                let map = GpuEnvMap::new(ctx, "prefiltered", Mapping::LatLong, w, h)?;
+                made.push((key, size, pre_texels));
+                pre_offsets[k] = pre_texels;
+                pre_maps.push((kernel, map, pre_texels));
+                pre_texels += w * h;
             }
         }
-    }
+        let pre_buffer = match brute {
+            Some(_) => Some(Buffer::new(
+                ctx,
+                "prefiltered maps",
+                (pre_texels.max(1) as u64) * 16,
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuOnly,
+            )?),
+            None => None,
+        };
 
-    // FIS: the dual paraboloid and its MIP chain.
-    let mut dp = None;
-    if needs(PassKind::DualParaboloid) {
-        let size = scene.fis.size.unwrap_or_else(|| default_dp_size(env));
-        let conv = converter
-            .as_ref()
-            .unwrap_or_else(|| unreachable!("made above"));
-        let (map, t) = conv.run_mipped(
-            &env_gpu,
-            &ConvertOptions {
-                to: Mapping::DualParaboloid,
-                size,
-                orientation,
-                supersample: None,
-            },
-        )?;
-        records.push(PassRecord {
-            kind: PassKind::DualParaboloid,
-            timings: t,
-        });
-        let t = MipChain::new(ctx)?.run(&map)?;
-        records.push(PassRecord {
-            kind: PassKind::MipChain,
-            timings: t,
-        });
-        dp = Some(map);
-    }
+        let gbuf_objects: Vec<GpuObject> = scene
+            .objects
+            .iter()
+            .enumerate()
+            .map(|(k, o)| object_record(o, pre_offsets[k]))
+            .collect();
+        let mut gbuf = GBuffer::new(ctx, scene.camera.width, scene.camera.height, &gbuf_objects)?;
 
-    // Prefiltered maps, one per distinct (kernel, size), concatenated into one buffer.
-    let mut pre_offsets = vec![0u32; scene.objects.len()];
-    let mut pre_buffer = None;
-    if needs(PassKind::Prefilter) {
-        let brute = BruteFilter::new(ctx)?;
-        let mut texels: Vec<[f32; 4]> = Vec::new();
-        let mut made: Vec<(u64, u32, u32)> = Vec::new();
-        for (k, o) in scene.objects.iter().enumerate() {
-            let Technique::Prefiltered { size } = o.material.technique() else {
-                continue;
-            };
-            let kernel = match o.material.kind {
-                Brdf::Phong { n } => Kernel::Phong { n },
-                _ => Kernel::Cosine,
-            };
-            let key = match kernel {
-                Kernel::Phong { n } => n.to_bits(),
-                Kernel::Cosine => u64::MAX,
-            };
-            if let Some(&(_, _, off)) = made.iter().find(|m| m.0 == key && m.1 == size) {
-                pre_offsets[k] = off;
-                continue;
+        // Everything before shading, in one submission.
+        let mut marks = Marks(Vec::new());
+        let ((), t) = ctx.run("rendering: inputs", |rec| {
+            env_gpu.record_upload(rec, env)?;
+            if let (Some(p), Some(out)) = (sh_pass, &sh_out) {
+                marks.record(rec, PassKind::ShProjection, |rec| {
+                    p.record(rec, &env_gpu, lmax, &orientation, out)
+                })?;
+                rec.use_buffer(out, Usage::HostRead);
             }
-            let (map, t) = brute.run(
-                &env_gpu,
-                &orientation,
-                kernel,
-                FilterTarget {
-                    to: Mapping::LatLong,
-                    size,
+            if let (Some((conv, mip)), Some((map, size))) = (dp_passes, &dp) {
+                let opts = ConvertOptions {
+                    to: Mapping::DualParaboloid,
+                    size: *size,
+                    orientation,
+                    supersample: None,
+                };
+                marks.record(rec, PassKind::DualParaboloid, |rec| {
+                    conv.record(rec, &env_gpu, map, &opts)
+                })?;
+                marks.record(rec, PassKind::MipChain, |rec| mip.record(rec, map))?;
+            }
+            if let (Some(b), Some(buf)) = (brute, &pre_buffer) {
+                for (kernel, map, off) in &pre_maps {
+                    marks.record(rec, PassKind::Prefilter, |rec| {
+                        b.record(rec, &env_gpu, &orientation, *kernel, map)
+                    })?;
+                    rec.copy_image_to_buffer(&map.image, 0, buf, *off as u64 * 16);
+                }
+            }
+            marks.record(rec, PassKind::GBuffer, |rec| {
+                gbuffer_pass.record(rec, &scene.camera, &gbuf)
+            })
+        })?;
+        marks.split(&t, &mut records);
+
+        // SH coefficients: each object's truncation, with Â_l folded in.
+        let mut sh_coeffs: Vec<[f64; 3]> = Vec::new();
+        if let Some(out) = &sh_out {
+            let flat: Vec<f32> = out.read(sh::count(lmax) * 3);
+            let c: Vec<[f64; 3]> = flat
+                .chunks_exact(3)
+                .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
+                .collect();
+            let mut objects = gbuf_objects.clone();
+            for (k, o) in scene.objects.iter().enumerate() {
+                if let Technique::Sh { order } = o.material.technique() {
+                    objects[k] = object_record(o, sh_coeffs.len() as u32);
+                    sh_coeffs.extend(sh::irradiance_coeffs(&c[..sh::count(order)]));
+                }
+            }
+            gbuf.objects.write(&objects);
+        }
+
+        // Monte Carlo: one accumulation for every MC material, at the most samples any asks.
+        let mut mc = None;
+        let mut mc_summary = None;
+        if needs(PassKind::MonteCarlo) {
+            let (samples, error) = scene
+                .objects
+                .iter()
+                .filter_map(|o| match o.material.technique() {
+                    Technique::Mc { samples, error } => Some((samples, error)),
+                    _ => None,
+                })
+                .fold((0, None::<f64>), |(s, e), (s2, e2)| {
+                    (
+                        s.max(s2),
+                        match (e, e2) {
+                            (Some(a), Some(b)) => Some(a.min(b)),
+                            (a, b) => a.or(b),
+                        },
+                    )
+                });
+            let (mc_env, t) = McEnv::for_map(ctx, self.converter()?, env, &env_gpu, &orientation)?;
+            if !t.is_empty() {
+                records.push(PassRecord {
+                    kind: PassKind::LatLong,
+                    timings: t,
+                });
+            }
+            let mc_pass = pass(&self.mc, || MonteCarlo::new(ctx))?;
+            let (res, t) = mc_pass.run(
+                &gbuf,
+                &mc_env,
+                &McOptions {
+                    samples,
+                    target_error: error,
+                    mis: scene.mc.mis,
+                    seed: scene.mc.seed,
+                    shadows: scene.shadows,
+                    per_frame: scene.mc.per_frame,
                 },
             )?;
             records.push(PassRecord {
-                kind: PassKind::Prefilter,
+                kind: PassKind::MonteCarlo,
                 timings: t,
             });
-            let off = texels.len() as u32;
-            texels.extend(
-                map.download(ctx)?
-                    .texels
-                    .iter()
-                    .map(|t| [t[0], t[1], t[2], 0.0]),
-            );
-            made.push((key, size, off));
-            pre_offsets[k] = off;
+            mc_summary = Some((res.samples, res.error));
+            mc = Some(res);
         }
-        pre_buffer = Some(Buffer::storage(ctx, "prefiltered maps", &texels)?);
-    }
 
-    // The objects' GPU records.
-    let objects: Vec<GpuObject> = scene
-        .objects
-        .iter()
-        .enumerate()
-        .map(|(k, o)| object_record(o, sh_offsets[k].max(pre_offsets[k])))
-        .collect();
-    let (gbuf, t) = GBufferPass::new(ctx)?.run(&scene.camera, &objects)?;
-    records.push(PassRecord {
-        kind: PassKind::GBuffer,
-        timings: t,
-    });
-
-    // Monte Carlo: one accumulation for every MC material, at the most samples any asks.
-    let mut mc = None;
-    let mut mc_summary = None;
-    if needs(PassKind::MonteCarlo) {
-        let (samples, error) = scene
-            .objects
-            .iter()
-            .filter_map(|o| match o.material.technique() {
-                Technique::Mc { samples, error } => Some((samples, error)),
-                _ => None,
-            })
-            .fold((0, None::<f64>), |(s, e), (s2, e2)| {
-                (
-                    s.max(s2),
-                    match (e, e2) {
-                        (Some(a), Some(b)) => Some(a.min(b)),
-                        (a, b) => a.or(b),
-                    },
-                )
-            });
-        let conv = converter
-            .as_ref()
-            .unwrap_or_else(|| unreachable!("made above"));
-        let (mc_env, t) = McEnv::for_map(ctx, conv, env, &env_gpu, &orientation)?;
-        if !t.is_empty() {
-            records.push(PassRecord {
-                kind: PassKind::LatLong,
-                timings: t,
-            });
-        }
-        let (res, t) = MonteCarlo::new(ctx)?.run(
-            &gbuf,
-            &mc_env,
-            &McOptions {
-                samples,
-                target_error: error,
-                mis: scene.mc.mis,
-                seed: scene.mc.seed,
-                shadows: scene.shadows,
-                per_frame: scene.mc.per_frame,
-            },
-        )?;
-        records.push(PassRecord {
-            kind: PassKind::MonteCarlo,
-            timings: t,
-        });
-        mc_summary = Some((res.samples, res.error));
-        mc = Some(res);
-    }
-
-    let (frame, t) = Shade::new(ctx)?.run(
-        &gbuf,
-        &ShadeInputs {
+        let shade = pass(&self.shade, || Shade::new(ctx))?;
+        let frame = target(ctx, "shaded frame", gbuf.width, gbuf.height)?;
+        let inputs = ShadeInputs {
             env: &env_gpu,
             orientation,
-            sh: if sh_coeffs.is_empty() {
-                None
-            } else {
-                Some(&sh_coeffs)
-            },
-            dp: dp.as_ref(),
+            sh: (!sh_coeffs.is_empty()).then_some(&sh_coeffs[..]),
+            dp: dp.as_ref().map(|d| &d.0),
             prefiltered: pre_buffer.as_ref(),
             mc: mc.as_ref().map(|m| (&m.accum, m.samples)),
             shadows: scene.shadows,
-        },
-    )?;
-    records.push(PassRecord {
-        kind: PassKind::Shade,
-        timings: t,
-    });
-    let frame = frame.download(ctx)?;
-    if let Some(k) = frame
-        .texels
-        .iter()
-        .position(|t| t.iter().any(|c| !c.is_finite()))
-    {
-        return Err(Error::Invalid(format!(
-            "pixel ({}, {}) of the frame is not finite: {:?}",
-            k as u32 % frame.width,
-            k as u32 / frame.width,
-            frame.texels[k]
-        )));
+        };
+        let mut marks = Marks(Vec::new());
+        let (readback, t) = ctx.run("rendering: shading", |rec| {
+            marks.record(rec, PassKind::Shade, |rec| {
+                shade.record(rec, &gbuf, &inputs, &frame)
+            })?;
+            frame.record_download(rec, 0)
+        })?;
+        marks.split(&t, &mut records);
+        let frame = EnvMap::new(
+            Mapping::LatLong,
+            gbuf.width,
+            gbuf.height,
+            readback
+                .read()
+                .into_iter()
+                .map(|t| [t[0], t[1], t[2]])
+                .collect(),
+        );
+        if let Some(k) = frame
+            .texels
+            .iter()
+            .position(|t| t.iter().any(|c| !c.is_finite()))
+        {
+            return Err(Error::Invalid(format!(
+                "pixel ({}, {}) of the frame is not finite: {:?}",
+                k as u32 % frame.width,
+                k as u32 / frame.width,
+                frame.texels[k]
+            )));
+        }
+        Ok(Rendered {
+            frame,
+            records,
+            plan,
+            mc: mc_summary,
+        })
     }
-    Ok(Rendered {
-        frame,
-        records,
-        plan,
-        mc: mc_summary,
-    })
+}
+
+/// Renders `scene` with `env` (from [`load_environment`]) on `ctx`, with a renderer of its
+/// own (see [`Renderer`] to reuse the passes across renders).
+pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
+    Renderer::new(ctx).render(scene, env)
 }

@@ -2,6 +2,7 @@
 //! technique each material is shaded by, and whether shadows are wanted; and the plan of the
 //! GPU passes a render of it runs, each with the reason it is needed.
 
+use crate::abi::{defaults, ShaderId};
 use crate::error::{Error, Result};
 use crate::math::brdf::Brdf;
 use crate::math::camera::{Camera, Shape};
@@ -96,18 +97,18 @@ fn yes() -> bool {
     true
 }
 fn seed() -> u32 {
-    1
+    defaults::MC_SEED
 }
 fn per_frame() -> u32 {
-    64
+    defaults::MC_PER_FRAME
 }
 
 impl Default for McSettings {
     fn default() -> Self {
         McSettings {
             mis: true,
-            seed: 1,
-            per_frame: 64,
+            seed: seed(),
+            per_frame: per_frame(),
         }
     }
 }
@@ -142,7 +143,7 @@ fn white() -> [f64; 3] {
 
 /// The default lod bias of filtered importance sampling (see docs/BENCHMARKS.md for the
 /// measurement that chose it).
-pub const DEFAULT_FIS_BIAS: f64 = 0.25;
+pub const DEFAULT_FIS_BIAS: f64 = defaults::FIS_BIAS;
 
 /// How a material is shaded.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
@@ -186,16 +187,16 @@ pub enum Technique {
 }
 
 fn fis_samples() -> u32 {
-    64
+    defaults::FIS_SAMPLES
 }
 fn sh_order() -> u32 {
-    2
+    defaults::SH_ORDER
 }
 fn prefiltered_size() -> u32 {
-    64
+    defaults::PREFILTERED_SIZE
 }
 fn mc_samples() -> u32 {
-    1024
+    defaults::MC_SAMPLES
 }
 
 impl Technique {
@@ -216,9 +217,11 @@ impl Material {
     pub fn technique(&self) -> Technique {
         self.technique.unwrap_or(match self.kind {
             Brdf::Mirror => Technique::Lookup,
-            Brdf::Lambert => Technique::Sh { order: 2 },
+            Brdf::Lambert => Technique::Sh {
+                order: defaults::SH_ORDER,
+            },
             _ => Technique::Fis {
-                samples: 64,
+                samples: defaults::FIS_SAMPLES,
                 bias: None,
                 rotate: false,
             },
@@ -309,7 +312,7 @@ impl Scene {
                         return Err(format!("{what}: fis bias must be within ±16"));
                     }
                 }
-                Technique::Sh { order } if order > crate::gpu::layout::SH_MAX_LMAX => {
+                Technique::Sh { order } if order > crate::abi::SH_MAX_LMAX => {
                     return Err(format!("{what}: SH order {order} is above 8"));
                 }
                 Technique::Prefiltered { size } if !(4..=4096).contains(&size) || size % 2 == 1 => {
@@ -377,20 +380,21 @@ impl PassKind {
 
     /// The shader modules whose pipelines the pass creates (either of a pair where the
     /// device decides: cube or 2D sources, subgroups or shared memory).
-    pub fn pipelines(self) -> &'static [&'static str] {
+    pub fn pipelines(self) -> &'static [ShaderId] {
+        use ShaderId::*;
         match self {
-            PassKind::GBuffer => &["gbuffer"],
-            PassKind::DualParaboloid | PassKind::LatLong => &["convert_2d", "convert_cube"],
-            PassKind::MipChain => &["mip"],
+            PassKind::GBuffer => &[GBuffer],
+            PassKind::DualParaboloid | PassKind::LatLong => &[Convert2d, ConvertCube],
+            PassKind::MipChain => &[Mip],
             PassKind::ShProjection => &[
-                "sh_project_subgroup",
-                "sh_reduce_subgroup",
-                "sh_project_shared",
-                "sh_reduce_shared",
+                ShProjectSubgroup,
+                ShReduceSubgroup,
+                ShProjectShared,
+                ShReduceShared,
             ],
-            PassKind::Prefilter => &["brute_prepare", "brute"],
-            PassKind::MonteCarlo => &["mc"],
-            PassKind::Shade => &["shade"],
+            PassKind::Prefilter => &[BrutePrepare, Brute],
+            PassKind::MonteCarlo => &[Mc],
+            PassKind::Shade => &[Shade],
         }
     }
 }

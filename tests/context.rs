@@ -3,7 +3,7 @@
 mod common;
 
 use envlight::gpu::{Context, ContextOptions, DeviceSelector};
-use envlight::passes::diagnostics::Diagnostics;
+use envlight::passes::testing::diagnostics::Diagnostics;
 
 #[test]
 fn costly_dispatch_after_graphics_work_measures_nonzero_time() {
@@ -82,7 +82,7 @@ fn live_objects_return_to_zero() {
             1,
             envlight::math::synth::smooth_env,
         );
-        let g = envlight::gpu::GpuEnvMap::upload(&ctx, &map).unwrap();
+        let g = envlight::GpuEnvMap::upload(&ctx, &map).unwrap();
         assert!(ctx.live_objects() > 0);
         let opts = envlight::passes::ConvertOptions {
             to: envlight::Mapping::LatLong,
@@ -110,13 +110,13 @@ fn uploading_nan_or_negative_radiance_is_refused() {
             envlight::math::synth::smooth_env,
         );
         map.texels[3][1] = f32::NAN;
-        let e = envlight::gpu::GpuEnvMap::upload(&ctx, &map)
+        let e = envlight::GpuEnvMap::upload(&ctx, &map)
             .err()
             .unwrap()
             .to_string();
         assert!(e.contains("texel 3") && e.contains("finite"), "{e}");
         map.texels[3][1] = -0.5;
-        assert!(envlight::gpu::GpuEnvMap::upload(&ctx, &map).is_err());
+        assert!(envlight::GpuEnvMap::upload(&ctx, &map).is_err());
     }
     common::finish(ctx);
 }

@@ -2,10 +2,11 @@
 
 mod common;
 
-use envlight::gpu::{Context, GpuEnvMap};
+use envlight::gpu::Context;
 use envlight::math::synth::smooth_env;
 use envlight::math::Mapping;
 use envlight::passes::{ConvertOptions, Converter};
+use envlight::GpuEnvMap;
 use envlight::{EnvMap, Orientation};
 use std::f64::consts::PI;
 
@@ -235,7 +236,7 @@ fn every_mapping_to_every_other_matches_the_analytic_environment() {
     common::finish(ctx);
 }
 
-/// The GPU pass against its float64 twin (`envlight::math::resample`), same algorithm and
+/// The GPU pass against its float64 twin (`envlight::math::convert`), same algorithm and
 /// sample positions. What remains is float32 arithmetic (directions to ~1e-7 rad, texel
 /// values to 6e-8 relative) and, for cube sources, the hardware's bilinear weights, which
 /// Vulkan quantises to subTexelPrecisionBits (at least 4; 8 on lavapipe): a weight error of up
@@ -266,7 +267,7 @@ fn gpu_matches_the_float64_reference_conversion() {
                 let (ow, oh) = to.extent_for_size(size);
                 let ss = Converter::supersampling((from, w, h), (to, ow, oh));
                 let gpu = convert(&ctx, &conv, &src, to, size, o);
-                let cpu = envlight::math::resample::convert(&src, to, size, o.world_to_file(), ss);
+                let cpu = envlight::math::convert::convert(&src, to, size, o.world_to_file(), ss);
                 let tol = if from == Mapping::Cube { 3e-4 } else { 1e-5 };
                 let (mut worst, mut at) = (0.0f64, (0, 0, 0));
                 for layer in 0..gpu.layers() {
@@ -443,7 +444,7 @@ fn tiny_and_odd_sizes() {
 fn copy_pass_is_exact() {
     let ctx = common::ctx();
     {
-        let copy = envlight::passes::copy::CopyPass::new(&ctx).unwrap();
+        let copy = envlight::passes::testing::copy::CopyPass::new(&ctx).unwrap();
         for m in Mapping::ALL {
             let (w, h) = m.extent_for_size(17);
             let map = EnvMap::from_fn(m, w, h, 2, smooth_env);

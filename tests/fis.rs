@@ -3,7 +3,6 @@
 mod common;
 
 use common::scenes::{fis, object, scene, sphere_camera, unit_sphere};
-use envlight::gpu::GpuEnvMap;
 use envlight::math::brdf::Brdf;
 use envlight::math::brdf::{local_view, Frame};
 use envlight::math::camera::{trace, Shape};
@@ -13,6 +12,7 @@ use envlight::passes::mip::MipChain;
 use envlight::render::render;
 use envlight::scene::Technique;
 use envlight::EnvMap;
+use envlight::GpuEnvMap;
 
 /// Each BRDF's directional albedo under a white environment, per pixel, against float64
 /// quadrature of the same BRDF (`Brdf::albedo`) at the pixel's float64 normal and view.

@@ -4,7 +4,7 @@ mod common;
 
 use envlight::math::synth::stress_directions;
 use envlight::math::Mapping;
-use envlight::passes::probe::MappingProbe;
+use envlight::passes::testing::probe::MappingProbe;
 use glam::DVec3;
 
 fn angle(a: DVec3, b: DVec3) -> f64 {

@@ -3,10 +3,10 @@
 
 mod common;
 
-use envlight::gpu::GpuEnvMap;
 use envlight::io::{self, LoadOptions};
 use envlight::math::Mapping;
 use envlight::passes::{ConvertOptions, Converter};
+use envlight::GpuEnvMap;
 use envlight::{EnvMap, Orientation};
 use std::path::{Path, PathBuf};
 

@@ -3,7 +3,6 @@
 
 mod common;
 
-use envlight::gpu::GpuEnvMap;
 use envlight::math::camera::{trace, Camera, Projection, Shape};
 use envlight::math::sh;
 use envlight::math::synth::smooth_env;
@@ -12,6 +11,7 @@ use envlight::passes::gbuffer::{GBufferPass, Object};
 use envlight::passes::sh_project::{ShProjector, Subgroups};
 use envlight::passes::shade::{Shade, ShadeInputs};
 use envlight::EnvMap;
+use envlight::GpuEnvMap;
 use std::f64::consts::PI;
 
 fn scene() -> Vec<Object> {

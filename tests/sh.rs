@@ -2,12 +2,13 @@
 
 mod common;
 
-use envlight::gpu::{Context, GpuEnvMap};
+use envlight::gpu::Context;
 use envlight::math::sh;
 use envlight::math::synth::Sky;
 use envlight::math::Mapping;
 use envlight::passes::sh_project::{ShProjector, Subgroups};
 use envlight::EnvMap;
+use envlight::GpuEnvMap;
 use std::f64::consts::PI;
 
 fn gpu_project(ctx: &Context, p: &ShProjector, map: &EnvMap, lmax: u32) -> Vec<[f64; 3]> {

@@ -1,8 +1,8 @@
 //! spirv/ is in step with glsl/, and every pipeline's bindings and push-constant size agree
 //! with what the SPIR-V declares.
 
-use envlight::gpu::layout::{self, SHADER_SOURCES};
-use envlight::gpu::shaders::{DescriptorKind, ShaderId};
+use envlight::abi::{self as layout, Kind, ShaderId, SHADER_SOURCES};
+use envlight::gpu::shaders::spirv;
 use rspirv_reflect::{DescriptorType, Reflection};
 use std::path::Path;
 
@@ -39,7 +39,7 @@ fn spirv_is_not_stale() {
 #[test]
 fn every_shader_is_registered_once() {
     assert_eq!(ShaderId::ALL.len(), SHADER_SOURCES.len());
-    for id in ShaderId::ALL {
+    for &id in ShaderId::ALL {
         assert_eq!(
             ShaderId::ALL
                 .iter()
@@ -52,8 +52,8 @@ fn every_shader_is_registered_once() {
 
 #[test]
 fn bindings_and_push_constants_match_the_spirv() {
-    for id in ShaderId::ALL {
-        let refl = Reflection::new_from_spirv(id.spirv()).unwrap();
+    for &id in ShaderId::ALL {
+        let refl = Reflection::new_from_spirv(spirv(id)).unwrap();
         let sets = refl.get_descriptor_sets().unwrap();
         let iface = id.interface();
         let set0 = sets.get(&0).cloned().unwrap_or_default();
@@ -62,14 +62,14 @@ fn bindings_and_push_constants_match_the_spirv() {
             "{id:?} uses a set other than 0"
         );
         assert_eq!(set0.len(), iface.bindings.len(), "{id:?}: binding count");
-        for &(b, kind) in iface.bindings {
+        for &(b, kind, _) in iface.bindings {
             let info = set0
                 .get(&b)
                 .unwrap_or_else(|| panic!("{id:?}: SPIR-V has no binding {b}"));
             let want = match kind {
-                DescriptorKind::SampledImage => DescriptorType::COMBINED_IMAGE_SAMPLER,
-                DescriptorKind::StorageImage => DescriptorType::STORAGE_IMAGE,
-                DescriptorKind::StorageBuffer => DescriptorType::STORAGE_BUFFER,
+                Kind::Sampled => DescriptorType::COMBINED_IMAGE_SAMPLER,
+                Kind::StorageImage => DescriptorType::STORAGE_IMAGE,
+                Kind::StorageBuffer => DescriptorType::STORAGE_BUFFER,
             };
             assert_eq!(info.ty, want, "{id:?}: binding {b} type");
         }
@@ -94,4 +94,81 @@ fn bindings_and_push_constants_match_the_spirv() {
             );
         }
     }
+}
+
+/// The push-constant block's members in the SPIR-V: (name if kept, byte offset), in order.
+fn push_members(words: &[u32]) -> Vec<(Option<String>, u32)> {
+    let mut i = 5;
+    let mut pointers = std::collections::HashMap::new();
+    let mut push_ptr = None;
+    let mut offsets: std::collections::BTreeMap<(u32, u32), u32> = Default::default();
+    let mut names: std::collections::HashMap<(u32, u32), String> = Default::default();
+    while i < words.len() {
+        let (count, op) = ((words[i] >> 16) as usize, words[i] & 0xffff);
+        let w = &words[i..i + count];
+        match op {
+            // OpMemberName: type, member, literal string.
+            6 => {
+                let bytes: Vec<u8> = w[3..].iter().flat_map(|x| x.to_le_bytes()).collect();
+                let end = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
+                names.insert((w[1], w[2]), String::from_utf8_lossy(&bytes[..end]).into());
+            }
+            // OpMemberDecorate … Offset.
+            72 if w[3] == 35 => {
+                offsets.insert((w[1], w[2]), w[4]);
+            }
+            // OpTypePointer: result, storage class, type.
+            32 => {
+                pointers.insert(w[1], w[3]);
+            }
+            // OpVariable: type, result, storage class 9 = PushConstant.
+            59 if w[3] == 9 => push_ptr = Some(w[1]),
+            _ => {}
+        }
+        i += count;
+    }
+    let Some(ptr) = push_ptr else {
+        return Vec::new();
+    };
+    let block = pointers[&ptr];
+    offsets
+        .iter()
+        .filter(|((t, _), _)| *t == block)
+        .map(|(&(t, m), &off)| (names.get(&(t, m)).cloned(), off))
+        .collect()
+}
+
+/// Every push block is generated from the Rust struct, and the compiled SPIR-V agrees with
+/// the struct field by field: same order, same offsets, same names where the SPIR-V keeps them.
+#[test]
+fn push_blocks_match_the_rust_structs_field_by_field() {
+    let mut checked = 0;
+    for &id in ShaderId::ALL {
+        let words: Vec<u32> = spirv(id)
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        let got = push_members(&words);
+        let want = id.interface().push_fields;
+        assert_eq!(got.len(), want.len(), "{id:?}: push block member count");
+        for ((name, off), &(field, _, offset)) in got.iter().zip(want) {
+            assert_eq!(*off as usize, offset, "{id:?}: offset of {field}");
+            if let Some(name) = name {
+                assert_eq!(name, field, "{id:?}: member at offset {offset}");
+            }
+        }
+        if let Some(block) = id.push_block() {
+            let text = std::fs::read_to_string(root().join("glsl").join(id.source().file)).unwrap();
+            assert!(
+                text.contains(&format!("PUSH_{block}")),
+                "{id:?}: the shader must use the generated PUSH_{block}"
+            );
+            assert!(
+                !text.contains("push_constant"),
+                "{id:?}: a hand-written push block"
+            );
+        }
+        checked += got.len();
+    }
+    assert!(checked > 50, "only {checked} push members found");
 }

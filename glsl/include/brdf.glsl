@@ -14,7 +14,7 @@ struct Brdf {
 
 // Tangent ŷ × n (x̂ × n near the poles) and bitangent n × t.
 void shading_frame(vec3 n, out vec3 t, out vec3 b) {
-    vec3 a = abs(n.y) < 0.999 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
+    vec3 a = abs(n.y) < POLE_THRESHOLD ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
     t = normalize(cross(a, n));
     b = cross(n, t);
 }
@@ -191,8 +191,8 @@ float brdf_weight(Brdf b, vec3 wo, vec3 wi) {
 // silhouettes put it at or below (the same rule as src/math/brdf.rs's local_view).
 vec3 local_view(vec3 v, vec3 t, vec3 bt, vec3 n) {
     vec3 wo = vec3(dot(v, t), dot(v, bt), dot(v, n));
-    if (wo.z < 1e-4) {
-        wo.z = 1e-4;
+    if (wo.z < VIEW_LIFT) {
+        wo.z = VIEW_LIFT;
         wo = normalize(wo);
     }
     return wo;

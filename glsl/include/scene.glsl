@@ -40,6 +40,6 @@ float object_hit(Object ob, vec3 o, vec3 d, out vec3 n) {
 // Where a shadow ray starts: off the surface by a margin relative to the scene's scale, so
 // the surface it leaves never shadows itself.
 vec3 shadow_origin(vec3 p, vec3 n) {
-    return p + n * (1e-4 * (1.0 + length(p)));
+    return p + n * (SHADOW_OFFSET * (1.0 + length(p)));
 }
 #endif

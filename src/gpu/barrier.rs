@@ -22,6 +22,10 @@ pub enum Usage {
     ComputeReadWrite,
     /// Sampled by a fragment shader.
     FragmentSampled,
+    /// Read as a storage buffer or image by a fragment shader.
+    FragmentRead,
+    /// Read and written as storage by a fragment shader.
+    FragmentReadWrite,
     /// Written as a colour attachment.
     ColorAttachment,
     /// Read by the host after the GPU is done.
@@ -69,6 +73,12 @@ pub fn usage_info(u: Usage) -> UsageInfo {
             A::SHADER_SAMPLED_READ,
             L::SHADER_READ_ONLY_OPTIMAL,
         ),
+        Usage::FragmentRead => (S::FRAGMENT_SHADER, A::SHADER_STORAGE_READ, L::GENERAL),
+        Usage::FragmentReadWrite => (
+            S::FRAGMENT_SHADER,
+            A::SHADER_STORAGE_READ | A::SHADER_STORAGE_WRITE,
+            L::GENERAL,
+        ),
         Usage::ColorAttachment => (
             S::COLOR_ATTACHMENT_OUTPUT,
             A::COLOR_ATTACHMENT_WRITE | A::COLOR_ATTACHMENT_READ,
@@ -82,6 +92,32 @@ pub fn usage_info(u: Usage) -> UsageInfo {
         access,
         layout,
     }
+}
+
+impl Usage {
+    /// Whether the usage writes.
+    pub fn writes(self) -> bool {
+        matches!(
+            self,
+            Usage::TransferDst
+                | Usage::ComputeWrite
+                | Usage::ComputeReadWrite
+                | Usage::FragmentReadWrite
+                | Usage::ColorAttachment
+                | Usage::HostWrite
+        )
+    }
+}
+
+/// Whether an image going from `before` to `after` needs a barrier: any write on either side
+/// (RAW, WAR, WAW), a layout change, or a read by a stage the last barrier did not cover.
+pub fn needs_barrier(before: Usage, after: Usage) -> bool {
+    buffer_needs_barrier(before, after) || usage_info(before).layout != usage_info(after).layout
+}
+
+/// As [`needs_barrier`] for a buffer, which has no layout.
+pub fn buffer_needs_barrier(before: Usage, after: Usage) -> bool {
+    before != Usage::Undefined && (before != after || after.writes())
 }
 
 /// A barrier for all mips and layers of a colour image.
@@ -200,10 +236,29 @@ mod tests {
             Usage::ComputeSampled,
             Usage::ComputeRead,
             Usage::FragmentSampled,
+            Usage::FragmentRead,
             Usage::HostRead,
         ] {
             assert!(!usage_info(u).access.intersects(write_bits), "{u:?}");
+            assert!(!u.writes(), "{u:?}");
         }
+    }
+
+    #[test]
+    fn barriers_only_where_a_hazard_or_layout_change_is() {
+        // Read after read in the same stage and layout: nothing to wait for.
+        assert!(!needs_barrier(Usage::ComputeSampled, Usage::ComputeSampled));
+        // A new image: only its layout changes.
+        assert!(needs_barrier(Usage::Undefined, Usage::ComputeWrite));
+        // RAW, WAW, WAR.
+        assert!(needs_barrier(Usage::ComputeWrite, Usage::ComputeSampled));
+        assert!(needs_barrier(
+            Usage::ComputeReadWrite,
+            Usage::ComputeReadWrite
+        ));
+        assert!(needs_barrier(Usage::FragmentSampled, Usage::ComputeWrite));
+        // The same layout read by another stage still needs the writes made visible there.
+        assert!(needs_barrier(Usage::ComputeSampled, Usage::FragmentSampled));
     }
 
     #[test]

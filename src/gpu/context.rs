@@ -467,15 +467,6 @@ impl Context {
             .map(|m| m.clone())
             .unwrap_or_default()
     }
-
-    /// Records commands with `record`, submits them, and waits for them to finish.
-    pub fn submit_and_wait(
-        &self,
-        what: &'static str,
-        record: impl FnOnce(vk::CommandBuffer) -> Result<()>,
-    ) -> Result<()> {
-        self.shared.submit_and_wait(what, record)
-    }
 }
 
 impl Shared {

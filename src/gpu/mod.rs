@@ -1,18 +1,21 @@
-//! Thin Vulkan plumbing: context, RAII resources, barriers, pipelines, timing.
+//! Thin Vulkan plumbing: context, RAII resources, barriers from declared usages, pipelines,
+//! the recorder and timing. It knows the shader table ([`crate::abi`]) and nothing of passes
+//! or maths.
 
 pub mod barrier;
 pub mod context;
-pub mod envmap;
-pub mod layout;
 pub mod pipeline;
+pub mod recorder;
 pub mod resources;
 pub mod shaders;
 pub mod timing;
 
+pub use barrier::Usage;
 pub use context::{AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSelector};
-pub use envmap::GpuEnvMap;
+pub use pipeline::{Bind, Pipeline};
+pub use recorder::{Recorded, Recorder};
 pub use resources::{Buffer, Image, ImageDesc, Sampler};
-pub use timing::{GpuTimer, Timing};
+pub use timing::Timing;
 
 /// Number of workgroups of `size` needed to cover `n` items.
 pub fn groups(n: u32, size: u32) -> u32 {

@@ -1,16 +1,16 @@
-//! Pipelines built from a [`ShaderId`] and its [`Interface`], and transient descriptor sets.
+//! Pipelines built from a [`ShaderId`] and its interface, and transient descriptor sets.
 
 use super::context::{Context, Shared};
 use super::resources::{Buffer, Image, Sampler};
-use super::shaders::{DescriptorKind, ShaderId};
+use super::shaders::{descriptor_type, spirv};
+use crate::abi::{Kind, PushBlock, ShaderId};
 use crate::error::{Result, VkContext};
 use ash::vk;
 use std::sync::Arc;
 
 fn shader_module(shared: &Shared, id: ShaderId) -> Result<vk::ShaderModule> {
-    let words = ash::util::read_spv(&mut std::io::Cursor::new(id.spirv())).map_err(|_| {
-        crate::Error::Invalid(format!("spirv/{}.spv is not SPIR-V", id.source().name))
-    })?;
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv(id)))
+        .map_err(|_| crate::Error::Invalid(format!("spirv/{}.spv is not SPIR-V", id.name())))?;
     let info = vk::ShaderModuleCreateInfo::default().code(&words);
     // SAFETY: valid device; the words are a SPIR-V module built for Vulkan 1.2.
     let m = unsafe { shared.device.create_shader_module(&info, None) }
@@ -39,10 +39,10 @@ impl Pipeline {
         let bindings: Vec<_> = iface
             .bindings
             .iter()
-            .map(|&(b, kind)| {
+            .map(|&(b, kind, _)| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)
-                    .descriptor_type(kind.vk())
+                    .descriptor_type(descriptor_type(kind))
                     .descriptor_count(1)
                     .stage_flags(stages)
             })
@@ -60,7 +60,7 @@ impl Pipeline {
             shader,
             stages,
         };
-        shared.name(set_layout, shader.source().name);
+        shared.name(set_layout, shader.name());
         let ranges = [vk::PushConstantRange::default()
             .stage_flags(stages)
             .offset(0)
@@ -74,7 +74,7 @@ impl Pipeline {
         p.layout = unsafe { shared.device.create_pipeline_layout(&info, None) }
             .vk("creating a pipeline layout")?;
         shared.track();
-        shared.name(p.layout, shader.source().name);
+        shared.name(p.layout, shader.name());
         Ok(p)
     }
 
@@ -114,9 +114,9 @@ impl Pipeline {
             .map_err(|(_, r)| r)
             .vk("creating a compute pipeline")?[0];
         shared.track();
-        shared.name(p.pipeline, shader.source().name);
+        shared.name(p.pipeline, shader.name());
         if let Ok(mut log) = shared.pipelines.lock() {
-            log.push(shader.source().name);
+            log.push(shader.name());
         }
         Ok(p)
     }
@@ -200,15 +200,25 @@ impl Pipeline {
             .map_err(|(_, r)| r)
             .vk("creating a graphics pipeline")?[0];
         shared.track();
-        shared.name(p.pipeline, frag.source().name);
+        shared.name(p.pipeline, frag.name());
         if let Ok(mut log) = shared.pipelines.lock() {
-            log.push(frag.source().name);
+            log.push(frag.name());
         }
         Ok(p)
     }
 
+    /// Whether it is a compute pipeline (else a fullscreen graphics one).
+    pub fn is_compute(&self) -> bool {
+        self.stages == vk::ShaderStageFlags::COMPUTE
+    }
+
+    /// The module its layout follows (the fragment shader of a graphics pipeline).
+    pub fn shader(&self) -> ShaderId {
+        self.shader
+    }
+
     /// Binds the pipeline, its descriptor set (if any) and push constants.
-    pub(crate) fn bind<P: bytemuck::Pod>(
+    pub(crate) fn bind<P: PushBlock>(
         &self,
         cmd: vk::CommandBuffer,
         set: Option<&DescriptorSet>,
@@ -233,7 +243,7 @@ impl Pipeline {
                 d.cmd_bind_descriptor_sets(cmd, point, self.layout, 0, &[s.set], &[]);
             }
             if std::mem::size_of::<P>() > 0 {
-                d.cmd_push_constants(cmd, self.layout, self.stages, 0, bytemuck::bytes_of(push));
+                d.cmd_push_constants(cmd, self.layout, self.stages, 0, push.bytes());
             }
         }
     }
@@ -270,6 +280,24 @@ pub enum Bind<'a> {
     Buffer(&'a Buffer),
 }
 
+impl Bind<'_> {
+    /// The image bound, if an image.
+    pub(crate) fn image(&self) -> Option<&Image> {
+        match self {
+            Bind::Sampled(i, _, _) | Bind::Storage(i) | Bind::StorageLevel(i, _) => Some(i),
+            Bind::Buffer(_) => None,
+        }
+    }
+
+    /// The buffer bound, if a buffer.
+    pub(crate) fn buffer(&self) -> Option<&Buffer> {
+        match self {
+            Bind::Buffer(b) => Some(b),
+            _ => None,
+        }
+    }
+}
+
 /// A descriptor set in a pool of its own, for one submission.
 pub struct DescriptorSet {
     shared: Arc<Shared>,
@@ -295,8 +323,8 @@ impl DescriptorSet {
         let sizes: Vec<_> = iface
             .bindings
             .iter()
-            .map(|&(_, k)| vk::DescriptorPoolSize {
-                ty: k.vk(),
+            .map(|&(_, k, _)| vk::DescriptorPoolSize {
+                ty: descriptor_type(k),
                 descriptor_count: 1,
             })
             .collect();
@@ -307,7 +335,7 @@ impl DescriptorSet {
         let pool = unsafe { shared.device.create_descriptor_pool(&info, None) }
             .vk("creating a descriptor pool")?;
         shared.track();
-        shared.name(pool, pipeline.shader.source().name);
+        shared.name(pool, pipeline.shader.name());
         let mut ds = DescriptorSet {
             shared: shared.clone(),
             pool,
@@ -326,22 +354,20 @@ impl DescriptorSet {
             let kind = iface
                 .bindings
                 .iter()
-                .find(|(n, _)| n == b)
-                .map(|&(_, k)| k)
+                .find(|(n, _, _)| n == b)
+                .map(|&(_, k, _)| k)
                 .unwrap_or_else(|| panic!("{:?} has no binding {b}", pipeline.shader));
             match (bind, kind) {
-                (Bind::Sampled(img, smp, cube), DescriptorKind::SampledImage) => {
-                    image_infos.push((
-                        *b,
-                        kind,
-                        vk::DescriptorImageInfo {
-                            sampler: smp.raw,
-                            image_view: if *cube { img.cube_view } else { img.view },
-                            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                        },
-                    ))
-                }
-                (Bind::Storage(img), DescriptorKind::StorageImage) => image_infos.push((
+                (Bind::Sampled(img, smp, cube), Kind::Sampled) => image_infos.push((
+                    *b,
+                    kind,
+                    vk::DescriptorImageInfo {
+                        sampler: smp.raw,
+                        image_view: if *cube { img.cube_view } else { img.view },
+                        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    },
+                )),
+                (Bind::Storage(img), Kind::StorageImage) => image_infos.push((
                     *b,
                     kind,
                     vk::DescriptorImageInfo {
@@ -350,18 +376,16 @@ impl DescriptorSet {
                         image_layout: vk::ImageLayout::GENERAL,
                     },
                 )),
-                (Bind::StorageLevel(img, level), DescriptorKind::StorageImage) => {
-                    image_infos.push((
-                        *b,
-                        kind,
-                        vk::DescriptorImageInfo {
-                            sampler: vk::Sampler::null(),
-                            image_view: img.level_view(*level),
-                            image_layout: vk::ImageLayout::GENERAL,
-                        },
-                    ))
-                }
-                (Bind::Buffer(buf), DescriptorKind::StorageBuffer) => buffer_infos.push((
+                (Bind::StorageLevel(img, level), Kind::StorageImage) => image_infos.push((
+                    *b,
+                    kind,
+                    vk::DescriptorImageInfo {
+                        sampler: vk::Sampler::null(),
+                        image_view: img.level_view(*level),
+                        image_layout: vk::ImageLayout::GENERAL,
+                    },
+                )),
+                (Bind::Buffer(buf), Kind::StorageBuffer) => buffer_infos.push((
                     *b,
                     vk::DescriptorBufferInfo {
                         buffer: buf.raw,
@@ -378,7 +402,7 @@ impl DescriptorSet {
                 vk::WriteDescriptorSet::default()
                     .dst_set(ds.set)
                     .dst_binding(*b)
-                    .descriptor_type(kind.vk())
+                    .descriptor_type(descriptor_type(*kind))
                     .image_info(std::slice::from_ref(info)),
             );
         }

@@ -1,12 +1,13 @@
 //! RAII buffers, images and samplers holding their gpu-allocator allocation. Each keeps the
 //! context alive, so teardown order is right by construction.
 
+use super::barrier::Usage;
 use super::context::{Context, Shared};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// Allocates memory for `requirements` (named for leak reports).
 fn allocate(
@@ -37,6 +38,8 @@ pub struct Buffer {
     pub(crate) raw: vk::Buffer,
     allocation: Option<Allocation>,
     size: u64,
+    /// How the last recorded command used it (see [`super::Recorder`]).
+    pub(crate) state: Mutex<Usage>,
 }
 
 impl Buffer {
@@ -62,6 +65,7 @@ impl Buffer {
             raw,
             allocation: None,
             size,
+            state: Mutex::new(Usage::Undefined),
         };
         s.name(raw, name);
         // SAFETY: raw is a live buffer of this device.
@@ -165,6 +169,10 @@ pub struct Image {
     pub(crate) cube_view: vk::ImageView,
     pub(crate) level_views: Vec<vk::ImageView>,
     desc: ImageDesc,
+    /// How the last recorded command used it (see [`super::Recorder`]).
+    pub(crate) state: Mutex<Usage>,
+    /// Whether envlight created the image (and so destroys it); views are always envlight's.
+    owned: bool,
 }
 
 impl Image {
@@ -214,6 +222,8 @@ impl Image {
             cube_view: vk::ImageView::null(),
             level_views: Vec::new(),
             desc,
+            state: Mutex::new(Usage::Undefined),
+            owned: true,
         };
         s.name(raw, name);
         // SAFETY: raw is a live image of this device.
@@ -226,6 +236,47 @@ impl Image {
         }
         .vk("binding image memory")?;
         image.allocation = Some(allocation);
+        image.make_views(name)?;
+        Ok(image)
+    }
+
+    /// Wraps an image the caller created (an engine's render target, say) so that passes can
+    /// read or write it. envlight makes its own views of it and destroys only those; `current`
+    /// is how the caller's last command before envlight's used it (its layout), and after
+    /// recording, [`Image::usage`] says how envlight's last command left it.
+    ///
+    /// # Safety
+    /// `raw` must be a live image of `ctx`'s device created as `desc` says (2D, its format,
+    /// extent, layers, MIP levels, usage flags, cube compatible when `desc.cube`), and must
+    /// outlive the returned value and every submission that uses it.
+    pub unsafe fn from_raw(
+        ctx: &Context,
+        name: &str,
+        raw: vk::Image,
+        desc: ImageDesc,
+        current: Usage,
+    ) -> Result<Image> {
+        assert!(desc.width > 0 && desc.height > 0 && desc.layers > 0 && desc.mips > 0);
+        assert!(!desc.cube || (desc.layers == 6 && desc.width == desc.height));
+        let mut image = Image {
+            shared: ctx.shared.clone(),
+            raw,
+            allocation: None,
+            view: vk::ImageView::null(),
+            cube_view: vk::ImageView::null(),
+            level_views: Vec::new(),
+            desc,
+            state: Mutex::new(current),
+            owned: false,
+        };
+        ctx.shared.track();
+        image.make_views(name)?;
+        Ok(image)
+    }
+
+    fn make_views(&mut self, name: &str) -> Result<()> {
+        let desc = self.desc;
+        let image = self;
         image.view = image.make_view(
             vk::ImageViewType::TYPE_2D_ARRAY,
             desc.layers,
@@ -248,7 +299,12 @@ impl Image {
                 image.level_views.push(v);
             }
         }
-        Ok(image)
+        Ok(())
+    }
+
+    /// How the last command recorded so far left it (its layout and the stage that used it).
+    pub fn usage(&self) -> Usage {
+        *self.state.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     fn make_view(
@@ -314,7 +370,9 @@ impl Drop for Image {
                     self.shared.untrack();
                 }
             }
-            d.destroy_image(self.raw, None);
+            if self.owned {
+                d.destroy_image(self.raw, None);
+            }
         }
         if let Some(a) = self.allocation.take() {
             let _ = self.shared.allocator().free(a);

@@ -1,7 +1,8 @@
-//! GPU timing with timestamp queries.
+//! GPU timing with timestamp queries: labelled spans recorded into a command buffer, read
+//! back once it has completed.
 
-use super::barrier::{cmd_memory_barrier, full_barrier};
-use super::context::{Context, Shared};
+use super::barrier::full_barrier;
+use super::context::Shared;
 use crate::error::{Result, VkContext};
 use ash::vk;
 use std::sync::Arc;
@@ -15,92 +16,100 @@ pub struct Timing {
     pub ms: f64,
 }
 
-/// A pool of timestamp queries recording labelled spans within one command buffer.
-pub struct GpuTimer {
+/// Spans per query pool; more spans take more pools.
+const POOL_SPANS: u32 = 64;
+
+/// Timestamp query pools holding labelled spans, grown a pool at a time while recording.
+pub(crate) struct Timestamps {
     shared: Arc<Shared>,
-    pool: vk::QueryPool,
-    capacity: u32,
+    pools: Vec<vk::QueryPool>,
     labels: Vec<String>,
+    /// Spans begun and not yet ended.
+    open: Vec<usize>,
 }
 
-impl GpuTimer {
-    /// A timer for up to `spans` spans, or `None` where the queue has no timestamps.
-    pub fn new(ctx: &Context, spans: u32) -> Result<Option<GpuTimer>> {
-        if ctx.info().timestamp_valid_bits == 0 {
-            return Ok(None);
-        }
-        let info = vk::QueryPoolCreateInfo::default()
-            .query_type(vk::QueryType::TIMESTAMP)
-            .query_count(spans * 2);
-        // SAFETY: valid device and create info.
-        let pool = unsafe { ctx.shared.device.create_query_pool(&info, None) }
-            .vk("creating a timestamp query pool")?;
-        ctx.shared.track();
-        ctx.shared.name(pool, "envlight timestamps");
-        Ok(Some(GpuTimer {
-            shared: ctx.shared.clone(),
-            pool,
-            capacity: spans,
+impl Timestamps {
+    pub(crate) fn new(shared: &Arc<Shared>) -> Timestamps {
+        Timestamps {
+            shared: shared.clone(),
+            pools: Vec::new(),
             labels: Vec::new(),
-        }))
+            open: Vec::new(),
+        }
     }
 
-    /// Resets the queries; record this before the first span.
-    pub fn reset(&mut self, cmd: vk::CommandBuffer) {
-        self.labels.clear();
-        // SAFETY: cmd is recording, outside a render pass.
-        unsafe {
-            self.shared
-                .device
-                .cmd_reset_query_pool(cmd, self.pool, 0, self.capacity * 2)
-        };
-    }
-
-    fn stamp(&self, cmd: vk::CommandBuffer, query: u32) {
+    fn stamp(&self, cmd: vk::CommandBuffer, index: u32) {
+        let pool = self.pools[(index / (2 * POOL_SPANS)) as usize];
+        let d = &self.shared.device;
         // SAFETY: cmd is recording; the query was reset in this command buffer.
         unsafe {
-            self.shared.device.cmd_write_timestamp2(
+            d.cmd_write_timestamp2(
                 cmd,
                 vk::PipelineStageFlags2::ALL_COMMANDS,
-                self.pool,
-                query,
+                pool,
+                index % (2 * POOL_SPANS),
             )
         };
         // The full barrier keeps lavapipe (Mesa 22.3) from reordering the stamp past a dispatch.
-        cmd_memory_barrier(&self.shared.device, cmd, full_barrier());
+        let bs = [full_barrier()];
+        let dep = vk::DependencyInfo::default().memory_barriers(&bs);
+        // SAFETY: cmd is recording.
+        unsafe { d.cmd_pipeline_barrier2(cmd, &dep) };
     }
 
-    /// Starts a span; returns its index for [`GpuTimer::end`].
-    pub fn begin(&mut self, cmd: vk::CommandBuffer, label: &str) -> usize {
-        let i = self.labels.len();
-        assert!((i as u32) < self.capacity, "GpuTimer capacity exceeded");
+    /// Starts a span (outside a render pass).
+    pub(crate) fn begin(&mut self, cmd: vk::CommandBuffer, label: &str) -> Result<()> {
+        let i = self.labels.len() as u32;
+        if i == self.pools.len() as u32 * POOL_SPANS {
+            let info = vk::QueryPoolCreateInfo::default()
+                .query_type(vk::QueryType::TIMESTAMP)
+                .query_count(2 * POOL_SPANS);
+            let d = &self.shared.device;
+            // SAFETY: valid device and create info.
+            let pool = unsafe { d.create_query_pool(&info, None) }
+                .vk("creating a timestamp query pool")?;
+            self.shared.track();
+            self.shared.name(pool, "envlight timestamps");
+            // SAFETY: cmd is recording, outside a render pass.
+            unsafe { d.cmd_reset_query_pool(cmd, pool, 0, 2 * POOL_SPANS) };
+            self.pools.push(pool);
+        }
         self.labels.push(label.to_string());
-        self.stamp(cmd, 2 * i as u32);
-        i
+        self.open.push(i as usize);
+        self.stamp(cmd, 2 * i);
+        Ok(())
     }
 
-    /// Ends a span.
-    pub fn end(&mut self, cmd: vk::CommandBuffer, span: usize) {
-        self.stamp(cmd, 2 * span as u32 + 1);
+    /// Spans begun so far.
+    pub(crate) fn len(&self) -> usize {
+        self.labels.len()
     }
 
-    /// Reads the spans back (after the command buffer has completed).
-    pub fn read(&self) -> Result<Vec<Timing>> {
+    /// Ends the innermost open span.
+    pub(crate) fn end(&mut self, cmd: vk::CommandBuffer) {
+        let i = self.open.pop().expect("end() without begin()");
+        self.stamp(cmd, 2 * i as u32 + 1);
+    }
+
+    /// The spans' times, once the command buffer has completed.
+    pub(crate) fn read(&self) -> Result<Vec<Timing>> {
+        assert!(self.open.is_empty(), "a timing span was never ended");
         let n = self.labels.len();
-        if n == 0 {
-            return Ok(Vec::new());
-        }
         let mut ticks = vec![0u64; 2 * n];
-        // SAFETY: the queries were written by a completed submission.
-        unsafe {
-            self.shared.device.get_query_pool_results(
-                self.pool,
-                0,
-                &mut ticks,
-                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-            )
+        for (k, pool) in self.pools.iter().enumerate() {
+            let first = 2 * k * POOL_SPANS as usize;
+            let count = (2 * n - first).min(2 * POOL_SPANS as usize);
+            // SAFETY: the queries were written by a completed submission.
+            unsafe {
+                self.shared.device.get_query_pool_results(
+                    *pool,
+                    0,
+                    &mut ticks[first..first + count],
+                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                )
+            }
+            .vk("reading timestamps")?;
         }
-        .vk("reading timestamps")?;
         let bits = self.shared.info.timestamp_valid_bits;
         let mask = if bits >= 64 {
             u64::MAX
@@ -123,48 +132,12 @@ impl GpuTimer {
     }
 }
 
-impl Drop for GpuTimer {
+impl Drop for Timestamps {
     fn drop(&mut self) {
-        // SAFETY: the submission using the pool has completed.
-        unsafe { self.shared.device.destroy_query_pool(self.pool, None) };
-        self.shared.untrack();
-    }
-}
-
-/// A [`GpuTimer`] where the device has timestamps, and nothing where it has none: passes record
-/// spans through it without caring which.
-pub struct Spans(Option<GpuTimer>);
-
-impl Spans {
-    /// Room for `spans` spans.
-    pub fn new(ctx: &Context, spans: u32) -> Result<Spans> {
-        Ok(Spans(GpuTimer::new(ctx, spans)?))
-    }
-
-    /// Resets the queries; record first in the command buffer.
-    pub fn reset(&mut self, cmd: vk::CommandBuffer) {
-        if let Some(t) = self.0.as_mut() {
-            t.reset(cmd);
-        }
-    }
-
-    /// Starts a span.
-    pub fn begin(&mut self, cmd: vk::CommandBuffer, label: &str) -> Option<usize> {
-        self.0.as_mut().map(|t| t.begin(cmd, label))
-    }
-
-    /// Ends a span started by [`Spans::begin`].
-    pub fn end(&mut self, cmd: vk::CommandBuffer, span: Option<usize>) {
-        if let (Some(t), Some(s)) = (self.0.as_mut(), span) {
-            t.end(cmd, s);
-        }
-    }
-
-    /// The spans' times, after the submission completed (empty without timestamps).
-    pub fn read(&self) -> Result<Vec<Timing>> {
-        match &self.0 {
-            Some(t) => t.read(),
-            None => Ok(Vec::new()),
+        for pool in self.pools.drain(..) {
+            // SAFETY: the submission using the pool has completed (Recorded's contract).
+            unsafe { self.shared.device.destroy_query_pool(pool, None) };
+            self.shared.untrack();
         }
     }
 }

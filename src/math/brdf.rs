@@ -20,7 +20,8 @@
 use glam::DVec3;
 use std::f64::consts::PI;
 
-pub use crate::gpu::layout::brdf::{ids, GGX_ALPHA_MIN, WARD_ALPHA_MIN};
+pub use crate::abi::brdf::{ids, GGX_ALPHA_MIN, WARD_ALPHA_MIN};
+use crate::abi::constants::{PHONG_EXPONENT_RANGE, VIEW_LIFT};
 
 /// A BRDF and its parameters. In scene files it is tagged by `type`: `mirror`, `diffuse`,
 /// `phong {n}`, `blinn {n}`, `ggx {alpha, correlated}`, `ward {alpha_x, alpha_y}`.
@@ -76,7 +77,7 @@ pub struct Frame {
 impl Frame {
     /// The frame of unit normal `n`.
     pub fn new(n: DVec3) -> Frame {
-        let a = if n.y.abs() < 0.999 {
+        let a = if n.y.abs() < crate::abi::constants::POLE_THRESHOLD {
             DVec3::Y
         } else {
             DVec3::X
@@ -104,8 +105,8 @@ impl Frame {
 /// float32 silhouettes put it at or below (the GPU applies the same rule).
 pub fn local_view(frame: &Frame, v: DVec3) -> DVec3 {
     let mut wo = frame.to_local(v);
-    if wo.z < 1e-4 {
-        wo.z = 1e-4;
+    if wo.z < VIEW_LIFT {
+        wo.z = VIEW_LIFT;
         wo = wo.normalize();
     }
     wo
@@ -214,10 +215,11 @@ impl Brdf {
                 Err(format!("{name} = {v} is outside [{lo}, {hi}]"))
             }
         };
+        let (lo, hi) = PHONG_EXPONENT_RANGE;
         match *self {
             Brdf::Lambert | Brdf::Mirror => Ok(()),
-            Brdf::Phong { n } => check("Phong exponent n", n, 0.0, 1e7),
-            Brdf::Blinn { n } => check("Blinn exponent n", n, 0.0, 1e7),
+            Brdf::Phong { n } => check("Phong exponent n", n, lo, hi),
+            Brdf::Blinn { n } => check("Blinn exponent n", n, lo, hi),
             Brdf::Ggx { alpha, .. } => check("GGX alpha", alpha, 0.0, 1.0),
             Brdf::Ward { ax, ay } => {
                 check("Ward alpha_x", ax, WARD_ALPHA_MIN, 1.0)?;

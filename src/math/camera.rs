@@ -218,6 +218,19 @@ pub fn trace(shapes: &[Shape], o: DVec3, d: DVec3) -> Option<Hit> {
     })
 }
 
+/// An orthographic camera whose `size`² image a unit sphere at the origin fills, so that the
+/// view angle runs from normal incidence to grazing.
+pub fn sphere_camera(size: u32) -> Camera {
+    Camera {
+        projection: Projection::Orthographic { height: 2.1 },
+        eye: [0.0, 0.3, 5.0],
+        target: [0.0, 0.0, 0.0],
+        up: [0.0, 1.0, 0.0],
+        width: size,
+        height: size,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -25,8 +25,8 @@ use crate::envmap::EnvMap;
 use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
 
-pub use crate::gpu::layout::filter_rule::{
-    CELLS_PER_WIDTH, CENTRE_LIMIT, EDGE_CELLS, LOG_CUTOFF, MAX_CELLS,
+pub use crate::abi::filter_rule::{
+    CELLS_PER_WIDTH, CENTRE_LIMIT, CONE_MARGIN, EDGE_CELLS, LOG_CUTOFF, MAX_CELLS,
 };
 
 /// A convolution kernel of x = axis·ω.
@@ -172,7 +172,7 @@ pub fn texel_cos_radius(mapping: Mapping, w: u32, h: u32, layer: u32, i: u32, j:
     }
     // Edges bulge between the sampled points by at most a fraction of the spacing: take the
     // angle 25% wider.
-    let rho = min_dot.clamp(-1.0, 1.0).acos() * 1.25;
+    let rho = min_dot.clamp(-1.0, 1.0).acos() * CONE_MARGIN;
     rho.min(PI).cos()
 }
 

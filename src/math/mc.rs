@@ -52,7 +52,7 @@ pub struct Estimate {
 
 /// Where a shadow ray starts (as `shadow_origin` in `glsl/include/scene.glsl`).
 pub fn shadow_origin(p: DVec3, n: DVec3) -> DVec3 {
-    p + n * (1e-4 * (1.0 + p.length()))
+    p + n * (crate::abi::constants::SHADOW_OFFSET * (1.0 + p.length()))
 }
 
 fn occluded(shapes: &[Shape], o: DVec3, d: DVec3) -> bool {

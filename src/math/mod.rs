@@ -5,13 +5,13 @@
 
 pub mod brdf;
 pub mod camera;
+pub mod convert;
 pub mod envsample;
 pub mod filter;
 pub mod mapping;
 pub mod mc;
 pub mod mip;
 pub mod quadrature;
-pub mod resample;
 pub mod sequence;
 pub mod sh;
 pub mod synth;

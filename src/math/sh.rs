@@ -94,7 +94,7 @@ pub fn project_oriented(map: &EnvMap, lmax: u32, file_to_world: DMat3) -> Vec<[f
     let mut c = vec![[0.0; 3]; n];
     let mut y = vec![0.0; n];
     let mut acc = vec![0.0; n];
-    let g = 0.5 / 3f64.sqrt();
+    let g = crate::abi::constants::GAUSS2_OFFSET;
     let (w, h) = (map.width as f64, map.height as f64);
     let disc = matches!(map.mapping, Mapping::Angular | Mapping::DualParaboloid);
     map.for_each_texel(|layer, i, j, t, omega| {

@@ -1,32 +1,12 @@
-//! Conversion of an environment map from any mapping to any other, at any resolution.
+//! Conversion of an environment map from any mapping to any other, at any resolution
+//! (`glsl/convert.comp`, float64 twin [`crate::math::convert`]).
 
+use super::map::GpuEnvMap;
+use crate::abi::{binding, push::ConvertPush, ShaderId, WORKGROUP_2D};
 use crate::error::Result;
-use crate::gpu::layout::WORKGROUP_2D;
-use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
-use crate::gpu::shaders::ShaderId;
-use crate::gpu::{mat3_rows, Context, GpuEnvMap, Sampler, Timing};
+use crate::gpu::{groups, mat3_rows, Bind, Context, Pipeline, Recorder, Sampler, Timing};
 use crate::math::{Mapping, Orientation};
 use std::sync::OnceLock;
-
-/// Push constants of `glsl/convert.comp` (std430 layout; size checked against the SPIR-V).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ConvertPush {
-    /// Rows of the world → file rotation/reflection (w unused).
-    pub world_to_file: [[f32; 4]; 3],
-    /// Source layer size.
-    pub src_size: [u32; 2],
-    /// Destination layer size.
-    pub dst_size: [u32; 2],
-    /// Source mapping id.
-    pub src_mapping: u32,
-    /// Destination mapping id.
-    pub dst_mapping: u32,
-    /// Samples per axis per output texel.
-    pub ss: u32,
-    /// Padding to 16 bytes.
-    pub pad: u32,
-}
 
 /// Per-call options of [`Converter::run`].
 #[derive(Clone, Copy, Debug)]
@@ -94,6 +74,64 @@ impl Converter {
         ((4.0 * ratio).ceil() as u32).clamp(1, 64)
     }
 
+    /// Records the conversion of `src` into `dst`, whose mapping and size must be
+    /// `opts.to` at `opts.size`. `dst` may have MIP levels: only level 0 is written.
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        src: &GpuEnvMap,
+        dst: &GpuEnvMap,
+        opts: &ConvertOptions,
+    ) -> Result<()> {
+        let (w, h) = opts.to.extent_for_size(opts.size);
+        assert_eq!(
+            (dst.mapping, dst.width, dst.height),
+            (opts.to, w, h),
+            "the output does not match the options"
+        );
+        let ss = opts
+            .supersample
+            .unwrap_or_else(|| {
+                Converter::supersampling((src.mapping, src.width, src.height), (opts.to, w, h))
+            })
+            .max(1);
+        let push = ConvertPush {
+            world_to_file: mat3_rows(opts.orientation.world_to_file()),
+            src_size: [src.width, src.height],
+            dst_size: [w, h],
+            src_mapping: src.mapping.id(),
+            dst_mapping: opts.to.id(),
+            ss,
+            pad: 0,
+        };
+        let cube = src.mapping == Mapping::Cube;
+        let pipeline = self.pipeline(cube)?;
+        let label = format!(
+            "convert {} -> {} {w}x{h}",
+            src.mapping.name(),
+            opts.to.name()
+        );
+        rec.discard(&dst.image);
+        rec.span(&label, |rec| {
+            rec.dispatch(
+                pipeline,
+                &[
+                    (
+                        binding::CONVERT_SRC,
+                        Bind::Sampled(&src.image, &self.sampler, cube),
+                    ),
+                    (binding::CONVERT_DST, Bind::Storage(&dst.image)),
+                ],
+                &push,
+                [
+                    groups(w, WORKGROUP_2D[0]),
+                    groups(h, WORKGROUP_2D[1]),
+                    opts.to.layers(),
+                ],
+            )
+        })
+    }
+
     /// Converts `src` to `opts.to` at `opts.size`; returns the new map and the GPU time.
     pub fn run(&self, src: &GpuEnvMap, opts: &ConvertOptions) -> Result<(GpuEnvMap, Vec<Timing>)> {
         self.run_into(src, opts, false)
@@ -122,43 +160,9 @@ impl Converter {
         } else {
             GpuEnvMap::new(&self.ctx, &name, opts.to, w, h)?
         };
-        let ss = opts
-            .supersample
-            .unwrap_or_else(|| {
-                Converter::supersampling((src.mapping, src.width, src.height), (opts.to, w, h))
-            })
-            .max(1);
-        let push = ConvertPush {
-            world_to_file: mat3_rows(opts.orientation.world_to_file()),
-            src_size: [src.width, src.height],
-            dst_size: [w, h],
-            src_mapping: src.mapping.id(),
-            dst_mapping: opts.to.id(),
-            ss,
-            pad: 0,
-        };
-        let cube = src.mapping == Mapping::Cube;
-        let pipeline = self.pipeline(cube)?;
-        let set = DescriptorSet::new(
-            &self.ctx,
-            pipeline,
-            &[
-                (
-                    crate::gpu::layout::binding::CONVERT_SRC,
-                    Bind::Sampled(&src.image, &self.sampler, cube),
-                ),
-                (
-                    crate::gpu::layout::binding::CONVERT_DST,
-                    Bind::Storage(&dst.image),
-                ),
-            ],
-        )?;
-        let label = format!(
-            "convert {} -> {} {w}x{h}",
-            src.mapping.name(),
-            opts.to.name()
-        );
-        let timings = dst.fill(&self.ctx, "converting a map", &label, pipeline, &set, &push)?;
-        Ok((dst, timings))
+        let ((), t) = self
+            .ctx
+            .run("converting a map", |rec| self.record(rec, src, &dst, opts))?;
+        Ok((dst, t))
     }
 }

@@ -2,39 +2,16 @@
 //! (`glsl/gbuffer.frag`, float64 twin [`crate::math::camera`]). Shading passes read it: SH
 //! diffuse shading here, glossy techniques later, all from the same three images.
 
+use super::map::GpuEnvMap;
+use crate::abi::{binding, brdf, push::GBufferPush, ShaderId};
 use crate::error::Result;
-use crate::gpu::barrier::{cmd_image_barriers, image_barrier, Usage};
-use crate::gpu::layout::binding;
-use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
-use crate::gpu::shaders::ShaderId;
-use crate::gpu::timing::Spans;
-use crate::gpu::{Buffer, Context, GpuEnvMap, Image, Timing};
+use crate::gpu::{Bind, Buffer, Context, ImageDesc, Pipeline, Recorder, Timing};
 use crate::math::camera::{Camera, Projection, Shape};
 use crate::math::Mapping;
 use ash::vk;
 
 /// Format of the G-buffer images and of shaded frames.
 pub const FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
-
-/// Push constants of `glsl/gbuffer.frag`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GBufferPush {
-    /// Eye position.
-    pub eye: [f32; 4],
-    /// Unit forward.
-    pub forward: [f32; 4],
-    /// Right, scaled by the image plane's half width.
-    pub right: [f32; 4],
-    /// Up, scaled by the half height.
-    pub up: [f32; 4],
-    /// Image size.
-    pub size: [u32; 2],
-    /// 1 for orthographic.
-    pub ortho: u32,
-    /// Number of objects.
-    pub count: u32,
-}
 
 /// An object of the scene as the GPU reads it (`Object` in `glsl/include/scene.glsl`): its
 /// shape, and its material and technique for the shading passes.
@@ -71,11 +48,11 @@ impl Object {
             self.albedo[0] as f32,
             self.albedo[1] as f32,
             self.albedo[2] as f32,
-            crate::gpu::layout::brdf::technique::SH as f32,
+            brdf::technique::SH as f32,
         ];
         let mut g = shape_record(&self.shape);
         g.albedo = albedo;
-        g.brdf = [crate::gpu::layout::brdf::ids::LAMBERT as f32, 0.0, 0.0, 0.0];
+        g.brdf = [brdf::ids::LAMBERT as f32, 0.0, 0.0, 0.0];
         g.extra = [0.0, 0.0, lmax as f32, 0.0];
         g
     }
@@ -134,87 +111,43 @@ pub struct GBuffer {
 
 /// A colour target: a one-layer image stored as a [`GpuEnvMap`] (its mapping field is
 /// `LatLong` only so that it can be downloaded like a map), rendered to, then sampled.
-pub(crate) fn target(ctx: &Context, name: &str, w: u32, h: u32) -> Result<GpuEnvMap> {
-    GpuEnvMap::with_usage(
+pub fn target(ctx: &Context, name: &str, w: u32, h: u32) -> Result<GpuEnvMap> {
+    GpuEnvMap::create(
         ctx,
         name,
+        ImageDesc {
+            width: w,
+            height: h,
+            layers: 1,
+            format: FORMAT,
+            usage: vk::ImageUsageFlags::COLOR_ATTACHMENT
+                | vk::ImageUsageFlags::SAMPLED
+                | vk::ImageUsageFlags::TRANSFER_SRC,
+            cube: false,
+            mips: 1,
+        },
         Mapping::LatLong,
-        w,
-        h,
-        vk::ImageUsageFlags::COLOR_ATTACHMENT
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC,
     )
 }
 
-/// Records a timed fullscreen draw of `pipeline` into `targets`, one-layer images of equal
-/// size with SAMPLED usage (from undefined to sampled by fragment shaders).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn record_fullscreen<P: bytemuck::Pod>(
-    ctx: &Context,
-    cmd: vk::CommandBuffer,
-    spans: &mut Spans,
-    label: &str,
-    pipeline: &Pipeline,
-    set: Option<&DescriptorSet>,
-    push: &P,
-    targets: &[&Image],
-) {
-    let d = ctx.device();
-    let (w, h) = (targets[0].desc().width, targets[0].desc().height);
-    let before: Vec<_> = targets
-        .iter()
-        .map(|t| image_barrier(t.raw(), 1, Usage::Undefined, Usage::ColorAttachment))
-        .collect();
-    cmd_image_barriers(d, cmd, &before);
-    let span = spans.begin(cmd, label);
-    let attachments: Vec<_> = targets
-        .iter()
-        .map(|t| {
-            vk::RenderingAttachmentInfo::default()
-                .image_view(t.view)
-                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .load_op(vk::AttachmentLoadOp::DONT_CARE)
-                .store_op(vk::AttachmentStoreOp::STORE)
-        })
-        .collect();
-    let area = vk::Rect2D {
-        offset: vk::Offset2D::default(),
-        extent: vk::Extent2D {
+impl GBuffer {
+    /// Allocates the images of a `w` × `h` G-buffer and uploads `objects`.
+    pub fn new(ctx: &Context, w: u32, h: u32, objects: &[GpuObject]) -> Result<GBuffer> {
+        if w == 0 || h == 0 || objects.is_empty() {
+            return Err(crate::Error::Invalid(
+                "a G-buffer needs a non-empty image and at least one object".into(),
+            ));
+        }
+        Ok(GBuffer {
             width: w,
             height: h,
-        },
-    };
-    let rendering = vk::RenderingInfo::default()
-        .render_area(area)
-        .layer_count(1)
-        .color_attachments(&attachments);
-    // SAFETY: cmd is recording; the attachments are live and in the right layout.
-    unsafe {
-        d.cmd_begin_rendering(cmd, &rendering);
-        pipeline.bind(cmd, set, push);
-        d.cmd_set_viewport(
-            cmd,
-            0,
-            &[vk::Viewport {
-                x: 0.0,
-                y: 0.0,
-                width: w as f32,
-                height: h as f32,
-                min_depth: 0.0,
-                max_depth: 1.0,
-            }],
-        );
-        d.cmd_set_scissor(cmd, 0, &[area]);
-        d.cmd_draw(cmd, 3, 1, 0, 0);
-        d.cmd_end_rendering(cmd);
+            normal: target(ctx, "gbuffer normal", w, h)?,
+            position: target(ctx, "gbuffer position", w, h)?,
+            view: target(ctx, "gbuffer view", w, h)?,
+            objects: Buffer::storage(ctx, "scene objects", objects)?,
+            count: objects.len() as u32,
+        })
     }
-    spans.end(cmd, span);
-    let after: Vec<_> = targets
-        .iter()
-        .map(|t| image_barrier(t.raw(), 1, Usage::ColorAttachment, Usage::FragmentSampled))
-        .collect();
-    cmd_image_barriers(d, cmd, &after);
 }
 
 /// The G-buffer pass.
@@ -237,30 +170,15 @@ impl GBufferPass {
         })
     }
 
-    /// Casts the camera's rays against `objects`. The images end up ready for sampling by
-    /// fragment shaders.
-    pub fn run(&self, camera: &Camera, objects: &[GpuObject]) -> Result<(GBuffer, Vec<Timing>)> {
+    /// Records the casting of the camera's rays against `gbuf`'s objects into its images
+    /// (the camera's size must be the G-buffer's). Span: "gbuffer".
+    pub fn record(&self, rec: &mut Recorder, camera: &Camera, gbuf: &GBuffer) -> Result<()> {
         let (w, h) = (camera.width, camera.height);
-        if w == 0 || h == 0 || objects.is_empty() {
-            return Err(crate::Error::Invalid(
-                "a G-buffer needs a non-empty image and at least one object".into(),
-            ));
-        }
-        let buf = Buffer::storage(&self.ctx, "scene objects", objects)?;
-        let g = GBuffer {
-            width: w,
-            height: h,
-            normal: target(&self.ctx, "gbuffer normal", w, h)?,
-            position: target(&self.ctx, "gbuffer position", w, h)?,
-            view: target(&self.ctx, "gbuffer view", w, h)?,
-            objects: buf,
-            count: objects.len() as u32,
-        };
-        let set = DescriptorSet::new(
-            &self.ctx,
-            &self.pipeline,
-            &[(binding::GBUF_OBJECTS, Bind::Buffer(&g.objects))],
-        )?;
+        assert_eq!(
+            (w, h),
+            (gbuf.width, gbuf.height),
+            "camera and G-buffer sizes differ"
+        );
         let f = camera.frame();
         let (hx, hy) = camera.half_extent();
         let v4 = |v: glam::DVec3| [v.x as f32, v.y as f32, v.z as f32, 0.0];
@@ -271,24 +189,24 @@ impl GBufferPass {
             up: v4(f.up * hy),
             size: [w, h],
             ortho: matches!(camera.projection, Projection::Orthographic { .. }) as u32,
-            count: objects.len() as u32,
+            count: gbuf.count,
         };
-        let mut spans = Spans::new(&self.ctx, 1)?;
-        self.ctx.submit_and_wait("drawing the G-buffer", |cmd| {
-            spans.reset(cmd);
-            record_fullscreen(
-                &self.ctx,
-                cmd,
-                &mut spans,
-                "gbuffer",
+        rec.span("gbuffer", |rec| {
+            rec.draw_fullscreen(
                 &self.pipeline,
-                Some(&set),
+                &[(binding::GBUF_OBJECTS, Bind::Buffer(&gbuf.objects))],
                 &push,
-                &[&g.normal.image, &g.position.image, &g.view.image],
-            );
-            Ok(())
-        })?;
-        let timings = spans.read()?;
-        Ok((g, timings))
+                &[&gbuf.normal.image, &gbuf.position.image, &gbuf.view.image],
+            )
+        })
+    }
+
+    /// Casts the camera's rays against `objects` into a new G-buffer and waits.
+    pub fn run(&self, camera: &Camera, objects: &[GpuObject]) -> Result<(GBuffer, Vec<Timing>)> {
+        let g = GBuffer::new(&self.ctx, camera.width, camera.height, objects)?;
+        let ((), t) = self
+            .ctx
+            .run("drawing the G-buffer", |rec| self.record(rec, camera, &g))?;
+        Ok((g, t))
     }
 }

@@ -2,48 +2,16 @@
 //! frames of BRDF × environment samples combined by MIS, accumulated per pixel with the
 //! luminance's second moment, so that every frame can say how far it still is from converged.
 
+use super::gbuffer::GBuffer;
+use super::map::GpuEnvMap;
+use super::{ConvertOptions, Converter};
+use crate::abi::{binding, defaults, push::McPush, ShaderId, WORKGROUP_2D};
 use crate::envmap::luminance;
 use crate::error::{Error, Result};
-use crate::gpu::barrier::{
-    cmd_image_barriers, cmd_memory_barrier, image_barrier, memory_barrier, Usage,
-};
-use crate::gpu::layout::{binding, WORKGROUP_2D};
-use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
-use crate::gpu::shaders::ShaderId;
-use crate::gpu::timing::Spans;
-use crate::gpu::{groups, mat3_rows, Buffer, Context, GpuEnvMap, Sampler, Timing};
+use crate::gpu::{groups, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing};
 use crate::math::envsample::EnvSampler;
 use crate::math::{Mapping, Orientation};
-use crate::passes::gbuffer::GBuffer;
-use crate::passes::{ConvertOptions, Converter};
 use crate::EnvMap;
-use ash::vk;
-
-/// Push constants of `glsl/mc.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct McPush {
-    /// Rows of the world → file matrix.
-    pub world_to_file: [[f32; 4]; 3],
-    /// Lat-long size.
-    pub env_size: [u32; 2],
-    /// Number of objects.
-    pub count: u32,
-    /// 1: shadow rays.
-    pub shadows: u32,
-    /// Frame size.
-    pub size: [u32; 2],
-    /// Index of the frame's first sample.
-    pub first: u32,
-    /// Samples per pixel in this frame.
-    pub samples: u32,
-    /// Random seed.
-    pub seed: u32,
-    /// 1: MIS of BRDF and environment sampling; 0: BRDF sampling alone.
-    pub mis: u32,
-    /// Padding.
-    pub pad: [u32; 2],
-}
 
 /// The environment as the Monte Carlo pass reads it: the full-resolution lat-long map and its
 /// sampling tables.
@@ -125,12 +93,12 @@ pub struct McOptions {
 impl Default for McOptions {
     fn default() -> Self {
         McOptions {
-            samples: 1024,
+            samples: defaults::MC_SAMPLES,
             target_error: None,
             mis: true,
-            seed: 1,
+            seed: defaults::MC_SEED,
             shadows: false,
-            per_frame: 64,
+            per_frame: defaults::MC_PER_FRAME,
         }
     }
 }
@@ -209,8 +177,84 @@ impl MonteCarlo {
         }
     }
 
+    /// Records `samples` more samples per pixel into `accum` (an rgba32f storage map of the
+    /// G-buffer's size), for every pixel of `gbuf` whose material asks for MC, in frames of
+    /// at most [`MonteCarlo::frame_samples`]. `first` is the index of the first new sample:
+    /// 0 clears the accumulation first. Spans: "mc frame k" from `frame`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        gbuf: &GBuffer,
+        env: &McEnv,
+        opts: &McOptions,
+        accum: &GpuEnvMap,
+        first: u32,
+        samples: u32,
+        frame: u32,
+    ) -> Result<()> {
+        assert_eq!((accum.width, accum.height), (gbuf.width, gbuf.height));
+        let per_frame = self.frame_samples(env, gbuf.count, opts.shadows, opts.per_frame);
+        if first == 0 {
+            rec.clear(&accum.image, [0.0; 4]);
+        }
+        let mut done = first;
+        let mut k = frame;
+        while done < first + samples {
+            let n = per_frame.min(first + samples - done);
+            let push = McPush {
+                world_to_file: mat3_rows(env.orientation.world_to_file()),
+                env_size: [env.map.width, env.map.height],
+                count: gbuf.count,
+                shadows: opts.shadows as u32,
+                size: [gbuf.width, gbuf.height],
+                first: done,
+                samples: n,
+                seed: opts.seed,
+                mis: opts.mis as u32,
+                pad: [0; 2],
+            };
+            rec.span(&format!("mc frame {k}"), |rec| {
+                rec.dispatch(
+                    &self.pipeline,
+                    &[
+                        (
+                            binding::MC_NORMAL,
+                            Bind::Sampled(&gbuf.normal.image, &self.sampler, false),
+                        ),
+                        (
+                            binding::MC_VIEW,
+                            Bind::Sampled(&gbuf.view.image, &self.sampler, false),
+                        ),
+                        (
+                            binding::MC_POSITION,
+                            Bind::Sampled(&gbuf.position.image, &self.sampler, false),
+                        ),
+                        (binding::MC_OBJECTS, Bind::Buffer(&gbuf.objects)),
+                        (
+                            binding::MC_ENV,
+                            Bind::Sampled(&env.map.image, &self.sampler, false),
+                        ),
+                        (binding::MC_TABLES, Bind::Buffer(&env.tables)),
+                        (binding::MC_ACCUM, Bind::Storage(&accum.image)),
+                    ],
+                    &push,
+                    [
+                        groups(gbuf.width, WORKGROUP_2D[0]),
+                        groups(gbuf.height, WORKGROUP_2D[1]),
+                        1,
+                    ],
+                )
+            })?;
+            done += n;
+            k += 1;
+        }
+        Ok(())
+    }
+
     /// Accumulates samples for every pixel of `gbuf` whose material asks for MC, until
-    /// `opts.samples` or `opts.target_error`. Timings are labelled "mc frame k".
+    /// `opts.samples` or `opts.target_error`, submitting a batch at a time (an error target
+    /// needs the estimate read back between batches). Timings are labelled "mc frame k".
     pub fn run(
         &self,
         gbuf: &GBuffer,
@@ -229,33 +273,7 @@ impl MonteCarlo {
             gbuf.width,
             gbuf.height,
         )?;
-        let set = DescriptorSet::new(
-            &self.ctx,
-            &self.pipeline,
-            &[
-                (
-                    binding::MC_NORMAL,
-                    Bind::Sampled(&gbuf.normal.image, &self.sampler, false),
-                ),
-                (
-                    binding::MC_VIEW,
-                    Bind::Sampled(&gbuf.view.image, &self.sampler, false),
-                ),
-                (
-                    binding::MC_POSITION,
-                    Bind::Sampled(&gbuf.position.image, &self.sampler, false),
-                ),
-                (binding::MC_OBJECTS, Bind::Buffer(&gbuf.objects)),
-                (
-                    binding::MC_ENV,
-                    Bind::Sampled(&env.map.image, &self.sampler, false),
-                ),
-                (binding::MC_TABLES, Bind::Buffer(&env.tables)),
-                (binding::MC_ACCUM, Bind::Storage(&accum.image)),
-            ],
-        )?;
         let per_frame = self.frame_samples(env, gbuf.count, opts.shadows, opts.per_frame);
-        let d = self.ctx.device();
         let mut timings = Vec::new();
         let mut done = 0u32;
         let mut error = None;
@@ -268,107 +286,12 @@ impl MonteCarlo {
         };
         while done < opts.samples {
             let this_batch = batch.min(opts.samples - done);
-            let frames = this_batch.div_ceil(per_frame);
-            let mut spans = Spans::new(&self.ctx, frames)?;
-            let start = done;
-            self.ctx.submit_and_wait("Monte Carlo frames", |cmd| {
-                spans.reset(cmd);
-                if start == 0 {
-                    cmd_image_barriers(
-                        d,
-                        cmd,
-                        &[image_barrier(
-                            accum.image.raw,
-                            1,
-                            Usage::Undefined,
-                            Usage::TransferDst,
-                        )],
-                    );
-                    let range = vk::ImageSubresourceRange::default()
-                        .aspect_mask(vk::ImageAspectFlags::COLOR)
-                        .level_count(1)
-                        .layer_count(1);
-                    // SAFETY: cmd is recording; the image is in TRANSFER_DST_OPTIMAL.
-                    unsafe {
-                        d.cmd_clear_color_image(
-                            cmd,
-                            accum.image.raw,
-                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                            &vk::ClearColorValue { float32: [0.0; 4] },
-                            &[range],
-                        )
-                    };
-                    cmd_image_barriers(
-                        d,
-                        cmd,
-                        &[image_barrier(
-                            accum.image.raw,
-                            1,
-                            Usage::TransferDst,
-                            Usage::ComputeReadWrite,
-                        )],
-                    );
-                } else {
-                    cmd_image_barriers(
-                        d,
-                        cmd,
-                        &[image_barrier(
-                            accum.image.raw,
-                            1,
-                            Usage::ComputeSampled,
-                            Usage::ComputeReadWrite,
-                        )],
-                    );
-                }
-                let mut first = start;
-                for k in 0..frames {
-                    let samples = per_frame.min(start + this_batch - first);
-                    let push = McPush {
-                        world_to_file: mat3_rows(env.orientation.world_to_file()),
-                        env_size: [env.map.width, env.map.height],
-                        count: gbuf.count,
-                        shadows: opts.shadows as u32,
-                        size: [gbuf.width, gbuf.height],
-                        first,
-                        samples,
-                        seed: opts.seed,
-                        mis: opts.mis as u32,
-                        pad: [0; 2],
-                    };
-                    let span = spans.begin(cmd, &format!("mc frame {}", frame + k));
-                    self.pipeline.bind(cmd, Some(&set), &push);
-                    // SAFETY: cmd is recording with the compute pipeline bound.
-                    unsafe {
-                        d.cmd_dispatch(
-                            cmd,
-                            groups(gbuf.width, WORKGROUP_2D[0]),
-                            groups(gbuf.height, WORKGROUP_2D[1]),
-                            1,
-                        )
-                    };
-                    spans.end(cmd, span);
-                    cmd_memory_barrier(
-                        d,
-                        cmd,
-                        memory_barrier(Usage::ComputeReadWrite, Usage::ComputeReadWrite),
-                    );
-                    first += samples;
-                }
-                cmd_image_barriers(
-                    d,
-                    cmd,
-                    &[image_barrier(
-                        accum.image.raw,
-                        1,
-                        Usage::ComputeReadWrite,
-                        Usage::ComputeSampled,
-                    )],
-                );
-                Ok(())
+            let ((), t) = self.ctx.run("Monte Carlo frames", |rec| {
+                self.record(rec, gbuf, env, opts, &accum, done, this_batch, frame)
             })?;
-            frame += frames;
+            frame += this_batch.div_ceil(per_frame);
             done += this_batch;
-            timings.extend(spans.read()?);
+            timings.extend(t);
             if let Some(target) = opts.target_error {
                 let e = relative_error(&accum.download_level(&self.ctx, 0)?, done);
                 error = Some(e);

@@ -1,15 +1,28 @@
-//! GPU passes, one file each. A pass is built once and run many times; each run records
-//! timestamps and returns what it cost.
+//! GPU passes, one file each, named as their shader and their float64 twin. A pass is built
+//! once from its context (its pipelines made then, or on first use where the input decides
+//! which) and records many times: `record(&mut rec, inputs…, outputs…, options)` records its
+//! dispatches into a [`crate::gpu::Recorder`] the caller owns, with timed spans, and never
+//! submits. Each pass also has a `run` helper that allocates its outputs and records through
+//! [`crate::gpu::Context::run`], for the CLI, tests and one-off jobs.
 
+pub mod brute;
 pub mod convert;
-pub mod copy;
-pub mod diagnostics;
-pub mod filter;
 pub mod gbuffer;
+pub mod map;
 pub mod mc;
 pub mod mip;
-pub mod probe;
+pub mod sh_eval;
 pub mod sh_project;
 pub mod shade;
+#[doc(hidden)]
+pub mod testing;
 
+pub use brute::{BruteFilter, FilterTarget};
 pub use convert::{ConvertOptions, Converter};
+pub use gbuffer::{GBuffer, GBufferPass};
+pub use map::GpuEnvMap;
+pub use mc::MonteCarlo;
+pub use mip::MipChain;
+pub use sh_eval::ShEvaluator;
+pub use sh_project::ShProjector;
+pub use shade::Shade;

@@ -1,47 +1,18 @@
 //! SH projection of an environment map on the GPU (Ramamoorthi & Hanrahan 2001): coefficients
 //! to any band up to [`SH_MAX_LMAX`], and R&H's 4×4 irradiance matrices.
 
+use super::map::GpuEnvMap;
+use crate::abi::{
+    binding,
+    push::{ShProjectPush, ShReducePush},
+    ShaderId, SH_MAX_LMAX, SH_WORKGROUP,
+};
 use crate::error::{Error, Result};
-use crate::gpu::barrier::{cmd_memory_barrier, memory_barrier, Usage};
-use crate::gpu::layout::{binding, SH_MAX_LMAX, SH_WORKGROUP};
-use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
-use crate::gpu::shaders::ShaderId;
-use crate::gpu::timing::Spans;
-use crate::gpu::{mat3_rows, Buffer, Context, GpuEnvMap, Sampler, Timing};
+use crate::gpu::{mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
 use crate::math::sh;
 use crate::Orientation;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
-
-/// Push constants of `glsl/sh_project.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ShProjectPush {
-    /// Rows of the file → world matrix (the inverse of [`crate::Orientation::world_to_file`]).
-    pub file_to_world: [[f32; 4]; 3],
-    /// Layer size.
-    pub size: [u32; 2],
-    /// Mapping id.
-    pub mapping: u32,
-    /// Highest band.
-    pub lmax: u32,
-    /// Texels in all layers.
-    pub texels: u32,
-    /// Padding.
-    pub pad: [u32; 3],
-}
-
-/// Push constants of `glsl/sh_reduce.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ShReducePush {
-    /// Rows of partial sums in the input.
-    pub rows: u32,
-    /// Coefficients per row.
-    pub coeffs: u32,
-    /// Padding.
-    pub pad: [u32; 2],
-}
 
 /// SH coefficients of radiance, RGB, flat index k = l(l+1)+m.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -150,24 +121,32 @@ impl ShProjector {
         self.subgroups
     }
 
-    /// Projects `map` up to band `lmax`; returns the coefficients and the GPU time.
-    pub fn run(&self, map: &GpuEnvMap, lmax: u32) -> Result<(ShCoefficients, Vec<Timing>)> {
-        self.run_oriented(map, lmax, &Orientation::default())
+    /// Bytes of the coefficients of bands up to `lmax` as [`ShProjector::record`] writes
+    /// them: (lmax+1)² RGB triples of f32.
+    pub fn output_bytes(lmax: u32) -> u64 {
+        sh::count(lmax) as u64 * 12
     }
 
-    /// Projects `map`, whose file is oriented by `orientation`, in the world frame.
-    pub fn run_oriented(
+    /// Records the projection of `map`, whose file is oriented by `orientation`, up to band
+    /// `lmax` in the world frame; the coefficients land at the start of `out` (a buffer with
+    /// TRANSFER_DST usage of at least [`ShProjector::output_bytes`]), flat index
+    /// k = l(l+1)+m, RGB f32. Spans: "sh project", "sh reduce".
+    pub fn record(
         &self,
+        rec: &mut Recorder,
         map: &GpuEnvMap,
         lmax: u32,
         orientation: &Orientation,
-    ) -> Result<(ShCoefficients, Vec<Timing>)> {
+        out: &Buffer,
+    ) -> Result<()> {
         if lmax > SH_MAX_LMAX {
             return Err(Error::Invalid(format!(
                 "SH order {lmax} is above the maximum, {SH_MAX_LMAX}"
             )));
         }
         let n = sh::count(lmax) as u32;
+        let row_bytes = ShProjector::output_bytes(lmax);
+        assert!(out.size() >= row_bytes, "the SH output buffer is too small");
         let texels = map.width * map.height * map.mapping.layers();
         let max = self.ctx.info().max_workgroup_count;
         let groups = texels.div_ceil(SH_WORKGROUP);
@@ -179,7 +158,6 @@ impl ShProjector {
             let (x, y) = grid(g, max);
             levels.push(x * y);
         }
-        let row_bytes = (n * 3 * 4) as u64;
         let mk = |name: &str| {
             Buffer::new(
                 &self.ctx,
@@ -190,40 +168,6 @@ impl ShProjector {
             )
         };
         let (a, b) = (mk("sh partials A")?, mk("sh partials B")?);
-        let readback = Buffer::new(
-            &self.ctx,
-            "sh readback",
-            row_bytes,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let project_set = DescriptorSet::new(
-            &self.ctx,
-            &self.project,
-            &[
-                (
-                    binding::SH_SRC,
-                    Bind::Sampled(&map.image, &self.sampler, false),
-                ),
-                (binding::SH_PARTIALS, Bind::Buffer(&a)),
-            ],
-        )?;
-        let ab = DescriptorSet::new(
-            &self.ctx,
-            &self.reduce,
-            &[
-                (binding::SH_REDUCE_IN, Bind::Buffer(&a)),
-                (binding::SH_REDUCE_OUT, Bind::Buffer(&b)),
-            ],
-        )?;
-        let ba = DescriptorSet::new(
-            &self.ctx,
-            &self.reduce,
-            &[
-                (binding::SH_REDUCE_IN, Bind::Buffer(&b)),
-                (binding::SH_REDUCE_OUT, Bind::Buffer(&a)),
-            ],
-        )?;
         let push = ShProjectPush {
             file_to_world: mat3_rows(orientation.world_to_file().transpose()),
             size: [map.width, map.height],
@@ -232,60 +176,75 @@ impl ShProjector {
             texels,
             pad: [0; 3],
         };
-        let mut spans = Spans::new(&self.ctx, 2)?;
-        let d = self.ctx.device();
-        let result_in_a = (levels.len() - 1) % 2 == 0;
-        self.ctx.submit_and_wait("projecting onto SH", |cmd| {
-            spans.reset(cmd);
-            let span = spans.begin(cmd, "sh project");
-            self.project.bind(cmd, Some(&project_set), &push);
-            // SAFETY: cmd is recording with the compute pipeline bound.
-            unsafe { d.cmd_dispatch(cmd, gx, gy, 1) };
-            spans.end(cmd, span);
-            let span = spans.begin(cmd, "sh reduce");
+        rec.span("sh project", |rec| {
+            rec.dispatch(
+                &self.project,
+                &[
+                    (
+                        binding::SH_SRC,
+                        Bind::Sampled(&map.image, &self.sampler, false),
+                    ),
+                    (binding::SH_PARTIALS, Bind::Buffer(&a)),
+                ],
+                &push,
+                [gx, gy, 1],
+            )
+        })?;
+        rec.span("sh reduce", |rec| {
             for (lvl, rows) in levels.iter().enumerate().take(levels.len() - 1) {
-                cmd_memory_barrier(
-                    d,
-                    cmd,
-                    memory_barrier(Usage::ComputeWrite, Usage::ComputeRead),
-                );
-                let set = if lvl % 2 == 0 { &ab } else { &ba };
+                let (from, to) = if lvl % 2 == 0 { (&a, &b) } else { (&b, &a) };
                 let (x, y) = grid(rows.div_ceil(SH_WORKGROUP), max);
-                self.reduce.bind(
-                    cmd,
-                    Some(set),
+                rec.dispatch(
+                    &self.reduce,
+                    &[
+                        (binding::SH_REDUCE_IN, Bind::Buffer(from)),
+                        (binding::SH_REDUCE_OUT, Bind::Buffer(to)),
+                    ],
                     &ShReducePush {
                         rows: *rows,
                         coeffs: n,
                         pad: [0; 2],
                     },
-                );
-                // SAFETY: as above.
-                unsafe { d.cmd_dispatch(cmd, x, y, 1) };
+                    [x, y, 1],
+                )?;
             }
-            spans.end(cmd, span);
-            cmd_memory_barrier(
-                d,
-                cmd,
-                memory_barrier(Usage::ComputeWrite, Usage::TransferSrc),
-            );
-            let src = if result_in_a { &a } else { &b };
-            let region = vk::BufferCopy {
-                src_offset: 0,
-                dst_offset: 0,
-                size: row_bytes,
-            };
-            // SAFETY: both buffers are live and large enough.
-            unsafe { d.cmd_copy_buffer(cmd, src.raw(), readback.raw(), &[region]) };
-            cmd_memory_barrier(d, cmd, memory_barrier(Usage::TransferDst, Usage::HostRead));
             Ok(())
         })?;
-        let flat: Vec<f32> = readback.read((n * 3) as usize);
+        let result = if (levels.len() - 1) % 2 == 0 { &a } else { &b };
+        rec.copy_buffer(result, out, row_bytes);
+        rec.keep((a, b));
+        Ok(())
+    }
+
+    /// Projects `map` up to band `lmax`; returns the coefficients and the GPU time.
+    pub fn run(&self, map: &GpuEnvMap, lmax: u32) -> Result<(ShCoefficients, Vec<Timing>)> {
+        self.run_oriented(map, lmax, &Orientation::default())
+    }
+
+    /// Projects `map`, whose file is oriented by `orientation`, in the world frame, and waits.
+    pub fn run_oriented(
+        &self,
+        map: &GpuEnvMap,
+        lmax: u32,
+        orientation: &Orientation,
+    ) -> Result<(ShCoefficients, Vec<Timing>)> {
+        let readback = Buffer::new(
+            &self.ctx,
+            "sh readback",
+            ShProjector::output_bytes(lmax.min(SH_MAX_LMAX)),
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let ((), timings) = self.ctx.run("projecting onto SH", |rec| {
+            self.record(rec, map, lmax, orientation, &readback)?;
+            rec.use_buffer(&readback, Usage::HostRead);
+            Ok(())
+        })?;
+        let flat: Vec<f32> = readback.read(sh::count(lmax) * 3);
         let coeffs = flat
             .chunks_exact(3)
             .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
             .collect();
-        let timings = spans.read()?;
         Ok((ShCoefficients { lmax, coeffs }, timings))
     }
 }

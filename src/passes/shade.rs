@@ -2,37 +2,12 @@
 //! by its material's technique (mirror lookup, SH irradiance, prefiltered maps, filtered
 //! importance sampling, or the Monte Carlo accumulation) and shows the environment behind.
 
+use super::gbuffer::{target, GBuffer};
+use super::map::GpuEnvMap;
+use crate::abi::{binding, push::ShadePush, ShaderId};
 use crate::error::Result;
-use crate::gpu::layout::binding;
-use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
-use crate::gpu::shaders::ShaderId;
-use crate::gpu::timing::Spans;
-use crate::gpu::{mat3_rows, Buffer, Context, GpuEnvMap, Sampler, Timing};
+use crate::gpu::{mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
 use crate::math::{Mapping, Orientation};
-use crate::passes::gbuffer::{record_fullscreen, target, GBuffer, FORMAT};
-use crate::EnvMap;
-
-/// Push constants of `glsl/shade.frag`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ShadePush {
-    /// Rows of the world → file matrix of the environment.
-    pub world_to_file: [[f32; 4]; 3],
-    /// Environment layer size.
-    pub env_size: [u32; 2],
-    /// Environment mapping id.
-    pub env_mapping: u32,
-    /// Number of objects.
-    pub count: u32,
-    /// Side of the dual paraboloid's level 0.
-    pub dp_size: u32,
-    /// Its last MIP level.
-    pub max_lod: f32,
-    /// 1: shadow rays for lookups and FIS samples.
-    pub shadows: u32,
-    /// Samples in the Monte Carlo accumulation.
-    pub mc_samples: u32,
-}
 
 /// What the shading reads besides the G-buffer; techniques no material uses are `None`.
 pub struct ShadeInputs<'a> {
@@ -72,76 +47,45 @@ impl Shade {
                 ctx,
                 ShaderId::FullscreenVert,
                 ShaderId::Shade,
-                &[FORMAT],
+                &[super::gbuffer::FORMAT],
             )?,
             plain: Sampler::linear_clamp(ctx, "shade sampler")?,
             trilinear: Sampler::trilinear_clamp(ctx, "shade trilinear sampler")?,
-            dummy_image: GpuEnvMap::upload(
-                ctx,
-                &EnvMap::new(Mapping::LatLong, 1, 1, vec![[0.0; 3]]),
-            )?,
+            dummy_image: GpuEnvMap::new(ctx, "shade: unused image", Mapping::LatLong, 1, 1)?,
             dummy_buffer,
         })
     }
 
-    /// Shades `gbuf`; returns the frame (linear RGB) and its GPU time ("shade").
-    pub fn run(
+    /// Records the shading of `gbuf` into `frame` (a colour target of the G-buffer's size,
+    /// see [`target`]). Span: "shade".
+    pub fn record(
         &self,
+        rec: &mut Recorder,
         gbuf: &GBuffer,
         inputs: &ShadeInputs<'_>,
-    ) -> Result<(GpuEnvMap, Vec<Timing>)> {
+        frame: &GpuEnvMap,
+    ) -> Result<()> {
+        assert_eq!((frame.width, frame.height), (gbuf.width, gbuf.height));
         let coeffs = match inputs.sh {
             Some(c) if !c.is_empty() => {
                 let data: Vec<[f32; 4]> = c
                     .iter()
                     .map(|v| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0])
                     .collect();
-                Some(Buffer::storage(&self.ctx, "shade SH coefficients", &data)?)
+                Some(Buffer::storage(
+                    rec.context(),
+                    "shade SH coefficients",
+                    &data,
+                )?)
             }
             _ => None,
         };
-        let frame = target(&self.ctx, "shaded frame", gbuf.width, gbuf.height)?;
+        // The unused image is bound but never read; it only needs a defined layout.
+        if self.dummy_image.image.usage() == Usage::Undefined {
+            rec.clear(&self.dummy_image.image, [0.0; 4]);
+        }
         let dp = inputs.dp.unwrap_or(&self.dummy_image);
         let mc = inputs.mc.map(|m| m.0).unwrap_or(&self.dummy_image);
-        let set = DescriptorSet::new(
-            &self.ctx,
-            &self.pipeline,
-            &[
-                (
-                    binding::SHADE_NORMAL,
-                    Bind::Sampled(&gbuf.normal.image, &self.plain, false),
-                ),
-                (
-                    binding::SHADE_VIEW,
-                    Bind::Sampled(&gbuf.view.image, &self.plain, false),
-                ),
-                (binding::SHADE_OBJECTS, Bind::Buffer(&gbuf.objects)),
-                (
-                    binding::SHADE_COEFFS,
-                    Bind::Buffer(coeffs.as_ref().unwrap_or(&self.dummy_buffer)),
-                ),
-                (
-                    binding::SHADE_ENV,
-                    Bind::Sampled(&inputs.env.image, &self.plain, false),
-                ),
-                (
-                    binding::SHADE_POSITION,
-                    Bind::Sampled(&gbuf.position.image, &self.plain, false),
-                ),
-                (
-                    binding::SHADE_DP,
-                    Bind::Sampled(&dp.image, &self.trilinear, false),
-                ),
-                (
-                    binding::SHADE_PREFILTERED,
-                    Bind::Buffer(inputs.prefiltered.unwrap_or(&self.dummy_buffer)),
-                ),
-                (
-                    binding::SHADE_MC,
-                    Bind::Sampled(&mc.image, &self.plain, false),
-                ),
-            ],
-        )?;
         let push = ShadePush {
             world_to_file: mat3_rows(inputs.orientation.world_to_file()),
             env_size: [inputs.env.width, inputs.env.height],
@@ -152,21 +96,65 @@ impl Shade {
             shadows: inputs.shadows as u32,
             mc_samples: inputs.mc.map(|m| m.1).unwrap_or(0),
         };
-        let mut spans = Spans::new(&self.ctx, 1)?;
-        self.ctx.submit_and_wait("shading", |cmd| {
-            spans.reset(cmd);
-            record_fullscreen(
-                &self.ctx,
-                cmd,
-                &mut spans,
-                "shade",
+        rec.span("shade", |rec| {
+            rec.draw_fullscreen(
                 &self.pipeline,
-                Some(&set),
+                &[
+                    (
+                        binding::SHADE_NORMAL,
+                        Bind::Sampled(&gbuf.normal.image, &self.plain, false),
+                    ),
+                    (
+                        binding::SHADE_VIEW,
+                        Bind::Sampled(&gbuf.view.image, &self.plain, false),
+                    ),
+                    (binding::SHADE_OBJECTS, Bind::Buffer(&gbuf.objects)),
+                    (
+                        binding::SHADE_COEFFS,
+                        Bind::Buffer(coeffs.as_ref().unwrap_or(&self.dummy_buffer)),
+                    ),
+                    (
+                        binding::SHADE_ENV,
+                        Bind::Sampled(&inputs.env.image, &self.plain, false),
+                    ),
+                    (
+                        binding::SHADE_POSITION,
+                        Bind::Sampled(&gbuf.position.image, &self.plain, false),
+                    ),
+                    (
+                        binding::SHADE_DP,
+                        Bind::Sampled(&dp.image, &self.trilinear, false),
+                    ),
+                    (
+                        binding::SHADE_PREFILTERED,
+                        Bind::Buffer(inputs.prefiltered.unwrap_or(&self.dummy_buffer)),
+                    ),
+                    (
+                        binding::SHADE_MC,
+                        Bind::Sampled(&mc.image, &self.plain, false),
+                    ),
+                ],
                 &push,
                 &[&frame.image],
-            );
-            Ok(())
+            )
         })?;
-        Ok((frame, spans.read()?))
+        if let Some(c) = coeffs {
+            rec.keep(c);
+        }
+        Ok(())
+    }
+
+    /// Shades `gbuf` into a new frame and waits; returns the frame (linear RGB) and its GPU
+    /// time ("shade").
+    pub fn run(
+        &self,
+        gbuf: &GBuffer,
+        inputs: &ShadeInputs<'_>,
+    ) -> Result<(GpuEnvMap, Vec<Timing>)> {
+        let frame = target(&self.ctx, "shaded frame", gbuf.width, gbuf.height)?;
+        let ((), t) = self
+            .ctx
+            .run("shading", |rec| self.record(rec, gbuf, inputs, &frame))?;
+        Ok((frame, t))
     }
 }

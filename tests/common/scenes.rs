@@ -7,7 +7,7 @@ use envlight::scene::{
 };
 
 #[allow(unused_imports)]
-pub use envlight::fisbench::sphere_camera;
+pub use envlight::math::camera::sphere_camera;
 
 pub fn unit_sphere() -> Shape {
     Shape::Sphere {

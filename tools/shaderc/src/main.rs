@@ -7,7 +7,7 @@
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 
-#[path = "../../../src/gpu/layout.rs"]
+#[path = "../../../src/abi.rs"]
 #[allow(dead_code)]
 mod layout;
 

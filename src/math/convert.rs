@@ -136,7 +136,8 @@ pub fn convert(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3, ss: u
                     let mut c = Mapping::texel_center(w, h, layer, i, j);
                     if to == Mapping::DualParaboloid {
                         let (s, t) = (2.0 * c.u - 1.0, 2.0 * c.v - 1.0);
-                        let k = (1.0 - 1e-4) / (s * s + t * t).sqrt().max(1.0 - 1e-4);
+                        let r = 1.0 - crate::abi::constants::RIM_PULL_IN;
+                        let k = r / (s * s + t * t).sqrt().max(r);
                         c.u = 0.5 * (s * k + 1.0);
                         c.v = 0.5 * (t * k + 1.0);
                     }

@@ -1,33 +1,12 @@
 //! Exposes the GLSL mapping functions (round trips and texel solid angles) so tests can hold
 //! them against the float64 versions.
 
+use crate::abi::{binding, push::ProbePush, ShaderId, WORKGROUP_1D};
 use crate::error::Result;
-use crate::gpu::barrier::{cmd_memory_barrier, memory_barrier, Usage};
-use crate::gpu::layout::{binding, WORKGROUP_1D};
-use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
-use crate::gpu::shaders::ShaderId;
-use crate::gpu::{groups, Buffer, Context};
+use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Usage};
 use crate::math::Mapping;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
-
-/// Push constants of `glsl/mapping_probe.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ProbePush {
-    /// 0: round trip; 1: solid angles.
-    pub mode: u32,
-    /// Mapping id.
-    pub mapping: u32,
-    /// Number of items.
-    pub count: u32,
-    /// Layer width (mode 1).
-    pub width: u32,
-    /// Layer height (mode 1).
-    pub height: u32,
-    /// Padding.
-    pub pad: [u32; 3],
-}
 
 /// One round trip through the GLSL mapping functions.
 #[derive(Clone, Copy, Debug)]
@@ -73,20 +52,17 @@ impl MappingProbe {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::GpuToCpu,
         )?;
-        let set = DescriptorSet::new(
-            &self.ctx,
-            &self.pipeline,
-            &[
-                (binding::PROBE_IN, Bind::Buffer(&inb)),
-                (binding::PROBE_OUT, Bind::Buffer(&outb)),
-            ],
-        )?;
-        let d = self.ctx.device();
-        self.ctx.submit_and_wait("mapping probe", |cmd| {
-            self.pipeline.bind(cmd, Some(&set), &push);
-            // SAFETY: cmd is recording with the compute pipeline bound.
-            unsafe { d.cmd_dispatch(cmd, groups(push.count, WORKGROUP_1D), 1, 1) };
-            cmd_memory_barrier(d, cmd, memory_barrier(Usage::ComputeWrite, Usage::HostRead));
+        self.ctx.run("mapping probe", |rec| {
+            rec.dispatch(
+                &self.pipeline,
+                &[
+                    (binding::PROBE_IN, Bind::Buffer(&inb)),
+                    (binding::PROBE_OUT, Bind::Buffer(&outb)),
+                ],
+                &push,
+                [groups(push.count, WORKGROUP_1D), 1, 1],
+            )?;
+            rec.use_buffer(&outb, Usage::HostRead);
             Ok(())
         })?;
         Ok(outb.read(out_len))

@@ -1,28 +1,11 @@
 //! Passes that exist to check the plumbing: a costly dispatch and a fullscreen draw, used to
 //! test that timestamps bracket compute work after graphics work has run.
 
+use crate::abi::{binding, push::BusyPush, ShaderId, WORKGROUP_1D};
 use crate::error::Result;
-use crate::gpu::barrier::{cmd_memory_barrier, memory_barrier, Usage};
-use crate::gpu::layout::{binding, WORKGROUP_1D};
-use crate::gpu::pipeline::{Bind, DescriptorSet, Pipeline};
-use crate::gpu::shaders::ShaderId;
-use crate::gpu::timing::Spans;
-use crate::gpu::{groups, Buffer, Context, Image, ImageDesc, Timing};
-use crate::passes::gbuffer::record_fullscreen;
+use crate::gpu::{groups, Bind, Buffer, Context, Image, ImageDesc, Pipeline, Timing, Usage};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
-
-/// Push constants of `glsl/busy.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct BusyPush {
-    /// Loop iterations per invocation.
-    pub iterations: u32,
-    /// Invocations.
-    pub count: u32,
-    /// Padding.
-    pub pad: [u32; 2],
-}
 
 /// A fullscreen draw followed by a costly dispatch, each timed.
 pub struct Diagnostics {
@@ -76,39 +59,23 @@ impl Diagnostics {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::GpuToCpu,
         )?;
-        let set = DescriptorSet::new(
-            &self.ctx,
-            &self.busy,
-            &[(binding::BUSY_OUT, Bind::Buffer(&out))],
-        )?;
-        let mut spans = Spans::new(&self.ctx, 2)?;
-        let d = self.ctx.device();
-        self.ctx.submit_and_wait("diagnostics", |cmd| {
-            spans.reset(cmd);
-            record_fullscreen(
-                &self.ctx,
-                cmd,
-                &mut spans,
-                "draw",
-                &self.draw,
-                None,
-                &(),
-                &[&target],
-            );
-            let span = spans.begin(cmd, "busy");
-            self.busy.bind(
-                cmd,
-                Some(&set),
-                &BusyPush {
-                    iterations,
-                    count,
-                    pad: [0; 2],
-                },
-            );
-            // SAFETY: cmd is recording with the compute pipeline bound.
-            unsafe { d.cmd_dispatch(cmd, groups(count, WORKGROUP_1D), 1, 1) };
-            spans.end(cmd, span);
-            cmd_memory_barrier(d, cmd, memory_barrier(Usage::ComputeWrite, Usage::HostRead));
+        let ((), timings) = self.ctx.run("diagnostics", |rec| {
+            rec.span("draw", |rec| {
+                rec.draw_fullscreen(&self.draw, &[], &(), &[&target])
+            })?;
+            rec.span("busy", |rec| {
+                rec.dispatch(
+                    &self.busy,
+                    &[(binding::BUSY_OUT, Bind::Buffer(&out))],
+                    &BusyPush {
+                        iterations,
+                        count,
+                        pad: [0; 2],
+                    },
+                    [groups(count, WORKGROUP_1D), 1, 1],
+                )
+            })?;
+            rec.use_buffer(&out, Usage::HostRead);
             Ok(())
         })?;
         let sum: f64 = out
@@ -116,7 +83,6 @@ impl Diagnostics {
             .iter()
             .map(|&v| v as f64)
             .sum();
-        let timings = spans.read()?;
         Ok((timings, sum))
     }
 }

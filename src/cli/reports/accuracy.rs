@@ -7,16 +7,22 @@
 //! exact solid angles, so sums over them are integrals over the sphere. Relative errors are of
 //! luminance, against the brute-force irradiance at the same normal.
 
-use crate::envmap::{luminance, EnvMap};
-use crate::error::Result;
-use crate::gpu::{Context, GpuEnvMap};
-use crate::math::filter::Kernel;
-use crate::math::sh::{self, Window};
-use crate::math::synth::fibonacci_sphere;
-use crate::math::{Mapping, Orientation};
-use crate::passes::filter::{BruteFilter, FilterTarget, ShEvaluator};
-use crate::passes::sh_project::{ShProjector, Subgroups};
+use crate::cli::{context, Global};
+use anyhow::Context as _;
+use envlight::envmap::{luminance, EnvMap};
+use envlight::error::Result;
+use envlight::gpu::Context;
+use envlight::io::{self, LoadOptions};
+use envlight::math::filter::Kernel;
+use envlight::math::sh::{self, Window};
+use envlight::math::synth::fibonacci_sphere;
+use envlight::math::{Mapping, Orientation};
+use envlight::passes::sh_project::{ShProjector, Subgroups};
+use envlight::passes::{BruteFilter, FilterTarget, ShEvaluator};
+use envlight::GpuEnvMap;
+use indicatif::ProgressBar;
 use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
 
 /// SH orders the report covers.
 pub const ORDERS: [u32; 6] = [0, 1, 2, 4, 6, 8];
@@ -279,4 +285,62 @@ pub fn plot(reports: &[MapReport]) -> image::RgbImage {
         }
     }
     img
+}
+
+/// `envlight accuracy sh`: the report on every map, written to `out`.
+pub fn accuracy_sh(cli: &Global, inputs: &[PathBuf], out: &Path, size: u32) -> anyhow::Result<()> {
+    let mut files = Vec::new();
+    for i in inputs {
+        if i.is_dir() {
+            let mut v: Vec<PathBuf> = std::fs::read_dir(i)
+                .with_context(|| i.display().to_string())?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| {
+                    p.is_file()
+                        && matches!(
+                            p.extension().and_then(|e| e.to_str()),
+                            Some("hdr" | "exr" | "dds" | "pfm")
+                        )
+                })
+                .collect();
+            v.sort();
+            files.extend(v);
+        } else {
+            files.push(i.clone());
+        }
+    }
+    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
+    let ctx = context(cli)?;
+    let acc = Accuracy::new(&ctx)?;
+    let pb = ProgressBar::new(files.len() as u64);
+    let mut reports = Vec::new();
+    for f in &files {
+        let name = f
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        pb.set_message(name.clone());
+        let map = io::load(f, &LoadOptions::default())?;
+        reports.push(acc.run(&name, &map, size)?);
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    let device = format!("{}, {}", ctx.info().name, ctx.info().driver.trim());
+    let mut md = markdown(&reports, &device);
+    md.push_str("\nPlot `accuracy.png`: unwindowed RMS error (log scale, 1e-4 to 10, a gridline per decade) against order 0–8; black squares are the seed's 25%, 8%, 1%. Curves:\n\n");
+    for (i, r) in reports.iter().enumerate() {
+        let [cr, cg, cb] = plot_colour(i);
+        md.push_str(&format!("- rgb({cr}, {cg}, {cb}): {}\n", r.name));
+    }
+    print!("{md}");
+    for (name, text) in [("accuracy.md", md), ("accuracy.csv", csv(&reports))] {
+        let p = out.join(name);
+        std::fs::write(&p, text).with_context(|| p.display().to_string())?;
+    }
+    let p = out.join("accuracy.png");
+    plot(&reports)
+        .save(&p)
+        .with_context(|| p.display().to_string())?;
+    println!("wrote {}", out.display());
+    Ok(())
 }

@@ -1,0 +1,780 @@
+//! The shared ABI: everything GLSL and Rust must agree on, written once. Binding numbers and
+//! their access, workgroup sizes, ids, numeric constants both sides use, defaults, the
+//! push-constant blocks (Rust structs and the GLSL blocks generated from the same list), and
+//! the list of shaders with how each is built.
+//!
+//! This file is self-contained (std only) because `tools/shaderc` includes it by path to write
+//! `glsl/include/generated.glsl` and `spirv/manifest.txt` without building the library. It is
+//! the bottom of the import order: abi ← math ← gpu ← passes ← scene/render ← CLI.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+macro_rules! bindings {
+    ($( $(#[$m:meta])* $name:ident = $v:literal; )*) => {
+        $( $(#[$m])* pub const $name: u32 = $v; )*
+        /// Every binding: (name, number), for the generated header.
+        pub const ALL: &[(&str, u32)] = &[$( (stringify!($name), $name) ),*];
+    };
+}
+
+/// Descriptor binding numbers, per pass (all in set 0).
+pub mod binding {
+    bindings! {
+        /// convert: the source map (sampler2DArray, or samplerCube for cube sources).
+        CONVERT_SRC = 0;
+        /// convert: the destination map (rgba32f image2DArray).
+        CONVERT_DST = 1;
+        /// mapping_probe: input directions (vec4 storage buffer).
+        PROBE_IN = 0;
+        /// mapping_probe: results (vec4 storage buffer).
+        PROBE_OUT = 1;
+        /// copy: the source image (sampler2DArray, read with texelFetch).
+        COPY_SRC = 0;
+        /// copy: the destination image (rgba32f image2DArray).
+        COPY_DST = 1;
+        /// busy: the buffer the costly loop writes to.
+        BUSY_OUT = 0;
+        /// sh_project: the map (sampler2DArray, read with texelFetch).
+        SH_SRC = 0;
+        /// sh_project: per-workgroup partial sums (storage buffer).
+        SH_PARTIALS = 1;
+        /// sh_reduce: partial sums in.
+        SH_REDUCE_IN = 0;
+        /// sh_reduce: partial sums out.
+        SH_REDUCE_OUT = 1;
+        /// brute_prepare: the source map (sampler2DArray, read with texelFetch).
+        BRUTE_PREP_SRC = 0;
+        /// brute_prepare: per-texel centre direction and cos of angular radius (vec4 buffer).
+        BRUTE_PREP_CONES = 1;
+        /// brute_prepare: per-texel radiance and solid angle (vec4 buffer).
+        BRUTE_PREP_RADIANCE = 2;
+        /// brute: the cones written by brute_prepare.
+        BRUTE_CONES = 0;
+        /// brute: the radiance and solid angles written by brute_prepare.
+        BRUTE_RADIANCE = 1;
+        /// brute: the output map (rgba32f image2DArray), accumulated over chunks.
+        BRUTE_DST = 2;
+        /// brute: the Kahan compensation per output texel, carried between chunks (vec4 buffer).
+        BRUTE_COMP = 3;
+        /// sh_eval: the coefficients, Â_l and window folded in (vec4 buffer).
+        SH_EVAL_COEFFS = 0;
+        /// sh_eval: the output map (rgba32f image2DArray).
+        SH_EVAL_DST = 1;
+        /// gbuffer: the scene's objects (storage buffer of `Object`).
+        GBUF_OBJECTS = 0;
+        /// shade_sh: G-buffer normals and object indices.
+        SHADE_NORMAL = 0;
+        /// shade_sh: G-buffer directions to the eye.
+        SHADE_VIEW = 1;
+        /// shade_sh: the scene's objects (albedo).
+        SHADE_OBJECTS = 2;
+        /// shade_sh: SH irradiance coefficients (vec4 buffer).
+        SHADE_COEFFS = 3;
+        /// shade: the environment map in its own mapping (background, mirror lookups).
+        SHADE_ENV = 4;
+        /// shade: G-buffer hit positions (shadow rays).
+        SHADE_POSITION = 5;
+        /// shade: the dual-paraboloid MIP chain (FIS).
+        SHADE_DP = 6;
+        /// shade: prefiltered lat-long maps, texel after texel (vec4 buffer).
+        SHADE_PREFILTERED = 7;
+        /// shade: the Monte Carlo accumulation (rgb sum, luminance² sum), read for MC pixels.
+        SHADE_MC = 8;
+        /// mip: the finer level (storage image, read).
+        MIP_SRC = 0;
+        /// mip: the coarser level (storage image, written).
+        MIP_DST = 1;
+        /// mc: G-buffer normals and object indices.
+        MC_NORMAL = 0;
+        /// mc: G-buffer directions to the eye.
+        MC_VIEW = 1;
+        /// mc: G-buffer hit positions.
+        MC_POSITION = 2;
+        /// mc: the scene's objects and materials.
+        MC_OBJECTS = 3;
+        /// mc: the full-resolution lat-long map (texelFetch).
+        MC_ENV = 4;
+        /// mc: the environment sampling tables (float buffer, see `math::envsample`).
+        MC_TABLES = 5;
+        /// mc: the accumulation image (rgba32f storage: rgb sum, luminance² sum).
+        MC_ACCUM = 6;
+    }
+}
+
+/// Ids of BRDFs and shading techniques, and the constants their twins share.
+pub mod brdf {
+    /// BRDF ids (`Object.brdf.x`).
+    pub mod ids {
+        /// Lambertian diffuse.
+        pub const LAMBERT: u32 = 0;
+        /// Perfect mirror.
+        pub const MIRROR: u32 = 1;
+        /// Normalised Phong lobe about the reflected direction.
+        pub const PHONG: u32 = 2;
+        /// Blinn-Phong.
+        pub const BLINN: u32 = 3;
+        /// GGX.
+        pub const GGX: u32 = 4;
+        /// Ward anisotropic.
+        pub const WARD: u32 = 5;
+    }
+    /// Technique ids (`Object.albedo.w`).
+    pub mod technique {
+        /// One lookup of the reflected direction (mirrors).
+        pub const LOOKUP: u32 = 0;
+        /// Filtered importance sampling.
+        pub const FIS: u32 = 1;
+        /// SH irradiance (diffuse).
+        pub const SH: u32 = 2;
+        /// A prefiltered map (irradiance by the normal, Phong by the reflected direction).
+        pub const PREFILTERED: u32 = 3;
+        /// The Monte Carlo reference.
+        pub const MC: u32 = 4;
+    }
+    /// GGX roughness below this is taken as this (the mirror limit with finite numbers).
+    pub const GGX_ALPHA_MIN: f64 = 1e-4;
+    /// Smallest Ward roughness accepted.
+    pub const WARD_ALPHA_MIN: f64 = 1e-3;
+}
+
+/// The per-texel quadrature rule of the brute-force convolution, shared by
+/// `src/math/filter.rs` and `glsl/brute.comp` (see the former for what each does).
+pub mod filter_rule {
+    /// Fewest cells per side for a texel the kernel's horizon cuts (the kink of max(0, cos)).
+    pub const EDGE_CELLS: u32 = 4;
+    /// Most cells per side of one texel.
+    pub const MAX_CELLS: u32 = 16;
+    /// Cells per side per unit of ρ·√n.
+    pub const CELLS_PER_WIDTH: f64 = 2.0;
+    /// Below this n·ρ² a texel away from the horizon takes one node.
+    pub const CENTRE_LIMIT: f64 = 1e-5;
+    /// Lobe values below this fraction of the peak are dropped (ln 1e-10).
+    pub const LOG_CUTOFF: f64 = -23.025_850_929_940_457;
+    /// A texel's angular radius is widened by this factor when bounding its cone, so the cone
+    /// covers the texel's corners in every mapping.
+    pub const CONE_MARGIN: f64 = 1.25;
+}
+
+/// Numbers both the float64 twins and the shaders use.
+pub mod constants {
+    /// Rec. 709 luminance weights of linear RGB.
+    pub const LUMINANCE: [f64; 3] = [0.2126, 0.7152, 0.0722];
+    /// Above this |n.y| a tangent frame is built from x̂ instead of ŷ (near the poles).
+    pub const POLE_THRESHOLD: f64 = 0.999;
+    /// A view direction closer than this to the surface is lifted to it (f32 grazing views).
+    pub const VIEW_LIFT: f64 = 1e-4;
+    /// Shadow rays start this far (times 1 + |p|) off the surface along the normal.
+    pub const SHADOW_OFFSET: f64 = 1e-4;
+    /// Paraboloid samples outside the unit disc are pulled in to radius 1 − this.
+    pub const RIM_PULL_IN: f64 = 1e-4;
+    /// Offset of the 2×2 Gauss–Legendre nodes from a texel's centre, in texels: 1/(2√3).
+    pub const GAUSS2_OFFSET: f64 = 0.288_675_134_594_812_87;
+    /// Phong and Blinn-Phong exponents accepted, materials and prefilters alike.
+    pub const PHONG_EXPONENT_RANGE: (f64, f64) = (1.0, 1e7);
+}
+
+/// Defaults of per-run options, shared by the library, scene files and the command line.
+pub mod defaults {
+    /// Monte Carlo samples per pixel.
+    pub const MC_SAMPLES: u32 = 1024;
+    /// Monte Carlo samples per pixel per dispatch.
+    pub const MC_PER_FRAME: u32 = 64;
+    /// Monte Carlo random seed.
+    pub const MC_SEED: u32 = 1;
+    /// SH order of diffuse materials.
+    pub const SH_ORDER: u32 = 2;
+    /// FIS samples per pixel.
+    pub const FIS_SAMPLES: u32 = 64;
+    /// FIS lod bias (chosen by measurement, docs/BENCHMARKS.md).
+    pub const FIS_BIAS: f64 = 0.25;
+    /// Side of prefiltered lat-long maps.
+    pub const PREFILTERED_SIZE: u32 = 64;
+}
+
+/// Highest SH band the GPU projection supports.
+pub const SH_MAX_LMAX: u32 = 8;
+/// Workgroup size of the SH passes: one texel (or partial sum) per invocation.
+pub const SH_WORKGROUP: u32 = 64;
+
+/// Workgroup size of 2D compute passes (specialization constants 0 and 1).
+pub const WORKGROUP_2D: [u32; 2] = [8, 8];
+/// Workgroup size of 1D compute passes (specialization constant 0).
+pub const WORKGROUP_1D: u32 = 64;
+/// Mapping ids, in [`crate::math::Mapping`]'s order.
+pub const MAPPING_NAMES: [&str; 4] = ["LATLONG", "ANGULAR", "CUBE", "DUAL_PARABOLOID"];
+
+/// SPIR-V target environment: Vulkan 1.2 (Vulkan 1.3 output uses LocalSizeId, which
+/// validation rejects without maintenance4).
+pub const TARGET_ENV: &str = "vulkan1.2";
+/// Optimisation level handed to shaderc.
+pub const OPTIMIZATION: &str = "performance";
+
+/// Where `generated_header` is written.
+pub const GENERATED_HEADER: &str = "glsl/include/generated.glsl";
+/// Where the hashes of the sources each SPIR-V file was built from are written.
+pub const MANIFEST: &str = "spirv/manifest.txt";
+
+/// A shader stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Compute shader.
+    Compute,
+    /// Vertex shader.
+    Vertex,
+    /// Fragment shader.
+    Fragment,
+}
+
+/// One SPIR-V module: which GLSL file, with which defines.
+#[derive(Clone, Copy, Debug)]
+pub struct ShaderSource {
+    /// File stem of the SPIR-V output in `spirv/` (`NAME.spv`).
+    pub name: &'static str,
+    /// GLSL source file in `glsl/`.
+    pub file: &'static str,
+    /// Stage.
+    pub stage: Stage,
+    /// Preprocessor defines (name, value).
+    pub defines: &'static [(&'static str, &'static str)],
+}
+
+/// What a descriptor binding is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// A combined image sampler.
+    Sampled,
+    /// A storage image.
+    StorageImage,
+    /// A storage buffer.
+    StorageBuffer,
+}
+
+/// What a shader does to a binding; the recorder derives barriers from it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    /// Only reads.
+    Read,
+    /// Only writes (earlier contents may be discarded only where the caller says so).
+    Write,
+    /// Reads and writes (an accumulation, or a level read while another is written).
+    ReadWrite,
+}
+
+/// Descriptor bindings (set 0) and push-constant size a module expects.
+#[derive(Clone, Copy, Debug)]
+pub struct Interface {
+    /// (binding, kind, access) triples.
+    pub bindings: &'static [(u32, Kind, Access)],
+    /// Size in bytes of the push-constant block (0 for none).
+    pub push_size: u32,
+    /// The push block's fields: (name, GLSL type, byte offset).
+    pub push_fields: &'static [(&'static str, &'static str, usize)],
+}
+
+/// A push-constant block: a `#[repr(C)]` struct of 4-byte scalars and arrays of them, with no
+/// padding (checked at compile time), whose GLSL twin is generated from the same field list.
+pub trait PushBlock: Copy + 'static {
+    /// (name, GLSL type, byte offset) of each field, in order.
+    const FIELDS: &'static [(&'static str, &'static str, usize)];
+    /// The bytes pushed.
+    fn bytes(&self) -> &[u8];
+}
+
+impl PushBlock for () {
+    const FIELDS: &'static [(&'static str, &'static str, usize)] = &[];
+    fn bytes(&self) -> &[u8] {
+        &[]
+    }
+}
+
+macro_rules! push_blocks {
+    ($( $(#[$m:meta])* $name:ident { $( $(#[$fm:meta])* $field:ident : $ty:ty = $glsl:literal ),* $(,)? } )*) => {
+        $(
+            $(#[$m])*
+            #[repr(C)]
+            #[derive(Clone, Copy, Debug, Default, PartialEq)]
+            pub struct $name { $( $(#[$fm])* pub $field: $ty, )* }
+
+            // No padding: the bytes are exactly the fields.
+            const _: () = assert!(
+                std::mem::size_of::<$name>() == 0 $(+ std::mem::size_of::<$ty>())*
+            );
+
+            impl PushBlock for $name {
+                const FIELDS: &'static [(&'static str, &'static str, usize)] =
+                    &[$( (stringify!($field), $glsl, std::mem::offset_of!($name, $field)) ),*];
+                fn bytes(&self) -> &[u8] {
+                    // SAFETY: repr(C), every field is u32/f32 or arrays of them (no invalid
+                    // bit patterns) and the assertion above rules out padding bytes.
+                    unsafe {
+                        std::slice::from_raw_parts(
+                            (self as *const $name).cast::<u8>(),
+                            std::mem::size_of::<$name>(),
+                        )
+                    }
+                }
+            }
+        )*
+
+        /// Every push block: (name, fields).
+        pub const PUSH_BLOCKS: &[(&str, &[(&str, &str, usize)])] =
+            &[$( (stringify!($name), <$name as PushBlock>::FIELDS) ),*];
+    };
+}
+
+/// Push-constant blocks, one per shader family. GLSL reads them as `pc` through the
+/// `PUSH_<Name>` macro of the generated header.
+pub mod push {
+    use super::PushBlock;
+
+    push_blocks! {
+        /// `glsl/convert.comp`.
+        ConvertPush {
+            /// Rows of the world → file rotation/reflection (w unused).
+            world_to_file: [[f32; 4]; 3] = "vec4[3]",
+            /// Source layer size.
+            src_size: [u32; 2] = "uvec2",
+            /// Destination layer size.
+            dst_size: [u32; 2] = "uvec2",
+            /// Source mapping id.
+            src_mapping: u32 = "uint",
+            /// Destination mapping id.
+            dst_mapping: u32 = "uint",
+            /// Samples per axis per output texel.
+            ss: u32 = "uint",
+            /// Padding to 16 bytes.
+            pad: u32 = "uint",
+        }
+        /// `glsl/mapping_probe.comp`.
+        ProbePush {
+            /// 0: round trip; 1: solid angles.
+            mode: u32 = "uint",
+            /// Mapping id.
+            mapping: u32 = "uint",
+            /// Number of items.
+            count: u32 = "uint",
+            /// Layer width (mode 1).
+            width: u32 = "uint",
+            /// Layer height (mode 1).
+            height: u32 = "uint",
+            /// Padding.
+            pad: [u32; 3] = "uint[3]",
+        }
+        /// `glsl/copy.comp`.
+        CopyPush {
+            /// Layer size.
+            size: [u32; 2] = "uvec2",
+            /// Padding.
+            pad: [u32; 2] = "uint[2]",
+        }
+        /// `glsl/busy.comp`.
+        BusyPush {
+            /// Loop iterations per invocation.
+            iterations: u32 = "uint",
+            /// Invocations.
+            count: u32 = "uint",
+            /// Padding.
+            pad: [u32; 2] = "uint[2]",
+        }
+        /// `glsl/sh_project.comp`.
+        ShProjectPush {
+            /// Rows of the file → world matrix.
+            file_to_world: [[f32; 4]; 3] = "vec4[3]",
+            /// Layer size.
+            size: [u32; 2] = "uvec2",
+            /// Mapping id.
+            mapping: u32 = "uint",
+            /// Highest band.
+            lmax: u32 = "uint",
+            /// Texels in all layers.
+            texels: u32 = "uint",
+            /// Padding.
+            pad: [u32; 3] = "uint[3]",
+        }
+        /// `glsl/sh_reduce.comp`.
+        ShReducePush {
+            /// Rows of partial sums in the input.
+            rows: u32 = "uint",
+            /// Coefficients per row.
+            coeffs: u32 = "uint",
+            /// Padding.
+            pad: [u32; 2] = "uint[2]",
+        }
+        /// `glsl/brute.comp` (both variants).
+        BrutePush {
+            /// Rows of the source file → world matrix.
+            file_to_world: [[f32; 4]; 3] = "vec4[3]",
+            /// Source layer size.
+            src_size: [u32; 2] = "uvec2",
+            /// Output layer size.
+            dst_size: [u32; 2] = "uvec2",
+            /// Source mapping id.
+            src_mapping: u32 = "uint",
+            /// Output mapping id.
+            dst_mapping: u32 = "uint",
+            /// Source texels in all layers.
+            texels: u32 = "uint",
+            /// 0 for the cosine, else the Phong exponent.
+            exponent: f32 = "float",
+            /// First source texel this dispatch sums.
+            chunk_begin: u32 = "uint",
+            /// One past the last.
+            chunk_end: u32 = "uint",
+            /// Padding.
+            pad: [u32; 2] = "uint[2]",
+        }
+        /// `glsl/sh_eval.comp`.
+        ShEvalPush {
+            /// Output layer size.
+            dst_size: [u32; 2] = "uvec2",
+            /// Output mapping id.
+            dst_mapping: u32 = "uint",
+            /// Highest band.
+            lmax: u32 = "uint",
+        }
+        /// `glsl/gbuffer.frag`.
+        GBufferPush {
+            /// Eye position.
+            eye: [f32; 4] = "vec4",
+            /// Unit forward.
+            forward: [f32; 4] = "vec4",
+            /// Right, scaled by the image plane's half width.
+            right: [f32; 4] = "vec4",
+            /// Up, scaled by the half height.
+            up: [f32; 4] = "vec4",
+            /// Image size.
+            size: [u32; 2] = "uvec2",
+            /// 1 for orthographic.
+            ortho: u32 = "uint",
+            /// Number of objects.
+            count: u32 = "uint",
+        }
+        /// `glsl/shade.frag`.
+        ShadePush {
+            /// Rows of the world → file matrix of the environment.
+            world_to_file: [[f32; 4]; 3] = "vec4[3]",
+            /// Environment layer size.
+            env_size: [u32; 2] = "uvec2",
+            /// Environment mapping id.
+            env_mapping: u32 = "uint",
+            /// Number of objects.
+            count: u32 = "uint",
+            /// Side of the dual paraboloid's level 0.
+            dp_size: u32 = "uint",
+            /// Its last MIP level.
+            max_lod: f32 = "float",
+            /// 1: shadow rays for lookups and FIS samples.
+            shadows: u32 = "uint",
+            /// Samples in the Monte Carlo accumulation.
+            mc_samples: u32 = "uint",
+        }
+        /// `glsl/mip.comp`.
+        MipPush {
+            /// Side of the level read.
+            src_size: u32 = "uint",
+            /// Side of the level written.
+            dst_size: u32 = "uint",
+            /// 0: premultiply level 0 in place; 1: filter down.
+            mode: u32 = "uint",
+            /// Padding.
+            pad: u32 = "uint",
+        }
+        /// `glsl/mc.comp`.
+        McPush {
+            /// Rows of the world → file matrix.
+            world_to_file: [[f32; 4]; 3] = "vec4[3]",
+            /// Lat-long size.
+            env_size: [u32; 2] = "uvec2",
+            /// Number of objects.
+            count: u32 = "uint",
+            /// 1: shadow rays.
+            shadows: u32 = "uint",
+            /// Frame size.
+            size: [u32; 2] = "uvec2",
+            /// Index of the frame's first sample.
+            first: u32 = "uint",
+            /// Samples per pixel in this frame.
+            samples: u32 = "uint",
+            /// Random seed.
+            seed: u32 = "uint",
+            /// 1: MIS of BRDF and environment sampling; 0: BRDF sampling alone.
+            mis: u32 = "uint",
+            /// Padding.
+            pad: [u32; 2] = "uint[2]",
+        }
+    }
+}
+
+/// The shader table: each module once, with its name, source, stage, defines, push block and
+/// bindings. `shader_table!(callback)` hands the whole table to `callback!`, so that the
+/// library can embed each module's SPIR-V by name while this file stays std-only.
+macro_rules! shader_table {
+    ($callback:ident) => {
+        $callback! {
+            /// Resampling between mappings from a 2D-array source.
+            Convert2d = "convert_2d", "convert.comp", Compute, [], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write)];
+            /// Resampling between mappings from a cube source.
+            ConvertCube = "convert_cube", "convert.comp", Compute, [("SRC_CUBE", "1")], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write)];
+            /// Mapping functions exposed for tests.
+            MappingProbe = "mapping_probe", "mapping_probe.comp", Compute, [], ProbePush,
+                [(PROBE_IN, StorageBuffer, Read), (PROBE_OUT, StorageBuffer, Write)];
+            /// A plain texel copy (the benchmark floor).
+            Copy = "copy", "copy.comp", Compute, [], CopyPush,
+                [(COPY_SRC, Sampled, Read), (COPY_DST, StorageImage, Write)];
+            /// A deliberately costly dispatch (timestamp test).
+            Busy = "busy", "busy.comp", Compute, [], BusyPush,
+                [(BUSY_OUT, StorageBuffer, Write)];
+            /// Fullscreen triangle vertex shader.
+            FullscreenVert = "fullscreen_vert", "fullscreen.vert", Vertex, [], (), [];
+            /// Flat colour fragment shader.
+            FlatFrag = "flat_frag", "flat.frag", Fragment, [], (), [];
+            /// SH projection, first level, with subgroup arithmetic.
+            ShProjectSubgroup = "sh_project_subgroup", "sh_project.comp", Compute,
+                [("USE_SUBGROUPS", "1")], ShProjectPush,
+                [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
+            /// SH projection, first level, shared-memory tree.
+            ShProjectShared = "sh_project_shared", "sh_project.comp", Compute, [], ShProjectPush,
+                [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
+            /// SH partial-sum reduction with subgroup arithmetic.
+            ShReduceSubgroup = "sh_reduce_subgroup", "sh_reduce.comp", Compute,
+                [("USE_SUBGROUPS", "1")], ShReducePush,
+                [(SH_REDUCE_IN, StorageBuffer, Read), (SH_REDUCE_OUT, StorageBuffer, Write)];
+            /// SH partial-sum reduction, shared-memory tree.
+            ShReduceShared = "sh_reduce_shared", "sh_reduce.comp", Compute, [], ShReducePush,
+                [(SH_REDUCE_IN, StorageBuffer, Read), (SH_REDUCE_OUT, StorageBuffer, Write)];
+            /// Brute-force convolution: per-texel cones, radiance and solid angles.
+            BrutePrepare = "brute_prepare", "brute.comp", Compute, [("PREPARE", "1")], BrutePush,
+                [(BRUTE_PREP_SRC, Sampled, Read), (BRUTE_PREP_CONES, StorageBuffer, Write),
+                 (BRUTE_PREP_RADIANCE, StorageBuffer, Write)];
+            /// Brute-force convolution with the cosine or a Phong lobe.
+            Brute = "brute", "brute.comp", Compute, [], BrutePush,
+                [(BRUTE_CONES, StorageBuffer, Read), (BRUTE_RADIANCE, StorageBuffer, Read),
+                 (BRUTE_DST, StorageImage, ReadWrite), (BRUTE_COMP, StorageBuffer, ReadWrite)];
+            /// Irradiance from SH coefficients into a map.
+            ShEval = "sh_eval", "sh_eval.comp", Compute, [], ShEvalPush,
+                [(SH_EVAL_COEFFS, StorageBuffer, Read), (SH_EVAL_DST, StorageImage, Write)];
+            /// G-buffer of analytic spheres and planes.
+            GBuffer = "gbuffer", "gbuffer.frag", Fragment, [], GBufferPush,
+                [(GBUF_OBJECTS, StorageBuffer, Read)];
+            /// Shading of every material, and the frame's composite.
+            Shade = "shade", "shade.frag", Fragment, [], ShadePush,
+                [(SHADE_NORMAL, Sampled, Read), (SHADE_VIEW, Sampled, Read),
+                 (SHADE_OBJECTS, StorageBuffer, Read), (SHADE_COEFFS, StorageBuffer, Read),
+                 (SHADE_ENV, Sampled, Read), (SHADE_POSITION, Sampled, Read),
+                 (SHADE_DP, Sampled, Read), (SHADE_PREFILTERED, StorageBuffer, Read),
+                 (SHADE_MC, Sampled, Read)];
+            /// One level of the dual-paraboloid MIP chain.
+            Mip = "mip", "mip.comp", Compute, [], MipPush,
+                [(MIP_SRC, StorageImage, ReadWrite), (MIP_DST, StorageImage, ReadWrite)];
+            /// One progressive frame of the Monte Carlo reference.
+            Mc = "mc", "mc.comp", Compute, [], McPush,
+                [(MC_NORMAL, Sampled, Read), (MC_VIEW, Sampled, Read),
+                 (MC_POSITION, Sampled, Read), (MC_OBJECTS, StorageBuffer, Read),
+                 (MC_ENV, Sampled, Read), (MC_TABLES, StorageBuffer, Read),
+                 (MC_ACCUM, StorageImage, ReadWrite)];
+        }
+    };
+}
+// The library's gpu::shaders embeds the SPIR-V through it; tools/shaderc does not use it.
+#[allow(unused_imports)]
+pub(crate) use shader_table;
+
+macro_rules! define_shaders {
+    ($( $(#[$m:meta])* $id:ident = $name:literal, $file:literal, $stage:ident,
+        [$(($k:literal, $v:literal)),*], $push:ty, [$(($b:ident, $kind:ident, $acc:ident)),*]; )*) => {
+        /// A shader module envlight uses.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum ShaderId { $( $(#[$m])* $id, )* }
+
+        /// Every module's build recipe, in table order.
+        pub const SHADER_SOURCES: &[ShaderSource] = &[$(
+            ShaderSource { name: $name, file: $file, stage: Stage::$stage, defines: &[$(($k, $v)),*] },
+        )*];
+
+        impl ShaderId {
+            /// Every module, in table order.
+            pub const ALL: &'static [ShaderId] = &[$(ShaderId::$id),*];
+
+            /// The build recipe of this module.
+            pub fn source(self) -> &'static ShaderSource {
+                &SHADER_SOURCES[self as usize]
+            }
+
+            /// Its name (the file stem of `spirv/NAME.spv`).
+            pub fn name(self) -> &'static str {
+                self.source().name
+            }
+
+            /// What the pipeline built on this module binds and pushes.
+            pub fn interface(self) -> Interface {
+                match self {$(
+                    ShaderId::$id => Interface {
+                        bindings: &[$((binding::$b, Kind::$kind, Access::$acc)),*],
+                        push_size: std::mem::size_of::<$push>() as u32,
+                        push_fields: <$push as PushBlock>::FIELDS,
+                    },
+                )*}
+            }
+
+            /// The push block's name in the generated header (`PUSH_<name>`), if any.
+            pub fn push_block(self) -> Option<&'static str> {
+                match self {$(
+                    ShaderId::$id => {
+                        let n = stringify!($push);
+                        (n != "()").then_some(n)
+                    }
+                )*}
+            }
+        }
+    };
+}
+use push::*;
+shader_table!(define_shaders);
+
+/// The GLSL header carrying the constants above.
+pub fn generated_header() -> String {
+    let mut s = String::from(
+        "// Generated from src/abi.rs by `cargo xtask shaders`; do not edit.\n\
+         #ifndef ENVLIGHT_GENERATED_GLSL\n#define ENVLIGHT_GENERATED_GLSL\n",
+    );
+    for (name, v) in binding::ALL {
+        let _ = writeln!(s, "#define BINDING_{name} {v}");
+    }
+    let _ = writeln!(s, "#define SH_MAX_LMAX {SH_MAX_LMAX}");
+    let n = (SH_MAX_LMAX + 1) * (SH_MAX_LMAX + 1);
+    let _ = writeln!(s, "#define SH_MAX_COEFFS {n}");
+    let _ = writeln!(s, "#define SH_WORKGROUP {SH_WORKGROUP}");
+    let _ = writeln!(s, "#define FILTER_EDGE_CELLS {}u", filter_rule::EDGE_CELLS);
+    let _ = writeln!(s, "#define FILTER_MAX_CELLS {}u", filter_rule::MAX_CELLS);
+    let f = |x: f64| format!("{:?}", x as f32);
+    let floats = [
+        ("FILTER_CELLS_PER_WIDTH", filter_rule::CELLS_PER_WIDTH),
+        ("FILTER_CENTRE_LIMIT", filter_rule::CENTRE_LIMIT),
+        ("FILTER_LOG_CUTOFF", filter_rule::LOG_CUTOFF),
+        ("FILTER_CONE_MARGIN", filter_rule::CONE_MARGIN),
+        ("POLE_THRESHOLD", constants::POLE_THRESHOLD),
+        ("VIEW_LIFT", constants::VIEW_LIFT),
+        ("SHADOW_OFFSET", constants::SHADOW_OFFSET),
+        ("RIM_PULL_IN", constants::RIM_PULL_IN),
+        ("GAUSS2_OFFSET", constants::GAUSS2_OFFSET),
+        ("GGX_ALPHA_MIN", brdf::GGX_ALPHA_MIN),
+    ];
+    for (name, v) in floats {
+        let _ = writeln!(s, "#define {name} {}", f(v));
+    }
+    let l = constants::LUMINANCE;
+    let _ = writeln!(
+        s,
+        "#define LUMINANCE vec3({}, {}, {})",
+        f(l[0]),
+        f(l[1]),
+        f(l[2])
+    );
+    // K_lm for m ≥ 0, l ≤ SH_MAX_LMAX, at index l(l+1)/2 + m (see src/math/sh.rs).
+    let mut k = Vec::new();
+    for l in 0..=SH_MAX_LMAX {
+        for m in 0..=l {
+            let f = |a: u32| (1..=a).map(|x| x as f64).product::<f64>();
+            let v =
+                ((2 * l + 1) as f64 / (4.0 * std::f64::consts::PI) * f(l - m) / f(l + m)).sqrt();
+            k.push(format!("{v:.9e}"));
+        }
+    }
+    let _ = writeln!(
+        s,
+        "const float SH_K[{}] = float[{}]({});",
+        k.len(),
+        k.len(),
+        k.join(", ")
+    );
+    let ids = [
+        ("BRDF_LAMBERT", brdf::ids::LAMBERT),
+        ("BRDF_MIRROR", brdf::ids::MIRROR),
+        ("BRDF_PHONG", brdf::ids::PHONG),
+        ("BRDF_BLINN", brdf::ids::BLINN),
+        ("BRDF_GGX", brdf::ids::GGX),
+        ("BRDF_WARD", brdf::ids::WARD),
+        ("TECH_LOOKUP", brdf::technique::LOOKUP),
+        ("TECH_FIS", brdf::technique::FIS),
+        ("TECH_SH", brdf::technique::SH),
+        ("TECH_PREFILTERED", brdf::technique::PREFILTERED),
+        ("TECH_MC", brdf::technique::MC),
+    ];
+    for (name, v) in ids {
+        let _ = writeln!(s, "#define {name} {v}u");
+    }
+    for (i, name) in MAPPING_NAMES.iter().enumerate() {
+        let _ = writeln!(s, "#define MAPPING_{name} {i}u");
+    }
+    // Push blocks, generated from the Rust structs' field lists (std430, so the offsets of
+    // 4-byte scalars, uvec2/vec4 and scalar arrays match repr(C) without padding).
+    for (name, fields) in push::PUSH_BLOCKS {
+        let decl: Vec<String> = fields
+            .iter()
+            .map(|(field, ty, _)| format!("{ty} {field};"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "#define PUSH_{name} layout(push_constant) uniform Push {{ {} }} pc;",
+            decl.join(" ")
+        );
+    }
+    s.push_str("#endif\n");
+    s
+}
+
+/// Reads a GLSL file with its `#include "…"` lines expanded from `glsl/include/`.
+pub fn expand_includes(glsl_dir: &Path, file: &str, depth: u32) -> std::io::Result<String> {
+    if depth > 16 {
+        return Err(std::io::Error::other(format!(
+            "{file}: includes nest too deep"
+        )));
+    }
+    let path = if depth == 0 {
+        glsl_dir.join(file)
+    } else {
+        glsl_dir.join("include").join(file)
+    };
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
+    let mut out = String::new();
+    for line in text.lines() {
+        let t = line.trim();
+        if let Some(rest) = t.strip_prefix("#include") {
+            let name = rest.trim().trim_matches('"');
+            out.push_str(&expand_includes(glsl_dir, name, depth + 1)?);
+        } else {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    Ok(out)
+}
+
+/// FNV-1a hash of everything a SPIR-V module is built from: target, optimisation, defines and
+/// the include-expanded source. `spirv/manifest.txt` records it; a test recomputes it.
+pub fn source_hash(glsl_dir: &Path, src: &ShaderSource) -> std::io::Result<u64> {
+    let mut text = format!("{TARGET_ENV} {OPTIMIZATION} {:?}\n", src.stage);
+    for (k, v) in src.defines {
+        let _ = writeln!(text, "#define {k} {v}");
+    }
+    text.push_str(&expand_includes(glsl_dir, src.file, 0)?);
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.bytes() {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    Ok(h)
+}
+
+/// The manifest's text for the current sources.
+pub fn manifest(glsl_dir: &Path) -> std::io::Result<String> {
+    let mut s = String::new();
+    for src in SHADER_SOURCES {
+        let _ = writeln!(s, "{}.spv {:016x}", src.name, source_hash(glsl_dir, src)?);
+    }
+    Ok(s)
+}

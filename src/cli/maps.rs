@@ -1,0 +1,251 @@
+//! `envlight convert`, `sh`, `irradiance` and `prefilter`: one map in, one result out.
+
+use super::{
+    context, load_input, print_timings, save, spinner, write_map, FilterOut, Global, Input,
+    MappingArg, Orient,
+};
+use anyhow::{bail, Context as _, Result};
+use clap::{Args, ValueEnum};
+use envlight::abi::defaults;
+use envlight::io::ToneMap;
+use envlight::math::filter::Kernel;
+use envlight::math::sh::{self, Window};
+use envlight::passes::sh_project::Subgroups;
+use envlight::passes::{BruteFilter, ConvertOptions, Converter, ShEvaluator, ShProjector};
+use envlight::GpuEnvMap;
+use std::path::PathBuf;
+
+/// Convert a map to another mapping and resolution on the GPU
+#[derive(Args)]
+pub struct ConvertArgs {
+    #[command(flatten)]
+    input: Input,
+    #[command(flatten)]
+    orient: Orient,
+    /// Output EXR (float32; a cube is six faces stacked vertically, a dual paraboloid its
+    /// upper half above its lower half)
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Output mapping
+    #[arg(long, value_enum)]
+    to: MappingArg,
+    /// Output size: lat-long width, angular side, cube face, paraboloid half
+    #[arg(long)]
+    size: u32,
+    /// Samples per axis per output texel (default: chosen from the resolutions)
+    #[arg(long)]
+    supersample: Option<u32>,
+    /// Also write a tone-mapped PNG preview beside the EXR
+    #[arg(long)]
+    png: bool,
+    /// Exposure of the PNG preview, in stops
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+}
+
+/// Project a map onto spherical harmonics on the GPU and write them as JSON
+#[derive(Args)]
+pub struct ShArgs {
+    #[command(flatten)]
+    input: Input,
+    #[command(flatten)]
+    orient: Orient,
+    /// Highest band l (0 to 8)
+    #[arg(long, default_value_t = defaults::SH_ORDER)]
+    order: u32,
+    /// Output JSON: {"order", "coefficients": [[r,g,b], ...], "irradiance_matrices"}
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// How an irradiance map is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Method {
+    /// SH projection and evaluation (Ramamoorthi & Hanrahan 2001).
+    Sh,
+    /// Brute-force convolution of every source texel.
+    Brute,
+}
+
+/// A window against SH ringing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum WindowArg {
+    /// No window.
+    None,
+    /// Hanning, of width --lambda (default 2·(order+1)).
+    Hanning,
+    /// Sloan's 1/(1 + λ l²(l+1)²), with --lambda.
+    Sloan,
+    /// The smallest Sloan λ that makes E non-negative.
+    Auto,
+}
+
+/// A window by name, with an error that says what the names are.
+fn parse_window(s: &str) -> Result<WindowArg, String> {
+    WindowArg::from_str(s, true)
+        .map_err(|_| format!("unknown window {s:?} (none, hanning, sloan, auto)"))
+}
+
+/// Irradiance map E(n) of a map, from SH (R&H 2001) or by brute-force convolution
+#[derive(Args)]
+pub struct IrradianceArgs {
+    #[command(flatten)]
+    input: Input,
+    #[command(flatten)]
+    orient: Orient,
+    /// How to compute it
+    #[arg(long, value_enum, default_value = "sh")]
+    method: Method,
+    /// Highest SH band (sh only; 0 to 8)
+    #[arg(long, default_value_t = defaults::SH_ORDER)]
+    order: u32,
+    /// Window against ringing (sh only): none, hanning, sloan, auto
+    #[arg(long, value_parser = parse_window, default_value = "none")]
+    window: WindowArg,
+    /// Strength of the Sloan window, or width of the Hanning window (default 2·(order+1))
+    #[arg(long)]
+    lambda: Option<f64>,
+    #[command(flatten)]
+    out: FilterOut,
+}
+
+/// Prefilter a map with a normalised Phong lobe (Miller & Hoffman 1984), brute force,
+/// indexed by the reflection direction
+#[derive(Args)]
+pub struct PrefilterArgs {
+    #[command(flatten)]
+    input: Input,
+    #[command(flatten)]
+    orient: Orient,
+    /// Phong exponent n (envlight::abi::constants::PHONG_EXPONENT_RANGE: 1 to 1e7)
+    #[arg(long)]
+    phong: f64,
+    #[command(flatten)]
+    out: FilterOut,
+}
+
+/// `envlight convert`.
+pub fn convert(g: &Global, a: &ConvertArgs) -> Result<()> {
+    if a.size == 0 || a.size > 16384 {
+        bail!("--size must be between 1 and 16384 (got {})", a.size);
+    }
+    let map = load_input(&a.input)?;
+    let ctx = context(g)?;
+    let pb = spinner("converting on the GPU");
+    let src = GpuEnvMap::upload(&ctx, &map)?;
+    let opts = ConvertOptions {
+        to: a.to.into(),
+        size: a.size,
+        orientation: a.orient.orientation(),
+        supersample: a.supersample,
+    };
+    let (dst, timings) = Converter::new(&ctx)?.run(&src, &opts)?;
+    let out = dst.download(&ctx)?;
+    pb.finish_and_clear();
+    let tm = ToneMap {
+        exposure: a.exposure,
+    };
+    save(&out, &a.output, a.png.then_some(tm))?;
+    print_timings(&timings);
+    Ok(())
+}
+
+/// `envlight sh`.
+pub fn sh(g: &Global, a: &ShArgs) -> Result<()> {
+    let map = load_input(&a.input)?;
+    let ctx = context(g)?;
+    let pb = spinner("projecting onto SH on the GPU");
+    let proj = ShProjector::new(&ctx, Subgroups::Auto)?;
+    let gm = GpuEnvMap::upload(&ctx, &map)?;
+    let (coeffs, timings) = proj.run_oriented(&gm, a.order, &a.orient.orientation())?;
+    pb.finish_and_clear();
+    let text = serde_json::to_string_pretty(&coeffs.to_json())?;
+    std::fs::write(&a.output, text).with_context(|| a.output.display().to_string())?;
+    println!(
+        "wrote {} ({} coefficients per channel)",
+        a.output.display(),
+        coeffs.coeffs.len()
+    );
+    print_timings(&timings);
+    Ok(())
+}
+
+/// `envlight irradiance`.
+pub fn irradiance(g: &Global, a: &IrradianceArgs) -> Result<()> {
+    let map = load_input(&a.input)?;
+    let ctx = context(g)?;
+    let gm = GpuEnvMap::upload(&ctx, &map)?;
+    let target = a.out.target();
+    let o = a.orient.orientation();
+    let order = a.order;
+    let (out, timings) = match a.method {
+        Method::Brute => {
+            let pb = spinner("brute-force irradiance on the GPU");
+            let r = BruteFilter::new(&ctx)?.run(&gm, &o, Kernel::Cosine, target)?;
+            pb.finish_and_clear();
+            r
+        }
+        Method::Sh => {
+            let (c, mut timings) =
+                ShProjector::new(&ctx, Subgroups::Auto)?.run_oriented(&gm, order, &o)?;
+            let dirs = envlight::math::synth::fibonacci_sphere(20_000);
+            let raw = sh::negativity(&sh::irradiance_coeffs(&c.coeffs), &dirs);
+            if raw.fraction > 0.0 {
+                println!(
+                    "unwindowed order-{order} irradiance is negative on {:.1}% of the sphere, down to {:.2}% of its mean, at ({:.3}, {:.3}, {:.3})",
+                    100.0 * raw.fraction,
+                    100.0 * raw.worst,
+                    raw.at.x,
+                    raw.at.y,
+                    raw.at.z
+                );
+            } else {
+                println!("unwindowed order-{order} irradiance is non-negative");
+            }
+            let w = match a.window {
+                WindowArg::None => Window::None,
+                WindowArg::Hanning => Window::Hanning {
+                    width: a.lambda.unwrap_or(2.0 * (order as f64 + 1.0)),
+                },
+                WindowArg::Sloan => Window::Sloan {
+                    lambda: a.lambda.context("--window sloan needs --lambda")?,
+                },
+                WindowArg::Auto => Window::Sloan {
+                    lambda: sh::smallest_nonnegative_window(&c.coeffs, &dirs),
+                },
+            };
+            if w != Window::None {
+                let n = sh::negativity(&sh::irradiance_coeffs(&w.apply(&c.coeffs)), &dirs);
+                println!(
+                    "window {w:?}: negative on {:.1}% of the sphere",
+                    100.0 * n.fraction
+                );
+            }
+            let irr = sh::irradiance_coeffs(&w.apply(&c.coeffs));
+            let (out, t) = ShEvaluator::new(&ctx)?.run(&irr, target)?;
+            timings.extend(t);
+            (out, timings)
+        }
+    };
+    write_map(&ctx, &out, &a.out.output, a.out.png)?;
+    print_timings(&timings);
+    Ok(())
+}
+
+/// `envlight prefilter`.
+pub fn prefilter(g: &Global, a: &PrefilterArgs) -> Result<()> {
+    let map = load_input(&a.input)?;
+    let ctx = context(g)?;
+    let gm = GpuEnvMap::upload(&ctx, &map)?;
+    let pb = spinner("brute-force Phong prefiltering on the GPU");
+    let (out, timings) = BruteFilter::new(&ctx)?.run(
+        &gm,
+        &a.orient.orientation(),
+        Kernel::Phong { n: a.phong },
+        a.out.target(),
+    )?;
+    pb.finish_and_clear();
+    write_map(&ctx, &out, &a.out.output, a.out.png)?;
+    print_timings(&timings);
+    Ok(())
+}

@@ -1,0 +1,195 @@
+//! The command line: one file per subcommand family, sharing the arguments and helpers here.
+//! Only the binary uses it; the library knows nothing of clap, indicatif or anyhow.
+
+pub mod info;
+pub mod maps;
+pub mod preview;
+pub mod reports;
+pub mod scene;
+
+use anyhow::{Context as _, Result};
+use clap::{Args, ValueEnum};
+use envlight::gpu::{Context, ContextOptions, DeviceSelector, Timing};
+use envlight::io::{self, LoadOptions, Sanitize, ToneMap};
+use envlight::passes::FilterTarget;
+use envlight::{EnvMap, GpuEnvMap, Mapping, Orientation};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// Options every subcommand takes.
+#[derive(Args, Clone)]
+pub struct Global {
+    /// Vulkan device: auto, cpu (lavapipe), an index, or part of a name [env: ENVLIGHT_DEVICE]
+    #[arg(long, global = true)]
+    pub device: Option<String>,
+    /// Enable the Vulkan validation layer
+    #[arg(long, global = true)]
+    pub validation: bool,
+}
+
+/// A mapping named on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MappingArg {
+    /// Equirectangular.
+    #[value(alias = "lat-long", alias = "equirect", alias = "equirectangular")]
+    Latlong,
+    /// Debevec's angular probe.
+    #[value(alias = "probe", alias = "lightprobe")]
+    Angular,
+    /// Cube map (six faces).
+    #[value(alias = "cubemap")]
+    Cube,
+    /// Dual paraboloid.
+    #[value(alias = "dp", alias = "dualparaboloid", alias = "paraboloid")]
+    DualParaboloid,
+}
+
+impl From<MappingArg> for Mapping {
+    fn from(m: MappingArg) -> Mapping {
+        match m {
+            MappingArg::Latlong => Mapping::LatLong,
+            MappingArg::Angular => Mapping::Angular,
+            MappingArg::Cube => Mapping::Cube,
+            MappingArg::DualParaboloid => Mapping::DualParaboloid,
+        }
+    }
+}
+
+/// An input map.
+#[derive(Args, Clone)]
+pub struct Input {
+    /// Input file; a path containing {face} names six cube faces (px, nx, py, ny, pz, nz)
+    pub input: String,
+    /// Mapping of the input; inferred if absent
+    #[arg(long, value_enum)]
+    pub mapping: Option<MappingArg>,
+    /// Replace NaN, infinite and negative texels by 0 instead of refusing the file
+    #[arg(long)]
+    pub sanitize: bool,
+}
+
+/// How the input file is oriented relative to the world frame.
+#[derive(Args, Clone, Copy)]
+pub struct Orient {
+    /// Mirror the input left-right (reflects x)
+    #[arg(long)]
+    pub flip_u: bool,
+    /// Turn the input upside down (reflects y)
+    #[arg(long)]
+    pub flip_v: bool,
+    /// Turn the environment by this many degrees about +Y
+    #[arg(
+        long,
+        value_name = "DEGREES",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub rotate_y: f64,
+}
+
+impl Orient {
+    /// The library's orientation.
+    pub fn orientation(&self) -> Orientation {
+        Orientation {
+            flip_u: self.flip_u,
+            flip_v: self.flip_v,
+            rotate_y_degrees: self.rotate_y,
+        }
+    }
+}
+
+/// Where a filtered map (irradiance, prefilter) goes.
+#[derive(Args, Clone)]
+pub struct FilterOut {
+    /// Output mapping
+    #[arg(long, value_enum, default_value = "cube")]
+    pub to: MappingArg,
+    /// Output size: lat-long width, angular side, cube face, paraboloid half
+    #[arg(long, default_value_t = 32)]
+    pub size: u32,
+    /// Output EXR (float32)
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also write a tone-mapped PNG preview beside the EXR
+    #[arg(long)]
+    pub png: bool,
+}
+
+impl FilterOut {
+    /// The library's target.
+    pub fn target(&self) -> FilterTarget {
+        FilterTarget {
+            to: self.to.into(),
+            size: self.size,
+        }
+    }
+}
+
+/// The device the options ask for.
+pub fn context(g: &Global) -> Result<Context> {
+    let mut opts = ContextOptions::default();
+    if let Some(d) = &g.device {
+        opts.device = DeviceSelector::parse(d);
+    }
+    opts.validation |= g.validation;
+    Ok(Context::new(&opts)?)
+}
+
+/// A spinner on stderr while something runs.
+pub fn spinner(msg: &str) -> ProgressBar {
+    let pb = ProgressBar::new_spinner();
+    pb.set_style(
+        ProgressStyle::with_template("{spinner} {msg} [{elapsed}]")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    pb.set_message(msg.to_string());
+    pb.enable_steady_tick(Duration::from_millis(120));
+    pb
+}
+
+/// Loads the input map.
+pub fn load_input(input: &Input) -> Result<EnvMap> {
+    let opts = LoadOptions {
+        mapping: input.mapping.map(Mapping::from),
+        sanitize: if input.sanitize {
+            Sanitize::Zero
+        } else {
+            Sanitize::Reject
+        },
+        ..Default::default()
+    };
+    let pb = spinner(&format!("loading {}", input.input));
+    let map = match io::face_paths(&input.input) {
+        Some(paths) => io::load_cube_faces(&paths, &opts),
+        None => io::load(&input.input, &opts),
+    };
+    pb.finish_and_clear();
+    Ok(map?)
+}
+
+/// Writes a map as EXR, and a tone-mapped PNG beside it when asked.
+pub fn write_map(ctx: &Context, map: &GpuEnvMap, output: &Path, png: bool) -> Result<()> {
+    save(&map.download(ctx)?, output, png.then(ToneMap::default))
+}
+
+/// Writes `map` as EXR, and with `png` a PNG preview beside it.
+pub fn save(map: &EnvMap, output: &Path, png: Option<ToneMap>) -> Result<()> {
+    io::save_exr(map, output)?;
+    println!("wrote {}", output.display());
+    if let Some(tm) = png {
+        let p = output.with_extension("png");
+        preview::preview(map, tm)
+            .save(&p)
+            .with_context(|| p.display().to_string())?;
+        println!("wrote {} ({})", p.display(), tm.describe());
+    }
+    Ok(())
+}
+
+/// Prints GPU timings, one per line.
+pub fn print_timings(t: &[Timing]) {
+    for t in t {
+        println!("  GPU {:>9.3} ms  {}", t.ms, t.label);
+    }
+}

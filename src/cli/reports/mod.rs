@@ -1,0 +1,343 @@
+//! Benchmarks and reports, in one place: GPU time from timestamp queries, medians of
+//! repeated runs, ratios against a floor measured in the same run, and the error beside
+//! each time.
+
+pub mod accuracy;
+pub mod fis;
+pub mod fis_report;
+
+use super::{context, Global};
+use anyhow::{Context as _, Result};
+use clap::Subcommand;
+use envlight::gpu::Timing;
+use envlight::math::filter::Kernel;
+use envlight::math::sh;
+use envlight::math::synth::Sky;
+use envlight::passes::sh_project::Subgroups;
+use envlight::passes::testing::copy::CopyPass;
+use envlight::passes::{
+    BruteFilter, ConvertOptions, Converter, FilterTarget, ShEvaluator, ShProjector,
+};
+use envlight::{EnvMap, GpuEnvMap, Mapping, Orientation};
+use std::path::{Path, PathBuf};
+
+/// What accuracy costs: SH irradiance of orders 0–8 against brute force, with GPU times
+#[derive(Subcommand)]
+pub enum AccuracyWhat {
+    /// SH irradiance against brute force on maps or folders of maps
+    Sh {
+        /// Maps, or folders whose .hdr/.exr/.dds/.pfm files are all taken
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// Output folder for accuracy.md, accuracy.csv and accuracy.png
+        #[arg(long, default_value = "out/accuracy")]
+        out: PathBuf,
+        /// Cube face size of the set of normals compared
+        #[arg(long, default_value_t = 8)]
+        size: u32,
+    },
+}
+
+/// Benchmarks (GPU time from timestamp queries)
+#[derive(Subcommand)]
+pub enum Bench {
+    /// SH projection time at several widths, against a plain copy of the same map
+    Sh {
+        /// Lat-long widths
+        #[arg(long, value_delimiter = ',', default_value = "512,1024,2048,4096")]
+        sizes: Vec<u32>,
+        /// Timed repetitions per case (the median is reported)
+        #[arg(long, default_value_t = 5)]
+        reps: usize,
+    },
+    /// Brute-force irradiance against SH (projection + evaluation) at equal output sizes
+    Irradiance {
+        /// Output sizes N (angular maps of N×N texels)
+        #[arg(long, value_delimiter = ',', default_value = "32,64,128")]
+        sizes: Vec<u32>,
+        /// Width of the lat-long source (the bundled sky, resampled)
+        #[arg(long, default_value_t = 128)]
+        source: u32,
+        /// Timed repetitions per case (the median is reported)
+        #[arg(long, default_value_t = 3)]
+        reps: usize,
+    },
+    /// What accuracy costs in time: FIS and plain BRDF-sampled MC against a converged MIS
+    /// reference, on a studio and a sun map (CSV, markdown and a PNG plot)
+    Fis {
+        /// Environment maps (default: the bundled sky)
+        #[arg(long, value_delimiter = ',')]
+        maps: Vec<PathBuf>,
+        /// Image sides
+        #[arg(long, value_delimiter = ',', default_value = "512,1024")]
+        sizes: Vec<u32>,
+        /// FIS sample counts
+        #[arg(long, value_delimiter = ',', default_value = "1,4,16,64,256")]
+        fis: Vec<u32>,
+        /// Plain MC sample counts
+        #[arg(long, value_delimiter = ',', default_value = "1,4,16,64,256,1024,4096")]
+        mc: Vec<u32>,
+        /// Samples per pixel of the MIS reference
+        #[arg(long, default_value_t = 16384)]
+        reference: u32,
+        /// Lod biases swept at FIS 16 and 64
+        #[arg(long, value_delimiter = ',', default_value = "-1,0,0.5,1,1.5,2,3")]
+        biases: Vec<f64>,
+        /// Output folder
+        #[arg(long, default_value = "docs/fis")]
+        out: PathBuf,
+    },
+    /// Conversion time at several source widths, against a plain copy of the same source
+    Convert {
+        /// Source lat-long widths
+        #[arg(long, value_delimiter = ',', default_value = "512,1024,2048,4096")]
+        sizes: Vec<u32>,
+        /// Timed repetitions per case (the median is reported)
+        #[arg(long, default_value_t = 5)]
+        reps: usize,
+    },
+}
+
+/// `envlight accuracy`.
+pub fn accuracy(g: &Global, what: &AccuracyWhat) -> Result<()> {
+    match what {
+        AccuracyWhat::Sh { inputs, out, size } => accuracy::accuracy_sh(g, inputs, out, *size),
+    }
+}
+
+/// `envlight bench`.
+pub fn bench(g: &Global, what: &Bench) -> Result<()> {
+    match what {
+        Bench::Fis {
+            maps,
+            sizes,
+            fis,
+            mc,
+            reference,
+            biases,
+            out,
+        } => bench_fis(g, maps, sizes, fis, mc, *reference, biases, out),
+        Bench::Convert { sizes, reps } => bench_convert(g, sizes, *reps),
+        Bench::Irradiance {
+            sizes,
+            source,
+            reps,
+        } => bench_irradiance(g, sizes, *source, *reps),
+        Bench::Sh { sizes, reps } => bench_sh(g, sizes, *reps),
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn bench_fis(
+    cli: &Global,
+    maps: &[PathBuf],
+    sizes: &[u32],
+    fis: &[u32],
+    mc: &[u32],
+    reference: u32,
+    biases: &[f64],
+    out: &Path,
+) -> Result<()> {
+    let ctx = context(cli)?;
+    let default = [PathBuf::from("assets/sky_latlong.exr")];
+    let paths = if maps.is_empty() { &default[..] } else { maps };
+    let mut loaded = Vec::new();
+    for p in paths {
+        let m = envlight::io::load(p, &Default::default())?;
+        let name = p
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        loaded.push((name, m));
+    }
+    let cfg = fis::FisBench {
+        sizes: sizes.to_vec(),
+        fis: fis.to_vec(),
+        mc: mc.to_vec(),
+        reference,
+        biases: biases.to_vec(),
+        bias_at: vec![16, 64],
+        bias: envlight::scene::DEFAULT_FIS_BIAS,
+    };
+    let bar = indicatif::ProgressBar::new_spinner();
+    let rows = fis::run(&ctx, &loaded, &cfg, |m| bar.set_message(m.to_string()))?;
+    bar.finish_and_clear();
+    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
+    let device = format!("{} ({})", ctx.info().name, ctx.info().driver);
+    std::fs::write(out.join("fis_vs_mc.csv"), fis_report::csv(&rows))?;
+    let md = fis_report::markdown(&rows, &device);
+    std::fs::write(out.join("fis_vs_mc.md"), &md)?;
+    let png = out.join("fis_vs_mc.png");
+    fis_report::plot(&rows)
+        .save(&png)
+        .with_context(|| png.display().to_string())?;
+    println!("{md}");
+    Ok(())
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn bench_convert(cli: &Global, sizes: &[u32], reps: usize) -> Result<()> {
+    let ctx = context(cli)?;
+    println!("device: {} ({})", ctx.info().name, ctx.info().driver.trim());
+    println!(
+        "GPU time from timestamps, median of {reps} runs. 'copy' reads and writes every source texel \
+         once: the floor. Source: the analytic sky (sun ~1e5 x zenith) as a lat-long.\n"
+    );
+    println!("| source | conversion | output | ss | copy ms | convert ms | ratio to copy | power error |");
+    println!("|---|---|---|---|---|---|---|---|");
+    let conv = Converter::new(&ctx)?;
+    let copy = CopyPass::new(&ctx)?;
+    let reps = reps.max(1);
+    for &w in sizes {
+        let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 2, |d| {
+            Sky::default().radiance(d)
+        });
+        let pin = map.power()[1];
+        let src = GpuEnvMap::upload(&ctx, &map)?;
+        // One untimed run of each pass first: pipeline and driver warm-up.
+        copy.run(&src)?;
+        let mut copy_ms = Vec::new();
+        for _ in 0..reps {
+            copy_ms.push(copy.run(&src)?.1.iter().map(|t| t.ms).sum());
+        }
+        let floor = median(copy_ms);
+        let cases = [
+            (Mapping::LatLong, w, None),
+            (Mapping::Cube, w / 4, Some(1)),
+            (Mapping::Cube, w / 4, Some(2)),
+            (Mapping::Cube, w / 4, None),
+            (Mapping::Angular, w / 2, None),
+            (Mapping::DualParaboloid, w / 2, None),
+        ];
+        for (to, size, supersample) in cases {
+            let opts = ConvertOptions {
+                to,
+                size,
+                orientation: Orientation::default(),
+                supersample,
+            };
+            let (ow, oh) = to.extent_for_size(size);
+            let ss = supersample.unwrap_or_else(|| {
+                Converter::supersampling((Mapping::LatLong, w, w / 2), (to, ow, oh))
+            });
+            conv.run(&src, &opts)?;
+            let mut ms = Vec::new();
+            let mut power = 0.0;
+            for r in 0..reps {
+                let (out, t) = conv.run(&src, &opts)?;
+                ms.push(t.iter().map(|t| t.ms).sum());
+                if r == 0 {
+                    power = out.download(&ctx)?.power()[1] / pin - 1.0;
+                }
+            }
+            let m = median(ms);
+            println!(
+                "| latlong {w}x{} | -> {}{} | {ow}x{oh}x{} | {ss} | {floor:.3} | {m:.3} | {:.1} | {:+.3}% |",
+                w / 2,
+                to.name(),
+                if supersample.is_some() { " (forced ss)" } else { "" },
+                to.layers(),
+                m / floor,
+                power * 100.0
+            );
+        }
+    }
+    Ok(())
+}
+
+fn bench_irradiance(cli: &Global, sizes: &[u32], source: u32, reps: usize) -> Result<()> {
+    let ctx = context(cli)?;
+    println!("device: {} ({})", ctx.info().name, ctx.info().driver.trim());
+    let w = source.max(4);
+    let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 2, |d| {
+        Sky::default().radiance(d)
+    });
+    println!("source: the analytic sky, lat-long {w}x{}; GPU time from timestamps, median of {reps} runs after one untimed run.\n", w / 2);
+    println!("| output | brute ms | SH order | project ms | eval ms | brute / (project + eval) | brute / eval |");
+    println!("|---|---|---|---|---|---|---|");
+    let src = GpuEnvMap::upload(&ctx, &map)?;
+    let brute = BruteFilter::new(&ctx)?;
+    let proj = ShProjector::new(&ctx, Subgroups::Auto)?;
+    let eval = ShEvaluator::new(&ctx)?;
+    let reps = reps.max(1);
+    let o = Orientation::default();
+    let total = |t: &[Timing]| t.iter().map(|t| t.ms).sum::<f64>();
+    for &n in sizes {
+        let target = FilterTarget {
+            to: Mapping::Angular,
+            size: n,
+        };
+        brute.run(&src, &o, Kernel::Cosine, target)?;
+        let mut b = Vec::new();
+        for _ in 0..reps {
+            b.push(total(&brute.run(&src, &o, Kernel::Cosine, target)?.1));
+        }
+        let b = median(b);
+        for order in [2u32, 8] {
+            let (c, _) = proj.run(&src, order)?;
+            let irr = sh::irradiance_coeffs(&c.coeffs);
+            eval.run(&irr, target)?;
+            let (mut p, mut e) = (Vec::new(), Vec::new());
+            for _ in 0..reps {
+                p.push(total(&proj.run(&src, order)?.1));
+                e.push(total(&eval.run(&irr, target)?.1));
+            }
+            let (p, e) = (median(p), median(e));
+            println!(
+                "| angular {n}x{n} | {b:.1} | {order} | {p:.3} | {e:.3} | {:.0}x | {:.0}x |",
+                b / (p + e),
+                b / e
+            );
+        }
+    }
+    Ok(())
+}
+
+fn bench_sh(cli: &Global, sizes: &[u32], reps: usize) -> Result<()> {
+    let ctx = context(cli)?;
+    println!("device: {} ({})", ctx.info().name, ctx.info().driver.trim());
+    println!("GPU time from timestamps, median of {reps} runs after one untimed run; 'copy' reads and writes every texel once.\n");
+    println!("| map | reduction | lmax | copy ms | project + reduce ms | ratio to copy |");
+    println!("|---|---|---|---|---|---|");
+    let copy = CopyPass::new(&ctx)?;
+    let reps = reps.max(1);
+    let projectors = [
+        ("subgroups", ShProjector::new(&ctx, Subgroups::Auto)?),
+        ("shared tree", ShProjector::new(&ctx, Subgroups::Off)?),
+    ];
+    for &w in sizes {
+        let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 1, |d| {
+            Sky::default().radiance(d)
+        });
+        let src = GpuEnvMap::upload(&ctx, &map)?;
+        copy.run(&src)?;
+        let mut c = Vec::new();
+        for _ in 0..reps {
+            c.push(copy.run(&src)?.1.iter().map(|t| t.ms).sum());
+        }
+        let floor = median(c);
+        for (name, p) in &projectors {
+            if *name == "subgroups" && !p.uses_subgroups() {
+                continue;
+            }
+            for lmax in [2, 8] {
+                p.run(&src, lmax)?;
+                let mut ms = Vec::new();
+                for _ in 0..reps {
+                    ms.push(p.run(&src, lmax)?.1.iter().map(|t| t.ms).sum());
+                }
+                let m = median(ms);
+                println!(
+                    "| latlong {w}x{} | {name} | {lmax} | {floor:.3} | {m:.3} | {:.1} |",
+                    w / 2,
+                    m / floor
+                );
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,200 @@
+//! `envlight render`, `plan` and `demo`.
+
+use super::{context, preview, Global};
+use anyhow::{Context as _, Result};
+use clap::Args;
+use envlight::io::{self, LoadOptions, ToneMap};
+use envlight::passes::{ConvertOptions, Converter};
+use envlight::{GpuEnvMap, Mapping, Orientation};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+
+/// Render a scene file: an HDR EXR, a tone-mapped PNG beside it, and a per-pass timing table
+#[derive(Args)]
+pub struct RenderArgs {
+    /// The scene (TOML)
+    scene: PathBuf,
+    /// Output EXR (the PNG gets the same name with .png)
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// Print the GPU passes a render of a scene will run, and why
+#[derive(Args)]
+pub struct PlanArgs {
+    /// The scene (TOML)
+    scene: PathBuf,
+}
+
+/// Convert the bundled probe to all four mappings, render every material, and show what each
+/// step cost
+#[derive(Args)]
+pub struct DemoArgs {
+    /// Input probe
+    #[arg(long, default_value = "assets/sky_latlong.exr")]
+    input: PathBuf,
+    /// Output folder
+    #[arg(long, default_value = "out/demo")]
+    out: PathBuf,
+    /// Size of the outputs (lat-long width; the others get half of it)
+    #[arg(long, default_value_t = 512)]
+    size: u32,
+}
+
+/// `envlight render`.
+pub fn render(g: &Global, a: &RenderArgs) -> Result<()> {
+    render_scene(g, &a.scene, &a.output)
+}
+
+/// `envlight plan`.
+pub fn plan(a: &PlanArgs) -> Result<()> {
+    let scene = &a.scene;
+    let sc = envlight::scene::Scene::load(scene)?;
+    let base = scene.parent().unwrap_or(Path::new("."));
+    let path = base.join(&sc.environment.file);
+    let mapping = match &sc.environment.mapping {
+        Some(m) => Mapping::parse(m)
+            .with_context(|| format!("{}: unknown mapping '{m}'", scene.display()))?,
+        None => envlight::render::load_environment(&sc, base)?.mapping,
+    };
+    let plan = envlight::scene::plan(&sc, mapping);
+    println!(
+        "{} ({}, {})",
+        scene.display(),
+        path.display(),
+        mapping.name()
+    );
+    for (k, p) in plan.passes.iter().enumerate() {
+        println!("{:>2}. {:<16} {}", k + 1, p.kind.name(), p.why);
+    }
+    for n in &plan.notes {
+        println!("    note: {n}");
+    }
+    Ok(())
+}
+
+/// `envlight demo`.
+pub fn demo(g: &Global, a: &DemoArgs) -> Result<()> {
+    demo_maps(g, &a.input, &a.out, a.size)
+}
+
+fn demo_maps(cli: &Global, input: &Path, out: &Path, size: u32) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
+    let t0 = std::time::Instant::now();
+    let map = io::load(input, &LoadOptions::default())?;
+    println!(
+        "loaded {} ({} {} x {}) in {:.0} ms",
+        input.display(),
+        map.mapping.name(),
+        map.width,
+        map.height,
+        t0.elapsed().as_secs_f64() * 1e3
+    );
+    let ctx = context(cli)?;
+    println!("device: {} ({})", ctx.info().name, ctx.info().driver.trim());
+    let src = GpuEnvMap::upload(&ctx, &map)?;
+    let conv = Converter::new(&ctx)?;
+    let tm = ToneMap::default();
+    let pb = ProgressBar::new(4);
+    pb.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let mut previews = Vec::new();
+    let mut rows = Vec::new();
+    for to in Mapping::ALL {
+        pb.set_message(to.name());
+        let n = if to == Mapping::LatLong {
+            size
+        } else {
+            size / 2
+        };
+        let opts = ConvertOptions {
+            to,
+            size: n.max(1),
+            orientation: Orientation::default(),
+            supersample: None,
+        };
+        let (dst, timings) = conv.run(&src, &opts)?;
+        let result = dst.download(&ctx)?;
+        let exr = out.join(format!("sky_{}.exr", to.name()));
+        let png = out.join(format!("sky_{}.png", to.name()));
+        io::save_exr(&result, &exr)?;
+        let p = preview::preview(&result, tm);
+        p.save(&png).with_context(|| png.display().to_string())?;
+        previews.push(p);
+        let pin = map.power();
+        let pout = result.power();
+        rows.push((to, exr, png, timings, (pout[1] / pin[1] - 1.0) * 100.0));
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    let sheet = out.join("contact_sheet.png");
+    preview::contact_sheet(&previews, 256)
+        .save(&sheet)
+        .with_context(|| sheet.display().to_string())?;
+    println!("\nPreviews: {}", tm.describe());
+    for (to, exr, png, timings, dp) in &rows {
+        let ms: f64 = timings.iter().map(|t| t.ms).sum();
+        println!(
+            "{:<16} {:>9.3} ms GPU  power {:+.3}%  {}  {}",
+            to.name(),
+            ms,
+            dp,
+            exr.display(),
+            png.display()
+        );
+    }
+    println!("contact sheet: {}", sheet.display());
+    drop(src);
+    drop(ctx);
+    demo_scene(cli, out)?;
+    Ok(())
+}
+
+/// Renders `assets/scenes/materials.toml`: every material side by side.
+fn demo_scene(cli: &Global, out: &Path) -> Result<()> {
+    let scene = Path::new("assets/scenes/materials.toml");
+    println!("\nevery material side by side ({}):", scene.display());
+    render_scene(cli, scene, &out.join("materials.exr"))
+}
+
+fn render_scene(cli: &Global, scene: &Path, output: &Path) -> Result<()> {
+    let sc = envlight::scene::Scene::load(scene)?;
+    let base = scene.parent().unwrap_or(Path::new("."));
+    let env = envlight::render::load_environment(&sc, base)?;
+    let ctx = context(cli)?;
+    let t0 = std::time::Instant::now();
+    let r = envlight::render::render(&ctx, &sc, &env)?;
+    let wall = t0.elapsed().as_secs_f64();
+    if let Some(dir) = output.parent() {
+        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+    }
+    envlight::io::save_exr(&r.frame, output)?;
+    let png = output.with_extension("png");
+    let tm = ToneMap::default();
+    preview::preview(&r.frame, tm)
+        .save(&png)
+        .with_context(|| png.display().to_string())?;
+    println!("{}  {}", output.display(), png.display());
+    println!("{:<16} {:>11}  spans", "pass", "GPU ms");
+    let mut total = 0.0;
+    for rec in &r.records {
+        println!(
+            "{:<16} {:>11.3}  {}",
+            rec.kind.name(),
+            rec.ms(),
+            rec.timings.len()
+        );
+        total += rec.ms();
+    }
+    println!("{:<16} {:>11.3}  (wall {wall:.2} s)", "total", total);
+    if let Some((n, e)) = r.mc {
+        match e {
+            Some(e) => println!("monte carlo: {n} samples per pixel, relative error {e:.2e}"),
+            None => println!("monte carlo: {n} samples per pixel"),
+        }
+    }
+    println!("tone map: {tm:?} (PNG only; the EXR is linear)");
+    Ok(())
+}

@@ -1,0 +1,400 @@
+//! Recording into a command buffer someone else owns. Passes never submit: they record their
+//! dispatches, draws and copies through a [`Recorder`], which places every barrier from the
+//! usages each command declares (a binding's kind and access in the shader table, or a copy's
+//! source and destination) and the usage each resource was last left in. [`Context::run`] is
+//! the one place that submits and waits, for the CLI, tests and one-off jobs.
+
+use super::barrier::{
+    buffer_needs_barrier, image_barrier, memory_barrier, needs_barrier, usage_info, Usage,
+};
+use super::context::Context;
+use super::pipeline::{Bind, DescriptorSet, Pipeline};
+use super::resources::{Buffer, Image};
+use super::shaders::binding_usage;
+use super::timing::{Timestamps, Timing};
+use crate::abi::PushBlock;
+use crate::error::Result;
+use ash::vk;
+use std::any::Any;
+
+/// Records envlight's commands into a command buffer in the recording state, outside a render
+/// pass. Made by [`Recorder::begin`] on the caller's command buffer, or by [`Context::run`].
+///
+/// Every resource remembers how the last command recorded so far used it; a command that
+/// uses it otherwise gets the barrier between the two first. Resources that only this
+/// recording needs (descriptor sets, staging buffers) are kept by the recorder and handed to
+/// the [`Recorded`] that [`Recorder::finish`] returns, which must outlive the GPU's work.
+pub struct Recorder {
+    ctx: Context,
+    cmd: vk::CommandBuffer,
+    timestamps: Option<Timestamps>,
+    keep: Vec<Box<dyn Any>>,
+}
+
+/// What a finished recording holds until the GPU has executed it: the transient resources and
+/// the timestamp queries.
+pub struct Recorded {
+    timestamps: Option<Timestamps>,
+    /// Kept alive until dropped; never read.
+    _keep: Vec<Box<dyn Any>>,
+}
+
+impl Recorded {
+    /// The GPU time of every span recorded, in order of beginning. Call only after the
+    /// command buffer has completed (empty where timestamps were off or unsupported).
+    pub fn timings(&self) -> Result<Vec<Timing>> {
+        match &self.timestamps {
+            Some(t) => t.read(),
+            None => Ok(Vec::new()),
+        }
+    }
+}
+
+impl Recorder {
+    /// Starts recording into `cmd`. With `timestamps`, spans are timed where the queue
+    /// supports timestamps.
+    ///
+    /// # Safety
+    /// `cmd` must be a primary command buffer of `ctx`'s device, in the recording state and
+    /// outside a render pass, to be submitted to a queue of [`Context::queue_family`]. The
+    /// caller must keep the [`Recorded`] that [`Recorder::finish`] returns, and every resource
+    /// passed to the passes, alive until that submission has completed, and submit work in the
+    /// order it was recorded (each resource's tracked usage follows recording order).
+    pub unsafe fn begin(ctx: &Context, cmd: vk::CommandBuffer, timestamps: bool) -> Recorder {
+        let timestamps = (timestamps && ctx.info().timestamp_valid_bits > 0)
+            .then(|| Timestamps::new(&ctx.shared));
+        Recorder {
+            ctx: ctx.clone(),
+            cmd,
+            timestamps,
+            keep: Vec::new(),
+        }
+    }
+
+    /// Ends recording (the command buffer stays in the recording state, the caller's).
+    pub fn finish(self) -> Recorded {
+        Recorded {
+            timestamps: self.timestamps,
+            _keep: self.keep,
+        }
+    }
+
+    /// The context.
+    pub fn context(&self) -> &Context {
+        &self.ctx
+    }
+
+    /// The command buffer being recorded.
+    pub fn command_buffer(&self) -> vk::CommandBuffer {
+        self.cmd
+    }
+
+    /// Keeps `resource` alive until the recording has executed.
+    pub fn keep<T: 'static>(&mut self, resource: T) {
+        self.keep.push(Box::new(resource));
+    }
+
+    /// Spans begun so far (0 where timestamps are off), to attribute timings to callers.
+    pub fn spans(&self) -> usize {
+        self.timestamps.as_ref().map_or(0, |t| t.len())
+    }
+
+    /// Records `f` inside a timed span labelled `label`.
+    pub fn span<R>(
+        &mut self,
+        label: &str,
+        f: impl FnOnce(&mut Recorder) -> Result<R>,
+    ) -> Result<R> {
+        if let Some(t) = self.timestamps.as_mut() {
+            t.begin(self.cmd, label)?;
+        }
+        let r = f(self);
+        if let Some(t) = self.timestamps.as_mut() {
+            t.end(self.cmd);
+        }
+        r
+    }
+
+    /// Declares that the next command uses `image` as `usage`, recording the barrier from
+    /// its last usage where one is needed. `Usage::Undefined` as the new usage is refused:
+    /// to discard contents, use [`Recorder::discard`].
+    pub fn use_image(&mut self, image: &Image, usage: Usage) {
+        assert_ne!(
+            usage,
+            Usage::Undefined,
+            "an image cannot be used as Undefined"
+        );
+        let mut state = image.state.lock().unwrap_or_else(|e| e.into_inner());
+        if needs_barrier(*state, usage) {
+            let b = image_barrier(image.raw, image.desc().layers, *state, usage);
+            let bs = [b];
+            let dep = vk::DependencyInfo::default().image_memory_barriers(&bs);
+            // SAFETY: cmd is recording outside a render pass; the image is live.
+            unsafe { self.ctx.device().cmd_pipeline_barrier2(self.cmd, &dep) };
+        }
+        *state = usage;
+    }
+
+    /// Declares that `image`'s contents are not needed: the next use transitions it from
+    /// undefined (no wait, no copy of old contents).
+    pub fn discard(&mut self, image: &Image) {
+        *image.state.lock().unwrap_or_else(|e| e.into_inner()) = Usage::Undefined;
+    }
+
+    /// Declares that the next command uses `buffer` as `usage` (as [`Recorder::use_image`]).
+    pub fn use_buffer(&mut self, buffer: &Buffer, usage: Usage) {
+        let mut state = buffer.state.lock().unwrap_or_else(|e| e.into_inner());
+        if buffer_needs_barrier(*state, usage) {
+            let bs = [memory_barrier(*state, usage)];
+            let dep = vk::DependencyInfo::default().memory_barriers(&bs);
+            // SAFETY: cmd is recording outside a render pass.
+            unsafe { self.ctx.device().cmd_pipeline_barrier2(self.cmd, &dep) };
+        }
+        *state = usage;
+    }
+
+    /// Declares the usage every binding implies (from the shader table's kind and access),
+    /// writes a descriptor set for them, and binds pipeline, set and push constants.
+    fn bind<P: PushBlock>(
+        &mut self,
+        pipeline: &Pipeline,
+        binds: &[(u32, Bind<'_>)],
+        push: &P,
+    ) -> Result<()> {
+        let iface = pipeline.shader().interface();
+        let compute = pipeline.is_compute();
+        for (b, bind) in binds {
+            let &(_, kind, access) = iface
+                .bindings
+                .iter()
+                .find(|(n, _, _)| n == b)
+                .unwrap_or_else(|| panic!("{:?} has no binding {b}", pipeline.shader()));
+            let usage = binding_usage(compute, kind, access);
+            if let Some(i) = bind.image() {
+                self.use_image(i, usage);
+            }
+            if let Some(buf) = bind.buffer() {
+                self.use_buffer(buf, usage);
+            }
+        }
+        let set = if binds.is_empty() {
+            None
+        } else {
+            Some(DescriptorSet::new(&self.ctx, pipeline, binds)?)
+        };
+        pipeline.bind(self.cmd, set.as_ref(), push);
+        if let Some(s) = set {
+            self.keep(s);
+        }
+        Ok(())
+    }
+
+    /// Records a dispatch of the compute `pipeline` with `binds` and `push`, over `groups`
+    /// workgroups, after the barriers its bindings need.
+    pub fn dispatch<P: PushBlock>(
+        &mut self,
+        pipeline: &Pipeline,
+        binds: &[(u32, Bind<'_>)],
+        push: &P,
+        groups: [u32; 3],
+    ) -> Result<()> {
+        assert!(
+            pipeline.is_compute(),
+            "{:?} is not compute",
+            pipeline.shader()
+        );
+        self.bind(pipeline, binds, push)?;
+        // SAFETY: cmd is recording with the compute pipeline and its set bound.
+        unsafe {
+            self.ctx
+                .device()
+                .cmd_dispatch(self.cmd, groups[0], groups[1], groups[2])
+        };
+        Ok(())
+    }
+
+    /// Records a fullscreen draw of the graphics `pipeline` into `targets` (one-layer images
+    /// of equal size, contents discarded), after the barriers its bindings need.
+    pub fn draw_fullscreen<P: PushBlock>(
+        &mut self,
+        pipeline: &Pipeline,
+        binds: &[(u32, Bind<'_>)],
+        push: &P,
+        targets: &[&Image],
+    ) -> Result<()> {
+        assert!(!pipeline.is_compute() && !targets.is_empty());
+        let (w, h) = (targets[0].desc().width, targets[0].desc().height);
+        for t in targets {
+            assert_eq!((t.desc().width, t.desc().height), (w, h));
+            self.discard(t);
+            self.use_image(t, Usage::ColorAttachment);
+        }
+        let attachments: Vec<_> = targets
+            .iter()
+            .map(|t| {
+                vk::RenderingAttachmentInfo::default()
+                    .image_view(t.view)
+                    .image_layout(usage_info(Usage::ColorAttachment).layout)
+                    .load_op(vk::AttachmentLoadOp::DONT_CARE)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+            })
+            .collect();
+        // Bindings' barriers go before the render pass begins.
+        self.bind(pipeline, binds, push)?;
+        let area = vk::Rect2D {
+            offset: vk::Offset2D::default(),
+            extent: vk::Extent2D {
+                width: w,
+                height: h,
+            },
+        };
+        let rendering = vk::RenderingInfo::default()
+            .render_area(area)
+            .layer_count(1)
+            .color_attachments(&attachments);
+        let d = self.ctx.device();
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: w as f32,
+            height: h as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        // SAFETY: cmd is recording; the attachments are live and in the attachment layout;
+        // the pipeline was bound above and binding state survives vkCmdBeginRendering.
+        unsafe {
+            d.cmd_begin_rendering(self.cmd, &rendering);
+            d.cmd_set_viewport(self.cmd, 0, &[viewport]);
+            d.cmd_set_scissor(self.cmd, 0, &[area]);
+            d.cmd_draw(self.cmd, 3, 1, 0, 0);
+            d.cmd_end_rendering(self.cmd);
+        }
+        Ok(())
+    }
+
+    /// Copies `src` (tightly packed texels, layer after layer) into MIP level `level` of
+    /// `dst`, whose earlier contents are discarded when `discard`.
+    pub fn copy_buffer_to_image(&mut self, src: &Buffer, dst: &Image, level: u32, discard: bool) {
+        self.use_buffer(src, Usage::TransferSrc);
+        if discard {
+            self.discard(dst);
+        }
+        self.use_image(dst, Usage::TransferDst);
+        let region = level_region(dst, level);
+        // SAFETY: cmd is recording; buffer and image are live, the image is in
+        // TRANSFER_DST_OPTIMAL and the caller sized the buffer for the level.
+        unsafe {
+            self.ctx.device().cmd_copy_buffer_to_image(
+                self.cmd,
+                src.raw,
+                dst.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            )
+        };
+    }
+
+    /// Copies MIP level `level` of `src` into `dst` (tightly packed, layer after layer).
+    pub fn copy_image_to_buffer(&mut self, src: &Image, level: u32, dst: &Buffer, offset: u64) {
+        self.use_image(src, Usage::TransferSrc);
+        self.use_buffer(dst, Usage::TransferDst);
+        let region = level_region(src, level).buffer_offset(offset);
+        // SAFETY: cmd is recording; both are live, the image is in TRANSFER_SRC_OPTIMAL and
+        // the caller sized the buffer for the level.
+        unsafe {
+            self.ctx.device().cmd_copy_image_to_buffer(
+                self.cmd,
+                src.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst.raw,
+                &[region],
+            )
+        };
+    }
+
+    /// Copies the first `bytes` of `src` to the start of `dst`.
+    pub fn copy_buffer(&mut self, src: &Buffer, dst: &Buffer, bytes: u64) {
+        assert!(bytes <= src.size() && bytes <= dst.size());
+        self.use_buffer(src, Usage::TransferSrc);
+        self.use_buffer(dst, Usage::TransferDst);
+        let region = vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: 0,
+            size: bytes,
+        };
+        // SAFETY: cmd is recording; both buffers are live and large enough.
+        unsafe {
+            self.ctx
+                .device()
+                .cmd_copy_buffer(self.cmd, src.raw, dst.raw, &[region])
+        };
+    }
+
+    /// Clears every level and layer of `image` to `value`, discarding its contents.
+    pub fn clear(&mut self, image: &Image, value: [f32; 4]) {
+        self.discard(image);
+        self.use_image(image, Usage::TransferDst);
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(vk::REMAINING_MIP_LEVELS)
+            .layer_count(vk::REMAINING_ARRAY_LAYERS);
+        // SAFETY: cmd is recording; the image is live and in TRANSFER_DST_OPTIMAL.
+        unsafe {
+            self.ctx.device().cmd_clear_color_image(
+                self.cmd,
+                image.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &vk::ClearColorValue { float32: value },
+                &[range],
+            )
+        };
+    }
+}
+
+fn level_region(image: &Image, level: u32) -> vk::BufferImageCopy {
+    let d = image.desc();
+    vk::BufferImageCopy::default()
+        .image_subresource(
+            vk::ImageSubresourceLayers::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .mip_level(level)
+                .layer_count(d.layers),
+        )
+        .image_extent(vk::Extent3D {
+            width: (d.width >> level).max(1),
+            height: (d.height >> level).max(1),
+            depth: 1,
+        })
+}
+
+impl Context {
+    /// Records with `record` into a command buffer of envlight's own, submits it, waits for
+    /// it, and returns what `record` returned and the GPU time of every span. The one place
+    /// envlight submits work; an engine records into its own command buffers instead
+    /// ([`Recorder::begin`]).
+    pub fn run<R>(
+        &self,
+        what: &'static str,
+        record: impl FnOnce(&mut Recorder) -> Result<R>,
+    ) -> Result<(R, Vec<Timing>)> {
+        let mut out = None;
+        let mut recorded = None;
+        self.shared.submit_and_wait(what, |cmd| {
+            // SAFETY: submit_and_wait hands a fresh primary command buffer in the recording
+            // state, submits it to this context's queue, and waits before returning; the
+            // Recorded is kept past that wait.
+            let mut rec = unsafe { Recorder::begin(self, cmd, true) };
+            let r = record(&mut rec);
+            recorded = Some(rec.finish());
+            out = Some(r?);
+            Ok(())
+        })?;
+        let timings = match &recorded {
+            Some(r) => r.timings()?,
+            None => Vec::new(),
+        };
+        let out = out.unwrap_or_else(|| unreachable!("set when recording succeeded"));
+        Ok((out, timings))
+    }
+}

@@ -1,0 +1,234 @@
+//! Environment maps resident on the GPU as RGBA32F 2D array images (cube-compatible for
+//! cubes), envlight's or the caller's, and the recorded copies that move them to and from
+//! the host.
+
+use crate::envmap::EnvMap;
+use crate::error::{Error, Result};
+use crate::gpu::{Buffer, Context, Image, ImageDesc, Recorder, Usage};
+use crate::math::Mapping;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+/// Texel format of maps on the GPU: float32 keeps a 10⁵ sun exact (half floats overflow at
+/// 65504).
+pub const FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+/// The usage flags of maps envlight creates: written by passes, sampled, copied both ways.
+pub const USAGE: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
+    vk::ImageUsageFlags::STORAGE.as_raw()
+        | vk::ImageUsageFlags::SAMPLED.as_raw()
+        | vk::ImageUsageFlags::TRANSFER_SRC.as_raw()
+        | vk::ImageUsageFlags::TRANSFER_DST.as_raw(),
+);
+
+/// An environment map on the GPU: an image and how to read it.
+pub struct GpuEnvMap {
+    /// Its mapping.
+    pub mapping: Mapping,
+    /// Width of a layer.
+    pub width: u32,
+    /// Height of a layer.
+    pub height: u32,
+    /// The image (layers = mapping's layers).
+    pub image: Image,
+}
+
+/// The image description of a map of `mapping`, `width` × `height`, with `mips` levels.
+pub fn map_desc(mapping: Mapping, width: u32, height: u32, mips: u32) -> ImageDesc {
+    ImageDesc {
+        width,
+        height,
+        layers: mapping.layers(),
+        format: FORMAT,
+        usage: USAGE,
+        cube: mapping == Mapping::Cube,
+        mips,
+    }
+}
+
+/// Levels of a full MIP chain for a `width` × `height` image (Vulkan's sizes).
+pub fn full_mips(width: u32, height: u32) -> u32 {
+    32 - width.max(height).max(1).leading_zeros()
+}
+
+impl GpuEnvMap {
+    /// An uninitialised map for a pass to write (storage, sampled, transfer both ways).
+    pub fn new(
+        ctx: &Context,
+        name: &str,
+        mapping: Mapping,
+        width: u32,
+        height: u32,
+    ) -> Result<GpuEnvMap> {
+        GpuEnvMap::create(ctx, name, map_desc(mapping, width, height, 1), mapping)
+    }
+
+    /// An uninitialised map with a full MIP chain (Vulkan's sizes: level k is
+    /// max(1, size >> k)), for passes to write level by level.
+    pub fn with_mips(
+        ctx: &Context,
+        name: &str,
+        mapping: Mapping,
+        width: u32,
+        height: u32,
+    ) -> Result<GpuEnvMap> {
+        let mips = full_mips(width, height);
+        GpuEnvMap::create(ctx, name, map_desc(mapping, width, height, mips), mapping)
+    }
+
+    /// An uninitialised map of any description (a colour target, say).
+    pub fn create(
+        ctx: &Context,
+        name: &str,
+        desc: ImageDesc,
+        mapping: Mapping,
+    ) -> Result<GpuEnvMap> {
+        if desc.width == 0 || desc.height == 0 {
+            return Err(Error::Invalid(format!(
+                "{name}: a map needs a non-zero size"
+            )));
+        }
+        assert_eq!(desc.layers, mapping.layers());
+        Ok(GpuEnvMap {
+            mapping,
+            width: desc.width,
+            height: desc.height,
+            image: Image::new(ctx, name, desc)?,
+        })
+    }
+
+    /// A map over an image the caller owns (see [`Image::from_raw`]).
+    pub fn from_image(image: Image, mapping: Mapping) -> GpuEnvMap {
+        let d = *image.desc();
+        assert_eq!(
+            d.layers,
+            mapping.layers(),
+            "{mapping:?} needs {} layers",
+            mapping.layers()
+        );
+        assert!(
+            mapping != Mapping::Cube || d.cube,
+            "a cube map needs a cube view"
+        );
+        GpuEnvMap {
+            mapping,
+            width: d.width,
+            height: d.height,
+            image,
+        }
+    }
+
+    /// Its MIP levels.
+    pub fn mips(&self) -> u32 {
+        self.image.desc().mips
+    }
+
+    /// The size of MIP level `level`.
+    pub fn level_size(&self, level: u32) -> (u32, u32) {
+        ((self.width >> level).max(1), (self.height >> level).max(1))
+    }
+
+    /// Records the upload of `map` into level 0 of this map (same mapping and size); the
+    /// staging buffer is kept by the recorder. Texels must be finite and non-negative (what
+    /// [`crate::io::load`] guarantees); anything else is refused so that no pass ever sees
+    /// or makes NaN.
+    pub fn record_upload(&self, rec: &mut Recorder, map: &EnvMap) -> Result<()> {
+        check_radiance(map)?;
+        assert_eq!(
+            (map.mapping, map.width, map.height),
+            (self.mapping, self.width, self.height)
+        );
+        let rgba: Vec<[f32; 4]> = map.texels.iter().map(|t| [t[0], t[1], t[2], 1.0]).collect();
+        let mut staging = Buffer::new(
+            rec.context(),
+            "upload staging",
+            (rgba.len() * 16) as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging.write(&rgba);
+        rec.copy_buffer_to_image(&staging, &self.image, 0, true);
+        rec.keep(staging);
+        Ok(())
+    }
+
+    /// Uploads a map into a new GPU map and waits (see [`GpuEnvMap::record_upload`]).
+    pub fn upload(ctx: &Context, map: &EnvMap) -> Result<GpuEnvMap> {
+        check_radiance(map)?;
+        let g = GpuEnvMap::new(ctx, "uploaded map", map.mapping, map.width, map.height)?;
+        ctx.run("uploading a map", |rec| g.record_upload(rec, map))?;
+        Ok(g)
+    }
+
+    /// As [`GpuEnvMap::upload`], into level 0 of a map with a full MIP chain (the other
+    /// levels undefined, for a pass to fill).
+    pub fn upload_mipped(ctx: &Context, map: &EnvMap) -> Result<GpuEnvMap> {
+        check_radiance(map)?;
+        let g = GpuEnvMap::with_mips(ctx, "uploaded map", map.mapping, map.width, map.height)?;
+        ctx.run("uploading a map", |rec| g.record_upload(rec, map))?;
+        Ok(g)
+    }
+
+    /// Records the copy of level `level` (rgba, layer after layer, row after row) into a new
+    /// host-visible buffer, which [`Readback::read`] reads once the work has completed.
+    pub fn record_download(&self, rec: &mut Recorder, level: u32) -> Result<Readback> {
+        assert!(level < self.mips(), "level {level} of {}", self.mips());
+        let (w, h) = self.level_size(level);
+        let n = (w * h * self.mapping.layers()) as usize;
+        let buffer = Buffer::new(
+            rec.context(),
+            "download staging",
+            (n * 16) as u64,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        rec.copy_image_to_buffer(&self.image, level, &buffer, 0);
+        rec.use_buffer(&buffer, Usage::HostRead);
+        Ok(Readback { buffer, texels: n })
+    }
+
+    /// Reads the map back (level 0) and waits.
+    pub fn download(&self, ctx: &Context) -> Result<EnvMap> {
+        let rgba = self.download_level(ctx, 0)?;
+        Ok(EnvMap::new(
+            self.mapping,
+            self.width,
+            self.height,
+            rgba.into_iter().map(|t| [t[0], t[1], t[2]]).collect(),
+        ))
+    }
+
+    /// Reads one MIP level back with its alpha channel, layer after layer, row after row.
+    pub fn download_level(&self, ctx: &Context, level: u32) -> Result<Vec<[f32; 4]>> {
+        let (r, _) = ctx.run("downloading a map", |rec| self.record_download(rec, level))?;
+        Ok(r.read())
+    }
+}
+
+/// Texels copied to a host-visible buffer by [`GpuEnvMap::record_download`].
+pub struct Readback {
+    buffer: Buffer,
+    texels: usize,
+}
+
+impl Readback {
+    /// The texels, rgba; valid once the recorded work has completed.
+    pub fn read(&self) -> Vec<[f32; 4]> {
+        self.buffer.read(self.texels)
+    }
+}
+
+fn check_radiance(map: &EnvMap) -> Result<()> {
+    if let Some(k) = map
+        .texels
+        .iter()
+        .position(|t| t.iter().any(|c| !c.is_finite() || *c < 0.0))
+    {
+        return Err(Error::Invalid(format!(
+            "texel {k} of the {} map is {:?}; radiance must be finite and non-negative",
+            map.mapping.name(),
+            map.texels[k]
+        )));
+    }
+    Ok(())
+}
