@@ -1,0 +1,295 @@
+//! An engine's frame with envlight's passes in it: a minimal ash application that owns its
+//! device, its command buffer and its images (a dual-paraboloid MIP chain and the frame it
+//! shades), records envlight's upload, dual-paraboloid conversion, MIP chain, G-buffer and
+//! shading into that one command buffer, submits once and waits on its own fence.
+//!
+//! `cargo run --example frame [SCENE]` renders a scene of lookup and FIS materials (default
+//! `assets/scenes/frame.toml`) to `out/frame.exr`; `tests/frame.rs` runs the same code and
+//! compares the frame with `envlight render` of the same scene.
+
+#[path = "support/engine.rs"]
+#[allow(dead_code)]
+mod engine;
+
+use ash::vk;
+use envlight::gpu::{AdoptInfo, Context, Image, ImageDesc, Recorder, Usage};
+use envlight::passes::gbuffer::{GBuffer, GpuObject};
+use envlight::passes::map::{full_mips, map_desc};
+use envlight::passes::shade::ShadeInputs;
+use envlight::passes::{ConvertOptions, Converter, GBufferPass, GpuEnvMap, MipChain, Shade};
+use envlight::render::{default_dp_size, load_environment, object_record};
+use envlight::scene::{Scene, Technique};
+use envlight::{EnvMap, Mapping};
+use std::path::Path;
+
+type Error = Box<dyn std::error::Error>;
+
+/// An image the engine creates and binds to memory of its own.
+struct EngineImage {
+    raw: vk::Image,
+    memory: vk::DeviceMemory,
+}
+
+impl EngineImage {
+    fn new(e: &engine::Engine, desc: &ImageDesc) -> Result<EngineImage, Error> {
+        let info = vk::ImageCreateInfo::default()
+            .flags(if desc.cube {
+                vk::ImageCreateFlags::CUBE_COMPATIBLE
+            } else {
+                vk::ImageCreateFlags::empty()
+            })
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(desc.format)
+            .extent(vk::Extent3D {
+                width: desc.width,
+                height: desc.height,
+                depth: 1,
+            })
+            .mip_levels(desc.mips)
+            .array_layers(desc.layers)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(desc.usage)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: valid device and create info.
+        let raw = unsafe { e.device.create_image(&info, None)? };
+        // SAFETY: raw is a live image of this device.
+        let req = unsafe { e.device.get_image_memory_requirements(raw) };
+        let ty = e
+            .memory_type(req.memory_type_bits, vk::MemoryPropertyFlags::DEVICE_LOCAL)
+            .ok_or("no device-local memory")?;
+        let alloc = vk::MemoryAllocateInfo::default()
+            .allocation_size(req.size)
+            .memory_type_index(ty);
+        // SAFETY: valid allocation info; the memory is bound once and freed after the image.
+        let memory = unsafe { e.device.allocate_memory(&alloc, None)? };
+        unsafe { e.device.bind_image_memory(raw, memory, 0)? };
+        Ok(EngineImage { raw, memory })
+    }
+
+    /// Destroys the image and frees its memory (after the GPU is done with it).
+    fn destroy(self, e: &engine::Engine) {
+        // SAFETY: no pending work uses the image; envlight's views of it are gone.
+        unsafe {
+            e.device.destroy_image(self.raw, None);
+            e.device.free_memory(self.memory, None);
+        }
+    }
+}
+
+/// What a run produced.
+pub struct Frame {
+    /// The shaded frame, linear RGB.
+    pub frame: EnvMap,
+    /// Validation warnings the engine saw.
+    pub warnings: usize,
+    /// envlight objects still alive after everything was dropped (must be 0).
+    pub leaked: i64,
+    /// GPU time of each span of the one command buffer.
+    pub timings: Vec<envlight::gpu::Timing>,
+}
+
+/// Renders `scene` (lookup and FIS materials only) in one command buffer of the engine's.
+pub fn run(scene_path: &Path) -> Result<Frame, Error> {
+    let scene = Scene::load(scene_path)?;
+    let env = load_environment(&scene, scene_path.parent().unwrap_or(Path::new(".")))?;
+    if let Some(o) = scene.objects.iter().find(|o| {
+        !matches!(
+            o.material.technique(),
+            Technique::Lookup | Technique::Fis { .. }
+        )
+    }) {
+        return Err(format!(
+            "this example shades lookup and FIS only, not {:?}",
+            o.material
+        )
+        .into());
+    }
+    let engine = engine::Engine::new()?;
+
+    // The engine's command pool and command buffer.
+    let pool_info = vk::CommandPoolCreateInfo::default().queue_family_index(engine.family);
+    // SAFETY: valid device and create info.
+    let pool = unsafe { engine.device.create_command_pool(&pool_info, None)? };
+    let alloc = vk::CommandBufferAllocateInfo::default()
+        .command_pool(pool)
+        .level(vk::CommandBufferLevel::PRIMARY)
+        .command_buffer_count(1);
+    // SAFETY: the pool is the engine's.
+    let cmd = unsafe { engine.device.allocate_command_buffers(&alloc)? }[0];
+
+    // The engine's images: the dual-paraboloid chain and the frame.
+    let dp_size = scene.fis.size.unwrap_or_else(|| default_dp_size(&env));
+    let (dw, dh) = Mapping::DualParaboloid.extent_for_size(dp_size);
+    let dp_desc = map_desc(Mapping::DualParaboloid, dw, dh, full_mips(dw, dh));
+    let (fw, fh) = (scene.camera.width, scene.camera.height);
+    let frame_desc = ImageDesc {
+        width: fw,
+        height: fh,
+        layers: 1,
+        format: envlight::passes::gbuffer::FORMAT,
+        usage: vk::ImageUsageFlags::COLOR_ATTACHMENT
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_SRC,
+        cube: false,
+        mips: 1,
+    };
+    let dp_raw = EngineImage::new(&engine, &dp_desc)?;
+    let frame_raw = EngineImage::new(&engine, &frame_desc)?;
+
+    let (frame, timings, leaked) = {
+        // SAFETY: the engine's handles are valid and outlive the context (this block).
+        let ctx = unsafe {
+            Context::adopt(AdoptInfo {
+                entry: engine.entry.clone(),
+                instance: engine.instance.clone(),
+                physical_device: engine.physical,
+                device: engine.device.clone(),
+                queue: engine.queue,
+                queue_family_index: engine.family,
+                debug_utils: true,
+            })?
+        };
+        // SAFETY: both images were created above as their descriptions say, and are
+        // destroyed by the engine only after every envlight object using them is gone.
+        let dp = GpuEnvMap::from_image(
+            unsafe {
+                Image::from_raw(
+                    &ctx,
+                    "engine paraboloid",
+                    dp_raw.raw,
+                    dp_desc,
+                    Usage::Undefined,
+                )?
+            },
+            Mapping::DualParaboloid,
+        );
+        let target = GpuEnvMap::from_image(
+            unsafe {
+                Image::from_raw(
+                    &ctx,
+                    "engine frame",
+                    frame_raw.raw,
+                    frame_desc,
+                    Usage::Undefined,
+                )?
+            },
+            Mapping::LatLong,
+        );
+        // Passes are built once, before the frame.
+        let converter = Converter::new(&ctx)?;
+        let mip = MipChain::new(&ctx)?;
+        let gbuffer = GBufferPass::new(&ctx)?;
+        let shade = Shade::new(&ctx)?;
+        let orientation = scene.environment.orientation();
+        let env_gpu = GpuEnvMap::new(&ctx, "environment", env.mapping, env.width, env.height)?;
+        let objects: Vec<GpuObject> = scene.objects.iter().map(|o| object_record(o, 0)).collect();
+        let gbuf = GBuffer::new(&ctx, fw, fh, &objects)?;
+
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: a fresh command buffer of the engine's pool.
+        unsafe { engine.device.begin_command_buffer(cmd, &begin)? };
+        // SAFETY: cmd is recording, outside a render pass, for this context's queue family;
+        // `recorded` and every resource live until the fence below has signalled.
+        let mut rec = unsafe { Recorder::begin(&ctx, cmd, true) };
+        env_gpu.record_upload(&mut rec, &env)?;
+        let opts = ConvertOptions {
+            to: Mapping::DualParaboloid,
+            size: dp_size,
+            orientation,
+            supersample: None,
+        };
+        converter.record(&mut rec, &env_gpu, &dp, &opts)?;
+        mip.record(&mut rec, &dp)?;
+        gbuffer.record(&mut rec, &scene.camera, &gbuf)?;
+        let inputs = ShadeInputs {
+            env: &env_gpu,
+            orientation,
+            sh: None,
+            dp: Some(&dp),
+            prefiltered: None,
+            mc: None,
+            shadows: scene.shadows,
+        };
+        shade.record(&mut rec, &gbuf, &inputs, &target)?;
+        let readback = target.record_download(&mut rec, 0)?;
+        let recorded = rec.finish();
+        // SAFETY: cmd is recording; the engine submits once and waits on its own fence.
+        unsafe {
+            engine.device.end_command_buffer(cmd)?;
+            let fence = engine
+                .device
+                .create_fence(&vk::FenceCreateInfo::default(), None)?;
+            let cmds = [cmd];
+            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            engine.device.queue_submit(engine.queue, &[submit], fence)?;
+            engine.device.wait_for_fences(&[fence], true, u64::MAX)?;
+            engine.device.destroy_fence(fence, None);
+        }
+        let timings = recorded.timings()?;
+        let frame = EnvMap::new(
+            Mapping::LatLong,
+            fw,
+            fh,
+            readback
+                .read()
+                .into_iter()
+                .map(|t| [t[0], t[1], t[2]])
+                .collect(),
+        );
+        drop((
+            recorded, readback, dp, target, converter, mip, gbuffer, shade, env_gpu, gbuf,
+        ));
+        (frame, timings, ctx.live_objects())
+    };
+
+    // The engine tears down what it made.
+    dp_raw.destroy(&engine);
+    frame_raw.destroy(&engine);
+    // SAFETY: the command buffer's work completed; the pool is the engine's.
+    unsafe { engine.device.destroy_command_pool(pool, None) };
+    let warnings = engine.warnings();
+    drop(engine);
+    Ok(Frame {
+        frame,
+        warnings,
+        leaked,
+        timings,
+    })
+}
+
+#[allow(dead_code)]
+fn main() {
+    let scene = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "assets/scenes/frame.toml".into());
+    match run(Path::new(&scene)) {
+        Ok(f) => {
+            for t in &f.timings {
+                println!("  GPU {:>9.3} ms  {}", t.ms, t.label);
+            }
+            let out = Path::new("out/frame.exr");
+            if let Err(e) = std::fs::create_dir_all("out")
+                .map_err(Error::from)
+                .and_then(|_| envlight::io::save_exr(&f.frame, out).map_err(Error::from))
+            {
+                eprintln!("frame example: {e}");
+                std::process::exit(1);
+            }
+            println!(
+                "wrote {}; {} validation warnings, {} envlight objects left",
+                out.display(),
+                f.warnings,
+                f.leaked
+            );
+            if f.warnings > 0 || f.leaked != 0 {
+                std::process::exit(1);
+            }
+        }
+        Err(e) => {
+            eprintln!("frame example failed: {e}");
+            std::process::exit(1);
+        }
+    }
+}
