@@ -169,7 +169,7 @@ pub mod constants {
     /// Paraboloid samples outside the unit disc are pulled in to radius 1 − this.
     pub const RIM_PULL_IN: f64 = 1e-4;
     /// Offset of the 2×2 Gauss–Legendre nodes from a texel's centre, in texels: 1/(2√3).
-    pub const GAUSS2_OFFSET: f64 = 0.288_675_134_594_812_87;
+    pub const GAUSS2_OFFSET: f64 = 0.288_675_134_594_812_9;
     /// Phong and Blinn-Phong exponents accepted, materials and prefilters alike.
     pub const PHONG_EXPONENT_RANGE: (f64, f64) = (1.0, 1e7);
 }
@@ -777,4 +777,40 @@ pub fn manifest(glsl_dir: &Path) -> std::io::Result<String> {
         let _ = writeln!(s, "{}.spv {:016x}", src.name, source_hash(glsl_dir, src)?);
     }
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn constants_are_what_their_docs_say() {
+        assert_eq!(constants::GAUSS2_OFFSET, 0.5 / 3f64.sqrt());
+        assert!((filter_rule::LOG_CUTOFF - 1e-10f64.ln()).abs() < 1e-12);
+        let l = constants::LUMINANCE;
+        assert!((l[0] + l[1] + l[2] - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn every_binding_of_the_table_is_named_once_in_its_shader() {
+        for &id in ShaderId::ALL {
+            let b = id.interface().bindings;
+            for (i, x) in b.iter().enumerate() {
+                assert!(b[i + 1..].iter().all(|y| y.0 != x.0), "{id:?}: binding {}", x.0);
+            }
+            assert_eq!(id.source().name, id.name());
+            assert_eq!(ShaderId::ALL[id as usize], id);
+        }
+    }
+
+    #[test]
+    fn the_header_defines_every_push_block_and_binding() {
+        let h = generated_header();
+        for (name, _) in push::PUSH_BLOCKS {
+            assert!(h.contains(&format!("#define PUSH_{name} ")), "{name}");
+        }
+        for (name, v) in binding::ALL {
+            assert!(h.contains(&format!("#define BINDING_{name} {v}\n")), "{name}");
+        }
+    }
 }

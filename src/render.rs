@@ -150,7 +150,7 @@ pub struct Renderer {
 }
 
 /// The pass in `cell`, built by `make` on first use.
-fn pass<'a, T>(cell: &'a OnceCell<T>, make: impl FnOnce() -> Result<T>) -> Result<&'a T> {
+fn pass<T>(cell: &OnceCell<T>, make: impl FnOnce() -> Result<T>) -> Result<&T> {
     if cell.get().is_none() {
         let _ = cell.set(make()?);
     }
