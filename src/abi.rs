@@ -796,7 +796,11 @@ mod tests {
         for &id in ShaderId::ALL {
             let b = id.interface().bindings;
             for (i, x) in b.iter().enumerate() {
-                assert!(b[i + 1..].iter().all(|y| y.0 != x.0), "{id:?}: binding {}", x.0);
+                assert!(
+                    b[i + 1..].iter().all(|y| y.0 != x.0),
+                    "{id:?}: binding {}",
+                    x.0
+                );
             }
             assert_eq!(id.source().name, id.name());
             assert_eq!(ShaderId::ALL[id as usize], id);
@@ -810,7 +814,10 @@ mod tests {
             assert!(h.contains(&format!("#define PUSH_{name} ")), "{name}");
         }
         for (name, v) in binding::ALL {
-            assert!(h.contains(&format!("#define BINDING_{name} {v}\n")), "{name}");
+            assert!(
+                h.contains(&format!("#define BINDING_{name} {v}\n")),
+                "{name}"
+            );
         }
     }
 }

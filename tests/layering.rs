@@ -31,8 +31,24 @@ fn code(text: &str) -> impl Iterator<Item = &str> {
 #[test]
 fn imports_go_one_way() {
     let rules: [(&str, &[&str]); 3] = [
-        ("src/math", &["crate::gpu", "crate::passes", "crate::render", "crate::scene"]),
-        ("src/gpu", &["crate::math", "crate::passes", "crate::render", "crate::scene"]),
+        (
+            "src/math",
+            &[
+                "crate::gpu",
+                "crate::passes",
+                "crate::render",
+                "crate::scene",
+            ],
+        ),
+        (
+            "src/gpu",
+            &[
+                "crate::math",
+                "crate::passes",
+                "crate::render",
+                "crate::scene",
+            ],
+        ),
         ("src/passes", &["crate::render", "crate::scene"]),
     ];
     for (dir, banned) in rules {
@@ -44,15 +60,14 @@ fn imports_go_one_way() {
             }
         }
     }
-    let abi = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/abi.rs"))
-        .unwrap();
+    let abi =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/abi.rs")).unwrap();
     assert!(
         code(&abi).all(|l| !l.contains("crate::") && !l.contains("ash::")),
         "src/abi.rs must stay std-only"
     );
     for (path, text) in sources("src", "rs") {
-        let cli = path.components().any(|c| c.as_os_str() == "cli")
-            || path.ends_with("main.rs");
+        let cli = path.components().any(|c| c.as_os_str() == "cli") || path.ends_with("main.rs");
         if !cli {
             for dep in ["clap::", "indicatif::", "anyhow::"] {
                 assert!(
