@@ -8,6 +8,7 @@ pub mod camera;
 pub mod convert;
 pub mod envsample;
 pub mod filter;
+pub mod fis;
 pub mod mapping;
 pub mod mc;
 pub mod mip;
