@@ -1,6 +1,7 @@
-//! The shading pass (`glsl/shade.frag`, its FIS estimator's float64 twin [`crate::math::fis`]): one fullscreen draw that shades each G-buffer pixel
-//! by its material's technique (mirror lookup, SH irradiance, prefiltered maps, filtered
-//! importance sampling, or the Monte Carlo accumulation) and shows the environment behind.
+//! The shading pass (`glsl/shade.frag`; its FIS estimator's float64 twin is
+//! [`crate::math::fis`]): one fullscreen draw that shades each G-buffer pixel by its
+//! material's technique (mirror lookup, SH irradiance, prefiltered maps, filtered importance
+//! sampling, or the Monte Carlo accumulation) and shows the environment behind.
 
 use super::gbuffer::{target, GBuffer};
 use super::map::GpuEnvMap;
