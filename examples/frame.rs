@@ -32,25 +32,8 @@ struct EngineImage {
 
 impl EngineImage {
     fn new(e: &engine::Engine, desc: &ImageDesc) -> Result<EngineImage, Error> {
-        let info = vk::ImageCreateInfo::default()
-            .flags(if desc.cube {
-                vk::ImageCreateFlags::CUBE_COMPATIBLE
-            } else {
-                vk::ImageCreateFlags::empty()
-            })
-            .image_type(vk::ImageType::TYPE_2D)
-            .format(desc.format)
-            .extent(vk::Extent3D {
-                width: desc.width,
-                height: desc.height,
-                depth: 1,
-            })
-            .mip_levels(desc.mips)
-            .array_layers(desc.layers)
-            .samples(vk::SampleCountFlags::TYPE_1)
-            .tiling(vk::ImageTiling::OPTIMAL)
-            .usage(desc.usage)
-            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // The create info envlight expects of an image it is handed.
+        let info = desc.create_info();
         // SAFETY: valid device and create info.
         let raw = unsafe { e.device.create_image(&info, None)? };
         // SAFETY: raw is a live image of this device.

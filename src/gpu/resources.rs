@@ -160,6 +160,33 @@ pub struct ImageDesc {
     pub mips: u32,
 }
 
+impl ImageDesc {
+    /// The create info of an image of this description: what envlight makes, and what an
+    /// engine's image handed to [`Image::from_raw`] must be created as.
+    pub fn create_info(&self) -> vk::ImageCreateInfo<'static> {
+        vk::ImageCreateInfo::default()
+            .flags(if self.cube {
+                vk::ImageCreateFlags::CUBE_COMPATIBLE
+            } else {
+                vk::ImageCreateFlags::empty()
+            })
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(self.format)
+            .extent(vk::Extent3D {
+                width: self.width,
+                height: self.height,
+                depth: 1,
+            })
+            .mip_levels(self.mips)
+            .array_layers(self.layers)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(self.usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED)
+    }
+}
+
 /// A 2D array image with its memory, an array view and, for cubes, a cube view.
 pub struct Image {
     shared: Arc<Shared>,
@@ -191,40 +218,11 @@ impl Image {
                 desc.width, desc.height
             )));
         }
-        let info = vk::ImageCreateInfo::default()
-            .flags(if desc.cube {
-                vk::ImageCreateFlags::CUBE_COMPATIBLE
-            } else {
-                vk::ImageCreateFlags::empty()
-            })
-            .image_type(vk::ImageType::TYPE_2D)
-            .format(desc.format)
-            .extent(vk::Extent3D {
-                width: desc.width,
-                height: desc.height,
-                depth: 1,
-            })
-            .mip_levels(desc.mips)
-            .array_layers(desc.layers)
-            .samples(vk::SampleCountFlags::TYPE_1)
-            .tiling(vk::ImageTiling::OPTIMAL)
-            .usage(desc.usage)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE)
-            .initial_layout(vk::ImageLayout::UNDEFINED);
+        let info = desc.create_info();
         // SAFETY: valid device and create info.
         let raw = unsafe { s.device.create_image(&info, None) }.vk("creating an image")?;
         s.track();
-        let mut image = Image {
-            shared: s.clone(),
-            raw,
-            allocation: None,
-            view: vk::ImageView::null(),
-            cube_view: vk::ImageView::null(),
-            level_views: Vec::new(),
-            desc,
-            state: Mutex::new(Usage::Undefined),
-            owned: true,
-        };
+        let mut image = Image::wrap(s, raw, desc, Usage::Undefined, true);
         s.name(raw, name);
         // SAFETY: raw is a live image of this device.
         let requirements = unsafe { s.device.get_image_memory_requirements(raw) };
@@ -258,20 +256,31 @@ impl Image {
     ) -> Result<Image> {
         assert!(desc.width > 0 && desc.height > 0 && desc.layers > 0 && desc.mips > 0);
         assert!(!desc.cube || (desc.layers == 6 && desc.width == desc.height));
-        let mut image = Image {
-            shared: ctx.shared.clone(),
+        ctx.shared.track();
+        let mut image = Image::wrap(&ctx.shared, raw, desc, current, false);
+        image.make_views(name)?;
+        Ok(image)
+    }
+
+    /// An image value around `raw`, with no memory and no views yet.
+    fn wrap(
+        shared: &Arc<Shared>,
+        raw: vk::Image,
+        desc: ImageDesc,
+        state: Usage,
+        owned: bool,
+    ) -> Image {
+        Image {
+            shared: shared.clone(),
             raw,
             allocation: None,
             view: vk::ImageView::null(),
             cube_view: vk::ImageView::null(),
             level_views: Vec::new(),
             desc,
-            state: Mutex::new(current),
-            owned: false,
-        };
-        ctx.shared.track();
-        image.make_views(name)?;
-        Ok(image)
+            state: Mutex::new(state),
+            owned,
+        }
     }
 
     fn make_views(&mut self, name: &str) -> Result<()> {

@@ -154,7 +154,6 @@ impl GpuEnvMap {
 
     /// Uploads a map into a new GPU map and waits (see [`GpuEnvMap::record_upload`]).
     pub fn upload(ctx: &Context, map: &EnvMap) -> Result<GpuEnvMap> {
-        check_radiance(map)?;
         let g = GpuEnvMap::new(ctx, "uploaded map", map.mapping, map.width, map.height)?;
         ctx.run("uploading a map", |rec| g.record_upload(rec, map))?;
         Ok(g)
@@ -163,7 +162,6 @@ impl GpuEnvMap {
     /// As [`GpuEnvMap::upload`], into level 0 of a map with a full MIP chain (the other
     /// levels undefined, for a pass to fill).
     pub fn upload_mipped(ctx: &Context, map: &EnvMap) -> Result<GpuEnvMap> {
-        check_radiance(map)?;
         let g = GpuEnvMap::with_mips(ctx, "uploaded map", map.mapping, map.width, map.height)?;
         ctx.run("uploading a map", |rec| g.record_upload(rec, map))?;
         Ok(g)
