@@ -196,6 +196,10 @@ pub mod defaults {
 pub const SH_MAX_LMAX: u32 = 8;
 /// Workgroup size of the SH passes: one texel (or partial sum) per invocation.
 pub const SH_WORKGROUP: u32 = 64;
+/// Texels each SH projection invocation sums in registers before the workgroup sums, on
+/// lat-long and cube maps: fewer workgroup reductions (each a barrier per coefficient), at an
+/// f32 sum SH_RUN long. Disc mappings take one (their rim rule is long; see sh_project.comp).
+pub const SH_RUN: u32 = 16;
 
 /// Workgroup size of 2D compute passes (specialization constants 0 and 1).
 pub const WORKGROUP_2D: [u32; 2] = [8, 8];

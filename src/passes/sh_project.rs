@@ -5,12 +5,12 @@ use super::map::GpuEnvMap;
 use crate::abi::{
     binding,
     push::{ShProjectPush, ShReducePush},
-    ShaderId, SH_MAX_LMAX, SH_WORKGROUP,
+    ShaderId, SH_MAX_LMAX, SH_RUN, SH_WORKGROUP,
 };
 use crate::error::{Error, Result};
 use crate::gpu::{mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
 use crate::math::sh;
-use crate::Orientation;
+use crate::{Mapping, Orientation};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -87,7 +87,9 @@ pub enum Subgroups {
 /// The projection pass.
 pub struct ShProjector {
     ctx: Context,
-    project: Pipeline,
+    /// One projection pipeline per band and mapping (specialisation constants), built on first use.
+    project: std::sync::Mutex<Vec<Option<Pipeline>>>,
+    project_shader: ShaderId,
     reduce: Pipeline,
     sampler: Sampler,
     subgroups: bool,
@@ -109,11 +111,20 @@ impl ShProjector {
         };
         Ok(ShProjector {
             ctx: ctx.clone(),
-            project: Pipeline::compute(ctx, p, &[SH_WORKGROUP])?,
+            project: std::sync::Mutex::new((0..(SH_MAX_LMAX + 1) * 4).map(|_| None).collect()),
+            project_shader: p,
             reduce: Pipeline::compute(ctx, r, &[SH_WORKGROUP])?,
             sampler: Sampler::linear_clamp(ctx, "sh sampler")?,
             subgroups: use_sg,
         })
+    }
+
+    /// Texels per invocation (see `glsl/sh_project.comp`).
+    fn run_length(mapping: Mapping) -> u32 {
+        match mapping {
+            Mapping::LatLong | Mapping::Cube => SH_RUN,
+            Mapping::Angular | Mapping::DualParaboloid => 1,
+        }
     }
 
     /// Whether this projector uses subgroup operations.
@@ -149,7 +160,8 @@ impl ShProjector {
         assert!(out.size() >= row_bytes, "the SH output buffer is too small");
         let texels = map.width * map.height * map.mapping.layers();
         let max = self.ctx.info().max_workgroup_count;
-        let groups = texels.div_ceil(SH_WORKGROUP);
+        let run = Self::run_length(map.mapping);
+        let groups = texels.div_ceil(SH_WORKGROUP * run);
         let (gx, gy) = grid(groups, max);
         // Rows of partial sums at each level of the tree, down to one.
         let mut levels = vec![gx * gy];
@@ -176,9 +188,22 @@ impl ShProjector {
             texels,
             pad: [0; 3],
         };
+        let mut project = self
+            .project
+            .lock()
+            .map_err(|_| Error::Invalid("the SH pipeline lock is poisoned".into()))?;
+        let slot = &mut project[(lmax + (SH_MAX_LMAX + 1) * map.mapping.id()) as usize];
+        if slot.is_none() {
+            *slot = Some(Pipeline::compute(
+                &self.ctx,
+                self.project_shader,
+                &[SH_WORKGROUP, lmax, map.mapping.id(), run],
+            )?);
+        }
+        let pipeline = slot.as_ref().expect("built above");
         rec.span("sh project", |rec| {
             rec.dispatch(
-                &self.project,
+                pipeline,
                 &[
                     (
                         binding::SH_SRC,
