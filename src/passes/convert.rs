@@ -37,8 +37,8 @@ fn texels_on_sphere(m: Mapping, w: u32, h: u32) -> f64 {
 /// The conversion pass. Pipelines are built on first use, one per source kind.
 pub struct Converter {
     ctx: Context,
-    from_2d: OnceLock<Pipeline>,
-    from_cube: OnceLock<Pipeline>,
+    /// One pipeline per (source, destination) mapping pair, specialised on both.
+    pipelines: [OnceLock<Pipeline>; 16],
     sampler: Sampler,
 }
 
@@ -47,21 +47,21 @@ impl Converter {
     pub fn new(ctx: &Context) -> Result<Converter> {
         Ok(Converter {
             ctx: ctx.clone(),
-            from_2d: OnceLock::new(),
-            from_cube: OnceLock::new(),
+            pipelines: Default::default(),
             sampler: Sampler::linear_clamp(ctx, "convert sampler")?,
         })
     }
 
-    fn pipeline(&self, cube: bool) -> Result<&Pipeline> {
-        let (cell, id) = if cube {
-            (&self.from_cube, ShaderId::ConvertCube)
+    fn pipeline(&self, from: Mapping, to: Mapping) -> Result<&Pipeline> {
+        let cell = &self.pipelines[(4 * from.id() + to.id()) as usize];
+        let id = if from == Mapping::Cube {
+            ShaderId::ConvertCube
         } else {
-            (&self.from_2d, ShaderId::Convert2d)
+            ShaderId::Convert2d
         };
         if cell.get().is_none() {
-            let p = Pipeline::compute(&self.ctx, id, &WORKGROUP_2D)?;
-            let _ = cell.set(p);
+            let spec = [WORKGROUP_2D[0], WORKGROUP_2D[1], from.id(), to.id()];
+            let _ = cell.set(Pipeline::compute(&self.ctx, id, &spec)?);
         }
         Ok(cell.get().unwrap_or_else(|| unreachable!("set above")))
     }
@@ -105,7 +105,7 @@ impl Converter {
             pad: 0,
         };
         let cube = src.mapping == Mapping::Cube;
-        let pipeline = self.pipeline(cube)?;
+        let pipeline = self.pipeline(src.mapping, opts.to)?;
         let label = format!(
             "convert {} -> {} {w}x{h}",
             src.mapping.name(),
