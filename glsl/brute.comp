@@ -3,18 +3,27 @@
 // (Miller & Hoffman 1984), the float64 twin being src/math/filter.rs. Built twice:
 // - PREPARE: one invocation per source texel writes its centre direction (world), the cosine of
 //   its angular radius, its radiance and its exact solid angle (0 where it holds no sphere);
+// - TILES: one invocation per tile of BRUTE_TILE² source texels writes a cone bounding all
+//   its texels' cones (w = 2 when it holds none);
 // - otherwise: one invocation per output texel sums L·∫K over every source texel, choosing per
 //   texel the same rule as the CPU (skip, centre node, or s×s cells of 3×3 Gauss points), with
 //   Kahan compensation so a sun 1e5 times the sky does not swamp the sum. The source is taken
 //   in chunks, one dispatch each, accumulating into dst (and the compensation buffer), so that
 //   no invocation runs more loop iterations than llvmpipe allows (DeviceInfo::
-//   loop_iteration_limit); the node loops are unrolled for the same reason.
+//   loop_iteration_limit); the node loops are unrolled for the same reason. Texels are
+//   walked tile by tile ("slots": tile-major, BRUTE_TILE² per tile, the chunks count slots),
+//   and a tile whose cone lies wholly where the rule skips texels is skipped whole: every
+//   texel in it would have been skipped, so the sum is the same, term for term.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #include "mappings.glsl"
 #include "kernel.glsl"
 
-#ifdef PREPARE
+#if defined(TILES)
+layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
+layout(std430, set = 0, binding = BINDING_BRUTE_TILE_CONES) readonly buffer Cones { vec4 cones[]; };
+layout(std430, set = 0, binding = BINDING_BRUTE_TILE_OUT) writeonly buffer Tiles { vec4 tiles[]; };
+#elif defined(PREPARE)
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(set = 0, binding = BINDING_BRUTE_PREP_SRC) uniform sampler2DArray src;
 layout(std430, set = 0, binding = BINDING_BRUTE_PREP_CONES) writeonly buffer Cones { vec4 cones[]; };
@@ -25,6 +34,7 @@ layout(std430, set = 0, binding = BINDING_BRUTE_CONES) readonly buffer Cones { v
 layout(std430, set = 0, binding = BINDING_BRUTE_RADIANCE) readonly buffer Rad { vec4 rad[]; };
 layout(set = 0, binding = BINDING_BRUTE_DST, rgba32f) uniform image2DArray dst;
 layout(std430, set = 0, binding = BINDING_BRUTE_COMP) buffer Comp { vec4 comp_buf[]; };
+layout(std430, set = 0, binding = BINDING_BRUTE_TILES) readonly buffer Tiles { vec4 tiles[]; };
 #endif
 
 // The push block, generated from src/abi.rs.
@@ -49,7 +59,53 @@ bool rim_cut(ivec2 p) {
     return dot(f, f) > 1.0;
 }
 
-#ifdef PREPARE
+// Tiles per row and per layer of the source.
+uvec2 tile_grid() {
+    return (pc.src_size + BRUTE_TILE - 1u) / BRUTE_TILE;
+}
+
+// The texel in slot s of tile `tile`, or -1 where the tile overhangs the map's edge.
+int slot_texel(uint tile, uint s) {
+    uvec2 g = tile_grid();
+    uint per_layer = g.x * g.y;
+    uint layer = tile / per_layer, r = tile % per_layer;
+    uvec2 q = uvec2(r % g.x, r / g.x) * BRUTE_TILE + uvec2(s % BRUTE_TILE, s / BRUTE_TILE);
+    if (any(greaterThanEqual(q, pc.src_size))) return -1;
+    return int((layer * pc.src_size.y + q.y) * pc.src_size.x + q.x);
+}
+
+#if defined(TILES)
+void main() {
+    uint tile = gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x + gl_GlobalInvocationID.x;
+    uvec2 g = tile_grid();
+    if (tile >= g.x * g.y * pc.src_layers) return;
+    // Axis: the mean of the texel centres; radius: the farthest texel cone edge from it.
+    vec3 sum = vec3(0.0);
+    for (uint s = 0u; s < BRUTE_TILE * BRUTE_TILE; s++) {
+        int t = slot_texel(tile, s);
+        if (t >= 0 && cones[t].w <= 1.0) sum += cones[t].xyz;
+    }
+    if (dot(sum, sum) == 0.0) {
+        tiles[tile] = vec4(0.0, 0.0, 1.0, 2.0);
+        return;
+    }
+    vec3 axis = normalize(sum);
+    float radius = 0.0;
+    for (uint s = 0u; s < BRUTE_TILE * BRUTE_TILE; s++) {
+        int t = slot_texel(tile, s);
+        if (t < 0 || cones[t].w > 1.0) continue;
+        vec4 c = cones[t];
+        float d = clamp(dot(axis, c.xyz), -1.0, 1.0);
+        float apart = atan2_precise(length(cross(axis, c.xyz)), d);
+        float cr = clamp(c.w, -1.0, 1.0);
+        radius = max(radius, apart + atan2_precise(sqrt(max(0.0, (1.0 - cr) * (1.0 + cr))), cr));
+    }
+    // A relative and an absolute margin cover f32 rounding in the angles, so the tile's
+    // bound is never tighter than its texels' own.
+    radius = min(radius * (1.0 + 1e-4) + 1e-5, PI);
+    tiles[tile] = vec4(axis, cos(radius));
+}
+#elif defined(PREPARE)
 void main() {
     uint i = gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x + gl_GlobalInvocationID.x;
     if (i >= pc.texels) return;
@@ -146,6 +202,18 @@ float texel_mean(vec3 axis, uint t, uint s) {
     return wsum > 0.0 ? acc / wsum : -1.0;
 }
 
+// Whether the rule skips everything inside cone c (axis, cos of radius; w > 1: empty): the
+// largest cosine to the axis over the cone, cos(θc − ρ), is at or below the horizon, or the
+// lobe there is below the cutoff. texel_weight makes the same two tests per texel.
+bool cone_skipped(vec3 axis, float n, vec4 c) {
+    if (c.w > 1.0) return true;
+    float x = dot(axis, c.xyz);
+    float sin_rho = sqrt(max(0.0, (1.0 - c.w) * (1.0 + c.w)));
+    float sin_c = sqrt(max(0.0, (1.0 - x) * (1.0 + x)));
+    float x_max = x >= c.w ? 1.0 : x * c.w + sin_c * sin_rho;
+    return x_max <= 0.0 || (n > 1.0 && n * log(x_max) < FILTER_LOG_CUTOFF);
+}
+
 // ∫K over source texel t (0 where skipped): the rule of filter::rule, decision for decision.
 float texel_weight(vec3 axis, float n, uint t) {
     float omega = rad[t].w;
@@ -188,14 +256,23 @@ void main() {
         sum = imageLoad(dst, ivec3(id)).rgb;
         comp = comp_buf[o].rgb;
     }
-    for (uint t = pc.chunk_begin; t < pc.chunk_end; t++) {
-        float k = texel_weight(axis, n, t);
-        if (k > 0.0) {
-            vec4 rw = rad[t];
-            precise vec3 y = rw.rgb * (rw.w * k) - comp;
-            precise vec3 tsum = sum + y;
-            comp = (tsum - sum) - y;
-            sum = tsum;
+    const uint per_tile = BRUTE_TILE * BRUTE_TILE;
+    for (uint tile = pc.chunk_begin / per_tile; tile * per_tile < pc.chunk_end; tile++) {
+        if (cone_skipped(axis, n, tiles[tile])) continue;
+        uint first = max(pc.chunk_begin, tile * per_tile) - tile * per_tile;
+        uint last = min(pc.chunk_end, (tile + 1u) * per_tile) - tile * per_tile;
+        for (uint s = first; s < last; s++) {
+            int ti = slot_texel(tile, s);
+            if (ti < 0) continue;
+            uint t = uint(ti);
+            float k = texel_weight(axis, n, t);
+            if (k > 0.0) {
+                vec4 rw = rad[t];
+                precise vec3 y = rw.rgb * (rw.w * k) - comp;
+                precise vec3 tsum = sum + y;
+                comp = (tsum - sum) - y;
+                sum = tsum;
+            }
         }
     }
     comp_buf[o] = vec4(comp, 0.0);

@@ -57,6 +57,12 @@ pub mod binding {
         BRUTE_DST = 2;
         /// brute: the Kahan compensation per output texel, carried between chunks (vec4 buffer).
         BRUTE_COMP = 3;
+        /// brute: per-tile bounding cones written by brute_tiles (vec4 buffer).
+        BRUTE_TILES = 4;
+        /// brute_tiles: the per-texel cones written by brute_prepare.
+        BRUTE_TILE_CONES = 0;
+        /// brute_tiles: the per-tile bounding cones (axis, cos of radius; w = 2 when empty).
+        BRUTE_TILE_OUT = 1;
         /// sh_eval: the coefficients, Â_l and window folded in (vec4 buffer).
         SH_EVAL_COEFFS = 0;
         /// sh_eval: the output map (rgba32f image2DArray).
@@ -191,6 +197,11 @@ pub mod defaults {
     /// Side of prefiltered lat-long maps.
     pub const PREFILTERED_SIZE: u32 = 64;
 }
+
+/// Side of the square tiles of source texels that the brute-force pass culls as a whole: a
+/// tile whose bounding cone lies where the kernel is below the per-texel cutoff holds only
+/// texels the per-texel rule would skip, so skipping it changes nothing.
+pub const BRUTE_TILE: u32 = 16;
 
 /// Highest SH band the GPU projection supports.
 pub const SH_MAX_LMAX: u32 = 8;
@@ -421,12 +432,14 @@ pub mod push {
             texels: u32 = "uint",
             /// 0 for the cosine, else the Phong exponent.
             exponent: f32 = "float",
-            /// First source texel this dispatch sums.
+            /// First source slot this dispatch sums (tile-major: BRUTE_TILE² slots a tile).
             chunk_begin: u32 = "uint",
             /// One past the last.
             chunk_end: u32 = "uint",
+            /// Source layers.
+            src_layers: u32 = "uint",
             /// Padding.
-            pad: [u32; 2] = "uint[2]",
+            pad: u32 = "uint",
         }
         /// `glsl/sh_eval.comp`.
         ShEvalPush {
@@ -553,10 +566,14 @@ macro_rules! shader_table {
             BrutePrepare = "brute_prepare", "brute.comp", Compute, [("PREPARE", "1")], BrutePush,
                 [(BRUTE_PREP_SRC, Sampled, Read), (BRUTE_PREP_CONES, StorageBuffer, Write),
                  (BRUTE_PREP_RADIANCE, StorageBuffer, Write)];
+            /// Brute-force convolution: a bounding cone per tile of BRUTE_TILE² texels.
+            BruteTiles = "brute_tiles", "brute.comp", Compute, [("TILES", "1")], BrutePush,
+                [(BRUTE_TILE_CONES, StorageBuffer, Read), (BRUTE_TILE_OUT, StorageBuffer, Write)];
             /// Brute-force convolution with the cosine or a Phong lobe.
             Brute = "brute", "brute.comp", Compute, [], BrutePush,
                 [(BRUTE_CONES, StorageBuffer, Read), (BRUTE_RADIANCE, StorageBuffer, Read),
-                 (BRUTE_DST, StorageImage, ReadWrite), (BRUTE_COMP, StorageBuffer, ReadWrite)];
+                 (BRUTE_DST, StorageImage, ReadWrite), (BRUTE_COMP, StorageBuffer, ReadWrite),
+                 (BRUTE_TILES, StorageBuffer, Read)];
             /// Irradiance from SH coefficients into a map.
             ShEval = "sh_eval", "sh_eval.comp", Compute, [], ShEvalPush,
                 [(SH_EVAL_COEFFS, StorageBuffer, Read), (SH_EVAL_DST, StorageImage, Write)];
@@ -651,6 +668,7 @@ pub fn generated_header() -> String {
     let n = (SH_MAX_LMAX + 1) * (SH_MAX_LMAX + 1);
     let _ = writeln!(s, "#define SH_MAX_COEFFS {n}");
     let _ = writeln!(s, "#define SH_WORKGROUP {SH_WORKGROUP}");
+    let _ = writeln!(s, "#define BRUTE_TILE {BRUTE_TILE}u");
     let _ = writeln!(s, "#define FILTER_EDGE_CELLS {}u", filter_rule::EDGE_CELLS);
     let _ = writeln!(s, "#define FILTER_MAX_CELLS {}u", filter_rule::MAX_CELLS);
     let f = |x: f64| format!("{:?}", x as f32);

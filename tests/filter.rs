@@ -26,7 +26,9 @@ fn brute_gpu(
     let (out, t) = pass
         .run(&g, &Orientation::default(), kernel, target)
         .unwrap();
-    assert_eq!(t.len(), 2);
+    let spans: Vec<&str> = t.iter().map(|t| t.label.as_str()).collect();
+    assert_eq!(spans[..2], ["brute prepare", "brute tiles"]);
+    assert_eq!(spans.len(), 3);
     out.download(ctx).unwrap()
 }
 

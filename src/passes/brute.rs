@@ -3,7 +3,9 @@
 //! [`crate::math::filter`]).
 
 use super::map::GpuEnvMap;
-use crate::abi::{binding, constants, push::BrutePush, ShaderId, WORKGROUP_1D, WORKGROUP_2D};
+use crate::abi::{
+    binding, constants, push::BrutePush, ShaderId, BRUTE_TILE, WORKGROUP_1D, WORKGROUP_2D,
+};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing};
 use crate::math::filter::{self, Kernel};
@@ -31,6 +33,7 @@ impl FilterTarget {
 pub struct BruteFilter {
     ctx: Context,
     prepare: Pipeline,
+    tiles: Pipeline,
     brute: Pipeline,
     sampler: Sampler,
 }
@@ -41,6 +44,7 @@ impl BruteFilter {
         Ok(BruteFilter {
             ctx: ctx.clone(),
             prepare: Pipeline::compute(ctx, ShaderId::BrutePrepare, &[WORKGROUP_1D])?,
+            tiles: Pipeline::compute(ctx, ShaderId::BruteTiles, &[WORKGROUP_1D])?,
             brute: Pipeline::compute(ctx, ShaderId::Brute, &WORKGROUP_2D)?,
             sampler: Sampler::linear_clamp(ctx, "brute sampler")?,
         })
@@ -49,7 +53,7 @@ impl BruteFilter {
     /// Records the convolution of `src` (oriented by `orientation`) with `kernel` into
     /// `dst`, in the world frame: irradiance E(n) for [`Kernel::Cosine`], the normalised
     /// Phong prefilter indexed by the reflection direction for [`Kernel::Phong`]. Spans:
-    /// "brute prepare", then "brute irradiance" or "brute phong".
+    /// "brute prepare", "brute tiles", then "brute irradiance" or "brute phong".
     pub fn record(
         &self,
         rec: &mut Recorder,
@@ -90,9 +94,14 @@ impl BruteFilter {
             texels,
             exponent,
             chunk_begin: 0,
-            chunk_end: texels,
-            pad: [0; 2],
+            chunk_end: 0,
+            src_layers: src.mapping.layers(),
+            pad: 0,
         };
+        let tile_count =
+            src.width.div_ceil(BRUTE_TILE) * src.height.div_ceil(BRUTE_TILE) * src.mapping.layers();
+        let slots = tile_count * BRUTE_TILE * BRUTE_TILE;
+        let tiles = scratch("brute tiles", tile_count as u64 * 16)?;
         let prep_groups = texels.div_ceil(WORKGROUP_1D);
         let gx = prep_groups.min(ctx.info().max_workgroup_count.min(65535));
         let gy = prep_groups.div_ceil(gx);
@@ -111,6 +120,19 @@ impl BruteFilter {
                 [gx, gy, 1],
             )
         })?;
+        let tile_groups = tile_count.div_ceil(WORKGROUP_1D);
+        let tx = tile_groups.min(ctx.info().max_workgroup_count.min(65535));
+        rec.span("brute tiles", |rec| {
+            rec.dispatch(
+                &self.tiles,
+                &[
+                    (binding::BRUTE_TILE_CONES, Bind::Buffer(&cones)),
+                    (binding::BRUTE_TILE_OUT, Bind::Buffer(&tiles)),
+                ],
+                &push,
+                [tx, tile_groups.div_ceil(tx), 1],
+            )
+        })?;
         let label = match kernel {
             Kernel::Cosine => "brute irradiance",
             Kernel::Phong { .. } => "brute phong",
@@ -120,8 +142,8 @@ impl BruteFilter {
         rec.discard(&dst.image);
         rec.span(label, |rec| {
             let mut begin = 0;
-            while begin < texels {
-                let end = texels.min(begin.saturating_add(chunk));
+            while begin < slots {
+                let end = slots.min(begin.saturating_add(chunk));
                 rec.dispatch(
                     &self.brute,
                     &[
@@ -129,6 +151,7 @@ impl BruteFilter {
                         (binding::BRUTE_RADIANCE, Bind::Buffer(&rad)),
                         (binding::BRUTE_DST, Bind::Storage(&dst.image)),
                         (binding::BRUTE_COMP, Bind::Buffer(&comp)),
+                        (binding::BRUTE_TILES, Bind::Buffer(&tiles)),
                     ],
                     &BrutePush {
                         chunk_begin: begin,
@@ -145,7 +168,7 @@ impl BruteFilter {
             }
             Ok(())
         })?;
-        rec.keep((cones, rad, comp));
+        rec.keep((cones, rad, comp, tiles));
         Ok(())
     }
 
@@ -168,7 +191,7 @@ impl BruteFilter {
 }
 
 impl BruteFilter {
-    /// Source texels per dispatch: all of them, or where the device cuts long loops short
+    /// Source slots (tile-major texels) per dispatch: all, or where the device cuts long loops short
     /// ([`crate::gpu::DeviceInfo::loop_iteration_limit`]), as many as keep every invocation's
     /// loop iterations within 90% of the limit: one for the texel loop plus, per texel, at
     /// most s² cell iterations (s from the rule for the source's widest texel) or ~130 for a
