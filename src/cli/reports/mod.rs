@@ -5,6 +5,7 @@
 pub mod accuracy;
 pub mod fis;
 pub mod fis_report;
+pub mod peers;
 
 use super::{context, Global};
 use anyhow::{Context as _, Result};
@@ -87,6 +88,25 @@ pub enum Bench {
         #[arg(long, default_value = "docs/fis")]
         out: PathBuf,
     },
+    /// Whole-process times of the jobs users give cmft, paired with cmft on the same machine,
+    /// each with its error (markdown; see docs/BENCHMARKS.md)
+    Peers {
+        /// The map every job reads (.hdr, which cmft reads too)
+        #[arg(long, default_value = "../shared/probes/spiaggia_di_mondello_1k.hdr")]
+        map: PathBuf,
+        /// cmft's executable (default: $ENVLIGHT_CMFT); without it cmft's columns stay empty
+        #[arg(long)]
+        cmft: Option<PathBuf>,
+        /// Timed pairs per fast job (the median is reported)
+        #[arg(long, default_value_t = 5)]
+        reps: usize,
+        /// Timed pairs for the Phong job
+        #[arg(long, default_value_t = 1)]
+        phong_reps: usize,
+        /// Also write the report here
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Conversion time at several source widths, against a plain copy of the same source
     Convert {
         /// Source lat-long widths
@@ -124,6 +144,27 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
             reps,
         } => bench_irradiance(g, sizes, *source, *reps),
         Bench::Sh { sizes, reps } => bench_sh(g, sizes, *reps),
+        Bench::Peers {
+            map,
+            cmft,
+            reps,
+            phong_reps,
+            out,
+        } => {
+            let cmft = cmft
+                .clone()
+                .or_else(|| std::env::var_os("ENVLIGHT_CMFT").map(PathBuf::from));
+            if cmft.is_none() {
+                eprintln!("ENVLIGHT_CMFT is not set: timing envlight alone, cmft skipped");
+            }
+            peers::bench_peers(&peers::PeersOptions {
+                map,
+                cmft: cmft.as_deref(),
+                reps: *reps,
+                phong_reps: *phong_reps,
+                out: out.as_deref(),
+            })
+        }
     }
 }
 
