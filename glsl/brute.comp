@@ -102,7 +102,7 @@ void main() {
     }
     // A relative and an absolute margin cover f32 rounding in the angles, so the tile's
     // bound is never tighter than its texels' own.
-    radius = min(radius * (1.0 + 1e-4) + 1e-5, PI);
+    radius = min(radius * (1.0 + FILTER_TILE_MARGIN_REL) + FILTER_TILE_MARGIN_ABS, PI);
     tiles[tile] = vec4(axis, cos(radius));
 }
 #elif defined(PREPARE)

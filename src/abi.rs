@@ -155,6 +155,11 @@ pub mod filter_rule {
     pub const CELLS_PER_WIDTH: f64 = 2.0;
     /// Below this n·ρ² a texel away from the horizon takes one node.
     pub const CENTRE_LIMIT: f64 = 1e-5;
+    /// A tile's bounding radius is widened by this fraction, and then by TILE_MARGIN_ABS
+    /// radians, so that f32 rounding in its angles never makes it tighter than its texels'.
+    pub const TILE_MARGIN_REL: f64 = 1e-4;
+    /// See TILE_MARGIN_REL.
+    pub const TILE_MARGIN_ABS: f64 = 1e-5;
     /// Lobe values below this fraction of the peak are dropped (ln 1e-10).
     pub const LOG_CUTOFF: f64 = -23.025_850_929_940_457;
     /// A texel's angular radius is widened by this factor when bounding its cone, so the cone
@@ -677,6 +682,8 @@ pub fn generated_header() -> String {
         ("FILTER_CENTRE_LIMIT", filter_rule::CENTRE_LIMIT),
         ("FILTER_LOG_CUTOFF", filter_rule::LOG_CUTOFF),
         ("FILTER_CONE_MARGIN", filter_rule::CONE_MARGIN),
+        ("FILTER_TILE_MARGIN_REL", filter_rule::TILE_MARGIN_REL),
+        ("FILTER_TILE_MARGIN_ABS", filter_rule::TILE_MARGIN_ABS),
         ("POLE_THRESHOLD", constants::POLE_THRESHOLD),
         ("VIEW_LIFT", constants::VIEW_LIFT),
         ("SHADOW_OFFSET", constants::SHADOW_OFFSET),
