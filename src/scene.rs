@@ -392,7 +392,7 @@ impl PassKind {
                 ShProjectShared,
                 ShReduceShared,
             ],
-            PassKind::Prefilter => &[BrutePrepare, Brute],
+            PassKind::Prefilter => &[BrutePrepare, BruteTiles, Brute],
             PassKind::MonteCarlo => &[Mc],
             PassKind::Shade => &[Shade],
         }
