@@ -13,6 +13,7 @@ use crate::math::sh;
 use crate::{Mapping, Orientation};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
+use std::sync::OnceLock;
 
 /// SH coefficients of radiance, RGB, flat index k = l(l+1)+m.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -84,11 +85,14 @@ pub enum Subgroups {
     Off,
 }
 
+/// Projection pipelines: one per band and mapping.
+const PROJECT_VARIANTS: usize = (SH_MAX_LMAX as usize + 1) * 4;
+
 /// The projection pass.
 pub struct ShProjector {
     ctx: Context,
     /// One projection pipeline per band and mapping (specialisation constants), built on first use.
-    project: std::sync::Mutex<Vec<Option<Pipeline>>>,
+    project: [OnceLock<Pipeline>; PROJECT_VARIANTS],
     project_shader: ShaderId,
     reduce: Pipeline,
     sampler: Sampler,
@@ -111,7 +115,7 @@ impl ShProjector {
         };
         Ok(ShProjector {
             ctx: ctx.clone(),
-            project: std::sync::Mutex::new((0..(SH_MAX_LMAX + 1) * 4).map(|_| None).collect()),
+            project: std::array::from_fn(|_| OnceLock::new()),
             project_shader: p,
             reduce: Pipeline::compute(ctx, r, &[SH_WORKGROUP])?,
             sampler: Sampler::linear_clamp(ctx, "sh sampler")?,
@@ -188,19 +192,12 @@ impl ShProjector {
             texels,
             pad: [0; 3],
         };
-        let mut project = self
-            .project
-            .lock()
-            .map_err(|_| Error::Invalid("the SH pipeline lock is poisoned".into()))?;
-        let slot = &mut project[(lmax + (SH_MAX_LMAX + 1) * map.mapping.id()) as usize];
-        if slot.is_none() {
-            *slot = Some(Pipeline::compute(
-                &self.ctx,
-                self.project_shader,
-                &[SH_WORKGROUP, lmax, map.mapping.id(), run],
-            )?);
+        let cell = &self.project[(lmax + (SH_MAX_LMAX + 1) * map.mapping.id()) as usize];
+        if cell.get().is_none() {
+            let spec = [SH_WORKGROUP, lmax, map.mapping.id(), run];
+            let _ = cell.set(Pipeline::compute(&self.ctx, self.project_shader, &spec)?);
         }
-        let pipeline = slot.as_ref().expect("built above");
+        let pipeline = cell.get().unwrap_or_else(|| unreachable!("set above"));
         rec.span("sh project", |rec| {
             rec.dispatch(
                 pipeline,
