@@ -65,4 +65,13 @@ fn main() {
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }
+    let messages = cli::validation_messages();
+    if !messages.is_empty() {
+        eprintln!(
+            "error: the Vulkan validation layer reported {} message(s):\n{}",
+            messages.len(),
+            messages.join("\n")
+        );
+        std::process::exit(1);
+    }
 }

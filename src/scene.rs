@@ -255,13 +255,11 @@ impl Scene {
 
     /// Checks every value a render depends on; the message names the object.
     pub fn validate(&self) -> std::result::Result<(), String> {
-        let c = &self.camera;
-        if c.width == 0 || c.height == 0 || c.width > 16384 || c.height > 16384 {
-            return Err(format!(
-                "camera resolution {} x {} is outside 1 to 16384",
-                c.width, c.height
-            ));
-        }
+        self.camera.validate()?;
+        self.environment
+            .orientation()
+            .validate()
+            .map_err(|m| format!("environment: {m}"))?;
         if !(self.environment.intensity.is_finite() && self.environment.intensity >= 0.0) {
             return Err(format!(
                 "environment intensity {} must be finite and non-negative",
@@ -281,6 +279,7 @@ impl Scene {
         }
         for (k, o) in self.objects.iter().enumerate() {
             let what = format!("object {k} ({:?})", o.material.kind);
+            o.shape.validate().map_err(|m| format!("object {k}: {m}"))?;
             o.material
                 .kind
                 .validate()

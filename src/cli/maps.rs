@@ -1,8 +1,8 @@
 //! `envlight convert`, `sh`, `irradiance` and `prefilter`: one map in, one result out.
 
 use super::{
-    context, load_input, print_timings, save, spinner, write_map, FilterOut, Global, Input,
-    MappingArg, Orient,
+    context, finite_f32, finite_f64, load_input, print_timings, save, spinner, write_map,
+    FilterOut, Global, Input, MappingArg, Orient,
 };
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, ValueEnum};
@@ -39,7 +39,7 @@ pub struct ConvertArgs {
     #[arg(long)]
     png: bool,
     /// Exposure of the PNG preview, in stops
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite_f32)]
     exposure: f32,
 }
 
@@ -103,7 +103,7 @@ pub struct IrradianceArgs {
     #[arg(long, value_parser = parse_window, default_value = "none")]
     window: WindowArg,
     /// Strength of the Sloan window, or width of the Hanning window (default 2·(order+1))
-    #[arg(long)]
+    #[arg(long, value_parser = finite_f64)]
     lambda: Option<f64>,
     #[command(flatten)]
     out: FilterOut,
@@ -118,7 +118,7 @@ pub struct PrefilterArgs {
     #[command(flatten)]
     orient: Orient,
     /// Phong exponent n (envlight::abi::constants::PHONG_EXPONENT_RANGE: 1 to 1e7)
-    #[arg(long)]
+    #[arg(long, value_parser = finite_f64)]
     phong: f64,
     #[command(flatten)]
     out: FilterOut,

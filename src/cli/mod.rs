@@ -83,7 +83,8 @@ pub struct Orient {
         long,
         value_name = "DEGREES",
         default_value_t = 0.0,
-        allow_negative_numbers = true
+        allow_negative_numbers = true,
+        value_parser = finite_f64
     )]
     pub rotate_y: f64,
 }
@@ -126,6 +127,24 @@ impl FilterOut {
     }
 }
 
+/// A float option that must be a finite number (clap's own parser takes "nan" and "inf").
+pub fn finite_f64(s: &str) -> std::result::Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(v) => Err(format!("{v} is not a finite number")),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// As [`finite_f64`], for single-precision options.
+pub fn finite_f32(s: &str) -> std::result::Result<f32, String> {
+    let v = finite_f64(s)?;
+    if v.abs() > f32::MAX as f64 {
+        return Err(format!("{v} is out of range"));
+    }
+    Ok(v as f32)
+}
+
 /// The device the options ask for.
 pub fn context(g: &Global) -> Result<Context> {
     let mut opts = ContextOptions::default();
@@ -133,7 +152,27 @@ pub fn context(g: &Global) -> Result<Context> {
         opts.device = DeviceSelector::parse(d);
     }
     opts.validation |= g.validation;
-    Ok(Context::new(&opts)?)
+    let ctx = Context::new(&opts)?;
+    if opts.validation {
+        if let Ok(mut logs) = VALIDATION_LOGS.lock() {
+            logs.push(ctx.validation_log());
+        }
+    }
+    Ok(ctx)
+}
+
+/// The validation logs of every context this process made with validation on.
+static VALIDATION_LOGS: std::sync::Mutex<Vec<envlight::gpu::ValidationLog>> =
+    std::sync::Mutex::new(Vec::new());
+
+/// Messages the validation layer reported on this process's contexts, teardown included:
+/// `main` checks them after the command has dropped its contexts, and a non-empty list
+/// fails the process (so tests that run the CLI with `--validation` see them).
+pub fn validation_messages() -> Vec<String> {
+    VALIDATION_LOGS
+        .lock()
+        .map(|logs| logs.iter().flat_map(|l| l.messages()).collect())
+        .unwrap_or_default()
 }
 
 /// A spinner on stderr while something runs.

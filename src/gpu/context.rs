@@ -92,6 +92,31 @@ pub struct AdoptInfo {
 #[derive(Default)]
 struct MessageSink {
     messages: Mutex<Vec<String>>,
+    /// Set once the context's device and instance are destroyed.
+    torn_down: std::sync::atomic::AtomicBool,
+}
+
+/// The validation messages of one context, readable after the context is gone: the layer
+/// reports leaked objects while the device and instance are destroyed, so a test checks the
+/// log after dropping the context (see [`Context::validation_log`]).
+#[derive(Clone)]
+pub struct ValidationLog(Arc<MessageSink>);
+
+impl ValidationLog {
+    /// Messages at warning or above so far.
+    pub fn messages(&self) -> Vec<String> {
+        self.0
+            .messages
+            .lock()
+            .map(|m| m.clone())
+            .unwrap_or_default()
+    }
+
+    /// Whether the context has been torn down (its last clone and resource dropped), so
+    /// that the log is complete.
+    pub fn complete(&self) -> bool {
+        self.0.torn_down.load(Ordering::SeqCst)
+    }
 }
 
 unsafe extern "system" fn debug_callback(
@@ -136,6 +161,10 @@ pub struct DeviceInfo {
     pub timestamp_valid_bits: u32,
     /// Largest 2D image dimension.
     pub max_image_dimension_2d: u32,
+    /// Largest cube image face.
+    pub max_image_dimension_cube: u32,
+    /// Largest storage buffer a descriptor may cover, bytes (128 MiB on lavapipe).
+    pub max_storage_buffer_range: u64,
     /// Driver name and version text.
     pub driver: String,
     /// Subgroup size of compute shaders.
@@ -165,7 +194,7 @@ pub(crate) struct Shared {
     command_pool: Mutex<vk::CommandPool>,
     live: AtomicI64,
     owns_device: bool,
-    sink: Box<MessageSink>,
+    sink: Arc<MessageSink>,
     /// The shader of every pipeline created, in order (what `envlight plan` is checked by).
     pub(crate) pipelines: Mutex<Vec<&'static str>>,
 }
@@ -187,7 +216,7 @@ impl Context {
     pub fn new(opts: &ContextOptions) -> Result<Context> {
         // SAFETY: loading the system's Vulkan loader runs its initialisers; nothing else to uphold.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::NoLoader(e.to_string()))?;
-        let sink = Box::<MessageSink>::default();
+        let sink = Arc::<MessageSink>::default();
 
         let mut layers = Vec::new();
         let mut extensions = Vec::new();
@@ -214,6 +243,23 @@ impl Context {
             }
             layers.push(VALIDATION_LAYER.as_ptr());
         }
+        // Synchronization validation (missing or wrong barriers) needs the layer's
+        // VK_EXT_validation_features; older layers without it get core validation only.
+        // SAFETY: plain enumeration call on a loaded entry.
+        let sync_validation = opts.validation
+            && unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }
+                .unwrap_or_default()
+                .iter()
+                .any(|e| {
+                    e.extension_name_as_c_str()
+                        .is_ok_and(|n| n == ash::ext::validation_features::NAME)
+                });
+        if sync_validation {
+            extensions.push(ash::ext::validation_features::NAME.as_ptr());
+        }
+        let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let mut features =
+            vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_features);
         let debug_utils = has_ext(ash::ext::debug_utils::NAME);
         if debug_utils {
             extensions.push(ash::ext::debug_utils::NAME.as_ptr());
@@ -227,7 +273,7 @@ impl Context {
         let types = vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
             | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
             | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE;
-        let sink_ptr = &*sink as *const MessageSink as *mut c_void;
+        let sink_ptr = Arc::as_ptr(&sink) as *mut c_void;
         let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
             .message_severity(severity)
             .message_type(types)
@@ -240,6 +286,9 @@ impl Context {
         if debug_utils && opts.validation {
             // Also catches messages from instance creation and destruction.
             create = create.push_next(&mut messenger_info);
+        }
+        if sync_validation {
+            create = create.push_next(&mut features);
         }
         // SAFETY: the create info and everything it points to live across the call.
         let instance = unsafe { entry.create_instance(&create, None) }.map_err(|r| match r {
@@ -324,7 +373,7 @@ impl Context {
             None,
             debug_utils,
             false,
-            Box::default(),
+            Arc::default(),
         )
     }
 
@@ -339,7 +388,7 @@ impl Context {
         debug_instance: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
         debug_utils: bool,
         owns_device: bool,
-        sink: Box<MessageSink>,
+        sink: Arc<MessageSink>,
     ) -> Result<Context> {
         // SAFETY: valid physical device of this instance.
         let props = unsafe { instance.get_physical_device_properties(physical) };
@@ -363,6 +412,8 @@ impl Context {
                 .map(|f| f.timestamp_valid_bits)
                 .unwrap_or(0),
             max_image_dimension_2d: props.limits.max_image_dimension2_d,
+            max_image_dimension_cube: props.limits.max_image_dimension_cube,
+            max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
             subgroup_size: subgroup.subgroup_size,
             subgroup_arithmetic: subgroup
                 .supported_stages
@@ -456,6 +507,12 @@ impl Context {
             .lock()
             .map(|p| p.clone())
             .unwrap_or_default()
+    }
+
+    /// A handle on this context's validation messages that stays readable after the context
+    /// is dropped, to catch what the layer reports during teardown (leaked objects).
+    pub fn validation_log(&self) -> ValidationLog {
+        ValidationLog(self.shared.sink.clone())
     }
 
     /// Validation messages at warning or above recorded so far.
@@ -573,6 +630,7 @@ impl Drop for Shared {
                 self.instance.destroy_instance(None);
             }
         }
+        self.sink.torn_down.store(true, Ordering::SeqCst);
         let _ = &self.entry;
         let _ = self.physical;
     }

@@ -11,7 +11,7 @@ pub mod shaders;
 pub mod timing;
 
 pub use barrier::Usage;
-pub use context::{AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSelector};
+pub use context::{AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSelector, ValidationLog};
 pub use pipeline::{Bind, Pipeline};
 pub use recorder::{Recorded, Recorder};
 pub use resources::{Buffer, Image, ImageDesc, Sampler};

@@ -51,8 +51,17 @@ impl Buffer {
         usage: vk::BufferUsageFlags,
         location: MemoryLocation,
     ) -> Result<Buffer> {
-        assert!(size > 0, "zero-sized buffer {name}");
         let s = &ctx.shared;
+        if size == 0 {
+            return Err(Error::Invalid(format!("{name}: a buffer of 0 bytes")));
+        }
+        let max = s.info.max_storage_buffer_range;
+        if usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) && size > max {
+            return Err(Error::Invalid(format!(
+                "{name}: a storage buffer of {size} bytes exceeds the device's \
+                 maxStorageBufferRange ({max} bytes); use a smaller map or output"
+            )));
+        }
         let info = vk::BufferCreateInfo::default()
             .size(size)
             .usage(usage)
@@ -205,16 +214,22 @@ pub struct Image {
 impl Image {
     /// Creates the image, its memory and its views.
     pub fn new(ctx: &Context, name: &str, desc: ImageDesc) -> Result<Image> {
-        assert!(
-            desc.width > 0 && desc.height > 0 && desc.layers > 0,
-            "empty image {name}"
-        );
+        if desc.width == 0 || desc.height == 0 || desc.layers == 0 {
+            return Err(Error::Invalid(format!(
+                "{name}: an empty image ({} x {} x {})",
+                desc.width, desc.height, desc.layers
+            )));
+        }
         assert!(!desc.cube || (desc.layers == 6 && desc.width == desc.height));
         let s = &ctx.shared;
-        let max = s.info.max_image_dimension_2d;
+        let (max, what) = if desc.cube {
+            (s.info.max_image_dimension_cube, "cube face")
+        } else {
+            (s.info.max_image_dimension_2d, "image side")
+        };
         if desc.width > max || desc.height > max {
             return Err(Error::Invalid(format!(
-                "{name}: {} x {} exceeds the device's largest image side ({max})",
+                "{name}: {} x {} exceeds the device's largest {what} ({max})",
                 desc.width, desc.height
             )));
         }

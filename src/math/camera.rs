@@ -58,7 +58,59 @@ pub struct Frame {
     pub up: DVec3,
 }
 
+/// Smallest sine of the angle between the view and the up hint (below it the frame's right
+/// vector is lost to rounding).
+pub const MIN_UP_SINE: f64 = 1e-6;
+
+fn finite3(v: [f64; 3]) -> bool {
+    v.iter().all(|c| c.is_finite())
+}
+
 impl Camera {
+    /// Checks everything [`Camera::frame`] and [`Camera::ray`] need: finite positions, an
+    /// eye apart from its target, an up hint not along the view, a field of view in (0°, 180°)
+    /// or a positive orthographic height, and an image of 1 to 16384 pixels a side.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.width == 0 || self.height == 0 || self.width > 16384 || self.height > 16384 {
+            return Err(format!(
+                "camera resolution {} x {} is outside 1 to 16384",
+                self.width, self.height
+            ));
+        }
+        for (name, v) in [("eye", self.eye), ("target", self.target), ("up", self.up)] {
+            if !finite3(v) {
+                return Err(format!("camera {name} {v:?} is not finite"));
+            }
+        }
+        let (eye, target) = (DVec3::from(self.eye), DVec3::from(self.target));
+        let view = target - eye;
+        let scale = eye.length().max(target.length()).max(1.0);
+        if view.length() <= 1e-9 * scale {
+            return Err(format!(
+                "camera eye {:?} and target {:?} coincide: there is no view direction",
+                self.eye, self.target
+            ));
+        }
+        let up = DVec3::from(self.up);
+        if up.length() == 0.0 || view.normalize().cross(up.normalize()).length() < MIN_UP_SINE {
+            return Err(format!(
+                "camera up {:?} is zero or along the view direction {:?}; give an up vector \
+                 across the view",
+                self.up,
+                view.normalize().to_array()
+            ));
+        }
+        match self.projection {
+            Projection::Perspective { fov_y } if !(fov_y > 0.0 && fov_y < 180.0) => Err(format!(
+                "perspective fov_y = {fov_y} must be between 0 and 180 degrees (exclusive)"
+            )),
+            Projection::Orthographic { height } if !(height > 0.0 && height.is_finite()) => Err(
+                format!("orthographic height = {height} must be positive and finite"),
+            ),
+            _ => Ok(()),
+        }
+    }
+
     /// The camera's frame.
     pub fn frame(&self) -> Frame {
         let forward = (DVec3::from(self.target) - DVec3::from(self.eye)).normalize();
@@ -120,6 +172,43 @@ pub enum Shape {
         #[serde(default)]
         extent: f64,
     },
+}
+
+impl Shape {
+    /// Checks that the shape is well defined: finite numbers, a positive sphere radius, a
+    /// non-zero plane normal and a non-negative extent.
+    pub fn validate(&self) -> Result<(), String> {
+        match *self {
+            Shape::Sphere { center, radius } => {
+                if !finite3(center) {
+                    return Err(format!("sphere center {center:?} is not finite"));
+                }
+                if !(radius > 0.0 && radius.is_finite()) {
+                    return Err(format!(
+                        "sphere radius {radius} must be positive and finite"
+                    ));
+                }
+            }
+            Shape::Plane {
+                normal,
+                offset,
+                extent,
+            } => {
+                if !finite3(normal) || DVec3::from(normal).length() < 1e-12 {
+                    return Err(format!(
+                        "plane normal {normal:?} must be finite and non-zero"
+                    ));
+                }
+                if !offset.is_finite() {
+                    return Err(format!("plane offset {offset} is not finite"));
+                }
+                if !(extent >= 0.0 && extent.is_finite()) {
+                    return Err(format!("plane extent {extent} must be finite and ≥ 0"));
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Where a ray meets the scene.

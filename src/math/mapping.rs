@@ -473,6 +473,25 @@ impl Orientation {
         s * DMat3::from_rotation_y(-self.rotate_y_degrees.to_radians())
     }
 
+    /// Checks that the rotation is a finite number of degrees (a NaN or infinite angle would
+    /// turn every direction into NaN).
+    pub fn validate(&self) -> Result<(), String> {
+        if self.rotate_y_degrees.is_finite() {
+            Ok(())
+        } else {
+            Err(format!(
+                "rotation about +Y must be a finite number of degrees (got {})",
+                self.rotate_y_degrees
+            ))
+        }
+    }
+
+    /// [`Orientation::world_to_file`] after [`Orientation::validate`].
+    pub fn checked_world_to_file(&self) -> crate::error::Result<DMat3> {
+        self.validate().map_err(crate::error::Error::Invalid)?;
+        Ok(self.world_to_file())
+    }
+
     /// Whether this is the identity.
     pub fn is_identity(&self) -> bool {
         !self.flip_u && !self.flip_v && self.rotate_y_degrees == 0.0

@@ -96,7 +96,7 @@ impl Converter {
             })
             .max(1);
         let push = ConvertPush {
-            world_to_file: mat3_rows(opts.orientation.world_to_file()),
+            world_to_file: mat3_rows(opts.orientation.checked_world_to_file()?),
             src_size: [src.width, src.height],
             dst_size: [w, h],
             src_mapping: src.mapping.id(),

@@ -203,7 +203,7 @@ impl MonteCarlo {
         while done < first + samples {
             let n = per_frame.min(first + samples - done);
             let push = McPush {
-                world_to_file: mat3_rows(env.orientation.world_to_file()),
+                world_to_file: mat3_rows(env.orientation.checked_world_to_file()?),
                 env_size: [env.map.width, env.map.height],
                 count: gbuf.count,
                 shadows: opts.shadows as u32,

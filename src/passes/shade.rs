@@ -88,7 +88,7 @@ impl Shade {
         let dp = inputs.dp.unwrap_or(&self.dummy_image);
         let mc = inputs.mc.map(|m| m.0).unwrap_or(&self.dummy_image);
         let push = ShadePush {
-            world_to_file: mat3_rows(inputs.orientation.world_to_file()),
+            world_to_file: mat3_rows(inputs.orientation.checked_world_to_file()?),
             env_size: [inputs.env.width, inputs.env.height],
             env_mapping: inputs.env.mapping.id(),
             count: gbuf.count,

@@ -82,7 +82,7 @@ pub enum Bench {
         #[arg(long, default_value_t = 16384)]
         reference: u32,
         /// Lod biases swept at FIS 16 and 64
-        #[arg(long, value_delimiter = ',', default_value = "-1,0,0.5,1,1.5,2,3")]
+        #[arg(long, value_delimiter = ',', default_value = "-1,0,0.5,1,1.5,2,3", value_parser = crate::cli::finite_f64)]
         biases: Vec<f64>,
         /// Output folder
         #[arg(long, default_value = "docs/fis")]
