@@ -145,7 +145,10 @@ pub(crate) fn read(path: &Path, bytes: &[u8], max_texels: u64) -> Result<Raster>
 }
 
 /// Writes an RGBA16F DDS cube map (faces in Vulkan order; used by tests to make inputs).
+/// Values a half cannot hold (above 65504, or not finite) are refused, not written as Inf.
 pub fn write_cube_rgba16f(path: &Path, n: u32, faces: &[[f32; 3]]) -> std::io::Result<()> {
+    super::check_half(path, faces.iter().flatten().copied())
+        .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()))?;
     let mut h = vec![0u8; HEADER];
     h[..4].copy_from_slice(b"DDS ");
     let put =

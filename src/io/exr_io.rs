@@ -12,12 +12,17 @@ use std::path::Path;
 /// Name of the attribute holding the mapping in files envlight writes.
 pub const MAPPING_ATTRIBUTE: &str = "envlight.mapping";
 
-pub(crate) fn read(path: &Path, max_texels: u64) -> Result<Raster> {
+/// Largest block (scan-line group or tile) read, decompressed: 64 MiB, which holds 16 lines of
+/// a 65 536-texel-wide RGBA float image.
+const MAX_BLOCK_BYTES: u64 = 64 << 20;
+
+pub(crate) fn read(path: &Path, bytes: &[u8], max_texels: u64) -> Result<Raster> {
     let bad = |e: exr::error::Error| {
         Error::bad_file(path, format!("corrupt or unsupported OpenEXR: {e}"))
     };
     // Read the header first so an absurd data window is refused before any allocation.
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(bad)?;
+    let meta =
+        exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false).map_err(bad)?;
     let header = meta
         .headers
         .first()
@@ -30,6 +35,38 @@ pub(crate) fn read(path: &Path, max_texels: u64) -> Result<Raster> {
         1,
         max_texels,
     )?;
+    // The exr crate allocates a block buffer of the header's largest block size and an offset
+    // table of its chunk count before reading either; the fuzzer found headers that claim
+    // gigabytes of both in a file of a few hundred bytes. Neither can exceed the file.
+    for h in &meta.headers {
+        let table = (h.chunk_count as u64).saturating_mul(8);
+        if h.deep || table > bytes.len() as u64 {
+            return Err(Error::bad_file(
+                path,
+                if h.deep {
+                    "deep OpenEXR data is not an environment map".to_string()
+                } else {
+                    format!(
+                        "corrupt OpenEXR: {} chunks need a {table}-byte offset table, but the \
+                         file holds {} bytes",
+                        h.chunk_count,
+                        bytes.len()
+                    )
+                },
+            ));
+        }
+        let block = h.max_block_byte_size() as u64;
+        if block > MAX_BLOCK_BYTES {
+            return Err(Error::bad_file(
+                path,
+                format!(
+                    "corrupt or unsupported OpenEXR: blocks of {block} bytes ({} bytes per \
+                     pixel), above envlight's limit of {MAX_BLOCK_BYTES}",
+                    h.channels.bytes_per_pixel
+                ),
+            ));
+        }
+    }
     let hint = header
         .own_attributes
         .other
@@ -38,14 +75,26 @@ pub(crate) fn read(path: &Path, max_texels: u64) -> Result<Raster> {
             AttributeValue::Text(t) => Mapping::parse(&t.to_string()),
             _ => None,
         });
-    let image = exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(path)
-        .map_err(bad)?;
+    // The crate asserts on some inconsistent files instead of returning an error (found by
+    // the fuzzer: "line should have been filtered"); such a file is corrupt, not a crash.
+    let decoded = std::panic::catch_unwind(|| {
+        exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_buffered(std::io::Cursor::new(bytes))
+    });
+    let image = match decoded {
+        Ok(r) => r.map_err(bad)?,
+        Err(_) => {
+            return Err(Error::bad_file(
+                path,
+                "corrupt OpenEXR: the decoder rejected its block layout",
+            ))
+        }
+    };
     let layer = image.layer_data;
     let (w, h) = (layer.size.width(), layer.size.height());
     let channels = &layer.channel_data.list;
@@ -111,7 +160,9 @@ pub(crate) fn read(path: &Path, max_texels: u64) -> Result<Raster> {
 
 /// Writes named channels as half floats (for tests of "any channel layout", such as B, G, R
 /// half like pbrt's grace_latlong.exr, or Y alone).
+/// Values a half cannot hold are refused (see the README's hard cases), not written as Inf.
 pub fn write_half_channels(path: &Path, w: u32, h: u32, channels: &[(&str, &[f32])]) -> Result<()> {
+    super::check_half(path, channels.iter().flat_map(|(_, v)| v.iter().copied()))?;
     let list: Vec<_> = channels
         .iter()
         .map(|(name, v)| {

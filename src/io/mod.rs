@@ -107,12 +107,7 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
 /// Loads an environment map from a file.
 pub fn load(path: impl AsRef<Path>, opts: &LoadOptions) -> Result<EnvMap> {
     let path = path.as_ref();
-    let raster = read_raster(path, opts)?;
-    let mapping = match opts.mapping.or(raster.mapping_hint) {
-        Some(m) => m,
-        None => infer_mapping(path, raster.width, raster.height)?,
-    };
-    into_envmap(path, raster, mapping, opts.sanitize)
+    load_bytes(path, &read_file(path)?, opts)
 }
 
 /// Loads a cube map from six face files, in Vulkan face order +X, −X, +Y, −Y, +Z, −Z.
@@ -161,7 +156,23 @@ pub fn face_paths(pattern: &str) -> Option<[PathBuf; 6]> {
 }
 
 fn read_raster(path: &Path, opts: &LoadOptions) -> Result<Raster> {
-    let bytes = read_file(path)?;
+    raster_from_bytes(path, &read_file(path)?, opts)
+}
+
+/// Decodes a map from the bytes of a file held in memory (an engine's pak file, a network
+/// buffer). `name` is only used in error messages, and its extension in the format error.
+/// The rules of [`load`] apply: same formats, mapping inference and [`Sanitize`] policy.
+pub fn load_bytes(name: impl AsRef<Path>, bytes: &[u8], opts: &LoadOptions) -> Result<EnvMap> {
+    let path = name.as_ref();
+    let raster = raster_from_bytes(path, bytes, opts)?;
+    let mapping = match opts.mapping.or(raster.mapping_hint) {
+        Some(m) => m,
+        None => infer_mapping(path, raster.width, raster.height)?,
+    };
+    into_envmap(path, raster, mapping, opts.sanitize)
+}
+
+fn raster_from_bytes(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Raster> {
     if bytes.is_empty() {
         return Err(Error::bad_file(path, "file is empty"));
     }
@@ -171,15 +182,15 @@ fn read_raster(path: &Path, opts: &LoadOptions) -> Result<Raster> {
         .unwrap_or("")
         .to_ascii_lowercase();
     if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
-        exr_io::read(path, opts.max_texels)
+        exr_io::read(path, bytes, opts.max_texels)
     } else if bytes.starts_with(b"DDS ") {
-        dds::read(path, &bytes, opts.max_texels)
+        dds::read(path, bytes, opts.max_texels)
     } else if bytes.starts_with(b"PF") || bytes.starts_with(b"Pf") {
-        pfm::read(path, &bytes, opts.max_texels)
+        pfm::read(path, bytes, opts.max_texels)
     } else if bytes.starts_with(b"#?") {
-        png_io::read_with_image_crate(path, &bytes, opts.max_texels, false)
+        png_io::read_with_image_crate(path, bytes, opts.max_texels, false)
     } else if bytes.starts_with(&[0x89, b'P', b'N', b'G']) || bytes.starts_with(&[0xff, 0xd8]) {
-        png_io::read_with_image_crate(path, &bytes, opts.max_texels, true)
+        png_io::read_with_image_crate(path, bytes, opts.max_texels, true)
     } else {
         Err(Error::bad_file(
             path,
@@ -233,7 +244,9 @@ fn into_envmap(path: &Path, r: Raster, mapping: Mapping, sanitize: Sanitize) -> 
         ));
     }
     let mut map = EnvMap::new(mapping, r.width, r.height / layers, r.rgb);
-    let s = map.stats();
+    // Every stored texel counts, not only those on the sphere: bilinear lookups at an angular
+    // or paraboloid rim read the corners too (the fuzzer found NaN corners accepted).
+    let s = bad_texels(&map.texels);
     if s.nan + s.inf + s.negative > 0 {
         match sanitize {
             Sanitize::Reject => {
@@ -258,6 +271,56 @@ fn into_envmap(path: &Path, r: Raster, mapping: Mapping, sanitize: Sanitize) -> 
         }
     }
     Ok(map)
+}
+
+/// Refuses values a half float cannot hold: half-float writers never turn a bright texel
+/// (a sun of 10⁶) into Inf. Values that round to at most 65504 (`f16::MAX`) are written.
+pub(crate) fn check_half(path: &Path, values: impl Iterator<Item = f32>) -> Result<()> {
+    let (mut n, mut worst) = (0usize, 0.0f32);
+    for v in values {
+        if !v.is_finite() || half::f16::from_f32(v).is_infinite() {
+            n += 1;
+            // NaN has no magnitude to report; the count still includes it.
+            if v.abs() > worst {
+                worst = v.abs();
+            }
+        }
+    }
+    if n > 0 {
+        return Err(Error::bad_file(
+            path,
+            format!(
+                "{n} values overflow half float (largest magnitude {worst:e}, half holds at \
+                 most 65504); write float32 instead, or scale the map down"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+struct BadTexels {
+    nan: usize,
+    inf: usize,
+    negative: usize,
+}
+
+fn bad_texels(texels: &[[f32; 3]]) -> BadTexels {
+    let mut b = BadTexels {
+        nan: 0,
+        inf: 0,
+        negative: 0,
+    };
+    for t in texels {
+        if t.iter().any(|c| c.is_nan()) {
+            b.nan += 1;
+        } else if t.iter().any(|c| c.is_infinite()) {
+            b.inf += 1;
+        }
+        if t.iter().any(|&c| c < 0.0) {
+            b.negative += 1;
+        }
+    }
+    b
 }
 
 /// Splits a map into the single image [`save_exr`] and [`save_png`] write: layers stacked

@@ -24,7 +24,17 @@ pub(crate) fn read_with_image_crate(
     check_size(path, w as u64, h as u64, 1, max_texels)?;
     let mut r = reader()?;
     r.no_limits();
-    let img = r.decode().map_err(bad)?.to_rgb32f();
+    // A decoder assertion on a corrupt file (the fuzzer found one in zune-jpeg's upsampler)
+    // is a corrupt file, not a crash.
+    let img = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| r.decode())) {
+        Ok(d) => d.map_err(bad)?.to_rgb32f(),
+        Err(_) => {
+            return Err(Error::bad_file(
+                path,
+                format!("corrupt {kind}: the decoder rejected its data"),
+            ))
+        }
+    };
     let decode = |c: f32| {
         if !srgb {
             c
