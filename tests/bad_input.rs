@@ -1,6 +1,8 @@
 //! Bad files and a missing driver get clear errors naming the file and the problem; never a
 //! panic, a hang or a silently wrong image.
 
+mod common;
+
 use envlight::io::{self, LoadOptions, Sanitize};
 use envlight::math::synth::smooth_env;
 use envlight::math::Mapping;
@@ -59,11 +61,36 @@ fn truncated_and_corrupt_exr() {
     }
     let q = tmp("corrupt.exr");
     std::fs::write(&q, &corrupt).unwrap();
-    // A corrupt body either fails to decode or decodes to garbage that the NaN/Inf/negative
-    // check refuses; it must never load silently as a valid-looking image of the right power.
-    if let Ok(m) = io::load(&q, &LoadOptions::default()) {
-        let s = m.stats();
-        assert_eq!(s.nan + s.inf + s.negative, 0);
+    // The scrambled body (offset table and compressed blocks) is refused outright.
+    expect_error(&q, &LoadOptions::default(), &["exr"]);
+    // A header that claims more than the file holds (the fuzzer found such tables and
+    // blocks of gigabytes) is refused before anything is allocated; so is an invalid enum.
+    for (name, words) in [
+        ("chunk_table", &["offset table"][..]),
+        ("line_order", &["exr"][..]),
+    ] {
+        let mut b = bytes.clone();
+        let at = |b: &[u8], key: &[u8]| b.windows(key.len()).position(|w| w == key).unwrap();
+        if name == "chunk_table" {
+            // dataWindow's box2i: make the window 2^28 rows tall (the offset table grows
+            // with it while the file does not).
+            let k = at(&b, b"dataWindow\0box2i\0") + 17 + 4;
+            b[k + 12..k + 16].copy_from_slice(&(1i32 << 28).to_le_bytes());
+            let opts = LoadOptions {
+                max_texels: u64::MAX,
+                ..Default::default()
+            };
+            let q = tmp(&format!("{name}.exr"));
+            std::fs::write(&q, &b).unwrap();
+            expect_error(&q, &opts, words);
+        } else {
+            // A line order of 255 is not one of the three the format defines.
+            let k = at(&b, b"lineOrder\0lineOrder\0") + 20 + 4;
+            b[k] = 255;
+            let q = tmp(&format!("{name}.exr"));
+            std::fs::write(&q, &b).unwrap();
+            expect_error(&q, &LoadOptions::default(), words);
+        }
     }
 }
 
@@ -170,10 +197,22 @@ fn truncated_and_absurd_dds() {
     expect_error(&q, &LoadOptions::default(), &["zero size"]);
     // Half-float overflow: a sun of 1e5 stored as RGBA16F becomes infinite; it is refused
     // (or zeroed on request), never passed on.
+    // The writer refuses to make such a file (README "Hard cases": half-float overflow on
+    // write is refused, naming the count and the largest value) ...
     let mut hot = faces.clone();
     hot[10] = [1e5, 9e4, 8e4];
     let q = tmp("overflow.dds");
-    io::write_dds_cube(&q, n, &hot).unwrap();
+    let e = io::write_dds_cube(&q, n, &hot).unwrap_err().to_string();
+    assert!(
+        e.contains("3 values overflow half float") && e.contains("1e5"),
+        "{e}"
+    );
+    // ... so the reader's refusal is checked on a file whose texel 10 holds half +Inf.
+    io::write_dds_cube(&q, n, &faces).unwrap();
+    let mut inf = std::fs::read(&q).unwrap();
+    let at = inf.len() - (faces.len() - 10) * 8;
+    inf[at..at + 2].copy_from_slice(&0x7c00u16.to_le_bytes());
+    std::fs::write(&q, &inf).unwrap();
     expect_error(&q, &LoadOptions::default(), &["1 infinite", "--sanitize"]);
     let fixed = io::load(
         &q,
@@ -183,7 +222,9 @@ fn truncated_and_absurd_dds() {
         },
     )
     .unwrap();
-    assert_eq!(fixed.texels[10], [0.0; 3]);
+    // Only the infinite channel is replaced.
+    assert_eq!(fixed.texels[10][0], 0.0);
+    assert!(fixed.texels[10].iter().all(|c| c.is_finite()));
     let mut fmt = bytes;
     fmt[84..88].copy_from_slice(&71u32.to_le_bytes());
     let q = tmp("bc1.dds");
@@ -289,4 +330,171 @@ fn missing_driver_names_what_to_install() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("mesa-vulkan-drivers"), "stderr: {err}");
     assert!(!err.contains("panicked"), "stderr: {err}");
+}
+
+/// A scene a renderer cannot draw is refused with the field named: a camera without a view
+/// direction or with up along it, angles and sizes out of range, degenerate shapes and
+/// non-finite numbers (TOML writes them as `nan` and `inf`).
+#[test]
+fn degenerate_scenes_are_refused() {
+    let good = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/frame.toml"),
+    )
+    .unwrap();
+    assert!(envlight::scene::Scene::parse(&good).is_ok());
+    let cases: &[(&str, &str, &str)] = &[
+        ("eye = [0.0, 1.0, 8.0]", "eye = [0.0, 0.0, 0.0]", "coincide"),
+        (
+            "eye = [0.0, 1.0, 8.0]",
+            "eye = [0.0, 8.0, 0.0]",
+            "along the view",
+        ),
+        (
+            "eye = [0.0, 1.0, 8.0]",
+            "eye = [0.0, nan, 8.0]",
+            "not finite",
+        ),
+        ("fov_y = 30.0", "fov_y = 0.0", "fov_y"),
+        ("fov_y = 30.0", "fov_y = 180.0", "fov_y"),
+        ("fov_y = 30.0", "fov_y = nan", "fov_y"),
+        ("width = 64", "width = 0", "resolution"),
+        ("width = 64", "width = 100000", "resolution"),
+        (
+            "radius = 1.0\nmaterial = { type = \"mirror\" }",
+            "radius = 0.0\nmaterial = { type = \"mirror\" }",
+            "radius",
+        ),
+        (
+            "radius = 1.0\nmaterial = { type = \"mirror\" }",
+            "radius = nan\nmaterial = { type = \"mirror\" }",
+            "radius",
+        ),
+        (
+            "radius = 1.0\nmaterial = { type = \"mirror\" }",
+            "radius = -1.0\nmaterial = { type = \"mirror\" }",
+            "radius",
+        ),
+        (
+            "center = [-1.1, 0.0, 0.0]",
+            "center = [-1.1, inf, 0.0]",
+            "center",
+        ),
+        (
+            "rotate_y = 30.0",
+            "rotate_y = inf",
+            "finite number of degrees",
+        ),
+        (
+            "rotate_y = 30.0",
+            "rotate_y = 30.0\nintensity = nan",
+            "intensity",
+        ),
+        ("alpha = 0.3", "alpha = nan", "alpha"),
+    ];
+    for (from, to, word) in cases {
+        assert!(good.contains(from), "{from}");
+        let bad = good.replacen(from, to, 1);
+        let e = envlight::scene::Scene::parse(&bad)
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {to}"));
+        assert!(e.to_string().contains(word), "{to}: '{e}' lacks '{word}'");
+    }
+    let plane = format!(
+        "{good}\n[[objects]]\nshape = \"plane\"\nnormal = [0.0, 0.0, 0.0]\noffset = -1.0\n\
+         material = {{ type = \"diffuse\" }}\n"
+    );
+    let e = match envlight::scene::Scene::parse(&plane) {
+        Ok(_) => panic!("zero normal"),
+        Err(e) => e,
+    };
+    assert!(e.to_string().contains("normal"), "{e}");
+}
+
+/// Non-finite numbers on the command line are refused by the parser, naming the option.
+#[test]
+fn non_finite_options_are_refused() {
+    let exe = env!("CARGO_BIN_EXE_envlight");
+    let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/sky_latlong.exr");
+    let out = tmp("never_written.exr");
+    for (args, flag) in [
+        (
+            &[
+                "convert",
+                "--to",
+                "cube",
+                "--size",
+                "4",
+                "--rotate-y",
+                "nan",
+            ][..],
+            "--rotate-y",
+        ),
+        (
+            &[
+                "convert",
+                "--to",
+                "cube",
+                "--size",
+                "4",
+                "--exposure",
+                "inf",
+            ][..],
+            "--exposure",
+        ),
+        (
+            &["prefilter", "--phong", "inf", "--to", "cube", "--size", "4"][..],
+            "--phong",
+        ),
+        (&["sh", "--rotate-y=-inf"][..], "--rotate-y"),
+    ] {
+        let o = std::process::Command::new(exe)
+            .args(&args[..1])
+            .arg(&input)
+            .args(&args[1..])
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(
+            err.contains(flag) && err.contains("finite"),
+            "{args:?}: {err}"
+        );
+        assert!(!out.exists());
+    }
+}
+
+/// Sizes beyond the device are refused with the limit named, before anything is created:
+/// an image wider than maxImageDimension2D, a storage buffer over maxStorageBufferRange.
+#[test]
+fn sizes_beyond_the_device_are_refused() {
+    let ctx = common::ctx();
+    {
+        let max = ctx.info().max_image_dimension_2d;
+        let wide = EnvMap::new(
+            Mapping::LatLong,
+            max + 1,
+            1,
+            vec![[1.0; 3]; max as usize + 1],
+        );
+        let e = match envlight::GpuEnvMap::upload(&ctx, &wide) {
+            Ok(_) => panic!("too wide"),
+            Err(e) => e,
+        };
+        assert!(e.to_string().contains("largest image side"), "{e}");
+        let range = ctx.info().max_storage_buffer_range;
+        let e = match envlight::gpu::Buffer::new(
+            &ctx,
+            "too large",
+            range + 1,
+            ash::vk::BufferUsageFlags::STORAGE_BUFFER,
+            gpu_allocator::MemoryLocation::GpuOnly,
+        ) {
+            Ok(_) => panic!("too large"),
+            Err(e) => e,
+        };
+        assert!(e.to_string().contains("maxStorageBufferRange"), "{e}");
+    }
+    common::finish(ctx);
 }

@@ -120,3 +120,26 @@ fn uploading_nan_or_negative_radiance_is_refused() {
     }
     common::finish(ctx);
 }
+
+/// The layer reports objects still alive when the device is destroyed; `common::finish`
+/// reads the log after teardown, so such a leak fails a test. Here a buffer made behind
+/// envlight's back (so `live_objects` cannot see it) is left alive on purpose.
+#[test]
+fn a_leak_reported_at_teardown_reaches_the_log() {
+    let ctx = common::ctx();
+    let info = ash::vk::BufferCreateInfo::default()
+        .size(256)
+        .usage(ash::vk::BufferUsageFlags::STORAGE_BUFFER);
+    // SAFETY: valid device and create info; the buffer is deliberately never destroyed.
+    let _leaked = unsafe { ctx.device().create_buffer(&info, None) }.unwrap();
+    assert_eq!(ctx.live_objects(), 0);
+    let log = ctx.validation_log();
+    assert!(log.messages().is_empty());
+    drop(ctx);
+    assert!(log.complete());
+    let messages = log.messages();
+    assert!(
+        messages.iter().any(|m| m.contains("VkBuffer")),
+        "no leak reported at teardown: {messages:?}"
+    );
+}

@@ -416,13 +416,30 @@ fn tiny_and_odd_sizes() {
         let conv = Converter::new(&ctx).unwrap();
         for from in Mapping::ALL {
             for n in [1u32, 3, 7] {
-                let (w, h) = from.extent_for_size(n.max(2));
+                // n = 1 is a 1×1 map in every mapping (a single texel covering the sphere,
+                // or the disc and its corners), which the output must reproduce exactly.
+                let (w, h) = if n == 1 {
+                    (1, 1)
+                } else {
+                    from.extent_for_size(n)
+                };
                 let src = EnvMap::from_fn(from, w, h, 4, smooth_env);
                 for to in Mapping::ALL {
                     for size in [1u32, 5, 33] {
                         let out = convert(&ctx, &conv, &src, to, size, Orientation::default());
                         let s = out.stats();
                         assert_eq!(s.nan + s.inf + s.negative, 0, "{from:?}{n} -> {to:?}{size}");
+                        if n == 1 {
+                            let want = src.texels[0];
+                            for t in &out.texels {
+                                for c in 0..3 {
+                                    assert!(
+                                        (t[c] - want[c]).abs() <= 1e-6 * want[c].max(1.0),
+                                        "{from:?} 1x1 -> {to:?}{size}: {t:?} vs {want:?}"
+                                    );
+                                }
+                            }
+                        }
                         // Everything lies within the range of the source's texels.
                         let smax = src.stats().max;
                         for (out_max, src_max) in s.max.iter().zip(smax) {

@@ -453,7 +453,13 @@ fn irradiance_prefilter_and_accuracy_commands() {
     let input = dir.join("smooth.exr");
     let map = EnvMap::from_fn(Mapping::LatLong, 48, 24, 2, smooth_env);
     envlight::io::save_exr(&map, &input).unwrap();
-    let run = |args: &[&str]| std::process::Command::new(exe).args(args).output().unwrap();
+    let run = |args: &[&str]| {
+        std::process::Command::new(exe)
+            .arg("--validation")
+            .args(args)
+            .output()
+            .unwrap()
+    };
     let path = |n: &str| dir.join(n).to_str().unwrap().to_string();
     let inp = input.to_str().unwrap();
     let common = ["--to", "cube", "--size", "4"];

@@ -25,7 +25,10 @@ use envlight::GpuEnvMap;
 fn furnace_renders_each_brdfs_albedo() {
     let ctx = common::ctx();
     {
-        let env = EnvMap::new(Mapping::LatLong, 8, 4, vec![[1.0; 3]; 32]);
+        // Large enough that the 32² paraboloid has a six-level MIP chain and the rough
+        // lobes read its coarse levels: a level left unfilled or mis-weighted breaks the
+        // furnace (the 8 × 4 map this test once used made a chain of one level matter).
+        let env = EnvMap::new(Mapping::LatLong, 64, 32, vec![[1.0; 3]; 64 * 32]);
         let cam = sphere_camera(20);
         let materials = [
             Brdf::Phong { n: 1.0 },
@@ -60,7 +63,7 @@ fn furnace_renders_each_brdfs_albedo() {
                 cam,
                 vec![object(unit_sphere(), kind, [1.0; 3], fis(16384))],
                 false,
-                8,
+                32,
             );
             let r = render(&ctx, &sc, &env).unwrap();
             let brdf = kind;

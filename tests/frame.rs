@@ -29,7 +29,7 @@ fn an_engine_frame_matches_the_cli_render() {
     std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join("cli.exr");
     let o = Command::new(env!("CARGO_BIN_EXE_envlight"))
-        .args(["--device", "cpu", "render"])
+        .args(["--validation", "--device", "cpu", "render"])
         .arg(&scene)
         .arg("-o")
         .arg(&out)

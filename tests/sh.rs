@@ -255,6 +255,7 @@ fn sh_command_writes_the_documented_json() {
     let out = dir.join("smooth_sh.json");
     let status = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
         .args([
+            "--validation",
             "sh",
             input.to_str().unwrap(),
             "--order",
@@ -285,4 +286,30 @@ fn sh_command_writes_the_documented_json() {
             );
         }
     }
+}
+
+/// Both reductions (subgroup arithmetic and the shared-memory tree) on a map that is not
+/// constant: a sun ~1e5 times the sky, orders 2 and 8, each against the float64 projection.
+/// A reduction that dropped or doubled one workgroup's partial sum would move the
+/// coefficients by far more than 1e-5 of L00 (the f32 bound the 4k test measures).
+#[test]
+fn both_reductions_match_f64_on_a_sun_map() {
+    let ctx = common::ctx();
+    {
+        let map = EnvMap::from_fn(Mapping::LatLong, 512, 256, 1, |d| {
+            Sky::default().radiance(d)
+        });
+        assert!(map.stats().max_luminance > 1e4);
+        for sg in [Subgroups::Auto, Subgroups::Off] {
+            let p = ShProjector::new(&ctx, sg).unwrap();
+            for order in [2, 8] {
+                let cpu = sh::project(&map, order);
+                let gpu = gpu_project(&ctx, &p, &map, order);
+                let e = worst_vs_cpu(&gpu, &cpu);
+                eprintln!("{sg:?} order {order}: worst |GPU - f64| / |L00| = {e:.2e}");
+                assert!(e < 1e-5, "{sg:?} order {order}: {e:e}");
+            }
+        }
+    }
+    common::finish(ctx);
 }

@@ -44,7 +44,7 @@ fn search(cdf: &[f64], u: f64) -> usize {
 
 impl EnvSampler {
     /// Builds the tables of a lat-long `map` whose file is oriented by `orientation`. Fails
-    /// for another mapping or a map without light.
+    /// for another mapping; a map without light is sampled uniformly.
     pub fn new(map: &EnvMap, orientation: &Orientation) -> Result<EnvSampler> {
         if map.mapping != Mapping::LatLong {
             return Err(Error::Invalid(format!(
@@ -58,6 +58,11 @@ impl EnvSampler {
             .iter()
             .map(|t| [t[0] as f64, t[1] as f64, t[2] as f64])
             .collect();
+        // A map without light (zero luminance everywhere) is sampled
+        // uniformly over the sphere: every sample then reads zero radiance, and the estimate
+        // is an exact 0 rather than a refused render.
+        let dark = texels.iter().all(|&t| luminance(t) <= 0.0);
+        let weight = |t: [f64; 3]| if dark { 1.0 } else { luminance(t) };
         let mut conditional = vec![0.0; (w * h) as usize];
         let mut rows = vec![0.0; h as usize];
         for j in 0..h {
@@ -65,7 +70,7 @@ impl EnvSampler {
             let mut acc = 0.0;
             for i in 0..w {
                 let k = (j * w + i) as usize;
-                acc += luminance(texels[k]) * omega;
+                acc += weight(texels[k]) * omega;
                 conditional[k] = acc;
             }
             rows[j as usize] = acc;
@@ -92,12 +97,12 @@ impl EnvSampler {
             marginal.push(acc / total);
         }
         // p_t/Ω_t = (Y·Ω_t/total)/Ω_t.
-        let pdf = texels.iter().map(|&t| luminance(t) / total).collect();
+        let pdf = texels.iter().map(|&t| weight(t) / total).collect();
         Ok(EnvSampler {
             width: w,
             height: h,
             texels,
-            world_to_file: orientation.world_to_file(),
+            world_to_file: orientation.checked_world_to_file()?,
             marginal,
             conditional,
             pdf,

@@ -118,6 +118,38 @@ pub fn rule(kernel: Kernel, x: f64, cos_rho: f64, sin_rho: f64) -> Rule {
     Rule::Cells(s.min(MAX_CELLS as f64) as u32)
 }
 
+/// Largest n·ρ² the per-texel rule resolves: its cells (at most `MAX_CELLS` a side, each
+/// with 3×3 Gauss points) may be at most two lobe widths (2/√n) wide. The rule asks for
+/// cells of 1/`CELLS_PER_WIDTH` lobe width, and is capped at a quarter of that.
+pub const RESOLVED_N_RHO2: f64 = {
+    let cells = 2.0 * MAX_CELLS as f64 / CELLS_PER_WIDTH;
+    cells * cells
+};
+
+/// The largest n·ρ² over the texels of a `w` × `h` `mapping` source when it exceeds
+/// [`RESOLVED_N_RHO2`]: a lobe that much narrower than a texel falls between the rule's
+/// nodes, so the sum would be wrong (a Phong n = 10⁶ lobe on a 32 × 16 map sums to 0).
+/// `None` when every texel is resolved.
+pub fn unresolved(kernel: Kernel, mapping: Mapping, w: u32, h: u32) -> Option<f64> {
+    let n = kernel.exponent();
+    // No texel is wider than one covering the whole sphere (ρ ≤ π), so small n are resolved.
+    if n * PI * PI <= RESOLVED_N_RHO2 {
+        return None;
+    }
+    let mut worst: f64 = 0.0;
+    for layer in 0..mapping.layers() {
+        for j in 0..h {
+            // Lat-long texels of a row are congruent: one column stands for all.
+            let columns = if mapping == Mapping::LatLong { 1 } else { w };
+            for i in 0..columns {
+                let cos_rho = texel_cos_radius(mapping, w, h, layer, i, j);
+                worst = worst.max(n * 2.0 * (1.0 - cos_rho));
+            }
+        }
+    }
+    (worst > RESOLVED_N_RHO2).then_some(worst)
+}
+
 /// Whether the rim of an angular or paraboloid disc cuts texel (i, j).
 pub fn rim_cut(mapping: Mapping, w: u32, h: u32, i: u32, j: u32) -> bool {
     if !matches!(mapping, Mapping::Angular | Mapping::DualParaboloid) {

@@ -72,6 +72,19 @@ impl BruteFilter {
                 )))
             }
         };
+        if let Some(worst) =
+            crate::math::filter::unresolved(kernel, src.mapping, src.width, src.height)
+        {
+            return Err(Error::Invalid(format!(
+                "the {kernel:?} lobe is too sharp for the {} x {} {} source: n·ρ² reaches \
+                 {worst:.3e} where the per-texel rule resolves up to {} (ρ the texel's \
+                 radius); use a larger source (envlight convert --size) or a lower exponent",
+                src.width,
+                src.height,
+                src.mapping.name(),
+                crate::math::filter::RESOLVED_N_RHO2
+            )));
+        }
         let (w, h) = (dst.width, dst.height);
         let texels = src.width * src.height * src.mapping.layers();
         let bytes = texels as u64 * 16;
@@ -86,7 +99,7 @@ impl BruteFilter {
             (w * h * dst.mapping.layers()) as u64 * 16,
         )?;
         let push = BrutePush {
-            file_to_world: mat3_rows(orientation.world_to_file().transpose()),
+            file_to_world: mat3_rows(orientation.checked_world_to_file()?.transpose()),
             src_size: [src.width, src.height],
             dst_size: [w, h],
             src_mapping: src.mapping.id(),

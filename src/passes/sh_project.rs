@@ -159,6 +159,19 @@ impl ShProjector {
                 "SH order {lmax} is above the maximum, {SH_MAX_LMAX}"
             )));
         }
+        let rule_error = sh::rule_error(map.mapping, map.width, map.height, lmax);
+        if rule_error > sh::RULE_TOLERANCE {
+            return Err(Error::Invalid(format!(
+                "the {} x {} {} map is too coarse for SH order {lmax}: its texels are too large \
+                 for the per-texel quadrature, which would be off by {:.1}% of L00 (limit \
+                 {:.1}%); convert it to a larger size first (envlight convert --size)",
+                map.width,
+                map.height,
+                map.mapping.name(),
+                rule_error * 100.0,
+                sh::RULE_TOLERANCE * 100.0
+            )));
+        }
         let n = sh::count(lmax) as u32;
         let row_bytes = ShProjector::output_bytes(lmax);
         assert!(out.size() >= row_bytes, "the SH output buffer is too small");
@@ -185,7 +198,7 @@ impl ShProjector {
         };
         let (a, b) = (mk("sh partials A")?, mk("sh partials B")?);
         let push = ShProjectPush {
-            file_to_world: mat3_rows(orientation.world_to_file().transpose()),
+            file_to_world: mat3_rows(orientation.checked_world_to_file()?.transpose()),
             size: [map.width, map.height],
             mapping: map.mapping.id(),
             lmax,

@@ -17,20 +17,29 @@ pub fn ctx() -> Context {
     }
 }
 
-/// Asserts that validation stayed silent and every object envlight made is gone. Call after
-/// dropping all passes and resources.
+/// Tears the context down and asserts that validation stayed silent throughout, teardown
+/// included (the layer reports leaked objects while the device is destroyed), and that every
+/// object envlight made is gone. Call after dropping all passes and resources.
 pub fn finish(ctx: Context) {
-    let messages = ctx.validation_messages();
+    assert_eq!(ctx.live_objects(), 0, "Vulkan objects leaked");
+    let log = ctx.validation_log();
+    drop(ctx);
+    assert!(
+        log.complete(),
+        "the context outlived finish(): a clone is still alive"
+    );
+    let messages = log.messages();
     assert!(
         messages.is_empty(),
         "validation messages:\n{}",
         messages.join("\n")
     );
-    assert_eq!(ctx.live_objects(), 0, "Vulkan objects leaked");
 }
 
-/// The real probes folder from ENVLIGHT_PROBES, or None (and a note) when it is unset. When it
-/// is set, it must exist: tests never skip then.
+/// The real probes folder from ENVLIGHT_PROBES, or None when it is unset. When it is set it
+/// must exist, and in CI (`CI` set, as `.ci/run` does) it must be set: there the probe tests
+/// never skip. A skip is noted on stderr and in the file `ENVLIGHT_SKIP_LOG` names, which
+/// `cargo xtask test` prints in its summary.
 pub fn probes() -> Option<PathBuf> {
     match std::env::var_os("ENVLIGHT_PROBES") {
         Some(p) => {
@@ -43,8 +52,32 @@ pub fn probes() -> Option<PathBuf> {
             Some(p)
         }
         None => {
-            eprintln!("ENVLIGHT_PROBES is unset: skipping the tests on real probes");
+            assert!(
+                std::env::var_os("CI").is_none(),
+                "CI is set but ENVLIGHT_PROBES is not: the tests on real probes must run in CI \
+                 (.ci/run sets it to ../shared/probes)"
+            );
+            skipped("ENVLIGHT_PROBES is unset: the tests on real probes did not run");
             None
+        }
+    }
+}
+
+/// Records that the current test skipped its work, and why.
+pub fn skipped(why: &str) {
+    let test = std::thread::current()
+        .name()
+        .unwrap_or("(unnamed test)")
+        .to_string();
+    eprintln!("SKIPPED {test}: {why}");
+    if let Some(log) = std::env::var_os("ENVLIGHT_SKIP_LOG") {
+        use std::io::Write;
+        if let Ok(mut f) = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(log)
+        {
+            let _ = writeln!(f, "{test}: {why}");
         }
     }
 }

@@ -1,7 +1,8 @@
 //! Project tasks: `cargo xtask <setup|test|demo|bench|shaders|gen-assets|lint>`.
 //!
 //! `setup` installs what the project needs on a Debian-like system (idempotently); `test` and
-//! `demo` run it first, so the README's two commands work on a fresh machine.
+//! `demo` run it first, so the README's two commands work on a fresh machine. `test --quick`
+//! runs the inner-loop subset.
 
 use std::process::{Command, ExitCode};
 
@@ -89,15 +90,62 @@ fn cargo(args: &[&str]) -> Result<(), String> {
     }
 }
 
+/// The inner-loop subset of `test --quick` (under 2 minutes once built): the library's unit
+/// tests and float64 oracles, input validation and bad files, the fuzz corpora, the layering
+/// and plan checks, and the quick GPU checks of context teardown and mappings.
+const QUICK: &[&str] = &[
+    "--lib",
+    "--test",
+    "bad_input",
+    "--test",
+    "fuzz_corpus",
+    "--test",
+    "layering",
+    "--test",
+    "plan",
+    "--test",
+    "context",
+    "--test",
+    "mappings_gpu",
+    "--test",
+    "hard_cases",
+];
+
+/// `cargo test` (everything, or with `--quick` the [`QUICK`] subset), then a summary of the
+/// tests that skipped their work (outside CI; in CI a skip is a failure).
+fn test(rest: &[&str]) -> Result<(), String> {
+    let quick = rest.contains(&"--quick");
+    let mut args = vec!["test"];
+    if quick {
+        args.extend(QUICK);
+    }
+    args.extend(rest.iter().filter(|a| **a != "--quick"));
+    let log = std::env::temp_dir().join(format!("envlight-skips-{}.txt", std::process::id()));
+    let _ = std::fs::remove_file(&log);
+    std::env::set_var("ENVLIGHT_SKIP_LOG", &log);
+    let result = cargo(&args);
+    let skips = std::fs::read_to_string(&log).unwrap_or_default();
+    let _ = std::fs::remove_file(&log);
+    let mut lines: Vec<&str> = skips.lines().collect();
+    lines.sort();
+    if lines.is_empty() {
+        println!("xtask test: no test skipped its work");
+    } else {
+        println!("xtask test: {} tests skipped their work:", lines.len());
+        for l in lines {
+            println!("  {l}");
+        }
+    }
+    result
+}
+
 fn run(task: &str, rest: &[String]) -> Result<(), String> {
     let rest: Vec<&str> = rest.iter().map(String::as_str).collect();
     match task {
         "setup" => setup(),
         "test" => {
             setup()?;
-            let mut args = vec!["test"];
-            args.extend(&rest);
-            cargo(&args)
+            test(&rest)
         }
         "demo" => {
             setup()?;
