@@ -136,15 +136,20 @@ pub fn unresolved(kernel: Kernel, mapping: Mapping, w: u32, h: u32) -> Option<f6
     if n * PI * PI <= RESOLVED_N_RHO2 {
         return None;
     }
+    // Symmetry keeps this off the pass's critical path: lat-long texels of a row are
+    // congruent (one column stands for all); cube faces and paraboloid halves are congruent,
+    // and each of them, like the angular disc, is symmetric about both of its axes (one
+    // quadrant of layer 0 stands for all).
+    let (columns, rows) = if mapping == Mapping::LatLong {
+        (1, h)
+    } else {
+        (w.div_ceil(2), h.div_ceil(2))
+    };
     let mut worst: f64 = 0.0;
-    for layer in 0..mapping.layers() {
-        for j in 0..h {
-            // Lat-long texels of a row are congruent: one column stands for all.
-            let columns = if mapping == Mapping::LatLong { 1 } else { w };
-            for i in 0..columns {
-                let cos_rho = texel_cos_radius(mapping, w, h, layer, i, j);
-                worst = worst.max(n * 2.0 * (1.0 - cos_rho));
-            }
+    for j in 0..rows {
+        for i in 0..columns {
+            let cos_rho = texel_cos_radius(mapping, w, h, 0, i, j);
+            worst = worst.max(n * 2.0 * (1.0 - cos_rho));
         }
     }
     (worst > RESOLVED_N_RHO2).then_some(worst)

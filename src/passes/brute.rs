@@ -78,7 +78,8 @@ impl BruteFilter {
             return Err(Error::Invalid(format!(
                 "the {kernel:?} lobe is too sharp for the {} x {} {} source: n·ρ² reaches \
                  {worst:.3e} where the per-texel rule resolves up to {} (ρ the texel's \
-                 radius); use a larger source (envlight convert --size) or a lower exponent",
+                 radius); convert the source to a larger one first (a cube resolves the back of an \
+                 angular probe best: envlight convert --to cube --size N) or use a lower exponent",
                 src.width,
                 src.height,
                 src.mapping.name(),
