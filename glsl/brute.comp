@@ -2,11 +2,13 @@
 // Brute-force convolution of a whole map with the clamped cosine or a normalised Phong lobe
 // (Miller & Hoffman 1984), the float64 twin being src/math/filter.rs. Built twice:
 // - PREPARE: one invocation per source texel writes its centre direction (world), the cosine of
-//   its angular radius, its radiance and its exact solid angle (0 where it holds no sphere);
+//   its angular radius, its radiance and its exact solid angle (0 where it holds no sphere),
+//   and its shape for the tilted rule;
 // - TILES: one invocation per tile of BRUTE_TILE² source texels writes a cone bounding all
 //   its texels' cones (w = 2 when it holds none);
 // - otherwise: one invocation per output texel sums L·∫K over every source texel, choosing per
-//   texel the same rule as the CPU (skip, centre node, or s×s cells of 3×3 Gauss points), with
+//   texel the same rule as the CPU (skip, centre node, the tilted rule, or s×s cells of 3×3
+//   Gauss points), with
 //   Kahan compensation so a sun 1e5 times the sky does not swamp the sum. The source is taken
 //   in chunks, one dispatch each, accumulating into dst (and the compensation buffer), so that
 //   no invocation runs more loop iterations than llvmpipe allows (DeviceInfo::
@@ -28,6 +30,7 @@ layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(set = 0, binding = BINDING_BRUTE_PREP_SRC) uniform sampler2DArray src;
 layout(std430, set = 0, binding = BINDING_BRUTE_PREP_CONES) writeonly buffer Cones { vec4 cones[]; };
 layout(std430, set = 0, binding = BINDING_BRUTE_PREP_RADIANCE) writeonly buffer Rad { vec4 rad[]; };
+layout(std430, set = 0, binding = BINDING_BRUTE_PREP_SHAPES) writeonly buffer Shapes { vec4 shapes[]; };
 #else
 layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_BRUTE_CONES) readonly buffer Cones { vec4 cones[]; };
@@ -35,10 +38,17 @@ layout(std430, set = 0, binding = BINDING_BRUTE_RADIANCE) readonly buffer Rad { 
 layout(set = 0, binding = BINDING_BRUTE_DST, rgba32f) uniform image2DArray dst;
 layout(std430, set = 0, binding = BINDING_BRUTE_COMP) buffer Comp { vec4 comp_buf[]; };
 layout(std430, set = 0, binding = BINDING_BRUTE_TILES) readonly buffer Tiles { vec4 tiles[]; };
+layout(std430, set = 0, binding = BINDING_BRUTE_SHAPES) readonly buffer Shapes { vec4 shapes[]; };
 #endif
 
 // The push block, generated from src/abi.rs.
 PUSH_BrutePush
+
+// Source and destination mappings are specialisation constants (they equal the push block's):
+// other mappings' branches, the disc rim's clipped rule above all, vanish from the texel loop,
+// which llvmpipe then runs several times faster.
+layout(constant_id = 2) const uint SRC_MAPPING = 0u;
+layout(constant_id = 3) const uint DST_MAPPING = 0u;
 
 vec3 to_world(vec3 f) {
     return vec3(dot(pc.file_to_world[0].xyz, f), dot(pc.file_to_world[1].xyz, f), dot(pc.file_to_world[2].xyz, f));
@@ -48,11 +58,11 @@ vec3 src_dir(uint layer, vec2 uv) {
     Coord c;
     c.layer = layer;
     c.uv = uv;
-    return to_world(coord_to_dir(pc.src_mapping, c));
+    return to_world(coord_to_dir(SRC_MAPPING, c));
 }
 
 bool rim_cut(ivec2 p) {
-    if (pc.src_mapping != MAPPING_ANGULAR && pc.src_mapping != MAPPING_DUAL_PARABOLOID) return false;
+    if (SRC_MAPPING != MAPPING_ANGULAR && SRC_MAPPING != MAPPING_DUAL_PARABOLOID) return false;
     vec2 lo = 2.0 * vec2(p) / vec2(pc.src_size) - 1.0;
     vec2 hi = 2.0 * vec2(p + 1) / vec2(pc.src_size) - 1.0;
     vec2 f = max(abs(lo), abs(hi));
@@ -106,13 +116,82 @@ void main() {
     tiles[tile] = vec4(axis, cos(radius));
 }
 #elif defined(PREPARE)
+// The square root of a symmetric positive semi-definite 2×2 matrix (a, b, c) = [a b; b c].
+vec3 sqrt2(vec3 m) {
+    float d = sqrt(max(m.x * m.z - m.y * m.y, 0.0));
+    float t = sqrt(m.x + m.z + 2.0 * d);
+    return t > 0.0 ? vec3(m.x + d, m.y, m.z + d) / t : vec3(0.0);
+}
+
+// The tilted rule's view of texel p (twin of filter::texel_shape): the centroid of its solid
+// angle from its 3×3 Gauss nodes, its half-edges mapped so that their parallelogram has the
+// texel's covariance, and whether the texel is regular (w of the first vec4).
+void write_shape(uint i, uint layer, ivec2 p) {
+    vec3 sum = vec3(0.0);
+    vec3 d[9];
+    float wq[9];
+    [[unroll]] for (int k = 0; k < 9; k++) {
+        vec2 ab = vec2(k % 3 - 1, k / 3 - 1);
+        vec2 uv = (vec2(p) + 0.5 + 0.387298335 * ab) / vec2(pc.src_size);
+        vec2 gw = mix(vec2(8.0 / 18.0), vec2(5.0 / 18.0), abs(ab));
+        wq[k] = gw.x * gw.y * density(SRC_MAPPING, uv);
+        d[k] = coord_to_dir(SRC_MAPPING, Coord(layer, uv));
+        sum += wq[k] * d[k];
+    }
+    vec2 size = vec2(pc.src_size);
+    vec3 c = dot(sum, sum) > 0.0 ? normalize(sum) : coord_to_dir(SRC_MAPPING, Coord(layer, (vec2(p) + 0.5) / size));
+    vec3 hu = coord_to_dir(SRC_MAPPING, Coord(layer, (vec2(p) + vec2(1.0, 0.5)) / size))
+        - coord_to_dir(SRC_MAPPING, Coord(layer, (vec2(p) + vec2(0.0, 0.5)) / size));
+    vec3 hv = coord_to_dir(SRC_MAPPING, Coord(layer, (vec2(p) + vec2(0.5, 1.0)) / size))
+        - coord_to_dir(SRC_MAPPING, Coord(layer, (vec2(p) + vec2(0.5, 0.0)) / size));
+    hu = 0.5 * (hu - c * dot(hu, c));
+    hv = 0.5 * (hv - c * dot(hv, c));
+    float dmin = 3.4e38, dmax = 0.0;
+    for (int k = 0; k < 9; k++) {
+        float dk = density(SRC_MAPPING, (vec2(p) + 0.5 * vec2(k % 3, k / 3)) / size);
+        dmin = min(dmin, dk);
+        dmax = max(dmax, dk);
+    }
+    bool regular = !rim_cut(p) && dmin > 0.0 && dmax <= FILTER_TILT_DENSITY_RATIO * dmin;
+    if (regular) {
+        vec3 e1 = normalize(abs(c.x) < 0.9 ? cross(c, vec3(1.0, 0.0, 0.0)) : cross(c, vec3(0.0, 1.0, 0.0)));
+        vec3 e2 = cross(c, e1);
+        float wsum = 0.0;
+        vec3 cov = vec3(0.0);
+        for (int k = 0; k < 9; k++) {
+            vec3 y = d[k] - c * dot(d[k], c);
+            vec2 q = vec2(dot(y, e1), dot(y, e2));
+            cov += wq[k] * vec3(q.x * q.x, q.x * q.y, q.y * q.y);
+            wsum += wq[k];
+        }
+        cov /= wsum;
+        vec2 a = vec2(dot(hu, e1), dot(hu, e2)), b = vec2(dot(hv, e1), dot(hv, e2));
+        vec3 par = vec3(a.x * a.x + b.x * b.x, a.x * a.y + b.x * b.y, a.y * a.y + b.y * b.y) / 3.0;
+        vec3 sq = sqrt2(cov), sp = sqrt2(par);
+        float det = sp.x * sp.z - sp.y * sp.y;
+        if (det > 0.0) {
+            vec3 ip = vec3(sp.z, -sp.y, sp.x) / det;
+            mat2 m = mat2(sq.x * ip.x + sq.y * ip.y, sq.y * ip.x + sq.z * ip.y,
+                          sq.x * ip.y + sq.y * ip.z, sq.y * ip.y + sq.z * ip.z);
+            vec2 ma = m * a, mb = m * b;
+            hu = e1 * ma.x + e2 * ma.y;
+            hv = e1 * mb.x + e2 * mb.y;
+        } else {
+            regular = false;
+        }
+    }
+    shapes[3u * i] = vec4(to_world(c), regular ? 1.0 : 0.0);
+    shapes[3u * i + 1u] = vec4(to_world(hu), 0.0);
+    shapes[3u * i + 2u] = vec4(to_world(hv), 0.0);
+}
+
 void main() {
     uint i = gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x + gl_GlobalInvocationID.x;
     if (i >= pc.texels) return;
     uint per_layer = pc.src_size.x * pc.src_size.y;
     uint layer = i / per_layer, r = i % per_layer;
     ivec2 p = ivec2(r % pc.src_size.x, r / pc.src_size.x);
-    ivec2 source = integration_source(pc.src_mapping, pc.src_size, p);
+    ivec2 source = integration_source(SRC_MAPPING, pc.src_size, p);
     if (source.x < 0) {
         cones[i] = vec4(0.0, 0.0, 1.0, 1.0);
         rad[i] = vec4(0.0);
@@ -121,7 +200,7 @@ void main() {
     vec3 c = src_dir(layer, (vec2(p) + 0.5) / vec2(pc.src_size));
     // Angular radius: corners and edge midpoints (pulled into the disc), 25% wider for the
     // bulge of the edges between them (twin of texel_cos_radius).
-    bool disc = pc.src_mapping == MAPPING_ANGULAR || pc.src_mapping == MAPPING_DUAL_PARABOLOID;
+    bool disc = SRC_MAPPING == MAPPING_ANGULAR || SRC_MAPPING == MAPPING_DUAL_PARABOLOID;
     float min_dot = 1.0;
     for (int k = 0; k < 9; k++) {
         if (k == 4) continue;
@@ -137,8 +216,9 @@ void main() {
     float md = clamp(min_dot, -1.0, 1.0);
     float rho = min(FILTER_CONE_MARGIN * atan2_precise(sqrt(max(0.0, (1.0 - md) * (1.0 + md))), md), PI);
     cones[i] = vec4(c, cos(rho));
-    float omega = texel_solid_angle(pc.src_mapping, pc.src_size, p);
+    float omega = texel_solid_angle(SRC_MAPPING, pc.src_size, p);
     rad[i] = vec4(texelFetch(src, ivec3(source, int(layer)), 0).rgb, omega);
+    write_shape(i, layer, p);
 }
 #else
 
@@ -174,7 +254,7 @@ float texel_mean(vec3 axis, uint t, uint s) {
                         [[unroll]] for (int b = 0; b < 8; b++) {
                             vec2 pt = vec2(x, my + hy * (b < 4 ? -1.0 : 1.0) * GL8_X[b & 3]);
                             vec2 uv = 0.5 * (pt + 1.0);
-                            float w = GL8_W[a & 3] * GL8_W[b & 3] * hx * hy * jac * density(pc.src_mapping, uv);
+                            float w = GL8_W[a & 3] * GL8_W[b & 3] * hx * hy * jac * density(SRC_MAPPING, uv);
                             acc += w * kernel_eval(pc.exponent, axis, src_dir(layer, uv));
                             wsum += w;
                         }
@@ -192,7 +272,7 @@ float texel_mean(vec3 axis, uint t, uint s) {
                     vec2 ab = vec2(a, b);
                     vec2 uv = (corner + (0.5 + 0.387298335 * ab) / float(s)) / vec2(pc.src_size);
                     vec2 gw = mix(vec2(8.0 / 18.0), vec2(5.0 / 18.0), abs(ab));
-                    float w = gw.x * gw.y * density(pc.src_mapping, uv);
+                    float w = gw.x * gw.y * density(SRC_MAPPING, uv);
                     acc += w * kernel_eval(pc.exponent, axis, src_dir(layer, uv));
                     wsum += w;
                 }
@@ -200,6 +280,41 @@ float texel_mean(vec3 axis, uint t, uint s) {
         }
     }
     return wsum > 0.0 ? acc / wsum : -1.0;
+}
+
+
+// The tilted rule (twin of filter::tilted_mean): the mean of K over texel t taken as the
+// uniform parallelogram of its shape, ln K linear across it plus the curvature's mean.
+// ln(sinh z / z), E[s] = coth z − 1/z and E[s²] = 1 − 2E[s]/z (s uniform on [−1, 1] tilted
+// by e^{zs}) take series below |z| = 1/2, where the closed forms cancel in f32, as the twin
+// does; above it they share e^{−2|z|} per axis and one log for both axes, because llvmpipe
+// evaluates both sides of every branch and transcendentals dominate this loop.
+float tilted_mean(vec3 axis, float n, float ln_scale, uint t) {
+    vec3 c = shapes[3u * t].xyz, hu = shapes[3u * t + 1u].xyz, hv = shapes[3u * t + 2u].xyz;
+    vec3 e = axis - c;
+    float gap = 0.5 * dot(e, e);
+    float x = 1.0 - gap;
+    if (x <= 0.0) return 0.0;
+    float bu = dot(e, hu), bv = dot(e, hv);
+    vec2 z = n * vec2(bu, bv) / x;
+    vec2 a = abs(z);
+    vec2 z2 = z * z;
+    bvec2 small = lessThan(a, vec2(0.5));
+    vec2 ex = exp(-2.0 * max(a, vec2(0.5)));
+    vec2 big = max(a, vec2(0.5));
+    // ln sinhc: series, or |z| + ln((1 − e^{−2|z|}) / (2|z|)) with one log for both axes.
+    vec2 series = z2 * (1.0 / 6.0 - z2 * (1.0 / 180.0 - z2 * (1.0 / 2835.0 - z2 / 37800.0)));
+    vec2 ratio = mix((1.0 - ex) / (2.0 * big), vec2(1.0), small);
+    float ln_sinhc = dot(mix(big, series, small), vec2(1.0)) + log(ratio.x * ratio.y);
+    vec2 m1_series = z * (1.0 / 3.0 - z2 * (1.0 / 45.0 - z2 * (2.0 / 945.0 - z2 / 4725.0)));
+    vec2 m1_closed = sign(z) * ((1.0 + ex) / (1.0 - ex) - 1.0 / big);
+    vec2 m1 = mix(m1_closed, m1_series, small);
+    vec2 m2_series = 1.0 / 3.0 + z2 * (2.0 / 45.0 - z2 * (4.0 / 945.0 - z2 * 2.0 / 4725.0));
+    vec2 m2 = mix(1.0 - 2.0 * m1_closed * sign(z) / big, m2_series, small);
+    float x2 = x * x;
+    float q = (dot(hu, hu) + bu * bu / x2) * m2.x + (dot(hv, hv) + bv * bv / x2) * m2.y
+        + 2.0 * (dot(hu, hv) + bu * bv / x2) * m1.x * m1.y;
+    return exp(ln_scale + n * log1m(gap) + ln_sinhc - 0.5 * n * q);
 }
 
 // Whether the rule skips everything inside cone c (axis, cos of radius; w > 1: empty): the
@@ -215,7 +330,7 @@ bool cone_skipped(vec3 axis, float n, vec4 c) {
 }
 
 // ∫K over source texel t (0 where skipped): the rule of filter::rule, decision for decision.
-float texel_weight(vec3 axis, float n, uint t) {
+float texel_weight(vec3 axis, float n, float ln_scale, uint t) {
     float omega = rad[t].w;
     if (omega == 0.0) return 0.0;
     vec4 cone = cones[t];
@@ -230,7 +345,11 @@ float texel_weight(vec3 axis, float n, uint t) {
     if (n > 1.0 && n * log(x_max) < FILTER_LOG_CUTOFF) return 0.0;
     float rho2 = 2.0 * (1.0 - cos_rho);
     bool straddles = x_min < 0.0;
-    if (!straddles && n * rho2 < FILTER_CENTRE_LIMIT) return kernel_eval(pc.exponent, axis, cone.xyz);
+    bool centre = !straddles && n * rho2 < FILTER_CENTRE_LIMIT;
+    bool tilted = !centre && !straddles && n * rho2 <= FILTER_TILT_LIMIT * x_min * x_min
+        && shapes[3u * t].w > 0.5;
+    if (centre) return kernel_eval(pc.exponent, axis, cone.xyz);
+    if (tilted) return tilted_mean(axis, n, ln_scale, t);
     float s = max(ceil(FILTER_CELLS_PER_WIDTH * sqrt(n * rho2)), 1.0);
     if (straddles) s = max(s, float(FILTER_EDGE_CELLS));
     float k = texel_mean(axis, t, uint(min(s, float(FILTER_MAX_CELLS))));
@@ -240,15 +359,16 @@ float texel_weight(vec3 axis, float n, uint t) {
 void main() {
     uvec3 id = gl_GlobalInvocationID;
     if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
-    if (pc.dst_mapping == MAPPING_ANGULAR && !texel_in_domain(pc.dst_mapping, pc.dst_size, ivec2(id.xy))) {
+    if (DST_MAPPING == MAPPING_ANGULAR && !texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy))) {
         imageStore(dst, ivec3(id), vec4(0.0, 0.0, 0.0, 1.0));
         return;
     }
     Coord oc;
     oc.layer = id.z;
     oc.uv = (vec2(id.xy) + 0.5) / vec2(pc.dst_size);
-    vec3 axis = coord_to_dir(pc.dst_mapping, oc);
+    vec3 axis = coord_to_dir(DST_MAPPING, oc);
     float n = pc.exponent == 0.0 ? 1.0 : pc.exponent;
+    float ln_scale = pc.exponent == 0.0 ? 0.0 : log((n + 1.0) / TAU);
     uint o = (id.z * pc.dst_size.y + id.y) * pc.dst_size.x + id.x;
     precise vec3 sum = vec3(0.0);
     precise vec3 comp = vec3(0.0);
@@ -265,7 +385,7 @@ void main() {
             int ti = slot_texel(tile, s);
             if (ti < 0) continue;
             uint t = uint(ti);
-            float k = texel_weight(axis, n, t);
+            float k = texel_weight(axis, n, ln_scale, t);
             if (k > 0.0) {
                 vec4 rw = rad[t];
                 precise vec3 y = rw.rgb * (rw.w * k) - comp;

@@ -49,6 +49,9 @@ pub mod binding {
         BRUTE_PREP_CONES = 1;
         /// brute_prepare: per-texel radiance and solid angle (vec4 buffer).
         BRUTE_PREP_RADIANCE = 2;
+        /// brute_prepare: per-texel shape for the tilted rule (3 vec4: centroid and whether
+        /// the texel is regular, then the two half-edge vectors).
+        BRUTE_PREP_SHAPES = 3;
         /// brute: the cones written by brute_prepare.
         BRUTE_CONES = 0;
         /// brute: the radiance and solid angles written by brute_prepare.
@@ -59,6 +62,8 @@ pub mod binding {
         BRUTE_COMP = 3;
         /// brute: per-tile bounding cones written by brute_tiles (vec4 buffer).
         BRUTE_TILES = 4;
+        /// brute: the texel shapes written by brute_prepare.
+        BRUTE_SHAPES = 5;
         /// brute_tiles: the per-texel cones written by brute_prepare.
         BRUTE_TILE_CONES = 0;
         /// brute_tiles: the per-tile bounding cones (axis, cos of radius; w = 2 when empty).
@@ -155,6 +160,14 @@ pub mod filter_rule {
     pub const CELLS_PER_WIDTH: f64 = 2.0;
     /// Below this n·ρ² a texel away from the horizon takes one node.
     pub const CENTRE_LIMIT: f64 = 1e-5;
+    /// A regular texel takes the tilted rule (one closed-form term) while n·ρ² is at most
+    /// this times x_min², x_min the smallest axis·ω over its cone: the kernel's log-curvature
+    /// across it is then small (measured per-texel error under 1e-3, docs/BENCHMARKS.md).
+    pub const TILT_LIMIT: f64 = 0.1;
+    /// A texel is regular (close enough to a parallelogram for the tilted rule) when the
+    /// mapping's solid-angle density over it varies by at most this ratio and no disc rim
+    /// cuts it: lat-long rows next to a pole are triangles, not parallelograms.
+    pub const TILT_DENSITY_RATIO: f64 = 1.4;
     /// A tile's bounding radius is widened by this fraction, and then by TILE_MARGIN_ABS
     /// radians, so that f32 rounding in its angles never makes it tighter than its texels'.
     pub const TILE_MARGIN_REL: f64 = 1e-4;
@@ -570,7 +583,8 @@ macro_rules! shader_table {
             /// Brute-force convolution: per-texel cones, radiance and solid angles.
             BrutePrepare = "brute_prepare", "brute.comp", Compute, [("PREPARE", "1")], BrutePush,
                 [(BRUTE_PREP_SRC, Sampled, Read), (BRUTE_PREP_CONES, StorageBuffer, Write),
-                 (BRUTE_PREP_RADIANCE, StorageBuffer, Write)];
+                 (BRUTE_PREP_RADIANCE, StorageBuffer, Write),
+                 (BRUTE_PREP_SHAPES, StorageBuffer, Write)];
             /// Brute-force convolution: a bounding cone per tile of BRUTE_TILE² texels.
             BruteTiles = "brute_tiles", "brute.comp", Compute, [("TILES", "1")], BrutePush,
                 [(BRUTE_TILE_CONES, StorageBuffer, Read), (BRUTE_TILE_OUT, StorageBuffer, Write)];
@@ -578,7 +592,7 @@ macro_rules! shader_table {
             Brute = "brute", "brute.comp", Compute, [], BrutePush,
                 [(BRUTE_CONES, StorageBuffer, Read), (BRUTE_RADIANCE, StorageBuffer, Read),
                  (BRUTE_DST, StorageImage, ReadWrite), (BRUTE_COMP, StorageBuffer, ReadWrite),
-                 (BRUTE_TILES, StorageBuffer, Read)];
+                 (BRUTE_TILES, StorageBuffer, Read), (BRUTE_SHAPES, StorageBuffer, Read)];
             /// Irradiance from SH coefficients into a map.
             ShEval = "sh_eval", "sh_eval.comp", Compute, [], ShEvalPush,
                 [(SH_EVAL_COEFFS, StorageBuffer, Read), (SH_EVAL_DST, StorageImage, Write)];
@@ -680,6 +694,8 @@ pub fn generated_header() -> String {
     let floats = [
         ("FILTER_CELLS_PER_WIDTH", filter_rule::CELLS_PER_WIDTH),
         ("FILTER_CENTRE_LIMIT", filter_rule::CENTRE_LIMIT),
+        ("FILTER_TILT_LIMIT", filter_rule::TILT_LIMIT),
+        ("FILTER_TILT_DENSITY_RATIO", filter_rule::TILT_DENSITY_RATIO),
         ("FILTER_LOG_CUTOFF", filter_rule::LOG_CUTOFF),
         ("FILTER_CONE_MARGIN", filter_rule::CONE_MARGIN),
         ("FILTER_TILE_MARGIN_REL", filter_rule::TILE_MARGIN_REL),

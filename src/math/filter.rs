@@ -11,6 +11,9 @@
 //!   are skipped;
 //! - texels small next to the kernel's width (`n·ρ² < 1e-5`, ρ the texel's angular radius)
 //!   and not cut by the horizon take one node at their centre;
+//! - regular texels (see [`TexelShape`]) where the kernel's log-curvature across the texel
+//!   is small (`n·ρ² ≤ TILT_LIMIT·x_min²`) take the tilted rule, one closed-form term
+//!   ([`tilted_mean`]);
 //! - the rest are split into s×s cells with 3×3 Gauss points each, s = ⌈ρ·√n·c⌉ (at least
 //!   [`EDGE_CELLS`] where the horizon cuts the texel, at most [`MAX_CELLS`]);
 //! - texels the rim of an angular or paraboloid disc cuts take the clipped rule of the SH
@@ -27,6 +30,7 @@ use std::f64::consts::PI;
 
 pub use crate::abi::filter_rule::{
     CELLS_PER_WIDTH, CENTRE_LIMIT, CONE_MARGIN, EDGE_CELLS, LOG_CUTOFF, MAX_CELLS,
+    TILT_DENSITY_RATIO, TILT_LIMIT,
 };
 
 /// A convolution kernel of x = axis·ω.
@@ -84,13 +88,17 @@ pub enum Rule {
     Skip,
     /// One node at the texel's centre.
     Centre,
+    /// The tilted rule: the texel as a uniform parallelogram, the log of the kernel linear
+    /// across it plus a curvature term ([`tilted_mean`]).
+    Tilted,
     /// s×s cells of 3×3 Gauss points.
     Cells(u32),
 }
 
 /// The rule for a texel whose centre direction c has x = axis·c and whose directions are
-/// within angle ρ of c (`cos_rho`, `sin_rho`). Shared with the GLSL, decision for decision.
-pub fn rule(kernel: Kernel, x: f64, cos_rho: f64, sin_rho: f64) -> Rule {
+/// within angle ρ of c (`cos_rho`, `sin_rho`); `regular` says whether the tilted rule may
+/// take it ([`TexelShape::regular`]). Shared with the GLSL, decision for decision.
+pub fn rule(kernel: Kernel, x: f64, cos_rho: f64, sin_rho: f64, regular: bool) -> Rule {
     let sin_c = (1.0 - x * x).max(0.0).sqrt();
     // cos(θc − ρ) and cos(θc + ρ): the largest and smallest x over the texel.
     let x_max = if x >= cos_rho {
@@ -110,6 +118,9 @@ pub fn rule(kernel: Kernel, x: f64, cos_rho: f64, sin_rho: f64) -> Rule {
     let straddles = x_min < 0.0;
     if !straddles && n * rho2 < CENTRE_LIMIT {
         return Rule::Centre;
+    }
+    if regular && !straddles && n * rho2 <= TILT_LIMIT * x_min * x_min {
+        return Rule::Tilted;
     }
     let mut s = (CELLS_PER_WIDTH * (n * rho2).sqrt()).ceil().max(1.0);
     if straddles {
@@ -211,6 +222,187 @@ pub fn texel_cos_radius(mapping: Mapping, w: u32, h: u32, layer: u32, i: u32, j:
     // angle 25% wider.
     let rho = min_dot.clamp(-1.0, 1.0).acos() * CONE_MARGIN;
     rho.min(PI).cos()
+}
+
+/// What the tilted rule knows of a texel: the centroid of its solid angle and two half-edge
+/// vectors in the tangent plane there, the texel being taken as the uniform parallelogram
+/// they span. The vectors are the texel's own half-edges (corrected so that the
+/// parallelogram's covariance equals the texel's, which takes the trapezoid of a lat-long
+/// texel into account), so the skew of cube texels near face corners is kept.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TexelShape {
+    /// Unit centroid direction.
+    pub centroid: DVec3,
+    /// Half-edge along u (tangent at the centroid).
+    pub hu: DVec3,
+    /// Half-edge along v.
+    pub hv: DVec3,
+    /// Whether the parallelogram model holds: no disc rim cuts the texel and the mapping's
+    /// density varies over it by at most [`TILT_DENSITY_RATIO`].
+    pub regular: bool,
+}
+
+impl TexelShape {
+    /// The shape rotated by `m` (file to world).
+    pub fn rotated(&self, m: DMat3) -> TexelShape {
+        TexelShape {
+            centroid: m * self.centroid,
+            hu: m * self.hu,
+            hv: m * self.hv,
+            regular: self.regular,
+        }
+    }
+}
+
+/// The shape of texel (i, j) of `layer` (file frame), from its 3×3 Gauss nodes.
+pub fn texel_shape(mapping: Mapping, w: u32, h: u32, layer: u32, i: u32, j: u32) -> TexelShape {
+    let at = |a: f64, b: f64| Coord {
+        layer,
+        u: (i as f64 + a) / w as f64,
+        v: (j as f64 + b) / h as f64,
+    };
+    let mut sum = DVec3::ZERO;
+    let mut nodes = [(DVec3::ZERO, 0.0); 9];
+    let mut k = 0;
+    for_each_node(mapping, (w, h), (layer, i, j), 1, |c, wq| {
+        let d = mapping.coord_to_dir(c);
+        if k < 9 {
+            nodes[k] = (d, wq);
+        }
+        k += 1;
+        sum += d * wq;
+    });
+    let regular_nodes = k == 9 && !rim_cut(mapping, w, h, i, j);
+    let c = if sum.length_squared() > 0.0 {
+        sum.normalize()
+    } else {
+        mapping.coord_to_dir(at(0.5, 0.5))
+    };
+    let tangent = |v: DVec3| v - c * v.dot(c);
+    let hu = tangent(mapping.coord_to_dir(at(1.0, 0.5)) - mapping.coord_to_dir(at(0.0, 0.5))) * 0.5;
+    let hv = tangent(mapping.coord_to_dir(at(0.5, 1.0)) - mapping.coord_to_dir(at(0.5, 0.0))) * 0.5;
+    let mut shape = TexelShape {
+        centroid: c,
+        hu,
+        hv,
+        regular: false,
+    };
+    if !regular_nodes {
+        return shape;
+    }
+    let (mut dmin, mut dmax) = (f64::MAX, 0.0f64);
+    for b in 0..3 {
+        for a in 0..3 {
+            let d = mapping.density(at(0.5 * a as f64, 0.5 * b as f64));
+            dmin = dmin.min(d);
+            dmax = dmax.max(d);
+        }
+    }
+    if !(dmin > 0.0 && dmax <= TILT_DENSITY_RATIO * dmin) {
+        return shape;
+    }
+    // Covariance of the texel (Σ) and of the parallelogram (P = (hu huᵀ + hv hvᵀ)/3) in a
+    // tangent frame; the edges are mapped by A = Σ^½ P^-½ so that their covariance is Σ.
+    let e1 = c.any_orthonormal_vector();
+    let e2 = c.cross(e1);
+    let wsum: f64 = nodes.iter().map(|n| n.1).sum();
+    let mut cov = [0.0; 3];
+    for (d, wq) in nodes {
+        let y = tangent(d);
+        let (p, q) = (y.dot(e1), y.dot(e2));
+        cov[0] += wq * p * p / wsum;
+        cov[1] += wq * p * q / wsum;
+        cov[2] += wq * q * q / wsum;
+    }
+    let (a1, a2, b1, b2) = (hu.dot(e1), hu.dot(e2), hv.dot(e1), hv.dot(e2));
+    let par = [
+        (a1 * a1 + b1 * b1) / 3.0,
+        (a1 * a2 + b1 * b2) / 3.0,
+        (a2 * a2 + b2 * b2) / 3.0,
+    ];
+    let (Some(sq), Some(sp)) = (sqrt2(cov), sqrt2(par)) else {
+        return shape;
+    };
+    let det = sp[0] * sp[2] - sp[1] * sp[1];
+    if det <= 0.0 {
+        return shape;
+    }
+    let ip = [sp[2] / det, -sp[1] / det, sp[0] / det];
+    let m = [
+        [sq[0] * ip[0] + sq[1] * ip[1], sq[0] * ip[1] + sq[1] * ip[2]],
+        [sq[1] * ip[0] + sq[2] * ip[1], sq[1] * ip[1] + sq[2] * ip[2]],
+    ];
+    let map = |x: f64, y: f64| e1 * (m[0][0] * x + m[0][1] * y) + e2 * (m[1][0] * x + m[1][1] * y);
+    shape.hu = map(a1, a2);
+    shape.hv = map(b1, b2);
+    shape.regular = true;
+    shape
+}
+
+/// The square root of a symmetric positive semi-definite 2×2 matrix [a, b; b, c] as
+/// [a', b', c'], or `None` when it is zero.
+fn sqrt2(m: [f64; 3]) -> Option<[f64; 3]> {
+    let d = (m[0] * m[2] - m[1] * m[1]).max(0.0).sqrt();
+    let t = (m[0] + m[2] + 2.0 * d).sqrt();
+    (t > 0.0).then(|| [(m[0] + d) / t, m[1] / t, (m[2] + d) / t])
+}
+
+/// ln(sinh z / z): a series below |z| = 1/2 (where the closed form cancels in f32), the
+/// log-domain closed form above, so that far tails (z in the tens) keep their digits. The
+/// GLSL twin takes the same branches.
+fn ln_sinhc(z: f64) -> f64 {
+    let a = z.abs();
+    if a < 0.5 {
+        let z2 = a * a;
+        z2 * (1.0 / 6.0 - z2 * (1.0 / 180.0 - z2 * (1.0 / 2835.0 - z2 / 37800.0)))
+    } else {
+        a + (-(-2.0 * a).exp()).ln_1p() - (2.0 * a).ln()
+    }
+}
+
+/// E[s] for s uniform on [−1, 1] tilted by e^{zs}: coth z − 1/z (series below 1/2).
+fn tilt_m1(z: f64) -> f64 {
+    if z.abs() < 0.5 {
+        let z2 = z * z;
+        z * (1.0 / 3.0 - z2 * (1.0 / 45.0 - z2 * (2.0 / 945.0 - z2 / 4725.0)))
+    } else {
+        1.0 / z.tanh() - 1.0 / z
+    }
+}
+
+/// E[s²] under the same tilt: 1 − 2(coth z − 1/z)/z (series below 1/2).
+fn tilt_m2(z: f64) -> f64 {
+    if z.abs() < 0.5 {
+        let z2 = z * z;
+        1.0 / 3.0 + z2 * (2.0 / 45.0 - z2 * (4.0 / 945.0 - z2 * 2.0 / 4725.0))
+    } else {
+        1.0 - 2.0 * tilt_m1(z) / z
+    }
+}
+
+/// The tilted rule: the mean of K over a texel of shape `s` (world frame), for x = axis·ω
+/// above the horizon over it. With g = ln K = ln scale + n·ln x, and ω = centroid + y,
+/// y = s_u·hu + s_v·hv, (s_u, s_v) uniform on the square, g is linear in y up to the term
+/// −n/2·(|y|² + (axis·y)²/x²). The linear part integrates in closed form (a product of
+/// sinh z / z, z = n·axis·h/x); the quadratic part enters through its mean under the tilted
+/// distribution. Exact for a linear log-kernel; its error is the curvature's second order.
+pub fn tilted_mean(kernel: Kernel, axis: DVec3, s: &TexelShape) -> f64 {
+    let e = axis - s.centroid;
+    let gap = 0.5 * e.length_squared();
+    let x = 1.0 - gap;
+    if x <= 0.0 {
+        return 0.0;
+    }
+    let n = kernel.exponent();
+    let ln_k = kernel.scale().ln() + n * (-gap).ln_1p();
+    // axis·h, as (axis − centroid)·h: h ⊥ centroid, and e keeps its digits near the peak.
+    let (bu, bv) = (e.dot(s.hu), e.dot(s.hv));
+    let (zu, zv) = (n * bu / x, n * bv / x);
+    let x2 = x * x;
+    let q = (s.hu.length_squared() + bu * bu / x2) * tilt_m2(zu)
+        + (s.hv.length_squared() + bv * bv / x2) * tilt_m2(zv)
+        + 2.0 * (s.hu.dot(s.hv) + bu * bv / x2) * tilt_m1(zu) * tilt_m1(zv);
+    (ln_k + ln_sinhc(zu) + ln_sinhc(zv) - 0.5 * n * q).exp()
 }
 
 /// Calls `f(coord, weight)` for the quadrature nodes of texel (i, j) split into `cells`²
@@ -316,6 +508,7 @@ pub struct Prepared<'a> {
     map: &'a EnvMap,
     file_to_world: DMat3,
     texels: Vec<PreparedTexel>,
+    tilted: bool,
 }
 
 struct PreparedTexel {
@@ -327,6 +520,7 @@ struct PreparedTexel {
     sin_rho: f64,
     radiance: [f64; 3],
     omega: f64,
+    shape: TexelShape,
 }
 
 impl<'a> Prepared<'a> {
@@ -345,13 +539,22 @@ impl<'a> Prepared<'a> {
                 sin_rho: (1.0 - cos_rho * cos_rho).max(0.0).sqrt(),
                 radiance: t.map(f64::from),
                 omega,
+                shape: texel_shape(map.mapping, w, h, layer, i, j).rotated(file_to_world),
             });
         });
         Prepared {
             map,
             file_to_world,
             texels,
+            tilted: true,
         }
+    }
+
+    /// The same sums with the Gauss-cell rule wherever the tilted rule would be taken: the
+    /// oracle the tilted rule is measured against.
+    pub fn without_tilt(mut self) -> Self {
+        self.tilted = false;
+        self
     }
 
     /// ∑ over texels of L_t·∫_t K(axis·ω) dω.
@@ -361,9 +564,11 @@ impl<'a> Prepared<'a> {
         let mut out = [0.0; 3];
         for t in &self.texels {
             let x = axis.dot(t.dir);
-            let k = match rule(kernel, x, t.cos_rho, t.sin_rho) {
+            let regular = self.tilted && t.shape.regular;
+            let k = match rule(kernel, x, t.cos_rho, t.sin_rho, regular) {
                 Rule::Skip => continue,
                 Rule::Centre => kernel.eval(axis, t.dir),
+                Rule::Tilted => tilted_mean(kernel, axis, &t.shape),
                 Rule::Cells(s) => {
                     let (mut acc, mut wsum) = (0.0, 0.0);
                     for_each_node(m, (w, h), (t.layer, t.i, t.j), s, |c, wq| {
@@ -413,7 +618,7 @@ impl Prepared<'_> {
         };
         for t in &self.texels {
             let x = axis.dot(t.dir);
-            if rule(kernel, x, t.cos_rho, t.sin_rho) != Rule::Skip {
+            if rule(kernel, x, t.cos_rho, t.sin_rho, false) != Rule::Skip {
                 continue;
             }
             let sin_c = (1.0 - x * x).max(0.0).sqrt();
@@ -603,14 +808,129 @@ mod tests {
         assert!(worst < 1e-6, "worst dropped fraction {worst:e}");
     }
 
+    /// The tilted rule against 12×12 cells of 3×3 Gauss points, texel by texel, wherever the
+    /// rule takes it: random texels of every mapping (pole rows, face corners and disc
+    /// texels included), axes anywhere within the lobe's cut-off cone, n from 1 to 10⁵.
+    /// Measured worst 9.8e-4 (deep in the tail of a 1k lat-long texel at n = 2049); the bound
+    /// is the rule's stated 1e-3.
+    #[test]
+    fn tilted_rule_matches_gauss_cells_texel_by_texel() {
+        let mut rng = crate::math::sequence::Rng::new(1, 2, 3, 7);
+        let mut worst: f64 = 0.0;
+        let mut taken = 0;
+        for (m, size) in [
+            (Mapping::LatLong, 512),
+            (Mapping::LatLong, 64),
+            (Mapping::Cube, 128),
+            (Mapping::Cube, 16),
+            (Mapping::Angular, 128),
+            (Mapping::DualParaboloid, 64),
+        ] {
+            let (w, h) = m.extent_for_size(size);
+            for n in [1.0, 4.0, 64.0, 512.0, 2049.0, 1e4, 1e5] {
+                let kernel = Kernel::Phong { n };
+                let cut = (LOG_CUTOFF / n).exp().acos().min(0.5 * PI);
+                for _ in 0..300 {
+                    let layer = (rng.uniform() * m.layers() as f64) as u32;
+                    let i = (rng.uniform() * w as f64) as u32;
+                    let j = (rng.uniform() * h as f64) as u32;
+                    if m.integration_source(w, h, i, j).is_none() {
+                        continue;
+                    }
+                    let shape = texel_shape(m, w, h, layer, i, j);
+                    let c = m.coord_to_dir(Mapping::texel_center(w, h, layer, i, j));
+                    let cos_rho = texel_cos_radius(m, w, h, layer, i, j);
+                    let sin_rho = (1.0 - cos_rho * cos_rho).sqrt();
+                    let (angle, turn) = (rng.uniform() * cut, rng.uniform() * 2.0 * PI);
+                    let e1 = c.any_orthonormal_vector();
+                    let e2 = c.cross(e1);
+                    let axis = c * angle.cos() + (e1 * turn.cos() + e2 * turn.sin()) * angle.sin();
+                    if rule(kernel, axis.dot(c), cos_rho, sin_rho, shape.regular) != Rule::Tilted {
+                        continue;
+                    }
+                    let (mut acc, mut wsum) = (0.0, 0.0);
+                    for_each_node(m, (w, h), (layer, i, j), 12, |q, wq| {
+                        acc += wq * kernel.eval(axis, m.coord_to_dir(q));
+                        wsum += wq;
+                    });
+                    let exact = acc / wsum;
+                    let err = (tilted_mean(kernel, axis, &shape) / exact - 1.0).abs();
+                    assert!(
+                        err.is_finite() && err < 1e-3,
+                        "{m:?} {size} ({layer}, {i}, {j}) n = {n}: {err:e}"
+                    );
+                    worst = worst.max(err);
+                    taken += 1;
+                }
+            }
+        }
+        eprintln!("tilted rule: {taken} texels, worst relative error {worst:.2e}");
+        assert!(
+            taken > 2000,
+            "the tilted rule was taken for only {taken} texels"
+        );
+    }
+
+    /// Whole convolutions of a map with a sun 10⁵ times the sky, with and without the
+    /// tilted rule, at axes on, beside and far from the sun: the rule's per-texel errors do
+    /// not add up (measured worst 2e-5 relative).
+    #[test]
+    fn tilted_rule_keeps_whole_convolutions_on_a_sun_map() {
+        use crate::math::synth::{bake, Sky};
+        let sky = Sky {
+            sun_radius: 1.5f64.to_radians(),
+            sun_ratio: 1e5,
+            ..Sky::default()
+        };
+        for (m, size) in [(Mapping::LatLong, 128), (Mapping::Cube, 32)] {
+            let (w, h) = m.extent_for_size(size);
+            let map = EnvMap::new(m, w, h, bake(m, w, h, 2, |d| sky.radiance(d)));
+            let fast = Prepared::new(&map, DMat3::IDENTITY);
+            let oracle = Prepared::new(&map, DMat3::IDENTITY).without_tilt();
+            let side = sky.sun_dir.cross(DVec3::Y).normalize();
+            let mut worst: f64 = 0.0;
+            for n in [1.0, 16.0, 256.0, 2049.0] {
+                for a in [0.0, 0.02, 0.1, 0.4, 1.5, 3.0] {
+                    let axis = sky.sun_dir * f64::cos(a) + side * f64::sin(a);
+                    let (f, o) = (
+                        fast.convolve(Kernel::Phong { n }, axis),
+                        oracle.convolve(Kernel::Phong { n }, axis),
+                    );
+                    for ch in 0..3 {
+                        worst = worst.max((f[ch] / o[ch] - 1.0).abs());
+                    }
+                }
+                let (f, o) = (
+                    fast.convolve(Kernel::Cosine, side),
+                    oracle.convolve(Kernel::Cosine, side),
+                );
+                worst = worst.max((f[0] / o[0] - 1.0).abs());
+            }
+            eprintln!("{m:?} {size}: worst relative difference {worst:.2e}");
+            assert!(worst < 2e-4, "{m:?}: {worst:e}");
+        }
+    }
+
     #[test]
     fn rules_skip_below_the_horizon_and_refine_near_it() {
         let (c, s) = (0.999f64, (1.0 - 0.999f64 * 0.999).sqrt());
-        assert_eq!(rule(Kernel::Cosine, -0.5, c, s), Rule::Skip);
-        assert_eq!(rule(Kernel::Cosine, 0.0, c, s), Rule::Cells(EDGE_CELLS));
-        assert!(matches!(rule(Kernel::Cosine, 0.9, c, s), Rule::Cells(1)));
-        assert_eq!(rule(Kernel::Phong { n: 1e4 }, 0.5, c, s), Rule::Skip);
+        assert_eq!(rule(Kernel::Cosine, -0.5, c, s, true), Rule::Skip);
+        assert_eq!(
+            rule(Kernel::Cosine, 0.0, c, s, true),
+            Rule::Cells(EDGE_CELLS)
+        );
+        assert!(matches!(
+            rule(Kernel::Cosine, 0.9, c, s, false),
+            Rule::Cells(1)
+        ));
+        assert_eq!(rule(Kernel::Cosine, 0.9, c, s, true), Rule::Tilted);
+        // The log-curvature grows as 1/x² toward the horizon: near it, cells again.
+        assert!(matches!(
+            rule(Kernel::Cosine, 0.05, c, s, true),
+            Rule::Cells(_)
+        ));
+        assert_eq!(rule(Kernel::Phong { n: 1e4 }, 0.5, c, s, true), Rule::Skip);
         let (c2, s2) = (1.0 - 1e-8, (2e-8f64).sqrt());
-        assert_eq!(rule(Kernel::Cosine, 0.9, c2, s2), Rule::Centre);
+        assert_eq!(rule(Kernel::Cosine, 0.9, c2, s2, true), Rule::Centre);
     }
 }

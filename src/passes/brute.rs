@@ -12,6 +12,7 @@ use crate::math::filter::{self, Kernel};
 use crate::math::{Mapping, Orientation};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
+use std::sync::OnceLock;
 
 /// Where a filtered map goes: its mapping and size (as `--size` means for conversion).
 #[derive(Clone, Copy, Debug)]
@@ -32,22 +33,36 @@ impl FilterTarget {
 /// The brute-force convolution pass.
 pub struct BruteFilter {
     ctx: Context,
-    prepare: Pipeline,
+    /// Per source mapping, specialised on it.
+    prepare: [OnceLock<Pipeline>; 4],
     tiles: Pipeline,
-    brute: Pipeline,
+    /// Per (source, destination) mapping pair, specialised on both.
+    brute: [OnceLock<Pipeline>; 16],
     sampler: Sampler,
 }
 
 impl BruteFilter {
-    /// Builds the two pipelines.
+    /// Builds the tile pipeline; the others are built, specialised, when a run needs them.
     pub fn new(ctx: &Context) -> Result<BruteFilter> {
         Ok(BruteFilter {
             ctx: ctx.clone(),
-            prepare: Pipeline::compute(ctx, ShaderId::BrutePrepare, &[WORKGROUP_1D])?,
+            prepare: Default::default(),
             tiles: Pipeline::compute(ctx, ShaderId::BruteTiles, &[WORKGROUP_1D])?,
-            brute: Pipeline::compute(ctx, ShaderId::Brute, &WORKGROUP_2D)?,
+            brute: Default::default(),
             sampler: Sampler::linear_clamp(ctx, "brute sampler")?,
         })
+    }
+
+    fn specialised<'a>(
+        &self,
+        cell: &'a OnceLock<Pipeline>,
+        id: ShaderId,
+        spec: &[u32],
+    ) -> Result<&'a Pipeline> {
+        if cell.get().is_none() {
+            let _ = cell.set(Pipeline::compute(&self.ctx, id, spec)?);
+        }
+        Ok(cell.get().unwrap_or_else(|| unreachable!("set above")))
     }
 
     /// Records the convolution of `src` (oriented by `orientation`) with `kernel` into
@@ -95,6 +110,7 @@ impl BruteFilter {
             |name: &str, bytes: u64| Buffer::new(&ctx, name, bytes, usage, MemoryLocation::GpuOnly);
         let cones = scratch("brute cones", bytes)?;
         let rad = scratch("brute radiance", bytes)?;
+        let shapes = scratch("brute shapes", 3 * bytes)?;
         let comp = scratch(
             "brute compensation",
             (w * h * dst.mapping.layers()) as u64 * 16,
@@ -119,9 +135,20 @@ impl BruteFilter {
         let prep_groups = texels.div_ceil(WORKGROUP_1D);
         let gx = prep_groups.min(ctx.info().max_workgroup_count.min(65535));
         let gy = prep_groups.div_ceil(gx);
+        let (from, to) = (src.mapping.id(), dst.mapping.id());
+        let prepare = self.specialised(
+            &self.prepare[from as usize],
+            ShaderId::BrutePrepare,
+            &[WORKGROUP_1D, 1, from, to],
+        )?;
+        let brute = self.specialised(
+            &self.brute[(4 * from + to) as usize],
+            ShaderId::Brute,
+            &[WORKGROUP_2D[0], WORKGROUP_2D[1], from, to],
+        )?;
         rec.span("brute prepare", |rec| {
             rec.dispatch(
-                &self.prepare,
+                prepare,
                 &[
                     (
                         binding::BRUTE_PREP_SRC,
@@ -129,6 +156,7 @@ impl BruteFilter {
                     ),
                     (binding::BRUTE_PREP_CONES, Bind::Buffer(&cones)),
                     (binding::BRUTE_PREP_RADIANCE, Bind::Buffer(&rad)),
+                    (binding::BRUTE_PREP_SHAPES, Bind::Buffer(&shapes)),
                 ],
                 &push,
                 [gx, gy, 1],
@@ -159,13 +187,14 @@ impl BruteFilter {
             while begin < slots {
                 let end = slots.min(begin.saturating_add(chunk));
                 rec.dispatch(
-                    &self.brute,
+                    brute,
                     &[
                         (binding::BRUTE_CONES, Bind::Buffer(&cones)),
                         (binding::BRUTE_RADIANCE, Bind::Buffer(&rad)),
                         (binding::BRUTE_DST, Bind::Storage(&dst.image)),
                         (binding::BRUTE_COMP, Bind::Buffer(&comp)),
                         (binding::BRUTE_TILES, Bind::Buffer(&tiles)),
+                        (binding::BRUTE_SHAPES, Bind::Buffer(&shapes)),
                     ],
                     &BrutePush {
                         chunk_begin: begin,
@@ -182,7 +211,7 @@ impl BruteFilter {
             }
             Ok(())
         })?;
-        rec.keep((cones, rad, comp, tiles));
+        rec.keep((cones, rad, comp, tiles, shapes));
         Ok(())
     }
 
@@ -214,6 +243,7 @@ impl BruteFilter {
         let Some(limit) = self.ctx.info().loop_iteration_limit else {
             return u32::MAX;
         };
+
         let (w, h) = (src.width, src.height);
         let mut min_cos: f64 = 1.0;
         // Texel radii vary smoothly: a sparse sample of texels plus the corners suffices,
@@ -225,9 +255,19 @@ impl BruteFilter {
                 min_cos = min_cos.min(filter::texel_cos_radius(src.mapping, w, h, 0, i, j));
             }
         }
-        let s = (filter::CELLS_PER_WIDTH * (kernel.exponent() * 2.0 * (1.0 - min_cos)).sqrt())
+        let n = kernel.exponent();
+        let rho = min_cos.clamp(-1.0, 1.0).acos();
+        // Texels the horizon cuts take at least EDGE_CELLS a side, unless the lobe there is
+        // below the cut-off for every texel: x_max ≤ sin ρ at the horizon.
+        let straddlers_kept = n <= 1.0 || n * rho.sin().ln() >= filter::LOG_CUTOFF;
+        let floor = if straddlers_kept {
+            filter::EDGE_CELLS as f64
+        } else {
+            1.0
+        };
+        let s = (filter::CELLS_PER_WIDTH * (n * 2.0 * (1.0 - min_cos)).sqrt())
             .ceil()
-            .clamp(filter::EDGE_CELLS as f64, filter::MAX_CELLS as f64);
+            .clamp(floor, filter::MAX_CELLS as f64);
         let rim = if matches!(src.mapping, Mapping::Angular | Mapping::DualParaboloid) {
             130.0
         } else {
