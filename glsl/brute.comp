@@ -286,7 +286,7 @@ float texel_mean(vec3 axis, uint t, uint s) {
 // The tilted rule (twin of filter::tilted_mean): the mean of K over texel t taken as the
 // uniform parallelogram of its shape, ln K linear across it plus the curvature's mean.
 // ln(sinh z / z), E[s] = coth z − 1/z and E[s²] = 1 − 2E[s]/z (s uniform on [−1, 1] tilted
-// by e^{zs}) take series below |z| = 1/2, where the closed forms cancel in f32, as the twin
+// by e^{zs}) take series below |z| = FILTER_TILT_SERIES_BELOW, where the closed forms cancel in f32, as the twin
 // does; above it they share e^{−2|z|} per axis and one log for both axes, because llvmpipe
 // evaluates both sides of every branch and transcendentals dominate this loop.
 float tilted_mean(vec3 axis, float n, float ln_scale, uint t) {
@@ -299,9 +299,9 @@ float tilted_mean(vec3 axis, float n, float ln_scale, uint t) {
     vec2 z = n * vec2(bu, bv) / x;
     vec2 a = abs(z);
     vec2 z2 = z * z;
-    bvec2 small = lessThan(a, vec2(0.5));
-    vec2 ex = exp(-2.0 * max(a, vec2(0.5)));
-    vec2 big = max(a, vec2(0.5));
+    bvec2 small = lessThan(a, vec2(FILTER_TILT_SERIES_BELOW));
+    vec2 big = max(a, vec2(FILTER_TILT_SERIES_BELOW));
+    vec2 ex = exp(-2.0 * big);
     // ln sinhc: series, or |z| + ln((1 − e^{−2|z|}) / (2|z|)) with one log for both axes.
     vec2 series = z2 * (1.0 / 6.0 - z2 * (1.0 / 180.0 - z2 * (1.0 / 2835.0 - z2 / 37800.0)));
     vec2 ratio = mix((1.0 - ex) / (2.0 * big), vec2(1.0), small);

@@ -168,6 +168,9 @@ pub mod filter_rule {
     /// mapping's solid-angle density over it varies by at most this ratio and no disc rim
     /// cuts it: lat-long rows next to a pole are triangles, not parallelograms.
     pub const TILT_DENSITY_RATIO: f64 = 1.4;
+    /// Below this |z| the tilted rule's sinh z / z, coth z − 1/z and their kin take series:
+    /// the closed forms cancel there in f32.
+    pub const TILT_SERIES_BELOW: f64 = 0.5;
     /// A tile's bounding radius is widened by this fraction, and then by TILE_MARGIN_ABS
     /// radians, so that f32 rounding in its angles never makes it tighter than its texels'.
     pub const TILE_MARGIN_REL: f64 = 1e-4;
@@ -696,6 +699,7 @@ pub fn generated_header() -> String {
         ("FILTER_CENTRE_LIMIT", filter_rule::CENTRE_LIMIT),
         ("FILTER_TILT_LIMIT", filter_rule::TILT_LIMIT),
         ("FILTER_TILT_DENSITY_RATIO", filter_rule::TILT_DENSITY_RATIO),
+        ("FILTER_TILT_SERIES_BELOW", filter_rule::TILT_SERIES_BELOW),
         ("FILTER_LOG_CUTOFF", filter_rule::LOG_CUTOFF),
         ("FILTER_CONE_MARGIN", filter_rule::CONE_MARGIN),
         ("FILTER_TILE_MARGIN_REL", filter_rule::TILE_MARGIN_REL),

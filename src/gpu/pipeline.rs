@@ -78,6 +78,20 @@ impl Pipeline {
         Ok(p)
     }
 
+    /// The compute pipeline in `cell`, built on first use with [`Pipeline::compute`]: passes
+    /// keep one cell per specialisation they may need and build only those a run asks for.
+    pub fn compute_once<'a>(
+        cell: &'a std::sync::OnceLock<Pipeline>,
+        ctx: &Context,
+        shader: ShaderId,
+        spec: &[u32],
+    ) -> Result<&'a Pipeline> {
+        if cell.get().is_none() {
+            let _ = cell.set(Pipeline::compute(ctx, shader, spec)?);
+        }
+        Ok(cell.get().unwrap_or_else(|| unreachable!("set above")))
+    }
+
     /// A compute pipeline; `spec` are the u32 specialization constants 0, 1, … (workgroup
     /// sizes from [`super::layout`]).
     pub fn compute(ctx: &Context, shader: ShaderId, spec: &[u32]) -> Result<Pipeline> {

@@ -30,7 +30,7 @@ use std::f64::consts::PI;
 
 pub use crate::abi::filter_rule::{
     CELLS_PER_WIDTH, CENTRE_LIMIT, CONE_MARGIN, EDGE_CELLS, LOG_CUTOFF, MAX_CELLS,
-    TILT_DENSITY_RATIO, TILT_LIMIT,
+    TILT_DENSITY_RATIO, TILT_LIMIT, TILT_SERIES_BELOW,
 };
 
 /// A convolution kernel of x = axis·ω.
@@ -347,12 +347,12 @@ fn sqrt2(m: [f64; 3]) -> Option<[f64; 3]> {
     (t > 0.0).then(|| [(m[0] + d) / t, m[1] / t, (m[2] + d) / t])
 }
 
-/// ln(sinh z / z): a series below |z| = 1/2 (where the closed form cancels in f32), the
+/// ln(sinh z / z): a series below |z| = `TILT_SERIES_BELOW` (where the closed form cancels in f32), the
 /// log-domain closed form above, so that far tails (z in the tens) keep their digits. The
 /// GLSL twin takes the same branches.
 fn ln_sinhc(z: f64) -> f64 {
     let a = z.abs();
-    if a < 0.5 {
+    if a < TILT_SERIES_BELOW {
         let z2 = a * a;
         z2 * (1.0 / 6.0 - z2 * (1.0 / 180.0 - z2 * (1.0 / 2835.0 - z2 / 37800.0)))
     } else {
@@ -360,9 +360,9 @@ fn ln_sinhc(z: f64) -> f64 {
     }
 }
 
-/// E[s] for s uniform on [−1, 1] tilted by e^{zs}: coth z − 1/z (series below 1/2).
+/// E[s] for s uniform on [−1, 1] tilted by e^{zs}: coth z − 1/z (series below `TILT_SERIES_BELOW`).
 fn tilt_m1(z: f64) -> f64 {
-    if z.abs() < 0.5 {
+    if z.abs() < TILT_SERIES_BELOW {
         let z2 = z * z;
         z * (1.0 / 3.0 - z2 * (1.0 / 45.0 - z2 * (2.0 / 945.0 - z2 / 4725.0)))
     } else {
@@ -370,9 +370,9 @@ fn tilt_m1(z: f64) -> f64 {
     }
 }
 
-/// E[s²] under the same tilt: 1 − 2(coth z − 1/z)/z (series below 1/2).
+/// E[s²] under the same tilt: 1 − 2(coth z − 1/z)/z (series below `TILT_SERIES_BELOW`).
 fn tilt_m2(z: f64) -> f64 {
-    if z.abs() < 0.5 {
+    if z.abs() < TILT_SERIES_BELOW {
         let z2 = z * z;
         1.0 / 3.0 + z2 * (2.0 / 45.0 - z2 * (4.0 / 945.0 - z2 * 2.0 / 4725.0))
     } else {

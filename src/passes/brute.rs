@@ -53,18 +53,6 @@ impl BruteFilter {
         })
     }
 
-    fn specialised<'a>(
-        &self,
-        cell: &'a OnceLock<Pipeline>,
-        id: ShaderId,
-        spec: &[u32],
-    ) -> Result<&'a Pipeline> {
-        if cell.get().is_none() {
-            let _ = cell.set(Pipeline::compute(&self.ctx, id, spec)?);
-        }
-        Ok(cell.get().unwrap_or_else(|| unreachable!("set above")))
-    }
-
     /// Records the convolution of `src` (oriented by `orientation`) with `kernel` into
     /// `dst`, in the world frame: irradiance E(n) for [`Kernel::Cosine`], the normalised
     /// Phong prefilter indexed by the reflection direction for [`Kernel::Phong`]. Spans:
@@ -136,13 +124,16 @@ impl BruteFilter {
         let gx = prep_groups.min(ctx.info().max_workgroup_count.min(65535));
         let gy = prep_groups.div_ceil(gx);
         let (from, to) = (src.mapping.id(), dst.mapping.id());
-        let prepare = self.specialised(
+        // Prepare reads only the source mapping (constant 1 is unused there).
+        let prepare = Pipeline::compute_once(
             &self.prepare[from as usize],
+            &self.ctx,
             ShaderId::BrutePrepare,
-            &[WORKGROUP_1D, 1, from, to],
+            &[WORKGROUP_1D, 1, from, 0],
         )?;
-        let brute = self.specialised(
+        let brute = Pipeline::compute_once(
             &self.brute[(4 * from + to) as usize],
+            &self.ctx,
             ShaderId::Brute,
             &[WORKGROUP_2D[0], WORKGROUP_2D[1], from, to],
         )?;

@@ -59,11 +59,8 @@ impl Converter {
         } else {
             ShaderId::Convert2d
         };
-        if cell.get().is_none() {
-            let spec = [WORKGROUP_2D[0], WORKGROUP_2D[1], from.id(), to.id()];
-            let _ = cell.set(Pipeline::compute(&self.ctx, id, &spec)?);
-        }
-        Ok(cell.get().unwrap_or_else(|| unreachable!("set above")))
+        let spec = [WORKGROUP_2D[0], WORKGROUP_2D[1], from.id(), to.id()];
+        Pipeline::compute_once(cell, &self.ctx, id, &spec)
     }
 
     /// Samples per axis for an output texel: about two per source texel spacing, so that

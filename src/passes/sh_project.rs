@@ -205,12 +205,12 @@ impl ShProjector {
             texels,
             pad: [0; 3],
         };
-        let cell = &self.project[(lmax + (SH_MAX_LMAX + 1) * map.mapping.id()) as usize];
-        if cell.get().is_none() {
-            let spec = [SH_WORKGROUP, lmax, map.mapping.id(), run];
-            let _ = cell.set(Pipeline::compute(&self.ctx, self.project_shader, &spec)?);
-        }
-        let pipeline = cell.get().unwrap_or_else(|| unreachable!("set above"));
+        let pipeline = Pipeline::compute_once(
+            &self.project[(lmax + (SH_MAX_LMAX + 1) * map.mapping.id()) as usize],
+            &self.ctx,
+            self.project_shader,
+            &[SH_WORKGROUP, lmax, map.mapping.id(), run],
+        )?;
         rec.span("sh project", |rec| {
             rec.dispatch(
                 pipeline,
