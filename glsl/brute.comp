@@ -6,6 +6,9 @@
 //   and its shape for the tilted rule;
 // - TILES: one invocation per tile of BRUTE_TILE² source texels writes a cone bounding all
 //   its texels' cones (w = 2 when it holds none);
+// - MOMENTS: one invocation per texel of level src_level of the power-moment pyramid (2^s × 2^s
+//   prepared texels each) writes its cone and, per channel, its light's power and the uniform
+//   parallelogram with the light's centroid and covariance (twin of moments::MomentLevel::new);
 // - otherwise: one invocation per output texel sums L·∫K over every source texel, choosing per
 //   texel the same rule as the CPU (skip, centre node, the tilted rule, or s×s cells of 3×3
 //   Gauss points), with
@@ -25,6 +28,12 @@
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_BRUTE_TILE_CONES) readonly buffer Cones { vec4 cones[]; };
 layout(std430, set = 0, binding = BINDING_BRUTE_TILE_OUT) writeonly buffer Tiles { vec4 tiles[]; };
+#elif defined(MOMENTS)
+layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
+layout(std430, set = 0, binding = BINDING_BRUTE_MOM_RADIANCE) readonly buffer Rad { vec4 rad[]; };
+layout(std430, set = 0, binding = BINDING_BRUTE_MOM_SHAPES) readonly buffer Shapes { vec4 shapes[]; };
+layout(std430, set = 0, binding = BINDING_BRUTE_MOM_CONES) writeonly buffer Cones { vec4 cones[]; };
+layout(std430, set = 0, binding = BINDING_BRUTE_MOM_LIGHT) writeonly buffer Light { vec4 light[]; };
 #elif defined(PREPARE)
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(set = 0, binding = BINDING_BRUTE_PREP_SRC) uniform sampler2DArray src;
@@ -39,6 +48,8 @@ layout(set = 0, binding = BINDING_BRUTE_DST, rgba32f) uniform image2DArray dst;
 layout(std430, set = 0, binding = BINDING_BRUTE_COMP) buffer Comp { vec4 comp_buf[]; };
 layout(std430, set = 0, binding = BINDING_BRUTE_TILES) readonly buffer Tiles { vec4 tiles[]; };
 layout(std430, set = 0, binding = BINDING_BRUTE_SHAPES) readonly buffer Shapes { vec4 shapes[]; };
+layout(std430, set = 0, binding = BINDING_BRUTE_COARSE_CONES) readonly buffer CoarseCones { vec4 coarse_cones[]; };
+layout(std430, set = 0, binding = BINDING_BRUTE_LIGHT) readonly buffer Light { vec4 light[]; };
 #endif
 
 // The push block, generated from src/abi.rs.
@@ -49,6 +60,14 @@ PUSH_BrutePush
 // which llvmpipe then runs several times faster.
 layout(constant_id = 2) const uint SRC_MAPPING = 0u;
 layout(constant_id = 3) const uint DST_MAPPING = 0u;
+// Whether the sum runs over a level of the moment pyramid (pc.src_size is then that level's
+// size, and the prepared texels are pc.src_level levels finer).
+layout(constant_id = 4) const bool MOMENT_SOURCE = false;
+
+// The size of the prepared (finest) texels.
+uvec2 fine_size() {
+    return pc.src_size << pc.src_level;
+}
 
 vec3 to_world(vec3 f) {
     return vec3(dot(pc.file_to_world[0].xyz, f), dot(pc.file_to_world[1].xyz, f), dot(pc.file_to_world[2].xyz, f));
@@ -63,8 +82,8 @@ vec3 src_dir(uint layer, vec2 uv) {
 
 bool rim_cut(ivec2 p) {
     if (SRC_MAPPING != MAPPING_ANGULAR && SRC_MAPPING != MAPPING_DUAL_PARABOLOID) return false;
-    vec2 lo = 2.0 * vec2(p) / vec2(pc.src_size) - 1.0;
-    vec2 hi = 2.0 * vec2(p + 1) / vec2(pc.src_size) - 1.0;
+    vec2 lo = 2.0 * vec2(p) / vec2(fine_size()) - 1.0;
+    vec2 hi = 2.0 * vec2(p + 1) / vec2(fine_size()) - 1.0;
     vec2 f = max(abs(lo), abs(hi));
     return dot(f, f) > 1.0;
 }
@@ -83,6 +102,41 @@ int slot_texel(uint tile, uint s) {
     if (any(greaterThanEqual(q, pc.src_size))) return -1;
     return int((layer * pc.src_size.y + q.y) * pc.src_size.x + q.x);
 }
+
+#if defined(PREPARE) || defined(MOMENTS)
+// The square root of a symmetric positive semi-definite 2×2 matrix (a, b, c) = [a b; b c].
+vec3 sqrt2(vec3 m) {
+    float d = sqrt(max(m.x * m.z - m.y * m.y, 0.0));
+    float t = sqrt(m.x + m.z + 2.0 * d);
+    return t > 0.0 ? vec3(m.x + d, m.y, m.z + d) / t : vec3(0.0);
+}
+
+// Texel p's centre direction (world) and the cosine of its angular radius: corners and edge
+// midpoints (pulled into the disc), 25% wider for the bulge of the edges between them (twin of
+// texel_cos_radius), for a texel of a pc.src_size map.
+vec4 texel_cone(uint layer, ivec2 p) {
+    vec3 c = src_dir(layer, (vec2(p) + 0.5) / vec2(pc.src_size));
+    // Angular radius: corners and edge midpoints (pulled into the disc), 25% wider for the
+    // bulge of the edges between them (twin of texel_cos_radius).
+    bool disc = SRC_MAPPING == MAPPING_ANGULAR || SRC_MAPPING == MAPPING_DUAL_PARABOLOID;
+    float min_dot = 1.0;
+    for (int k = 0; k < 9; k++) {
+        if (k == 4) continue;
+        vec2 uv = (vec2(p) + 0.5 * vec2(k % 3, k / 3)) / vec2(pc.src_size);
+        if (disc) {
+            vec2 xy = 2.0 * uv - 1.0;
+            float rr = length(xy);
+            if (rr > 1.0) uv = 0.5 * (xy / rr + 1.0);
+        }
+        min_dot = min(min_dot, dot(c, src_dir(layer, uv)));
+    }
+    // acos via atan2 so a tiny radius keeps its digits.
+    float md = clamp(min_dot, -1.0, 1.0);
+    float rho = min(FILTER_CONE_MARGIN * atan2_precise(sqrt(max(0.0, (1.0 - md) * (1.0 + md))), md), PI);
+    return vec4(c, cos(rho));
+}
+
+#endif
 
 #if defined(TILES)
 void main() {
@@ -115,13 +169,62 @@ void main() {
     radius = min(radius * (1.0 + FILTER_TILE_MARGIN_REL) + FILTER_TILE_MARGIN_ABS, PI);
     tiles[tile] = vec4(axis, cos(radius));
 }
-#elif defined(PREPARE)
-// The square root of a symmetric positive semi-definite 2×2 matrix (a, b, c) = [a b; b c].
-vec3 sqrt2(vec3 m) {
-    float d = sqrt(max(m.x * m.z - m.y * m.y, 0.0));
-    float t = sqrt(m.x + m.z + 2.0 * d);
-    return t > 0.0 ? vec3(m.x + d, m.y, m.z + d) / t : vec3(0.0);
+#elif defined(MOMENTS)
+// Per channel c: the centroid ∑ P·c_f normalised over the fine texels f, then the covariance in
+// the tangent plane there, ∑ P·((e·c_f)(e′·c_f) + eᵀΣ_f e′) / ∑ P with Σ_f = (hu huᵀ + hv hvᵀ)/3,
+// taken directly (no difference of large second moments), and the parallelogram √3·Σ^½.
+void main() {
+    uint i = gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x + gl_GlobalInvocationID.x;
+    if (i >= pc.texels) return;
+    uint per_layer = pc.src_size.x * pc.src_size.y;
+    uint layer = i / per_layer, r = i % per_layer;
+    ivec2 p = ivec2(r % pc.src_size.x, r / pc.src_size.x);
+    cones[i] = texel_cone(layer, p);
+    uint side = 1u << pc.src_level;
+    uvec2 fine = fine_size();
+    uvec2 base = uvec2(p) * side;
+    vec3 power = vec3(0.0);
+    vec3 m1[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
+    for (uint k = 0u; k < side * side; k++) {
+        uvec2 q = base + uvec2(k % side, k / side);
+        uint t = (layer * fine.y + q.y) * fine.x + q.x;
+        vec3 pw = rad[t].rgb * rad[t].w;
+        vec3 c = shapes[3u * t].xyz;
+        power += pw;
+        m1[0] += pw.r * c;
+        m1[1] += pw.g * c;
+        m1[2] += pw.b * c;
+    }
+    for (int ch = 0; ch < 3; ch++) {
+        uint o = 9u * i + 3u * uint(ch);
+        if (!(power[ch] > 0.0) || dot(m1[ch], m1[ch]) == 0.0) {
+            light[o] = vec4(0.0);
+            light[o + 1u] = vec4(0.0);
+            light[o + 2u] = vec4(0.0);
+            continue;
+        }
+        vec3 cen = normalize(m1[ch]);
+        vec3 e1 = normalize(abs(cen.x) < 0.9 ? cross(cen, vec3(1.0, 0.0, 0.0)) : cross(cen, vec3(0.0, 1.0, 0.0)));
+        vec3 e2 = cross(cen, e1);
+        vec3 cov = vec3(0.0);
+        for (uint k = 0u; k < side * side; k++) {
+            uvec2 q = base + uvec2(k % side, k / side);
+            uint t = (layer * fine.y + q.y) * fine.x + q.x;
+            float pw = rad[t][ch] * rad[t].w;
+            vec3 c = shapes[3u * t].xyz, hu = shapes[3u * t + 1u].xyz, hv = shapes[3u * t + 2u].xyz;
+            vec2 a = vec2(dot(e1, c), dot(e2, c));
+            vec2 u = vec2(dot(e1, hu), dot(e2, hu));
+            vec2 v = vec2(dot(e1, hv), dot(e2, hv));
+            cov += pw * (vec3(a.x * a.x, a.x * a.y, a.y * a.y)
+                + vec3(u.x * u.x + v.x * v.x, u.x * u.y + v.x * v.y, u.y * u.y + v.y * v.y) / 3.0);
+        }
+        vec3 sq = sqrt2(cov / power[ch]) * sqrt(3.0);
+        light[o] = vec4(cen, power[ch]);
+        light[o + 1u] = vec4(e1 * sq.x + e2 * sq.y, 0.0);
+        light[o + 2u] = vec4(e1 * sq.y + e2 * sq.z, 0.0);
+    }
 }
+#elif defined(PREPARE)
 
 // The tilted rule's view of texel p (twin of filter::texel_shape): the centroid of its solid
 // angle from its 3×3 Gauss nodes, its half-edges mapped so that their parallelogram has the
@@ -197,25 +300,7 @@ void main() {
         rad[i] = vec4(0.0);
         return;
     }
-    vec3 c = src_dir(layer, (vec2(p) + 0.5) / vec2(pc.src_size));
-    // Angular radius: corners and edge midpoints (pulled into the disc), 25% wider for the
-    // bulge of the edges between them (twin of texel_cos_radius).
-    bool disc = SRC_MAPPING == MAPPING_ANGULAR || SRC_MAPPING == MAPPING_DUAL_PARABOLOID;
-    float min_dot = 1.0;
-    for (int k = 0; k < 9; k++) {
-        if (k == 4) continue;
-        vec2 uv = (vec2(p) + 0.5 * vec2(k % 3, k / 3)) / vec2(pc.src_size);
-        if (disc) {
-            vec2 xy = 2.0 * uv - 1.0;
-            float rr = length(xy);
-            if (rr > 1.0) uv = 0.5 * (xy / rr + 1.0);
-        }
-        min_dot = min(min_dot, dot(c, src_dir(layer, uv)));
-    }
-    // acos via atan2 so a tiny radius keeps its digits.
-    float md = clamp(min_dot, -1.0, 1.0);
-    float rho = min(FILTER_CONE_MARGIN * atan2_precise(sqrt(max(0.0, (1.0 - md) * (1.0 + md))), md), PI);
-    cones[i] = vec4(c, cos(rho));
+    cones[i] = texel_cone(layer, p);
     float omega = texel_solid_angle(SRC_MAPPING, pc.src_size, p);
     rad[i] = vec4(texelFetch(src, ivec3(source, int(layer)), 0).rgb, omega);
     write_shape(i, layer, p);
@@ -225,14 +310,14 @@ void main() {
 // Mean of the kernel over texel t split into s×s cells of 3×3 Gauss points, or over the
 // clipped rule (pieces and chords split s ways, s ≤ 4) when a disc's rim cuts it.
 float texel_mean(vec3 axis, uint t, uint s) {
-    uint per_layer = pc.src_size.x * pc.src_size.y;
+    uint per_layer = fine_size().x * fine_size().y;
     uint layer = t / per_layer, r = t % per_layer;
-    ivec2 p = ivec2(r % pc.src_size.x, r / pc.src_size.x);
+    ivec2 p = ivec2(r % fine_size().x, r / fine_size().x);
     float acc = 0.0, wsum = 0.0;
     if (rim_cut(p)) {
         uint split = min(s, 4u);
-        vec2 lo = 2.0 * vec2(p) / vec2(pc.src_size) - 1.0;
-        vec2 hi = 2.0 * vec2(p + 1) / vec2(pc.src_size) - 1.0;
+        vec2 lo = 2.0 * vec2(p) / vec2(fine_size()) - 1.0;
+        vec2 hi = 2.0 * vec2(p + 1) / vec2(fine_size()) - 1.0;
         float xs[6];
         int cnt = clipped_breaks(lo, hi, xs);
         for (int pi = 0; pi + 1 < cnt; pi++) {
@@ -270,7 +355,7 @@ float texel_mean(vec3 axis, uint t, uint s) {
             [[unroll]] for (int b = -1; b <= 1; b++) {
                 [[unroll]] for (int a = -1; a <= 1; a++) {
                     vec2 ab = vec2(a, b);
-                    vec2 uv = (corner + (0.5 + 0.387298335 * ab) / float(s)) / vec2(pc.src_size);
+                    vec2 uv = (corner + (0.5 + 0.387298335 * ab) / float(s)) / vec2(fine_size());
                     vec2 gw = mix(vec2(8.0 / 18.0), vec2(5.0 / 18.0), abs(ab));
                     float w = gw.x * gw.y * density(SRC_MAPPING, uv);
                     acc += w * kernel_eval(pc.exponent, axis, src_dir(layer, uv));
@@ -289,8 +374,7 @@ float texel_mean(vec3 axis, uint t, uint s) {
 // by e^{zs}) take series below |z| = FILTER_TILT_SERIES_BELOW, where the closed forms cancel in f32, as the twin
 // does; above it they share e^{−2|z|} per axis and one log for both axes, because llvmpipe
 // evaluates both sides of every branch and transcendentals dominate this loop.
-float tilted_mean(vec3 axis, float n, float ln_scale, uint t) {
-    vec3 c = shapes[3u * t].xyz, hu = shapes[3u * t + 1u].xyz, hv = shapes[3u * t + 2u].xyz;
+float tilted_shape(vec3 axis, float n, float ln_scale, vec3 c, vec3 hu, vec3 hv) {
     vec3 e = axis - c;
     float gap = 0.5 * dot(e, e);
     float x = 1.0 - gap;
@@ -317,6 +401,10 @@ float tilted_mean(vec3 axis, float n, float ln_scale, uint t) {
     return exp(ln_scale + n * log1m(gap) + ln_sinhc - 0.5 * n * q);
 }
 
+float tilted_mean(vec3 axis, float n, float ln_scale, uint t) {
+    return tilted_shape(axis, n, ln_scale, shapes[3u * t].xyz, shapes[3u * t + 1u].xyz, shapes[3u * t + 2u].xyz);
+}
+
 // Whether the rule skips everything inside cone c (axis, cos of radius; w > 1: empty): the
 // largest cosine to the axis over the cone, cos(θc − ρ), is at or below the horizon, or the
 // lobe there is below the cutoff. texel_weight makes the same two tests per texel.
@@ -329,11 +417,12 @@ bool cone_skipped(vec3 axis, float n, vec4 c) {
     return x_max <= 0.0 || (n > 1.0 && n * log(x_max) < FILTER_LOG_CUTOFF);
 }
 
-// ∫K over source texel t (0 where skipped): the rule of filter::rule, decision for decision.
-float texel_weight(vec3 axis, float n, float ln_scale, uint t) {
-    float omega = rad[t].w;
-    if (omega == 0.0) return 0.0;
-    vec4 cone = cones[t];
+const int RULE_SKIP = 0, RULE_CENTRE = 1, RULE_TILTED = 2, RULE_CELLS = 3;
+
+// The rule of filter::rule for a texel with cone c (centre, cos of radius), decision for
+// decision; `cells` is the cells' count a side where it asks for cells.
+int texel_rule(vec3 axis, float n, vec4 cone, bool regular, out uint cells) {
+    cells = 1u;
     float x = dot(axis, cone.xyz);
     float cos_rho = cone.w;
     float sin_rho = sqrt(max(0.0, (1.0 - cos_rho) * (1.0 + cos_rho)));
@@ -341,19 +430,74 @@ float texel_weight(vec3 axis, float n, float ln_scale, uint t) {
     // The largest and smallest x over the texel: cos(θc − ρ) and cos(θc + ρ).
     float x_max = x >= cos_rho ? 1.0 : x * cos_rho + sin_c * sin_rho;
     float x_min = x * cos_rho - sin_c * sin_rho;
-    if (x_max <= 0.0) return 0.0;
-    if (n > 1.0 && n * log(x_max) < FILTER_LOG_CUTOFF) return 0.0;
+    if (x_max <= 0.0) return RULE_SKIP;
+    if (n > 1.0 && n * log(x_max) < FILTER_LOG_CUTOFF) return RULE_SKIP;
     float rho2 = 2.0 * (1.0 - cos_rho);
     bool straddles = x_min < 0.0;
-    bool centre = !straddles && n * rho2 < FILTER_CENTRE_LIMIT;
-    bool tilted = !centre && !straddles && n * rho2 <= FILTER_TILT_LIMIT * x_min * x_min
-        && shapes[3u * t].w > 0.5;
-    if (centre) return kernel_eval(pc.exponent, axis, cone.xyz);
-    if (tilted) return tilted_mean(axis, n, ln_scale, t);
+    if (!straddles && n * rho2 < FILTER_CENTRE_LIMIT) return RULE_CENTRE;
+    if (regular && !straddles && n * rho2 <= FILTER_TILT_LIMIT * x_min * x_min) return RULE_TILTED;
     float s = max(ceil(FILTER_CELLS_PER_WIDTH * sqrt(n * rho2)), 1.0);
     if (straddles) s = max(s, float(FILTER_EDGE_CELLS));
-    float k = texel_mean(axis, t, uint(min(s, float(FILTER_MAX_CELLS))));
+    cells = uint(min(s, float(FILTER_MAX_CELLS)));
+    return RULE_CELLS;
+}
+
+// ∫K over prepared texel t (0 where skipped).
+float texel_weight(vec3 axis, float n, float ln_scale, uint t) {
+    if (rad[t].w == 0.0) return 0.0;
+    vec4 cone = cones[t];
+    uint cells;
+    int r = texel_rule(axis, n, cone, shapes[3u * t].w > 0.5, cells);
+    if (r == RULE_SKIP) return 0.0;
+    if (r == RULE_CENTRE) return kernel_eval(pc.exponent, axis, cone.xyz);
+    if (r == RULE_TILTED) return tilted_mean(axis, n, ln_scale, t);
+    float k = texel_mean(axis, t, cells);
     return k < 0.0 ? kernel_eval(pc.exponent, axis, cone.xyz) : k;
+}
+
+// Kahan summation, so a sun 1e5 times the sky does not swamp the sum.
+void kahan_add(inout vec3 sum, inout vec3 comp, vec3 term) {
+    precise vec3 y = term - comp;
+    precise vec3 t = sum + y;
+    comp = (t - sum) - y;
+    sum = t;
+}
+
+// Texel t's term L·∫K: a prepared texel, or with MOMENT_SOURCE a texel of the pyramid's level,
+// taken whole (each channel's parallelogram) where the rule takes it by centre or tilt, and
+// from its 2^s × 2^s prepared texels elsewhere (twin of MomentLevel::convolve).
+void add_texel(vec3 axis, float n, float ln_scale, uint t, inout vec3 sum, inout vec3 comp) {
+    if (!MOMENT_SOURCE) {
+        float k = texel_weight(axis, n, ln_scale, t);
+        if (k > 0.0) kahan_add(sum, comp, rad[t].rgb * (rad[t].w * k));
+        return;
+    }
+    uint cells;
+    int r = texel_rule(axis, n, coarse_cones[t], true, cells);
+    if (r == RULE_SKIP) return;
+    if (r != RULE_CELLS) {
+        vec3 term = vec3(0.0);
+        for (int ch = 0; ch < 3; ch++) {
+            vec4 cp = light[9u * t + 3u * uint(ch)];
+            if (cp.w > 0.0) {
+                term[ch] = cp.w * tilted_shape(axis, n, ln_scale, cp.xyz, light[9u * t + 3u * uint(ch) + 1u].xyz,
+                                               light[9u * t + 3u * uint(ch) + 2u].xyz);
+            }
+        }
+        kahan_add(sum, comp, term);
+        return;
+    }
+    uint per_layer = pc.src_size.x * pc.src_size.y;
+    uint layer = t / per_layer, rr = t % per_layer;
+    uint side = 1u << pc.src_level;
+    uvec2 fine = fine_size();
+    uvec2 base = uvec2(rr % pc.src_size.x, rr / pc.src_size.x) * side;
+    for (uint k = 0u; k < side * side; k++) {
+        uvec2 q = base + uvec2(k % side, k / side);
+        uint f = (layer * fine.y + q.y) * fine.x + q.x;
+        float kk = texel_weight(axis, n, ln_scale, f);
+        if (kk > 0.0) kahan_add(sum, comp, rad[f].rgb * (rad[f].w * kk));
+    }
 }
 
 void main() {
@@ -384,15 +528,7 @@ void main() {
         for (uint s = first; s < last; s++) {
             int ti = slot_texel(tile, s);
             if (ti < 0) continue;
-            uint t = uint(ti);
-            float k = texel_weight(axis, n, ln_scale, t);
-            if (k > 0.0) {
-                vec4 rw = rad[t];
-                precise vec3 y = rw.rgb * (rw.w * k) - comp;
-                precise vec3 tsum = sum + y;
-                comp = (tsum - sum) - y;
-                sum = tsum;
-            }
+            add_texel(axis, n, ln_scale, uint(ti), sum, comp);
         }
     }
     comp_buf[o] = vec4(comp, 0.0);

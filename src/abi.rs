@@ -64,6 +64,19 @@ pub mod binding {
         BRUTE_TILES = 4;
         /// brute: the texel shapes written by brute_prepare.
         BRUTE_SHAPES = 5;
+        /// brute: with a moment source, the pyramid level's cones written by brute_moments.
+        BRUTE_COARSE_CONES = 6;
+        /// brute: with a moment source, the level's light: per texel and channel 3 vec4
+        /// (centroid and power, then the parallelogram's two half-edges).
+        BRUTE_LIGHT = 7;
+        /// brute_moments: the prepared texels' radiance and solid angles.
+        BRUTE_MOM_RADIANCE = 0;
+        /// brute_moments: the prepared texels' shapes.
+        BRUTE_MOM_SHAPES = 1;
+        /// brute_moments: the level's cones (vec4 buffer).
+        BRUTE_MOM_CONES = 2;
+        /// brute_moments: the level's light (9 vec4 per texel).
+        BRUTE_MOM_LIGHT = 3;
         /// brute_tiles: the per-texel cones written by brute_prepare.
         BRUTE_TILE_CONES = 0;
         /// brute_tiles: the per-tile bounding cones (axis, cos of radius; w = 2 when empty).
@@ -164,6 +177,9 @@ pub mod filter_rule {
     /// this times x_min², x_min the smallest axis·ω over its cone: the kernel's log-curvature
     /// across it is then small (measured per-texel error under 1e-3, docs/BENCHMARKS.md).
     pub const TILT_LIMIT: f64 = 0.1;
+    /// Coarsest level of the power-moment pyramid a lobe is filtered from (4096 fine texels
+    /// per coarse one, within llvmpipe's loop limit when the sum descends).
+    pub const MAX_SOURCE_LEVEL: u32 = 6;
     /// A texel is regular (close enough to a parallelogram for the tilted rule) when the
     /// mapping's solid-angle density over it varies by at most this ratio and no disc rim
     /// cuts it: lat-long rows next to a pole are triangles, not parallelograms.
@@ -459,8 +475,8 @@ pub mod push {
             chunk_end: u32 = "uint",
             /// Source layers.
             src_layers: u32 = "uint",
-            /// Padding.
-            pad: u32 = "uint",
+            /// Level of the moment pyramid `src_size` is the size of (0: the prepared texels).
+            src_level: u32 = "uint",
         }
         /// `glsl/sh_eval.comp`.
         ShEvalPush {
@@ -588,6 +604,10 @@ macro_rules! shader_table {
                 [(BRUTE_PREP_SRC, Sampled, Read), (BRUTE_PREP_CONES, StorageBuffer, Write),
                  (BRUTE_PREP_RADIANCE, StorageBuffer, Write),
                  (BRUTE_PREP_SHAPES, StorageBuffer, Write)];
+            /// Brute-force convolution: one level of the power-moment pyramid.
+            BruteMoments = "brute_moments", "brute.comp", Compute, [("MOMENTS", "1")], BrutePush,
+                [(BRUTE_MOM_RADIANCE, StorageBuffer, Read), (BRUTE_MOM_SHAPES, StorageBuffer, Read),
+                 (BRUTE_MOM_CONES, StorageBuffer, Write), (BRUTE_MOM_LIGHT, StorageBuffer, Write)];
             /// Brute-force convolution: a bounding cone per tile of BRUTE_TILE² texels.
             BruteTiles = "brute_tiles", "brute.comp", Compute, [("TILES", "1")], BrutePush,
                 [(BRUTE_TILE_CONES, StorageBuffer, Read), (BRUTE_TILE_OUT, StorageBuffer, Write)];
@@ -595,7 +615,8 @@ macro_rules! shader_table {
             Brute = "brute", "brute.comp", Compute, [], BrutePush,
                 [(BRUTE_CONES, StorageBuffer, Read), (BRUTE_RADIANCE, StorageBuffer, Read),
                  (BRUTE_DST, StorageImage, ReadWrite), (BRUTE_COMP, StorageBuffer, ReadWrite),
-                 (BRUTE_TILES, StorageBuffer, Read), (BRUTE_SHAPES, StorageBuffer, Read)];
+                 (BRUTE_TILES, StorageBuffer, Read), (BRUTE_SHAPES, StorageBuffer, Read),
+                 (BRUTE_COARSE_CONES, StorageBuffer, Read), (BRUTE_LIGHT, StorageBuffer, Read)];
             /// Irradiance from SH coefficients into a map.
             ShEval = "sh_eval", "sh_eval.comp", Compute, [], ShEvalPush,
                 [(SH_EVAL_COEFFS, StorageBuffer, Read), (SH_EVAL_DST, StorageImage, Write)];

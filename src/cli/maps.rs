@@ -10,6 +10,8 @@ use envlight::abi::defaults;
 use envlight::io::ToneMap;
 use envlight::math::filter::Kernel;
 use envlight::math::sh::{self, Window};
+use envlight::math::Mapping;
+use envlight::passes::brute::PhongLevels;
 use envlight::passes::sh_project::Subgroups;
 use envlight::passes::{BruteFilter, ConvertOptions, Converter, ShEvaluator, ShProjector};
 use envlight::GpuEnvMap;
@@ -118,8 +120,20 @@ pub struct PrefilterArgs {
     #[command(flatten)]
     orient: Orient,
     /// Phong exponent n (envlight::abi::constants::PHONG_EXPONENT_RANGE: 1 to 1e7)
-    #[arg(long, value_parser = finite_f64)]
-    phong: f64,
+    #[arg(long, value_parser = finite_f64, required_unless_present = "phong_levels", conflicts_with = "phong_levels")]
+    phong: Option<f64>,
+    /// Write K levels instead, like cmft's radiance filter: level k is --size halved k times,
+    /// filtered with n = 2^(scale·(1 − k/(K−1)) + bias) + 1, each from the coarsest level of
+    /// the source's moment pyramid its lobe allows; files OUT's stem + ".level<k>.exr" and
+    /// a JSON list of the levels at OUT's stem + ".levels.json"
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16))]
+    phong_levels: Option<u32>,
+    /// cmft's glossScale for --phong-levels
+    #[arg(long, value_parser = finite_f64, default_value_t = 10.0)]
+    gloss_scale: f64,
+    /// cmft's glossBias for --phong-levels
+    #[arg(long, value_parser = finite_f64, default_value_t = 1.0)]
+    gloss_bias: f64,
     #[command(flatten)]
     out: FilterOut,
 }
@@ -238,14 +252,48 @@ pub fn prefilter(g: &Global, a: &PrefilterArgs) -> Result<()> {
     let ctx = context(g)?;
     let gm = GpuEnvMap::upload(&ctx, &map)?;
     let pb = spinner("brute-force Phong prefiltering on the GPU");
-    let (out, timings) = BruteFilter::new(&ctx)?.run(
-        &gm,
-        &a.orient.orientation(),
-        Kernel::Phong { n: a.phong },
-        a.out.target(),
-    )?;
+    let filter = BruteFilter::new(&ctx)?;
+    let o = a.orient.orientation();
+    let Some(count) = a.phong_levels else {
+        let n = a.phong.context("--phong or --phong-levels is required")?;
+        let (out, timings) = filter.run(&gm, &o, Kernel::Phong { n }, a.out.target())?;
+        pb.finish_and_clear();
+        write_map(&ctx, &out, &a.out.output, a.out.png)?;
+        print_timings(&timings);
+        return Ok(());
+    };
+    let levels = PhongLevels {
+        count,
+        scale: a.gloss_scale,
+        bias: a.gloss_bias,
+    };
+    let (maps, sources, timings) = filter.run_levels(&gm, &o, &levels, a.out.target())?;
     pb.finish_and_clear();
-    write_map(&ctx, &out, &a.out.output, a.out.png)?;
+    let stem = a.out.output.with_extension("");
+    let mut listing = Vec::new();
+    for (k, (map, source)) in maps.iter().zip(&sources).enumerate() {
+        let path = PathBuf::from(format!("{}.level{k}.exr", stem.display()));
+        write_map(&ctx, map, &path, a.out.png)?;
+        listing.push(serde_json::json!({
+            "level": k,
+            "file": path.file_name().map(|f| f.to_string_lossy().into_owned()),
+            "width": map.width,
+            "height": map.height,
+            "phong_exponent": levels.exponent(k as u32),
+            "source_level": source,
+        }));
+    }
+    let json = PathBuf::from(format!("{}.levels.json", stem.display()));
+    let doc = serde_json::json!({
+        "mapping": Mapping::from(a.out.to).name(),
+        "rule": "n_k = 2^(gloss_scale * (1 - k/(levels-1)) + gloss_bias) + 1",
+        "gloss_scale": levels.scale,
+        "gloss_bias": levels.bias,
+        "levels": listing,
+    });
+    std::fs::write(&json, serde_json::to_string_pretty(&doc)?)
+        .with_context(|| json.display().to_string())?;
+    println!("wrote {}", json.display());
     print_timings(&timings);
     Ok(())
 }

@@ -341,7 +341,7 @@ pub fn texel_shape(mapping: Mapping, w: u32, h: u32, layer: u32, i: u32, j: u32)
 
 /// The square root of a symmetric positive semi-definite 2×2 matrix [a, b; b, c] as
 /// [a', b', c'], or `None` when it is zero.
-fn sqrt2(m: [f64; 3]) -> Option<[f64; 3]> {
+pub(crate) fn sqrt2(m: [f64; 3]) -> Option<[f64; 3]> {
     let d = (m[0] * m[2] - m[1] * m[1]).max(0.0).sqrt();
     let t = (m[0] + m[2] + 2.0 * d).sqrt();
     (t > 0.0).then(|| [(m[0] + d) / t, m[1] / t, (m[2] + d) / t])
@@ -559,34 +559,59 @@ impl<'a> Prepared<'a> {
 
     /// ∑ over texels of L_t·∫_t K(axis·ω) dω.
     pub fn convolve(&self, kernel: Kernel, axis: DVec3) -> [f64; 3] {
-        let m = self.map.mapping;
-        let (w, h) = (self.map.width, self.map.height);
         let mut out = [0.0; 3];
-        for t in &self.texels {
-            let x = axis.dot(t.dir);
-            let regular = self.tilted && t.shape.regular;
-            let k = match rule(kernel, x, t.cos_rho, t.sin_rho, regular) {
-                Rule::Skip => continue,
-                Rule::Centre => kernel.eval(axis, t.dir),
-                Rule::Tilted => tilted_mean(kernel, axis, &t.shape),
-                Rule::Cells(s) => {
-                    let (mut acc, mut wsum) = (0.0, 0.0);
-                    for_each_node(m, (w, h), (t.layer, t.i, t.j), s, |c, wq| {
-                        acc += wq * kernel.eval(axis, self.file_to_world * m.coord_to_dir(c));
-                        wsum += wq;
-                    });
-                    if wsum > 0.0 {
-                        acc / wsum
-                    } else {
-                        kernel.eval(axis, t.dir)
-                    }
-                }
-            };
-            for (o, l) in out.iter_mut().zip(t.radiance) {
-                *o += l * t.omega * k;
+        for t in 0..self.texels.len() {
+            let term = self.texel_term(kernel, axis, t);
+            for (o, v) in out.iter_mut().zip(term) {
+                *o += v;
             }
         }
         out
+    }
+
+    /// The map this was prepared from.
+    pub fn map(&self) -> &EnvMap {
+        self.map
+    }
+
+    /// The file → world rotation.
+    pub fn file_to_world(&self) -> DMat3 {
+        self.file_to_world
+    }
+
+    /// Texel `index`'s shape (world frame), radiance and solid angle (numbered as for
+    /// [`Prepared::texel_term`]).
+    pub fn texel(&self, index: usize) -> (&TexelShape, [f64; 3], f64) {
+        let t = &self.texels[index];
+        (&t.shape, t.radiance, t.omega)
+    }
+
+    /// Texel `index`'s term L_t·∫_t K(axis·ω) dω (texels are numbered layer-major, then
+    /// row-major, over those that hold part of the sphere: every texel of a lat-long or cube).
+    pub fn texel_term(&self, kernel: Kernel, axis: DVec3, index: usize) -> [f64; 3] {
+        let m = self.map.mapping;
+        let (w, h) = (self.map.width, self.map.height);
+        let t = &self.texels[index];
+        let x = axis.dot(t.dir);
+        let regular = self.tilted && t.shape.regular;
+        let k = match rule(kernel, x, t.cos_rho, t.sin_rho, regular) {
+            Rule::Skip => return [0.0; 3],
+            Rule::Centre => kernel.eval(axis, t.dir),
+            Rule::Tilted => tilted_mean(kernel, axis, &t.shape),
+            Rule::Cells(s) => {
+                let (mut acc, mut wsum) = (0.0, 0.0);
+                for_each_node(m, (w, h), (t.layer, t.i, t.j), s, |c, wq| {
+                    acc += wq * kernel.eval(axis, self.file_to_world * m.coord_to_dir(c));
+                    wsum += wq;
+                });
+                if wsum > 0.0 {
+                    acc / wsum
+                } else {
+                    kernel.eval(axis, t.dir)
+                }
+            }
+        };
+        t.radiance.map(|l| l * t.omega * k)
     }
 }
 

@@ -12,6 +12,7 @@ pub mod fis;
 pub mod mapping;
 pub mod mc;
 pub mod mip;
+pub mod moments;
 pub mod quadrature;
 pub mod sequence;
 pub mod sh;

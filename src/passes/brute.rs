@@ -9,6 +9,7 @@ use crate::abi::{
 use crate::error::{Error, Result};
 use crate::gpu::{groups, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing};
 use crate::math::filter::{self, Kernel};
+use crate::math::moments;
 use crate::math::{Mapping, Orientation};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -36,8 +37,11 @@ pub struct BruteFilter {
     /// Per source mapping, specialised on it.
     prepare: [OnceLock<Pipeline>; 4],
     tiles: Pipeline,
-    /// Per (source, destination) mapping pair, specialised on both.
-    brute: [OnceLock<Pipeline>; 16],
+    /// Per source mapping, specialised on it.
+    moments: [OnceLock<Pipeline>; 4],
+    /// Per (source, destination) mapping pair and source kind (texels or a moment level),
+    /// specialised on all three.
+    brute: [OnceLock<Pipeline>; 32],
     sampler: Sampler,
 }
 
@@ -48,15 +52,17 @@ impl BruteFilter {
             ctx: ctx.clone(),
             prepare: Default::default(),
             tiles: Pipeline::compute(ctx, ShaderId::BruteTiles, &[WORKGROUP_1D])?,
+            moments: Default::default(),
             brute: Default::default(),
             sampler: Sampler::linear_clamp(ctx, "brute sampler")?,
         })
     }
 
     /// Records the convolution of `src` (oriented by `orientation`) with `kernel` into
-    /// `dst`, in the world frame: irradiance E(n) for [`Kernel::Cosine`], the normalised
-    /// Phong prefilter indexed by the reflection direction for [`Kernel::Phong`]. Spans:
-    /// "brute prepare", "brute tiles", then "brute irradiance" or "brute phong".
+    /// `dst`, in the world frame, over every source texel: irradiance E(n) for
+    /// [`Kernel::Cosine`], the normalised Phong prefilter indexed by the reflection direction
+    /// for [`Kernel::Phong`]. Spans: "brute prepare", "brute tiles", then "brute irradiance" or
+    /// "brute phong".
     pub fn record(
         &self,
         rec: &mut Recorder,
@@ -65,16 +71,58 @@ impl BruteFilter {
         kernel: Kernel,
         dst: &GpuEnvMap,
     ) -> Result<()> {
-        let (lo, hi) = constants::PHONG_EXPONENT_RANGE;
-        let exponent = match kernel {
-            Kernel::Cosine => 0.0,
-            Kernel::Phong { n } if (lo..=hi).contains(&n) => n as f32,
-            Kernel::Phong { n } => {
-                return Err(Error::Invalid(format!(
-                    "Phong exponent {n} is outside {lo} to {hi:e}"
-                )))
-            }
+        let prep = self.prepare(rec, src, orientation, kernel)?;
+        self.convolve(rec, &prep, None, kernel, dst)?;
+        rec.keep(prep);
+        Ok(())
+    }
+
+    /// Records one convolution per `(kernel, dst)` pair, each from the source level of the
+    /// power-moment pyramid that [`moments::level_for`] picks for its lobe (level 0, every
+    /// source texel, for the sharpest lobes; coarse levels for wide ones, descending to the
+    /// source texels wherever the rule cannot take a coarse texel whole). Returns the levels.
+    /// Spans: "brute prepare", "brute tiles", "brute moments" per level built, then one
+    /// "brute phong" per output.
+    pub fn record_levels(
+        &self,
+        rec: &mut Recorder,
+        src: &GpuEnvMap,
+        orientation: &Orientation,
+        outputs: &[(Kernel, &GpuEnvMap)],
+    ) -> Result<Vec<u32>> {
+        let Some(sharpest) = outputs
+            .iter()
+            .map(|o| o.0)
+            .max_by(|a, b| a.exponent().total_cmp(&b.exponent()))
+        else {
+            return Ok(Vec::new());
         };
+        let prep = self.prepare(rec, src, orientation, sharpest)?;
+        let mut levels: Vec<(u32, CoarseLevel)> = Vec::new();
+        let mut chosen = Vec::new();
+        for &(kernel, dst) in outputs {
+            let s = moments::level_for(kernel, src.mapping, src.width, src.height);
+            chosen.push(s);
+            if s > 0 && !levels.iter().any(|l| l.0 == s) {
+                let level = self.build_level(rec, &prep, s)?;
+                levels.push((s, level));
+            }
+            let coarse = levels.iter().find(|l| l.0 == s).map(|l| &l.1);
+            self.convolve(rec, &prep, coarse, kernel, dst)?;
+        }
+        rec.keep((prep, levels));
+        Ok(chosen)
+    }
+
+    /// Checks the kernel and records the per-texel preparation and its tiles.
+    fn prepare(
+        &self,
+        rec: &mut Recorder,
+        src: &GpuEnvMap,
+        orientation: &Orientation,
+        kernel: Kernel,
+    ) -> Result<PreparedSource> {
+        check_kernel(kernel)?;
         if let Some(worst) =
             crate::math::filter::unresolved(kernel, src.mapping, src.width, src.height)
         {
@@ -89,53 +137,32 @@ impl BruteFilter {
                 crate::math::filter::RESOLVED_N_RHO2
             )));
         }
-        let (w, h) = (dst.width, dst.height);
         let texels = src.width * src.height * src.mapping.layers();
         let bytes = texels as u64 * 16;
         let ctx = rec.context().clone();
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let scratch =
-            |name: &str, bytes: u64| Buffer::new(&ctx, name, bytes, usage, MemoryLocation::GpuOnly);
-        let cones = scratch("brute cones", bytes)?;
-        let rad = scratch("brute radiance", bytes)?;
-        let shapes = scratch("brute shapes", 3 * bytes)?;
-        let comp = scratch(
-            "brute compensation",
-            (w * h * dst.mapping.layers()) as u64 * 16,
-        )?;
+        let cones = scratch(&ctx, "brute cones", bytes)?;
+        let rad = scratch(&ctx, "brute radiance", bytes)?;
+        let shapes = scratch(&ctx, "brute shapes", 3 * bytes)?;
         let push = BrutePush {
             file_to_world: mat3_rows(orientation.checked_world_to_file()?.transpose()),
             src_size: [src.width, src.height],
-            dst_size: [w, h],
+            dst_size: [0, 0],
             src_mapping: src.mapping.id(),
-            dst_mapping: dst.mapping.id(),
+            dst_mapping: 0,
             texels,
-            exponent,
+            exponent: 0.0,
             chunk_begin: 0,
             chunk_end: 0,
             src_layers: src.mapping.layers(),
-            pad: 0,
+            src_level: 0,
         };
-        let tile_count =
-            src.width.div_ceil(BRUTE_TILE) * src.height.div_ceil(BRUTE_TILE) * src.mapping.layers();
-        let slots = tile_count * BRUTE_TILE * BRUTE_TILE;
-        let tiles = scratch("brute tiles", tile_count as u64 * 16)?;
-        let prep_groups = texels.div_ceil(WORKGROUP_1D);
-        let gx = prep_groups.min(ctx.info().max_workgroup_count.min(65535));
-        let gy = prep_groups.div_ceil(gx);
-        let (from, to) = (src.mapping.id(), dst.mapping.id());
-        // Prepare reads only the source mapping (constant 1 is unused there).
+        let from = src.mapping.id();
+        // Prepare reads only the source mapping (constant 3 is unused there).
         let prepare = Pipeline::compute_once(
             &self.prepare[from as usize],
             &self.ctx,
             ShaderId::BrutePrepare,
             &[WORKGROUP_1D, 1, from, 0],
-        )?;
-        let brute = Pipeline::compute_once(
-            &self.brute[(4 * from + to) as usize],
-            &self.ctx,
-            ShaderId::Brute,
-            &[WORKGROUP_2D[0], WORKGROUP_2D[1], from, to],
         )?;
         rec.span("brute prepare", |rec| {
             rec.dispatch(
@@ -150,27 +177,134 @@ impl BruteFilter {
                     (binding::BRUTE_PREP_SHAPES, Bind::Buffer(&shapes)),
                 ],
                 &push,
-                [gx, gy, 1],
+                grid_1d(&ctx, texels),
             )
         })?;
-        let tile_groups = tile_count.div_ceil(WORKGROUP_1D);
-        let tx = tile_groups.min(ctx.info().max_workgroup_count.min(65535));
+        let tiles = self.record_tiles(rec, &cones, &push)?;
+        Ok(PreparedSource {
+            cones,
+            rad,
+            shapes,
+            tiles,
+            push,
+            mapping: src.mapping,
+            size: (src.width, src.height),
+        })
+    }
+
+    /// Records the tiles' bounding cones over `cones` (a map of `push.src_size`).
+    fn record_tiles(&self, rec: &mut Recorder, cones: &Buffer, push: &BrutePush) -> Result<Buffer> {
+        let ctx = rec.context().clone();
+        let tile_count = tile_count(push);
+        let tiles = scratch(&ctx, "brute tiles", tile_count as u64 * 16)?;
         rec.span("brute tiles", |rec| {
             rec.dispatch(
                 &self.tiles,
                 &[
-                    (binding::BRUTE_TILE_CONES, Bind::Buffer(&cones)),
+                    (binding::BRUTE_TILE_CONES, Bind::Buffer(cones)),
                     (binding::BRUTE_TILE_OUT, Bind::Buffer(&tiles)),
                 ],
-                &push,
-                [tx, tile_groups.div_ceil(tx), 1],
+                push,
+                grid_1d(&ctx, tile_count),
             )
         })?;
+        Ok(tiles)
+    }
+
+    /// Records level `s` of the moment pyramid of a prepared source, and its tiles.
+    fn build_level(
+        &self,
+        rec: &mut Recorder,
+        prep: &PreparedSource,
+        s: u32,
+    ) -> Result<CoarseLevel> {
+        let ctx = rec.context().clone();
+        let (w, h) = (prep.size.0 >> s, prep.size.1 >> s);
+        let texels = w * h * prep.mapping.layers();
+        let cones = scratch(&ctx, "brute level cones", texels as u64 * 16)?;
+        let light = scratch(&ctx, "brute level light", texels as u64 * 9 * 16)?;
+        let push = BrutePush {
+            src_size: [w, h],
+            texels,
+            src_level: s,
+            ..prep.push
+        };
+        let from = prep.mapping.id();
+        let pipeline = Pipeline::compute_once(
+            &self.moments[from as usize],
+            &self.ctx,
+            ShaderId::BruteMoments,
+            &[WORKGROUP_1D, 1, from, 0],
+        )?;
+        rec.span("brute moments", |rec| {
+            rec.dispatch(
+                pipeline,
+                &[
+                    (binding::BRUTE_MOM_RADIANCE, Bind::Buffer(&prep.rad)),
+                    (binding::BRUTE_MOM_SHAPES, Bind::Buffer(&prep.shapes)),
+                    (binding::BRUTE_MOM_CONES, Bind::Buffer(&cones)),
+                    (binding::BRUTE_MOM_LIGHT, Bind::Buffer(&light)),
+                ],
+                &push,
+                grid_1d(&ctx, texels),
+            )
+        })?;
+        let tiles = self.record_tiles(rec, &cones, &push)?;
+        Ok(CoarseLevel {
+            cones,
+            light,
+            tiles,
+            push,
+        })
+    }
+
+    /// Records the sum into `dst` over the prepared texels, or over a level of the pyramid.
+    fn convolve(
+        &self,
+        rec: &mut Recorder,
+        prep: &PreparedSource,
+        coarse: Option<&CoarseLevel>,
+        kernel: Kernel,
+        dst: &GpuEnvMap,
+    ) -> Result<()> {
+        let exponent = check_kernel(kernel)?;
+        let ctx = rec.context().clone();
+        let (w, h) = (dst.width, dst.height);
+        let comp = scratch(
+            &ctx,
+            "brute compensation",
+            (w * h * dst.mapping.layers()) as u64 * 16,
+        )?;
+        let base = coarse.map_or(prep.push, |c| c.push);
+        let push = BrutePush {
+            dst_size: [w, h],
+            dst_mapping: dst.mapping.id(),
+            exponent,
+            ..base
+        };
+        let slots = tile_count(&push) * BRUTE_TILE * BRUTE_TILE;
+        let (from, to) = (prep.mapping.id(), dst.mapping.id());
+        let moment = coarse.is_some() as usize;
+        let brute = Pipeline::compute_once(
+            &self.brute[2 * (4 * from + to) as usize + moment],
+            &self.ctx,
+            ShaderId::Brute,
+            &[WORKGROUP_2D[0], WORKGROUP_2D[1], from, to, moment as u32],
+        )?;
         let label = match kernel {
             Kernel::Cosine => "brute irradiance",
             Kernel::Phong { .. } => "brute phong",
         };
-        let chunk = self.chunk_size(src, kernel);
+        let fine_chunk = self.chunk_size(prep, kernel);
+        // A coarse texel may descend to all of its 4^s prepared texels.
+        let chunk = match coarse {
+            Some(c) => (fine_chunk >> (2 * c.push.src_level)).max(1),
+            None => fine_chunk,
+        };
+        let tiles = coarse.map_or(&prep.tiles, |c| &c.tiles);
+        // Without a moment source, the level bindings are not read: bind the fine buffers.
+        let (coarse_cones, light) =
+            coarse.map_or((&prep.cones, &prep.shapes), |c| (&c.cones, &c.light));
         // The first chunk starts the sums (its shader run sees chunk_begin = 0).
         rec.discard(&dst.image);
         rec.span(label, |rec| {
@@ -180,12 +314,14 @@ impl BruteFilter {
                 rec.dispatch(
                     brute,
                     &[
-                        (binding::BRUTE_CONES, Bind::Buffer(&cones)),
-                        (binding::BRUTE_RADIANCE, Bind::Buffer(&rad)),
+                        (binding::BRUTE_CONES, Bind::Buffer(&prep.cones)),
+                        (binding::BRUTE_RADIANCE, Bind::Buffer(&prep.rad)),
                         (binding::BRUTE_DST, Bind::Storage(&dst.image)),
                         (binding::BRUTE_COMP, Bind::Buffer(&comp)),
-                        (binding::BRUTE_TILES, Bind::Buffer(&tiles)),
-                        (binding::BRUTE_SHAPES, Bind::Buffer(&shapes)),
+                        (binding::BRUTE_TILES, Bind::Buffer(tiles)),
+                        (binding::BRUTE_SHAPES, Bind::Buffer(&prep.shapes)),
+                        (binding::BRUTE_COARSE_CONES, Bind::Buffer(coarse_cones)),
+                        (binding::BRUTE_LIGHT, Bind::Buffer(light)),
                     ],
                     &BrutePush {
                         chunk_begin: begin,
@@ -202,7 +338,7 @@ impl BruteFilter {
             }
             Ok(())
         })?;
-        rec.keep((cones, rad, comp, tiles, shapes));
+        rec.keep(comp);
         Ok(())
     }
 
@@ -222,6 +358,126 @@ impl BruteFilter {
         })?;
         Ok((dst, t))
     }
+
+    /// Prefilters `src` into one map per level of `levels` (level k: the lobe of
+    /// [`PhongLevels::exponent`], the target size halved k times, at least 1) and waits
+    /// (see [`BruteFilter::record_levels`]); returns the maps, each level's source level and
+    /// the GPU times.
+    pub fn run_levels(
+        &self,
+        src: &GpuEnvMap,
+        orientation: &Orientation,
+        levels: &PhongLevels,
+        target: FilterTarget,
+    ) -> Result<(Vec<GpuEnvMap>, Vec<u32>, Vec<Timing>)> {
+        let mut maps = Vec::new();
+        for k in 0..levels.count {
+            let size = (target.size >> k).max(1);
+            let (w, h) = target.to.extent_for_size(size);
+            maps.push(GpuEnvMap::new(
+                &self.ctx,
+                "prefiltered level",
+                target.to,
+                w,
+                h,
+            )?);
+        }
+        let outputs: Vec<_> = maps
+            .iter()
+            .enumerate()
+            .map(|(k, m)| {
+                (
+                    Kernel::Phong {
+                        n: levels.exponent(k as u32),
+                    },
+                    m,
+                )
+            })
+            .collect();
+        let (chosen, t) = self.ctx.run("prefiltered levels", |rec| {
+            self.record_levels(rec, src, orientation, &outputs)
+        })?;
+        Ok((maps, chosen, t))
+    }
+}
+
+/// One Phong lobe per MIP level, by cmft's rule: level k of `count` has the exponent
+/// 2^(scale·(1 − k/(count − 1)) + bias) + 1 (gloss 1 at level 0, 0 at the last; a single
+/// level has gloss 1). cmft's `--glossScale 10 --glossBias 1` gives 2049 at level 0 and 3 at
+/// the last.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhongLevels {
+    /// Levels, at least 1.
+    pub count: u32,
+    /// cmft's glossScale.
+    pub scale: f64,
+    /// cmft's glossBias.
+    pub bias: f64,
+}
+
+impl PhongLevels {
+    /// The exponent of level `k`.
+    pub fn exponent(&self, k: u32) -> f64 {
+        let gloss = if self.count > 1 {
+            1.0 - k as f64 / (self.count - 1) as f64
+        } else {
+            1.0
+        };
+        (self.scale * gloss + self.bias).exp2() + 1.0
+    }
+}
+
+/// The exponent the shader takes (0 for the cosine), or the error for one out of range.
+fn check_kernel(kernel: Kernel) -> Result<f32> {
+    let (lo, hi) = constants::PHONG_EXPONENT_RANGE;
+    match kernel {
+        Kernel::Cosine => Ok(0.0),
+        Kernel::Phong { n } if (lo..=hi).contains(&n) => Ok(n as f32),
+        Kernel::Phong { n } => Err(Error::Invalid(format!(
+            "Phong exponent {n} is outside {lo} to {hi:e}"
+        ))),
+    }
+}
+
+fn scratch(ctx: &Context, name: &str, bytes: u64) -> Result<Buffer> {
+    Buffer::new(
+        ctx,
+        name,
+        bytes,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        MemoryLocation::GpuOnly,
+    )
+}
+
+/// Tiles of BRUTE_TILE² texels over a map of `push.src_size` and `push.src_layers`.
+fn tile_count(push: &BrutePush) -> u32 {
+    push.src_size[0].div_ceil(BRUTE_TILE) * push.src_size[1].div_ceil(BRUTE_TILE) * push.src_layers
+}
+
+/// Workgroups for one invocation per item, folded into y past the x limit.
+fn grid_1d(ctx: &Context, items: u32) -> [u32; 3] {
+    let groups = items.div_ceil(WORKGROUP_1D);
+    let gx = groups.min(ctx.info().max_workgroup_count.min(65535)).max(1);
+    [gx, groups.div_ceil(gx), 1]
+}
+
+/// The source prepared for the sums: per-texel cones, radiance and shapes, and the tiles.
+struct PreparedSource {
+    cones: Buffer,
+    rad: Buffer,
+    shapes: Buffer,
+    tiles: Buffer,
+    push: BrutePush,
+    mapping: Mapping,
+    size: (u32, u32),
+}
+
+/// One level of the moment pyramid: its cones, light and tiles, and its push block.
+struct CoarseLevel {
+    cones: Buffer,
+    light: Buffer,
+    tiles: Buffer,
+    push: BrutePush,
 }
 
 impl BruteFilter {
@@ -230,12 +486,12 @@ impl BruteFilter {
     /// loop iterations within 90% of the limit: one for the texel loop plus, per texel, at
     /// most s² cell iterations (s from the rule for the source's widest texel) or ~130 for a
     /// clipped rim texel of an angular or paraboloid source.
-    fn chunk_size(&self, src: &GpuEnvMap, kernel: Kernel) -> u32 {
+    fn chunk_size(&self, src: &PreparedSource, kernel: Kernel) -> u32 {
         let Some(limit) = self.ctx.info().loop_iteration_limit else {
             return u32::MAX;
         };
 
-        let (w, h) = (src.width, src.height);
+        let (w, h) = src.size;
         let mut min_cos: f64 = 1.0;
         // Texel radii vary smoothly: a sparse sample of texels plus the corners suffices,
         // and the 25% margin in the radius already covers the spread between samples.
