@@ -239,6 +239,41 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
             reps: opts.phong_reps,
             goal: "≤ 1.0×, error ≤ 1e-3",
         },
+        Job {
+            name: "Phong levels, cube 64, 7 levels (n = 2049 … 3)",
+            envlight: strings(&[
+                "prefilter",
+                &map,
+                "--phong-levels",
+                "7",
+                "--to",
+                "cube",
+                "--size",
+                "64",
+                "-o",
+                &t("levels.exr"),
+            ]),
+            cmft: {
+                let mut v = cmft_common("radiance", &t("cmft_levels"));
+                v.extend(strings(&[
+                    "--dstFaceSize",
+                    "64",
+                    "--lightingModel",
+                    "phongbrdf",
+                    "--excludeBase",
+                    "false",
+                    "--mipCount",
+                    "7",
+                    "--glossScale",
+                    "10",
+                    "--glossBias",
+                    "1",
+                ]));
+                v
+            },
+            reps: opts.phong_reps,
+            goal: "≤ 1.0×, every level within 1e-3",
+        },
     ];
 
     let (_, devices) = run(&me, &strings(&["devices"]), &[])?;
@@ -341,8 +376,9 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     md.push_str(
         "\nErrors: SH, worst coefficient against the float64 projection (relative to the largest); \
          irradiance, worst texel against float64 SH of the same order (cmft's E/π against order 4); \
-         conversion, total power against the source's; Phong, worst of 128 texels against the \
-         float64 brute force. cmft's irradiance and Phong cubes are not compared texel by texel: \
+         conversion, total power against the source's; Phong, worst of 128 texels (levels: 32 per \
+         level) against the float64 brute force over every source texel with Gauss cells \
+         everywhere. cmft's irradiance and Phong cubes are not compared texel by texel: \
          their face frame is not yet matched to DESIGN.md's, so a difference would measure the \
          frames; ../shared/peers/README.md measured 1–16% lobe-tail error for its Phong.\n",
     );
@@ -392,24 +428,37 @@ fn errors(job: &str, src: &EnvMap, tmp: &Path, cmft: bool) -> Result<(String, St
         };
         return Ok((format!("power {}", f(e)), format!("power {c}")));
     }
-    // Phong: 128 texels spread over the cube, against the float64 brute force with Gauss
-    // cells everywhere (not the tilted rule the GPU takes), so the error includes the rule's.
-    let ours = load_any(&tmp.join("phong.exr"))?;
+    // Phong: texels spread over the cube (128; 32 per level for the levels), against the
+    // float64 brute force over every source texel with Gauss cells everywhere (not the tilted
+    // rule nor the moment pyramid the GPU takes), so the error includes both.
     let prep = Prepared::new(src, DMat3::IDENTITY).without_tilt();
-    let kernel = Kernel::Phong { n: 2049.0 };
-    let dirs = centres(&ours);
-    let step = (dirs.len() / 128).max(1);
-    let picks: Vec<usize> = (0..dirs.len()).step_by(step).collect();
-    let want: Vec<[f64; 3]> = picks
-        .iter()
-        .map(|&i| prep.convolve(kernel, dirs[i]))
-        .collect();
-    let pick = |m: &EnvMap| -> Vec<[f64; 3]> {
-        picks.iter().map(|&i| m.texels[i].map(f64::from)).collect()
+    let worst = |ours: &EnvMap, n: f64, count: usize| {
+        let kernel = Kernel::Phong { n };
+        let dirs = centres(ours);
+        let step = (dirs.len() / count).max(1);
+        let picks: Vec<usize> = (0..dirs.len()).step_by(step).collect();
+        let want: Vec<[f64; 3]> = picks
+            .iter()
+            .map(|&i| prep.convolve(kernel, dirs[i]))
+            .collect();
+        let got: Vec<[f64; 3]> = picks
+            .iter()
+            .map(|&i| ours.texels[i].map(f64::from))
+            .collect();
+        worst_relative(&got, &want)
     };
-    let e = f(worst_relative(&pick(&ours), &want));
     let c = if cmft { NOT_COMPARED.into() } else { dash() };
-    Ok((e, c))
+    if job.starts_with("Phong levels") {
+        let mut e: f64 = 0.0;
+        for k in 0..7 {
+            let ours = load_any(&tmp.join(format!("levels.level{k}.exr")))?;
+            let n = (10.0 * (1.0 - k as f64 / 6.0) + 1.0).exp2() + 1.0;
+            e = e.max(worst(&ours, n, 32));
+        }
+        return Ok((format!("{} (worst level)", f(e)), c));
+    }
+    let ours = load_any(&tmp.join("phong.exr"))?;
+    Ok((f(worst(&ours, 2049.0, 128)), c))
 }
 
 /// What the cmft error column says where its output's frame is not matched to envlight's.
