@@ -77,6 +77,9 @@ pub struct MomentLevel {
     pub height: u32,
     /// Per texel, per channel (`None` without power).
     pub light: Vec<[Option<Light>; 3]>,
+    /// Per texel, its centre direction (world) and the cosine and sine of its angular radius,
+    /// which the rule decides from.
+    cones: Vec<(DVec3, f64, f64)>,
 }
 
 impl MomentLevel {
@@ -92,9 +95,18 @@ impl MomentLevel {
         let side = 1u32 << s;
         let (cw, ch) = (w >> s, h >> s);
         let mut light = Vec::with_capacity((cw * ch * map.layers()) as usize);
+        let mut cones = Vec::with_capacity(light.capacity());
         for layer in 0..map.layers() {
             for cj in 0..ch {
                 for ci in 0..cw {
+                    let m = map.mapping;
+                    let cos_rho = filter::texel_cos_radius(m, cw, ch, layer, ci, cj);
+                    cones.push((
+                        fine.file_to_world()
+                            * m.coord_to_dir(Mapping::texel_center(cw, ch, layer, ci, cj)),
+                        cos_rho,
+                        (1.0 - cos_rho * cos_rho).max(0.0).sqrt(),
+                    ));
                     let children = || {
                         (0..side * side).map(move |k| {
                             let (i, j) = (ci * side + k % side, cj * side + k / side);
@@ -146,6 +158,7 @@ impl MomentLevel {
             width: cw,
             height: ch,
             light,
+            cones,
         }
     }
 
@@ -155,7 +168,6 @@ impl MomentLevel {
     /// too much across it) the sum descends to its fine texels in `fine`, the level-0
     /// preparation of the same map.
     pub fn convolve(&self, fine: &Prepared, kernel: Kernel, axis: DVec3) -> [f64; 3] {
-        let file_to_world = fine.file_to_world();
         let m = self.mapping;
         let (w, h) = (self.width, self.height);
         let side = 1u32 << self.level;
@@ -164,11 +176,9 @@ impl MomentLevel {
         for layer in 0..m.layers() {
             for j in 0..h {
                 for i in 0..w {
-                    let light = &self.light[((layer * h + j) * w + i) as usize];
-                    let dir =
-                        file_to_world * m.coord_to_dir(Mapping::texel_center(w, h, layer, i, j));
-                    let cos_rho = filter::texel_cos_radius(m, w, h, layer, i, j);
-                    let sin_rho = (1.0 - cos_rho * cos_rho).max(0.0).sqrt();
+                    let at = ((layer * h + j) * w + i) as usize;
+                    let light = &self.light[at];
+                    let (dir, cos_rho, sin_rho) = self.cones[at];
                     match rule(kernel, axis.dot(dir), cos_rho, sin_rho, true) {
                         Rule::Skip => {}
                         Rule::Centre | Rule::Tilted => {

@@ -5,6 +5,7 @@ use anyhow::{bail, Context as _, Result};
 use envlight::io::{load, LoadOptions};
 use envlight::math::filter::{Kernel, Prepared};
 use envlight::math::sh;
+use envlight::passes::brute::PhongLevels;
 use envlight::EnvMap;
 use glam::{DMat3, DVec3};
 use std::path::{Path, PathBuf};
@@ -152,6 +153,25 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         ]));
         v
     };
+    // cmft's phongbrdf radiance filter into a 64 cube, `mips` levels by BENCH_LEVELS' rule.
+    let cmft_phong = |out: &str, mips: u32| {
+        let mut v = cmft_common("radiance", &t(out));
+        v.extend(strings(&[
+            "--dstFaceSize",
+            "64",
+            "--lightingModel",
+            "phongbrdf",
+            "--excludeBase",
+            "false",
+            "--mipCount",
+            &mips.to_string(),
+            "--glossScale",
+            &BENCH_LEVELS.scale.to_string(),
+            "--glossBias",
+            &BENCH_LEVELS.bias.to_string(),
+        ]));
+        v
+    };
     let jobs = vec![
         Job {
             name: "SH coefficients (envlight l = 2; cmft l = 4)",
@@ -218,24 +238,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
                 "-o",
                 &t("phong.exr"),
             ]),
-            cmft: {
-                let mut v = cmft_common("radiance", &t("cmft_phong"));
-                v.extend(strings(&[
-                    "--dstFaceSize",
-                    "64",
-                    "--lightingModel",
-                    "phongbrdf",
-                    "--excludeBase",
-                    "false",
-                    "--mipCount",
-                    "1",
-                    "--glossScale",
-                    "10",
-                    "--glossBias",
-                    "1",
-                ]));
-                v
-            },
+            cmft: cmft_phong("cmft_phong", 1),
             reps: opts.phong_reps,
             goal: "≤ 1.0×, error ≤ 1e-3",
         },
@@ -245,7 +248,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
                 "prefilter",
                 &map,
                 "--phong-levels",
-                "7",
+                &BENCH_LEVELS.count.to_string(),
                 "--to",
                 "cube",
                 "--size",
@@ -253,24 +256,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
                 "-o",
                 &t("levels.exr"),
             ]),
-            cmft: {
-                let mut v = cmft_common("radiance", &t("cmft_levels"));
-                v.extend(strings(&[
-                    "--dstFaceSize",
-                    "64",
-                    "--lightingModel",
-                    "phongbrdf",
-                    "--excludeBase",
-                    "false",
-                    "--mipCount",
-                    "7",
-                    "--glossScale",
-                    "10",
-                    "--glossBias",
-                    "1",
-                ]));
-                v
-            },
+            cmft: cmft_phong("cmft_levels", BENCH_LEVELS.count),
             reps: opts.phong_reps,
             goal: "≤ 1.0×, every level within 1e-3",
         },
@@ -450,16 +436,23 @@ fn errors(job: &str, src: &EnvMap, tmp: &Path, cmft: bool) -> Result<(String, St
     let c = if cmft { NOT_COMPARED.into() } else { dash() };
     if job.starts_with("Phong levels") {
         let mut e: f64 = 0.0;
-        for k in 0..7 {
+        for k in 0..BENCH_LEVELS.count {
             let ours = load_any(&tmp.join(format!("levels.level{k}.exr")))?;
-            let n = (10.0 * (1.0 - k as f64 / 6.0) + 1.0).exp2() + 1.0;
-            e = e.max(worst(&ours, n, 32));
+            e = e.max(worst(&ours, BENCH_LEVELS.exponent(k), 32));
         }
         return Ok((format!("{} (worst level)", f(e)), c));
     }
     let ours = load_any(&tmp.join("phong.exr"))?;
-    Ok((f(worst(&ours, 2049.0, 128)), c))
+    Ok((f(worst(&ours, BENCH_LEVELS.exponent(0), 128)), c))
 }
+
+/// The Phong jobs' levels: cmft's `--glossScale 10 --glossBias 1` (n = 2049 at level 0; the
+/// one-level job is level 0), seven levels for the 64 cube.
+const BENCH_LEVELS: PhongLevels = PhongLevels {
+    count: 7,
+    scale: 10.0,
+    bias: 1.0,
+};
 
 /// What the cmft error column says where its output's frame is not matched to envlight's.
 const NOT_COMPARED: &str = "not compared (frame)";
