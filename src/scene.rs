@@ -383,7 +383,7 @@ impl PassKind {
         use ShaderId::*;
         match self {
             PassKind::GBuffer => &[GBuffer],
-            PassKind::DualParaboloid | PassKind::LatLong => &[Convert2d, ConvertCube],
+            PassKind::DualParaboloid | PassKind::LatLong => &[Convert2d, ConvertCube, Reduce],
             PassKind::MipChain => &[Mip],
             PassKind::ShProjection => &[
                 ShProjectSubgroup,

@@ -11,6 +11,7 @@ use super::{context, Global};
 use anyhow::{Context as _, Result};
 use clap::Subcommand;
 use envlight::gpu::Timing;
+use envlight::math::convert::Sampling;
 use envlight::math::filter::Kernel;
 use envlight::math::sh;
 use envlight::math::synth::Sky;
@@ -263,7 +264,7 @@ fn bench_convert(cli: &Global, sizes: &[u32], reps: usize) -> Result<()> {
             };
             let (ow, oh) = to.extent_for_size(size);
             let ss = supersample.unwrap_or_else(|| {
-                Converter::supersampling((Mapping::LatLong, w, w / 2), (to, ow, oh))
+                Sampling::for_conversion((Mapping::LatLong, w, w / 2), (to, ow, oh)).ss
             });
             conv.run(&src, &opts)?;
             let mut ms = Vec::new();
