@@ -2,7 +2,7 @@
 // Reduces a lat-long or cube map by `factor` per axis: each texel the solid-angle-weighted
 // mean of its factor x factor source texels, so that the sum of L·Ω is kept. A conversion that
 // minifies strongly reads this instead of the source (src/math/convert.rs: Sampling), at a
-// rate set by the reduced size (4 to 8 reduced texels per output texel, two samples each). Lat-long weights are the texels' closed-form solid angles;
+// rate set by the reduced size. Lat-long weights are the texels' closed-form solid angles;
 // cube weights the density at the texel centre (exact to O(h²) within a block, as the twin).
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"

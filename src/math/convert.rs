@@ -53,30 +53,25 @@ impl Sampling {
     /// The sampling for a `src` → `dst` conversion, each (mapping, width, height).
     ///
     /// About four samples per axis per source texel the output texel covers, so that the
-    /// footprint mean sees every source texel (1 when magnifying). Past a ratio of 8 source
+    /// footprint mean sees every source texel (1 when magnifying). Past a ratio of 4 source
     /// texels per output texel per axis that rate costs ss² ∝ ratio² per output texel, so a
     /// lat-long or cube source is first reduced by 2^level (solid-angle-weighted block means,
-    /// which keep its power) to leave 4 to 8 texels per output texel, read at two samples per
-    /// reduced texel (each already the mean of its block): at most 16² samples per output
-    /// texel, and the reduced texel, so the extra blur of its bilinear tent, at most a quarter
-    /// of an output texel wide. (Leaving 2 to 4 at four samples each costs the same and blurs
-    /// twice as much: FIS on spiaggia through a 64² paraboloid then differed from the
-    /// unreduced one by 3.2% RMS instead of 1.0%.)
+    /// which keep its power) to leave 2 to 4 texels per output texel: the reduced texel, and
+    /// so the extra blur of its bilinear tent, is at most half an output texel wide.
     pub fn for_conversion(src: (Mapping, u32, u32), dst: (Mapping, u32, u32)) -> Sampling {
         let ratio =
             (texels_on_sphere(src.0, src.1, src.2) / texels_on_sphere(dst.0, dst.1, dst.2)).sqrt();
         let mut level = 0;
-        if matches!(src.0, Mapping::LatLong | Mapping::Cube) && ratio >= 8.0 {
+        if matches!(src.0, Mapping::LatLong | Mapping::Cube) && ratio >= 4.0 {
             let divides = src.1.trailing_zeros().min(src.2.trailing_zeros());
-            level = ((ratio / 4.0).log2().floor() as u32)
+            level = ((ratio / 2.0).log2().floor() as u32)
                 .min(divides)
                 .min(MAX_REDUCTION);
         }
         let rest = ratio / f64::from(1u32 << level);
-        let per_texel = if level > 0 { 2.0 } else { 4.0 };
         Sampling {
             level,
-            ss: ((per_texel * rest).ceil() as u32).clamp(1, 64),
+            ss: ((4.0 * rest).ceil() as u32).clamp(1, 64),
         }
     }
 }
@@ -290,8 +285,8 @@ mod tests {
         assert!((row_centroid(7, h) - (2.0 * PI - row_centroid(6, h))).abs() < 1e-12);
     }
 
-    /// Below 8 source texels per output texel per axis the source is read as it is; above,
-    /// a lat-long or cube source is reduced to leave 4 to 8, within what its sides allow;
+    /// Below 4 source texels per output texel per axis the source is read as it is; above,
+    /// a lat-long or cube source is reduced to leave 2 to 4, within what its sides allow;
     /// angular and paraboloid sources never are.
     #[test]
     fn sampling_reduces_only_strong_minification() {
@@ -301,9 +296,8 @@ mod tests {
         };
         let ll = (Mapping::LatLong, 1024, 512);
         assert_eq!(s(ll, Mapping::Cube, 256), Sampling { level: 0, ss: 5 });
-        assert_eq!(s(ll, Mapping::Cube, 64).level, 0);
         for (to, size) in [
-            (Mapping::Cube, 32),
+            (Mapping::Cube, 64),
             (Mapping::Cube, 8),
             (Mapping::DualParaboloid, 16),
             (Mapping::LatLong, 64),
@@ -318,7 +312,7 @@ mod tests {
         // An odd side allows no reduction; a disc mapping is never reduced.
         assert_eq!(s((Mapping::LatLong, 1022, 511), Mapping::Cube, 8).level, 0);
         assert_eq!(s((Mapping::Angular, 1024, 1024), Mapping::Cube, 8).level, 0);
-        assert_eq!(s((Mapping::Cube, 256, 256), Mapping::Cube, 16).level, 2);
+        assert_eq!(s((Mapping::Cube, 256, 256), Mapping::Cube, 16).level, 3);
     }
 
     /// Reducing keeps ∑ L·Ω: exactly for lat-long maps (to float32 storage), to O(h²) of the
