@@ -25,10 +25,6 @@ pub mod binding {
         CONVERT_SRC = 0;
         /// convert: the destination map (rgba32f image2DArray).
         CONVERT_DST = 1;
-        /// reduce: the source map (sampler2DArray, read with texelFetch).
-        REDUCE_SRC = 0;
-        /// reduce: the reduced map (rgba32f image2DArray).
-        REDUCE_DST = 1;
         /// mapping_probe: input directions (vec4 storage buffer).
         PROBE_IN = 0;
         /// mapping_probe: results (vec4 storage buffer).
@@ -527,17 +523,6 @@ pub mod push {
             /// Samples in the Monte Carlo accumulation.
             mc_samples: u32 = "uint",
         }
-        /// `glsl/reduce.comp`.
-        ReducePush {
-            /// Source layer size.
-            src_size: [u32; 2] = "uvec2",
-            /// Reduced layer size.
-            dst_size: [u32; 2] = "uvec2",
-            /// Source texels per reduced texel, per axis.
-            factor: u32 = "uint",
-            /// Padding.
-            pad: [u32; 3] = "uint[3]",
-        }
         /// `glsl/mip.comp`.
         MipPush {
             /// Side of the level read.
@@ -587,9 +572,6 @@ macro_rules! shader_table {
             /// Resampling between mappings from a cube source.
             ConvertCube = "convert_cube", "convert.comp", Compute, [("SRC_CUBE", "1")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write)];
-            /// Solid-angle-weighted block means of a lat-long or cube map, for strong minification.
-            Reduce = "reduce", "reduce.comp", Compute, [], ReducePush,
-                [(REDUCE_SRC, Sampled, Read), (REDUCE_DST, StorageImage, Write)];
             /// Mapping functions exposed for tests.
             MappingProbe = "mapping_probe", "mapping_probe.comp", Compute, [], ProbePush,
                 [(PROBE_IN, StorageBuffer, Read), (PROBE_OUT, StorageBuffer, Write)];

@@ -99,30 +99,6 @@ pub fn default_dp_size(map: &EnvMap) -> u32 {
     (side.max(1.0) as u32).next_power_of_two().clamp(16, 1024)
 }
 
-/// Side of the dual paraboloid a render of `scene` builds for FIS from `map`: the scene's
-/// `[fis] size` if set; otherwise [`default_dp_size`], or less where no FIS material reads
-/// that fine ([`crate::math::fis::dp_size_for`]: the finest level its densest sample calls
-/// for). A scene of broad lobes then neither converts nor MIP-filters texels it never reads.
-pub fn fis_dp_size(scene: &Scene, map: &EnvMap) -> u32 {
-    if let Some(s) = scene.fis.size {
-        return s;
-    }
-    let needed = scene
-        .objects
-        .iter()
-        .filter_map(|o| match o.material.technique() {
-            Technique::Fis { samples, bias, .. } => Some(crate::math::fis::dp_size_for(
-                &o.material.kind,
-                samples,
-                bias.unwrap_or(DEFAULT_FIS_BIAS),
-            )),
-            _ => None,
-        })
-        .max()
-        .unwrap_or(16);
-    default_dp_size(map).min(needed)
-}
-
 /// The GPU record of a scene object; `data_offset` locates its SH coefficients or its
 /// prefiltered map (0 for other techniques).
 pub fn object_record(o: &SceneObject, data_offset: u32) -> GpuObject {
@@ -285,7 +261,7 @@ impl Renderer {
         // FIS: the dual paraboloid and its MIP chain.
         let dp = match dp_passes {
             Some(_) => {
-                let size = fis_dp_size(scene, env);
+                let size = scene.fis.size.unwrap_or_else(|| default_dp_size(env));
                 let (w, h) = Mapping::DualParaboloid.extent_for_size(size);
                 Some((
                     GpuEnvMap::with_mips(ctx, "fis paraboloid", Mapping::DualParaboloid, w, h)?,
@@ -501,46 +477,4 @@ impl Renderer {
 /// own (see [`Renderer`] to reuse the passes across renders).
 pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
     Renderer::new(ctx).render(scene, env)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::math::Mapping;
-
-    fn scene(materials: &[&str], fis: &str) -> Scene {
-        let mut text = format!(
-            "{fis}\n[environment]\nfile = \"x.exr\"\n[camera]\n\
-             projection = {{ kind = \"orthographic\", height = 2.0 }}\n\
-             eye = [0, 0, 5]\ntarget = [0, 0, 0]\nwidth = 8\nheight = 8\n"
-        );
-        for m in materials {
-            text += &format!(
-                "[[objects]]\nshape = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = {m}\n"
-            );
-        }
-        Scene::parse(&text).unwrap()
-    }
-
-    /// The paraboloid is as fine as the sharpest FIS lobe reads, never finer than the source
-    /// calls for, and exactly the scene's `[fis] size` when given.
-    #[test]
-    fn fis_paraboloid_follows_the_sharpest_lobe() {
-        let map = EnvMap::new(Mapping::LatLong, 1024, 512, vec![[1.0; 3]; 1024 * 512]);
-        assert_eq!(default_dp_size(&map), 1024);
-        let broad = r#"{ type = "ggx", alpha = 0.3, technique = { kind = "fis", samples = 64 } }"#;
-        let sharp = r#"{ type = "ggx", alpha = 0.05, technique = { kind = "fis", samples = 64 } }"#;
-        let mirror = r#"{ type = "mirror" }"#;
-        let s = |m: &[&str], f: &str| fis_dp_size(&scene(m, f), &map);
-        assert_eq!(s(&[broad], ""), 64);
-        assert_eq!(s(&[broad, sharp], ""), 512);
-        // Materials without FIS do not ask for texels.
-        assert_eq!(s(&[broad, mirror], ""), 64);
-        assert_eq!(s(&[broad], "[fis]\nsize = 300"), 300);
-        let small = EnvMap::new(Mapping::LatLong, 64, 32, vec![[1.0; 3]; 64 * 32]);
-        assert_eq!(
-            fis_dp_size(&scene(&[sharp], ""), &small),
-            default_dp_size(&small)
-        );
-    }
 }

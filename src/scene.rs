@@ -383,7 +383,7 @@ impl PassKind {
         use ShaderId::*;
         match self {
             PassKind::GBuffer => &[GBuffer],
-            PassKind::DualParaboloid | PassKind::LatLong => &[Convert2d, ConvertCube, Reduce],
+            PassKind::DualParaboloid | PassKind::LatLong => &[Convert2d, ConvertCube],
             PassKind::MipChain => &[Mip],
             PassKind::ShProjection => &[
                 ShProjectSubgroup,

@@ -3,8 +3,6 @@
 #define ENVLIGHT_GENERATED_GLSL
 #define BINDING_CONVERT_SRC 0
 #define BINDING_CONVERT_DST 1
-#define BINDING_REDUCE_SRC 0
-#define BINDING_REDUCE_DST 1
 #define BINDING_PROBE_IN 0
 #define BINDING_PROBE_OUT 1
 #define BINDING_COPY_SRC 0
@@ -101,7 +99,6 @@ const float SH_K[45] = float[45](2.820947918e-1, 4.886025119e-1, 3.454941495e-1,
 #define PUSH_ShEvalPush layout(push_constant) uniform Push { uvec2 dst_size; uint dst_mapping; uint lmax; } pc;
 #define PUSH_GBufferPush layout(push_constant) uniform Push { vec4 eye; vec4 forward; vec4 right; vec4 up; uvec2 size; uint ortho; uint count; } pc;
 #define PUSH_ShadePush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint env_mapping; uint count; uint dp_size; float max_lod; uint shadows; uint mc_samples; } pc;
-#define PUSH_ReducePush layout(push_constant) uniform Push { uvec2 src_size; uvec2 dst_size; uint factor; uint[3] pad; } pc;
 #define PUSH_MipPush layout(push_constant) uniform Push { uint src_size; uint dst_size; uint mode; uint pad; } pc;
 #define PUSH_McPush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint count; uint shadows; uvec2 size; uint first; uint samples; uint seed; uint mis; uint[2] pad; } pc;
 #endif

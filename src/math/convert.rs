@@ -1,7 +1,6 @@
 //! The float64 twin of the conversion pass (`glsl/convert.comp`): the same reconstruction
 //! (masked bilinear, lat-long rows between their solid-angle centroids, seamless cube
-//! filtering) and the same footprint means, as the oracle the GPU is tested against; and of
-//! the reduction (`glsl/reduce.comp`) that strong minification reads instead of the source.
+//! filtering) and the same footprint means, as the oracle the GPU is tested against.
 
 use super::mapping::{Coord, Mapping};
 use crate::envmap::EnvMap;
@@ -15,106 +14,6 @@ pub fn row_centroid(j: i64, h: f64) -> f64 {
     let x = 0.5 * h;
     // cot θm · (1 − x cot x)
     tm + tm.cos() / tm.sin() * (1.0 - x / x.tan())
-}
-
-/// Texels that cover the sphere (those inside the disc for angular and paraboloid maps).
-fn texels_on_sphere(m: Mapping, w: u32, h: u32) -> f64 {
-    let n = w as f64 * h as f64;
-    match m {
-        Mapping::LatLong => n,
-        Mapping::Angular => n * std::f64::consts::FRAC_PI_4,
-        Mapping::Cube => 6.0 * n,
-        Mapping::DualParaboloid => 2.0 * n * std::f64::consts::FRAC_PI_4,
-    }
-}
-
-/// How a conversion samples its source: from which reduction level, at how many samples per
-/// axis per output texel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Sampling {
-    /// The source is first reduced by 2^level per axis ([`reduce`]); 0 reads it as it is.
-    pub level: u32,
-    /// Samples per axis per output texel.
-    pub ss: u32,
-}
-
-/// Most reduction levels a conversion uses (a factor of 1024 per axis).
-pub const MAX_REDUCTION: u32 = 10;
-
-impl Sampling {
-    /// Level 0 at `ss` samples per axis (a forced rate).
-    pub fn at(ss: u32) -> Sampling {
-        Sampling {
-            level: 0,
-            ss: ss.max(1),
-        }
-    }
-
-    /// The sampling for a `src` → `dst` conversion, each (mapping, width, height).
-    ///
-    /// About four samples per axis per source texel the output texel covers, so that the
-    /// footprint mean sees every source texel (1 when magnifying). Past a ratio of 4 source
-    /// texels per output texel per axis that rate costs ss² ∝ ratio² per output texel, so a
-    /// lat-long or cube source is first reduced by 2^level (solid-angle-weighted block means,
-    /// which keep its power) to leave 2 to 4 texels per output texel: the reduced texel, and
-    /// so the extra blur of its bilinear tent, is at most half an output texel wide.
-    pub fn for_conversion(src: (Mapping, u32, u32), dst: (Mapping, u32, u32)) -> Sampling {
-        let ratio =
-            (texels_on_sphere(src.0, src.1, src.2) / texels_on_sphere(dst.0, dst.1, dst.2)).sqrt();
-        let mut level = 0;
-        if matches!(src.0, Mapping::LatLong | Mapping::Cube) && ratio >= 4.0 {
-            let divides = src.1.trailing_zeros().min(src.2.trailing_zeros());
-            level = ((ratio / 2.0).log2().floor() as u32)
-                .min(divides)
-                .min(MAX_REDUCTION);
-        }
-        let rest = ratio / f64::from(1u32 << level);
-        Sampling {
-            level,
-            ss: ((4.0 * rest).ceil() as u32).clamp(1, 64),
-        }
-    }
-}
-
-/// `map` reduced by `factor` per axis (which must divide its sides): each texel the mean of
-/// its factor × factor source texels weighted by their solid angles, so that ∑ L·Ω is kept
-/// (exactly for a lat-long map, whose weights are closed forms; for a cube, the weights are
-/// the solid-angle density at the texel centre, exact to O(h²) within a block).
-pub fn reduce(map: &EnvMap, factor: u32) -> EnvMap {
-    assert!(factor >= 1 && map.width % factor == 0 && map.height % factor == 0);
-    let (w, h) = (map.width / factor, map.height / factor);
-    let mut texels = Vec::with_capacity((w * h * map.layers()) as usize);
-    for layer in 0..map.layers() {
-        for j in 0..h {
-            for i in 0..w {
-                let (mut acc, mut wsum) = ([0.0f64; 3], 0.0);
-                for y in j * factor..(j + 1) * factor {
-                    for x in i * factor..(i + 1) * factor {
-                        let wt = reduce_weight(map.mapping, map.width, map.height, x, y);
-                        let l = map.texel(layer, x, y);
-                        for c in 0..3 {
-                            acc[c] += wt * f64::from(l[c]);
-                        }
-                        wsum += wt;
-                    }
-                }
-                texels.push(acc.map(|a| (a / wsum) as f32));
-            }
-        }
-    }
-    EnvMap::new(map.mapping, w, h, texels)
-}
-
-/// The weight of texel (i, j) of a `w × h` layer in [`reduce`] (as `glsl/reduce.comp`).
-pub fn reduce_weight(m: Mapping, w: u32, h: u32, i: u32, j: u32) -> f64 {
-    match m {
-        Mapping::Cube => {
-            let s = 2.0 * (i as f64 + 0.5) / w as f64 - 1.0;
-            let t = 2.0 * (j as f64 + 0.5) / h as f64 - 1.0;
-            (1.0 + s * s + t * t).powf(-1.5)
-        }
-        _ => m.texel_solid_angle(w, h, i, j),
-    }
 }
 
 fn fetch(map: &EnvMap, layer: u32, i: i64, j: i64) -> [f64; 3] {
@@ -201,21 +100,9 @@ pub fn sample(map: &EnvMap, d: DVec3) -> [f64; 3] {
     }
 }
 
-/// Converts `map` to `to` at `size` as `sampling` says (its reduction level, then `ss × ss`
-/// samples per output texel), `world_to_file` orienting the source (see
-/// [`super::Orientation::world_to_file`]).
-pub fn convert(
-    map: &EnvMap,
-    to: Mapping,
-    size: u32,
-    world_to_file: DMat3,
-    sampling: Sampling,
-) -> EnvMap {
-    if sampling.level > 0 {
-        let reduced = reduce(map, 1 << sampling.level);
-        return convert(&reduced, to, size, world_to_file, Sampling::at(sampling.ss));
-    }
-    let ss = sampling.ss.max(1);
+/// Converts `map` to `to` at `size` with `ss × ss` samples per output texel, `world_to_file`
+/// orienting the source (see [`super::Orientation::world_to_file`]).
+pub fn convert(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3, ss: u32) -> EnvMap {
     let (w, h) = to.extent_for_size(size);
     let mut texels = Vec::with_capacity((w * h * to.layers()) as usize);
     for layer in 0..to.layers() {
@@ -283,74 +170,6 @@ mod tests {
         // Across the pole the virtual rows mirror the real ones.
         assert!((row_centroid(-1, h) + row_centroid(0, h)).abs() < 1e-12);
         assert!((row_centroid(7, h) - (2.0 * PI - row_centroid(6, h))).abs() < 1e-12);
-    }
-
-    /// Below 4 source texels per output texel per axis the source is read as it is; above,
-    /// a lat-long or cube source is reduced to leave 2 to 4, within what its sides allow;
-    /// angular and paraboloid sources never are.
-    #[test]
-    fn sampling_reduces_only_strong_minification() {
-        let s = |src: (Mapping, u32, u32), to: Mapping, size: u32| {
-            let (w, h) = to.extent_for_size(size);
-            Sampling::for_conversion(src, (to, w, h))
-        };
-        let ll = (Mapping::LatLong, 1024, 512);
-        assert_eq!(s(ll, Mapping::Cube, 256), Sampling { level: 0, ss: 5 });
-        for (to, size) in [
-            (Mapping::Cube, 64),
-            (Mapping::Cube, 8),
-            (Mapping::DualParaboloid, 16),
-            (Mapping::LatLong, 64),
-            (Mapping::Angular, 40),
-        ] {
-            let x = s(ll, to, size);
-            assert!(
-                x.level > 0 && (8..=16).contains(&x.ss),
-                "{to:?} {size}: {x:?}"
-            );
-        }
-        // An odd side allows no reduction; a disc mapping is never reduced.
-        assert_eq!(s((Mapping::LatLong, 1022, 511), Mapping::Cube, 8).level, 0);
-        assert_eq!(s((Mapping::Angular, 1024, 1024), Mapping::Cube, 8).level, 0);
-        assert_eq!(s((Mapping::Cube, 256, 256), Mapping::Cube, 16).level, 3);
-    }
-
-    /// Reducing keeps ∑ L·Ω: exactly for lat-long maps (to float32 storage), to O(h²) of the
-    /// density weights for cubes; and a constant stays constant.
-    #[test]
-    fn reduction_keeps_power() {
-        for (m, size, factor, tol) in [
-            (Mapping::LatLong, 64, 4, 1e-6),
-            (Mapping::LatLong, 64, 16, 1e-6),
-            (Mapping::Cube, 32, 4, 2e-4),
-        ] {
-            let (w, h) = m.extent_for_size(size);
-            // A sun 10⁴ × the sky, off every block centre.
-            let sun = DVec3::new(0.3, 0.5, -0.8).normalize();
-            let map = EnvMap::from_fn(m, w, h, 3, |d| {
-                let s = 1e4 * (4000.0 * (d.dot(sun) - 1.0)).exp();
-                [1.0 + d.y + s, 0.5 + s, 2.0 - d.x]
-            });
-            let r = reduce(&map, factor);
-            assert_eq!((r.width, r.height), (w / factor, h / factor));
-            let (p0, p1) = (map.power(), r.power());
-            for c in 0..3 {
-                assert!(
-                    (p1[c] / p0[c] - 1.0).abs() < tol,
-                    "{m:?} /{factor} channel {c}: {p0:?} {p1:?}"
-                );
-            }
-            let flat = EnvMap::new(
-                m,
-                w,
-                h,
-                vec![[2.0, 3.0, 4.0]; (w * h * m.layers()) as usize],
-            );
-            assert!(reduce(&flat, factor)
-                .texels
-                .iter()
-                .all(|t| (t[1] - 3.0).abs() < 1e-6));
-        }
     }
 
     #[test]

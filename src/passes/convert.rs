@@ -1,16 +1,10 @@
 //! Conversion of an environment map from any mapping to any other, at any resolution
-//! (`glsl/convert.comp`, float64 twin [`crate::math::convert`]); strong minification first
-//! reduces the source (`glsl/reduce.comp`).
+//! (`glsl/convert.comp`, float64 twin [`crate::math::convert`]).
 
 use super::map::GpuEnvMap;
-use crate::abi::{
-    binding,
-    push::{ConvertPush, ReducePush},
-    ShaderId, WORKGROUP_2D,
-};
+use crate::abi::{binding, push::ConvertPush, ShaderId, WORKGROUP_2D};
 use crate::error::Result;
 use crate::gpu::{groups, mat3_rows, Bind, Context, Pipeline, Recorder, Sampler, Timing};
-use crate::math::convert::Sampling;
 use crate::math::{Mapping, Orientation};
 use std::sync::OnceLock;
 
@@ -24,9 +18,20 @@ pub struct ConvertOptions {
     pub size: u32,
     /// How the source file is oriented relative to the world frame.
     pub orientation: Orientation,
-    /// Samples per axis per output texel, read from the source itself; `None` picks the
-    /// reduction level and the rate from the resolutions ([`Sampling::for_conversion`]).
+    /// Samples per axis per output texel; `None` picks it from the resolutions
+    /// ([`Converter::supersampling`]).
     pub supersample: Option<u32>,
+}
+
+/// Texels that cover the sphere (those inside the disc for angular and paraboloid maps).
+fn texels_on_sphere(m: Mapping, w: u32, h: u32) -> f64 {
+    let n = w as f64 * h as f64;
+    match m {
+        Mapping::LatLong => n,
+        Mapping::Angular => n * std::f64::consts::FRAC_PI_4,
+        Mapping::Cube => 6.0 * n,
+        Mapping::DualParaboloid => 2.0 * n * std::f64::consts::FRAC_PI_4,
+    }
 }
 
 /// The conversion pass. Pipelines are built on first use, one per source kind.
@@ -34,8 +39,6 @@ pub struct Converter {
     ctx: Context,
     /// One pipeline per (source, destination) mapping pair, specialised on both.
     pipelines: [OnceLock<Pipeline>; 16],
-    /// The reduction, one per source mapping (lat-long and cube are used).
-    reduce: [OnceLock<Pipeline>; 4],
     sampler: Sampler,
 }
 
@@ -45,7 +48,6 @@ impl Converter {
         Ok(Converter {
             ctx: ctx.clone(),
             pipelines: Default::default(),
-            reduce: Default::default(),
             sampler: Sampler::linear_clamp(ctx, "convert sampler")?,
         })
     }
@@ -61,59 +63,12 @@ impl Converter {
         Pipeline::compute_once(cell, &self.ctx, id, &spec)
     }
 
-    /// How a conversion of `src` into `opts` samples: the forced rate at level 0, or
-    /// [`Sampling::for_conversion`].
-    pub fn sampling(src: &GpuEnvMap, opts: &ConvertOptions) -> Sampling {
-        let (w, h) = opts.to.extent_for_size(opts.size);
-        match opts.supersample {
-            Some(ss) => Sampling::at(ss),
-            None => Sampling::for_conversion((src.mapping, src.width, src.height), (opts.to, w, h)),
-        }
-    }
-
-    /// Records the reduction of `src` by `factor` per axis into a new map, which the caller
-    /// hands to `rec` to keep once its last use is recorded.
-    fn record_reduce(&self, rec: &mut Recorder, src: &GpuEnvMap, factor: u32) -> Result<GpuEnvMap> {
-        let (w, h) = (src.width / factor, src.height / factor);
-        let out = GpuEnvMap::new(
-            &self.ctx,
-            &format!("{} reduced by {factor}", src.mapping.name()),
-            src.mapping,
-            w,
-            h,
-        )?;
-        let cell = &self.reduce[src.mapping.id() as usize];
-        let spec = [WORKGROUP_2D[0], WORKGROUP_2D[1], src.mapping.id()];
-        let pipeline = Pipeline::compute_once(cell, &self.ctx, ShaderId::Reduce, &spec)?;
-        let push = ReducePush {
-            src_size: [src.width, src.height],
-            dst_size: [w, h],
-            factor,
-            pad: [0; 3],
-        };
-        rec.discard(&out.image);
-        rec.span(
-            &format!("reduce {} by {factor}", src.mapping.name()),
-            |rec| {
-                rec.dispatch(
-                    pipeline,
-                    &[
-                        (
-                            binding::REDUCE_SRC,
-                            Bind::Sampled(&src.image, &self.sampler, false),
-                        ),
-                        (binding::REDUCE_DST, Bind::Storage(&out.image)),
-                    ],
-                    &push,
-                    [
-                        groups(w, WORKGROUP_2D[0]),
-                        groups(h, WORKGROUP_2D[1]),
-                        src.mapping.layers(),
-                    ],
-                )
-            },
-        )?;
-        Ok(out)
+    /// Samples per axis for an output texel: about two per source texel spacing, so that
+    /// minification averages every source texel the footprint covers (1 when magnifying).
+    pub fn supersampling(src: (Mapping, u32, u32), dst: (Mapping, u32, u32)) -> u32 {
+        let ratio =
+            (texels_on_sphere(src.0, src.1, src.2) / texels_on_sphere(dst.0, dst.1, dst.2)).sqrt();
+        ((4.0 * ratio).ceil() as u32).clamp(1, 64)
     }
 
     /// Records the conversion of `src` into `dst`, whose mapping and size must be
@@ -131,14 +86,12 @@ impl Converter {
             (opts.to, w, h),
             "the output does not match the options"
         );
-        let sampling = Converter::sampling(src, opts);
-        let reduced = if sampling.level > 0 {
-            Some(self.record_reduce(rec, src, 1 << sampling.level)?)
-        } else {
-            None
-        };
-        let src = reduced.as_ref().unwrap_or(src);
-        let ss = sampling.ss;
+        let ss = opts
+            .supersample
+            .unwrap_or_else(|| {
+                Converter::supersampling((src.mapping, src.width, src.height), (opts.to, w, h))
+            })
+            .max(1);
         let push = ConvertPush {
             world_to_file: mat3_rows(opts.orientation.checked_world_to_file()?),
             src_size: [src.width, src.height],
@@ -173,11 +126,7 @@ impl Converter {
                     opts.to.layers(),
                 ],
             )
-        })?;
-        if let Some(r) = reduced {
-            rec.keep(r);
-        }
-        Ok(())
+        })
     }
 
     /// Converts `src` to `opts.to` at `opts.size`; returns the new map and the GPU time.

@@ -11,7 +11,6 @@ use super::{context, Global};
 use anyhow::{Context as _, Result};
 use clap::Subcommand;
 use envlight::gpu::Timing;
-use envlight::math::convert::Sampling;
 use envlight::math::filter::Kernel;
 use envlight::math::sh;
 use envlight::math::synth::Sky;
@@ -264,7 +263,7 @@ fn bench_convert(cli: &Global, sizes: &[u32], reps: usize) -> Result<()> {
             };
             let (ow, oh) = to.extent_for_size(size);
             let ss = supersample.unwrap_or_else(|| {
-                Sampling::for_conversion((Mapping::LatLong, w, w / 2), (to, ow, oh)).ss
+                Converter::supersampling((Mapping::LatLong, w, w / 2), (to, ow, oh))
             });
             conv.run(&src, &opts)?;
             let mut ms = Vec::new();

@@ -30,8 +30,7 @@ pub struct PeersOptions<'a> {
 struct Job {
     name: &'static str,
     envlight: Vec<String>,
-    /// cmft's arguments, where cmft has the job.
-    cmft: Option<Vec<String>>,
+    cmft: Vec<String>,
     reps: usize,
     goal: &'static str,
 }
@@ -65,23 +64,15 @@ fn median(v: &mut [f64]) -> f64 {
     }
 }
 
-/// Sum of the "GPU  x ms  label" lines envlight prints, or a render's "total  x" line.
+/// Sum of the "GPU  x ms  label" lines envlight prints.
 fn gpu_ms(stdout: &str) -> f64 {
-    let field = |first: &str| -> Vec<f64> {
-        stdout
-            .lines()
-            .filter_map(|l| {
-                let mut w = l.split_whitespace();
-                (w.next() == Some(first)).then(|| w.next()?.parse::<f64>().ok())?
-            })
-            .collect()
-    };
-    let gpu = field("GPU");
-    if gpu.is_empty() {
-        field("total").iter().sum()
-    } else {
-        gpu.iter().sum()
-    }
+    stdout
+        .lines()
+        .filter_map(|l| {
+            let mut w = l.split_whitespace();
+            (w.next() == Some("GPU")).then(|| w.next()?.parse::<f64>().ok())?
+        })
+        .sum()
 }
 
 fn strings(v: &[&str]) -> Vec<String> {
@@ -185,7 +176,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         Job {
             name: "SH coefficients (envlight l = 2; cmft l = 4)",
             envlight: strings(&["sh", &map, "--order", "2", "-o", &t("sh.json")]),
-            cmft: Some(cmft_common("shcoeffs", &t("cmft_sh"))),
+            cmft: cmft_common("shcoeffs", &t("cmft_sh")),
             reps: opts.reps,
             goal: "≤ 1.0×",
         },
@@ -208,7 +199,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
             cmft: {
                 let mut v = cmft_common("irradiance", &t("cmft_irr"));
                 v.extend(strings(&["--dstFaceSize", "64"]));
-                Some(v)
+                v
             },
             reps: opts.reps,
             goal: "≤ 1.0×",
@@ -228,7 +219,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
             cmft: {
                 let mut v = cmft_common("none", &t("cmft_conv"));
                 v.extend(strings(&["--dstFaceSize", "256"]));
-                Some(v)
+                v
             },
             reps: opts.reps,
             goal: "≤ 2×, power within 0.01%",
@@ -247,7 +238,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
                 "-o",
                 &t("phong.exr"),
             ]),
-            cmft: Some(cmft_phong("cmft_phong", 1)),
+            cmft: cmft_phong("cmft_phong", 1),
             reps: opts.phong_reps,
             goal: "≤ 1.0×, error ≤ 1e-3",
         },
@@ -265,24 +256,11 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
                 "-o",
                 &t("levels.exr"),
             ]),
-            cmft: Some(cmft_phong("cmft_levels", BENCH_LEVELS.count)),
+            cmft: cmft_phong("cmft_levels", BENCH_LEVELS.count),
             reps: opts.phong_reps,
             goal: "≤ 1.0×, every level within 1e-3",
         },
-        Job {
-            name: FIS_JOB,
-            envlight: strings(&["render", &t("fis.toml"), "-o", &t("fis.exr")]),
-            cmft: None,
-            reps: opts.reps,
-            goal: "≤ 0.15 s",
-        },
     ];
-    // The FIS scene, and the same with the paraboloid as fine as the source (the size every
-    // render used before it was chosen from the lobes), to measure what the smaller one costs.
-    let src = load_any(opts.map)?;
-    let full = envlight::render::default_dp_size(&src);
-    std::fs::write(tmp.join("fis.toml"), fis_scene(&map, None))?;
-    std::fs::write(tmp.join("fis_full.toml"), fis_scene(&map, Some(full)))?;
 
     let (_, devices) = run(&me, &strings(&["devices"]), &[])?;
     let device = devices
@@ -302,14 +280,14 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     let floor_devices = floor(&strings(&["devices"]))?;
     let floor_info = floor(&strings(&["info", &map]))?;
 
+    let src = load_any(opts.map)?;
     let mut rows = Vec::new();
     for job in &jobs {
         eprintln!("{} …", job.name);
         // One untimed run of each warms the file cache and Mesa's shader cache.
         run(&me, &job.envlight, &[])?;
-        let cmft = opts.cmft.zip(job.cmft.as_ref());
-        if let Some((c, args)) = cmft {
-            run(c, args, &[])?;
+        if let Some(c) = opts.cmft {
+            run(c, &job.cmft, &[])?;
         }
         let (mut te, mut tc) = (Vec::new(), Vec::new());
         let mut gpu = Vec::new();
@@ -317,22 +295,13 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
             let (s, out) = run(&me, &job.envlight, &[])?;
             te.push(s);
             gpu.push(gpu_ms(&out));
-            if let Some((c, args)) = cmft {
-                tc.push(run(c, args, &[])?.0);
+            if let Some(c) = opts.cmft {
+                tc.push(run(c, &job.cmft, &[])?.0);
             }
         }
         // A first run as a new user has it: no shader cache, so llvmpipe compiles every shader.
         let (cold, _) = run(&me, &job.envlight, &[("MESA_SHADER_CACHE_DISABLE", "true")])?;
-        let (e_err, c_err) = if job.name == FIS_JOB {
-            let (_, _) = run(
-                &me,
-                &strings(&["render", &t("fis_full.toml"), "-o", &t("fis_full.exr")]),
-                &[],
-            )?;
-            (fis_error(&tmp, full)?, "–".to_string())
-        } else {
-            errors(job.name, &src, &tmp, opts.cmft.is_some())?
-        };
+        let (e_err, c_err) = errors(job.name, &src, &tmp, opts.cmft.is_some())?;
         rows.push((
             job,
             median(&mut te),
@@ -372,7 +341,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     ));
     md.push_str("| job | cmft s | envlight s | ratio | envlight cold s | envlight GPU ms | envlight error | cmft error | goal |\n|---|---|---|---|---|---|---|---|---|\n");
     for (job, te, tc, cold, gpu, ee, ce) in &rows {
-        let have_c = opts.cmft.is_some() && job.cmft.is_some();
+        let have_c = opts.cmft.is_some();
         md.push_str(&format!(
             "| {} | {} | {te:.3} | {} | {cold:.3} | {gpu:.1} | {ee} | {} | {} |\n",
             job.name,
@@ -395,9 +364,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
          irradiance, worst texel against float64 SH of the same order (cmft's E/π against order 4); \
          conversion, total power against the source's; Phong, worst of 128 texels (levels: 32 per \
          level) against the float64 brute force over every source texel with Gauss cells \
-         everywhere; FIS, per-pixel relative difference on the sphere from the same render with \
-         the paraboloid as fine as the source (its size before it was chosen from the lobes). \
-         cmft's irradiance and Phong cubes are not compared texel by texel: \
+         everywhere. cmft's irradiance and Phong cubes are not compared texel by texel: \
          their face frame is not yet matched to DESIGN.md's, so a difference would measure the \
          frames; ../shared/peers/README.md measured 1–16% lobe-tail error for its Phong.\n",
     );
@@ -486,48 +453,6 @@ const BENCH_LEVELS: PhongLevels = PhongLevels {
     scale: 10.0,
     bias: 1.0,
 };
-
-/// The FIS job's name: a render that cmft has no counterpart for.
-const FIS_JOB: &str = "FIS render, 128² sphere, GGX α = 0.3, 64 samples";
-
-/// The FIS job's scene on `map`, with the paraboloid's side if given.
-fn fis_scene(map: &str, dp_size: Option<u32>) -> String {
-    let fis = dp_size.map_or(String::new(), |s| format!("[fis]\nsize = {s}\n"));
-    format!(
-        "{fis}[environment]\nfile = {map:?}\n\n[camera]\n\
-         projection = {{ kind = \"orthographic\", height = 2.0 }}\n\
-         eye = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nwidth = 128\nheight = 128\n\n\
-         [[objects]]\nshape = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n\
-         material = {{ type = \"ggx\", alpha = 0.3, technique = {{ kind = \"fis\", samples = 64 }} }}\n"
-    )
-}
-
-/// RMS and worst per-pixel relative difference of the FIS render from the one with the
-/// source-sized paraboloid, over the pixels that see the sphere (the background is the same
-/// lookup in both).
-fn fis_error(tmp: &Path, full: u32) -> Result<String> {
-    let a = load_any(&tmp.join("fis.exr"))?;
-    let b = load_any(&tmp.join("fis_full.exr"))?;
-    let (mut sq, mut worst, mut n) = (0.0f64, 0.0f64, 0usize);
-    for (j, (p, q)) in a.texels.iter().zip(&b.texels).enumerate() {
-        // Pixel centres inside the unit disc of the orthographic 2 × 2 view.
-        let (x, y) = ((j % 128) as f64 + 0.5, (j / 128) as f64 + 0.5);
-        if (x / 64.0 - 1.0).hypot(y / 64.0 - 1.0) > 0.99 {
-            continue;
-        }
-        for c in 0..3 {
-            let e = (f64::from(p[c]) - f64::from(q[c])).abs() / f64::from(q[c]).max(1e-6);
-            sq += e * e;
-            worst = worst.max(e);
-            n += 1;
-        }
-    }
-    Ok(format!(
-        "vs paraboloid {full}: rms {:.1e}, worst {:.1e}",
-        (sq / n.max(1) as f64).sqrt(),
-        worst
-    ))
-}
 
 /// What the cmft error column says where its output's frame is not matched to envlight's.
 const NOT_COMPARED: &str = "not compared (frame)";
