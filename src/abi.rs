@@ -123,6 +123,19 @@ pub mod binding {
         MC_TABLES = 5;
         /// mc: the accumulation image (rgba32f storage: rgb sum, luminance² sum).
         MC_ACCUM = 6;
+        /// sh_brdf: the BRDF's coefficient vectors, view after view (float buffer), summed
+        /// over one dispatch per panel.
+        SH_BRDF_TABLE = 0;
+        /// sh_rotate: rotations and coefficient vectors in (float buffer).
+        SH_ROT_IN = 0;
+        /// sh_rotate: rotated vectors out (float buffer).
+        SH_ROT_OUT = 1;
+        /// sh_rotate: the fixed M(Rx(90°)) blocks (float buffer).
+        SH_ROT_X90 = 2;
+        /// shade: SH-BRDF coefficient tables, concatenated (float buffer).
+        SHADE_BRDF_SH = 9;
+        /// shade: the fixed M(Rx(90°)) blocks of the zxzxz rotation (float buffer).
+        SHADE_X90 = 10;
     }
 }
 
@@ -155,6 +168,8 @@ pub mod brdf {
         pub const PREFILTERED: u32 = 3;
         /// The Monte Carlo reference.
         pub const MC: u32 = 4;
+        /// SH shading of the BRDF (Kautz et al. 2002).
+        pub const SH_BRDF: u32 = 5;
     }
     /// GGX roughness below this is taken as this (the mirror limit with finite numbers).
     pub const GGX_ALPHA_MIN: f64 = 1e-4;
@@ -242,6 +257,37 @@ pub const BRUTE_TILE: u32 = 16;
 
 /// Highest SH band the GPU projection supports.
 pub const SH_MAX_LMAX: u32 = 8;
+
+/// SH shading of arbitrary BRDFs (Kautz et al. 2002), shared by `src/math/sh_brdf.rs` and
+/// `glsl/sh_brdf.comp`, `glsl/shade.frag`.
+pub mod sh_brdf {
+    /// Uniform panels in the second (azimuthal) uniform of the BRDF projection's quadrature
+    /// over the sampler's unit square; each panel takes GL_NODES × GL_NODES nodes.
+    pub const PANELS: u32 = 16;
+    /// Geometric levels toward each end of the first uniform (2·GRADED_LEVELS panels).
+    pub const GRADED_LEVELS: u32 = 8;
+    /// Gauss–Legendre nodes per panel axis (the rule of [`gauss4`]).
+    pub const GL_NODES: u32 = 4;
+    /// Views per side of the paraboloid-mapped view grid, by default (the furnace's
+    /// interpolation error is 4× smaller than at 16: tests/sh_brdf.rs).
+    pub const DEFAULT_GRID: u32 = 32;
+    /// Largest view grid accepted.
+    pub const MAX_GRID: u32 = 64;
+    /// Rotation by Kautz et al.'s zxzxz decomposition (the default, by measurement).
+    pub const ROTATION_ZXZXZ: u32 = 0;
+    /// Rotation by the Ivanic–Ruedenberg recurrence.
+    pub const ROTATION_IVANIC: u32 = 1;
+
+    /// The 4-point Gauss–Legendre rule on [−1, 1] in closed form: nodes ±√(3/7 ∓ 2/7·√(6/5)),
+    /// weights (18 ± √30)/36.
+    pub fn gauss4() -> ([f64; 4], [f64; 4]) {
+        let a = (3.0 / 7.0 - 2.0 / 7.0 * (6.0f64 / 5.0).sqrt()).sqrt();
+        let b = (3.0 / 7.0 + 2.0 / 7.0 * (6.0f64 / 5.0).sqrt()).sqrt();
+        let wa = (18.0 + 30.0f64.sqrt()) / 36.0;
+        let wb = (18.0 - 30.0f64.sqrt()) / 36.0;
+        ([-b, -a, a, b], [wb, wa, wa, wb])
+    }
+}
 /// Workgroup size of the SH passes: one texel (or partial sum) per invocation.
 pub const SH_WORKGROUP: u32 = 64;
 /// Texels each SH projection invocation sums in registers before the workgroup sums, on
@@ -522,6 +568,36 @@ pub mod push {
             shadows: u32 = "uint",
             /// Samples in the Monte Carlo accumulation.
             mc_samples: u32 = "uint",
+            /// Rotation of SH-BRDF vectors: SH_ROTATION_ZXZXZ or SH_ROTATION_IVANIC.
+            sh_rotation: u32 = "uint",
+            /// Padding.
+            pad: [u32; 3] = "uint[3]",
+        }
+        /// `glsl/sh_brdf.comp`.
+        ShBrdfPush {
+            /// Views per side of the grid.
+            grid: u32 = "uint",
+            /// The BRDF's first parameter.
+            p0: f32 = "float",
+            /// Its second.
+            p1: f32 = "float",
+            /// Where the table starts in the output, in floats.
+            offset: u32 = "uint",
+            /// The panel of the first uniform this dispatch adds (panel 0 writes).
+            panel: u32 = "uint",
+            /// Padding.
+            pad: [u32; 3] = "uint[3]",
+        }
+        /// `glsl/sh_rotate.comp`.
+        ShRotatePush {
+            /// Records.
+            count: u32 = "uint",
+            /// Highest band.
+            lmax: u32 = "uint",
+            /// SH_ROTATION_ZXZXZ or SH_ROTATION_IVANIC.
+            method: u32 = "uint",
+            /// Padding.
+            pad: u32 = "uint",
         }
         /// `glsl/mip.comp`.
         MipPush {
@@ -629,7 +705,15 @@ macro_rules! shader_table {
                  (SHADE_OBJECTS, StorageBuffer, Read), (SHADE_COEFFS, StorageBuffer, Read),
                  (SHADE_ENV, Sampled, Read), (SHADE_POSITION, Sampled, Read),
                  (SHADE_DP, Sampled, Read), (SHADE_PREFILTERED, StorageBuffer, Read),
-                 (SHADE_MC, Sampled, Read)];
+                 (SHADE_MC, Sampled, Read), (SHADE_BRDF_SH, StorageBuffer, Read),
+                 (SHADE_X90, StorageBuffer, Read)];
+            /// SH projection of a BRDF per view of a grid (SH-BRDF shading's table).
+            ShBrdf = "sh_brdf", "sh_brdf.comp", Compute, [], ShBrdfPush,
+                [(SH_BRDF_TABLE, StorageBuffer, ReadWrite)];
+            /// Rotation of SH vectors by either construction (tests, benchmark).
+            ShRotate = "sh_rotate", "sh_rotate.comp", Compute, [], ShRotatePush,
+                [(SH_ROT_IN, StorageBuffer, Read), (SH_ROT_OUT, StorageBuffer, Write),
+                 (SH_ROT_X90, StorageBuffer, Read)];
             /// One level of the dual-paraboloid MIP chain.
             Mip = "mip", "mip.comp", Compute, [], MipPush,
                 [(MIP_SRC, StorageImage, ReadWrite), (MIP_DST, StorageImage, ReadWrite)];
@@ -772,10 +856,20 @@ pub fn generated_header() -> String {
         ("TECH_SH", brdf::technique::SH),
         ("TECH_PREFILTERED", brdf::technique::PREFILTERED),
         ("TECH_MC", brdf::technique::MC),
+        ("TECH_SH_BRDF", brdf::technique::SH_BRDF),
+        ("SH_ROTATION_ZXZXZ", sh_brdf::ROTATION_ZXZXZ),
+        ("SH_ROTATION_IVANIC", sh_brdf::ROTATION_IVANIC),
+        ("SH_BRDF_PANELS", sh_brdf::PANELS),
+        ("SH_BRDF_GL_NODES", sh_brdf::GL_NODES),
+        ("SH_BRDF_GRADED_LEVELS", sh_brdf::GRADED_LEVELS),
     ];
     for (name, v) in ids {
         let _ = writeln!(s, "#define {name} {v}u");
     }
+    let (x, w) = sh_brdf::gauss4();
+    let list = |v: [f64; 4]| v.map(|a| format!("{a:.9e}")).join(", ");
+    let _ = writeln!(s, "const float SH_BRDF_GL_X[4] = float[4]({});", list(x));
+    let _ = writeln!(s, "const float SH_BRDF_GL_W[4] = float[4]({});", list(w));
     for (i, name) in MAPPING_NAMES.iter().enumerate() {
         let _ = writeln!(s, "#define MAPPING_{name} {i}u");
     }

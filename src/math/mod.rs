@@ -16,6 +16,8 @@ pub mod moments;
 pub mod quadrature;
 pub mod sequence;
 pub mod sh;
+pub mod sh_brdf;
+pub mod sh_rotate;
 pub mod synth;
 
 pub use mapping::{Coord, Mapping, Orientation};
