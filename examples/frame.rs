@@ -193,6 +193,8 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
             dp: Some(&dp),
             prefiltered: None,
             mc: None,
+            brdf_sh: None,
+            sh_rotation: envlight::passes::shade::Rotation::Zxzxz,
             shadows: scene.shadows,
         };
         shade.record(&mut rec, &gbuf, &inputs, &target)?;

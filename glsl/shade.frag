@@ -5,7 +5,9 @@
 // - PREFILTERED: a prefiltered lat-long map (#3), irradiance by n or Phong by r, bilinear;
 // - FIS: filtered importance sampling (Colbert & Křivánek 2007): N Hammersley samples of the
 //   BRDF, each read from the dual-paraboloid MIP chain at lod ½·log2(Ωs/Ωp) + bias;
-// - MC: the mean the Monte Carlo pass accumulated.
+// - MC: the mean the Monte Carlo pass accumulated;
+// - SH_BRDF: Kautz et al. 2002: the BRDF's SH vector at the local view (bilinear over the view
+//   grid), rotated to world space, dotted with the environment's radiance coefficients.
 // Misses show the environment along the ray. Shadows (V_em) apply to LOOKUP and FIS.
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
@@ -23,6 +25,10 @@ layout(set = 0, binding = BINDING_SHADE_POSITION) uniform sampler2DArray gbuf_po
 layout(set = 0, binding = BINDING_SHADE_DP) uniform sampler2DArray dp;
 layout(std430, set = 0, binding = BINDING_SHADE_PREFILTERED) readonly buffer Pre { vec4 pre[]; };
 layout(set = 0, binding = BINDING_SHADE_MC) uniform sampler2DArray mc_accum;
+layout(std430, set = 0, binding = BINDING_SHADE_BRDF_SH) readonly buffer BrdfSh { float brdf_sh[]; };
+layout(std430, set = 0, binding = BINDING_SHADE_X90) readonly buffer X90 { float x90[]; };
+#define SH_X90(i) x90[i]
+#include "sh_rotate.glsl"
 
 // The push block, generated from src/abi.rs.
 PUSH_ShadePush
@@ -101,6 +107,37 @@ vec3 fis(Object ob, vec3 n, vec3 v, vec3 p, uvec2 pix) {
     return sum / float(count);
 }
 
+// Twin of math::sh_brdf::shade. extra = (grid, environment coefficients' offset, band, table offset).
+vec3 sh_brdf(Object ob, vec3 n, vec3 v) {
+    uint grid = uint(ob.extra.x), env_off = uint(ob.extra.y), lmax = uint(ob.extra.z);
+    uint table = uint(ob.extra.w), nc = (lmax + 1u) * (lmax + 1u);
+    vec3 t, bt;
+    shading_frame(n, t, bt);
+    vec3 wo = local_view(v, t, bt, n);
+    float g = float(grid);
+    vec2 p = clamp((wo.xy / (1.0 + wo.z) + 1.0) * 0.5 * g - 0.5, 0.0, g - 1.0);
+    uvec2 i0 = min(uvec2(floor(p)), uvec2(max(grid, 2u) - 2u));
+    vec2 f = p - vec2(i0);
+    uvec2 i1 = min(i0 + 1u, uvec2(grid - 1u));
+    uint v00 = table + (i0.y * grid + i0.x) * nc, v10 = table + (i0.y * grid + i1.x) * nc;
+    uint v01 = table + (i1.y * grid + i0.x) * nc, v11 = table + (i1.y * grid + i1.x) * nc;
+    float c[SH_MAX_COEFFS];
+    for (uint k = 0u; k < SH_MAX_COEFFS; k++) {
+        c[k] = k < nc ? mix(mix(brdf_sh[v00 + k], brdf_sh[v10 + k], f.x),
+                            mix(brdf_sh[v01 + k], brdf_sh[v11 + k], f.x), f.y)
+                      : 0.0;
+    }
+    mat3 frame = mat3(t, bt, n);
+    if (pc.sh_rotation == SH_ROTATION_IVANIC) {
+        sh_rotate_ivanic(frame, lmax, c);
+    } else {
+        sh_rotate_zxzxz(frame, lmax, c);
+    }
+    vec3 sum = vec3(0.0);
+    for (uint k = 0u; k < nc; k++) sum += c[k] * coeffs[env_off + k].rgb;
+    return max(sum, vec3(0.0));
+}
+
 void main() {
     uvec2 pix = uvec2(gl_FragCoord.xy);
     ivec3 q = ivec3(pix, 0);
@@ -129,6 +166,8 @@ void main() {
         bool diffuse = uint(ob.brdf.x) == BRDF_LAMBERT;
         vec3 l = prefiltered_lookup(uint(ob.extra.y), int(ob.extra.z), diffuse ? n : r);
         color = ob.albedo.rgb * (diffuse ? l / PI : l);
+    } else if (tech == TECH_SH_BRDF) {
+        color = ob.albedo.rgb * sh_brdf(ob, n, v);
     } else if (tech == TECH_LOOKUP) {
         bool dark = pc.shadows != 0u && occluded(shadow_origin(p, n), r);
         color = dark ? vec3(0.0) : ob.albedo.rgb * env_lookup(r);

@@ -6,11 +6,14 @@ use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, Recorder, Timing, Usage};
 use crate::math::brdf::Brdf;
 use crate::math::filter::Kernel;
+use crate::math::sh::Window;
+use crate::math::sh_brdf::ViewGrid;
 use crate::math::{sh, Mapping, Orientation};
 use crate::passes::gbuffer::{shape_record, target, GBuffer, GpuObject};
 use crate::passes::mc::{McEnv, McOptions};
 use crate::passes::sh_project::Subgroups;
-use crate::passes::shade::ShadeInputs;
+use crate::passes::shade::{Rotation, ShadeInputs};
+use crate::passes::ShBrdfProjector;
 use crate::passes::{
     BruteFilter, ConvertOptions, Converter, GBufferPass, GpuEnvMap, MipChain, MonteCarlo,
     ShProjector, Shade,
@@ -102,6 +105,11 @@ pub fn default_dp_size(map: &EnvMap) -> u32 {
 /// The GPU record of a scene object; `data_offset` locates its SH coefficients or its
 /// prefiltered map (0 for other techniques).
 pub fn object_record(o: &SceneObject, data_offset: u32) -> GpuObject {
+    object_record_with(o, data_offset, 0)
+}
+
+/// [`object_record`] with the offset of the object's SH-BRDF table too (in floats).
+pub fn object_record_with(o: &SceneObject, data_offset: u32, table_offset: u32) -> GpuObject {
     let mut g = shape_record(&o.shape);
     let m = &o.material;
     let brdf = m.kind;
@@ -129,11 +137,30 @@ pub fn object_record(o: &SceneObject, data_offset: u32) -> GpuObject {
             (technique::PREFILTERED, 0, [0.0, off, size as f32, 0.0])
         }
         Technique::Mc { .. } => (technique::MC, 0, [0.0; 4]),
+        Technique::ShBrdf { order, grid, .. } => (
+            technique::SH_BRDF,
+            0,
+            [grid as f32, off, order as f32, table_offset as f32],
+        ),
     };
     g.albedo = [a[0] as f32, a[1] as f32, a[2] as f32, tech as f32];
     g.brdf = [brdf.id() as f32, p[0] as f32, p[1] as f32, samples as f32];
     g.extra = extra;
     g
+}
+
+/// Directions on which SH lighting's ringing is measured: a 64 × 32 lat-long grid's centres.
+fn ringing_directions() -> Vec<glam::DVec3> {
+    let (w, h) = (64u32, 32u32);
+    (0..w * h)
+        .map(|k| {
+            Mapping::LatLong.coord_to_dir(crate::math::Coord {
+                layer: 0,
+                u: ((k % w) as f64 + 0.5) / w as f64,
+                v: ((k / w) as f64 + 0.5) / h as f64,
+            })
+        })
+        .collect()
 }
 
 /// Renders scenes: holds each pass, built the first time a scene needs it and reused by
@@ -147,6 +174,8 @@ pub struct Renderer {
     gbuffer: OnceCell<GBufferPass>,
     mc: OnceCell<MonteCarlo>,
     shade: OnceCell<Shade>,
+    sh_brdf: OnceCell<ShBrdfProjector>,
+    sh_rotation: Rotation,
 }
 
 /// The pass in `cell`, built by `make` on first use.
@@ -198,7 +227,14 @@ impl Renderer {
             gbuffer: OnceCell::new(),
             mc: OnceCell::new(),
             shade: OnceCell::new(),
+            sh_brdf: OnceCell::new(),
+            sh_rotation: Rotation::Zxzxz,
         }
+    }
+
+    /// Rotates SH-BRDF vectors with `rotation` from now on (the default is zxzxz).
+    pub fn set_sh_rotation(&mut self, rotation: Rotation) {
+        self.sh_rotation = rotation;
     }
 
     fn converter(&self) -> Result<&Converter> {
@@ -242,11 +278,39 @@ impl Renderer {
             .objects
             .iter()
             .filter_map(|o| match o.material.technique() {
-                Technique::Sh { order } => Some(order),
+                Technique::Sh { order } | Technique::ShBrdf { order, .. } => Some(order),
                 _ => None,
             })
             .max()
             .unwrap_or(2);
+
+        // SH-BRDF tables, one per object, concatenated.
+        let mut table_offsets = vec![0u32; scene.objects.len()];
+        let mut tables: Vec<(Brdf, u32, ViewGrid, u32)> = Vec::new();
+        let mut table_floats = 0usize;
+        for (k, o) in scene.objects.iter().enumerate() {
+            if let Technique::ShBrdf { order, grid, .. } = o.material.technique() {
+                let g = ViewGrid { size: grid };
+                table_offsets[k] = table_floats as u32;
+                tables.push((o.material.kind, order, g, table_floats as u32));
+                table_floats += ShBrdfProjector::table_floats(order, g);
+            }
+        }
+        let brdf_pass = if needs(PassKind::ShBrdfTable) {
+            Some(pass(&self.sh_brdf, || Ok(ShBrdfProjector::new(ctx)))?)
+        } else {
+            None
+        };
+        let table_buffer = match brdf_pass {
+            Some(_) => Some(Buffer::new(
+                ctx,
+                "sh brdf tables",
+                table_floats.max(4) as u64 * 4,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+            )?),
+            None => None,
+        };
         let sh_out = match sh_pass {
             Some(_) => Some(Buffer::new(
                 ctx,
@@ -317,7 +381,7 @@ impl Renderer {
             .objects
             .iter()
             .enumerate()
-            .map(|(k, o)| object_record(o, pre_offsets[k]))
+            .map(|(k, o)| object_record_with(o, pre_offsets[k], table_offsets[k]))
             .collect();
         let mut gbuf = GBuffer::new(ctx, scene.camera.width, scene.camera.height, &gbuf_objects)?;
 
@@ -330,6 +394,13 @@ impl Renderer {
                     p.record(rec, &env_gpu, lmax, &orientation, out)
                 })?;
                 rec.use_buffer(out, Usage::HostRead);
+            }
+            if let (Some(p), Some(buf)) = (brdf_pass, &table_buffer) {
+                for (brdf, order, grid, off) in &tables {
+                    marks.record(rec, PassKind::ShBrdfTable, |rec| {
+                        p.record(rec, brdf, *order, *grid, buf, *off)
+                    })?;
+                }
             }
             if let (Some((conv, mip)), Some((map, size))) = (dp_passes, &dp) {
                 let opts = ConvertOptions {
@@ -359,6 +430,7 @@ impl Renderer {
 
         // SH coefficients: each object's truncation, with Â_l folded in.
         let mut sh_coeffs: Vec<[f64; 3]> = Vec::new();
+        let mut ringing = Vec::new();
         if let Some(out) = &sh_out {
             let flat: Vec<f32> = out.read(sh::count(lmax) * 3);
             let c: Vec<[f64; 3]> = flat
@@ -367,9 +439,32 @@ impl Renderer {
                 .collect();
             let mut objects = gbuf_objects.clone();
             for (k, o) in scene.objects.iter().enumerate() {
-                if let Technique::Sh { order } = o.material.technique() {
-                    objects[k] = object_record(o, sh_coeffs.len() as u32);
-                    sh_coeffs.extend(sh::irradiance_coeffs(&c[..sh::count(order)]));
+                match o.material.technique() {
+                    Technique::Sh { order } => {
+                        objects[k] = object_record(o, sh_coeffs.len() as u32);
+                        sh_coeffs.extend(sh::irradiance_coeffs(&c[..sh::count(order)]));
+                    }
+                    Technique::ShBrdf { order, window, .. } => {
+                        objects[k] =
+                            object_record_with(o, sh_coeffs.len() as u32, table_offsets[k]);
+                        let radiance = &c[..sh::count(order)];
+                        let w = match window {
+                            Some(width) => Window::Hanning { width },
+                            None => Window::None,
+                        };
+                        let lit = w.apply(radiance);
+                        let neg = sh::negativity(&lit, &ringing_directions());
+                        if neg.fraction > 0.0 {
+                            ringing.push(format!(
+                                "ringing: object {k}'s order-{order} lighting ({w:?}) is negative \
+                                 on {:.1}% of the sphere, down to {:.2}% of its mean",
+                                100.0 * neg.fraction,
+                                100.0 * neg.worst
+                            ));
+                        }
+                        sh_coeffs.extend(lit);
+                    }
+                    _ => {}
                 }
             }
             gbuf.objects.write(&objects);
@@ -432,6 +527,8 @@ impl Renderer {
             dp: dp.as_ref().map(|d| &d.0),
             prefiltered: pre_buffer.as_ref(),
             mc: mc.as_ref().map(|m| (&m.accum, m.samples)),
+            brdf_sh: table_buffer.as_ref(),
+            sh_rotation: self.sh_rotation,
             shadows: scene.shadows,
         };
         let mut marks = Marks(Vec::new());
@@ -464,6 +561,8 @@ impl Renderer {
                 frame.texels[k]
             )));
         }
+        let mut plan = plan;
+        plan.notes.extend(ringing);
         Ok(Rendered {
             frame,
             records,

@@ -175,6 +175,21 @@ pub enum Technique {
         #[serde(default = "prefiltered_size")]
         size: u32,
     },
+    /// SH shading of the BRDF (Kautz, Sloan & Snyder 2002): the BRDF's SH vector per view of
+    /// a paraboloid grid, rotated to world space per pixel, against the environment's SH.
+    #[serde(rename = "sh_brdf")]
+    ShBrdf {
+        /// Highest band, 0 to 8.
+        #[serde(default = "sh_brdf_order")]
+        order: u32,
+        /// Views per side of the grid (2 to 64).
+        #[serde(default = "sh_brdf_grid")]
+        grid: u32,
+        /// A Hanning window of this width in bands on the environment's coefficients, against
+        /// ringing (Sloan 2008); none when absent.
+        #[serde(default)]
+        window: Option<f64>,
+    },
     /// The Monte Carlo reference.
     Mc {
         /// Samples per pixel.
@@ -192,6 +207,12 @@ fn fis_samples() -> u32 {
 fn sh_order() -> u32 {
     defaults::SH_ORDER
 }
+fn sh_brdf_order() -> u32 {
+    crate::abi::SH_MAX_LMAX
+}
+fn sh_brdf_grid() -> u32 {
+    crate::abi::sh_brdf::DEFAULT_GRID
+}
 fn prefiltered_size() -> u32 {
     defaults::PREFILTERED_SIZE
 }
@@ -208,6 +229,7 @@ impl Technique {
             Technique::Sh { .. } => "sh",
             Technique::Prefiltered { .. } => "prefiltered",
             Technique::Mc { .. } => "mc",
+            Technique::ShBrdf { .. } => "sh_brdf",
         }
     }
 }
@@ -292,7 +314,10 @@ impl Scene {
                 Brdf::Mirror => matches!(t, Technique::Lookup | Technique::Mc { .. }),
                 Brdf::Lambert => !matches!(t, Technique::Lookup),
                 Brdf::Phong { .. } => !matches!(t, Technique::Lookup | Technique::Sh { .. }),
-                _ => matches!(t, Technique::Fis { .. } | Technique::Mc { .. }),
+                _ => matches!(
+                    t,
+                    Technique::Fis { .. } | Technique::Mc { .. } | Technique::ShBrdf { .. }
+                ),
             };
             if !allowed {
                 return Err(format!(
@@ -313,6 +338,22 @@ impl Scene {
                 }
                 Technique::Sh { order } if order > crate::abi::SH_MAX_LMAX => {
                     return Err(format!("{what}: SH order {order} is above 8"));
+                }
+                Technique::ShBrdf {
+                    order,
+                    grid,
+                    window,
+                } => {
+                    if order > crate::abi::SH_MAX_LMAX {
+                        return Err(format!("{what}: SH order {order} is above 8"));
+                    }
+                    let max = crate::abi::sh_brdf::MAX_GRID;
+                    if !(2..=max).contains(&grid) {
+                        return Err(format!("{what}: sh_brdf grid {grid} outside 2 to {max}"));
+                    }
+                    if window.is_some_and(|w| !(w.is_finite() && w > 0.0)) {
+                        return Err(format!("{what}: sh_brdf window must be a positive width"));
+                    }
                 }
                 Technique::Prefiltered { size } if !(4..=4096).contains(&size) || size % 2 == 1 => {
                     return Err(format!(
@@ -352,6 +393,8 @@ pub enum PassKind {
     MipChain,
     /// SH projection.
     ShProjection,
+    /// SH projection of BRDFs per view (SH-BRDF tables).
+    ShBrdfTable,
     /// Brute-force prefiltering of one map.
     Prefilter,
     /// Converting the environment to lat-long for Monte Carlo sampling.
@@ -370,6 +413,7 @@ impl PassKind {
             PassKind::DualParaboloid => "dual paraboloid",
             PassKind::MipChain => "mip chain",
             PassKind::ShProjection => "sh projection",
+            PassKind::ShBrdfTable => "sh brdf table",
             PassKind::Prefilter => "prefilter",
             PassKind::LatLong => "lat-long",
             PassKind::MonteCarlo => "monte carlo",
@@ -391,6 +435,7 @@ impl PassKind {
                 ShProjectShared,
                 ShReduceShared,
             ],
+            PassKind::ShBrdfTable => &[ShBrdf],
             PassKind::Prefilter => &[BrutePrepare, BruteTiles, Brute],
             PassKind::MonteCarlo => &[Mc],
             PassKind::Shade => &[Shade],
@@ -440,12 +485,29 @@ pub fn plan(scene: &Scene, source: crate::math::Mapping) -> Plan {
     let pre = users(&|t| matches!(t, Technique::Prefiltered { .. }));
     let mc = users(&|t| matches!(t, Technique::Mc { .. }));
     let lookup = users(&|t| matches!(t, Technique::Lookup));
+    let sh_brdf = users(&|t| matches!(t, Technique::ShBrdf { .. }));
     let mut passes = Vec::new();
     let list = |v: &[String]| v.join(", ");
-    if !sh.is_empty() {
+    if !sh.is_empty() || !sh_brdf.is_empty() {
+        let mut why = Vec::new();
+        if !sh.is_empty() {
+            why.push(format!("objects {} use SH irradiance", list(&sh)));
+        }
+        if !sh_brdf.is_empty() {
+            why.push(format!("objects {} use SH-BRDF shading", list(&sh_brdf)));
+        }
         passes.push(PlannedPass {
             kind: PassKind::ShProjection,
-            why: format!("objects {} use SH irradiance", list(&sh)),
+            why: why.join("; "),
+        });
+    }
+    if !sh_brdf.is_empty() {
+        passes.push(PlannedPass {
+            kind: PassKind::ShBrdfTable,
+            why: format!(
+                "objects {} need their BRDF's SH vector per view direction",
+                list(&sh_brdf)
+            ),
         });
     }
     if !fis.is_empty() {
@@ -507,7 +569,7 @@ pub fn plan(scene: &Scene, source: crate::math::Mapping) -> Plan {
             } else {
                 traced.join(", ")
             },
-            if sh.is_empty() && pre.is_empty() {
+            if sh.is_empty() && pre.is_empty() && sh_brdf.is_empty() {
                 String::new()
             } else {
                 "; SH and prefiltered maps integrate the whole environment and stay unshadowed"

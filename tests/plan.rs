@@ -9,8 +9,8 @@ use envlight::scene::{plan, PassKind, Scene};
 use envlight::EnvMap;
 use std::path::Path;
 
-/// The shipped example scenes (diffuse only, mirror only, glossy, mixed with shadows, and
-/// every material), at a small resolution on a small sky: the passes the timing records show
+/// The shipped example scenes (diffuse only, mirror only, SH-BRDF, glossy, mixed with
+/// shadows, and every material), at a small resolution on a small sky: the passes the timing records show
 /// equal the plan; each planned pass created its pipelines; no pipeline outside the plan was
 /// created (each scene on a fresh context, whose log lists every pipeline made on it).
 #[test]
@@ -18,12 +18,21 @@ fn renders_run_exactly_the_planned_passes() {
     let sky = Sky::default();
     let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, |d| sky.radiance(d));
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
-    let expect: [(&str, &[PassKind]); 5] = [
+    let expect: [(&str, &[PassKind]); 6] = [
         (
             "diffuse.toml",
             &[PassKind::ShProjection, PassKind::GBuffer, PassKind::Shade],
         ),
         ("mirror.toml", &[PassKind::GBuffer, PassKind::Shade]),
+        (
+            "sh_brdf.toml",
+            &[
+                PassKind::ShProjection,
+                PassKind::ShBrdfTable,
+                PassKind::GBuffer,
+                PassKind::Shade,
+            ],
+        ),
         (
             "glossy.toml",
             &[

@@ -102,6 +102,8 @@ fn diffuse_spheres_match_float64_irradiance() {
                             dp: None,
                             prefiltered: None,
                             mc: None,
+                            brdf_sh: None,
+                            sh_rotation: envlight::passes::shade::Rotation::Zxzxz,
                             shadows: false,
                         },
                     )

@@ -51,6 +51,12 @@
 #define BINDING_MC_ENV 4
 #define BINDING_MC_TABLES 5
 #define BINDING_MC_ACCUM 6
+#define BINDING_SH_BRDF_TABLE 0
+#define BINDING_SH_ROT_IN 0
+#define BINDING_SH_ROT_OUT 1
+#define BINDING_SH_ROT_X90 2
+#define BINDING_SHADE_BRDF_SH 9
+#define BINDING_SHADE_X90 10
 #define SH_MAX_LMAX 8
 #define SH_MAX_COEFFS 81
 #define SH_WORKGROUP 64
@@ -85,6 +91,14 @@ const float SH_K[45] = float[45](2.820947918e-1, 4.886025119e-1, 3.454941495e-1,
 #define TECH_SH 2u
 #define TECH_PREFILTERED 3u
 #define TECH_MC 4u
+#define TECH_SH_BRDF 5u
+#define SH_ROTATION_ZXZXZ 0u
+#define SH_ROTATION_IVANIC 1u
+#define SH_BRDF_PANELS 16u
+#define SH_BRDF_GL_NODES 4u
+#define SH_BRDF_GRADED_LEVELS 8u
+const float SH_BRDF_GL_X[4] = float[4](-8.611363116e-1, -3.399810436e-1, 3.399810436e-1, 8.611363116e-1);
+const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.521451549e-1, 3.478548451e-1);
 #define MAPPING_LATLONG 0u
 #define MAPPING_ANGULAR 1u
 #define MAPPING_CUBE 2u
@@ -98,7 +112,9 @@ const float SH_K[45] = float[45](2.820947918e-1, 4.886025119e-1, 3.454941495e-1,
 #define PUSH_BrutePush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint texels; float exponent; uint chunk_begin; uint chunk_end; uint src_layers; uint src_level; } pc;
 #define PUSH_ShEvalPush layout(push_constant) uniform Push { uvec2 dst_size; uint dst_mapping; uint lmax; } pc;
 #define PUSH_GBufferPush layout(push_constant) uniform Push { vec4 eye; vec4 forward; vec4 right; vec4 up; uvec2 size; uint ortho; uint count; } pc;
-#define PUSH_ShadePush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint env_mapping; uint count; uint dp_size; float max_lod; uint shadows; uint mc_samples; } pc;
+#define PUSH_ShadePush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint env_mapping; uint count; uint dp_size; float max_lod; uint shadows; uint mc_samples; uint sh_rotation; uint[3] pad; } pc;
+#define PUSH_ShBrdfPush layout(push_constant) uniform Push { uint grid; float p0; float p1; uint offset; uint panel; uint[3] pad; } pc;
+#define PUSH_ShRotatePush layout(push_constant) uniform Push { uint count; uint lmax; uint method; uint pad; } pc;
 #define PUSH_MipPush layout(push_constant) uniform Push { uint src_size; uint dst_size; uint mode; uint pad; } pc;
 #define PUSH_McPush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint count; uint shadows; uvec2 size; uint first; uint samples; uint seed; uint mis; uint[2] pad; } pc;
 #endif

@@ -196,5 +196,8 @@ fn render_scene(cli: &Global, scene: &Path, output: &Path) -> Result<()> {
         }
     }
     println!("tone map: {tm:?} (PNG only; the EXR is linear)");
+    for n in r.plan.notes.iter().filter(|n| n.starts_with("ringing")) {
+        println!("{n}");
+    }
     Ok(())
 }

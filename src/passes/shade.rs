@@ -5,6 +5,7 @@
 
 use super::gbuffer::{target, GBuffer};
 use super::map::GpuEnvMap;
+pub use super::sh_brdf::Rotation;
 use crate::abi::{binding, push::ShadePush, ShaderId};
 use crate::error::Result;
 use crate::gpu::{mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
@@ -24,6 +25,10 @@ pub struct ShadeInputs<'a> {
     pub prefiltered: Option<&'a Buffer>,
     /// The Monte Carlo accumulation and its sample count.
     pub mc: Option<(&'a GpuEnvMap, u32)>,
+    /// SH-BRDF tables, concatenated (each object's record holds its offset).
+    pub brdf_sh: Option<&'a Buffer>,
+    /// How SH-BRDF vectors are rotated per pixel.
+    pub sh_rotation: Rotation,
     /// Trace shadow rays.
     pub shadows: bool,
 }
@@ -36,6 +41,7 @@ pub struct Shade {
     trilinear: Sampler,
     dummy_image: GpuEnvMap,
     dummy_buffer: Buffer,
+    x90: Buffer,
 }
 
 impl Shade {
@@ -54,6 +60,7 @@ impl Shade {
             trilinear: Sampler::trilinear_clamp(ctx, "shade trilinear sampler")?,
             dummy_image: GpuEnvMap::new(ctx, "shade: unused image", Mapping::LatLong, 1, 1)?,
             dummy_buffer,
+            x90: super::sh_brdf::x90_buffer(ctx)?,
         })
     }
 
@@ -96,6 +103,8 @@ impl Shade {
             max_lod: (dp.mips() - 1) as f32,
             shadows: inputs.shadows as u32,
             mc_samples: inputs.mc.map(|m| m.1).unwrap_or(0),
+            sh_rotation: inputs.sh_rotation.id(),
+            pad: [0; 3],
         };
         rec.span("shade", |rec| {
             rec.draw_fullscreen(
@@ -134,6 +143,11 @@ impl Shade {
                         binding::SHADE_MC,
                         Bind::Sampled(&mc.image, &self.plain, false),
                     ),
+                    (
+                        binding::SHADE_BRDF_SH,
+                        Bind::Buffer(inputs.brdf_sh.unwrap_or(&self.dummy_buffer)),
+                    ),
+                    (binding::SHADE_X90, Bind::Buffer(&self.x90)),
                 ],
                 &push,
                 &[&frame.image],

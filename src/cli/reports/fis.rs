@@ -185,6 +185,8 @@ pub fn run(
                             dp: Some(&dp),
                             prefiltered: None,
                             mc: None,
+                            brdf_sh: None,
+                            sh_rotation: envlight::passes::shade::Rotation::Zxzxz,
                             shadows: false,
                         };
                         // The faster of two draws (the first may pay for warming caches).
