@@ -19,12 +19,12 @@ void main() {
     uint id = gl_GlobalInvocationID.x;
     if (id >= pc.count) return;
     uint nc = (pc.lmax + 1u) * (pc.lmax + 1u);
-    uint base = id * (12u + nc);
+    uint base = id * (SH_ROTATE_HEADER + nc);
     mat3 r;
     for (uint i = 0u; i < 3u; i++)
         for (uint j = 0u; j < 3u; j++) r[j][i] = data[base + 4u * i + j];
     float c[SH_MAX_COEFFS];
-    for (uint k = 0u; k < SH_MAX_COEFFS; k++) c[k] = k < nc ? data[base + 12u + k] : 0.0;
+    for (uint k = 0u; k < SH_MAX_COEFFS; k++) c[k] = k < nc ? data[base + SH_ROTATE_HEADER + k] : 0.0;
     if (pc.method == SH_ROTATION_IVANIC) {
         sh_rotate_ivanic(r, pc.lmax, c);
     } else {

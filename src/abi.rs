@@ -277,6 +277,8 @@ pub mod sh_brdf {
     pub const ROTATION_ZXZXZ: u32 = 0;
     /// Rotation by the Ivanic–Ruedenberg recurrence.
     pub const ROTATION_IVANIC: u32 = 1;
+    /// Floats before the coefficients in a `sh_rotate.comp` input record (three vec4 rows).
+    pub const ROTATE_HEADER: u32 = 12;
 
     /// The 4-point Gauss–Legendre rule on [−1, 1] in closed form: nodes ±√(3/7 ∓ 2/7·√(6/5)),
     /// weights (18 ± √30)/36.
@@ -859,6 +861,7 @@ pub fn generated_header() -> String {
         ("TECH_SH_BRDF", brdf::technique::SH_BRDF),
         ("SH_ROTATION_ZXZXZ", sh_brdf::ROTATION_ZXZXZ),
         ("SH_ROTATION_IVANIC", sh_brdf::ROTATION_IVANIC),
+        ("SH_ROTATE_HEADER", sh_brdf::ROTATE_HEADER),
         ("SH_BRDF_PANELS", sh_brdf::PANELS),
         ("SH_BRDF_GL_NODES", sh_brdf::GL_NODES),
         ("SH_BRDF_GRADED_LEVELS", sh_brdf::GRADED_LEVELS),

@@ -4,9 +4,8 @@
 
 mod common;
 
-use common::scenes::{object, scene, sphere_camera, unit_sphere};
+use common::scenes::{object, scene, sphere_camera, sphere_pixels, unit_sphere};
 use envlight::math::brdf::{local_view, Brdf, Frame};
-use envlight::math::camera::trace;
 use envlight::math::sh::{self, count};
 use envlight::math::sh_brdf::{self, ViewGrid, DEFAULT_GRID};
 use envlight::math::sh_rotate::{by_quadrature, ivanic, ShRotation};
@@ -217,26 +216,22 @@ fn render_matches_the_float64_twin() {
                 let g = ViewGrid { size: grid };
                 let table = sh_brdf::table(&b, order, g);
                 let lit = &env_sh[..count(order)];
-                let (mut worst, mut peak, mut n) = (0.0f64, 0.0f64, 0);
+                assert!(r
+                    .frame
+                    .texels
+                    .iter()
+                    .all(|px| px.iter().all(|v| v.is_finite() && *v >= 0.0)));
+                let pixels = sphere_pixels(&cam);
+                let n = pixels.len();
+                let (mut worst, mut peak) = (0.0f64, 0.0f64);
                 let mut want_all = Vec::new();
-                for j in 0..cam.height {
-                    for i in 0..cam.width {
-                        let px = r.frame.texels[(j * cam.width + i) as usize];
-                        assert!(px.iter().all(|v| v.is_finite() && *v >= 0.0));
-                        let (o, d) = cam.ray(i, j);
-                        let Some(hit) = trace(&[unit_sphere()], o, d) else {
-                            continue;
-                        };
-                        if hit.margin < 1e-3 {
-                            continue;
-                        }
-                        let want = sh_brdf::shade(&table, g, order, lit, hit.normal, -d);
-                        for ch in 0..3 {
-                            let w = want[ch] * albedo[ch];
-                            peak = peak.max(w);
-                            want_all.push((px[ch] as f64, w));
-                        }
-                        n += 1;
+                for (k, normal, d) in pixels {
+                    let px = r.frame.texels[k];
+                    let want = sh_brdf::shade(&table, g, order, lit, normal, -d);
+                    for ch in 0..3 {
+                        let w = want[ch] * albedo[ch];
+                        peak = peak.max(w);
+                        want_all.push((px[ch] as f64, w));
                     }
                 }
                 for (got, w) in want_all {
@@ -277,24 +272,19 @@ fn furnace_shows_each_brdfs_albedo() {
                 16,
             );
             let r = renderer.render(&sc, &env).unwrap();
-            let (mut bins, mut n) = ([0.0f64; 2], 0);
-            for j in 0..cam.height {
-                for i in 0..cam.width {
-                    let px = r.frame.texels[(j * cam.width + i) as usize];
-                    assert!(px.iter().all(|v| v.is_finite() && *v >= 0.0));
-                    let (o, d) = cam.ray(i, j);
-                    let Some(hit) = trace(&[unit_sphere()], o, d) else {
-                        continue;
-                    };
-                    if hit.margin < 1e-3 {
-                        continue;
-                    }
-                    let wo = local_view(&Frame::new(hit.normal), -d);
-                    let e = (px[1] as f64 - b.albedo(wo)).abs();
-                    let grazing = wo.z < 80f64.to_radians().cos();
-                    bins[grazing as usize] = bins[grazing as usize].max(e);
-                    n += 1;
-                }
+            assert!(r
+                .frame
+                .texels
+                .iter()
+                .all(|px| px.iter().all(|v| v.is_finite() && *v >= 0.0)));
+            let pixels = sphere_pixels(&cam);
+            let n = pixels.len();
+            let mut bins = [0.0f64; 2];
+            for (k, normal, d) in pixels {
+                let wo = local_view(&Frame::new(normal), -d);
+                let e = (r.frame.texels[k][1] as f64 - b.albedo(wo)).abs();
+                let grazing = wo.z < 80f64.to_radians().cos();
+                bins[grazing as usize] = bins[grazing as usize].max(e);
             }
             eprintln!(
                 "{b:?}: {n} pixels, worst below 80°: {:.1e}, beyond: {:.1e}",
@@ -378,27 +368,18 @@ fn error_against_the_exact_integral_is_what_the_band_allows() {
                 16,
             );
             let r = renderer.render(&sc, &env).unwrap();
-            let (mut se, mut sw, mut n) = (0.0, 0.0, 0);
-            for j in 0..cam.height {
-                for i in 0..cam.width {
-                    let px = r.frame.texels[(j * cam.width + i) as usize];
-                    let (o, d) = cam.ray(i, j);
-                    let Some(hit) = trace(&[unit_sphere()], o, d) else {
-                        continue;
-                    };
-                    if hit.margin < 1e-3 {
-                        continue;
-                    }
-                    let frame = Frame::new(hit.normal);
-                    let wo = local_view(&frame, -d);
-                    let mut want = 0.0;
-                    for (dir, l, omega) in &texels {
-                        want += l[1] * b.eval_cos(wo, frame.to_local(*dir)) * omega;
-                    }
-                    se += (px[1] as f64 - want).powi(2);
-                    sw += want * want;
-                    n += 1;
+            let pixels = sphere_pixels(&cam);
+            let n = pixels.len();
+            let (mut se, mut sw) = (0.0, 0.0);
+            for (k, normal, d) in pixels {
+                let frame = Frame::new(normal);
+                let wo = local_view(&frame, -d);
+                let mut want = 0.0;
+                for (dir, l, omega) in &texels {
+                    want += l[1] * b.eval_cos(wo, frame.to_local(*dir)) * omega;
                 }
+                se += (r.frame.texels[k][1] as f64 - want).powi(2);
+                sw += want * want;
             }
             let rms = (se / sw).sqrt();
             eprintln!("{b:?} l = {order}: relative RMS {rms:.2e} over {n} pixels");
@@ -440,23 +421,14 @@ fn sh_brdf_meets_the_goal_on_a_soft_probe() {
             samples: 4096,
             error: None,
         });
-        let (mut se, mut sw, mut n) = (0.0, 0.0, 0);
-        for j in 0..cam.height {
-            for i in 0..cam.width {
-                let (o, d) = cam.ray(i, j);
-                let Some(hit) = trace(&[unit_sphere()], o, d) else {
-                    continue;
-                };
-                if hit.margin < 1e-3 {
-                    continue;
-                }
-                let k = (j * cam.width + i) as usize;
-                for ch in 0..3 {
-                    let (a, m) = (sh.frame.texels[k][ch] as f64, mc.frame.texels[k][ch] as f64);
-                    se += (a - m).powi(2);
-                    sw += m * m;
-                }
-                n += 1;
+        let pixels = sphere_pixels(&cam);
+        let n = pixels.len();
+        let (mut se, mut sw) = (0.0, 0.0);
+        for (k, _, _) in pixels {
+            for ch in 0..3 {
+                let (a, m) = (sh.frame.texels[k][ch] as f64, mc.frame.texels[k][ch] as f64);
+                se += (a - m).powi(2);
+                sw += m * m;
             }
         }
         let rms = (se / sw).sqrt();

@@ -94,6 +94,7 @@ const float SH_K[45] = float[45](2.820947918e-1, 4.886025119e-1, 3.454941495e-1,
 #define TECH_SH_BRDF 5u
 #define SH_ROTATION_ZXZXZ 0u
 #define SH_ROTATION_IVANIC 1u
+#define SH_ROTATE_HEADER 12u
 #define SH_BRDF_PANELS 16u
 #define SH_BRDF_GL_NODES 4u
 #define SH_BRDF_GRADED_LEVELS 8u

@@ -173,7 +173,8 @@ impl ShRotator {
     ) -> Result<(Vec<Vec<f32>>, Vec<Timing>)> {
         let nc = count(lmax);
         assert!(lmax <= SH_MAX_LMAX && !items.is_empty());
-        let mut data: Vec<f32> = Vec::with_capacity(items.len() * (12 + nc));
+        let mut data: Vec<f32> =
+            Vec::with_capacity(items.len() * (sh_brdf::ROTATE_HEADER as usize + nc));
         for (r, c) in items {
             assert_eq!(c.len(), nc, "a vector of the wrong length");
             for i in 0..3 {

@@ -59,3 +59,20 @@ pub fn fis(samples: u32) -> Technique {
         rotate: false,
     }
 }
+
+/// The pixels of `cam` that see the unit sphere away from its silhouette (where float32 and
+/// float64 may disagree on the hit: margin < 1e-3), as (pixel index, normal, ray direction).
+pub fn sphere_pixels(cam: &Camera) -> Vec<(usize, glam::DVec3, glam::DVec3)> {
+    let mut v = Vec::new();
+    for j in 0..cam.height {
+        for i in 0..cam.width {
+            let (o, d) = cam.ray(i, j);
+            if let Some(hit) = envlight::math::camera::trace(&[unit_sphere()], o, d) {
+                if hit.margin >= 1e-3 {
+                    v.push(((j * cam.width + i) as usize, hit.normal, d));
+                }
+            }
+        }
+    }
+    v
+}
