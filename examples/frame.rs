@@ -195,6 +195,7 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
             mc: None,
             brdf_sh: None,
             sh_rotation: envlight::passes::shade::Rotation::Zxzxz,
+            split: None,
             shadows: scene.shadows,
         };
         shade.record(&mut rec, &gbuf, &inputs, &target)?;

@@ -27,6 +27,8 @@ layout(std430, set = 0, binding = BINDING_SHADE_PREFILTERED) readonly buffer Pre
 layout(set = 0, binding = BINDING_SHADE_MC) uniform sampler2DArray mc_accum;
 layout(std430, set = 0, binding = BINDING_SHADE_BRDF_SH) readonly buffer BrdfSh { float brdf_sh[]; };
 layout(std430, set = 0, binding = BINDING_SHADE_X90) readonly buffer X90 { float x90[]; };
+layout(set = 0, binding = BINDING_SHADE_SPLIT) uniform sampler2DArray split_chain;
+layout(std430, set = 0, binding = BINDING_SHADE_DFG) readonly buffer Dfg { vec2 dfg[]; };
 #define SH_X90(i) x90[i]
 #include "sh_rotate.glsl"
 
@@ -138,6 +140,26 @@ vec3 sh_brdf(Object ob, vec3 n, vec3 v) {
     return max(sum, vec3(0.0));
 }
 
+// Twin of math::split_sum::shade: the prefiltered chain at lod √α·(levels − 1) along r, times
+// A + B (F = 1) read bilinearly at (n·v, √α). extra = (levels − 1, table offset in entries,
+// table size, 0); brdf.y = α.
+vec3 split_sum(Object ob, vec3 n, vec3 v, vec3 r) {
+    float ra = sqrt(clamp(ob.brdf.y, 0.0, 1.0));
+    Coord c = dir_to_coord(MAPPING_DUAL_PARABOLOID, r);
+    vec3 p = textureLod(split_chain, vec3(c.uv, float(c.layer)), ra * ob.extra.x).rgb;
+    vec3 t, bt;
+    shading_frame(n, t, bt);
+    float mu = clamp(local_view(v, t, bt, n).z, 0.0, 1.0);
+    uint off = uint(ob.extra.y), size = uint(ob.extra.z);
+    vec2 q = vec2(mu, ra) * float(size - 1u);
+    uvec2 i0 = min(uvec2(floor(q)), uvec2(max(size, 2u) - 2u));
+    vec2 f = q - vec2(i0);
+    uvec2 i1 = min(i0 + 1u, uvec2(size - 1u));
+    vec2 ab = mix(mix(dfg[off + i0.y * size + i0.x], dfg[off + i0.y * size + i1.x], f.x),
+                  mix(dfg[off + i1.y * size + i0.x], dfg[off + i1.y * size + i1.x], f.x), f.y);
+    return p * (ab.x + ab.y);
+}
+
 void main() {
     uvec2 pix = uvec2(gl_FragCoord.xy);
     ivec3 q = ivec3(pix, 0);
@@ -166,6 +188,8 @@ void main() {
         bool diffuse = uint(ob.brdf.x) == BRDF_LAMBERT;
         vec3 l = prefiltered_lookup(uint(ob.extra.y), int(ob.extra.z), diffuse ? n : r);
         color = ob.albedo.rgb * (diffuse ? l / PI : l);
+    } else if (tech == TECH_SPLIT_SUM) {
+        color = ob.albedo.rgb * split_sum(ob, n, v, r);
     } else if (tech == TECH_SH_BRDF) {
         color = ob.albedo.rgb * sh_brdf(ob, n, v);
     } else if (tech == TECH_LOOKUP) {

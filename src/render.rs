@@ -2,6 +2,7 @@
 //! cost.
 
 use crate::abi::brdf::technique;
+use crate::abi::split_sum;
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, Recorder, Timing, Usage};
 use crate::math::brdf::Brdf;
@@ -18,7 +19,10 @@ use crate::passes::{
     BruteFilter, ConvertOptions, Converter, GBufferPass, GpuEnvMap, MipChain, MonteCarlo,
     ShProjector, Shade,
 };
-use crate::scene::{plan, PassKind, Plan, Scene, SceneObject, Technique, DEFAULT_FIS_BIAS};
+use crate::passes::{PrefilterOptions, SplitSum};
+use crate::scene::{
+    plan, PassKind, Plan, Scene, SceneObject, SplitSumSettings, Technique, DEFAULT_FIS_BIAS,
+};
 use crate::EnvMap;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -137,6 +141,8 @@ pub fn object_record_with(o: &SceneObject, data_offset: u32, table_offset: u32) 
             (technique::PREFILTERED, 0, [0.0, off, size as f32, 0.0])
         }
         Technique::Mc { .. } => (technique::MC, 0, [0.0; 4]),
+        // The chain's last lod and the DFG table are set by the render (see split_record).
+        Technique::SplitSum => (technique::SPLIT_SUM, 0, [0.0; 4]),
         Technique::ShBrdf { order, grid, .. } => (
             technique::SH_BRDF,
             0,
@@ -147,6 +153,28 @@ pub fn object_record_with(o: &SceneObject, data_offset: u32, table_offset: u32) 
     g.brdf = [brdf.id() as f32, p[0] as f32, p[1] as f32, samples as f32];
     g.extra = extra;
     g
+}
+
+/// Sets a split-sum object's record: the chain's `levels`, and its DFG table (`dfg_size` a
+/// side) at entry `dfg_offset` of the tables.
+pub fn split_record(g: &mut GpuObject, levels: u32, dfg_offset: u32, dfg_size: u32) {
+    g.extra = [
+        levels.saturating_sub(1) as f32,
+        dfg_offset as f32,
+        dfg_size as f32,
+        0.0,
+    ];
+}
+
+/// Side of the split-sum chain: the scene's, or the FIS paraboloid's up to
+/// [`split_sum::DEFAULT_SIZE`], but at least enough that the coarsest of `levels` keeps
+/// [`split_sum::MIN_LEVEL_SIZE`] texels a side.
+pub fn split_size(settings: &SplitSumSettings, dp_size: u32) -> u32 {
+    settings.size.unwrap_or_else(|| {
+        dp_size
+            .min(split_sum::DEFAULT_SIZE)
+            .max(split_sum::MIN_LEVEL_SIZE << settings.levels.saturating_sub(1))
+    })
 }
 
 /// Directions on which SH lighting's ringing is measured: a 64 × 32 lat-long grid's centres.
@@ -175,6 +203,7 @@ pub struct Renderer {
     mc: OnceCell<MonteCarlo>,
     shade: OnceCell<Shade>,
     sh_brdf: OnceCell<ShBrdfProjector>,
+    split: OnceCell<SplitSum>,
     sh_rotation: Rotation,
 }
 
@@ -228,6 +257,7 @@ impl Renderer {
             mc: OnceCell::new(),
             shade: OnceCell::new(),
             sh_brdf: OnceCell::new(),
+            split: OnceCell::new(),
             sh_rotation: Rotation::Zxzxz,
         }
     }
@@ -377,12 +407,52 @@ impl Renderer {
             None => None,
         };
 
-        let gbuf_objects: Vec<GpuObject> = scene
+        // Split-sum: one prefiltered chain, one DFG table per Smith form in use.
+        let split = if needs(PassKind::SplitSum) {
+            let p = pass(&self.split, || SplitSum::new(ctx))?;
+            let ss = &scene.split_sum;
+            let dp_size = dp.as_ref().map(|d| d.1).unwrap_or(split_sum::DEFAULT_SIZE);
+            let chain = SplitSum::chain(ctx, split_size(ss, dp_size), ss.levels)?;
+            let mut forms: Vec<bool> = Vec::new();
+            for o in &scene.objects {
+                if let (Technique::SplitSum, Brdf::Ggx { correlated, .. }) =
+                    (o.material.technique(), o.material.kind)
+                {
+                    if !forms.contains(&correlated) {
+                        forms.push(correlated);
+                    }
+                }
+            }
+            let tables = Buffer::new(
+                ctx,
+                "dfg tables",
+                (forms.len() * SplitSum::dfg_floats(ss.dfg_size)) as u64 * 4,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+            )?;
+            Some((p, chain, tables, forms))
+        } else {
+            None
+        };
+
+        let mut gbuf_objects: Vec<GpuObject> = scene
             .objects
             .iter()
             .enumerate()
             .map(|(k, o)| object_record_with(o, pre_offsets[k], table_offsets[k]))
             .collect();
+        if let Some((_, chain, _, forms)) = &split {
+            let ss = &scene.split_sum;
+            for (g, o) in gbuf_objects.iter_mut().zip(&scene.objects) {
+                if let (Technique::SplitSum, Brdf::Ggx { correlated, .. }) =
+                    (o.material.technique(), o.material.kind)
+                {
+                    let form = forms.iter().position(|&c| c == correlated).unwrap_or(0);
+                    let entries = (form * SplitSum::dfg_floats(ss.dfg_size) / 2) as u32;
+                    split_record(g, chain.mips(), entries, ss.dfg_size);
+                }
+            }
+        }
         let mut gbuf = GBuffer::new(ctx, scene.camera.width, scene.camera.height, &gbuf_objects)?;
 
         // Everything before shading, in one submission.
@@ -413,6 +483,21 @@ impl Renderer {
                     conv.record(rec, &env_gpu, map, &opts)
                 })?;
                 marks.record(rec, PassKind::MipChain, |rec| mip.record(rec, map))?;
+                if let Some((p, chain, tables, forms)) = &split {
+                    let ss = &scene.split_sum;
+                    marks.record(rec, PassKind::SplitSum, |rec| {
+                        for (i, &correlated) in forms.iter().enumerate() {
+                            let off = (i * SplitSum::dfg_floats(ss.dfg_size)) as u32;
+                            p.record_dfg(rec, ss.dfg_size, correlated, tables, off)?;
+                        }
+                        let opts = PrefilterOptions {
+                            levels: ss.levels,
+                            samples: ss.samples,
+                            bias: ss.bias.unwrap_or(DEFAULT_FIS_BIAS),
+                        };
+                        p.record_prefilter(rec, map, chain, &opts)
+                    })?;
+                }
             }
             if let (Some(b), Some(buf)) = (brute, &pre_buffer) {
                 for (kernel, map, off) in &pre_maps {
@@ -529,6 +614,7 @@ impl Renderer {
             mc: mc.as_ref().map(|m| (&m.accum, m.samples)),
             brdf_sh: table_buffer.as_ref(),
             sh_rotation: self.sh_rotation,
+            split: split.as_ref().map(|s| (&s.1, &s.2)),
             shadows: scene.shadows,
         };
         let mut marks = Marks(Vec::new());

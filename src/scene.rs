@@ -24,6 +24,9 @@ pub struct Scene {
     /// Settings of filtered importance sampling.
     #[serde(default)]
     pub fis: FisSettings,
+    /// Settings of split-sum shading.
+    #[serde(default)]
+    pub split_sum: SplitSumSettings,
     /// Settings of the Monte Carlo reference.
     #[serde(default)]
     pub mc: McSettings,
@@ -76,6 +79,51 @@ pub struct FisSettings {
     /// Side of each dual-paraboloid half; by default about as many texels as the source.
     #[serde(default)]
     pub size: Option<u32>,
+}
+
+/// Settings of split-sum shading shared by its materials (one prefiltered chain serves every
+/// GGX roughness and both Smith forms: at n = v they agree).
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SplitSumSettings {
+    /// Side of the prefiltered chain's level 0; by default the FIS paraboloid's, at most
+    /// [`crate::abi::split_sum::DEFAULT_SIZE`].
+    #[serde(default)]
+    pub size: Option<u32>,
+    /// Roughness levels: level k holds α = (k/(levels − 1))².
+    #[serde(default = "split_levels")]
+    pub levels: u32,
+    /// FIS samples per prefiltered texel.
+    #[serde(default = "split_samples")]
+    pub samples: u32,
+    /// Lod bias of those samples; [`DEFAULT_FIS_BIAS`] when absent.
+    #[serde(default)]
+    pub bias: Option<f64>,
+    /// Entries per side of the DFG table.
+    #[serde(default = "dfg_size")]
+    pub dfg_size: u32,
+}
+
+fn split_levels() -> u32 {
+    crate::abi::split_sum::DEFAULT_LEVELS
+}
+fn split_samples() -> u32 {
+    crate::abi::split_sum::DEFAULT_SAMPLES
+}
+fn dfg_size() -> u32 {
+    crate::abi::split_sum::DEFAULT_DFG_SIZE
+}
+
+impl Default for SplitSumSettings {
+    fn default() -> Self {
+        SplitSumSettings {
+            size: None,
+            levels: split_levels(),
+            samples: split_samples(),
+            bias: None,
+            dfg_size: dfg_size(),
+        }
+    }
 }
 
 /// Settings of the Monte Carlo reference.
@@ -190,6 +238,10 @@ pub enum Technique {
         #[serde(default)]
         window: Option<f64>,
     },
+    /// Split-sum (Karis 2013): one read of a prefiltered GGX chain times the DFG table
+    /// (GGX only; see [`crate::math::split_sum`] for the n = v = r approximation).
+    #[serde(rename = "split_sum")]
+    SplitSum,
     /// The Monte Carlo reference.
     Mc {
         /// Samples per pixel.
@@ -230,6 +282,7 @@ impl Technique {
             Technique::Prefiltered { .. } => "prefiltered",
             Technique::Mc { .. } => "mc",
             Technique::ShBrdf { .. } => "sh_brdf",
+            Technique::SplitSum => "split_sum",
         }
     }
 }
@@ -296,6 +349,31 @@ impl Scene {
                 return Err(format!("fis size {s} is outside 1 to 4096"));
             }
         }
+        let ss = &self.split_sum;
+        if let Some(size) = ss.size {
+            if !(1..=4096).contains(&size) {
+                return Err(format!("split_sum size {size} is outside 1 to 4096"));
+            }
+        }
+        if !(1..=16).contains(&ss.levels) {
+            return Err(format!("split_sum levels {} outside 1 to 16", ss.levels));
+        }
+        if !(1..=MAX_FIS_SAMPLES).contains(&ss.samples) {
+            return Err(format!(
+                "split_sum samples {} outside 1 to {MAX_FIS_SAMPLES}",
+                ss.samples
+            ));
+        }
+        if ss.bias.is_some_and(|b| !b.is_finite() || b.abs() > 16.0) {
+            return Err("split_sum bias must be within ±16".into());
+        }
+        let max_dfg = crate::abi::split_sum::MAX_DFG_SIZE;
+        if !(2..=max_dfg).contains(&ss.dfg_size) {
+            return Err(format!(
+                "split_sum dfg_size {} outside 2 to {max_dfg}",
+                ss.dfg_size
+            ));
+        }
         if self.mc.per_frame == 0 {
             return Err("mc per_frame must be at least 1".into());
         }
@@ -313,7 +391,17 @@ impl Scene {
             let allowed = match o.material.kind {
                 Brdf::Mirror => matches!(t, Technique::Lookup | Technique::Mc { .. }),
                 Brdf::Lambert => !matches!(t, Technique::Lookup),
-                Brdf::Phong { .. } => !matches!(t, Technique::Lookup | Technique::Sh { .. }),
+                Brdf::Phong { .. } => !matches!(
+                    t,
+                    Technique::Lookup | Technique::Sh { .. } | Technique::SplitSum
+                ),
+                Brdf::Ggx { .. } => matches!(
+                    t,
+                    Technique::Fis { .. }
+                        | Technique::Mc { .. }
+                        | Technique::ShBrdf { .. }
+                        | Technique::SplitSum
+                ),
                 _ => matches!(
                     t,
                     Technique::Fis { .. } | Technique::Mc { .. } | Technique::ShBrdf { .. }
@@ -395,6 +483,8 @@ pub enum PassKind {
     ShProjection,
     /// SH projection of BRDFs per view (SH-BRDF tables).
     ShBrdfTable,
+    /// Split-sum: the prefiltered GGX chain and the DFG tables.
+    SplitSum,
     /// Brute-force prefiltering of one map.
     Prefilter,
     /// Converting the environment to lat-long for Monte Carlo sampling.
@@ -414,6 +504,7 @@ impl PassKind {
             PassKind::MipChain => "mip chain",
             PassKind::ShProjection => "sh projection",
             PassKind::ShBrdfTable => "sh brdf table",
+            PassKind::SplitSum => "split-sum",
             PassKind::Prefilter => "prefilter",
             PassKind::LatLong => "lat-long",
             PassKind::MonteCarlo => "monte carlo",
@@ -436,6 +527,7 @@ impl PassKind {
                 ShReduceShared,
             ],
             PassKind::ShBrdfTable => &[ShBrdf],
+            PassKind::SplitSum => &[Dfg, PrefilterGgx],
             PassKind::Prefilter => &[BrutePrepare, BruteTiles, Brute],
             PassKind::MonteCarlo => &[Mc],
             PassKind::Shade => &[Shade],
@@ -486,6 +578,7 @@ pub fn plan(scene: &Scene, source: crate::math::Mapping) -> Plan {
     let mc = users(&|t| matches!(t, Technique::Mc { .. }));
     let lookup = users(&|t| matches!(t, Technique::Lookup));
     let sh_brdf = users(&|t| matches!(t, Technique::ShBrdf { .. }));
+    let split = users(&|t| matches!(t, Technique::SplitSum));
     let mut passes = Vec::new();
     let list = |v: &[String]| v.join(", ");
     if !sh.is_empty() || !sh_brdf.is_empty() {
@@ -510,14 +603,36 @@ pub fn plan(scene: &Scene, source: crate::math::Mapping) -> Plan {
             ),
         });
     }
-    if !fis.is_empty() {
+    if !fis.is_empty() || !split.is_empty() {
+        let mut why = Vec::new();
+        if !fis.is_empty() {
+            why.push(format!(
+                "objects {} use filtered importance sampling",
+                list(&fis)
+            ));
+        }
+        if !split.is_empty() {
+            why.push(format!(
+                "objects {} use split-sum, whose chain is prefiltered by FIS",
+                list(&split)
+            ));
+        }
         passes.push(PlannedPass {
             kind: PassKind::DualParaboloid,
-            why: format!("objects {} use filtered importance sampling", list(&fis)),
+            why: why.join("; "),
         });
         passes.push(PlannedPass {
             kind: PassKind::MipChain,
             why: "FIS reads each sample at the MIP level its pdf calls for".into(),
+        });
+    }
+    if !split.is_empty() {
+        passes.push(PlannedPass {
+            kind: PassKind::SplitSum,
+            why: format!(
+                "objects {} read a GGX chain prefiltered per roughness (n = v = r) and a DFG table",
+                list(&split)
+            ),
         });
     }
     if !pre.is_empty() {
@@ -569,16 +684,16 @@ pub fn plan(scene: &Scene, source: crate::math::Mapping) -> Plan {
             } else {
                 traced.join(", ")
             },
-            if sh.is_empty() && pre.is_empty() && sh_brdf.is_empty() {
+            if sh.is_empty() && pre.is_empty() && sh_brdf.is_empty() && split.is_empty() {
                 String::new()
             } else {
-                "; SH and prefiltered maps integrate the whole environment and stay unshadowed"
+                "; SH, split-sum and prefiltered maps integrate the whole environment and stay unshadowed"
                     .into()
             }
         ));
     }
-    if fis.is_empty() {
-        notes.push("no dual paraboloid or MIP chain: no material uses FIS".into());
+    if fis.is_empty() && split.is_empty() {
+        notes.push("no dual paraboloid or MIP chain: no material uses FIS or split-sum".into());
     }
     Plan { passes, notes }
 }

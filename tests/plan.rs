@@ -18,7 +18,7 @@ fn renders_run_exactly_the_planned_passes() {
     let sky = Sky::default();
     let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, |d| sky.radiance(d));
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
-    let expect: [(&str, &[PassKind]); 6] = [
+    let expect: [(&str, &[PassKind]); 7] = [
         (
             "diffuse.toml",
             &[PassKind::ShProjection, PassKind::GBuffer, PassKind::Shade],
@@ -29,6 +29,16 @@ fn renders_run_exactly_the_planned_passes() {
             &[
                 PassKind::ShProjection,
                 PassKind::ShBrdfTable,
+                PassKind::GBuffer,
+                PassKind::Shade,
+            ],
+        ),
+        (
+            "split_sum.toml",
+            &[
+                PassKind::DualParaboloid,
+                PassKind::MipChain,
+                PassKind::SplitSum,
                 PassKind::GBuffer,
                 PassKind::Shade,
             ],

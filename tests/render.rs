@@ -104,6 +104,7 @@ fn diffuse_spheres_match_float64_irradiance() {
                             mc: None,
                             brdf_sh: None,
                             sh_rotation: envlight::passes::shade::Rotation::Zxzxz,
+                            split: None,
                             shadows: false,
                         },
                     )

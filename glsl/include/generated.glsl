@@ -57,6 +57,11 @@
 #define BINDING_SH_ROT_X90 2
 #define BINDING_SHADE_BRDF_SH 9
 #define BINDING_SHADE_X90 10
+#define BINDING_SHADE_SPLIT 11
+#define BINDING_SHADE_DFG 12
+#define BINDING_DFG_TABLE 0
+#define BINDING_PREFILTER_GGX_SRC 0
+#define BINDING_PREFILTER_GGX_DST 1
 #define SH_MAX_LMAX 8
 #define SH_MAX_COEFFS 81
 #define SH_WORKGROUP 64
@@ -72,6 +77,7 @@
 #define FILTER_CONE_MARGIN 1.25
 #define FILTER_TILE_MARGIN_REL 0.0001
 #define FILTER_TILE_MARGIN_ABS 1e-5
+#define DFG_MU_MIN 0.0001
 #define POLE_THRESHOLD 0.999
 #define VIEW_LIFT 0.0001
 #define SHADOW_OFFSET 0.0001
@@ -92,6 +98,7 @@ const float SH_K[45] = float[45](2.820947918e-1, 4.886025119e-1, 3.454941495e-1,
 #define TECH_PREFILTERED 3u
 #define TECH_MC 4u
 #define TECH_SH_BRDF 5u
+#define TECH_SPLIT_SUM 6u
 #define SH_ROTATION_ZXZXZ 0u
 #define SH_ROTATION_IVANIC 1u
 #define SH_ROTATE_HEADER 12u
@@ -115,6 +122,8 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_GBufferPush layout(push_constant) uniform Push { vec4 eye; vec4 forward; vec4 right; vec4 up; uvec2 size; uint ortho; uint count; } pc;
 #define PUSH_ShadePush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint env_mapping; uint count; uint dp_size; float max_lod; uint shadows; uint mc_samples; uint sh_rotation; uint[3] pad; } pc;
 #define PUSH_ShBrdfPush layout(push_constant) uniform Push { uint grid; float p0; float p1; uint offset; uint panel; uint[3] pad; } pc;
+#define PUSH_DfgPush layout(push_constant) uniform Push { uint size; uint correlated; uint offset; uint panel; } pc;
+#define PUSH_PrefilterGgxPush layout(push_constant) uniform Push { uint size; uint src_size; float src_max_lod; float alpha; uint samples; float bias; uint[2] pad; } pc;
 #define PUSH_ShRotatePush layout(push_constant) uniform Push { uint count; uint lmax; uint method; uint pad; } pc;
 #define PUSH_MipPush layout(push_constant) uniform Push { uint src_size; uint dst_size; uint mode; uint pad; } pc;
 #define PUSH_McPush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint count; uint shadows; uvec2 size; uint first; uint samples; uint seed; uint mis; uint[2] pad; } pc;

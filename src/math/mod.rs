@@ -18,6 +18,7 @@ pub mod sequence;
 pub mod sh;
 pub mod sh_brdf;
 pub mod sh_rotate;
+pub mod split_sum;
 pub mod synth;
 
 pub use mapping::{Coord, Mapping, Orientation};

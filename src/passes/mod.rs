@@ -15,6 +15,7 @@ pub mod sh_brdf;
 pub mod sh_eval;
 pub mod sh_project;
 pub mod shade;
+pub mod split_sum;
 #[doc(hidden)]
 pub mod testing;
 
@@ -28,3 +29,4 @@ pub use sh_brdf::{ShBrdfProjector, ShRotator};
 pub use sh_eval::ShEvaluator;
 pub use sh_project::ShProjector;
 pub use shade::Shade;
+pub use split_sum::{PrefilterOptions, SplitSum};

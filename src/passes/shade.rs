@@ -29,6 +29,9 @@ pub struct ShadeInputs<'a> {
     pub brdf_sh: Option<&'a Buffer>,
     /// How SH-BRDF vectors are rotated per pixel.
     pub sh_rotation: Rotation,
+    /// Split-sum: the prefiltered chain and the DFG tables (each object's record holds its
+    /// table's offset).
+    pub split: Option<(&'a GpuEnvMap, &'a Buffer)>,
     /// Trace shadow rays.
     pub shadows: bool,
 }
@@ -94,6 +97,10 @@ impl Shade {
         }
         let dp = inputs.dp.unwrap_or(&self.dummy_image);
         let mc = inputs.mc.map(|m| m.0).unwrap_or(&self.dummy_image);
+        let split_chain = inputs
+            .split
+            .map(|s| &s.0.image)
+            .unwrap_or(&self.dummy_image.image);
         let push = ShadePush {
             world_to_file: mat3_rows(inputs.orientation.checked_world_to_file()?),
             env_size: [inputs.env.width, inputs.env.height],
@@ -148,6 +155,14 @@ impl Shade {
                         Bind::Buffer(inputs.brdf_sh.unwrap_or(&self.dummy_buffer)),
                     ),
                     (binding::SHADE_X90, Bind::Buffer(&self.x90)),
+                    (
+                        binding::SHADE_SPLIT,
+                        Bind::Sampled(split_chain, &self.trilinear, false),
+                    ),
+                    (
+                        binding::SHADE_DFG,
+                        Bind::Buffer(inputs.split.map(|s| s.1).unwrap_or(&self.dummy_buffer)),
+                    ),
                 ],
                 &push,
                 &[&frame.image],

@@ -3,7 +3,7 @@
 
 use envlight::math::camera::{Camera, Shape};
 use envlight::scene::{
-    Environment, FisSettings, Material, McSettings, Scene, SceneObject, Technique,
+    Environment, FisSettings, Material, McSettings, Scene, SceneObject, SplitSumSettings, Technique,
 };
 
 #[allow(unused_imports)]
@@ -47,6 +47,7 @@ pub fn scene(camera: Camera, objects: Vec<SceneObject>, shadows: bool, dp_size: 
         fis: FisSettings {
             size: Some(dp_size),
         },
+        split_sum: SplitSumSettings::default(),
         mc: McSettings::default(),
         objects,
     }

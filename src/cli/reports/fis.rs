@@ -187,6 +187,7 @@ pub fn run(
                             mc: None,
                             brdf_sh: None,
                             sh_rotation: envlight::passes::shade::Rotation::Zxzxz,
+                            split: None,
                             shadows: false,
                         };
                         // The faster of two draws (the first may pay for warming caches).

@@ -1,0 +1,184 @@
+//! Split-sum shading's precomputation (Karis 2013): the DFG table (`glsl/dfg.comp`) and the
+//! prefiltered GGX chain, one roughness a level, built by filtered importance sampling from
+//! the dual-paraboloid MIP chain (`glsl/prefilter_ggx.comp`). Float64 twins in
+//! [`crate::math::split_sum`], which states the approximation (n = v = r) and the level rule.
+
+use super::map::{map_desc, GpuEnvMap};
+use crate::abi::push::{DfgPush, PrefilterGgxPush};
+use crate::abi::{binding, sh_brdf, split_sum, ShaderId, WORKGROUP_1D, WORKGROUP_2D};
+use crate::error::{Error, Result};
+use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
+use crate::math::split_sum::{level_alpha, level_size};
+use crate::math::Mapping;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+/// How the prefiltered chain is built.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrefilterOptions {
+    /// Roughness levels (level k holds α = (k/(levels − 1))²).
+    pub levels: u32,
+    /// FIS samples per texel.
+    pub samples: u32,
+    /// Lod bias of the FIS reads.
+    pub bias: f64,
+}
+
+/// The split-sum passes.
+pub struct SplitSum {
+    ctx: Context,
+    dfg: Pipeline,
+    prefilter: Pipeline,
+    trilinear: Sampler,
+}
+
+impl SplitSum {
+    /// Builds the pipelines.
+    pub fn new(ctx: &Context) -> Result<SplitSum> {
+        Ok(SplitSum {
+            ctx: ctx.clone(),
+            dfg: Pipeline::compute(ctx, ShaderId::Dfg, &[WORKGROUP_1D])?,
+            prefilter: Pipeline::compute(ctx, ShaderId::PrefilterGgx, &WORKGROUP_2D)?,
+            trilinear: Sampler::trilinear_clamp(ctx, "split-sum source sampler")?,
+        })
+    }
+
+    /// Floats one DFG table `size` a side takes ((A, B) per entry).
+    pub fn dfg_floats(size: u32) -> usize {
+        2 * (size * size) as usize
+    }
+
+    /// Records the DFG table of GGX with the given Smith form into `out` from float `offset`
+    /// (even) on: row j (√α) after row, (A, B) per entry. Span: "dfg table".
+    pub fn record_dfg(
+        &self,
+        rec: &mut Recorder,
+        size: u32,
+        correlated: bool,
+        out: &Buffer,
+        offset: u32,
+    ) -> Result<()> {
+        if !(2..=split_sum::MAX_DFG_SIZE).contains(&size) || offset % 2 != 0 {
+            return Err(Error::Invalid(format!(
+                "split-sum: DFG table size {size} outside 2 to {} (or odd offset {offset})",
+                split_sum::MAX_DFG_SIZE
+            )));
+        }
+        let need = (offset as u64 + Self::dfg_floats(size) as u64) * 4;
+        assert!(need <= out.size(), "split-sum: the DFG buffer is too small");
+        rec.span("dfg table", |rec| {
+            // One dispatch per panel of the first uniform (llvmpipe's loop limit).
+            for panel in 0..2 * sh_brdf::GRADED_LEVELS {
+                let push = DfgPush {
+                    size,
+                    correlated: correlated as u32,
+                    offset,
+                    panel,
+                };
+                rec.dispatch(
+                    &self.dfg,
+                    &[(binding::DFG_TABLE, Bind::Buffer(out))],
+                    &push,
+                    [groups(size * size, WORKGROUP_1D), 1, 1],
+                )?;
+            }
+            Ok(())
+        })
+    }
+
+    /// Computes one DFG table and reads it back, with its GPU time.
+    pub fn run_dfg(&self, size: u32, correlated: bool) -> Result<(Vec<[f32; 2]>, Vec<Timing>)> {
+        let n = Self::dfg_floats(size);
+        let out = Buffer::new(
+            &self.ctx,
+            "dfg table",
+            n as u64 * 4,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let ((), t) = self.ctx.run("computing a DFG table", |rec| {
+            self.record_dfg(rec, size, correlated, &out, 0)?;
+            rec.use_buffer(&out, Usage::HostRead);
+            Ok(())
+        })?;
+        let flat: Vec<f32> = out.read(n);
+        Ok((flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect(), t))
+    }
+
+    /// A dual paraboloid `size` a side with exactly `levels` MIP levels, one roughness each
+    /// (no level beyond the last, so a trilinear read at the last lod reads nothing unwritten).
+    pub fn chain(ctx: &Context, size: u32, levels: u32) -> Result<GpuEnvMap> {
+        if levels == 0 || level_size(size, levels - 1) < split_sum::MIN_LEVEL_SIZE.min(size) {
+            return Err(Error::Invalid(format!(
+                "split-sum: {levels} levels of a {size}² paraboloid leave the coarsest under {}²",
+                split_sum::MIN_LEVEL_SIZE
+            )));
+        }
+        let (w, h) = Mapping::DualParaboloid.extent_for_size(size);
+        GpuEnvMap::create(
+            ctx,
+            "split-sum prefiltered chain",
+            map_desc(Mapping::DualParaboloid, w, h, levels),
+            Mapping::DualParaboloid,
+        )
+    }
+
+    /// Records the first `opts.levels` levels of `dst` (from [`SplitSum::chain`]) from `src`,
+    /// a dual paraboloid whose MIP chain is filled (premultiplied, as
+    /// [`crate::passes::MipChain`] leaves it). Spans: "split-sum level k".
+    pub fn record_prefilter(
+        &self,
+        rec: &mut Recorder,
+        src: &GpuEnvMap,
+        dst: &GpuEnvMap,
+        opts: &PrefilterOptions,
+    ) -> Result<()> {
+        if src.mapping != Mapping::DualParaboloid || dst.mapping != Mapping::DualParaboloid {
+            return Err(Error::Invalid(
+                "split-sum prefilters a dual paraboloid into a dual paraboloid".into(),
+            ));
+        }
+        if opts.levels == 0 || opts.levels > dst.mips() || opts.samples == 0 {
+            return Err(Error::Invalid(format!(
+                "split-sum: {} levels of {} samples into a chain of {} levels",
+                opts.levels,
+                opts.samples,
+                dst.mips()
+            )));
+        }
+        for k in 0..opts.levels {
+            let size = level_size(dst.width, k);
+            let push = PrefilterGgxPush {
+                size,
+                src_size: src.width,
+                src_max_lod: (src.mips() - 1) as f32,
+                alpha: level_alpha(k, opts.levels) as f32,
+                samples: opts.samples,
+                bias: opts.bias as f32,
+                pad: [0; 2],
+            };
+            rec.span(&format!("split-sum level {k}"), |rec| {
+                rec.dispatch(
+                    &self.prefilter,
+                    &[
+                        (
+                            binding::PREFILTER_GGX_SRC,
+                            Bind::Sampled(&src.image, &self.trilinear, false),
+                        ),
+                        (
+                            binding::PREFILTER_GGX_DST,
+                            Bind::StorageLevel(&dst.image, k),
+                        ),
+                    ],
+                    &push,
+                    [
+                        groups(size, WORKGROUP_2D[0]),
+                        groups(size, WORKGROUP_2D[1]),
+                        2,
+                    ],
+                )
+            })?;
+        }
+        Ok(())
+    }
+}
