@@ -307,12 +307,12 @@ pub mod sh_brdf {
 pub mod split_sum {
     /// Roughness levels of the prefiltered chain by default: level k holds GGX
     /// α = (k/(levels − 1))², level 0 the mirror.
-    pub const DEFAULT_LEVELS: u32 = 6;
+    pub const DEFAULT_LEVELS: u32 = 7;
     /// FIS samples per prefiltered texel by default (measured against MC on spiaggia, GGX
     /// α 0.16: 64 samples 16.7% relative RMS, 256 8.0%, 1024 5.5%, FIS's own 5.2%).
     pub const DEFAULT_SAMPLES: u32 = 256;
     /// Side of the prefiltered chain's level 0 by default (capped by the FIS paraboloid's).
-    pub const DEFAULT_SIZE: u32 = 256;
+    pub const DEFAULT_SIZE: u32 = 512;
     /// The coarsest level keeps at least this many texels a side.
     pub const MIN_LEVEL_SIZE: u32 = 8;
     /// Entries per side of the DFG table (n·v by √α) by default.
