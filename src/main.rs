@@ -37,6 +37,7 @@ enum Command {
     /// List the Vulkan devices and the one envlight would pick
     Devices,
     SynthSky(cli::info::SynthSkyArgs),
+    Report(cli::reports::report::ReportArgs),
     /// Benchmarks (GPU time from timestamp queries)
     Bench {
         #[command(subcommand)]
@@ -59,6 +60,7 @@ fn main() {
         Command::Plan(a) => cli::scene::plan(a),
         Command::Devices => cli::info::devices(g),
         Command::SynthSky(a) => cli::info::synth_sky(a),
+        Command::Report(a) => cli::reports::report::report(g, a),
         Command::Bench { what } => cli::reports::bench(g, what),
     };
     if let Err(e) = result {

@@ -6,6 +6,7 @@ pub mod accuracy;
 pub mod fis;
 pub mod fis_report;
 pub mod peers;
+pub mod report;
 
 use super::{context, Global};
 use anyhow::{Context as _, Result};

@@ -1,0 +1,821 @@
+//! `envlight report`: every technique on real probes and several materials, scored against a
+//! converged Monte Carlo reference, with its GPU time: report.md (tables, the Pareto front per
+//! material and a headline), report.csv (one row per technique × parameters × probe ×
+//! material) and report.png (error against time, one panel per material).
+
+use super::super::{context, Global};
+use anyhow::{anyhow, Context as _, Result};
+use clap::Args;
+use envlight::math::brdf::Brdf;
+use envlight::math::camera::{sphere_camera, trace, Camera, Shape};
+use envlight::render::Renderer;
+use envlight::scene::{
+    Environment, FisSettings, Material, McSettings, PassKind, Scene, SceneObject, SplitSumSettings,
+    Technique,
+};
+use envlight::EnvMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Every technique against converged Monte Carlo on real probes: error and GPU time, with a
+/// Pareto chart (report.md, report.csv, report.png)
+#[derive(Args)]
+pub struct ReportArgs {
+    /// Folder of the probes (default: $ENVLIGHT_PROBES, else ../shared/probes)
+    #[arg(long)]
+    probes: Option<PathBuf>,
+    /// Output folder
+    #[arg(long, default_value = "out/report")]
+    out: PathBuf,
+    /// A reduced set (two probes, two materials, fewer parameters, small images) that runs in
+    /// a few minutes on lavapipe
+    #[arg(long)]
+    quick: bool,
+    /// Side of the sphere image (default 64, quick 24)
+    #[arg(long)]
+    size: Option<u32>,
+    /// Samples per pixel of each of the two Monte Carlo reference renders (default 16384,
+    /// quick 1024)
+    #[arg(long)]
+    reference: Option<u32>,
+    /// Instead: split-sum's error against the reference on every probe of the folder at GGX
+    /// α 0.1, 0.2, 0.3, 0.45, 0.6 (split_sum.md, split_sum.csv)
+    #[arg(long)]
+    split_sum_every_probe: bool,
+    /// Split-sum's roughness levels (default: the scene default)
+    #[arg(long)]
+    split_levels: Option<u32>,
+    /// Split-sum's chain size (default: the scene default)
+    #[arg(long)]
+    split_size: Option<u32>,
+    /// Split-sum's FIS samples per texel (default: the scene default)
+    #[arg(long)]
+    split_samples: Option<u32>,
+}
+
+impl ReportArgs {
+    /// The split-sum settings asked for.
+    fn split(&self) -> SplitSumSettings {
+        let d = SplitSumSettings::default();
+        SplitSumSettings {
+            size: self.split_size.or(d.size),
+            levels: self.split_levels.unwrap_or(d.levels),
+            samples: self.split_samples.unwrap_or(d.samples),
+            ..d
+        }
+    }
+}
+
+/// One measurement.
+struct Row {
+    probe: String,
+    kind: &'static str,
+    material: String,
+    technique: &'static str,
+    params: String,
+    rms: f64,
+    bias: f64,
+    tile: f64,
+    gpu_ms: f64,
+    pre_ms: f64,
+    wall_s: f64,
+    noise: f64,
+}
+
+impl Row {
+    fn label(&self) -> String {
+        if self.params.is_empty() {
+            self.technique.to_string()
+        } else {
+            format!("{} {}", self.technique, self.params)
+        }
+    }
+}
+
+/// The probes: (file, what kind of light it is).
+fn probes(quick: bool) -> Vec<(&'static str, &'static str)> {
+    let mut v = vec![
+        ("venice_sunset_1k.hdr", "soft"),
+        ("spiaggia_di_mondello_1k.hdr", "sun"),
+    ];
+    if !quick {
+        v.push(("studio_small_08_1k.hdr", "studio"));
+        v.push(("quarry_01_1k.hdr", "sun"));
+    }
+    v
+}
+
+fn materials(quick: bool) -> Vec<(&'static str, Brdf)> {
+    let ggx = |alpha| Brdf::Ggx {
+        alpha,
+        correlated: true,
+    };
+    if quick {
+        return vec![("diffuse", Brdf::Lambert), ("ggx 0.3", ggx(0.3))];
+    }
+    vec![
+        ("diffuse", Brdf::Lambert),
+        ("ggx 0.1", ggx(0.1)),
+        ("ggx 0.3", ggx(0.3)),
+        ("ggx 0.6", ggx(0.6)),
+        ("phong 50", Brdf::Phong { n: 50.0 }),
+        ("mirror", Brdf::Mirror),
+    ]
+}
+
+/// The techniques that apply to `brdf`, with their parameters and labels.
+fn cases(brdf: &Brdf, quick: bool) -> Vec<(Technique, String)> {
+    let (fis, mc, orders): (&[u32], &[u32], &[u32]) = if quick {
+        (&[16, 64], &[64, 256], &[2, 8])
+    } else {
+        (&[4, 16, 64, 256], &[16, 64, 256, 1024], &[2, 4, 8])
+    };
+    let mut v = Vec::new();
+    if matches!(brdf, Brdf::Mirror) {
+        v.push((Technique::Lookup, String::new()));
+        return v;
+    }
+    if matches!(brdf, Brdf::Lambert) {
+        for &order in orders {
+            v.push((Technique::Sh { order }, format!("l={order}")));
+        }
+    }
+    if matches!(brdf, Brdf::Lambert | Brdf::Phong { .. }) && !quick {
+        let size = if matches!(brdf, Brdf::Lambert) {
+            32
+        } else {
+            64
+        };
+        v.push((Technique::Prefiltered { size }, format!("{size}")));
+    }
+    for &samples in fis {
+        let t = Technique::Fis {
+            samples,
+            bias: None,
+            rotate: true,
+        };
+        v.push((t, format!("N={samples}")));
+    }
+    for &samples in mc {
+        let t = Technique::Mc {
+            samples,
+            error: None,
+        };
+        v.push((t, format!("N={samples}")));
+    }
+    for &order in orders {
+        let t = Technique::ShBrdf {
+            order,
+            grid: envlight::math::sh_brdf::DEFAULT_GRID,
+            window: None,
+        };
+        v.push((t, format!("l={order}")));
+    }
+    if matches!(brdf, Brdf::Ggx { .. }) {
+        v.push((Technique::SplitSum, String::new()));
+    }
+    v
+}
+
+fn scene(
+    cam: Camera,
+    brdf: Brdf,
+    t: Technique,
+    dp: Option<u32>,
+    seed: u32,
+    split: SplitSumSettings,
+) -> Scene {
+    Scene {
+        environment: Environment {
+            file: "(in memory)".into(),
+            mapping: None,
+            flip_u: false,
+            flip_v: false,
+            rotate_y: 0.0,
+            intensity: 1.0,
+        },
+        camera: cam,
+        shadows: false,
+        fis: FisSettings { size: dp },
+        split_sum: split,
+        mc: McSettings {
+            seed,
+            ..McSettings::default()
+        },
+        objects: vec![SceneObject {
+            shape: Shape::Sphere {
+                center: [0.0; 3],
+                radius: 1.0,
+            },
+            material: Material {
+                kind: brdf,
+                albedo: [1.0; 3],
+                technique: Some(t),
+            },
+        }],
+    }
+}
+
+/// Pixels that see the sphere away from its silhouette, with their tile (8 × 8 pixels).
+fn sphere_pixels(cam: &Camera) -> Vec<(usize, u32)> {
+    let tiles_x = cam.width.div_ceil(8);
+    let sphere = [Shape::Sphere {
+        center: [0.0; 3],
+        radius: 1.0,
+    }];
+    let mut v = Vec::new();
+    for j in 0..cam.height {
+        for i in 0..cam.width {
+            let (o, d) = cam.ray(i, j);
+            if trace(&sphere, o, d).is_some_and(|h| h.margin >= 1e-3) {
+                v.push(((j * cam.width + i) as usize, (j / 8) * tiles_x + i / 8));
+            }
+        }
+    }
+    v
+}
+
+/// (relative RMS, mean bias, worst tile) of `a` against `m` over `pixels`, all channels; tiles
+/// with fewer than 16 sphere pixels are left out of the worst.
+fn errors(a: &EnvMap, m: &EnvMap, pixels: &[(usize, u32)]) -> (f64, f64, f64) {
+    let (mut se, mut sm2, mut sa, mut sm) = (0.0, 0.0, 0.0, 0.0);
+    let mut tiles: std::collections::BTreeMap<u32, (f64, f64, u32)> = Default::default();
+    for &(k, tile) in pixels {
+        let t = tiles.entry(tile).or_default();
+        for ch in 0..3 {
+            let (x, y) = (a.texels[k][ch] as f64, m.texels[k][ch] as f64);
+            se += (x - y).powi(2);
+            sm2 += y * y;
+            sa += x;
+            sm += y;
+            t.0 += x;
+            t.1 += y;
+        }
+        t.2 += 1;
+    }
+    let worst = tiles
+        .values()
+        .filter(|t| t.2 >= 16 && t.1 > 0.0)
+        .map(|t| (t.0 - t.1).abs() / t.1)
+        .fold(0.0, f64::max);
+    ((se / sm2).sqrt(), (sa - sm) / sm, worst)
+}
+
+fn average(a: &EnvMap, b: &EnvMap) -> EnvMap {
+    let mut out = a.clone();
+    for (o, t) in out.texels.iter_mut().zip(&b.texels) {
+        for ch in 0..3 {
+            o[ch] = 0.5 * (o[ch] + t[ch]);
+        }
+    }
+    out
+}
+
+/// Runs the report.
+pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
+    let dir = args
+        .probes
+        .clone()
+        .or_else(|| std::env::var_os("ENVLIGHT_PROBES").map(PathBuf::from))
+        .unwrap_or_else(|| PathBuf::from("../shared/probes"));
+    let quick = args.quick;
+    let size = args.size.unwrap_or(if quick { 24 } else { 64 });
+    let reference = args.reference.unwrap_or(if quick { 1024 } else { 16384 });
+    // Quick: a 256² paraboloid instead of the source-sized one, so lavapipe converts fast.
+    let dp = quick.then_some(256);
+    let ctx = context(g)?;
+    let device = format!("{} ({})", ctx.info().name, ctx.info().driver.trim());
+    eprintln!("device: {device}");
+    let renderer = Renderer::new(&ctx);
+    let cam = sphere_camera(size);
+    let pixels = sphere_pixels(&cam);
+    let split = args.split();
+    if args.split_sum_every_probe {
+        return split_sweep(&renderer, &dir, cam, reference, &args.out, &device, split);
+    }
+    let mut rows = Vec::new();
+    let started = Instant::now();
+    for (file, kind) in probes(quick) {
+        let path = dir.join(file);
+        let env = envlight::io::load(&path, &envlight::io::LoadOptions::default())
+            .with_context(|| format!("report: probe {} (set --probes)", path.display()))?;
+        for (name, brdf) in materials(quick) {
+            // The reference: two independent MIS renders; their mean is the reference, half
+            // their difference its noise.
+            let mc = |seed| {
+                let t = Technique::Mc {
+                    samples: reference,
+                    error: None,
+                };
+                renderer.render(&scene(cam, brdf, t, dp, seed, split), &env)
+            };
+            let (r1, r2) = (mc(1)?, mc(2)?);
+            let noise = errors(&r1.frame, &r2.frame, &pixels).0 / 2.0;
+            let truth = average(&r1.frame, &r2.frame);
+            for (t, params) in cases(&brdf, quick) {
+                let sc = scene(cam, brdf, t, dp, 7, split);
+                // One untimed render first: pipelines are built on first use.
+                renderer.render(&sc, &env)?;
+                let t0 = Instant::now();
+                let r = renderer.render(&sc, &env)?;
+                let wall_s = t0.elapsed().as_secs_f64();
+                let (rms, bias, tile) = errors(&r.frame, &truth, &pixels);
+                let per_frame = |k: PassKind| {
+                    matches!(
+                        k,
+                        PassKind::GBuffer | PassKind::Shade | PassKind::MonteCarlo
+                    )
+                };
+                let gpu_ms: f64 = r.records.iter().map(|p| p.ms()).sum();
+                // (+ 0.0: an empty float sum is −0.)
+                let pre_ms: f64 = r
+                    .records
+                    .iter()
+                    .filter(|p| !per_frame(p.kind))
+                    .map(|p| p.ms())
+                    .sum::<f64>()
+                    + 0.0;
+                let row = Row {
+                    probe: file.trim_end_matches(".hdr").to_string(),
+                    kind,
+                    material: name.to_string(),
+                    technique: t.name(),
+                    params,
+                    rms,
+                    bias,
+                    tile,
+                    gpu_ms,
+                    pre_ms,
+                    wall_s,
+                    noise,
+                };
+                eprintln!(
+                    "{:>28} {:>9} {:<16} rms {:>8.2e} bias {:>+9.2e} tile {:>8.2e} gpu {:>9.2} ms (pre {:>8.2}) wall {:.3} s",
+                    row.probe, row.material, row.label(), rms, bias, tile, gpu_ms, pre_ms, wall_s
+                );
+                rows.push(row);
+            }
+        }
+    }
+    let out = &args.out;
+    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
+    write_csv(&out.join("report.csv"), &rows)?;
+    let settings = format!(
+        "Device: {device}. Sphere {size}² (orthographic, normal to grazing incidence), \
+         reference 2 × {reference} spp MIS Monte Carlo (their mean; its noise is half their \
+         relative RMS difference). FIS paraboloid {}; split-sum {:?}; sh_brdf grid 32, no \
+         window. Run took {:.0} s{}.",
+        dp.map(|d| format!("{d}²"))
+            .unwrap_or_else(|| "sized by the source (1024² for a 1k lat-long)".into()),
+        split,
+        started.elapsed().as_secs_f64(),
+        if quick { " (--quick)" } else { "" }
+    );
+    let md = markdown(&rows, &settings);
+    std::fs::write(out.join("report.md"), md).with_context(|| "report.md")?;
+    plot(&out.join("report.png"), &rows, &device)?;
+    println!(
+        "wrote {}/report.md, report.csv, report.png ({} rows)",
+        out.display(),
+        rows.len()
+    );
+    Ok(())
+}
+
+/// Split-sum against the reference on every probe of `dir`, GGX (height-correlated) α 0.1 to
+/// 0.6, default settings: split_sum.md and split_sum.csv in `out`.
+fn split_sweep(
+    renderer: &Renderer,
+    dir: &Path,
+    cam: Camera,
+    reference: u32,
+    out: &Path,
+    device: &str,
+    split: SplitSumSettings,
+) -> Result<()> {
+    let pixels = sphere_pixels(&cam);
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| dir.display().to_string())?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.is_file()
+                && matches!(
+                    p.extension().and_then(|e| e.to_str()),
+                    Some("hdr" | "exr" | "dds" | "pfm")
+                )
+        })
+        .collect();
+    files.sort();
+    let alphas = [0.1, 0.2, 0.3, 0.45, 0.6];
+    let mut csv = String::from("probe,alpha,relative_rms,mean_bias,worst_tile,reference_noise\n");
+    let mut md = format!(
+        "# Split-sum against Monte Carlo on every probe\n\nDevice: {device}. GGX \
+         (height-correlated Smith), split-sum {split:?}; sphere {}² from normal to grazing \
+         incidence; reference 2 × {reference} spp MIS. Relative RMS over the sphere (all \
+         channels), mean bias in parentheses.\n\n| probe | {} | reference noise |\n|---|{}---|\n",
+        cam.width,
+        alphas.map(|a| format!("α {a}")).join(" | "),
+        "---|".repeat(alphas.len())
+    );
+    for path in &files {
+        let env = envlight::io::load(path, &envlight::io::LoadOptions::default())
+            .with_context(|| path.display().to_string())?;
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default();
+        let mut cells = Vec::new();
+        let mut worst_noise: f64 = 0.0;
+        for alpha in alphas {
+            let b = Brdf::Ggx {
+                alpha,
+                correlated: true,
+            };
+            let mc = |seed| {
+                let t = Technique::Mc {
+                    samples: reference,
+                    error: None,
+                };
+                renderer.render(&scene(cam, b, t, None, seed, split), &env)
+            };
+            let (r1, r2) = (mc(1)?, mc(2)?);
+            let noise = errors(&r1.frame, &r2.frame, &pixels).0 / 2.0;
+            let truth = average(&r1.frame, &r2.frame);
+            let r = renderer.render(&scene(cam, b, Technique::SplitSum, None, 7, split), &env)?;
+            let (rms, bias, tile) = errors(&r.frame, &truth, &pixels);
+            eprintln!("{name} α {alpha}: {rms:.3e} (bias {bias:+.2e}, noise {noise:.1e})");
+            let _ = writeln!(
+                csv,
+                "{name},{alpha},{rms:.5e},{bias:.5e},{tile:.5e},{noise:.3e}"
+            );
+            cells.push(format!("{:.1}% ({:+.1}%)", 100.0 * rms, 100.0 * bias));
+            worst_noise = worst_noise.max(noise);
+        }
+        let _ = writeln!(
+            md,
+            "| {name} | {} | {:.2}% |",
+            cells.join(" | "),
+            100.0 * worst_noise
+        );
+    }
+    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
+    std::fs::write(out.join("split_sum.csv"), csv).with_context(|| "split_sum.csv")?;
+    std::fs::write(out.join("split_sum.md"), md).with_context(|| "split_sum.md")?;
+    println!("wrote {}/split_sum.md, split_sum.csv", out.display());
+    Ok(())
+}
+
+fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
+    let mut s = String::from(
+        "technique,params,probe,probe_kind,material,relative_rms,mean_bias,worst_tile,gpu_ms,precompute_gpu_ms,render_wall_s,reference_noise\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.4},{:.4},{:.4},{:.3e}",
+            r.technique,
+            r.params,
+            r.probe,
+            r.kind,
+            r.material,
+            r.rms,
+            r.bias,
+            r.tile,
+            r.gpu_ms,
+            r.pre_ms,
+            r.wall_s,
+            r.noise
+        );
+    }
+    std::fs::write(path, s).with_context(|| path.display().to_string())
+}
+
+/// A technique's summary over the probes for one material: (label, mean GPU ms, mean
+/// relative RMS, worst relative RMS, mean |bias|, worst tile, mean precompute ms).
+struct Point {
+    label: String,
+    technique: &'static str,
+    ms: f64,
+    rms: f64,
+    worst: f64,
+    bias: f64,
+    tile: f64,
+    pre: f64,
+}
+
+fn points(rows: &[Row], material: &str) -> Vec<Point> {
+    let mut labels: Vec<(String, &'static str)> = Vec::new();
+    for r in rows.iter().filter(|r| r.material == material) {
+        if !labels.iter().any(|l| l.0 == r.label()) {
+            labels.push((r.label(), r.technique));
+        }
+    }
+    labels
+        .into_iter()
+        .map(|(label, technique)| {
+            let v: Vec<&Row> = rows
+                .iter()
+                .filter(|r| r.material == material && r.label() == label)
+                .collect();
+            let n = v.len() as f64;
+            Point {
+                ms: v.iter().map(|r| r.gpu_ms).sum::<f64>() / n,
+                rms: v.iter().map(|r| r.rms).sum::<f64>() / n,
+                worst: v.iter().map(|r| r.rms).fold(0.0, f64::max),
+                bias: v.iter().map(|r| r.bias.abs()).sum::<f64>() / n,
+                tile: v.iter().map(|r| r.tile).fold(0.0, f64::max),
+                pre: v.iter().map(|r| r.pre_ms).sum::<f64>() / n,
+                label,
+                technique,
+            }
+        })
+        .collect()
+}
+
+/// Indices of the Pareto front, fastest first: each is more accurate than everything faster.
+fn front(p: &[Point]) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..p.len()).collect();
+    idx.sort_by(|&a, &b| {
+        p[a].ms
+            .total_cmp(&p[b].ms)
+            .then(p[a].rms.total_cmp(&p[b].rms))
+    });
+    let mut best = f64::INFINITY;
+    idx.into_iter()
+        .filter(|&i| {
+            let keep = p[i].rms < best;
+            best = best.min(p[i].rms);
+            keep
+        })
+        .collect()
+}
+
+fn material_names(rows: &[Row]) -> Vec<String> {
+    let mut v: Vec<String> = Vec::new();
+    for r in rows {
+        if !v.contains(&r.material) {
+            v.push(r.material.clone());
+        }
+    }
+    v
+}
+
+fn markdown(rows: &[Row], settings: &str) -> String {
+    let mut md = String::from("# envlight report: accuracy against time\n\n");
+    let _ = writeln!(md, "{settings}\n");
+    md.push_str("## Headline: what to use at which time budget\n\n");
+    md.push_str(
+        "The Pareto front per material (mean over the probes of GPU time for the whole \
+         render, precomputation included, and of relative RMS against the reference): at a \
+         budget of at least the time listed, the technique beside it is the most accurate \
+         envlight has.\n\n",
+    );
+    let mats = material_names(rows);
+    for m in &mats {
+        let p = points(rows, m);
+        let f = front(&p);
+        let steps: Vec<String> = f
+            .iter()
+            .map(|&i| {
+                format!(
+                    "≥ {:.2} ms: **{}** ({:.2}%)",
+                    p[i].ms,
+                    p[i].label,
+                    100.0 * p[i].rms
+                )
+            })
+            .collect();
+        let _ = writeln!(md, "- **{m}**: {}", steps.join(" → "));
+    }
+    md.push_str(
+        "\nWhen the precomputation is amortised (an engine shades many frames from one \
+         environment), the front by the per-frame GPU time alone (G-buffer, shading, Monte \
+         Carlo frames):\n\n",
+    );
+    for m in &mats {
+        let mut p = points(rows, m);
+        for q in &mut p {
+            q.ms -= q.pre;
+        }
+        let f = front(&p);
+        let steps: Vec<String> = f
+            .iter()
+            .map(|&i| {
+                format!(
+                    "≥ {:.2} ms: **{}** ({:.2}%)",
+                    p[i].ms,
+                    p[i].label,
+                    100.0 * p[i].rms
+                )
+            })
+            .collect();
+        let _ = writeln!(md, "- **{m}**: {}", steps.join(" → "));
+    }
+    md.push_str(
+        "\nLight extraction (issue #10) is not built yet; its on/off rows join the report \
+         when it lands.\n\n![Pareto chart](report.png)\n",
+    );
+    for m in &mats {
+        let p = points(rows, m);
+        let f = front(&p);
+        let _ = writeln!(
+            md,
+            "\n## {m}\n\n| technique | mean rel. RMS | worst probe | mean abs bias | worst tile | GPU ms | of it precompute | front |\n|---|---|---|---|---|---|---|---|"
+        );
+        for (i, q) in p.iter().enumerate() {
+            let _ = writeln!(
+                md,
+                "| {} | {:.2}% | {:.2}% | {:.2}% | {:.2}% | {:.2} | {:.2} | {} |",
+                q.label,
+                100.0 * q.rms,
+                100.0 * q.worst,
+                100.0 * q.bias,
+                100.0 * q.tile,
+                q.ms,
+                q.pre,
+                if f.contains(&i) { "yes" } else { "" }
+            );
+        }
+        let noise = rows
+            .iter()
+            .filter(|r| &r.material == m)
+            .map(|r| r.noise)
+            .fold(0.0, f64::max);
+        let _ = writeln!(
+            md,
+            "\nReference noise (worst probe): {:.3}% relative RMS; errors near it are at the \
+             reference's floor.",
+            100.0 * noise
+        );
+    }
+    md.push_str("\n## Per probe\n\n| probe | kind | material | technique | rel. RMS | bias | worst tile | GPU ms | wall s |\n|---|---|---|---|---|---|---|---|---|\n");
+    for r in rows {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {:.2}% | {:+.2}% | {:.2}% | {:.2} | {:.3} |",
+            r.probe,
+            r.kind,
+            r.material,
+            r.label(),
+            100.0 * r.rms,
+            100.0 * r.bias,
+            100.0 * r.tile,
+            r.gpu_ms,
+            r.wall_s
+        );
+    }
+    md
+}
+
+/// Colour of a technique family.
+fn colour(technique: &str) -> plotters::style::RGBColor {
+    use plotters::style::RGBColor;
+    match technique {
+        "lookup" => RGBColor(0, 0, 0),
+        "sh" => RGBColor(31, 119, 180),
+        "prefiltered" => RGBColor(140, 86, 75),
+        "fis" => RGBColor(44, 160, 44),
+        "mc" => RGBColor(214, 39, 40),
+        "sh_brdf" => RGBColor(148, 103, 189),
+        _ => RGBColor(255, 127, 14),
+    }
+}
+
+fn plot(path: &Path, rows: &[Row], device: &str) -> Result<()> {
+    use plotters::prelude::*;
+    let e = |e: &dyn std::fmt::Display| anyhow!("report.png: {e}");
+    // Text comes from the DejaVu Sans the `dejavu` crate ships; no system font is read.
+    plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular())
+        .map_err(|_| anyhow!("report.png: the bundled font did not load"))?;
+    let mats = material_names(rows);
+    let cols = mats.len().clamp(1, 3);
+    let rows_n = mats.len().div_ceil(cols).max(1);
+    let (w, h) = (620 * cols as u32, 520 * rows_n as u32 + 90);
+    let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let root = root
+        .titled(
+            "envlight: error against converged Monte Carlo vs GPU time (mean over the probes)",
+            ("sans-serif", 22),
+        )
+        .map_err(|x| e(&x))?;
+    let (legend, body) = root.split_vertically(56);
+    legend
+        .draw(&Text::new(
+            format!("device: {device}; black line: the Pareto front"),
+            (20, 34),
+            ("sans-serif", 14),
+        ))
+        .map_err(|x| e(&x))?;
+    let families = [
+        "lookup",
+        "sh",
+        "prefiltered",
+        "fis",
+        "mc",
+        "sh_brdf",
+        "split_sum",
+    ];
+    for (k, f) in families.iter().enumerate() {
+        let x = 20 + k as i32 * 150;
+        legend
+            .draw(&Circle::new((x, 12), 6, colour(f).filled()))
+            .map_err(|x| e(&x))?;
+        legend
+            .draw(&Text::new(*f, (x + 12, 4), ("sans-serif", 16)))
+            .map_err(|x| e(&x))?;
+    }
+    let panels = body.split_evenly((rows_n, cols));
+    for (panel, m) in panels.iter().zip(&mats) {
+        let p = points(rows, m);
+        let f = front(&p);
+        let floor = 1e-4;
+        let (x0, x1) = p.iter().fold((f64::INFINITY, 0.0f64), |a, q| {
+            (a.0.min(q.ms.max(1e-3)), a.1.max(q.ms.max(1e-3)))
+        });
+        let y1 = p.iter().map(|q| q.rms).fold(floor * 10.0, f64::max);
+        let mut chart = ChartBuilder::on(panel)
+            .caption(m, ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(44)
+            .y_label_area_size(64)
+            .build_cartesian_2d(
+                (x0 / 2.0..x1 * 2.0).log_scale(),
+                (floor..y1 * 2.0).log_scale(),
+            )
+            .map_err(|x| e(&x))?;
+        chart
+            .configure_mesh()
+            .x_desc("GPU ms per render (precomputation included)")
+            .y_desc("relative RMS vs MC")
+            .label_style(("sans-serif", 13))
+            .axis_desc_style(("sans-serif", 14))
+            .draw()
+            .map_err(|x| e(&x))?;
+        let at = |q: &Point| (q.ms.max(1e-3), q.rms.max(floor));
+        chart
+            .draw_series(LineSeries::new(
+                f.iter().map(|&i| at(&p[i])),
+                ShapeStyle::from(&BLACK).stroke_width(2),
+            ))
+            .map_err(|x| e(&x))?;
+        for q in &p {
+            let c = colour(q.technique);
+            chart
+                .draw_series(std::iter::once(
+                    EmptyElement::at(at(q))
+                        + Circle::new((0, 0), 5, c.filled())
+                        + Text::new(q.label.clone(), (7, -14), ("sans-serif", 12)),
+                ))
+                .map_err(|x| e(&x))?;
+        }
+    }
+    root.present().map_err(|x| e(&x))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(label: &str, ms: f64, rms: f64) -> Point {
+        Point {
+            label: label.into(),
+            technique: "mc",
+            ms,
+            rms,
+            worst: rms,
+            bias: 0.0,
+            tile: 0.0,
+            pre: 0.0,
+        }
+    }
+
+    #[test]
+    fn the_front_keeps_what_beats_everything_faster() {
+        let p = vec![
+            point("slow and bad", 10.0, 0.5),
+            point("fast", 1.0, 0.3),
+            point("better", 2.0, 0.1),
+            point("worse, slower", 3.0, 0.2),
+            point("best", 20.0, 0.01),
+        ];
+        let labels: Vec<&str> = front(&p).iter().map(|&i| p[i].label.as_str()).collect();
+        assert_eq!(labels, ["fast", "better", "best"]);
+    }
+
+    #[test]
+    fn errors_measure_rms_bias_and_tiles() {
+        let m = EnvMap::new(envlight::Mapping::LatLong, 8, 8, vec![[1.0; 3]; 64]);
+        let mut a = m.clone();
+        for t in &mut a.texels[..32] {
+            *t = [1.5; 3];
+        }
+        let pixels: Vec<(usize, u32)> = (0..64).map(|k| (k, (k / 32) as u32)).collect();
+        let (rms, bias, tile) = errors(&a, &m, &pixels);
+        assert!((rms - (0.25f64 * 32.0 / 64.0).sqrt()).abs() < 1e-12);
+        assert!((bias - 0.25).abs() < 1e-12);
+        assert!((tile - 0.5).abs() < 1e-12);
+    }
+}
