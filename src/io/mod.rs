@@ -18,6 +18,7 @@
 
 mod dds;
 mod exr_io;
+pub mod ktx2;
 mod pfm;
 mod png_io;
 
@@ -30,6 +31,25 @@ pub use dds::write_cube_rgba16f as write_dds_cube;
 pub use exr_io::{save_exr, write_half_channels as write_exr_half_channels};
 pub use pfm::write as write_pfm;
 pub use png_io::{save_png, tone_map, ToneMap};
+
+/// Writes `bytes` to `path` atomically: into a temporary file in the same folder, then renamed
+/// over `path`, so an interrupted run leaves either the old file or the new one, never half.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    std::fs::write(&tmp, bytes).map_err(io)?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io(e)
+    })
+}
 
 /// What to do with NaN, infinite and negative texels.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
