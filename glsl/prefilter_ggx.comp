@@ -1,7 +1,7 @@
 #version 460
 // One roughness level of the split-sum prefiltered chain (Karis 2013), twin of
 // math::split_sum::prefilter: texel t of a dual paraboloid (directions continued past the
-// rim) holds P(r, α) = Σ w·L / Σ w over N Hammersley samples of GGX α with n = v = r, w the
+// rim) or of a cube (bakes) holds P(r, α) = Σ w·L / Σ w over N Hammersley samples of GGX α with n = v = r, w the
 // sampler's weight f·cos/pdf, each sample read from the source chain at
 // lod = ½·log2(Ωs/Ωp) + bias (filtered importance sampling, as shade.frag's fis()).
 #extension GL_GOOGLE_include_directive : require
@@ -31,7 +31,7 @@ void main() {
     Coord c;
     c.layer = id.z;
     c.uv = (vec2(id.xy) + 0.5) / float(pc.size);
-    vec3 r = normalize(coord_to_dir(MAPPING_DUAL_PARABOLOID, c));
+    vec3 r = normalize(coord_to_dir(pc.dst_mapping, c));
     vec3 color;
     if (pc.alpha <= 0.0) {
         color = src_lookup(r, 0.0);

@@ -648,8 +648,10 @@ pub mod push {
             samples: u32 = "uint",
             /// Lod bias.
             bias: f32 = "float",
+            /// Mapping of the chain written: dual paraboloid (the shading's) or cube (bakes).
+            dst_mapping: u32 = "uint",
             /// Padding.
-            pad: [u32; 2] = "uint[2]",
+            pad: u32 = "uint",
         }
         /// `glsl/sh_rotate.comp`.
         ShRotatePush {

@@ -21,6 +21,7 @@
 
 use super::brdf::{local_view, Brdf, Frame};
 use super::fis::lookup;
+use super::mapping::{Coord, Mapping};
 use super::mip::{texel_solid_angle, Level};
 use super::sequence::hammersley;
 use super::sh_brdf::{gauss4, graded_panels, GRADED_LEVELS, PANELS};
@@ -182,6 +183,37 @@ pub fn texel_dir(size: u32, layer: u32, i: u32, j: u32) -> DVec3 {
         2.0 * t / (1.0 + q),
     )
     .normalize()
+}
+
+/// The prefiltered cube a bake writes: `levels` levels of a `size`-side cube from `chain`, by
+/// the same rule (texel centres' directions as [`Mapping::Cube`] maps them).
+pub fn prefiltered_cube(
+    chain: &[Level],
+    size: u32,
+    levels: u32,
+    samples: u32,
+    bias: f64,
+) -> Vec<Vec<[f64; 3]>> {
+    (0..levels)
+        .map(|k| {
+            let s = level_size(size, k);
+            let alpha = level_alpha(k, levels);
+            let mut texels = Vec::with_capacity((6 * s * s) as usize);
+            for layer in 0..6 {
+                for j in 0..s {
+                    for i in 0..s {
+                        let d = Mapping::Cube.coord_to_dir(Coord {
+                            layer,
+                            u: (i as f64 + 0.5) / s as f64,
+                            v: (j as f64 + 0.5) / s as f64,
+                        });
+                        texels.push(prefilter(chain, alpha, d, samples, bias));
+                    }
+                }
+            }
+            texels
+        })
+        .collect()
 }
 
 /// Side of level `k` of a chain whose level 0 is `size`.

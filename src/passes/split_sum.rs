@@ -133,9 +133,11 @@ impl SplitSum {
         dst: &GpuEnvMap,
         opts: &PrefilterOptions,
     ) -> Result<()> {
-        if src.mapping != Mapping::DualParaboloid || dst.mapping != Mapping::DualParaboloid {
+        if src.mapping != Mapping::DualParaboloid
+            || !matches!(dst.mapping, Mapping::DualParaboloid | Mapping::Cube)
+        {
             return Err(Error::Invalid(
-                "split-sum prefilters a dual paraboloid into a dual paraboloid".into(),
+                "split-sum prefilters a dual paraboloid into a dual paraboloid or a cube".into(),
             ));
         }
         if opts.levels == 0 || opts.levels > dst.mips() || opts.samples == 0 {
@@ -155,7 +157,8 @@ impl SplitSum {
                 alpha: level_alpha(k, opts.levels) as f32,
                 samples: opts.samples,
                 bias: opts.bias as f32,
-                pad: [0; 2],
+                dst_mapping: dst.mapping.id(),
+                pad: 0,
             };
             rec.span(&format!("split-sum level {k}"), |rec| {
                 rec.dispatch(
@@ -174,11 +177,27 @@ impl SplitSum {
                     [
                         groups(size, WORKGROUP_2D[0]),
                         groups(size, WORKGROUP_2D[1]),
-                        2,
+                        dst.mapping.layers(),
                     ],
                 )
             })?;
         }
         Ok(())
+    }
+
+    /// A cube `size` a side with exactly `levels` MIP levels, one roughness each (a bake's
+    /// specular cube).
+    pub fn cube_chain(ctx: &Context, size: u32, levels: u32) -> Result<GpuEnvMap> {
+        if levels == 0 || levels > crate::passes::map::full_mips(size, size) {
+            return Err(Error::Invalid(format!(
+                "split-sum: {levels} levels do not fit a {size}² cube"
+            )));
+        }
+        GpuEnvMap::create(
+            ctx,
+            "prefiltered GGX cube",
+            map_desc(Mapping::Cube, size, size, levels),
+            Mapping::Cube,
+        )
     }
 }
