@@ -65,6 +65,7 @@
 #![warn(missing_docs)]
 
 pub mod abi;
+pub mod bake;
 pub mod envmap;
 pub mod error;
 pub mod gpu;

@@ -38,6 +38,7 @@ enum Command {
     Devices,
     SynthSky(cli::info::SynthSkyArgs),
     Report(cli::reports::report::ReportArgs),
+    Bake(cli::bake::BakeArgs),
     /// Benchmarks (GPU time from timestamp queries)
     Bench {
         #[command(subcommand)]
@@ -61,6 +62,7 @@ fn main() {
         Command::Devices => cli::info::devices(g),
         Command::SynthSky(a) => cli::info::synth_sky(a),
         Command::Report(a) => cli::reports::report::report(g, a),
+        Command::Bake(a) => cli::bake::bake(g, a),
         Command::Bench { what } => cli::reports::bench(g, what),
     };
     if let Err(e) = result {

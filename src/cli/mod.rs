@@ -1,6 +1,7 @@
 //! The command line: one file per subcommand family, sharing the arguments and helpers here.
 //! Only the binary uses it; the library knows nothing of clap, indicatif or anyhow.
 
+pub mod bake;
 pub mod info;
 pub mod maps;
 pub mod preview;

@@ -1,0 +1,209 @@
+//! Baking one probe into what an engine loads: SH radiance coefficients, an irradiance cube
+//! (from SH), a GGX-prefiltered specular cube with one MIP level per roughness, and the
+//! split-sum DFG table. [`Baker`] holds every pass, so pipelines are built once per run
+//! however many probes it bakes; each probe's GPU resources are freed when its bake returns,
+//! so memory stays bounded.
+//!
+//! The specular cube's level k holds GGX α = (k/(levels − 1))² (level 0 the mirror), filtered
+//! as split-sum's chain is ([`crate::math::split_sum`]: n = v = r, filtered importance
+//! sampling from the dual-paraboloid MIP chain); an engine reads lod √α·(levels − 1).
+
+use crate::error::{Error, Result};
+use crate::gpu::{Context, Timing};
+use crate::math::sh::{self, Window};
+use crate::math::Orientation;
+use crate::passes::sh_project::{ShCoefficients, Subgroups};
+use crate::passes::{
+    ConvertOptions, Converter, GpuEnvMap, MipChain, PrefilterOptions, ShEvaluator, ShProjector,
+    SplitSum,
+};
+use crate::render::default_dp_size;
+use crate::{EnvMap, Mapping};
+
+/// What a bake computes.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BakeOptions {
+    /// Highest SH band of the coefficients written (the irradiance cube uses them all).
+    pub sh_order: u32,
+    /// Face size of the irradiance cube.
+    pub irradiance_size: u32,
+    /// Face size of the specular cube's level 0.
+    pub specular_size: u32,
+    /// Roughness levels of the specular cube.
+    pub specular_levels: u32,
+    /// FIS samples per specular texel.
+    pub samples: u32,
+    /// Lod bias of those samples.
+    pub bias: f64,
+    /// Entries per side of the DFG table.
+    pub dfg_size: u32,
+}
+
+impl Default for BakeOptions {
+    fn default() -> Self {
+        BakeOptions {
+            sh_order: 2,
+            irradiance_size: 32,
+            specular_size: 256,
+            specular_levels: 8,
+            samples: crate::abi::split_sum::DEFAULT_SAMPLES,
+            bias: crate::abi::defaults::FIS_BIAS,
+            dfg_size: crate::abi::split_sum::DEFAULT_DFG_SIZE,
+        }
+    }
+}
+
+impl BakeOptions {
+    /// Checks every value; the message names the option.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::Invalid(m));
+        if self.sh_order > crate::abi::SH_MAX_LMAX {
+            return bad(format!("sh_order {} is above 8", self.sh_order));
+        }
+        if !(1..=4096).contains(&self.irradiance_size) {
+            return bad(format!(
+                "irradiance_size {} outside 1 to 4096",
+                self.irradiance_size
+            ));
+        }
+        if !(1..=4096).contains(&self.specular_size) {
+            return bad(format!(
+                "specular_size {} outside 1 to 4096",
+                self.specular_size
+            ));
+        }
+        let most = crate::passes::map::full_mips(self.specular_size, self.specular_size);
+        if !(1..=most).contains(&self.specular_levels) {
+            return bad(format!(
+                "specular_levels {} outside 1 to {most} for a {}² cube",
+                self.specular_levels, self.specular_size
+            ));
+        }
+        if !(1..=crate::scene::MAX_FIS_SAMPLES).contains(&self.samples) {
+            return bad(format!("samples {} outside 1 to 16384", self.samples));
+        }
+        if !(self.bias.is_finite() && self.bias.abs() <= 16.0) {
+            return bad("bias must be within ±16".into());
+        }
+        if !(2..=crate::abi::split_sum::MAX_DFG_SIZE).contains(&self.dfg_size) {
+            return bad(format!("dfg_size {} outside 2 to 256", self.dfg_size));
+        }
+        Ok(())
+    }
+}
+
+/// One probe's bake, on the host.
+pub struct Baked {
+    /// Radiance SH coefficients to `sh_order`.
+    pub sh: ShCoefficients,
+    /// The irradiance cube, faces × rows × columns, RGBA (A = 1).
+    pub irradiance: Vec<[f32; 4]>,
+    /// The specular cube's levels, level 0 first, each faces × rows × columns, RGBA (A = 1).
+    pub specular: Vec<Vec<[f32; 4]>>,
+    /// GPU time per pass.
+    pub timings: Vec<Timing>,
+}
+
+/// Side of the dual paraboloid the specular cube is filtered from: the source's own
+/// resolution ([`default_dp_size`]), but no finer than twice the cube's face, which already
+/// samples the mirror level as finely as the cube holds it (a paraboloid half spans the
+/// hemisphere a cube spans with about two faces' widths of texels at its equator).
+pub fn dp_size(env: &EnvMap, opts: &BakeOptions) -> u32 {
+    default_dp_size(env).min((2 * opts.specular_size).next_power_of_two().max(16))
+}
+
+/// The passes of a bake, built once.
+pub struct Baker {
+    ctx: Context,
+    sh: ShProjector,
+    eval: ShEvaluator,
+    convert: Converter,
+    mip: MipChain,
+    split: SplitSum,
+}
+
+impl Baker {
+    /// Builds every pass.
+    pub fn new(ctx: &Context) -> Result<Baker> {
+        Ok(Baker {
+            ctx: ctx.clone(),
+            sh: ShProjector::new(ctx, Subgroups::Auto)?,
+            eval: ShEvaluator::new(ctx)?,
+            convert: Converter::new(ctx)?,
+            mip: MipChain::new(ctx)?,
+            split: SplitSum::new(ctx)?,
+        })
+    }
+
+    /// Bakes `env` seen with `orientation`.
+    pub fn bake(
+        &self,
+        env: &EnvMap,
+        orientation: &Orientation,
+        opts: &BakeOptions,
+    ) -> Result<Baked> {
+        opts.validate()?;
+        let ctx = &self.ctx;
+        let src = GpuEnvMap::upload(ctx, env)?;
+        let (coeffs, mut timings) = self.sh.run_oriented(&src, opts.sh_order, orientation)?;
+        let irr = sh::irradiance_coeffs(&Window::None.apply(&coeffs.coeffs));
+        let irradiance_map = GpuEnvMap::new(
+            ctx,
+            "bake: irradiance cube",
+            Mapping::Cube,
+            opts.irradiance_size,
+            opts.irradiance_size,
+        )?;
+        let dp_size = dp_size(env, opts);
+        let (w, h) = Mapping::DualParaboloid.extent_for_size(dp_size);
+        let dp = GpuEnvMap::with_mips(ctx, "bake: paraboloid", Mapping::DualParaboloid, w, h)?;
+        let cube = SplitSum::cube_chain(ctx, opts.specular_size, opts.specular_levels)?;
+        let ((), t) = ctx.run("baking a probe", |rec| {
+            self.eval.record(rec, &irr, &irradiance_map)?;
+            let c = ConvertOptions {
+                to: Mapping::DualParaboloid,
+                size: dp_size,
+                orientation: *orientation,
+                supersample: None,
+            };
+            self.convert.record(rec, &src, &dp, &c)?;
+            self.mip.record(rec, &dp)?;
+            let p = PrefilterOptions {
+                levels: opts.specular_levels,
+                samples: opts.samples,
+                bias: opts.bias,
+            };
+            self.split.record_prefilter(rec, &dp, &cube, &p)
+        })?;
+        timings.extend(t);
+        let irradiance = irradiance_map.download_level(ctx, 0)?;
+        let specular = (0..opts.specular_levels)
+            .map(|k| cube.download_level(ctx, k))
+            .collect::<Result<Vec<_>>>()?;
+        let finite = |v: &[[f32; 4]]| v.iter().all(|t| t.iter().all(|c| c.is_finite()));
+        if !finite(&irradiance) || !specular.iter().all(|l| finite(l)) {
+            return Err(Error::Invalid(
+                "bake: a non-finite texel left the GPU".into(),
+            ));
+        }
+        Ok(Baked {
+            sh: coeffs,
+            irradiance: irradiance
+                .into_iter()
+                .map(|t| [t[0], t[1], t[2], 1.0])
+                .collect(),
+            specular: specular
+                .into_iter()
+                .map(|l| l.into_iter().map(|t| [t[0], t[1], t[2], 1.0]).collect())
+                .collect(),
+            timings,
+        })
+    }
+
+    /// The split-sum DFG table (height-correlated Smith unless `correlated` is false), row
+    /// √α = j/(size − 1) after row, (A, B) per entry.
+    pub fn dfg(&self, size: u32, correlated: bool) -> Result<Vec<[f32; 2]>> {
+        Ok(self.split.run_dfg(size, correlated)?.0)
+    }
+}

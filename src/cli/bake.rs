@@ -1,0 +1,537 @@
+//! `envlight bake`: a folder of probes to what an engine loads, one folder per probe (SH JSON,
+//! irradiance cube, specular cube with a level per roughness), with a manifest that makes
+//! re-runs skip what is done, deterministic shards, and a merge of the shards' manifests.
+
+use super::{context, Global};
+use anyhow::{anyhow, bail, Context as _, Result};
+use clap::Args;
+use envlight::bake::{BakeOptions, Baked, Baker};
+use envlight::io::ktx2::{self, Ktx2Format, Ktx2Image};
+use envlight::io::{write_atomic, LoadOptions};
+use envlight::{EnvMap, Mapping, Orientation};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Bake probes for engines: SH, an irradiance cube and a GGX specular cube per probe (KTX2 or
+/// EXR), resumable, shardable across machines
+#[derive(Args)]
+pub struct BakeArgs {
+    /// Probe files, folders (their .hdr, .exr, .dds and .pfm files) or globs
+    inputs: Vec<String>,
+    /// Output folder (one folder per probe, named as its file, and the manifest)
+    #[arg(short, long)]
+    out: PathBuf,
+    /// A TOML bake file with the options below (the command line wins)
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Highest SH band written [default: 2]
+    #[arg(long)]
+    sh_order: Option<u32>,
+    /// Irradiance cube face size [default: 32]
+    #[arg(long)]
+    irradiance_size: Option<u32>,
+    /// Specular cube face size at level 0 [default: 256]
+    #[arg(long)]
+    specular_size: Option<u32>,
+    /// Specular levels: level k holds GGX α = (k/(levels − 1))² [default: 8]
+    #[arg(long)]
+    specular_levels: Option<u32>,
+    /// FIS samples per specular texel [default: 256]
+    #[arg(long)]
+    samples: Option<u32>,
+    /// Output container: ktx2 or exr [default: ktx2]
+    #[arg(long)]
+    format: Option<String>,
+    /// KTX2 texels: rgba32f, or rgba16f (refuses values a half cannot hold) [default: rgba32f]
+    #[arg(long)]
+    texels: Option<String>,
+    /// Also write the split-sum DFG table once (dfg.ktx2: A, B per n·v column and √α row)
+    #[arg(long)]
+    dfg: bool,
+    /// Bake only the i-th of n deterministic subsets (1-based), e.g. 2/8
+    #[arg(long)]
+    shard: Option<String>,
+    /// Bake again probes whose inputs and options are unchanged
+    #[arg(long)]
+    force: bool,
+    /// Merge the shards' manifests found in OUT into OUT/manifest.json, and bake nothing
+    #[arg(long)]
+    merge: bool,
+}
+
+/// A bake file: every field optional, unknown keys refused.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BakeFile {
+    sh_order: Option<u32>,
+    irradiance_size: Option<u32>,
+    specular_size: Option<u32>,
+    specular_levels: Option<u32>,
+    samples: Option<u32>,
+    format: Option<String>,
+    texels: Option<String>,
+    dfg: Option<bool>,
+}
+
+/// Everything that decides the outputs' bytes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct Settings {
+    envlight: String,
+    options: BakeOptions,
+    format: String,
+    texels: String,
+}
+
+/// One output file in the manifest.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct Output {
+    file: String,
+    bytes: u64,
+    sha256: String,
+}
+
+/// One probe in the manifest.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Entry {
+    input: String,
+    input_sha256: String,
+    status: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    error: Option<String>,
+    outputs: Vec<Output>,
+    seconds: f64,
+    gpu_ms: f64,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Manifest {
+    settings: Settings,
+    settings_sha256: String,
+    shard: Option<String>,
+    probes: Vec<Entry>,
+}
+
+fn sha256(bytes: &[u8]) -> String {
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// (i, n) from "i/n", 1 ≤ i ≤ n.
+fn parse_shard(s: &str) -> Result<(usize, usize)> {
+    let (i, n) = s
+        .split_once('/')
+        .ok_or_else(|| anyhow!("--shard {s}: expected i/n, e.g. 2/8"))?;
+    let (i, n): (usize, usize) = (
+        i.trim().parse().with_context(|| format!("--shard {s}"))?,
+        n.trim().parse().with_context(|| format!("--shard {s}"))?,
+    );
+    if n == 0 || i == 0 || i > n {
+        bail!("--shard {s}: i must be between 1 and n");
+    }
+    Ok((i, n))
+}
+
+fn is_probe(p: &Path) -> bool {
+    p.is_file()
+        && matches!(
+            p.extension()
+                .and_then(|e| e.to_str())
+                .map(|e| e.to_ascii_lowercase())
+                .as_deref(),
+            Some("hdr" | "exr" | "dds" | "pfm")
+        )
+}
+
+/// The inputs: files, folders' probe files and glob matches, sorted and without repeats.
+fn collect(inputs: &[String]) -> Result<Vec<PathBuf>> {
+    let mut v = Vec::new();
+    for s in inputs {
+        let p = PathBuf::from(s);
+        if p.is_dir() {
+            let rd = std::fs::read_dir(&p).with_context(|| p.display().to_string())?;
+            v.extend(
+                rd.filter_map(|e| e.ok().map(|e| e.path()))
+                    .filter(|p| is_probe(p)),
+            );
+        } else if p.is_file() {
+            v.push(p);
+        } else {
+            let matches: Vec<PathBuf> = glob::glob(s)
+                .with_context(|| format!("{s}: not a file, a folder or a glob"))?
+                .filter_map(|m| m.ok())
+                .filter(|p| p.is_file())
+                .collect();
+            if matches.is_empty() {
+                bail!("{s}: no such file, and no file matches it as a glob");
+            }
+            v.extend(matches);
+        }
+    }
+    v.sort();
+    v.dedup();
+    Ok(v)
+}
+
+fn read_manifests(out: &Path) -> Vec<Manifest> {
+    let Ok(rd) = std::fs::read_dir(out) else {
+        return Vec::new();
+    };
+    let mut paths: Vec<PathBuf> = rd
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with("manifest") && n.ends_with(".json"))
+        })
+        .collect();
+    paths.sort();
+    paths
+        .iter()
+        .filter_map(|p| std::fs::read(p).ok())
+        .filter_map(|b| serde_json::from_slice(&b).ok())
+        .collect()
+}
+
+fn manifest_name(shard: Option<(usize, usize)>) -> String {
+    match shard {
+        Some((i, n)) => format!("manifest-shard-{i}-of-{n}.json"),
+        None => "manifest.json".into(),
+    }
+}
+
+fn cube_image(texels: &[[f32; 4]], size: u32) -> EnvMap {
+    EnvMap::new(
+        Mapping::Cube,
+        size,
+        size,
+        texels.iter().map(|t| [t[0], t[1], t[2]]).collect(),
+    )
+}
+
+/// Writes one probe's files into `dir`; returns them (paths relative to `root`).
+fn write_probe(
+    root: &Path,
+    dir: &Path,
+    baked: &Baked,
+    o: &BakeOptions,
+    format: &str,
+    texels: Ktx2Format,
+) -> Result<Vec<Output>> {
+    std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    let sh = serde_json::to_string_pretty(&baked.sh.to_json())?;
+    files.push((dir.join("sh.json"), sh.into_bytes()));
+    match format {
+        "ktx2" => {
+            let irr = std::slice::from_ref(&baked.irradiance);
+            let img = |levels, size| Ktx2Image {
+                width: size,
+                height: size,
+                faces: 6,
+                levels,
+            };
+            files.push((
+                dir.join("irradiance.ktx2"),
+                ktx2::encode(&img(irr, o.irradiance_size), texels)?,
+            ));
+            files.push((
+                dir.join("specular.ktx2"),
+                ktx2::encode(&img(&baked.specular, o.specular_size), texels)?,
+            ));
+        }
+        _ => {
+            let tmp = dir.join(format!(".bake-{}.exr", std::process::id()));
+            let exr = |map: &EnvMap| -> Result<Vec<u8>> {
+                envlight::io::save_exr(map, &tmp)?;
+                let b = std::fs::read(&tmp)?;
+                let _ = std::fs::remove_file(&tmp);
+                Ok(b)
+            };
+            let b = exr(&cube_image(&baked.irradiance, o.irradiance_size))?;
+            files.push((dir.join("irradiance.exr"), b));
+            for (k, level) in baked.specular.iter().enumerate() {
+                let size = (o.specular_size >> k).max(1);
+                let b = exr(&cube_image(level, size))?;
+                files.push((dir.join(format!("specular.level{k}.exr")), b));
+            }
+        }
+    }
+    let mut outputs = Vec::new();
+    for (path, bytes) in files {
+        write_atomic(&path, &bytes)?;
+        outputs.push(Output {
+            file: path
+                .strip_prefix(root)
+                .unwrap_or(&path)
+                .to_string_lossy()
+                .replace('\\', "/"),
+            bytes: bytes.len() as u64,
+            sha256: sha256(&bytes),
+        });
+    }
+    Ok(outputs)
+}
+
+/// Whether every output of `e` under `root` is there with its recorded hash.
+fn outputs_intact(root: &Path, e: &Entry) -> bool {
+    !e.outputs.is_empty()
+        && e.outputs.iter().all(|o| {
+            std::fs::read(root.join(&o.file))
+                .is_ok_and(|b| b.len() as u64 == o.bytes && sha256(&b) == o.sha256)
+        })
+}
+
+fn merge(out: &Path) -> Result<()> {
+    let shards: Vec<Manifest> = read_manifests(out)
+        .into_iter()
+        .filter(|m| m.shard.is_some())
+        .collect();
+    let Some(first) = shards.first() else {
+        bail!(
+            "{}: no shard manifests (manifest-shard-I-of-N.json) to merge",
+            out.display()
+        );
+    };
+    let n = parse_shard(first.shard.as_deref().unwrap_or("1/1"))?.1;
+    let mut seen = vec![false; n];
+    let mut probes: Vec<Entry> = Vec::new();
+    for m in &shards {
+        if m.settings_sha256 != first.settings_sha256 {
+            bail!("the shards were baked with different settings; bake them again alike");
+        }
+        let (i, ni) = parse_shard(m.shard.as_deref().unwrap_or("1/1"))?;
+        if ni != n {
+            bail!("shard {i}/{ni} does not belong to a split into {n}");
+        }
+        seen[i - 1] = true;
+        probes.extend(m.probes.iter().cloned());
+    }
+    if let Some(missing) = seen.iter().position(|s| !s) {
+        bail!(
+            "shard {}/{n} has no manifest in {}",
+            missing + 1,
+            out.display()
+        );
+    }
+    probes.sort_by(|a, b| a.input.cmp(&b.input));
+    let merged = Manifest {
+        settings: first.settings.clone(),
+        settings_sha256: first.settings_sha256.clone(),
+        shard: None,
+        probes,
+    };
+    write_atomic(
+        &out.join("manifest.json"),
+        serde_json::to_string_pretty(&merged)?.as_bytes(),
+    )?;
+    println!(
+        "merged {n} shard manifests ({} probes) into {}",
+        merged.probes.len(),
+        out.join("manifest.json").display()
+    );
+    Ok(())
+}
+
+/// Runs `envlight bake`.
+pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
+    if a.merge {
+        return merge(&a.out);
+    }
+    let file: BakeFile = match &a.config {
+        Some(p) => {
+            toml::from_str(&std::fs::read_to_string(p).with_context(|| p.display().to_string())?)
+                .with_context(|| format!("{}: not a bake file", p.display()))?
+        }
+        None => BakeFile::default(),
+    };
+    let d = BakeOptions::default();
+    let options = BakeOptions {
+        sh_order: a.sh_order.or(file.sh_order).unwrap_or(d.sh_order),
+        irradiance_size: a
+            .irradiance_size
+            .or(file.irradiance_size)
+            .unwrap_or(d.irradiance_size),
+        specular_size: a
+            .specular_size
+            .or(file.specular_size)
+            .unwrap_or(d.specular_size),
+        specular_levels: a
+            .specular_levels
+            .or(file.specular_levels)
+            .unwrap_or(d.specular_levels),
+        samples: a.samples.or(file.samples).unwrap_or(d.samples),
+        ..d
+    };
+    options.validate()?;
+    let format = a
+        .format
+        .clone()
+        .or(file.format)
+        .unwrap_or_else(|| "ktx2".into());
+    if format != "ktx2" && format != "exr" {
+        bail!("--format {format}: ktx2 or exr");
+    }
+    let texels_name = a
+        .texels
+        .clone()
+        .or(file.texels)
+        .unwrap_or_else(|| "rgba32f".into());
+    let texels = Ktx2Format::parse(&texels_name)
+        .ok_or_else(|| anyhow!("--texels {texels_name}: rgba32f or rgba16f"))?;
+    let shard = a.shard.as_deref().map(parse_shard).transpose()?;
+    let inputs = collect(&a.inputs)?;
+    if inputs.is_empty() {
+        bail!("no probes among the inputs");
+    }
+    // Output folders are named by file name: two inputs with one name would overwrite.
+    for w in inputs.windows(2) {
+        if w[0].file_name() == w[1].file_name() {
+            bail!(
+                "{} and {} share a file name, so their outputs would collide",
+                w[0].display(),
+                w[1].display()
+            );
+        }
+    }
+    let mine: Vec<PathBuf> = match shard {
+        Some((i, n)) => inputs
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| k % n == i - 1)
+            .map(|(_, p)| p.clone())
+            .collect(),
+        None => inputs.clone(),
+    };
+    let settings = Settings {
+        envlight: env!("CARGO_PKG_VERSION").into(),
+        options,
+        format: format.clone(),
+        texels: texels_name.to_ascii_lowercase(),
+    };
+    let settings_sha256 = sha256(serde_json::to_string(&settings)?.as_bytes());
+    let out = &a.out;
+    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
+    let previous: Vec<Entry> = read_manifests(out)
+        .into_iter()
+        .filter(|m| m.settings_sha256 == settings_sha256)
+        .flat_map(|m| m.probes)
+        .filter(|e| e.status != "failed")
+        .collect();
+
+    let ctx = context(g)?;
+    let baker = Baker::new(&ctx)?;
+    if a.dfg || file.dfg == Some(true) {
+        let t = baker.dfg(options.dfg_size, true)?;
+        let level: Vec<[f32; 4]> = t.iter().map(|v| [v[0], v[1], 0.0, 1.0]).collect();
+        let img = Ktx2Image {
+            width: options.dfg_size,
+            height: options.dfg_size,
+            faces: 1,
+            levels: std::slice::from_ref(&level),
+        };
+        ktx2::write(&out.join("dfg.ktx2"), &img, Ktx2Format::Rgba32f)?;
+    }
+    let pb = ProgressBar::new(mine.len() as u64);
+    pb.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} probes, ETA {eta} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let mut entries = Vec::new();
+    for path in &mine {
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default();
+        pb.set_message(name.clone());
+        let input = path.to_string_lossy().replace('\\', "/");
+        let t0 = Instant::now();
+        let bytes = std::fs::read(path);
+        let input_sha256 = bytes.as_ref().map(|b| sha256(b)).unwrap_or_default();
+        let done = previous
+            .iter()
+            .find(|e| e.input == input && e.input_sha256 == input_sha256 && outputs_intact(out, e));
+        let entry = match (done, a.force) {
+            (Some(e), false) => Entry {
+                status: "skipped".into(),
+                ..e.clone()
+            },
+            _ => {
+                let result = bytes
+                    .map_err(anyhow::Error::from)
+                    .and_then(|b| {
+                        let map = envlight::io::load_bytes(path, &b, &LoadOptions::default())?;
+                        let baked = baker.bake(&map, &Orientation::default(), &options)?;
+                        let outputs =
+                            write_probe(out, &out.join(&name), &baked, &options, &format, texels)?;
+                        Ok((outputs, baked.timings.iter().map(|t| t.ms).sum::<f64>()))
+                    })
+                    .with_context(|| path.display().to_string());
+                match result {
+                    Ok((outputs, gpu_ms)) => Entry {
+                        input,
+                        input_sha256,
+                        status: "baked".into(),
+                        error: None,
+                        outputs,
+                        seconds: t0.elapsed().as_secs_f64(),
+                        gpu_ms,
+                    },
+                    Err(e) => {
+                        pb.suspend(|| eprintln!("error: {e:#}"));
+                        Entry {
+                            input,
+                            input_sha256,
+                            status: "failed".into(),
+                            error: Some(format!("{e:#}")),
+                            outputs: Vec::new(),
+                            seconds: t0.elapsed().as_secs_f64(),
+                            gpu_ms: 0.0,
+                        }
+                    }
+                }
+            }
+        };
+        entries.push(entry);
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    let manifest = Manifest {
+        settings,
+        settings_sha256,
+        shard: shard.map(|(i, n)| format!("{i}/{n}")),
+        probes: entries,
+    };
+    let mpath = out.join(manifest_name(shard));
+    write_atomic(&mpath, serde_json::to_string_pretty(&manifest)?.as_bytes())?;
+    println!("| probe | status | seconds | GPU ms |\n|---|---|---|---|");
+    for e in &manifest.probes {
+        println!(
+            "| {} | {} | {:.3} | {:.1} |",
+            e.input,
+            e.error
+                .as_deref()
+                .map(|m| format!("failed: {m}"))
+                .unwrap_or_else(|| e.status.clone()),
+            e.seconds,
+            e.gpu_ms
+        );
+    }
+    let failed = manifest
+        .probes
+        .iter()
+        .filter(|e| e.status == "failed")
+        .count();
+    println!("wrote {}", mpath.display());
+    if failed > 0 {
+        bail!(
+            "{failed} of {} probes failed (see above and the manifest)",
+            manifest.probes.len()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,455 @@
+//! `envlight bake`: files an independent KTX 2.0 reader loads with the stated format, faces and
+//! levels, holding the GPU's images; the specular cube against its float64 twin; shards whose
+//! union is byte-identical to one run; re-runs that skip, resume and redo on --force; a bad
+//! probe that fails alone.
+
+mod common;
+
+use envlight::bake::{BakeOptions, Baker};
+use envlight::math::split_sum::prefiltered_cube;
+use envlight::math::synth::{smooth_env, Sky};
+use envlight::math::{convert, mip, Mapping, Orientation};
+use envlight::passes::Converter;
+use envlight::EnvMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn temp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("envlight-bake-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn probes(dir: &Path) -> Vec<EnvMap> {
+    let sky = Sky::default();
+    let maps = vec![
+        EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, smooth_env),
+        EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, move |d| sky.radiance(d)),
+        EnvMap::from_fn(Mapping::LatLong, 48, 24, 2, |d| {
+            let s = smooth_env(d);
+            [s[2], s[0], s[1]]
+        }),
+    ];
+    for (k, m) in maps.iter().enumerate() {
+        envlight::io::save_exr(m, dir.join(format!("p{k}.exr"))).unwrap();
+    }
+    maps
+}
+
+const SMALL: [&str; 8] = [
+    "--specular-size",
+    "16",
+    "--specular-levels",
+    "4",
+    "--irradiance-size",
+    "8",
+    "--samples",
+    "16",
+];
+
+fn bake(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .args(["--validation", "--device", "cpu", "bake"])
+        .args(SMALL)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn ok(o: &Output) {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+fn statuses(out: &Path, manifest: &str) -> Vec<(String, String)> {
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join(manifest)).unwrap()).unwrap();
+    m["probes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| {
+            (
+                e["input"]
+                    .as_str()
+                    .unwrap()
+                    .rsplit('/')
+                    .next()
+                    .unwrap()
+                    .to_string(),
+                e["status"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect()
+}
+
+fn small_options() -> BakeOptions {
+    BakeOptions {
+        specular_size: 16,
+        specular_levels: 4,
+        irradiance_size: 8,
+        samples: 16,
+        ..BakeOptions::default()
+    }
+}
+
+/// Each KTX2 file loads in the `ktx2` crate with R32G32B32A32_SFLOAT (or R16G16B16A16_SFLOAT),
+/// six faces, the levels asked, a linear BT.709 RGBSDA descriptor, and level data bit for bit
+/// equal to what `Baker` returns for the same map (half floats: their rounding of it).
+#[test]
+fn ktx2_files_load_in_an_independent_reader_with_the_gpu_images() {
+    let dir = temp("ktx2-in");
+    let out = temp("ktx2-out");
+    let maps = probes(&dir);
+    ok(&bake(&[
+        dir.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--dfg",
+    ]));
+    let ctx = common::ctx();
+    {
+        let baker = Baker::new(&ctx).unwrap();
+        let opts = small_options();
+        for (k, map) in maps.iter().enumerate() {
+            let baked = baker.bake(map, &Orientation::default(), &opts).unwrap();
+            for (file, levels, size) in [
+                ("specular.ktx2", baked.specular.clone(), 16u32),
+                ("irradiance.ktx2", vec![baked.irradiance.clone()], 8),
+            ] {
+                let bytes = std::fs::read(out.join(format!("p{k}.exr")).join(file)).unwrap();
+                let r = ktx2::Reader::new(&bytes[..]).unwrap();
+                let h = r.header();
+                assert_eq!(h.format, Some(ktx2::Format::R32G32B32A32_SFLOAT));
+                assert_eq!(
+                    (h.pixel_width, h.pixel_height, h.face_count),
+                    (size, size, 6)
+                );
+                assert_eq!((h.layer_count, h.pixel_depth), (0, 0));
+                assert_eq!(h.level_count as usize, levels.len());
+                assert_eq!(r.color_model(), Some(ktx2::ColorModel::RGBSDA));
+                assert_eq!(r.transfer_function(), Some(ktx2::TransferFunction::Linear));
+                for (level, want) in r.levels().zip(&levels) {
+                    let got: Vec<f32> = level
+                        .data
+                        .chunks_exact(4)
+                        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+                        .collect();
+                    let want: Vec<f32> = want.iter().flatten().copied().collect();
+                    assert_eq!(got.len(), want.len());
+                    assert!(got
+                        .iter()
+                        .zip(&want)
+                        .all(|(a, b)| a.to_bits() == b.to_bits()));
+                }
+            }
+        }
+        // The DFG table: 2D, one level, A + B in (0, 1].
+        let bytes = std::fs::read(out.join("dfg.ktx2")).unwrap();
+        let r = ktx2::Reader::new(&bytes[..]).unwrap();
+        assert_eq!(r.header().face_count, 1);
+        let t: Vec<f32> = r
+            .levels()
+            .next()
+            .unwrap()
+            .data
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        assert!(t
+            .chunks_exact(4)
+            .all(|v| v[0] + v[1] > 0.0 && v[0] + v[1] <= 1.0 + 1e-5));
+        // Half floats: the same images rounded to half.
+        let out16 = temp("ktx2-out16");
+        ok(&bake(&[
+            dir.to_str().unwrap(),
+            "-o",
+            out16.to_str().unwrap(),
+            "--texels",
+            "rgba16f",
+        ]));
+        let baked = baker
+            .bake(&maps[0], &Orientation::default(), &opts)
+            .unwrap();
+        let bytes = std::fs::read(out16.join("p0.exr/specular.ktx2")).unwrap();
+        let r = ktx2::Reader::new(&bytes[..]).unwrap();
+        assert_eq!(r.header().format, Some(ktx2::Format::R16G16B16A16_SFLOAT));
+        let level0: Vec<u16> = r
+            .levels()
+            .next()
+            .unwrap()
+            .data
+            .chunks_exact(2)
+            .map(|c| u16::from_le_bytes([c[0], c[1]]))
+            .collect();
+        let want: Vec<u16> = baked.specular[0]
+            .iter()
+            .flatten()
+            .map(|&v| half::f16::from_f32(v).to_bits())
+            .collect();
+        assert_eq!(level0, want);
+        let _ = std::fs::remove_dir_all(&out16);
+    }
+    common::finish(ctx);
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The specular cube's levels against `math::split_sum::prefiltered_cube` reading the float64
+/// MIP chain of the same paraboloid (converted in float64 as the GPU converts), on the sky
+/// whose sun is 5·10⁴ × the zenith: relative to the texel, or to the level's mean where the
+/// texel is darker. Bound 1e-4: the paraboloid's conversion in float32 (1e-6 of a sun texel)
+/// is carried through the trilinear reads (measured: printed).
+#[test]
+fn specular_cube_matches_its_float64_twin() {
+    let ctx = common::ctx();
+    {
+        let sky = Sky::default();
+        let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, move |d| sky.radiance(d));
+        let opts = small_options();
+        let baked = Baker::new(&ctx)
+            .unwrap()
+            .bake(&env, &Orientation::default(), &opts)
+            .unwrap();
+        let size = envlight::bake::dp_size(&env, &opts);
+        let (w, h) = Mapping::DualParaboloid.extent_for_size(size);
+        let ss = Converter::supersampling(
+            (Mapping::LatLong, env.width, env.height),
+            (Mapping::DualParaboloid, w, h),
+        );
+        let dp = convert::convert(
+            &env,
+            Mapping::DualParaboloid,
+            size,
+            Orientation::default().world_to_file(),
+            ss,
+        );
+        let want = prefiltered_cube(&mip::chain(&dp), 16, 4, 16, opts.bias);
+        for (k, (g, w)) in baked.specular.iter().zip(&want).enumerate() {
+            let mean = w.iter().map(|t| t[1]).sum::<f64>() / w.len() as f64;
+            let worst = g
+                .iter()
+                .zip(w)
+                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] as f64 - b[c]).abs() / b[c].max(mean)))
+                .fold(0.0, f64::max);
+            eprintln!("level {k}: worst {worst:.2e}");
+            assert!(worst < 1e-4, "level {k}: {worst:e}");
+        }
+    }
+    common::finish(ctx);
+}
+
+/// Shards 1/2 and 2/2 write every probe file byte for byte as one unsharded run does, and
+/// `--merge` joins their manifests.
+#[test]
+fn shards_are_byte_identical_to_one_run_and_merge() {
+    let dir = temp("shard-in");
+    probes(&dir);
+    let one = temp("shard-one");
+    let two = temp("shard-two");
+    let d = dir.to_str().unwrap();
+    ok(&bake(&[d, "-o", one.to_str().unwrap()]));
+    ok(&bake(&[d, "-o", two.to_str().unwrap(), "--shard", "1/2"]));
+    ok(&bake(&[d, "-o", two.to_str().unwrap(), "--shard", "2/2"]));
+    for k in 0..3 {
+        for f in ["sh.json", "irradiance.ktx2", "specular.ktx2"] {
+            let a = std::fs::read(one.join(format!("p{k}.exr")).join(f)).unwrap();
+            let b = std::fs::read(two.join(format!("p{k}.exr")).join(f)).unwrap();
+            assert!(
+                a == b,
+                "p{k}.exr/{f} differs between the sharded and the single run"
+            );
+        }
+    }
+    assert_eq!(statuses(&two, "manifest-shard-1-of-2.json").len(), 2);
+    assert_eq!(statuses(&two, "manifest-shard-2-of-2.json").len(), 1);
+    let o = Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .args(["bake", "--merge", "-o", two.to_str().unwrap()])
+        .output()
+        .unwrap();
+    ok(&o);
+    let merged = statuses(&two, "manifest.json");
+    assert_eq!(
+        merged.iter().map(|m| m.0.as_str()).collect::<Vec<_>>(),
+        ["p0.exr", "p1.exr", "p2.exr"]
+    );
+    for p in [&dir, &one, &two] {
+        let _ = std::fs::remove_dir_all(p);
+    }
+}
+
+/// An interrupted bake (here: one that only reached p0) resumes without redoing p0; a re-run
+/// skips everything; a corrupt probe fails alone, named, with a failing exit status; --force
+/// bakes again; no temporary file is left behind.
+#[test]
+fn reruns_resume_skip_and_fail_alone() {
+    let dir = temp("rerun-in");
+    probes(&dir);
+    let out = temp("rerun-out");
+    let o = out.to_str().unwrap();
+    let first = dir.join("p0.exr");
+    ok(&bake(&[first.to_str().unwrap(), "-o", o]));
+    let when = std::fs::metadata(out.join("p0.exr/specular.ktx2"))
+        .unwrap()
+        .modified()
+        .unwrap();
+    ok(&bake(&[dir.to_str().unwrap(), "-o", o]));
+    let s = statuses(&out, "manifest.json");
+    assert_eq!(s[0], ("p0.exr".into(), "skipped".into()));
+    assert!(s[1..].iter().all(|e| e.1 == "baked"), "{s:?}");
+    assert_eq!(
+        std::fs::metadata(out.join("p0.exr/specular.ktx2"))
+            .unwrap()
+            .modified()
+            .unwrap(),
+        when
+    );
+    // A truncated Radiance file among them.
+    std::fs::write(
+        dir.join("broken.hdr"),
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8 +X 16\n\x02\x02",
+    )
+    .unwrap();
+    let r = bake(&[dir.to_str().unwrap(), "-o", o]);
+    assert!(!r.status.success());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("broken.hdr") && err.contains("1 of 4 probes failed"),
+        "{err}"
+    );
+    let s = statuses(&out, "manifest.json");
+    assert_eq!(s.iter().filter(|e| e.1 == "skipped").count(), 3, "{s:?}");
+    assert_eq!(s.iter().find(|e| e.0 == "broken.hdr").unwrap().1, "failed");
+    std::fs::remove_file(dir.join("broken.hdr")).unwrap();
+    ok(&bake(&[dir.to_str().unwrap(), "-o", o, "--force"]));
+    assert!(statuses(&out, "manifest.json")
+        .iter()
+        .all(|e| e.1 == "baked"));
+    let leftovers: Vec<_> = walk(&out)
+        .into_iter()
+        .filter(|p| p.to_string_lossy().contains(".tmp-"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+    for p in [&dir, &out] {
+        let _ = std::fs::remove_dir_all(p);
+    }
+}
+
+fn walk(d: &Path) -> Vec<PathBuf> {
+    let mut v = Vec::new();
+    for e in std::fs::read_dir(d).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            v.extend(walk(&p));
+        } else {
+            v.push(p);
+        }
+    }
+    v
+}
+
+/// What the specular cube costs in accuracy: each level against the exact filter it stands
+/// for, P(r, α) = ∫ L·f·cos / ∫ f·cos with n = v = r, summed in float64 over every texel of
+/// the source lat-long (4 × 4 sub-cells for texels within 12 lobe widths of r, where the lobe
+/// varies across one texel), at 8 directions per level, on spiaggia's sun (10⁴ × the sky).
+/// The bake filters by 256 FIS samples from the MIP chain, so this is FIS's error, not a
+/// rounding: a compact sun is hit by a dozen samples of a narrow lobe, where lod clamps at 0
+/// (aliasing), and smeared by the MIP chain's box filter under a broad one. Measured worst
+/// per level at these 8 directions (printed with the RMS): 3.8e-2, 2.9e-1, 2.2e-1, 2.2e-1,
+/// 3.5e-1, 2.3e-1, 4.1e-1 (RMS 2e-2 to 2e-1); bounds at 1.3× those. Issue #12's goal, every
+/// level exact to 1e-3, needs the exact filter (or the sun extracted, issue #10), not FIS.
+#[test]
+fn specular_cube_error_against_the_exact_lobe_on_a_sun_probe() {
+    use envlight::math::brdf::{Brdf, Frame};
+    use envlight::math::split_sum::level_alpha;
+    use envlight::math::Coord;
+    use glam::DVec3;
+    let Some(dir) = common::probes() else {
+        return;
+    };
+    let env = envlight::io::load(
+        dir.join("spiaggia_di_mondello_1k.hdr"),
+        &envlight::io::LoadOptions::default(),
+    )
+    .unwrap();
+    let opts = BakeOptions::default();
+    let ctx = common::ctx();
+    let baked = Baker::new(&ctx)
+        .unwrap()
+        .bake(&env, &Orientation::default(), &opts)
+        .unwrap();
+    let (w, h) = (env.width, env.height);
+    // Texel centres, radiance (luminance) and solid angles of the source.
+    let mut texels = Vec::with_capacity((w * h) as usize);
+    for j in 0..h {
+        let (t0, t1) = (
+            std::f64::consts::PI * j as f64 / h as f64,
+            std::f64::consts::PI * (j + 1) as f64 / h as f64,
+        );
+        let omega = std::f64::consts::TAU / w as f64 * (t0.cos() - t1.cos());
+        for i in 0..w {
+            let c = move |u: f64, v: f64| {
+                Mapping::LatLong.coord_to_dir(Coord {
+                    layer: 0,
+                    u: (i as f64 + u) / w as f64,
+                    v: (j as f64 + v) / h as f64,
+                })
+            };
+            let t = env.texel(0, i, j);
+            texels.push((c(0.5, 0.5), t[1] as f64, omega, c));
+        }
+    }
+    let bounds = [0.0, 0.050, 0.371, 0.281, 0.285, 0.451, 0.303, 0.538];
+    let mut failures = Vec::new();
+    for k in 1..opts.specular_levels {
+        let alpha = level_alpha(k, opts.specular_levels);
+        let brdf = Brdf::Ggx {
+            alpha,
+            correlated: true,
+        };
+        let size = (opts.specular_size >> k).max(1);
+        let (mut worst, mut se, mut n) = (0.0f64, 0.0, 0);
+        for q in 0..8u32 {
+            let layer = q % 6;
+            let (i, j) = ((q * 7 + 3) % size, (q * 5 + 1) % size);
+            let r = Mapping::Cube.coord_to_dir(Coord {
+                layer,
+                u: (i as f64 + 0.5) / size as f64,
+                v: (j as f64 + 0.5) / size as f64,
+            });
+            let frame = Frame::new(r);
+            let width = (alpha.sqrt() * 12.0).max(0.05);
+            let (mut num, mut den) = (0.0, 0.0);
+            for (d, l, omega, c) in &texels {
+                if d.dot(r) > width.cos() {
+                    for a in 0..4 {
+                        for b in 0..4 {
+                            let dd: DVec3 = c((a as f64 + 0.5) / 4.0, (b as f64 + 0.5) / 4.0);
+                            let wgt = brdf.eval_cos(DVec3::Z, frame.to_local(dd)) * omega / 16.0;
+                            num += wgt * l;
+                            den += wgt;
+                        }
+                    }
+                } else {
+                    let wgt = brdf.eval_cos(DVec3::Z, frame.to_local(*d)) * omega;
+                    num += wgt * l;
+                    den += wgt;
+                }
+            }
+            let exact = num / den;
+            let got =
+                baked.specular[k as usize][((layer * size + j) * size + i) as usize][1] as f64;
+            let e = (got - exact).abs() / exact;
+            worst = worst.max(e);
+            se += e * e;
+            n += 1;
+        }
+        let rms = (se / n as f64).sqrt();
+        eprintln!("level {k} (α {alpha:.3}, {size}²): worst {worst:.2e}, RMS {rms:.2e}");
+        if worst >= bounds[k as usize] {
+            failures.push(format!("level {k}: {worst:e}"));
+        }
+    }
+    common::finish(ctx);
+    assert!(failures.is_empty(), "{failures:?}");
+}
