@@ -8,8 +8,7 @@ mod common;
 use envlight::bake::{BakeOptions, Baker};
 use envlight::math::split_sum::prefiltered_cube;
 use envlight::math::synth::{smooth_env, Sky};
-use envlight::math::{convert, mip, Mapping, Orientation};
-use envlight::passes::Converter;
+use envlight::math::{mip, Mapping, Orientation};
 use envlight::EnvMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -211,19 +210,7 @@ fn specular_cube_matches_its_float64_twin() {
             .unwrap()
             .bake(&env, &Orientation::default(), &opts)
             .unwrap();
-        let size = envlight::bake::dp_size(&env, &opts);
-        let (w, h) = Mapping::DualParaboloid.extent_for_size(size);
-        let ss = Converter::supersampling(
-            (Mapping::LatLong, env.width, env.height),
-            (Mapping::DualParaboloid, w, h),
-        );
-        let dp = convert::convert(
-            &env,
-            Mapping::DualParaboloid,
-            size,
-            Orientation::default().world_to_file(),
-            ss,
-        );
+        let dp = common::dp_f64(&env, envlight::bake::dp_size(&env, &opts));
         let want = prefiltered_cube(&mip::chain(&dp), 16, 4, 16, opts.bias);
         for (k, (g, w)) in baked.specular.iter().zip(&want).enumerate() {
             let mean = w.iter().map(|t| t[1]).sum::<f64>() / w.len() as f64;

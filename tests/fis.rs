@@ -364,24 +364,12 @@ fn fis_stays_finite_with_a_sun() {
 /// disagree on which samples fall below the horizon.
 #[test]
 fn fis_pass_matches_its_float64_twin() {
-    use envlight::math::{convert, fis as fis64, sequence};
-    use envlight::passes::Converter;
+    use envlight::math::{fis as fis64, sequence};
     let ctx = common::ctx();
     {
         let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, smooth_env);
         let size = 32;
-        let (w, h) = Mapping::DualParaboloid.extent_for_size(size);
-        let ss = Converter::supersampling(
-            (Mapping::LatLong, env.width, env.height),
-            (Mapping::DualParaboloid, w, h),
-        );
-        let dp = convert::convert(
-            &env,
-            Mapping::DualParaboloid,
-            size,
-            envlight::Orientation::default().world_to_file(),
-            ss,
-        );
+        let dp = common::dp_f64(&env, size);
         let chain = mip::chain(&dp);
         let cam = sphere_camera(20);
         for (kind, rotate) in [

@@ -124,24 +124,11 @@ fn prefiltered_levels_match_their_float64_twin() {
 /// Measured 1.2e-6 relative (printed); bound 1e-5.
 #[test]
 fn render_matches_its_float64_twin() {
-    use envlight::math::{convert, Orientation};
-    use envlight::passes::Converter;
     let ctx = common::ctx();
     {
         let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, smooth_env);
         let dp_size = 32;
-        let (w, h) = Mapping::DualParaboloid.extent_for_size(dp_size);
-        let ss = Converter::supersampling(
-            (Mapping::LatLong, env.width, env.height),
-            (Mapping::DualParaboloid, w, h),
-        );
-        let dp = convert::convert(
-            &env,
-            Mapping::DualParaboloid,
-            dp_size,
-            Orientation::default().world_to_file(),
-            ss,
-        );
+        let dp = common::dp_f64(&env, dp_size);
         let settings = SplitSumSettings {
             size: Some(32),
             levels: 3,

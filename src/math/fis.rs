@@ -52,6 +52,18 @@ pub fn lookup(chain: &[Level], d: DVec3, lod: f64) -> [f64; 3] {
     }
 }
 
+/// The lod a FIS sample of density `pdf` (one of `samples`) along `d` reads from a chain whose
+/// level 0 is `size` a side: ½·log2(Ωs/Ωp) + `bias`, Ωs = 1/(N·pdf), clamped to [0,
+/// `max_lod`]; the last level where the pdf is 0.
+pub fn sample_lod(pdf: f64, samples: u32, d: DVec3, size: u32, bias: f64, max_lod: f64) -> f64 {
+    if pdf > 0.0 {
+        let omega_s = 1.0 / (samples as f64 * pdf);
+        (0.5 * (omega_s / texel_solid_angle(d, size)).log2() + bias).clamp(0.0, max_lod)
+    } else {
+        max_lod
+    }
+}
+
 /// The FIS estimate of ∫ f·cos·L dω at a surface of normal `n` seen along `v` (unit, towards
 /// the eye), with `samples` points, lod `bias`, and the per-pixel rotation `offset` ([0, 0]
 /// when off). Shadows are not traced here.
@@ -75,14 +87,8 @@ pub fn estimate(
             continue;
         }
         let w = brdf.weight(wo, wi);
-        let pdf = brdf.pdf(wo, wi);
         let d = frame.to_world(wi).normalize();
-        let lod = if pdf > 0.0 {
-            let omega_s = 1.0 / (samples as f64 * pdf);
-            (0.5 * (omega_s / texel_solid_angle(d, size)).log2() + bias).clamp(0.0, max_lod)
-        } else {
-            max_lod
-        };
+        let lod = sample_lod(brdf.pdf(wo, wi), samples, d, size, bias, max_lod);
         let l = lookup(chain, d, lod);
         for c in 0..3 {
             sum[c] += w * l[c];

@@ -86,6 +86,18 @@ pub fn project(brdf: &Brdf, lmax: u32, wo: DVec3, panels: u32) -> Vec<f64> {
         basis_into(lmax, DVec3::new(-wo.x, -wo.y, wo.z), &mut c);
         return c;
     }
+    for_each_node(brdf, wo, panels, |wi, k| {
+        basis_into(lmax, wi, &mut y);
+        for (ci, yi) in c.iter_mut().zip(&y) {
+            *ci += k * yi;
+        }
+    });
+    c
+}
+
+/// Calls `f(ωᵢ, k)` for every node of the rule in the module docs (`panels` azimuth panels)
+/// whose weight is not zero, k = node weight × f·cos/pdf: Σ k·g(ωᵢ) ≈ ∫ f·cos·g dωᵢ.
+pub fn for_each_node(brdf: &Brdf, wo: DVec3, panels: u32, mut f: impl FnMut(DVec3, f64)) {
     let (x, w) = gauss4();
     let h = 1.0 / panels as f64;
     for (a0, a1) in graded_panels(GRADED_LEVELS) {
@@ -98,19 +110,13 @@ pub fn project(brdf: &Brdf, lmax: u32, wo: DVec3, panels: u32) -> Vec<f64> {
                     ];
                     let wi = brdf.sample(wo, u);
                     let weight = brdf.weight(wo, wi);
-                    if weight == 0.0 {
-                        continue;
-                    }
-                    basis_into(lmax, wi, &mut y);
-                    let k = 0.25 * wa * wb * (a1 - a0) * h * weight;
-                    for (ci, yi) in c.iter_mut().zip(&y) {
-                        *ci += k * yi;
+                    if weight != 0.0 {
+                        f(wi, 0.25 * wa * wb * (a1 - a0) * h * weight);
                     }
                 }
             }
         }
     }
-    c
 }
 
 /// Panels of the first uniform, graded geometrically toward both ends: [0, 2⁻ᴶ], [2⁻ᴶ, 2¹⁻ᴶ],

@@ -20,11 +20,11 @@
 //!   sampler's unit square, 4 × 4 Gauss–Legendre nodes a panel).
 
 use super::brdf::{local_view, Brdf, Frame};
-use super::fis::lookup;
+use super::fis::{lookup, sample_lod};
 use super::mapping::{Coord, Mapping};
-use super::mip::{texel_solid_angle, Level};
+use super::mip::Level;
 use super::sequence::hammersley;
-use super::sh_brdf::{gauss4, graded_panels, GRADED_LEVELS, PANELS};
+use super::sh_brdf::{for_each_node, PANELS};
 pub use crate::abi::split_sum::MU_MIN;
 use glam::DVec3;
 
@@ -51,31 +51,12 @@ pub fn ggx(alpha: f64, correlated: bool) -> Brdf {
 pub fn dfg(alpha: f64, correlated: bool, mu: f64) -> [f64; 2] {
     let mu = mu.clamp(MU_MIN, 1.0);
     let wo = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
-    let brdf = ggx(alpha, correlated);
-    let (x, w) = gauss4();
-    let h = 1.0 / PANELS as f64;
     let mut ab = [0.0; 2];
-    for (a0, a1) in graded_panels(GRADED_LEVELS) {
-        for pb in 0..PANELS {
-            for (xa, wa) in x.iter().zip(&w) {
-                for (xb, wb) in x.iter().zip(&w) {
-                    let u = [
-                        a0 + (a1 - a0) * 0.5 * (xa + 1.0),
-                        (pb as f64 + 0.5 * (xb + 1.0)) * h,
-                    ];
-                    let wi = brdf.sample(wo, u);
-                    let weight = brdf.weight(wo, wi);
-                    if weight == 0.0 {
-                        continue;
-                    }
-                    let k = 0.25 * wa * wb * (a1 - a0) * h * weight;
-                    let fc = fresnel_c(wo, wi);
-                    ab[0] += k * (1.0 - fc);
-                    ab[1] += k * fc;
-                }
-            }
-        }
-    }
+    for_each_node(&ggx(alpha, correlated), wo, PANELS, |wi, k| {
+        let fc = fresnel_c(wo, wi);
+        ab[0] += k * (1.0 - fc);
+        ab[1] += k * fc;
+    });
     ab
 }
 
@@ -148,14 +129,8 @@ pub fn prefilter(chain: &[Level], alpha: f64, r: DVec3, samples: u32, bias: f64)
             continue;
         }
         let w = brdf.weight(DVec3::Z, wi);
-        let pdf = brdf.pdf(DVec3::Z, wi);
         let d = frame.to_world(wi).normalize();
-        let lod = if pdf > 0.0 {
-            let omega_s = 1.0 / (samples as f64 * pdf);
-            (0.5 * (omega_s / texel_solid_angle(d, size)).log2() + bias).clamp(0.0, max_lod)
-        } else {
-            max_lod
-        };
+        let lod = sample_lod(brdf.pdf(DVec3::Z, wi), samples, d, size, bias, max_lod);
         let l = lookup(chain, d, lod);
         for c in 0..3 {
             sum[c] += w * l[c];

@@ -91,3 +91,22 @@ pub fn dump_pair(name: &str, actual: &envlight::EnvMap, expected: &envlight::Env
     let _ = envlight::io::save_exr(expected, dir.join(format!("{name}_expected.exr")));
     eprintln!("wrote {}/{name}_{{actual,expected}}.exr", dir.display());
 }
+
+/// The float64 conversion of `env` to a dual paraboloid `size` a side, at the supersampling
+/// the GPU converter picks for it: the level 0 the GPU's MIP chains are tested against.
+#[allow(dead_code)]
+pub fn dp_f64(env: &envlight::EnvMap, size: u32) -> envlight::EnvMap {
+    use envlight::math::{convert, Mapping};
+    let (w, h) = Mapping::DualParaboloid.extent_for_size(size);
+    let ss = envlight::passes::Converter::supersampling(
+        (env.mapping, env.width, env.height),
+        (Mapping::DualParaboloid, w, h),
+    );
+    convert::convert(
+        env,
+        Mapping::DualParaboloid,
+        size,
+        envlight::Orientation::default().world_to_file(),
+        ss,
+    )
+}

@@ -551,6 +551,22 @@ fn front(p: &[Point]) -> Vec<usize> {
         .collect()
 }
 
+/// The front of `p` as "≥ T ms: **label** (E%)" steps.
+fn front_line(p: &[Point]) -> String {
+    front(p)
+        .iter()
+        .map(|&i| {
+            format!(
+                "≥ {:.2} ms: **{}** ({:.2}%)",
+                p[i].ms,
+                p[i].label,
+                100.0 * p[i].rms
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(" → ")
+}
+
 fn material_names(rows: &[Row]) -> Vec<String> {
     let mut v: Vec<String> = Vec::new();
     for r in rows {
@@ -574,19 +590,7 @@ fn markdown(rows: &[Row], settings: &str) -> String {
     let mats = material_names(rows);
     for m in &mats {
         let p = points(rows, m);
-        let f = front(&p);
-        let steps: Vec<String> = f
-            .iter()
-            .map(|&i| {
-                format!(
-                    "≥ {:.2} ms: **{}** ({:.2}%)",
-                    p[i].ms,
-                    p[i].label,
-                    100.0 * p[i].rms
-                )
-            })
-            .collect();
-        let _ = writeln!(md, "- **{m}**: {}", steps.join(" → "));
+        let _ = writeln!(md, "- **{m}**: {}", front_line(&p));
     }
     md.push_str(
         "\nWhen the precomputation is amortised (an engine shades many frames from one \
@@ -598,19 +602,7 @@ fn markdown(rows: &[Row], settings: &str) -> String {
         for q in &mut p {
             q.ms -= q.pre;
         }
-        let f = front(&p);
-        let steps: Vec<String> = f
-            .iter()
-            .map(|&i| {
-                format!(
-                    "≥ {:.2} ms: **{}** ({:.2}%)",
-                    p[i].ms,
-                    p[i].label,
-                    100.0 * p[i].rms
-                )
-            })
-            .collect();
-        let _ = writeln!(md, "- **{m}**: {}", steps.join(" → "));
+        let _ = writeln!(md, "- **{m}**: {}", front_line(&p));
     }
     md.push_str(
         "\nLight extraction (issue #10) is not built yet; its on/off rows join the report \
