@@ -7,11 +7,11 @@ use crate::error::{Error, Result};
 use crate::math::brdf::Brdf;
 use crate::math::camera::{Camera, Shape};
 use crate::math::Orientation;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// A scene file.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     /// The distant light.
@@ -35,7 +35,7 @@ pub struct Scene {
 }
 
 /// The environment map and how to read it.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Environment {
     /// The file, relative to the scene file.
@@ -73,7 +73,7 @@ impl Environment {
 }
 
 /// Settings of filtered importance sampling shared by its materials.
-#[derive(Clone, Copy, Debug, Default, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct FisSettings {
     /// Side of each dual-paraboloid half; by default about as many texels as the source.
@@ -83,7 +83,7 @@ pub struct FisSettings {
 
 /// Settings of split-sum shading shared by its materials (one prefiltered chain serves every
 /// GGX roughness and both Smith forms: at n = v they agree).
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SplitSumSettings {
     /// Side of the prefiltered chain's level 0; by default the FIS paraboloid's, at most
@@ -127,7 +127,7 @@ impl Default for SplitSumSettings {
 }
 
 /// Settings of the Monte Carlo reference.
-#[derive(Clone, Copy, Debug, Deserialize)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct McSettings {
     /// Combine BRDF and environment sampling (otherwise BRDF sampling alone).
@@ -162,7 +162,7 @@ impl Default for McSettings {
 }
 
 /// An object: a shape and a material.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 pub struct SceneObject {
     /// The shape (`shape = "sphere"` or `"plane"` with its fields).
     #[serde(flatten)]
@@ -172,7 +172,7 @@ pub struct SceneObject {
 }
 
 /// A material: a BRDF, a colour and a technique.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 pub struct Material {
     /// The BRDF and its parameters.
     #[serde(flatten)]
@@ -194,7 +194,7 @@ fn white() -> [f64; 3] {
 pub const DEFAULT_FIS_BIAS: f64 = defaults::FIS_BIAS;
 
 /// How a material is shaded.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
 pub enum Technique {
     /// One lookup of the reflected direction (mirrors).

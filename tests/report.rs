@@ -36,6 +36,11 @@ fn quick_report_writes_its_three_files() {
         let e = rms(r);
         assert!(e.is_finite() && e >= 0.0, "{r:?}");
         assert!(r[col("gpu_ms")].parse::<f64>().unwrap() >= 0.0);
+        // The whole process includes the device's creation and the map's load.
+        assert!(
+            r[col("process_s")].parse::<f64>().unwrap()
+                > r[col("render_wall_s")].parse::<f64>().unwrap()
+        );
     }
     // Monte Carlo at 4x the samples halves its noise: at 256 it must beat 64 on each probe
     // and material (the reference's own noise, at 2 × 64 spp, is below either's).

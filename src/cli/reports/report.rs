@@ -4,7 +4,7 @@
 //! material) and report.png (error against time, one panel per material).
 
 use super::super::{context, Global};
-use anyhow::{anyhow, Context as _, Result};
+use anyhow::{anyhow, bail, Context as _, Result};
 use clap::Args;
 use envlight::math::brdf::Brdf;
 use envlight::math::camera::{sphere_camera, trace, Camera, Shape};
@@ -80,6 +80,7 @@ struct Row {
     gpu_ms: f64,
     pre_ms: f64,
     wall_s: f64,
+    process_s: f64,
     noise: f64,
 }
 
@@ -217,6 +218,32 @@ fn scene(
     }
 }
 
+/// Whole-process seconds of `envlight render` on `sc` (its environment a file): the load, the
+/// precomputation, the shading and the EXR written, as a user runs it.
+fn process_seconds(g: &Global, sc: &Scene, dir: &Path) -> Result<f64> {
+    let file = dir.join("scene.toml");
+    std::fs::write(&file, toml::to_string(sc)?).with_context(|| file.display().to_string())?;
+    let mut cmd = std::process::Command::new(std::env::current_exe()?);
+    if let Some(d) = &g.device {
+        cmd.args(["--device", d]);
+    }
+    cmd.arg("render")
+        .arg(&file)
+        .arg("-o")
+        .arg(dir.join("frame.exr"));
+    let t0 = Instant::now();
+    let o = cmd.output()?;
+    let s = t0.elapsed().as_secs_f64();
+    if !o.status.success() {
+        bail!(
+            "envlight render {}: {}",
+            file.display(),
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    Ok(s)
+}
+
 /// Pixels that see the sphere away from its silhouette, with their tile (8 × 8 pixels).
 fn sphere_pixels(cam: &Camera) -> Vec<(usize, u32)> {
     let tiles_x = cam.width.div_ceil(8);
@@ -296,8 +323,13 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     }
     let mut rows = Vec::new();
     let started = Instant::now();
+    let scratch = std::env::temp_dir().join(format!("envlight-report-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch).with_context(|| scratch.display().to_string())?;
     for (file, kind) in probes(quick) {
         let path = dir.join(file);
+        let absolute = path
+            .canonicalize()
+            .with_context(|| format!("report: probe {} (set --probes)", path.display()))?;
         let env = envlight::io::load(&path, &envlight::io::LoadOptions::default())
             .with_context(|| format!("report: probe {} (set --probes)", path.display()))?;
         for (name, brdf) in materials(quick) {
@@ -321,6 +353,9 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
                 let r = renderer.render(&sc, &env)?;
                 let wall_s = t0.elapsed().as_secs_f64();
                 let (rms, bias, tile) = errors(&r.frame, &truth, &pixels);
+                let mut on_disk = sc.clone();
+                on_disk.environment.file = absolute.clone();
+                let process_s = process_seconds(g, &on_disk, &scratch)?;
                 let per_frame = |k: PassKind| {
                     matches!(
                         k,
@@ -348,6 +383,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
                     gpu_ms,
                     pre_ms,
                     wall_s,
+                    process_s,
                     noise,
                 };
                 eprintln!(
@@ -358,6 +394,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
             }
         }
     }
+    let _ = std::fs::remove_dir_all(&scratch);
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
     write_csv(&out.join("report.csv"), &rows)?;
@@ -468,12 +505,12 @@ fn split_sweep(
 
 fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     let mut s = String::from(
-        "technique,params,probe,probe_kind,material,relative_rms,mean_bias,worst_tile,gpu_ms,precompute_gpu_ms,render_wall_s,reference_noise\n",
+        "technique,params,probe,probe_kind,material,relative_rms,mean_bias,worst_tile,gpu_ms,precompute_gpu_ms,render_wall_s,process_s,reference_noise\n",
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.4},{:.4},{:.4},{:.3e}",
+            "{},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.4},{:.4},{:.4},{:.4},{:.3e}",
             r.technique,
             r.params,
             r.probe,
@@ -485,6 +522,7 @@ fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             r.gpu_ms,
             r.pre_ms,
             r.wall_s,
+            r.process_s,
             r.noise
         );
     }
@@ -502,6 +540,7 @@ struct Point {
     bias: f64,
     tile: f64,
     pre: f64,
+    process: f64,
 }
 
 fn points(rows: &[Row], material: &str) -> Vec<Point> {
@@ -526,6 +565,7 @@ fn points(rows: &[Row], material: &str) -> Vec<Point> {
                 bias: v.iter().map(|r| r.bias.abs()).sum::<f64>() / n,
                 tile: v.iter().map(|r| r.tile).fold(0.0, f64::max),
                 pre: v.iter().map(|r| r.pre_ms).sum::<f64>() / n,
+                process: v.iter().map(|r| r.process_s).sum::<f64>() / n,
                 label,
                 technique,
             }
@@ -613,12 +653,12 @@ fn markdown(rows: &[Row], settings: &str) -> String {
         let f = front(&p);
         let _ = writeln!(
             md,
-            "\n## {m}\n\n| technique | mean rel. RMS | worst probe | mean abs bias | worst tile | GPU ms | of it precompute | front |\n|---|---|---|---|---|---|---|---|"
+            "\n## {m}\n\n| technique | mean rel. RMS | worst probe | mean abs bias | worst tile | GPU ms | of it precompute | whole process s | front |\n|---|---|---|---|---|---|---|---|---|"
         );
         for (i, q) in p.iter().enumerate() {
             let _ = writeln!(
                 md,
-                "| {} | {:.2}% | {:.2}% | {:.2}% | {:.2}% | {:.2} | {:.2} | {} |",
+                "| {} | {:.2}% | {:.2}% | {:.2}% | {:.2}% | {:.2} | {:.2} | {:.3} | {} |",
                 q.label,
                 100.0 * q.rms,
                 100.0 * q.worst,
@@ -626,6 +666,7 @@ fn markdown(rows: &[Row], settings: &str) -> String {
                 100.0 * q.tile,
                 q.ms,
                 q.pre,
+                q.process,
                 if f.contains(&i) { "yes" } else { "" }
             );
         }
@@ -641,11 +682,11 @@ fn markdown(rows: &[Row], settings: &str) -> String {
             100.0 * noise
         );
     }
-    md.push_str("\n## Per probe\n\n| probe | kind | material | technique | rel. RMS | bias | worst tile | GPU ms | wall s |\n|---|---|---|---|---|---|---|---|---|\n");
+    md.push_str("\n## Per probe\n\n| probe | kind | material | technique | rel. RMS | bias | worst tile | GPU ms | render wall s | whole process s |\n|---|---|---|---|---|---|---|---|---|---|\n");
     for r in rows {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {:.2}% | {:+.2}% | {:.2}% | {:.2} | {:.3} |",
+            "| {} | {} | {} | {} | {:.2}% | {:+.2}% | {:.2}% | {:.2} | {:.3} | {:.3} |",
             r.probe,
             r.kind,
             r.material,
@@ -654,7 +695,8 @@ fn markdown(rows: &[Row], settings: &str) -> String {
             100.0 * r.bias,
             100.0 * r.tile,
             r.gpu_ms,
-            r.wall_s
+            r.wall_s,
+            r.process_s
         );
     }
     md
@@ -781,6 +823,7 @@ mod tests {
             bias: 0.0,
             tile: 0.0,
             pre: 0.0,
+            process: 0.0,
         }
     }
 
