@@ -93,6 +93,21 @@ struct Output {
     sha256: String,
 }
 
+/// A probe as the reader thread hands it over.
+enum Prepared {
+    /// Unchanged since a previous run: its entry, marked skipped.
+    Skip(Entry),
+    /// To bake: the decoded map, or why it could not be read.
+    Bake {
+        path: PathBuf,
+        input: String,
+        input_sha256: String,
+        map: Result<EnvMap>,
+        /// Seconds spent reading, hashing and decoding it.
+        read_s: f64,
+    },
+}
+
 /// One probe in the manifest.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct Entry {
@@ -441,64 +456,106 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
         ProgressStyle::with_template("{bar:30} {pos}/{len} probes, ETA {eta} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let mut entries = Vec::new();
-    for path in &mine {
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().to_string())
-            .unwrap_or_default();
-        pb.set_message(name.clone());
-        let input = path.to_string_lossy().replace('\\', "/");
-        let t0 = Instant::now();
-        let bytes = std::fs::read(path);
-        let input_sha256 = bytes.as_ref().map(|b| sha256(b)).unwrap_or_default();
-        let done = previous
-            .iter()
-            .find(|e| e.input == input && e.input_sha256 == input_sha256 && outputs_intact(out, e));
-        let entry = match (done, a.force) {
-            (Some(e), false) => Entry {
-                status: "skipped".into(),
-                ..e.clone()
-            },
-            _ => {
-                let result = bytes
-                    .map_err(anyhow::Error::from)
-                    .and_then(|b| {
-                        let map = envlight::io::load_bytes(path, &b, &LoadOptions::default())?;
-                        let baked = baker.bake(&map, &Orientation::default(), &options)?;
-                        let outputs =
-                            write_probe(out, &out.join(&name), &baked, &options, &format, texels)?;
-                        Ok((outputs, baked.timings.iter().map(|t| t.ms).sum::<f64>()))
-                    })
-                    .with_context(|| path.display().to_string());
-                match result {
-                    Ok((outputs, gpu_ms)) => Entry {
-                        input,
-                        input_sha256,
-                        status: "baked".into(),
-                        error: None,
-                        outputs,
-                        seconds: t0.elapsed().as_secs_f64(),
-                        gpu_ms,
-                    },
-                    Err(e) => {
-                        pb.suspend(|| eprintln!("error: {e:#}"));
-                        Entry {
+    // A reader thread reads, hashes, checks and decodes the next probe while this one bakes
+    // and its files are written; the channel holds one probe, so memory stays bounded.
+    let (tx, rx) = std::sync::mpsc::sync_channel::<Prepared>(1);
+    let force = a.force;
+    let entries = std::thread::scope(|scope| {
+        let previous = &previous;
+        let mine = &mine;
+        scope.spawn(move || {
+            for path in mine {
+                let t0 = Instant::now();
+                let input = path.to_string_lossy().replace('\\', "/");
+                let bytes = std::fs::read(path);
+                let input_sha256 = bytes.as_ref().map(|b| sha256(b)).unwrap_or_default();
+                let done = previous.iter().find(|e| {
+                    e.input == input && e.input_sha256 == input_sha256 && outputs_intact(out, e)
+                });
+                let job = match (done, force) {
+                    (Some(e), false) => Prepared::Skip(Entry {
+                        status: "skipped".into(),
+                        ..e.clone()
+                    }),
+                    _ => {
+                        let map = bytes.map_err(anyhow::Error::from).and_then(|b| {
+                            Ok(envlight::io::load_bytes(path, &b, &LoadOptions::default())?)
+                        });
+                        Prepared::Bake {
+                            path: path.clone(),
                             input,
                             input_sha256,
-                            status: "failed".into(),
-                            error: Some(format!("{e:#}")),
-                            outputs: Vec::new(),
-                            seconds: t0.elapsed().as_secs_f64(),
-                            gpu_ms: 0.0,
+                            map,
+                            read_s: t0.elapsed().as_secs_f64(),
+                        }
+                    }
+                };
+                if tx.send(job).is_err() {
+                    return;
+                }
+            }
+        });
+        let mut entries = Vec::new();
+        for job in rx {
+            let entry = match job {
+                Prepared::Skip(e) => e,
+                Prepared::Bake {
+                    path,
+                    input,
+                    input_sha256,
+                    map,
+                    read_s,
+                } => {
+                    let t0 = Instant::now();
+                    let name = path
+                        .file_name()
+                        .map(|n| n.to_string_lossy().to_string())
+                        .unwrap_or_default();
+                    pb.set_message(name.clone());
+                    let result = map
+                        .and_then(|map| {
+                            let baked = baker.bake(&map, &Orientation::default(), &options)?;
+                            let outputs = write_probe(
+                                out,
+                                &out.join(&name),
+                                &baked,
+                                &options,
+                                &format,
+                                texels,
+                            )?;
+                            Ok((outputs, baked.timings.iter().map(|t| t.ms).sum::<f64>()))
+                        })
+                        .with_context(|| path.display().to_string());
+                    match result {
+                        Ok((outputs, gpu_ms)) => Entry {
+                            input,
+                            input_sha256,
+                            status: "baked".into(),
+                            error: None,
+                            outputs,
+                            seconds: read_s + t0.elapsed().as_secs_f64(),
+                            gpu_ms,
+                        },
+                        Err(e) => {
+                            pb.suspend(|| eprintln!("error: {e:#}"));
+                            Entry {
+                                input,
+                                input_sha256,
+                                status: "failed".into(),
+                                error: Some(format!("{e:#}")),
+                                outputs: Vec::new(),
+                                seconds: read_s + t0.elapsed().as_secs_f64(),
+                                gpu_ms: 0.0,
+                            }
                         }
                     }
                 }
-            }
-        };
-        entries.push(entry);
-        pb.inc(1);
-    }
+            };
+            entries.push(entry);
+            pb.inc(1);
+        }
+        entries
+    });
     pb.finish_and_clear();
     let manifest = Manifest {
         settings,
