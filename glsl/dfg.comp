@@ -11,22 +11,12 @@ layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 
 #include "mappings.glsl"
 #include "brdf.glsl"
+#include "graded.glsl"
 
 layout(std430, set = 0, binding = BINDING_DFG_TABLE) buffer Table { vec2 table[]; };
 
 // The push block, generated from src/abi.rs.
 PUSH_DfgPush
-
-vec2 lower_panel(uint k) {
-    const uint J = SH_BRDF_GRADED_LEVELS;
-    return vec2(k == 0u ? 0.0 : exp2(-float(J - k + 1u)), exp2(-float(J - k)));
-}
-
-vec2 graded_panel(uint k) {
-    if (k < SH_BRDF_GRADED_LEVELS) return lower_panel(k);
-    vec2 p = lower_panel(2u * SH_BRDF_GRADED_LEVELS - 1u - k);
-    return vec2(1.0 - p.y, 1.0 - p.x);
-}
 
 void main() {
     uint id = gl_GlobalInvocationID.x;

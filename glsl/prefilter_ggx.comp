@@ -11,6 +11,7 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 #include "mappings.glsl"
 #include "brdf.glsl"
 #include "sequence.glsl"
+#include "fis.glsl"
 
 layout(set = 0, binding = BINDING_PREFILTER_GGX_SRC) uniform sampler2DArray src;
 layout(rgba32f, set = 0, binding = BINDING_PREFILTER_GGX_DST) uniform writeonly image2DArray dst;
@@ -40,7 +41,6 @@ void main() {
         shading_frame(r, t, bt);
         Brdf b = Brdf(BRDF_GGX, pc.alpha, 0.0);
         const vec3 wo = vec3(0.0, 0.0, 1.0);
-        float k = 2.0 / float(pc.src_size);
         vec3 sum = vec3(0.0);
         float total = 0.0;
         for (uint i = 0u; i < pc.samples; i++) {
@@ -49,12 +49,7 @@ void main() {
             float w = brdf_weight(b, wo, wi);
             float pdf = brdf_pdf(b, wo, wi);
             vec3 d = normalize(t * wi.x + bt * wi.y + r * wi.z);
-            float lod = pc.src_max_lod;
-            if (pdf > 0.0) {
-                float y1 = 1.0 + abs(d.y);
-                float omega_s = 1.0 / (float(pc.samples) * pdf);
-                lod = clamp(0.5 * log2(omega_s / (y1 * y1 * k * k)) + pc.bias, 0.0, pc.src_max_lod);
-            }
+            float lod = fis_lod(pdf, pc.samples, d, pc.src_size, pc.bias, pc.src_max_lod);
             sum += w * src_lookup(d, lod);
             total += w;
         }

@@ -19,6 +19,7 @@ layout(constant_id = 2) const uint BRDF = 0u;
 #include "mappings.glsl"
 #include "sh.glsl"
 #include "brdf.glsl"
+#include "graded.glsl"
 
 layout(std430, set = 0, binding = BINDING_SH_BRDF_TABLE) buffer Table { float table[]; };
 
@@ -35,19 +36,6 @@ vec3 grid_view(uint i, uint j) {
     float q = dot(st, st);
     vec3 d = vec3(2.0 * st, 1.0 - q) / (1.0 + q);
     return local_view(d, vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0), vec3(0.0, 0.0, 1.0));
-}
-
-// Panel k of 2·SH_BRDF_GRADED_LEVELS over [0, 1]: [0, 2⁻ᴶ], [2⁻ᴶ, 2¹⁻ᴶ], …, [¼, ½], then the
-// same mirrored about ½.
-vec2 lower_panel(uint k) {
-    const uint J = SH_BRDF_GRADED_LEVELS;
-    return vec2(k == 0u ? 0.0 : exp2(-float(J - k + 1u)), exp2(-float(J - k)));
-}
-
-vec2 graded_panel(uint k) {
-    if (k < SH_BRDF_GRADED_LEVELS) return lower_panel(k);
-    vec2 p = lower_panel(2u * SH_BRDF_GRADED_LEVELS - 1u - k);
-    return vec2(1.0 - p.y, 1.0 - p.x);
 }
 
 void main() {

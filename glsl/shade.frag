@@ -15,6 +15,7 @@
 #include "scene.glsl"
 #include "sequence.glsl"
 #include "brdf.glsl"
+#include "fis.glsl"
 
 layout(set = 0, binding = BINDING_SHADE_NORMAL) uniform sampler2DArray gbuf_normal;
 layout(set = 0, binding = BINDING_SHADE_VIEW) uniform sampler2DArray gbuf_view;
@@ -59,12 +60,6 @@ vec3 dp_lookup(vec3 d, float lod) {
     return v.a > 0.0 ? v.rgb / v.a : vec3(0.0);
 }
 
-// Solid angle of a level-0 texel at d: 4/(1+s²+t²)² · (2/size)², and 1+s²+t² = 2/(1+|d.y|).
-float dp_texel_solid_angle(vec3 d) {
-    float k = 2.0 / float(pc.dp_size), y1 = 1.0 + abs(d.y);
-    return y1 * y1 * k * k;
-}
-
 // Bilinear lookup in a w x w/2 lat-long map stored at pre[off...], wrapping in u.
 vec3 prefiltered_lookup(uint off, int w, vec3 d) {
     int h = w / 2;
@@ -98,11 +93,7 @@ vec3 fis(Object ob, vec3 n, vec3 v, vec3 p, uvec2 pix) {
         float w = brdf_weight(b, wo, wi);
         float pdf = brdf_pdf(b, wo, wi);
         vec3 d = normalize(t * wi.x + bt * wi.y + n * wi.z);
-        float lod = pc.max_lod;
-        if (pdf > 0.0) {
-            float omega_s = 1.0 / (float(count) * pdf);
-            lod = clamp(0.5 * log2(omega_s / dp_texel_solid_angle(d)) + ob.extra.x, 0.0, pc.max_lod);
-        }
+        float lod = fis_lod(pdf, count, d, pc.dp_size, ob.extra.x, pc.max_lod);
         if (pc.shadows != 0u && occluded(origin, d)) continue;
         sum += w * dp_lookup(d, lod);
     }
