@@ -308,6 +308,28 @@ impl Material {
 pub const MAX_FIS_SAMPLES: u32 = 16384;
 
 impl Scene {
+    /// A scene of `objects` seen by `camera`, every other setting at its default, the
+    /// environment given to the render directly (its file is a placeholder; set it to write
+    /// the scene out).
+    pub fn new(camera: Camera, objects: Vec<SceneObject>) -> Scene {
+        Scene {
+            environment: Environment {
+                file: "(in memory)".into(),
+                mapping: None,
+                flip_u: false,
+                flip_v: false,
+                rotate_y: 0.0,
+                intensity: 1.0,
+            },
+            camera,
+            shadows: false,
+            fis: FisSettings::default(),
+            split_sum: SplitSumSettings::default(),
+            mc: McSettings::default(),
+            objects,
+        }
+    }
+
     /// Reads and checks a scene file.
     pub fn load(path: &Path) -> Result<Scene> {
         let text = std::fs::read_to_string(path).map_err(|source| Error::Io {

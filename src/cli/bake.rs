@@ -151,28 +151,13 @@ fn parse_shard(s: &str) -> Result<(usize, usize)> {
     Ok((i, n))
 }
 
-fn is_probe(p: &Path) -> bool {
-    p.is_file()
-        && matches!(
-            p.extension()
-                .and_then(|e| e.to_str())
-                .map(|e| e.to_ascii_lowercase())
-                .as_deref(),
-            Some("hdr" | "exr" | "dds" | "pfm")
-        )
-}
-
 /// The inputs: files, folders' probe files and glob matches, sorted and without repeats.
 fn collect(inputs: &[String]) -> Result<Vec<PathBuf>> {
     let mut v = Vec::new();
     for s in inputs {
         let p = PathBuf::from(s);
         if p.is_dir() {
-            let rd = std::fs::read_dir(&p).with_context(|| p.display().to_string())?;
-            v.extend(
-                rd.filter_map(|e| e.ok().map(|e| e.path()))
-                    .filter(|p| is_probe(p)),
-            );
+            v.extend(super::probe_files(&p)?);
         } else if p.is_file() {
             v.push(p);
         } else {

@@ -2,9 +2,7 @@
 #![allow(dead_code)]
 
 use envlight::math::camera::{Camera, Shape};
-use envlight::scene::{
-    Environment, FisSettings, Material, McSettings, Scene, SceneObject, SplitSumSettings, Technique,
-};
+use envlight::scene::{FisSettings, Material, Scene, SceneObject, Technique};
 
 #[allow(unused_imports)]
 pub use envlight::math::camera::sphere_camera;
@@ -33,24 +31,12 @@ pub fn object(
 }
 
 pub fn scene(camera: Camera, objects: Vec<SceneObject>, shadows: bool, dp_size: u32) -> Scene {
-    Scene {
-        environment: Environment {
-            file: "(in memory)".into(),
-            mapping: None,
-            flip_u: false,
-            flip_v: false,
-            rotate_y: 0.0,
-            intensity: 1.0,
-        },
-        camera,
-        shadows,
-        fis: FisSettings {
-            size: Some(dp_size),
-        },
-        split_sum: SplitSumSettings::default(),
-        mc: McSettings::default(),
-        objects,
-    }
+    let mut sc = Scene::new(camera, objects);
+    sc.shadows = shadows;
+    sc.fis = FisSettings {
+        size: Some(dp_size),
+    };
+    sc
 }
 
 pub fn fis(samples: u32) -> Technique {

@@ -292,19 +292,7 @@ pub fn accuracy_sh(cli: &Global, inputs: &[PathBuf], out: &Path, size: u32) -> a
     let mut files = Vec::new();
     for i in inputs {
         if i.is_dir() {
-            let mut v: Vec<PathBuf> = std::fs::read_dir(i)
-                .with_context(|| i.display().to_string())?
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| {
-                    p.is_file()
-                        && matches!(
-                            p.extension().and_then(|e| e.to_str()),
-                            Some("hdr" | "exr" | "dds" | "pfm")
-                        )
-                })
-                .collect();
-            v.sort();
-            files.extend(v);
+            files.extend(crate::cli::probe_files(i)?);
         } else {
             files.push(i.clone());
         }

@@ -9,10 +9,7 @@ use clap::Args;
 use envlight::math::brdf::Brdf;
 use envlight::math::camera::{sphere_camera, trace, Camera, Shape};
 use envlight::render::Renderer;
-use envlight::scene::{
-    Environment, FisSettings, Material, McSettings, PassKind, Scene, SceneObject, SplitSumSettings,
-    Technique,
-};
+use envlight::scene::{Material, PassKind, Scene, SceneObject, SplitSumSettings, Technique};
 use envlight::EnvMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -187,35 +184,22 @@ fn scene(
     seed: u32,
     split: SplitSumSettings,
 ) -> Scene {
-    Scene {
-        environment: Environment {
-            file: "(in memory)".into(),
-            mapping: None,
-            flip_u: false,
-            flip_v: false,
-            rotate_y: 0.0,
-            intensity: 1.0,
+    let object = SceneObject {
+        shape: Shape::Sphere {
+            center: [0.0; 3],
+            radius: 1.0,
         },
-        camera: cam,
-        shadows: false,
-        fis: FisSettings { size: dp },
-        split_sum: split,
-        mc: McSettings {
-            seed,
-            ..McSettings::default()
+        material: Material {
+            kind: brdf,
+            albedo: [1.0; 3],
+            technique: Some(t),
         },
-        objects: vec![SceneObject {
-            shape: Shape::Sphere {
-                center: [0.0; 3],
-                radius: 1.0,
-            },
-            material: Material {
-                kind: brdf,
-                albedo: [1.0; 3],
-                technique: Some(t),
-            },
-        }],
-    }
+    };
+    let mut sc = Scene::new(cam, vec![object]);
+    sc.fis.size = dp;
+    sc.split_sum = split;
+    sc.mc.seed = seed;
+    sc
 }
 
 /// Whole-process seconds of `envlight render` on `sc` (its environment a file): the load, the
@@ -432,18 +416,7 @@ fn split_sweep(
     split: SplitSumSettings,
 ) -> Result<()> {
     let pixels = sphere_pixels(&cam);
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| dir.display().to_string())?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.is_file()
-                && matches!(
-                    p.extension().and_then(|e| e.to_str()),
-                    Some("hdr" | "exr" | "dds" | "pfm")
-                )
-        })
-        .collect();
-    files.sort();
+    let files = super::super::probe_files(dir)?;
     let alphas = [0.1, 0.2, 0.3, 0.45, 0.6];
     let mut csv = String::from("probe,alpha,relative_rms,mean_bias,worst_tile,reference_noise\n");
     let mut md = format!(
