@@ -159,7 +159,8 @@ impl Baker {
         let (w, h) = Mapping::DualParaboloid.extent_for_size(dp_size);
         let dp = GpuEnvMap::with_mips(ctx, "bake: paraboloid", Mapping::DualParaboloid, w, h)?;
         let cube = SplitSum::cube_chain(ctx, opts.specular_size, opts.specular_levels)?;
-        let ((), t) = ctx.run("baking a probe", |rec| {
+        // Everything after the SH readback, the downloads included, in one submission.
+        let ((irradiance, specular), t) = ctx.run("baking a probe", |rec| {
             self.eval.record(rec, &irr, &irradiance_map)?;
             let c = ConvertOptions {
                 to: Mapping::DualParaboloid,
@@ -174,13 +175,16 @@ impl Baker {
                 samples: opts.samples,
                 bias: opts.bias,
             };
-            self.split.record_prefilter(rec, &dp, &cube, &p)
+            self.split.record_prefilter(rec, &dp, &cube, &p)?;
+            let irradiance = irradiance_map.record_download(rec, 0)?;
+            let specular = (0..opts.specular_levels)
+                .map(|k| cube.record_download(rec, k))
+                .collect::<Result<Vec<_>>>()?;
+            Ok((irradiance, specular))
         })?;
         timings.extend(t);
-        let irradiance = irradiance_map.download_level(ctx, 0)?;
-        let specular = (0..opts.specular_levels)
-            .map(|k| cube.download_level(ctx, k))
-            .collect::<Result<Vec<_>>>()?;
+        let irradiance = irradiance.read();
+        let specular: Vec<Vec<[f32; 4]>> = specular.iter().map(|r| r.read()).collect();
         let finite = |v: &[[f32; 4]]| v.iter().all(|t| t.iter().all(|c| c.is_finite()));
         if !finite(&irradiance) || !specular.iter().all(|l| finite(l)) {
             return Err(Error::Invalid(
