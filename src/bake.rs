@@ -8,9 +8,12 @@
 //! as split-sum's chain is ([`crate::math::split_sum`]: n = v = r, filtered importance
 //! sampling from the dual-paraboloid MIP chain); an engine reads lod √α·(levels − 1).
 
+use crate::envmap::luminance;
 use crate::error::{Error, Result};
 use crate::gpu::{Context, Timing};
+use crate::math::exact::ExactFilter;
 use crate::math::sh::{self, Window};
+use crate::math::split_sum::level_alpha;
 use crate::math::Orientation;
 use crate::passes::sh_project::{ShCoefficients, Subgroups};
 use crate::passes::{
@@ -103,6 +106,122 @@ pub struct Baked {
     pub specular: Vec<Vec<[f32; 4]>>,
     /// GPU time per pass.
     pub timings: Vec<Timing>,
+}
+
+/// How a bake's cubes compare with exact filters of its source at a few texels
+/// ([`spot_check`]): the worst relative error (luminance) among them.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SpotCheck {
+    /// Texels checked per cube level.
+    pub texels: u32,
+    /// The irradiance cube (SH to `sh_order`) against ∫ L·max(0, n·ω) dω.
+    pub irradiance: f64,
+    /// The specular cube per level against [`ExactFilter::ggx`]; level 0 (the mirror, a
+    /// resampling) is not checked and holds 0.
+    pub specular: Vec<f64>,
+}
+
+impl SpotCheck {
+    /// The worst over the specular levels.
+    pub fn specular_worst(&self) -> f64 {
+        self.specular.iter().copied().fold(0.0, f64::max)
+    }
+}
+
+/// The cube texel (layer, i, j) of a `size`-side face holding world direction `d`.
+fn cube_texel(size: u32, d: glam::DVec3) -> (u32, u32, u32) {
+    let c = Mapping::Cube.dir_to_coord(d);
+    let at = |x: f64| ((x * size as f64).floor().max(0.0) as u32).min(size - 1);
+    (c.layer, at(c.u), at(c.v))
+}
+
+/// Checks `baked` (of `env` seen with `orientation`) against float64 exact filters at
+/// `texels` texels of the irradiance cube and of each specular level ≥ 1: first the texel
+/// holding the source's brightest texel (a sun, where filtering errs most), then texels spread
+/// over the faces by a fixed rule, so that the same bake checks the same texels.
+pub fn spot_check(
+    env: &EnvMap,
+    orientation: &Orientation,
+    opts: &BakeOptions,
+    baked: &Baked,
+    texels: u32,
+) -> SpotCheck {
+    let exact = ExactFilter::new(env, orientation.world_to_file().transpose());
+    let sun = exact.brightest();
+    let pick = |size: u32, q: u32| -> (u32, u32, u32) {
+        if q == 0 {
+            cube_texel(size, sun)
+        } else {
+            (q % 6, (q * 37 + 11) % size, (q * 23 + 5) % size)
+        }
+    };
+    let centre = |size: u32, (layer, i, j): (u32, u32, u32)| {
+        Mapping::Cube.coord_to_dir(Mapping::texel_center(size, size, layer, i, j))
+    };
+    let rel = |got: [f32; 4], want: [f64; 3]| {
+        let g = luminance([got[0] as f64, got[1] as f64, got[2] as f64]);
+        let w = luminance(want);
+        if w > 0.0 {
+            (g - w).abs() / w
+        } else {
+            g.abs()
+        }
+    };
+    // (level, or None for the irradiance cube; texel centre; baked value), then the exact
+    // filters on every core: they cost as much as the bake's GPU work on a CPU device.
+    let mut jobs: Vec<(Option<u32>, glam::DVec3, [f32; 4])> = Vec::new();
+    let s = opts.irradiance_size;
+    for q in 0..texels {
+        let t = pick(s, q);
+        let got = baked.irradiance[((t.0 * s + t.2) * s + t.1) as usize];
+        jobs.push((None, centre(s, t), got));
+    }
+    for k in 1..opts.specular_levels {
+        let s = (opts.specular_size >> k).max(1);
+        for q in 0..texels {
+            let t = pick(s, q);
+            let got = baked.specular[k as usize][((t.0 * s + t.2) * s + t.1) as usize];
+            jobs.push((Some(k), centre(s, t), got));
+        }
+    }
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let errors: Vec<f64> = std::thread::scope(|scope| {
+        let exact = &exact;
+        let handles: Vec<_> = jobs
+            .chunks(jobs.len().div_ceil(threads).max(1))
+            .map(|chunk| {
+                scope.spawn(move || {
+                    chunk
+                        .iter()
+                        .map(|&(level, d, got)| {
+                            let want = match level {
+                                None => exact.irradiance(d),
+                                Some(k) => exact.ggx(d, level_alpha(k, opts.specular_levels)),
+                            };
+                            rel(got, want)
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().unwrap_or_default())
+            .collect()
+    });
+    let mut irradiance: f64 = 0.0;
+    let mut specular = vec![0.0f64; opts.specular_levels as usize];
+    for (&(level, _, _), e) in jobs.iter().zip(errors) {
+        match level {
+            None => irradiance = irradiance.max(e),
+            Some(k) => specular[k as usize] = specular[k as usize].max(e),
+        }
+    }
+    SpotCheck {
+        texels,
+        irradiance,
+        specular,
+    }
 }
 
 /// Side of the dual paraboloid the specular cube is filtered from: the source's own

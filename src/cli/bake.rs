@@ -5,7 +5,7 @@
 use super::{context, Global};
 use anyhow::{anyhow, bail, Context as _, Result};
 use clap::Args;
-use envlight::bake::{BakeOptions, Baked, Baker};
+use envlight::bake::{spot_check, BakeOptions, Baked, Baker, SpotCheck};
 use envlight::io::ktx2::{self, Ktx2Format, Ktx2Image};
 use envlight::io::{write_atomic, LoadOptions};
 use envlight::{EnvMap, Mapping, Orientation};
@@ -60,6 +60,10 @@ pub struct BakeArgs {
     /// Merge the shards' manifests found in OUT into OUT/manifest.json, and bake nothing
     #[arg(long)]
     merge: bool,
+    /// Texels per cube level checked against float64 exact filters (0: none); the errors go
+    /// to the summary and the manifest [default: 2]
+    #[arg(long)]
+    check: Option<u32>,
 }
 
 /// A bake file: every field optional, unknown keys refused.
@@ -74,6 +78,7 @@ struct BakeFile {
     format: Option<String>,
     texels: Option<String>,
     dfg: Option<bool>,
+    check: Option<u32>,
 }
 
 /// Everything that decides the outputs' bytes.
@@ -119,6 +124,9 @@ struct Entry {
     outputs: Vec<Output>,
     seconds: f64,
     gpu_ms: f64,
+    /// Errors against exact filters at a few texels (absent when not checked).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    check: Option<SpotCheck>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -445,6 +453,7 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
     // and its files are written; the channel holds one probe, so memory stays bounded.
     let (tx, rx) = std::sync::mpsc::sync_channel::<Prepared>(1);
     let force = a.force;
+    let check = a.check.or(file.check).unwrap_or(2);
     let entries = std::thread::scope(|scope| {
         let previous = &previous;
         let mine = &mine;
@@ -499,7 +508,8 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
                     pb.set_message(name.clone());
                     let result = map
                         .and_then(|map| {
-                            let baked = baker.bake(&map, &Orientation::default(), &options)?;
+                            let o = Orientation::default();
+                            let baked = baker.bake(&map, &o, &options)?;
                             let outputs = write_probe(
                                 out,
                                 &out.join(&name),
@@ -508,11 +518,14 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
                                 &format,
                                 texels,
                             )?;
-                            Ok((outputs, baked.timings.iter().map(|t| t.ms).sum::<f64>()))
+                            let checked =
+                                (check > 0).then(|| spot_check(&map, &o, &options, &baked, check));
+                            let gpu_ms = baked.timings.iter().map(|t| t.ms).sum::<f64>();
+                            Ok((outputs, gpu_ms, checked))
                         })
                         .with_context(|| path.display().to_string());
                     match result {
-                        Ok((outputs, gpu_ms)) => Entry {
+                        Ok((outputs, gpu_ms, check)) => Entry {
                             input,
                             input_sha256,
                             status: "baked".into(),
@@ -520,6 +533,7 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
                             outputs,
                             seconds: read_s + t0.elapsed().as_secs_f64(),
                             gpu_ms,
+                            check,
                         },
                         Err(e) => {
                             pb.suspend(|| eprintln!("error: {e:#}"));
@@ -531,6 +545,7 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
                                 outputs: Vec::new(),
                                 seconds: read_s + t0.elapsed().as_secs_f64(),
                                 gpu_ms: 0.0,
+                                check: None,
                             }
                         }
                     }
@@ -550,10 +565,20 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
     };
     let mpath = out.join(manifest_name(shard));
     write_atomic(&mpath, serde_json::to_string_pretty(&manifest)?.as_bytes())?;
-    println!("| probe | status | seconds | GPU ms |\n|---|---|---|---|");
+    println!(
+        "| probe | status | seconds | GPU ms | irradiance error | specular error (worst level) |\n\
+         |---|---|---|---|---|---|"
+    );
     for e in &manifest.probes {
+        let (irr, spec) = match &e.check {
+            Some(c) => (
+                format!("{:.2e}", c.irradiance),
+                format!("{:.2e}", c.specular_worst()),
+            ),
+            None => ("–".into(), "–".into()),
+        };
         println!(
-            "| {} | {} | {:.3} | {:.1} |",
+            "| {} | {} | {:.3} | {:.1} | {irr} | {spec} |",
             e.input,
             e.error
                 .as_deref()
@@ -561,6 +586,14 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
                 .unwrap_or_else(|| e.status.clone()),
             e.seconds,
             e.gpu_ms
+        );
+    }
+    if check > 0 {
+        println!(
+            "errors: worst relative luminance error at {check} texels a level (the brightest \
+             source texel's first) against float64 exact filters: the irradiance cube (SH to \
+             order {}) against the cosine integral, the specular levels against GGX at n = v = r",
+            options.sh_order
         );
     }
     let failed = manifest

@@ -7,6 +7,7 @@ pub mod brdf;
 pub mod camera;
 pub mod convert;
 pub mod envsample;
+pub mod exact;
 pub mod filter;
 pub mod fis;
 pub mod mapping;

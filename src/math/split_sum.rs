@@ -223,6 +223,26 @@ pub fn prefiltered_chain(
         .collect()
 }
 
+/// The chain's kernel f·cos at n = v = r, as a function of the gap g = 1 − r·l (which keeps
+/// its digits near the axis): D(h)·G/4 with n·h = √(1 − g/2), and G = 2x/(x + √(α² + (1 − α²)x²))
+/// at x = 1 − g, which both Smith forms give at n = v. Zero below the horizon. α is clamped
+/// to [`super::brdf::GGX_ALPHA_MIN`] as [`Brdf::eval_cos`] clamps it.
+pub fn chain_kernel(alpha: f64, gap: f64) -> f64 {
+    let x = 1.0 - gap;
+    if x <= 0.0 {
+        return 0.0;
+    }
+    let a2 = {
+        let a = alpha.max(super::brdf::GGX_ALPHA_MIN);
+        a * a
+    };
+    // |h_xy|² + α²·h_z² with |h_xy|² = g/2 and h_z² = 1 − g/2.
+    let s = 0.5 * gap + a2 * (1.0 - 0.5 * gap);
+    let d = a2 / (std::f64::consts::PI * s * s);
+    let g = 2.0 * x / (x + (a2 + (1.0 - a2) * x * x).sqrt());
+    0.25 * d * g
+}
+
 /// Split-sum shading at normal `n`, view `v` (towards the eye): P(r, α) from the prefiltered
 /// chain times A + B (F = 1) from the DFG table.
 pub fn shade(
@@ -245,6 +265,23 @@ pub fn shade(
 mod tests {
     use super::*;
     use std::f64::consts::PI;
+
+    #[test]
+    fn chain_kernel_is_the_brdf_at_n_equal_v() {
+        for alpha in [0.0, 0.02, 0.1, 0.5, 1.0] {
+            for x in [-0.3f64, 0.0, 1e-3, 0.2, 0.7, 0.99, 0.999_99, 1.0] {
+                let wi = DVec3::new((1.0 - x * x).max(0.0).sqrt(), 0.0, x);
+                for correlated in [true, false] {
+                    let want = ggx(alpha, correlated).eval_cos(DVec3::Z, wi);
+                    let got = chain_kernel(alpha, 1.0 - x);
+                    assert!(
+                        (got - want).abs() <= 1e-12 * want.max(1e-300),
+                        "α {alpha} x {x}: {got} vs {want}"
+                    );
+                }
+            }
+        }
+    }
 
     /// ∫ f·cos over the hemisphere by a plain (θ, φ) product rule, independent of the
     /// sampler: the albedo A + B must equal.
