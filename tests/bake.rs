@@ -194,6 +194,90 @@ fn ktx2_files_load_in_an_independent_reader_with_the_gpu_images() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// B10G11R11 and E5B9G9R9 files: the `ktx2` crate reads them with that format, six faces and
+/// the levels asked; their header's typeSize and their whole descriptor equal what the crate
+/// itself generates for the format (its own tables, written from the Khronos Data Format
+/// specification); and each texel, decoded here from the formats' definitions, is the GPU's
+/// image to the format's precision: half an ulp of the channel (2⁻⁷ of it for R and G's 6
+/// mantissa bits, 2⁻⁶ for B's 5), or half a step of the shared exponent (the largest channel
+/// / 511) for E5B9G9R9, with 2⁻²⁴ absolute where the 10- and 11-bit floats are subnormal.
+#[test]
+fn packed_ktx2_files_hold_the_gpu_images_to_their_precision() {
+    let dir = temp("packed-in");
+    let maps = probes(&dir);
+    let ctx = common::ctx();
+    {
+        let baker = Baker::new(&ctx).unwrap();
+        let baked = baker
+            .bake(&maps[1], &Orientation::default(), &small_options())
+            .unwrap();
+        for (name, format) in [
+            ("b10g11r11", ktx2::Format::B10G11R11_UFLOAT_PACK32),
+            ("e5b9g9r9", ktx2::Format::E5B9G9R9_UFLOAT_PACK32),
+        ] {
+            let out = temp(&format!("packed-{name}"));
+            ok(&bake(&[
+                dir.join("p1.exr").to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "--texels",
+                name,
+            ]));
+            let bytes = std::fs::read(out.join("p1.exr/specular.ktx2")).unwrap();
+            let r = ktx2::Reader::new(&bytes[..]).unwrap();
+            let h = r.header();
+            assert_eq!(h.format, Some(format));
+            assert_eq!((h.pixel_width, h.face_count, h.level_count), (16, 6, 4));
+            let (want_dfd, type_size) = ktx2::dfd::Basic::from_format(format).unwrap();
+            assert_eq!(h.type_size, type_size);
+            assert_eq!(r.basic_dfd(), Some(&want_dfd));
+            let unfloat = |bits: u32, m: u32| -> f64 {
+                let (e, q) = ((bits >> m) as i32, (bits & ((1 << m) - 1)) as f64);
+                let one = (1u32 << m) as f64;
+                if e == 0 {
+                    2f64.powi(-14) * q / one
+                } else {
+                    2f64.powi(e - 15) * (1.0 + q / one)
+                }
+            };
+            let mut worst: f64 = 0.0;
+            for (level, want) in r.levels().zip(&baked.specular) {
+                assert_eq!(level.data.len(), 4 * want.len());
+                for (w, t) in level.data.chunks_exact(4).zip(want) {
+                    let w = u32::from_le_bytes(w.try_into().unwrap());
+                    let (got, tol) = if name == "b10g11r11" {
+                        let got = [
+                            unfloat(w & 0x7ff, 6),
+                            unfloat((w >> 11) & 0x7ff, 6),
+                            unfloat(w >> 22, 5),
+                        ];
+                        let tol = [0, 1, 2].map(|c| {
+                            t[c] as f64 * if c == 2 { 2f64.powi(-6) } else { 2f64.powi(-7) }
+                                + 2f64.powi(-24)
+                        });
+                        (got, tol)
+                    } else {
+                        let scale = 2f64.powi((w >> 27) as i32 - 15 - 9);
+                        let got =
+                            [w & 511, (w >> 9) & 511, (w >> 18) & 511].map(|q| q as f64 * scale);
+                        let top = t[0].max(t[1]).max(t[2]) as f64;
+                        (got, [top / 511.0 + 1e-30; 3])
+                    };
+                    for c in 0..3 {
+                        let e = (got[c] - t[c] as f64).abs();
+                        assert!(e <= tol[c], "{name}: {got:?} vs {t:?}");
+                        worst = worst.max(e / (t[c] as f64).max(1e-30));
+                    }
+                }
+            }
+            eprintln!("{name}: worst relative error {worst:.2e}");
+            let _ = std::fs::remove_dir_all(&out);
+        }
+    }
+    common::finish(ctx);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// The specular cube's levels against `math::split_sum::prefiltered_cube` reading the float64
 /// MIP chain of the same paraboloid (converted in float64 as the GPU converts), on the sky
 /// whose sun is 5·10⁴ × the zenith: relative to the texel, or to the level's mean where the

@@ -45,7 +45,8 @@ pub struct BakeArgs {
     /// Output container: ktx2 or exr [default: ktx2]
     #[arg(long)]
     format: Option<String>,
-    /// KTX2 texels: rgba32f, or rgba16f (refuses values a half cannot hold) [default: rgba32f]
+    /// KTX2 texels: rgba32f, rgba16f, b10g11r11 or e5b9g9r9 (the last three refuse values
+    /// they cannot hold) [default: rgba32f]
     #[arg(long)]
     texels: Option<String>,
     /// Also write the split-sum DFG table once (dfg.ktx2: A, B per n·v column and √α row)
@@ -389,8 +390,9 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
         .clone()
         .or(file.texels)
         .unwrap_or_else(|| "rgba32f".into());
-    let texels = Ktx2Format::parse(&texels_name)
-        .ok_or_else(|| anyhow!("--texels {texels_name}: rgba32f or rgba16f"))?;
+    let texels = Ktx2Format::parse(&texels_name).ok_or_else(|| {
+        anyhow!("--texels {texels_name}: rgba32f, rgba16f, b10g11r11 or e5b9g9r9")
+    })?;
     let shard = a.shard.as_deref().map(parse_shard).transpose()?;
     let inputs = collect(&a.inputs)?;
     if inputs.is_empty() {

@@ -1,5 +1,6 @@
 //! KTX 2.0 output (the Khronos container glTF-IBL-Sampler and engines load): 2D textures and
-//! cube maps with any number of MIP levels, RGBA16F or RGBA32F, no supercompression.
+//! cube maps with any number of MIP levels, RGBA16F, RGBA32F, or the packed unsigned floats
+//! B10G11R11 and E5B9G9R9 (RGB, no alpha), no supercompression.
 //!
 //! Layout written (KTX 2.0 specification, §3): the 12-byte identifier; the header (vkFormat,
 //! typeSize, pixelWidth, pixelHeight, pixelDepth = 0, layerCount = 0, faceCount 1 or 6,
@@ -10,10 +11,19 @@
 //! (+X, −X, +Y, −Y, +Z, −Z, as envlight's cube layers do), each face's rows top to bottom.
 //!
 //! The DFD is one basic descriptor block (KHR_DF_MODEL_RGBSDA, BT.709 primaries, linear
-//! transfer, straight alpha, 1 × 1 × 1 × 1 texel blocks) with one sample per channel R, G, B,
-//! A: bit offsets 0, n, 2n, 3n of n = 16 or 32 bits, qualifiers float | signed, and the lower
-//! and upper values −1.0 and 1.0 as the float bit patterns, as the KTX 2.0 specification's
-//! Table 4 requires for float formats.
+//! transfer, straight alpha, 1 × 1 × 1 × 1 texel blocks), as the Khronos Data Format
+//! specification describes each format:
+//! - RGBA16F / RGBA32F: one sample per channel R, G, B, A at bit offsets 0, n, 2n, 3n of n =
+//!   16 or 32 bits, qualifiers float | signed, lower and upper −1.0 and 1.0 as float bits.
+//! - B10G11R11: samples R (bits 0–10), G (11–21), B (22–31), qualifier float (unsigned),
+//!   lower and upper 0.0 and 1.0 as float bits; typeSize 4 (the packed word).
+//! - E5B9G9R9: six samples, each channel's 9-bit mantissa (R bits 0–8, G 9–17, B 18–26, no
+//!   qualifier, lower 0, upper 8448 = 1.0 at the bias) and the shared 5-bit exponent (bits
+//!   27–31, qualifier exponent, lower 15 = the bias, upper 31) once per channel; typeSize 4.
+//!
+//! Packing rounds to nearest (even), as Vulkan's conversions to these formats do. Values a
+//! format cannot hold (above its largest finite value) are refused, naming the value, and so
+//! are negative ones for the unsigned formats.
 
 use crate::error::{Error, Result};
 use std::path::Path;
@@ -30,6 +40,12 @@ pub enum Ktx2Format {
     Rgba16f,
     /// VK_FORMAT_R32G32B32A32_SFLOAT (109).
     Rgba32f,
+    /// VK_FORMAT_B10G11R11_UFLOAT_PACK32 (122): R and G with 6 mantissa bits, B with 5, one
+    /// 5-bit exponent each; largest value 65024 (B 64512).
+    B10g11r11,
+    /// VK_FORMAT_E5B9G9R9_UFLOAT_PACK32 (123): 9-bit mantissas under one shared 5-bit
+    /// exponent; largest value 65408.
+    E5b9g9r9,
 }
 
 impl Ktx2Format {
@@ -38,25 +54,99 @@ impl Ktx2Format {
         match self {
             Ktx2Format::Rgba16f => 97,
             Ktx2Format::Rgba32f => 109,
+            Ktx2Format::B10g11r11 => 122,
+            Ktx2Format::E5b9g9r9 => 123,
         }
     }
 
-    /// Bytes per channel.
-    pub fn channel_bytes(self) -> u32 {
+    /// The header's typeSize: bytes per channel, or of the packed word.
+    pub fn type_size(self) -> u32 {
         match self {
             Ktx2Format::Rgba16f => 2,
-            Ktx2Format::Rgba32f => 4,
+            Ktx2Format::Rgba32f | Ktx2Format::B10g11r11 | Ktx2Format::E5b9g9r9 => 4,
         }
     }
 
-    /// Parses "rgba16f" or "rgba32f".
+    /// Bytes per texel.
+    pub fn texel_bytes(self) -> u32 {
+        match self {
+            Ktx2Format::Rgba16f => 8,
+            Ktx2Format::Rgba32f => 16,
+            Ktx2Format::B10g11r11 | Ktx2Format::E5b9g9r9 => 4,
+        }
+    }
+
+    /// Parses "rgba16f", "rgba32f", "b10g11r11" or "e5b9g9r9" (any case).
     pub fn parse(s: &str) -> Option<Ktx2Format> {
         match s.to_ascii_lowercase().as_str() {
             "rgba16f" | "half" => Some(Ktx2Format::Rgba16f),
             "rgba32f" | "float" => Some(Ktx2Format::Rgba32f),
+            "b10g11r11" | "r11g11b10" => Some(Ktx2Format::B10g11r11),
+            "e5b9g9r9" | "rgb9e5" => Some(Ktx2Format::E5b9g9r9),
             _ => None,
         }
     }
+}
+
+/// Bias of the 5-bit exponents of the packed formats.
+const BIAS: i32 = 15;
+
+/// `v` ≥ 0 as an unsigned float of 5 exponent and `m` mantissa bits (10- and 11-bit floats),
+/// rounded to nearest even; `None` above the largest finite value.
+pub fn pack_ufloat(v: f32, m: u32) -> Option<u32> {
+    if v.is_nan() || v < 0.0 {
+        return None;
+    }
+    if v == 0.0 {
+        return Some(0);
+    }
+    let v = v as f64;
+    let one = (1u32 << m) as f64;
+    let e = v.log2().floor() as i32;
+    let bits = if e < 1 - BIAS {
+        // Subnormal: v = 2^(1 − bias)·q/2^m; rounding up to 2^m gives the smallest normal.
+        (v / 2f64.powi(1 - BIAS) * one).round_ties_even() as u32
+    } else {
+        // 2^e ≤ v < 2^(e+1) (log2's rounding checked below).
+        let (e, f) = {
+            let f = v / 2f64.powi(e);
+            if f >= 2.0 {
+                (e + 1, f / 2.0)
+            } else if f < 1.0 {
+                (e - 1, f * 2.0)
+            } else {
+                (e, f)
+            }
+        };
+        let q = ((f - 1.0) * one).round_ties_even() as u32;
+        (((e + BIAS) as u32) << m) + q
+    };
+    // The all-ones exponent holds Inf and NaN.
+    (bits < (31 << m)).then_some(bits)
+}
+
+/// The largest E5B9G9R9 value: 511/512 · 2^16.
+const E5_MAX: f32 = 65408.0;
+
+/// (r, g, b) ≥ 0 as E5B9G9R9 (the shared-exponent rule of Vulkan's and
+/// EXT_texture_shared_exponent's conversion, rounding to nearest); `None` above 65408.
+pub fn pack_e5b9g9r9(c: [f32; 3]) -> Option<u32> {
+    const N: i32 = 9;
+    if c.iter().any(|v| !(*v >= 0.0 && *v <= E5_MAX)) {
+        return None;
+    }
+    let c = c.map(|v| v as f64);
+    let top = c[0].max(c[1]).max(c[2]);
+    let mut e = if top > 0.0 {
+        (top.log2().floor() as i32).max(-BIAS - 1) + 1 + BIAS
+    } else {
+        0
+    };
+    if top > 0.0 && (top / 2f64.powi(e - BIAS - N) + 0.5).floor() >= 512.0 {
+        e += 1;
+    }
+    let q = c.map(|v| ((v / 2f64.powi(e - BIAS - N) + 0.5).floor() as u32).min(511));
+    Some(q[0] | (q[1] << 9) | (q[2] << 18) | ((e as u32) << 27))
 }
 
 /// An image to write: `faces` (1 or 6) faces of `width` × `height` at level 0, and its levels,
@@ -80,10 +170,29 @@ fn align(v: &mut Vec<u8>) {
     }
 }
 
+/// One DFD sample: bit offset, bit length, channel id with its qualifier bits, lower, upper.
+fn sample(d: &mut Vec<u8>, offset: u16, bits: u8, channel: u8, lower: u32, upper: u32) {
+    d.extend(offset.to_le_bytes());
+    d.push(bits - 1);
+    d.push(channel);
+    d.extend([0u8; 4]); // sample position 0, 0, 0, 0
+    d.extend(lower.to_le_bytes());
+    d.extend(upper.to_le_bytes());
+}
+
+/// Qualifier bits of a sample's channel byte.
+const FLOAT: u8 = 0x80;
+const SIGNED: u8 = 0x40;
+const EXPONENT: u8 = 0x20;
+
 /// The Data Format Descriptor of `format` (dfdTotalSize first).
 fn dfd(format: Ktx2Format) -> Vec<u8> {
-    let bits = 8 * format.channel_bytes();
-    let block_size: u16 = 24 + 16 * 4;
+    let samples: u16 = match format {
+        Ktx2Format::Rgba16f | Ktx2Format::Rgba32f => 4,
+        Ktx2Format::B10g11r11 => 3,
+        Ktx2Format::E5b9g9r9 => 6,
+    };
+    let block_size: u16 = 24 + 16 * samples;
     let mut d = Vec::new();
     d.extend((4 + block_size as u32).to_le_bytes());
     d.extend(0u32.to_le_bytes()); // vendorId 0 (Khronos), descriptorType 0 (basic)
@@ -92,16 +201,36 @@ fn dfd(format: Ktx2Format) -> Vec<u8> {
     d.extend([1, 1, 1, 0]); // RGBSDA, BT.709, linear, straight alpha
     d.extend([0, 0, 0, 0]); // texel block 1 × 1 × 1 × 1 (each dimension minus one)
     let mut planes = [0u8; 8];
-    planes[0] = (4 * format.channel_bytes()) as u8;
+    planes[0] = format.texel_bytes() as u8;
     d.extend(planes);
-    // Channels R, G, B, A (ids 0, 1, 2, 15), float | signed qualifiers.
-    for (k, id) in [0u8, 1, 2, 15].into_iter().enumerate() {
-        d.extend(((k as u32 * bits) as u16).to_le_bytes());
-        d.push((bits - 1) as u8);
-        d.push(id | 0x80 | 0x40);
-        d.extend([0u8; 4]);
-        d.extend((-1.0f32).to_bits().to_le_bytes());
-        d.extend(1.0f32.to_bits().to_le_bytes());
+    let (one, minus_one) = (1.0f32.to_bits(), (-1.0f32).to_bits());
+    match format {
+        Ktx2Format::Rgba16f | Ktx2Format::Rgba32f => {
+            let bits = 8 * format.type_size();
+            // Channels R, G, B, A (ids 0, 1, 2, 15).
+            for (k, id) in [0u8, 1, 2, 15].into_iter().enumerate() {
+                let offset = (k as u32 * bits) as u16;
+                sample(
+                    &mut d,
+                    offset,
+                    bits as u8,
+                    id | FLOAT | SIGNED,
+                    minus_one,
+                    one,
+                );
+            }
+        }
+        Ktx2Format::B10g11r11 => {
+            for (id, offset, bits) in [(0u8, 0u16, 11u8), (1, 11, 11), (2, 22, 10)] {
+                sample(&mut d, offset, bits, id | FLOAT, 0, one);
+            }
+        }
+        Ktx2Format::E5b9g9r9 => {
+            for id in 0u8..3 {
+                sample(&mut d, 9 * id as u16, 9, id, 0, 8448);
+                sample(&mut d, 27, 5, id | EXPONENT, 15, 31);
+            }
+        }
     }
     d
 }
@@ -144,12 +273,18 @@ pub fn encode(image: &Ktx2Image<'_>, format: Ktx2Format) -> Result<Vec<u8>> {
         }
     }
     let level_bytes = |level: &[[f32; 4]]| -> Result<Vec<u8>> {
-        let mut out = Vec::with_capacity(level.len() * 4 * format.channel_bytes() as usize);
+        let mut out = Vec::with_capacity(level.len() * format.texel_bytes() as usize);
+        let refuse = |c: f32, name: &str| {
+            Error::Invalid(format!(
+                "KTX2 {name}: {c} does not fit (negative, or above the format's largest value; \
+                 use rgba32f)"
+            ))
+        };
         for t in level {
-            for &c in t {
-                match format {
-                    Ktx2Format::Rgba32f => out.extend(c.to_le_bytes()),
-                    Ktx2Format::Rgba16f => {
+            match format {
+                Ktx2Format::Rgba32f => t.iter().for_each(|c| out.extend(c.to_le_bytes())),
+                Ktx2Format::Rgba16f => {
+                    for &c in t {
                         let h = half::f16::from_f32(c);
                         if !h.is_finite() && c.is_finite() {
                             return Err(Error::Invalid(format!(
@@ -158,6 +293,22 @@ pub fn encode(image: &Ktx2Image<'_>, format: Ktx2Format) -> Result<Vec<u8>> {
                         }
                         out.extend(h.to_bits().to_le_bytes());
                     }
+                }
+                Ktx2Format::B10g11r11 => {
+                    let mut word = 0u32;
+                    for (k, (shift, m)) in [(0, 6), (11, 6), (22, 5)].into_iter().enumerate() {
+                        let v = pack_ufloat(t[k], m).ok_or_else(|| refuse(t[k], "B10G11R11"))?;
+                        word |= v << shift;
+                    }
+                    out.extend(word.to_le_bytes());
+                }
+                Ktx2Format::E5b9g9r9 => {
+                    let rgb = [t[0], t[1], t[2]];
+                    let word = pack_e5b9g9r9(rgb).ok_or_else(|| {
+                        let bad = rgb.into_iter().find(|v| !(*v >= 0.0 && *v <= E5_MAX));
+                        refuse(bad.unwrap_or(rgb[0]), "E5B9G9R9")
+                    })?;
+                    out.extend(word.to_le_bytes());
                 }
             }
         }
@@ -182,7 +333,7 @@ pub fn encode(image: &Ktx2Image<'_>, format: Ktx2Format) -> Result<Vec<u8>> {
     head.extend(IDENTIFIER);
     for v in [
         format.vk_format(),
-        format.channel_bytes(),
+        format.type_size(),
         image.width,
         image.height,
         0,
@@ -232,6 +383,98 @@ mod tests {
         assert_eq!((a[2], a[3]), (15, 15 | 0xC0));
     }
 
+    /// Decodes an unsigned float of 5 exponent and `m` mantissa bits from its definition.
+    fn unpack_ufloat(bits: u32, m: u32) -> f64 {
+        let (e, q) = ((bits >> m) as i32, (bits & ((1 << m) - 1)) as f64);
+        let one = (1u32 << m) as f64;
+        if e == 0 {
+            2f64.powi(-14) * q / one
+        } else {
+            2f64.powi(e - 15) * (1.0 + q / one)
+        }
+    }
+
+    #[test]
+    fn packed_floats_round_to_nearest_and_refuse_what_they_cannot_hold() {
+        for m in [5, 6] {
+            let ulp = 2f64.powi(-(m as i32));
+            // Every code round-trips; midpoints between codes go to the even one.
+            for bits in 0..(31u32 << m) {
+                let v = unpack_ufloat(bits, m);
+                assert_eq!(pack_ufloat(v as f32, m), Some(bits), "m {m} bits {bits}");
+                let next = unpack_ufloat(bits + 1, m);
+                let mid = 0.5 * (v + next);
+                if bits + 1 < (31 << m) && (mid as f32) as f64 == mid {
+                    let want = if bits % 2 == 0 { bits } else { bits + 1 };
+                    assert_eq!(pack_ufloat(mid as f32, m), Some(want), "mid of {bits}");
+                }
+            }
+            // Relative error at most half an ulp across the range.
+            let mut v = 1e-3f64;
+            while v < 6e4 {
+                let got = unpack_ufloat(pack_ufloat(v as f32, m).unwrap(), m);
+                assert!((got - v).abs() <= 0.5 * ulp * v * 1.0001, "{v} -> {got}");
+                v *= 1.37;
+            }
+            let max = unpack_ufloat((31 << m) - 1, m) as f32;
+            assert!(pack_ufloat(max, m).is_some());
+            assert!(pack_ufloat(max * 1.01, m).is_none());
+            assert!(pack_ufloat(-1.0, m).is_none());
+            assert!(pack_ufloat(f32::NAN, m).is_none());
+        }
+    }
+
+    #[test]
+    fn shared_exponent_keeps_the_largest_channel_to_half_an_ulp() {
+        let unpack = |w: u32| {
+            let e = (w >> 27) as i32;
+            let s = 2f64.powi(e - 15 - 9);
+            [w & 511, (w >> 9) & 511, (w >> 18) & 511].map(|q| q as f64 * s)
+        };
+        for c in [
+            [1.0f32, 0.5, 0.25],
+            [65408.0, 1.0, 0.0],
+            [3.1e-5, 0.0, 7.0e-6],
+            [0.0, 0.0, 0.0],
+            [1000.0, 999.9, 0.001],
+            [511.75, 2.0, 3.0],
+        ] {
+            let got = unpack(pack_e5b9g9r9(c).unwrap());
+            let top = c.iter().fold(0.0f32, |a, &b| a.max(b)) as f64;
+            for k in 0..3 {
+                // Each channel within half a step of the shared exponent's mantissa.
+                assert!(
+                    (got[k] - c[k] as f64).abs() <= top / 511.0 + 1e-12,
+                    "{c:?} -> {got:?}"
+                );
+            }
+        }
+        assert!(pack_e5b9g9r9([65409.0, 0.0, 0.0]).is_none());
+        assert!(pack_e5b9g9r9([1.0, -0.5, 0.0]).is_none());
+    }
+
+    #[test]
+    fn packed_dfds_describe_their_bits() {
+        let d = dfd(Ktx2Format::B10g11r11);
+        assert_eq!(d.len(), 4 + 24 + 48);
+        assert_eq!(d[20], 4);
+        let b = &d[28 + 32..28 + 48];
+        assert_eq!(
+            (u16::from_le_bytes([b[0], b[1]]), b[2], b[3]),
+            (22, 9, 2 | 0x80)
+        );
+        let d = dfd(Ktx2Format::E5b9g9r9);
+        assert_eq!(d.len(), 4 + 24 + 96);
+        let exp_g = &d[28 + 48..28 + 64];
+        assert_eq!(
+            (u16::from_le_bytes([exp_g[0], exp_g[1]]), exp_g[2], exp_g[3]),
+            (27, 4, 1 | 0x20)
+        );
+        assert_eq!(u32::from_le_bytes(exp_g[8..12].try_into().unwrap()), 15);
+        let mant_b = &d[28 + 64..28 + 80];
+        assert_eq!(u32::from_le_bytes(mant_b[12..16].try_into().unwrap()), 8448);
+    }
+
     #[test]
     fn refuses_inconsistent_images() {
         let level = vec![[0.0f32; 4]; 3];
@@ -250,6 +493,9 @@ mod tests {
             levels: std::slice::from_ref(&big),
         };
         assert!(encode(&img, Ktx2Format::Rgba16f).is_err());
+        assert!(encode(&img, Ktx2Format::B10g11r11).is_err());
+        let e = encode(&img, Ktx2Format::E5b9g9r9).unwrap_err().to_string();
+        assert!(e.contains("1000000"), "{e}");
         assert!(encode(&img, Ktx2Format::Rgba32f).is_ok());
     }
 }
