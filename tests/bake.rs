@@ -126,6 +126,9 @@ fn ktx2_files_load_in_an_independent_reader_with_the_gpu_images() {
                 );
                 assert_eq!((h.layer_count, h.pixel_depth), (0, 0));
                 assert_eq!(h.level_count as usize, levels.len());
+                let (dfd, type_size) =
+                    ktx2::dfd::Basic::from_format(ktx2::Format::R32G32B32A32_SFLOAT).unwrap();
+                assert_eq!((r.basic_dfd(), h.type_size), (Some(&dfd), type_size));
                 assert_eq!(r.color_model(), Some(ktx2::ColorModel::RGBSDA));
                 assert_eq!(r.transfer_function(), Some(ktx2::TransferFunction::Linear));
                 for (level, want) in r.levels().zip(&levels) {
@@ -173,6 +176,12 @@ fn ktx2_files_load_in_an_independent_reader_with_the_gpu_images() {
         let bytes = std::fs::read(out16.join("p0.exr/specular.ktx2")).unwrap();
         let r = ktx2::Reader::new(&bytes[..]).unwrap();
         assert_eq!(r.header().format, Some(ktx2::Format::R16G16B16A16_SFLOAT));
+        let (dfd, type_size) =
+            ktx2::dfd::Basic::from_format(ktx2::Format::R16G16B16A16_SFLOAT).unwrap();
+        assert_eq!(
+            (r.basic_dfd(), r.header().type_size),
+            (Some(&dfd), type_size)
+        );
         let level0: Vec<u16> = r
             .levels()
             .next()
