@@ -41,6 +41,9 @@ pub struct BakeOptions {
     pub bias: f64,
     /// Entries per side of the DFG table.
     pub dfg_size: u32,
+    /// Also return the dual-paraboloid MIP chain the specular cube is filtered from (what
+    /// filtered importance sampling reads at run time).
+    pub chain: bool,
 }
 
 impl Default for BakeOptions {
@@ -53,6 +56,7 @@ impl Default for BakeOptions {
             samples: crate::abi::split_sum::DEFAULT_SAMPLES,
             bias: crate::abi::defaults::FIS_BIAS,
             dfg_size: crate::abi::split_sum::DEFAULT_DFG_SIZE,
+            chain: false,
         }
     }
 }
@@ -104,6 +108,9 @@ pub struct Baked {
     pub irradiance: Vec<[f32; 4]>,
     /// The specular cube's levels, level 0 first, each faces × rows × columns, RGBA (A = 1).
     pub specular: Vec<Vec<[f32; 4]>>,
+    /// With [`BakeOptions::chain`]: the dual-paraboloid MIP chain, level 0 ([`dp_size`] a
+    /// side) first, each two halves (+Y, −Y) × rows × columns, RGBA as stored; else empty.
+    pub chain: Vec<Vec<[f32; 4]>>,
     /// GPU time per pass.
     pub timings: Vec<Timing>,
 }
@@ -279,7 +286,7 @@ impl Baker {
         let dp = GpuEnvMap::with_mips(ctx, "bake: paraboloid", Mapping::DualParaboloid, w, h)?;
         let cube = SplitSum::cube_chain(ctx, opts.specular_size, opts.specular_levels)?;
         // Everything after the SH readback, the downloads included, in one submission.
-        let ((irradiance, specular), t) = ctx.run("baking a probe", |rec| {
+        let ((irradiance, specular, chain), t) = ctx.run("baking a probe", |rec| {
             self.eval.record(rec, &irr, &irradiance_map)?;
             let c = ConvertOptions {
                 to: Mapping::DualParaboloid,
@@ -299,13 +306,21 @@ impl Baker {
             let specular = (0..opts.specular_levels)
                 .map(|k| cube.record_download(rec, k))
                 .collect::<Result<Vec<_>>>()?;
-            Ok((irradiance, specular))
+            let chain = if opts.chain {
+                (0..dp.mips())
+                    .map(|k| dp.record_download(rec, k))
+                    .collect::<Result<Vec<_>>>()?
+            } else {
+                Vec::new()
+            };
+            Ok((irradiance, specular, chain))
         })?;
         timings.extend(t);
         let irradiance = irradiance.read();
         let specular: Vec<Vec<[f32; 4]>> = specular.iter().map(|r| r.read()).collect();
+        let chain: Vec<Vec<[f32; 4]>> = chain.iter().map(|r| r.read()).collect();
         let finite = |v: &[[f32; 4]]| v.iter().all(|t| t.iter().all(|c| c.is_finite()));
-        if !finite(&irradiance) || !specular.iter().all(|l| finite(l)) {
+        if !finite(&irradiance) || !specular.iter().chain(&chain).all(|l| finite(l)) {
             return Err(Error::Invalid(
                 "bake: a non-finite texel left the GPU".into(),
             ));
@@ -320,6 +335,7 @@ impl Baker {
                 .into_iter()
                 .map(|l| l.into_iter().map(|t| [t[0], t[1], t[2], 1.0]).collect())
                 .collect(),
+            chain,
             timings,
         })
     }

@@ -94,7 +94,8 @@ fn small_options() -> BakeOptions {
 
 /// Each KTX2 file loads in the `ktx2` crate with R32G32B32A32_SFLOAT (or R16G16B16A16_SFLOAT),
 /// six faces, the levels asked, a linear BT.709 RGBSDA descriptor, and level data bit for bit
-/// equal to what `Baker` returns for the same map (half floats: their rounding of it).
+/// equal to what `Baker` returns for the same map (half floats: their rounding of it); with
+/// `--chain`, the paraboloid MIP chain as a two-layer array with every level.
 #[test]
 fn ktx2_files_load_in_an_independent_reader_with_the_gpu_images() {
     let dir = temp("ktx2-in");
@@ -105,6 +106,7 @@ fn ktx2_files_load_in_an_independent_reader_with_the_gpu_images() {
         "-o",
         out.to_str().unwrap(),
         "--dfg",
+        "--chain",
     ]));
     let ctx = common::ctx();
     {
@@ -112,6 +114,43 @@ fn ktx2_files_load_in_an_independent_reader_with_the_gpu_images() {
         let opts = small_options();
         for (k, map) in maps.iter().enumerate() {
             let baked = baker.bake(map, &Orientation::default(), &opts).unwrap();
+            assert!(
+                baked.chain.is_empty(),
+                "a chain nobody asked for was read back"
+            );
+            // The paraboloid chain: a 2-layer array, every level, premultiplied RGBA32F as
+            // the GPU holds it.
+            let chained = baker
+                .bake(
+                    map,
+                    &Orientation::default(),
+                    &BakeOptions {
+                        chain: true,
+                        ..opts
+                    },
+                )
+                .unwrap();
+            let side = envlight::bake::dp_size(map, &opts);
+            let bytes = std::fs::read(out.join(format!("p{k}.exr/chain.ktx2"))).unwrap();
+            let r = ktx2::Reader::new(&bytes[..]).unwrap();
+            let h = r.header();
+            assert_eq!(h.format, Some(ktx2::Format::R32G32B32A32_SFLOAT));
+            assert_eq!(
+                (h.pixel_width, h.pixel_height, h.layer_count, h.face_count),
+                (side, side, 2, 1)
+            );
+            assert_eq!(h.level_count, side.ilog2() + 1);
+            assert_eq!(chained.chain.len(), h.level_count as usize);
+            for (level, want) in r.levels().zip(&chained.chain) {
+                let got: Vec<u32> = level
+                    .data
+                    .chunks_exact(4)
+                    .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+                    .collect();
+                let want: Vec<u32> = want.iter().flatten().map(|v| v.to_bits()).collect();
+                assert_eq!(got, want);
+            }
+            assert_eq!(chained.specular, baked.specular);
             for (file, levels, size) in [
                 ("specular.ktx2", baked.specular.clone(), 16u32),
                 ("irradiance.ktx2", vec![baked.irradiance.clone()], 8),

@@ -49,6 +49,10 @@ pub struct BakeArgs {
     /// they cannot hold) [default: rgba32f]
     #[arg(long)]
     texels: Option<String>,
+    /// Also write each probe's dual-paraboloid MIP chain (chain.ktx2, RGBA32F premultiplied:
+    /// a lookup divides rgb by alpha after filtering), what FIS reads at run time
+    #[arg(long)]
+    chain: bool,
     /// Also write the split-sum DFG table once (dfg.ktx2: A, B per n·v column and √α row)
     #[arg(long)]
     dfg: bool,
@@ -79,6 +83,7 @@ struct BakeFile {
     format: Option<String>,
     texels: Option<String>,
     dfg: Option<bool>,
+    chain: Option<bool>,
     check: Option<u32>,
 }
 
@@ -242,6 +247,7 @@ fn write_probe(
                 width: size,
                 height: size,
                 faces: 6,
+                layers: 0,
                 levels,
             };
             files.push((
@@ -252,6 +258,22 @@ fn write_probe(
                 dir.join("specular.ktx2"),
                 ktx2::encode(&img(&baked.specular, o.specular_size), texels)?,
             ));
+            if let Some(first) = baked.chain.first() {
+                // Premultiplied with a weight that reaches 4 at the poles: float32, so that
+                // neither a sun nor the weight is refused or rounded.
+                let side = ((first.len() / 2) as f64).sqrt() as u32;
+                let chain = Ktx2Image {
+                    width: side,
+                    height: side,
+                    faces: 1,
+                    layers: 2,
+                    levels: &baked.chain,
+                };
+                files.push((
+                    dir.join("chain.ktx2"),
+                    ktx2::encode(&chain, Ktx2Format::Rgba32f)?,
+                ));
+            }
         }
         _ => {
             let tmp = dir.join(format!(".bake-{}.exr", std::process::id()));
@@ -267,6 +289,19 @@ fn write_probe(
                 let size = (o.specular_size >> k).max(1);
                 let b = exr(&cube_image(level, size))?;
                 files.push((dir.join(format!("specular.level{k}.exr")), b));
+            }
+            // The chain's radiance (rgb / weight), a dual-paraboloid map per level.
+            for (k, level) in baked.chain.iter().enumerate() {
+                let side = ((level.len() / 2) as f64).sqrt() as u32;
+                let texels = level
+                    .iter()
+                    .map(|t| {
+                        let w = if t[3] > 0.0 { 1.0 / t[3] } else { 0.0 };
+                        [t[0] * w, t[1] * w, t[2] * w]
+                    })
+                    .collect();
+                let map = EnvMap::new(Mapping::DualParaboloid, side, side, texels);
+                files.push((dir.join(format!("chain.level{k}.exr")), exr(&map)?));
             }
         }
     }
@@ -374,6 +409,7 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
             .or(file.specular_levels)
             .unwrap_or(d.specular_levels),
         samples: a.samples.or(file.samples).unwrap_or(d.samples),
+        chain: a.chain || file.chain == Some(true),
         ..d
     };
     options.validate()?;
@@ -442,6 +478,7 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
             width: options.dfg_size,
             height: options.dfg_size,
             faces: 1,
+            layers: 0,
             levels: std::slice::from_ref(&level),
         };
         ktx2::write(&out.join("dfg.ktx2"), &img, Ktx2Format::Rgba32f)?;

@@ -3,7 +3,8 @@
 //! B10G11R11 and E5B9G9R9 (RGB, no alpha), no supercompression.
 //!
 //! Layout written (KTX 2.0 specification, §3): the 12-byte identifier; the header (vkFormat,
-//! typeSize, pixelWidth, pixelHeight, pixelDepth = 0, layerCount = 0, faceCount 1 or 6,
+//! typeSize, pixelWidth, pixelHeight, pixelDepth = 0, layerCount (0, or 2 for a paraboloid's
+//! halves), faceCount 1 or 6,
 //! levelCount, supercompressionScheme = 0); the index (DFD, key/value data, no supercompression
 //! global data); the level index, level 0 first; the Data Format Descriptor; the key/value data
 //! (`KTXwriter`); then the levels' data, the smallest level first, each aligned to 16 bytes
@@ -149,8 +150,9 @@ pub fn pack_e5b9g9r9(c: [f32; 3]) -> Option<u32> {
     Some(q[0] | (q[1] << 9) | (q[2] << 18) | ((e as u32) << 27))
 }
 
-/// An image to write: `faces` (1 or 6) faces of `width` × `height` at level 0, and its levels,
-/// each faces × rows × columns RGBA texels (level k is max(1, size >> k)).
+/// An image to write: `layers` array layers (0: not an array) of `faces` (1 or 6) faces of
+/// `width` × `height` at level 0, and its levels, each layers × faces × rows × columns RGBA
+/// texels (level k is max(1, size >> k)), as KTX 2.0 orders a level's data.
 pub struct Ktx2Image<'a> {
     /// Level-0 width.
     pub width: u32,
@@ -158,6 +160,8 @@ pub struct Ktx2Image<'a> {
     pub height: u32,
     /// 1 (2D) or 6 (cube).
     pub faces: u32,
+    /// Array layers (a dual paraboloid's two halves: 2), or 0 for a plain texture or cube.
+    pub layers: u32,
     /// The levels, level 0 first.
     pub levels: &'a [Vec<[f32; 4]>],
 }
@@ -264,11 +268,11 @@ pub fn encode(image: &Ktx2Image<'_>, format: Ktx2Format) -> Result<Vec<u8>> {
             (image.width >> k).max(1) as usize,
             (image.height >> k).max(1) as usize,
         );
-        if level.len() != w * h * image.faces as usize {
+        let n = w * h * (image.faces * image.layers.max(1)) as usize;
+        if level.len() != n {
             return Err(Error::Invalid(format!(
-                "KTX2: level {k} holds {} texels, not {}",
+                "KTX2: level {k} holds {} texels, not {n}",
                 level.len(),
-                w * h * image.faces as usize
             )));
         }
     }
@@ -337,7 +341,7 @@ pub fn encode(image: &Ktx2Image<'_>, format: Ktx2Format) -> Result<Vec<u8>> {
         image.width,
         image.height,
         0,
-        0,
+        image.layers,
         image.faces,
         n_levels as u32,
         0,
@@ -482,6 +486,7 @@ mod tests {
             width: 2,
             height: 2,
             faces: 1,
+            layers: 0,
             levels: std::slice::from_ref(&level),
         };
         assert!(encode(&img, Ktx2Format::Rgba32f).is_err());
@@ -490,6 +495,7 @@ mod tests {
             width: 2,
             height: 2,
             faces: 1,
+            layers: 0,
             levels: std::slice::from_ref(&big),
         };
         assert!(encode(&img, Ktx2Format::Rgba16f).is_err());
