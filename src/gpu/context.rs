@@ -558,13 +558,24 @@ impl Shared {
         what: &'static str,
         record: impl FnOnce(vk::CommandBuffer) -> Result<()>,
     ) -> Result<()> {
+        let (cmd, fence) = self.submit(what, record)?;
+        self.retire(cmd, fence)
+    }
+
+    /// Allocates a command buffer and a fence, records with `record`, and submits; the
+    /// caller must [`Shared::retire`] the pair. On an error nothing is left to retire.
+    pub(crate) fn submit(
+        &self,
+        what: &'static str,
+        record: impl FnOnce(vk::CommandBuffer) -> Result<()>,
+    ) -> Result<(vk::CommandBuffer, vk::Fence)> {
         let d = &self.device;
         let pool = self.command_pool.lock().unwrap_or_else(|e| e.into_inner());
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(*pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
-        // SAFETY: pool is ours and externally synchronised by the mutex held until the end.
+        // SAFETY: pool is ours and externally synchronised by the mutex held while recording.
         let cmd =
             unsafe { d.allocate_command_buffers(&alloc) }.vk("allocating a command buffer")?[0];
         let fence_info = vk::FenceCreateInfo::default();
@@ -593,11 +604,31 @@ impl Shared {
             let submit = vk::SubmitInfo::default().command_buffers(&cmds);
             let queue = self.queue.lock().unwrap_or_else(|e| e.into_inner());
             // SAFETY: the queue is externally synchronised by its mutex.
-            unsafe { d.queue_submit(*queue, &[submit], fence) }.vk(what)?;
-            drop(queue);
-            unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("waiting for the GPU")
+            unsafe { d.queue_submit(*queue, &[submit], fence) }.vk(what)
         })();
-        // SAFETY: the work is finished (or never submitted), so both can go.
+        if let Err(e) = result {
+            // SAFETY: nothing of this pair is pending (a failed submit leaves nothing queued;
+            // the wait covers a device that failed mid-way).
+            unsafe {
+                let _ = d.device_wait_idle();
+                d.destroy_fence(fence, None);
+                d.free_command_buffers(*pool, &[cmd]);
+            }
+            self.untrack();
+            return Err(e);
+        }
+        Ok((cmd, fence))
+    }
+
+    /// Waits for a pair [`Shared::submit`] returned, then frees both.
+    pub(crate) fn retire(&self, cmd: vk::CommandBuffer, fence: vk::Fence) -> Result<()> {
+        let d = &self.device;
+        // SAFETY: the fence belongs to this device and was submitted with cmd.
+        let result =
+            unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("waiting for the GPU");
+        let pool = self.command_pool.lock().unwrap_or_else(|e| e.into_inner());
+        // SAFETY: the work is finished (or the device lost, after which the idle wait
+        // returns), so both can go; the pool is synchronised by its mutex.
         unsafe {
             if result.is_err() {
                 let _ = d.device_wait_idle();

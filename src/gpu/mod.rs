@@ -13,7 +13,7 @@ pub mod timing;
 pub use barrier::Usage;
 pub use context::{AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSelector, ValidationLog};
 pub use pipeline::{Bind, Pipeline};
-pub use recorder::{Recorded, Recorder};
+pub use recorder::{InFlight, Recorded, Recorder};
 pub use resources::{Buffer, Image, ImageDesc, Sampler};
 pub use timing::Timing;
 

@@ -331,6 +331,29 @@ impl Recorder {
         };
     }
 
+    /// Copies `regions` (source offset, destination offset, bytes) of `src` into `dst`.
+    pub fn copy_buffer_regions(&mut self, src: &Buffer, dst: &Buffer, regions: &[(u64, u64, u64)]) {
+        assert!(regions
+            .iter()
+            .all(|&(s, d, n)| s + n <= src.size() && d + n <= dst.size()));
+        self.use_buffer(src, Usage::TransferSrc);
+        self.use_buffer(dst, Usage::TransferDst);
+        let regions: Vec<vk::BufferCopy> = regions
+            .iter()
+            .map(|&(src_offset, dst_offset, size)| vk::BufferCopy {
+                src_offset,
+                dst_offset,
+                size,
+            })
+            .collect();
+        // SAFETY: cmd is recording; every region lies inside both live buffers.
+        unsafe {
+            self.ctx
+                .device()
+                .cmd_copy_buffer(self.cmd, src.raw, dst.raw, &regions)
+        };
+    }
+
     /// Clears every level and layer of `image` to `value`, discarding its contents.
     pub fn clear(&mut self, image: &Image, value: [f32; 4]) {
         self.discard(image);
@@ -368,11 +391,77 @@ fn level_region(image: &Image, level: u32) -> vk::BufferImageCopy {
         })
 }
 
+/// Work [`Context::submit`] handed to the GPU and nobody has waited for yet. Dropping it
+/// waits too, so what the recording keeps (and the value it returned, such as readbacks)
+/// outlives the GPU's work.
+pub struct InFlight<R> {
+    ctx: Context,
+    pending: Option<(vk::CommandBuffer, vk::Fence)>,
+    recorded: Option<Recorded>,
+    out: Option<R>,
+}
+
+impl<R> InFlight<R> {
+    /// Waits for the work; returns what the recording returned and the GPU time of every
+    /// span.
+    pub fn wait(mut self) -> Result<(R, Vec<Timing>)> {
+        if let Some((cmd, fence)) = self.pending.take() {
+            self.ctx.shared.retire(cmd, fence)?;
+        }
+        let timings = match &self.recorded {
+            Some(r) => r.timings()?,
+            None => Vec::new(),
+        };
+        let out = self
+            .out
+            .take()
+            .unwrap_or_else(|| unreachable!("set when submitted"));
+        Ok((out, timings))
+    }
+}
+
+impl<R> Drop for InFlight<R> {
+    fn drop(&mut self) {
+        if let Some((cmd, fence)) = self.pending.take() {
+            let _ = self.ctx.shared.retire(cmd, fence);
+        }
+    }
+}
+
 impl Context {
+    /// Records with `record` into a command buffer of envlight's own and submits it without
+    /// waiting: the host may prepare the next submission (uploads included) while the GPU
+    /// works. Submissions execute in the order they were made, which is the order resources'
+    /// tracked usages assume.
+    pub fn submit<R>(
+        &self,
+        what: &'static str,
+        record: impl FnOnce(&mut Recorder) -> Result<R>,
+    ) -> Result<InFlight<R>> {
+        let mut out = None;
+        let mut recorded = None;
+        let pending = self.shared.submit(what, |cmd| {
+            // SAFETY: submit hands a fresh primary command buffer in the recording state and
+            // submits it to this context's queue; InFlight keeps the Recorded (and the
+            // recording's value) until the fence has signalled.
+            let mut rec = unsafe { Recorder::begin(self, cmd, true) };
+            let r = record(&mut rec);
+            recorded = Some(rec.finish());
+            out = Some(r?);
+            Ok(())
+        })?;
+        Ok(InFlight {
+            ctx: self.clone(),
+            pending: Some(pending),
+            recorded,
+            out,
+        })
+    }
+
     /// Records with `record` into a command buffer of envlight's own, submits it, waits for
-    /// it, and returns what `record` returned and the GPU time of every span. The one place
-    /// envlight submits work; an engine records into its own command buffers instead
-    /// ([`Recorder::begin`]).
+    /// it, and returns what `record` returned and the GPU time of every span. With
+    /// [`Context::submit`], the one place envlight submits work; an engine records into its
+    /// own command buffers instead ([`Recorder::begin`]).
     pub fn run<R>(
         &self,
         what: &'static str,

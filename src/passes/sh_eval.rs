@@ -7,6 +7,8 @@ use crate::abi::{binding, push::ShEvalPush, ShaderId, SH_MAX_LMAX, WORKGROUP_2D}
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Timing};
 use crate::math::sh;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
 
 /// The SH evaluation pass: irradiance (or any zonal convolution whose per-band factors the
 /// caller folds into the coefficients) at every texel centre of a map.
@@ -36,9 +38,53 @@ impl ShEvaluator {
         }
         let data: Vec<[f32; 4]> = coeffs
             .iter()
-            .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 0.0])
+            .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 1.0])
             .collect();
         let buf = Buffer::storage(rec.context(), "sh eval coefficients", &data)?;
+        self.dispatch(rec, buf, lmax, dst)
+    }
+
+    /// Records irradiance at every texel centre of `dst` from radiance coefficients the GPU
+    /// holds: bands up to `lmax` at the start of `radiance` as [`ShProjector::record`] writes
+    /// them (RGB f32 triples). They are copied into the evaluator's coefficients, whose alpha
+    /// holds Â_l ([`sh::cosine_lobe`]), so no readback stands between projection and
+    /// evaluation.
+    ///
+    /// [`ShProjector::record`]: super::ShProjector::record
+    pub fn record_irradiance(
+        &self,
+        rec: &mut Recorder,
+        radiance: &Buffer,
+        lmax: u32,
+        dst: &GpuEnvMap,
+    ) -> Result<()> {
+        if lmax > SH_MAX_LMAX {
+            return Err(Error::Invalid(format!(
+                "SH order {lmax} is above the maximum, {SH_MAX_LMAX}"
+            )));
+        }
+        let n = sh::count(lmax);
+        let mut data = vec![[0.0f32; 4]; n];
+        for l in 0..=lmax {
+            for m in -(l as i32)..=(l as i32) {
+                data[sh::index(l, m)][3] = sh::cosine_lobe(l) as f32;
+            }
+        }
+        let buf = Buffer::new(
+            rec.context(),
+            "sh eval coefficients (from the GPU)",
+            (n * 16) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let mut buf = buf;
+        buf.write(&data);
+        let regions: Vec<(u64, u64, u64)> = (0..n as u64).map(|k| (12 * k, 16 * k, 12)).collect();
+        rec.copy_buffer_regions(radiance, &buf, &regions);
+        self.dispatch(rec, buf, lmax, dst)
+    }
+
+    fn dispatch(&self, rec: &mut Recorder, buf: Buffer, lmax: u32, dst: &GpuEnvMap) -> Result<()> {
         let push = ShEvalPush {
             dst_size: [dst.width, dst.height],
             dst_mapping: dst.mapping.id(),
