@@ -10,11 +10,12 @@
 
 use crate::envmap::luminance;
 use crate::error::{Error, Result};
-use crate::gpu::{Context, Timing};
+use crate::gpu::{Buffer, Context, InFlight, Timing, Usage};
 use crate::math::exact::ExactFilter;
-use crate::math::sh::{self, Window};
+use crate::math::sh;
 use crate::math::split_sum::level_alpha;
 use crate::math::Orientation;
+use crate::passes::map::Readback;
 use crate::passes::sh_project::{ShCoefficients, Subgroups};
 use crate::passes::{
     ConvertOptions, Converter, GpuEnvMap, MipChain, PrefilterOptions, ShEvaluator, ShProjector,
@@ -22,6 +23,8 @@ use crate::passes::{
 };
 use crate::render::default_dp_size;
 use crate::{EnvMap, Mapping};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
 
 /// What a bake computes.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -231,6 +234,60 @@ pub fn spot_check(
     }
 }
 
+/// What a bake's submission reads back.
+struct Downloads {
+    sh: Buffer,
+    irradiance: Readback,
+    specular: Vec<Readback>,
+    chain: Vec<Readback>,
+}
+
+/// A bake [`Baker::submit`] handed to the GPU; [`PendingBake::wait`] finishes it (dropping
+/// it waits too, and discards the results).
+pub struct PendingBake {
+    inflight: InFlight<Downloads>,
+    lmax: u32,
+}
+
+impl PendingBake {
+    /// Waits for the GPU and reads the results back; refuses a non-finite texel.
+    pub fn wait(self) -> Result<Baked> {
+        let (d, timings) = self.inflight.wait()?;
+        let flat: Vec<f32> = d.sh.read(sh::count(self.lmax) * 3);
+        let coeffs = flat
+            .chunks_exact(3)
+            .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
+            .collect();
+        let sh = ShCoefficients {
+            lmax: self.lmax,
+            coeffs,
+        };
+        let irradiance = d.irradiance.read();
+        let specular: Vec<Vec<[f32; 4]>> = d.specular.iter().map(|r| r.read()).collect();
+        let chain: Vec<Vec<[f32; 4]>> = d.chain.iter().map(|r| r.read()).collect();
+        let finite = |v: &[[f32; 4]]| v.iter().all(|t| t.iter().all(|c| c.is_finite()));
+        let sh_finite = flat.iter().all(|c| c.is_finite());
+        if !sh_finite || !finite(&irradiance) || !specular.iter().chain(&chain).all(|l| finite(l)) {
+            return Err(Error::Invalid(
+                "bake: a non-finite texel left the GPU".into(),
+            ));
+        }
+        Ok(Baked {
+            sh,
+            irradiance: irradiance
+                .into_iter()
+                .map(|t| [t[0], t[1], t[2], 1.0])
+                .collect(),
+            specular: specular
+                .into_iter()
+                .map(|l| l.into_iter().map(|t| [t[0], t[1], t[2], 1.0]).collect())
+                .collect(),
+            chain,
+            timings,
+        })
+    }
+}
+
 /// Side of the dual paraboloid the specular cube is filtered from: the source's own
 /// resolution ([`default_dp_size`]), but no finer than twice the cube's face, which already
 /// samples the mirror level as finely as the cube holds it (a paraboloid half spans the
@@ -262,18 +319,41 @@ impl Baker {
         })
     }
 
-    /// Bakes `env` seen with `orientation`.
+    /// Bakes `env` seen with `orientation` and waits ([`Baker::submit`], then
+    /// [`PendingBake::wait`]).
     pub fn bake(
         &self,
         env: &EnvMap,
         orientation: &Orientation,
         opts: &BakeOptions,
     ) -> Result<Baked> {
+        self.submit(env, orientation, opts)?.wait()
+    }
+
+    /// Records the whole bake of `env` — its upload, the SH projection, the irradiance cube
+    /// from the projected coefficients (copied on the GPU, no readback between), the
+    /// paraboloid and its MIP chain, the specular cube, and every download — into one
+    /// submission, and returns without waiting. Submitting the next probe before waiting for
+    /// this one overlaps that probe's upload and recording (and the caller's work on this
+    /// probe's results) with this probe's GPU work; on a device with one queue the GPU itself
+    /// runs the submissions one after the other, without idling between them.
+    pub fn submit(
+        &self,
+        env: &EnvMap,
+        orientation: &Orientation,
+        opts: &BakeOptions,
+    ) -> Result<PendingBake> {
         opts.validate()?;
         let ctx = &self.ctx;
-        let src = GpuEnvMap::upload(ctx, env)?;
-        let (coeffs, mut timings) = self.sh.run_oriented(&src, opts.sh_order, orientation)?;
-        let irr = sh::irradiance_coeffs(&Window::None.apply(&coeffs.coeffs));
+        let lmax = opts.sh_order;
+        let src = GpuEnvMap::new(ctx, "bake: source", env.mapping, env.width, env.height)?;
+        let sh_out = Buffer::new(
+            ctx,
+            "bake: SH coefficients",
+            ShProjector::output_bytes(lmax),
+            vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuToCpu,
+        )?;
         let irradiance_map = GpuEnvMap::new(
             ctx,
             "bake: irradiance cube",
@@ -285,13 +365,18 @@ impl Baker {
         let (w, h) = Mapping::DualParaboloid.extent_for_size(dp_size);
         let dp = GpuEnvMap::with_mips(ctx, "bake: paraboloid", Mapping::DualParaboloid, w, h)?;
         let cube = SplitSum::cube_chain(ctx, opts.specular_size, opts.specular_levels)?;
-        // Everything after the SH readback, the downloads included, in one submission.
-        let ((irradiance, specular, chain), t) = ctx.run("baking a probe", |rec| {
-            self.eval.record(rec, &irr, &irradiance_map)?;
+        let orientation = *orientation;
+        let opts = *opts;
+        let inflight = ctx.submit("baking a probe", move |rec| {
+            src.record_upload(rec, env)?;
+            self.sh.record(rec, &src, lmax, &orientation, &sh_out)?;
+            self.eval
+                .record_irradiance(rec, &sh_out, lmax, &irradiance_map)?;
+            rec.use_buffer(&sh_out, Usage::HostRead);
             let c = ConvertOptions {
                 to: Mapping::DualParaboloid,
                 size: dp_size,
-                orientation: *orientation,
+                orientation,
                 supersample: None,
             };
             self.convert.record(rec, &src, &dp, &c)?;
@@ -313,31 +398,15 @@ impl Baker {
             } else {
                 Vec::new()
             };
-            Ok((irradiance, specular, chain))
+            rec.keep((src, irradiance_map, dp, cube));
+            Ok(Downloads {
+                sh: sh_out,
+                irradiance,
+                specular,
+                chain,
+            })
         })?;
-        timings.extend(t);
-        let irradiance = irradiance.read();
-        let specular: Vec<Vec<[f32; 4]>> = specular.iter().map(|r| r.read()).collect();
-        let chain: Vec<Vec<[f32; 4]>> = chain.iter().map(|r| r.read()).collect();
-        let finite = |v: &[[f32; 4]]| v.iter().all(|t| t.iter().all(|c| c.is_finite()));
-        if !finite(&irradiance) || !specular.iter().chain(&chain).all(|l| finite(l)) {
-            return Err(Error::Invalid(
-                "bake: a non-finite texel left the GPU".into(),
-            ));
-        }
-        Ok(Baked {
-            sh: coeffs,
-            irradiance: irradiance
-                .into_iter()
-                .map(|t| [t[0], t[1], t[2], 1.0])
-                .collect(),
-            specular: specular
-                .into_iter()
-                .map(|l| l.into_iter().map(|t| [t[0], t[1], t[2], 1.0]).collect())
-                .collect(),
-            chain,
-            timings,
-        })
+        Ok(PendingBake { inflight, lmax })
     }
 
     /// The split-sum DFG table (height-correlated Smith unless `correlated` is false), row

@@ -326,7 +326,8 @@ fn packed_ktx2_files_hold_the_gpu_images_to_their_precision() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// The specular cube's levels against `math::split_sum::prefiltered_cube` reading the float64
+/// The irradiance cube against the float64 SH evaluation of the bake's own coefficients; the
+/// specular cube's levels against `math::split_sum::prefiltered_cube` reading the float64
 /// MIP chain of the same paraboloid (converted in float64 as the GPU converts), on the sky
 /// whose sun is 5·10⁴ × the zenith: relative to the texel, or to the level's mean where the
 /// texel is darker. Bound 1e-4: the paraboloid's conversion in float32 (1e-6 of a sun texel)
@@ -342,6 +343,30 @@ fn specular_cube_matches_its_float64_twin() {
             .unwrap()
             .bake(&env, &Orientation::default(), &opts)
             .unwrap();
+        // The irradiance cube, evaluated on the GPU from coefficients copied there (their
+        // alpha Â_l), against the float64 evaluation of the same coefficients: float32
+        // rounding of nine terms, bound 1e-5 of the cube's largest texel.
+        let e = envlight::math::sh::irradiance_coeffs(&baked.sh.coeffs);
+        let s = opts.irradiance_size;
+        let want: Vec<[f64; 3]> = (0..6 * s * s)
+            .map(|t| {
+                let c = envlight::math::Coord {
+                    layer: t / (s * s),
+                    u: ((t % s) as f64 + 0.5) / s as f64,
+                    v: ((t / s % s) as f64 + 0.5) / s as f64,
+                };
+                envlight::math::sh::eval(&e, Mapping::Cube.coord_to_dir(c)).map(|v| v.max(0.0))
+            })
+            .collect();
+        let top = want.iter().map(|w| w[1]).fold(0.0, f64::max);
+        let worst = baked
+            .irradiance
+            .iter()
+            .zip(&want)
+            .flat_map(|(g, w)| (0..3).map(move |c| (g[c] as f64 - w[c]).abs()))
+            .fold(0.0, f64::max);
+        eprintln!("irradiance cube: worst {:.2e} of the largest", worst / top);
+        assert!(worst < 1e-5 * top, "{worst:e} of {top:e}");
         let dp = common::dp_f64(&env, envlight::bake::dp_size(&env, &opts));
         let want = prefiltered_cube(&mip::chain(&dp), 16, 4, 16, opts.bias);
         for (k, (g, w)) in baked.specular.iter().zip(&want).enumerate() {
@@ -356,6 +381,39 @@ fn specular_cube_matches_its_float64_twin() {
         }
     }
     common::finish(ctx);
+}
+
+/// Probes submitted before the previous ones are waited for (as `envlight bake` pipelines
+/// them) bake bit for bit as one at a time, whichever order they are waited in; a submission
+/// dropped unwaited waits for itself, so nothing leaks and validation stays silent.
+#[test]
+fn submissions_in_flight_together_bake_as_one_at_a_time() {
+    let dir = temp("inflight");
+    let maps = probes(&dir);
+    let ctx = common::ctx();
+    {
+        let baker = Baker::new(&ctx).unwrap();
+        let opts = small_options();
+        let o = Orientation::default();
+        let alone: Vec<_> = maps
+            .iter()
+            .map(|m| baker.bake(m, &o, &opts).unwrap())
+            .collect();
+        let pending: Vec<_> = maps
+            .iter()
+            .map(|m| baker.submit(m, &o, &opts).unwrap())
+            .collect();
+        let dropped = baker.submit(&maps[0], &o, &opts).unwrap();
+        drop(dropped);
+        for (k, p) in pending.into_iter().enumerate().rev() {
+            let b = p.wait().unwrap();
+            assert_eq!(b.specular, alone[k].specular, "probe {k}");
+            assert_eq!(b.irradiance, alone[k].irradiance, "probe {k}");
+            assert_eq!(b.sh.coeffs, alone[k].sh.coeffs, "probe {k}");
+        }
+    }
+    common::finish(ctx);
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Shards 1/2 and 2/2 write every probe file byte for byte as one unsharded run does, and

@@ -5,7 +5,7 @@
 use super::{context, Global};
 use anyhow::{anyhow, bail, Context as _, Result};
 use clap::Args;
-use envlight::bake::{spot_check, BakeOptions, Baked, Baker, SpotCheck};
+use envlight::bake::{spot_check, BakeOptions, Baked, Baker, PendingBake, SpotCheck};
 use envlight::io::ktx2::{self, Ktx2Format, Ktx2Image};
 use envlight::io::{write_atomic, LoadOptions};
 use envlight::{EnvMap, Mapping, Orientation};
@@ -128,7 +128,12 @@ struct Entry {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     error: Option<String>,
     outputs: Vec<Output>,
+    /// The run's wall time from the previous probe's end to this one's (they add up).
     seconds: f64,
+    /// Of which the reader thread spent this long reading, hashing and decoding it
+    /// alongside the GPU work.
+    #[serde(default)]
+    read_seconds: f64,
     gpu_ms: f64,
     /// Errors against exact filters at a few texels (absent when not checked).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -141,6 +146,40 @@ struct Manifest {
     settings_sha256: String,
     shard: Option<String>,
     probes: Vec<Entry>,
+}
+
+/// A probe whose bake is on the GPU.
+struct InGpu {
+    path: PathBuf,
+    name: String,
+    input: String,
+    input_sha256: String,
+    map: EnvMap,
+    /// Seconds spent reading, hashing and decoding it.
+    read_s: f64,
+    pending: PendingBake,
+}
+
+/// The manifest entry of a probe that failed, reported above the progress bar.
+fn failed(
+    pb: &ProgressBar,
+    input: String,
+    input_sha256: String,
+    e: anyhow::Error,
+    read_seconds: f64,
+) -> Entry {
+    pb.suspend(|| eprintln!("error: {e:#}"));
+    Entry {
+        input,
+        input_sha256,
+        status: "failed".into(),
+        error: Some(format!("{e:#}")),
+        outputs: Vec::new(),
+        seconds: 0.0,
+        read_seconds,
+        gpu_ms: 0.0,
+        check: None,
+    }
 }
 
 fn sha256(bytes: &[u8]) -> String {
@@ -528,10 +567,57 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
                 }
             }
         });
+        // One probe on the GPU while the previous one is read back, written and checked:
+        // its upload and recording overlap that work, and the GPU does not idle between them.
+        let finish = |w: InGpu| -> Entry {
+            let result = w
+                .pending
+                .wait()
+                .map_err(anyhow::Error::from)
+                .and_then(|baked| {
+                    let outputs =
+                        write_probe(out, &out.join(&w.name), &baked, &options, &format, texels)?;
+                    let o = Orientation::default();
+                    let checked =
+                        (check > 0).then(|| spot_check(&w.map, &o, &options, &baked, check));
+                    let gpu_ms = baked.timings.iter().map(|t| t.ms).sum::<f64>();
+                    Ok((outputs, gpu_ms, checked))
+                })
+                .with_context(|| w.path.display().to_string());
+            match result {
+                Ok((outputs, gpu_ms, check)) => Entry {
+                    input: w.input,
+                    input_sha256: w.input_sha256,
+                    status: "baked".into(),
+                    error: None,
+                    outputs,
+                    seconds: 0.0,
+                    read_seconds: w.read_s,
+                    gpu_ms,
+                    check,
+                },
+                Err(e) => failed(&pb, w.input, w.input_sha256, e, w.read_s),
+            }
+        };
+        // Each probe's seconds: the run's wall time from the previous probe's end to its own,
+        // so that they add up to the run's (reading happens alongside, on the reader thread).
         let mut entries = Vec::new();
+        let mut mark = Instant::now();
+        let mut push = |entries: &mut Vec<Entry>, mut e: Entry| {
+            e.seconds = mark.elapsed().as_secs_f64();
+            mark = Instant::now();
+            entries.push(e);
+            pb.inc(1);
+        };
+        let mut in_gpu: Option<InGpu> = None;
         for job in rx {
-            let entry = match job {
-                Prepared::Skip(e) => e,
+            match job {
+                Prepared::Skip(e) => {
+                    if let Some(w) = in_gpu.take() {
+                        push(&mut entries, finish(w));
+                    }
+                    push(&mut entries, e);
+                }
                 Prepared::Bake {
                     path,
                     input,
@@ -539,59 +625,41 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
                     map,
                     read_s,
                 } => {
-                    let t0 = Instant::now();
                     let name = path
                         .file_name()
                         .map(|n| n.to_string_lossy().to_string())
                         .unwrap_or_default();
                     pb.set_message(name.clone());
-                    let result = map
-                        .and_then(|map| {
-                            let o = Orientation::default();
-                            let baked = baker.bake(&map, &o, &options)?;
-                            let outputs = write_probe(
-                                out,
-                                &out.join(&name),
-                                &baked,
-                                &options,
-                                &format,
-                                texels,
-                            )?;
-                            let checked =
-                                (check > 0).then(|| spot_check(&map, &o, &options, &baked, check));
-                            let gpu_ms = baked.timings.iter().map(|t| t.ms).sum::<f64>();
-                            Ok((outputs, gpu_ms, checked))
-                        })
-                        .with_context(|| path.display().to_string());
-                    match result {
-                        Ok((outputs, gpu_ms, check)) => Entry {
-                            input,
-                            input_sha256,
-                            status: "baked".into(),
-                            error: None,
-                            outputs,
-                            seconds: read_s + t0.elapsed().as_secs_f64(),
-                            gpu_ms,
-                            check,
-                        },
-                        Err(e) => {
-                            pb.suspend(|| eprintln!("error: {e:#}"));
-                            Entry {
+                    let submitted = map.and_then(|map| {
+                        let pending = baker.submit(&map, &Orientation::default(), &options)?;
+                        Ok((map, pending))
+                    });
+                    // The previous probe finishes while this one runs on the GPU.
+                    if let Some(w) = in_gpu.take() {
+                        push(&mut entries, finish(w));
+                    }
+                    match submitted {
+                        Ok((map, pending)) => {
+                            in_gpu = Some(InGpu {
+                                path,
+                                name,
                                 input,
                                 input_sha256,
-                                status: "failed".into(),
-                                error: Some(format!("{e:#}")),
-                                outputs: Vec::new(),
-                                seconds: read_s + t0.elapsed().as_secs_f64(),
-                                gpu_ms: 0.0,
-                                check: None,
-                            }
+                                map,
+                                read_s,
+                                pending,
+                            })
+                        }
+                        Err(e) => {
+                            let e = e.context(path.display().to_string());
+                            push(&mut entries, failed(&pb, input, input_sha256, e, read_s));
                         }
                     }
                 }
-            };
-            entries.push(entry);
-            pb.inc(1);
+            }
+        }
+        if let Some(w) = in_gpu.take() {
+            push(&mut entries, finish(w));
         }
         entries
     });
