@@ -323,6 +323,15 @@ pub mod split_sum {
     pub const MU_MIN: f64 = 1e-4;
 }
 
+/// Light extraction ([`crate::math::lights`]).
+pub mod lights {
+    /// A texel is a light texel above this many times the map's mean luminance by default.
+    pub const DEFAULT_RATIO: f64 = 32.0;
+    /// Most light texels kept (the threshold rises to keep to it): what the per-texel light
+    /// sums of the bake cost.
+    pub const MAX_TEXELS: u32 = 1024;
+}
+
 /// Workgroup size of the SH passes: one texel (or partial sum) per invocation.
 pub const SH_WORKGROUP: u32 = 64;
 /// Texels each SH projection invocation sums in registers before the workgroup sums, on

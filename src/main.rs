@@ -22,6 +22,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     Info(cli::info::InfoArgs),
+    Lights(cli::info::LightsArgs),
     Convert(cli::maps::ConvertArgs),
     Sh(cli::maps::ShArgs),
     Irradiance(cli::maps::IrradianceArgs),
@@ -51,6 +52,7 @@ fn main() {
     let g = &cli.global;
     let result = match &cli.command {
         Command::Info(a) => cli::info::info(a),
+        Command::Lights(a) => cli::info::lights(a),
         Command::Convert(a) => cli::maps::convert(g, a),
         Command::Sh(a) => cli::maps::sh(g, a),
         Command::Irradiance(a) => cli::maps::irradiance(g, a),

@@ -1,9 +1,10 @@
-//! `envlight info`, `devices` and `synth-sky`.
+//! `envlight info`, `lights`, `devices` and `synth-sky`.
 
 use super::{context, load_input, Global, Input};
 use anyhow::Result;
 use clap::Args;
 use envlight::io;
+use envlight::math::lights::{extract, group, ExtractOptions};
 use envlight::math::synth::Sky;
 use envlight::{EnvMap, Mapping};
 use std::path::PathBuf;
@@ -13,6 +14,82 @@ use std::path::PathBuf;
 pub struct InfoArgs {
     #[command(flatten)]
     input: Input,
+}
+
+/// List a map's compact bright sources (light extraction): direction, solid angle, power and
+/// share of the total
+#[derive(Args)]
+pub struct LightsArgs {
+    #[command(flatten)]
+    input: Input,
+    /// A texel is a light texel above this many times the map's mean luminance
+    #[arg(long, default_value_t = envlight::abi::lights::DEFAULT_RATIO)]
+    ratio: f64,
+    /// Most light texels kept (the threshold rises to keep to it)
+    #[arg(long, default_value_t = envlight::abi::lights::MAX_TEXELS as usize)]
+    max_texels: usize,
+    /// Print JSON instead of a table
+    #[arg(long)]
+    json: bool,
+}
+
+/// Texels within this angle (radians) of a light's first texel are reported as that light.
+const GROUP_RADIUS: f64 = 0.1;
+
+fn print_lights(map: &EnvMap, opts: &ExtractOptions) {
+    let ex = extract(map, opts);
+    let lights = group(map, &ex, GROUP_RADIUS);
+    let share: f64 = lights.iter().map(|l| l.share).sum();
+    println!(
+        "lights:    {} ({} texels above {:.4e} = {} x the mean luminance; {:.1}% of the power)",
+        lights.len(),
+        ex.lights.len(),
+        ex.threshold,
+        opts.ratio,
+        100.0 * share
+    );
+    for (k, l) in lights.iter().enumerate() {
+        println!(
+            "  {k}: direction [{:+.4}, {:+.4}, {:+.4}], {:.3e} sr, power [{:.4e}, {:.4e}, {:.4e}], \
+             {:.2}% of the total, {} texels",
+            l.direction[0],
+            l.direction[1],
+            l.direction[2],
+            l.solid_angle,
+            l.power[0],
+            l.power[1],
+            l.power[2],
+            100.0 * l.share,
+            l.texels
+        );
+    }
+}
+
+/// `envlight lights`.
+pub fn lights(a: &LightsArgs) -> Result<()> {
+    if !(a.ratio.is_finite() && a.ratio > 0.0) {
+        anyhow::bail!("--ratio {}: must be positive and finite", a.ratio);
+    }
+    let map = load_input(&a.input)?;
+    let opts = ExtractOptions {
+        ratio: a.ratio,
+        max_texels: a.max_texels,
+    };
+    if a.json {
+        let ex = extract(&map, &opts);
+        let report = serde_json::json!({
+            "file": a.input.input,
+            "threshold": ex.threshold,
+            "options": opts,
+            "light_texels": ex.lights.len(),
+            "lights": group(&map, &ex, GROUP_RADIUS),
+        });
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!("file:      {}", a.input.input);
+        print_lights(&map, &opts);
+    }
+    Ok(())
 }
 
 /// Write the analytic sky (gradient, sun 5·10⁴ × the zenith, ground) as a lat-long EXR
@@ -55,6 +132,7 @@ pub fn info(a: &InfoArgs) -> Result<()> {
         "power:     [{:.6e}, {:.6e}, {:.6e}]  (sum of L * solid angle, W/m^2 per unit radiance)",
         s.power[0], s.power[1], s.power[2]
     );
+    print_lights(&map, &ExtractOptions::default());
     Ok(())
 }
 
