@@ -146,6 +146,10 @@ pub mod binding {
         PREFILTER_GGX_SRC = 0;
         /// prefilter_ggx: the level written (rgba32f storage image).
         PREFILTER_GGX_DST = 1;
+        /// lights: the light texels (float buffer, LIGHT_STRIDE vec4 each).
+        LIGHTS_TEXELS = 0;
+        /// lights: the level their light is added to (rgba32f storage image).
+        LIGHTS_DST = 1;
     }
 }
 
@@ -329,7 +333,10 @@ pub mod lights {
     pub const DEFAULT_RATIO: f64 = 32.0;
     /// Most light texels kept (the threshold rises to keep to it): what the per-texel light
     /// sums of the bake cost.
-    pub const MAX_TEXELS: u32 = 1024;
+    pub const MAX_TEXELS: u32 = 256;
+    /// vec4s per light texel in the GPU's list: (world centre, Ω), (excess rgb, ρ = √Ω),
+    /// then its quadrature nodes' (world direction, weight).
+    pub const HEADER_VEC4S: u32 = 2;
 }
 
 /// Workgroup size of the SH passes: one texel (or partial sum) per invocation.
@@ -662,6 +669,25 @@ pub mod push {
             /// Padding.
             pad: u32 = "uint",
         }
+        /// `glsl/lights.comp`.
+        LightsPush {
+            /// Side of the level written (a cube face).
+            size: u32 = "uint",
+            /// Light texels.
+            count: u32 = "uint",
+            /// Quadrature nodes per light texel.
+            nodes: u32 = "uint",
+            /// 0: the clamped cosine (irradiance); 1: split-sum's GGX kernel at α.
+            kernel: u32 = "uint",
+            /// GGX α.
+            alpha: f32 = "float",
+            /// 1 / ∫ K dω, the kernel's normalisation (1 for the cosine).
+            inv_norm: f32 = "float",
+            /// Cells per lobe scale below which a texel takes its centre alone.
+            per_width: f32 = "float",
+            /// Padding.
+            pad: u32 = "uint",
+        }
         /// `glsl/sh_rotate.comp`.
         ShRotatePush {
             /// Records.
@@ -788,6 +814,9 @@ macro_rules! shader_table {
             /// One roughness level of the split-sum prefiltered GGX chain.
             PrefilterGgx = "prefilter_ggx", "prefilter_ggx.comp", Compute, [], PrefilterGgxPush,
                 [(PREFILTER_GGX_SRC, Sampled, Read), (PREFILTER_GGX_DST, StorageImage, Write)];
+            /// Light texels (extracted from a map) added exactly to a cube level.
+            Lights = "lights", "lights.comp", Compute, [], LightsPush,
+                [(LIGHTS_TEXELS, StorageBuffer, Read), (LIGHTS_DST, StorageImage, ReadWrite)];
             /// SH projection of a BRDF per view of a grid (SH-BRDF shading's table).
             ShBrdf = "sh_brdf", "sh_brdf.comp", Compute, [], ShBrdfPush,
                 [(SH_BRDF_TABLE, StorageBuffer, ReadWrite)];
@@ -877,6 +906,7 @@ pub fn generated_header() -> String {
     let _ = writeln!(s, "#define SH_MAX_COEFFS {n}");
     let _ = writeln!(s, "#define SH_WORKGROUP {SH_WORKGROUP}");
     let _ = writeln!(s, "#define BRUTE_TILE {BRUTE_TILE}u");
+    let _ = writeln!(s, "#define LIGHT_HEADER_VEC4S {}u", lights::HEADER_VEC4S);
     let _ = writeln!(s, "#define FILTER_EDGE_CELLS {}u", filter_rule::EDGE_CELLS);
     let _ = writeln!(s, "#define FILTER_MAX_CELLS {}u", filter_rule::MAX_CELLS);
     let f = |x: f64| format!("{:?}", x as f32);

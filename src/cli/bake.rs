@@ -53,6 +53,10 @@ pub struct BakeArgs {
     /// a lookup divides rgb by alpha after filtering), what FIS reads at run time
     #[arg(long)]
     chain: bool,
+    /// Filter the whole map by SH and FIS instead of extracting its lights and adding them
+    /// exactly (the default extracts)
+    #[arg(long)]
+    no_lights: bool,
     /// Also write the split-sum DFG table once (dfg.ktx2: A, B per n·v column and √α row)
     #[arg(long)]
     dfg: bool,
@@ -84,6 +88,7 @@ struct BakeFile {
     texels: Option<String>,
     dfg: Option<bool>,
     chain: Option<bool>,
+    lights: Option<bool>,
     check: Option<u32>,
 }
 
@@ -449,6 +454,7 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
             .unwrap_or(d.specular_levels),
         samples: a.samples.or(file.samples).unwrap_or(d.samples),
         chain: a.chain || file.chain == Some(true),
+        lights: !a.no_lights && file.lights.unwrap_or(d.lights),
         ..d
     };
     options.validate()?;

@@ -123,18 +123,16 @@ pub fn extract(map: &EnvMap, opts: &ExtractOptions) -> Extraction {
     }
 }
 
-/// Points per side of a light texel's quadrature: 2 cells of 2 Gauss–Legendre points.
-pub const NODES_PER_SIDE: u32 = 4;
-
-/// The quadrature nodes of light texel `t` of `map`: [`NODES_PER_SIDE`]² directions (file
-/// frame) with weights (the mapping's density) scaled to the texel's exact solid angle, what
-/// a sum takes where a lobe bends across the texel.
-pub fn nodes(map: &EnvMap, t: &LightTexel) -> Vec<(DVec3, f64)> {
+/// The quadrature nodes of light texel `t` of `map`: `cells` × `cells` cells of 2 × 2
+/// Gauss–Legendre points, directions (file frame) with weights (the mapping's density)
+/// scaled to the texel's exact solid angle, what a sum takes where a lobe bends across it.
+pub fn nodes(map: &EnvMap, t: &LightTexel, cells: u32) -> Vec<(DVec3, f64)> {
     let g = 0.5 / 3f64.sqrt();
-    let at = |n: u32| ((n / 2) as f64 + 0.5 + if n % 2 == 0 { -g } else { g }) / 2.0;
-    let mut v = Vec::with_capacity((NODES_PER_SIDE * NODES_PER_SIDE) as usize);
-    for b in 0..NODES_PER_SIDE {
-        for a in 0..NODES_PER_SIDE {
+    let side = 2 * cells;
+    let at = |n: u32| ((n / 2) as f64 + 0.5 + if n % 2 == 0 { -g } else { g }) / cells as f64;
+    let mut v = Vec::with_capacity((side * side) as usize);
+    for b in 0..side {
+        for a in 0..side {
             let c = Coord {
                 layer: t.layer,
                 u: (t.i as f64 + at(a)) / map.width as f64,
@@ -153,6 +151,124 @@ pub fn nodes(map: &EnvMap, t: &LightTexel) -> Vec<(DVec3, f64)> {
         for (d, w) in &mut v {
             *d = t.dir;
             *w = t.omega / n;
+        }
+    }
+    v
+}
+
+/// Cells per side of every light texel's quadrature for lobes down to `alpha`:
+/// ⌈[`PER_WIDTH`]·ρ/α⌉ for the largest texel, 1 to 8 (the exact oracle's rule,
+/// [`super::exact::ExactFilter::ggx`], at the lobe's peak).
+pub fn cells_for(ex: &Extraction, alpha: f64) -> u32 {
+    let rho = ex.lights.iter().map(|t| t.omega.sqrt()).fold(0.0, f64::max);
+    let a = alpha.max(super::brdf::GGX_ALPHA_MIN);
+    ((PER_WIDTH * rho / a).ceil() as u32).clamp(1, 8)
+}
+
+/// Cells per lobe scale below which a light texel takes its centre alone (see
+/// [`light_sum`]); the GPU pass is pushed the same.
+pub const PER_WIDTH: f64 = 4.0;
+
+/// A kernel the light texels are summed with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKernel {
+    /// max(0, r·ω): irradiance.
+    Cosine,
+    /// [`super::split_sum::chain_kernel`] at α.
+    Ggx {
+        /// GGX α.
+        alpha: f64,
+    },
+}
+
+/// One light texel ready for sums: world centre, solid angle, excess radiance, angular size
+/// and quadrature nodes (world).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreparedLight {
+    /// Centre direction (world).
+    pub dir: DVec3,
+    /// Solid angle.
+    pub omega: f64,
+    /// Excess radiance.
+    pub radiance: [f64; 3],
+    /// √Ω.
+    pub rho: f64,
+    /// [`nodes`], turned to the world.
+    pub nodes: Vec<(DVec3, f64)>,
+}
+
+/// The light texels of `ex` (of `map`, whose file directions reach the world through
+/// `file_to_world`) ready for [`light_sum`] and the GPU, with quadratures fine enough for
+/// lobes down to GGX `alpha` ([`cells_for`]).
+pub fn prepare(
+    map: &EnvMap,
+    ex: &Extraction,
+    file_to_world: glam::DMat3,
+    alpha: f64,
+) -> Vec<PreparedLight> {
+    let cells = cells_for(ex, alpha);
+    ex.lights
+        .iter()
+        .map(|t| PreparedLight {
+            dir: file_to_world * t.dir,
+            omega: t.omega,
+            radiance: t.radiance.map(f64::from),
+            rho: t.omega.sqrt(),
+            nodes: nodes(map, t, cells)
+                .into_iter()
+                .map(|(d, w)| (file_to_world * d, w))
+                .collect(),
+        })
+        .collect()
+}
+
+/// Σ_t L_t·∫_t K(r·ω) dω over the light texels (not normalised), each integral by one node
+/// at the texel's centre where [`PER_WIDTH`]·ρ < 0.2·w, w the kernel's scale there (α at
+/// GGX's peak, θ/8 in its θ⁻⁴ tail with the chord for θ, a radian for the cosine), else by its
+/// nodes. The float64 twin of `glsl/lights.comp`.
+pub fn light_sum(lights: &[PreparedLight], r: DVec3, kernel: LightKernel) -> [f64; 3] {
+    let kern = |w: DVec3| {
+        let g = 0.5 * (r - w).length_squared();
+        match kernel {
+            LightKernel::Cosine => (1.0 - g).max(0.0),
+            LightKernel::Ggx { alpha } => super::split_sum::chain_kernel(alpha, g),
+        }
+    };
+    let mut sum = [0.0; 3];
+    for t in lights {
+        let width = match kernel {
+            LightKernel::Cosine => 1.0,
+            LightKernel::Ggx { alpha } => alpha
+                .max(super::brdf::GGX_ALPHA_MIN)
+                .max(0.125 * (r - t.dir).length()),
+        };
+        let k = if t.nodes.is_empty() || PER_WIDTH * t.rho < 0.2 * width {
+            kern(t.dir) * t.omega
+        } else {
+            t.nodes.iter().map(|&(d, w)| kern(d) * w).sum()
+        };
+        for (s, l) in sum.iter_mut().zip(t.radiance) {
+            *s += k * l;
+        }
+    }
+    sum
+}
+
+/// The GPU's list: per light texel (centre, Ω), (excess, ρ), then its nodes (direction,
+/// weight), [`crate::abi::lights::HEADER_VEC4S`] + `nodes` vec4s each.
+pub fn gpu_list(lights: &[PreparedLight]) -> Vec<[f32; 4]> {
+    let mut v = Vec::new();
+    for t in lights {
+        v.push([
+            t.dir.x as f32,
+            t.dir.y as f32,
+            t.dir.z as f32,
+            t.omega as f32,
+        ]);
+        let l = t.radiance;
+        v.push([l[0] as f32, l[1] as f32, l[2] as f32, t.rho as f32]);
+        for &(d, w) in &t.nodes {
+            v.push([d.x as f32, d.y as f32, d.z as f32, w as f32]);
         }
     }
     v
@@ -354,14 +470,15 @@ mod tests {
         assert_eq!(brightest(&capped), brightest(&all));
     }
 
-    /// A light texel's nodes: weights summing to its solid angle, directions inside it.
+    /// A light texel's nodes (2 × 2 cells): weights summing to its solid angle, directions
+    /// inside it.
     #[test]
     fn nodes_cover_their_texel() {
         for mapping in [Mapping::LatLong, Mapping::Cube, Mapping::Angular] {
             let map = sky_map(mapping, 64);
             let ex = extract(&map, &ExtractOptions::default());
             for t in &ex.lights {
-                let n = nodes(&map, t);
+                let n = nodes(&map, t, 2);
                 let w: f64 = n.iter().map(|n| n.1).sum();
                 assert!((w - t.omega).abs() <= 1e-12 * t.omega);
                 for (d, _) in &n {

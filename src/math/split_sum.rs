@@ -243,6 +243,24 @@ pub fn chain_kernel(alpha: f64, gap: f64) -> f64 {
     0.25 * d * g
 }
 
+/// ∫ K dω over the sphere for [`chain_kernel`] at α: the normalisation of light sums (the
+/// directional albedo at n = v). By the zonal kernel's 1D integral 2π∫K(x) dx, x = 1 − t²,
+/// with 2·10⁵ midpoints in t, whose spacing (5·10⁻⁶) is far below the peak's scale in t
+/// (about α).
+pub fn chain_norm(alpha: f64) -> f64 {
+    chain_norm_with(alpha, 200_000)
+}
+
+fn chain_norm_with(alpha: f64, n: u32) -> f64 {
+    let mut sum = 0.0;
+    for q in 0..n {
+        let t = (q as f64 + 0.5) / n as f64;
+        // dx = 2t dt; t ∈ [0, 1] covers x ∈ [0, 1], the kernel's support.
+        sum += chain_kernel(alpha, t * t) * 2.0 * t;
+    }
+    std::f64::consts::TAU * sum / n as f64
+}
+
 /// Split-sum shading at normal `n`, view `v` (towards the eye): P(r, α) from the prefiltered
 /// chain times A + B (F = 1) from the DFG table.
 pub fn shade(
@@ -280,6 +298,19 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// The light sums' normalisation is converged (ten times the nodes move it < 1e-8) and
+    /// is the directional albedo at n = v by the 1D rule in θ of `Brdf::eval_cos` (1e-8).
+    /// (The DFG table's graded rule gives it only to 1.3e-3 at α 0.3, 2.7e-4 at 0.02.)
+    #[test]
+    fn chain_norm_is_the_albedo_at_normal_incidence() {
+        for alpha in [0.02, 0.08, 0.3, 0.6, 1.0] {
+            let n = chain_norm(alpha);
+            assert!((n - chain_norm_with(alpha, 2_000_000)).abs() < 1e-8);
+            let want = albedo_at_normal(alpha, true);
+            assert!((n - want).abs() < 1e-8, "α {alpha}: {n} vs {want}");
         }
     }
 

@@ -66,9 +66,13 @@ impl Converter {
     /// Samples per axis for an output texel: about two per source texel spacing, so that
     /// minification averages every source texel the footprint covers (1 when magnifying).
     pub fn supersampling(src: (Mapping, u32, u32), dst: (Mapping, u32, u32)) -> u32 {
-        let ratio =
-            (texels_on_sphere(src.0, src.1, src.2) / texels_on_sphere(dst.0, dst.1, dst.2)).sqrt();
-        ((4.0 * ratio).ceil() as u32).clamp(1, 64)
+        ((4.0 * Converter::ratio(src, dst)).ceil() as u32).clamp(1, 64)
+    }
+
+    /// Source texel spacings per output texel spacing: √ of the ratio of the texels that
+    /// cover the sphere.
+    pub fn ratio(src: (Mapping, u32, u32), dst: (Mapping, u32, u32)) -> f64 {
+        (texels_on_sphere(src.0, src.1, src.2) / texels_on_sphere(dst.0, dst.1, dst.2)).sqrt()
     }
 
     /// Records the conversion of `src` into `dst`, whose mapping and size must be

@@ -8,6 +8,7 @@
 pub mod brute;
 pub mod convert;
 pub mod gbuffer;
+pub mod lights;
 pub mod map;
 pub mod mc;
 pub mod mip;
@@ -22,6 +23,7 @@ pub mod testing;
 pub use brute::{BruteFilter, FilterTarget};
 pub use convert::{ConvertOptions, Converter};
 pub use gbuffer::{GBuffer, GBufferPass};
+pub use lights::{GpuLights, LightsPass};
 pub use map::GpuEnvMap;
 pub use mc::MonteCarlo;
 pub use mip::MipChain;

@@ -133,6 +133,20 @@ impl SplitSum {
         dst: &GpuEnvMap,
         opts: &PrefilterOptions,
     ) -> Result<()> {
+        self.record_prefilter_levels(rec, src, dst, opts, 0..opts.levels)
+    }
+
+    /// As [`SplitSum::record_prefilter`], for the levels in `levels` only (of a chain of
+    /// `opts.levels`): a bake filters the mirror from the whole map and the rough levels
+    /// from its residual after light extraction.
+    pub fn record_prefilter_levels(
+        &self,
+        rec: &mut Recorder,
+        src: &GpuEnvMap,
+        dst: &GpuEnvMap,
+        opts: &PrefilterOptions,
+        levels: std::ops::Range<u32>,
+    ) -> Result<()> {
         if src.mapping != Mapping::DualParaboloid
             || !matches!(dst.mapping, Mapping::DualParaboloid | Mapping::Cube)
         {
@@ -148,7 +162,7 @@ impl SplitSum {
                 dst.mips()
             )));
         }
-        for k in 0..opts.levels {
+        for k in levels.start..levels.end.min(opts.levels) {
             let size = level_size(dst.width, k);
             let push = PrefilterGgxPush {
                 size,

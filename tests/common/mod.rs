@@ -96,15 +96,21 @@ pub fn dump_pair(name: &str, actual: &envlight::EnvMap, expected: &envlight::Env
 /// the GPU converter picks for it: the level 0 the GPU's MIP chains are tested against.
 #[allow(dead_code)]
 pub fn dp_f64(env: &envlight::EnvMap, size: u32) -> envlight::EnvMap {
-    use envlight::math::{convert, Mapping};
+    use envlight::math::Mapping;
     let (w, h) = Mapping::DualParaboloid.extent_for_size(size);
     let ss = envlight::passes::Converter::supersampling(
         (env.mapping, env.width, env.height),
         (Mapping::DualParaboloid, w, h),
     );
-    convert::convert(
+    dp_f64_with(env, size, ss)
+}
+
+/// As [`dp_f64`], with `ss` samples per axis per texel.
+#[allow(dead_code)]
+pub fn dp_f64_with(env: &envlight::EnvMap, size: u32, ss: u32) -> envlight::EnvMap {
+    envlight::math::convert::convert(
         env,
-        Mapping::DualParaboloid,
+        envlight::math::Mapping::DualParaboloid,
         size,
         envlight::Orientation::default().world_to_file(),
         ss,

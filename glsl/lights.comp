@@ -1,0 +1,64 @@
+#version 460
+// Light texels (src/math/lights.rs) added exactly to one level of a cube: at each texel
+// centre r, (1/∫K)·Σ_t L_t·∫_t K(r·ω) dω over the light texels t, each integral by one node
+// at t's centre where t is small next to the kernel's scale there (per_width·ρ/w < 0.2,
+// w = α at the peak and θ/8 in GGX's θ⁻⁴ tail, a radian for the cosine), else by t's
+// quadrature nodes. The kernel is the clamped cosine (irradiance) or split-sum's GGX at
+// n = v = r. Float64 twin: math::lights::light_sum.
+#extension GL_GOOGLE_include_directive : require
+#include "mappings.glsl"
+
+layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
+layout(std430, set = 0, binding = BINDING_LIGHTS_TEXELS) readonly buffer Texels { vec4 lt[]; };
+layout(set = 0, binding = BINDING_LIGHTS_DST, rgba32f) uniform image2DArray dst;
+
+// The push block, generated from src/abi.rs.
+PUSH_LightsPush
+
+// split_sum::chain_kernel from the gap g = |r − l|²/2, with a2 = α².
+float chain_kernel(float a2, float g) {
+    float x = 1.0 - g;
+    if (x <= 0.0) return 0.0;
+    float s = 0.5 * g + a2 * (1.0 - 0.5 * g);
+    float d = a2 / (PI * s * s);
+    float gm = 2.0 * x / (x + sqrt(a2 + (1.0 - a2) * x * x));
+    return 0.25 * d * gm;
+}
+
+float kern(float a2, vec3 r, vec3 w) {
+    vec3 e = r - w;
+    float g = 0.5 * dot(e, e);
+    if (pc.kernel == 0u) return max(1.0 - g, 0.0);
+    return chain_kernel(a2, g);
+}
+
+void main() {
+    uvec3 id = gl_GlobalInvocationID;
+    if (any(greaterThanEqual(id.xy, uvec2(pc.size)))) return;
+    Coord c;
+    c.layer = id.z;
+    c.uv = (vec2(id.xy) + 0.5) / float(pc.size);
+    vec3 r = coord_to_dir(MAPPING_CUBE, c);
+    float a = max(pc.alpha, GGX_ALPHA_MIN);
+    float a2 = a * a;
+    uint stride = LIGHT_HEADER_VEC4S + pc.nodes;
+    vec3 sum = vec3(0.0);
+    for (uint t = 0u; t < pc.count; t++) {
+        vec4 centre = lt[t * stride];
+        vec4 light = lt[t * stride + 1u];
+        vec3 e = r - centre.xyz;
+        float width = pc.kernel == 0u ? 1.0 : max(a, 0.125 * length(e));
+        float k = 0.0;
+        if (pc.nodes == 0u || pc.per_width * light.w < 0.2 * width) {
+            k = kern(a2, r, centre.xyz) * centre.w;
+        } else {
+            for (uint n = 0u; n < pc.nodes; n++) {
+                vec4 q = lt[t * stride + LIGHT_HEADER_VEC4S + n];
+                k += kern(a2, r, q.xyz) * q.w;
+            }
+        }
+        sum += k * light.rgb;
+    }
+    vec4 prev = imageLoad(dst, ivec3(id));
+    imageStore(dst, ivec3(id), vec4(prev.rgb + sum * pc.inv_norm, prev.a));
+}

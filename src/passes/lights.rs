@@ -1,0 +1,107 @@
+//! Extracted light texels added exactly to a cube level (`glsl/lights.comp`, float64 twin
+//! [`crate::math::lights::light_sum`]): the bake's irradiance (cosine) and specular (GGX at
+//! n = v = r) cubes get their lights this way, on top of what the residual map gives.
+
+use super::map::GpuEnvMap;
+use crate::abi::{binding, push::LightsPush, ShaderId, WORKGROUP_2D};
+use crate::error::{Error, Result};
+use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder};
+use crate::math::lights::{gpu_list, LightKernel, PreparedLight, PER_WIDTH};
+use crate::math::split_sum::chain_norm;
+use crate::Mapping;
+
+/// The light texels on the GPU, uploaded once per map.
+pub struct GpuLights {
+    buffer: Buffer,
+    count: u32,
+    nodes: u32,
+}
+
+impl GpuLights {
+    /// Uploads `lights` (all with the same number of nodes).
+    pub fn upload(ctx: &Context, lights: &[PreparedLight]) -> Result<GpuLights> {
+        let nodes = lights.first().map_or(0, |t| t.nodes.len()) as u32;
+        if lights.iter().any(|t| t.nodes.len() as u32 != nodes) {
+            return Err(Error::Invalid(
+                "light texels with different node counts".into(),
+            ));
+        }
+        Ok(GpuLights {
+            buffer: Buffer::storage(ctx, "light texels", &gpu_list(lights))?,
+            count: lights.len() as u32,
+            nodes,
+        })
+    }
+
+    /// Light texels held.
+    pub fn count(&self) -> u32 {
+        self.count
+    }
+}
+
+/// The lights pass.
+pub struct LightsPass {
+    pipeline: Pipeline,
+}
+
+impl LightsPass {
+    /// Builds the pipeline.
+    pub fn new(ctx: &Context) -> Result<LightsPass> {
+        Ok(LightsPass {
+            pipeline: Pipeline::compute(ctx, ShaderId::Lights, &WORKGROUP_2D)?,
+        })
+    }
+
+    /// Records the addition of `lights` filtered by `kernel` — divided by ∫K dω for GGX
+    /// ([`chain_norm`]), as is for the cosine (irradiance) — to level `level` of the cube
+    /// `dst`. Span: "lights".
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        lights: &GpuLights,
+        kernel: LightKernel,
+        dst: &GpuEnvMap,
+        level: u32,
+    ) -> Result<()> {
+        if dst.mapping != Mapping::Cube || level >= dst.mips() {
+            return Err(Error::Invalid(format!(
+                "lights: level {level} of a {} map with {} levels (a cube's level expected)",
+                dst.mapping.name(),
+                dst.mips()
+            )));
+        }
+        if lights.count == 0 {
+            return Ok(());
+        }
+        let (kind, alpha, inv_norm) = match kernel {
+            LightKernel::Cosine => (0, 0.0, 1.0),
+            LightKernel::Ggx { alpha } => (1, alpha, 1.0 / chain_norm(alpha)),
+        };
+        let size = dst.level_size(level).0;
+        let push = LightsPush {
+            size,
+            count: lights.count,
+            nodes: lights.nodes,
+            kernel: kind,
+            alpha: alpha as f32,
+            inv_norm: inv_norm as f32,
+            per_width: PER_WIDTH as f32,
+            pad: 0,
+        };
+        rec.span("lights", |rec| {
+            rec.dispatch(
+                &self.pipeline,
+                &[
+                    (binding::LIGHTS_TEXELS, Bind::Buffer(&lights.buffer)),
+                    (binding::LIGHTS_DST, Bind::StorageLevel(&dst.image, level)),
+                ],
+                &push,
+                [
+                    groups(size, WORKGROUP_2D[0]),
+                    groups(size, WORKGROUP_2D[1]),
+                    6,
+                ],
+            )
+        })
+    }
+}
