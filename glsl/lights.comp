@@ -15,14 +15,13 @@ layout(set = 0, binding = BINDING_LIGHTS_DST, rgba32f) uniform image2DArray dst;
 // The push block, generated from src/abi.rs.
 PUSH_LightsPush
 
-// split_sum::chain_kernel from the gap g = |r − l|²/2, with a2 = α².
+// split_sum::chain_kernel from the gap g = |r − l|²/2, with a2 = α²: D·G/4 with
+// D = a2/(π s²) and G = 2x/(x + √(a2 + (1 − a2)x²)), folded into one division.
 float chain_kernel(float a2, float g) {
     float x = 1.0 - g;
     if (x <= 0.0) return 0.0;
     float s = 0.5 * g + a2 * (1.0 - 0.5 * g);
-    float d = a2 / (PI * s * s);
-    float gm = 2.0 * x / (x + sqrt(a2 + (1.0 - a2) * x * x));
-    return 0.25 * d * gm;
+    return a2 * x / (2.0 * PI * s * s * (x + sqrt(a2 + (1.0 - a2) * x * x)));
 }
 
 float kern(float a2, vec3 r, vec3 w) {
@@ -47,9 +46,11 @@ void main() {
         vec4 centre = lt[t * stride];
         vec4 light = lt[t * stride + 1u];
         vec3 e = r - centre.xyz;
-        float width = pc.kernel == 0u ? 1.0 : max(a, 0.125 * length(e));
+        // per_width·ρ < 0.2·w, squared (w = max(α, chord/8) for GGX, 1 for the cosine).
+        float w2 = pc.kernel == 0u ? 1.0 : max(a2, dot(e, e) / 64.0);
+        float cw = 5.0 * pc.per_width * light.w;
         float k = 0.0;
-        if (pc.nodes == 0u || pc.per_width * light.w < 0.2 * width) {
+        if (pc.nodes == 0u || cw * cw < w2) {
             k = kern(a2, r, centre.xyz) * centre.w;
         } else {
             for (uint n = 0u; n < pc.nodes; n++) {
