@@ -40,12 +40,18 @@ fn print_lights(map: &EnvMap, opts: &ExtractOptions) {
     let ex = extract(map, opts);
     let lights = group(map, &ex, GROUP_RADIUS);
     let share: f64 = lights.iter().map(|l| l.share).sum();
+    let mean = envlight::envmap::luminance(map.stats().power) / (4.0 * std::f64::consts::PI);
     println!(
-        "lights:    {} ({} texels above {:.4e} = {} x the mean luminance; {:.1}% of the power)",
+        "lights:    {} ({} texels above {:.4e} = {:.1} x the mean luminance{}; {:.1}% of the power)",
         lights.len(),
         ex.lights.len(),
         ex.threshold,
-        opts.ratio,
+        ex.threshold / mean,
+        if ex.threshold > opts.ratio * mean * (1.0 + 1e-12) {
+            format!(", raised from {} x to keep at most {} texels", opts.ratio, opts.max_texels)
+        } else {
+            String::new()
+        },
         100.0 * share
     );
     for (k, l) in lights.iter().enumerate() {
