@@ -197,6 +197,7 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
             sh_rotation: envlight::passes::shade::Rotation::Zxzxz,
             split: None,
             shadows: scene.shadows,
+            lights: None,
         };
         shade.record(&mut rec, &gbuf, &inputs, &target)?;
         let readback = target.record_download(&mut rec, 0)?;

@@ -30,6 +30,7 @@ layout(std430, set = 0, binding = BINDING_SHADE_BRDF_SH) readonly buffer BrdfSh 
 layout(std430, set = 0, binding = BINDING_SHADE_X90) readonly buffer X90 { float x90[]; };
 layout(set = 0, binding = BINDING_SHADE_SPLIT) uniform sampler2DArray split_chain;
 layout(std430, set = 0, binding = BINDING_SHADE_DFG) readonly buffer Dfg { vec2 dfg[]; };
+layout(std430, set = 0, binding = BINDING_SHADE_LIGHTS) readonly buffer Lights { vec4 lights[]; };
 #define SH_X90(i) x90[i]
 #include "sh_rotate.glsl"
 
@@ -174,7 +175,26 @@ void main() {
         sh_basis(lmax, n, y);
         vec3 e = vec3(0.0);
         for (uint k = 0u; k < (lmax + 1u) * (lmax + 1u); k++) e += coeffs[off + k].rgb * y[k];
-        color = ob.albedo.rgb * max(e, vec3(0.0)) / PI;
+        e = max(e, vec3(0.0));
+        // SH of the residual plus the light texels' irradiance: a texel by its centre where
+        // it is small next to the cosine's radian, else by its nodes (lights.comp's rule).
+        if (ob.extra.w > 0.5) {
+            for (uint t = 0u; t < pc.lights; t++) {
+                uint at = t * pc.light_stride;
+                vec4 centre = lights[at];
+                vec4 light = lights[at + 1u];
+                float k = 0.0;
+                if (pc.light_stride == LIGHT_HEADER_VEC4S || 5.0 * LIGHT_PER_WIDTH * light.w < 1.0) {
+                    k = max(dot(n, centre.xyz), 0.0) * centre.w;
+                } else {
+                    for (uint q = at + LIGHT_HEADER_VEC4S; q < at + pc.light_stride; q++) {
+                        k += max(dot(n, lights[q].xyz), 0.0) * lights[q].w;
+                    }
+                }
+                e += k * light.rgb;
+            }
+        }
+        color = ob.albedo.rgb * e / PI;
     } else if (tech == TECH_PREFILTERED) {
         bool diffuse = uint(ob.brdf.x) == BRDF_LAMBERT;
         vec3 l = prefiltered_lookup(uint(ob.extra.y), int(ob.extra.z), diffuse ? n : r);

@@ -140,6 +140,8 @@ pub mod binding {
         SHADE_SPLIT = 11;
         /// shade: the split-sum DFG tables (float buffer, (A, B) pairs).
         SHADE_DFG = 12;
+        /// shade: extracted light texels (float buffer, as `lights` takes them).
+        SHADE_LIGHTS = 13;
         /// dfg: the tables, (A, B) per entry (float buffer), summed over one dispatch per panel.
         DFG_TABLE = 0;
         /// prefilter_ggx: the source dual-paraboloid MIP chain (sampler2DArray, trilinear).
@@ -337,6 +339,9 @@ pub mod lights {
     /// vec4s per light texel in the GPU's list: (world centre, Ω), (excess rgb, ρ = √Ω),
     /// then its quadrature nodes' (world direction, weight).
     pub const HEADER_VEC4S: u32 = 2;
+    /// A light texel takes its centre alone where PER_WIDTH·ρ < 0.2·w (w the kernel's scale
+    /// there), its nodes elsewhere.
+    pub const PER_WIDTH: f64 = 4.0;
 }
 
 /// Workgroup size of the SH passes: one texel (or partial sum) per invocation.
@@ -621,8 +626,12 @@ pub mod push {
             mc_samples: u32 = "uint",
             /// Rotation of SH-BRDF vectors: SH_ROTATION_ZXZXZ or SH_ROTATION_IVANIC.
             sh_rotation: u32 = "uint",
+            /// Extracted light texels (SH objects marked for them add their irradiance).
+            lights: u32 = "uint",
+            /// vec4s per light texel in their buffer.
+            light_stride: u32 = "uint",
             /// Padding.
-            pad: [u32; 3] = "uint[3]",
+            pad: u32 = "uint",
         }
         /// `glsl/sh_brdf.comp`.
         ShBrdfPush {
@@ -807,7 +816,7 @@ macro_rules! shader_table {
                  (SHADE_DP, Sampled, Read), (SHADE_PREFILTERED, StorageBuffer, Read),
                  (SHADE_MC, Sampled, Read), (SHADE_BRDF_SH, StorageBuffer, Read),
                  (SHADE_X90, StorageBuffer, Read), (SHADE_SPLIT, Sampled, Read),
-                 (SHADE_DFG, StorageBuffer, Read)];
+                 (SHADE_DFG, StorageBuffer, Read), (SHADE_LIGHTS, StorageBuffer, Read)];
             /// The split-sum DFG table (A, B) per n·v and √α.
             Dfg = "dfg", "dfg.comp", Compute, [], DfgPush,
                 [(DFG_TABLE, StorageBuffer, ReadWrite)];
@@ -907,6 +916,7 @@ pub fn generated_header() -> String {
     let _ = writeln!(s, "#define SH_WORKGROUP {SH_WORKGROUP}");
     let _ = writeln!(s, "#define BRUTE_TILE {BRUTE_TILE}u");
     let _ = writeln!(s, "#define LIGHT_HEADER_VEC4S {}u", lights::HEADER_VEC4S);
+    let _ = writeln!(s, "#define LIGHT_PER_WIDTH {:?}", lights::PER_WIDTH as f32);
     let _ = writeln!(s, "#define FILTER_EDGE_CELLS {}u", filter_rule::EDGE_CELLS);
     let _ = writeln!(s, "#define FILTER_MAX_CELLS {}u", filter_rule::MAX_CELLS);
     let f = |x: f64| format!("{:?}", x as f32);

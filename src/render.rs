@@ -7,6 +7,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, Recorder, Timing, Usage};
 use crate::math::brdf::Brdf;
 use crate::math::filter::Kernel;
+use crate::math::lights::{extract, prepare};
 use crate::math::sh::Window;
 use crate::math::sh_brdf::ViewGrid;
 use crate::math::{sh, Mapping, Orientation};
@@ -14,6 +15,7 @@ use crate::passes::gbuffer::{shape_record, target, GBuffer, GpuObject};
 use crate::passes::mc::{McEnv, McOptions};
 use crate::passes::sh_project::Subgroups;
 use crate::passes::shade::{Rotation, ShadeInputs};
+use crate::passes::GpuLights;
 use crate::passes::ShBrdfProjector;
 use crate::passes::{
     BruteFilter, ConvertOptions, Converter, GBufferPass, GpuEnvMap, MipChain, MonteCarlo,
@@ -21,7 +23,8 @@ use crate::passes::{
 };
 use crate::passes::{PrefilterOptions, SplitSum};
 use crate::scene::{
-    plan, PassKind, Plan, Scene, SceneObject, SplitSumSettings, Technique, DEFAULT_FIS_BIAS,
+    plan, LightsMode, PassKind, Plan, Scene, SceneObject, SplitSumSettings, Technique,
+    DEFAULT_FIS_BIAS,
 };
 use crate::EnvMap;
 use ash::vk;
@@ -351,6 +354,38 @@ impl Renderer {
             )?),
             None => None,
         };
+        // Lights: SH objects take the residual's SH plus the light texels' exact irradiance.
+        let sh_lights = scene.environment.lights == LightsMode::Extract
+            && scene
+                .objects
+                .iter()
+                .any(|o| matches!(o.material.technique(), Technique::Sh { .. }));
+        let extraction = sh_lights
+            .then(|| extract(env, &scene.environment.extract_options()))
+            .filter(|e| !e.lights.is_empty());
+        let residual = match (&extraction, sh_pass) {
+            (Some(ex), Some(_)) => {
+                let file_to_world = orientation.checked_world_to_file()?.transpose();
+                // The cosine's scale is a radian: one cell of nodes, never read (centres).
+                let lights = GpuLights::upload(ctx, &prepare(env, ex, file_to_world, 1.0))?;
+                let map = GpuEnvMap::new(
+                    ctx,
+                    "environment residual",
+                    env.mapping,
+                    env.width,
+                    env.height,
+                )?;
+                let out = Buffer::new(
+                    ctx,
+                    "sh coefficients of the residual",
+                    ShProjector::output_bytes(lmax),
+                    vk::BufferUsageFlags::TRANSFER_DST,
+                    MemoryLocation::GpuToCpu,
+                )?;
+                Some((ex, map, out, lights))
+            }
+            _ => None,
+        };
 
         // FIS: the dual paraboloid and its MIP chain.
         let dp = match dp_passes {
@@ -465,6 +500,13 @@ impl Renderer {
                 })?;
                 rec.use_buffer(out, Usage::HostRead);
             }
+            if let (Some(p), Some((ex, map, out, _))) = (sh_pass, &residual) {
+                map.record_upload(rec, &ex.residual)?;
+                marks.record(rec, PassKind::ShProjection, |rec| {
+                    p.record(rec, map, lmax, &orientation, out)
+                })?;
+                rec.use_buffer(out, Usage::HostRead);
+            }
             if let (Some(p), Some(buf)) = (brdf_pass, &table_buffer) {
                 for (brdf, order, grid, off) in &tables {
                     marks.record(rec, PassKind::ShBrdfTable, |rec| {
@@ -517,16 +559,27 @@ impl Renderer {
         let mut sh_coeffs: Vec<[f64; 3]> = Vec::new();
         let mut ringing = Vec::new();
         if let Some(out) = &sh_out {
-            let flat: Vec<f32> = out.read(sh::count(lmax) * 3);
-            let c: Vec<[f64; 3]> = flat
-                .chunks_exact(3)
-                .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
-                .collect();
+            let read = |out: &Buffer| -> Vec<[f64; 3]> {
+                let flat: Vec<f32> = out.read(sh::count(lmax) * 3);
+                flat.chunks_exact(3)
+                    .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
+                    .collect()
+            };
+            let c = read(out);
+            let c_res = residual.as_ref().map(|r| read(&r.2));
             let mut objects = gbuf_objects.clone();
             for (k, o) in scene.objects.iter().enumerate() {
                 match o.material.technique() {
                     Technique::Sh { order } => {
                         objects[k] = object_record(o, sh_coeffs.len() as u32);
+                        let c = match &c_res {
+                            Some(r) => {
+                                // extra.w = 1: the shader adds the light texels.
+                                objects[k].extra[3] = 1.0;
+                                r
+                            }
+                            None => &c,
+                        };
                         sh_coeffs.extend(sh::irradiance_coeffs(&c[..sh::count(order)]));
                     }
                     Technique::ShBrdf { order, window, .. } => {
@@ -616,6 +669,7 @@ impl Renderer {
             sh_rotation: self.sh_rotation,
             split: split.as_ref().map(|s| (&s.1, &s.2)),
             shadows: scene.shadows,
+            lights: residual.as_ref().map(|r| &r.3),
         };
         let mut marks = Marks(Vec::new());
         let (readback, t) = ctx.run("rendering: shading", |rec| {

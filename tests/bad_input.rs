@@ -390,6 +390,21 @@ fn degenerate_scenes_are_refused() {
             "intensity",
         ),
         ("alpha = 0.3", "alpha = nan", "alpha"),
+        (
+            "rotate_y = 30.0",
+            "rotate_y = 30.0\nlight_ratio = 0.0",
+            "light_ratio",
+        ),
+        (
+            "rotate_y = 30.0",
+            "rotate_y = 30.0\nlight_texels = 0",
+            "light_texels",
+        ),
+        (
+            "rotate_y = 30.0",
+            "rotate_y = 30.0\nlights = \"some\"",
+            "lights",
+        ),
     ];
     for (from, to, word) in cases {
         assert!(good.contains(from), "{from}");

@@ -106,6 +106,7 @@ fn diffuse_spheres_match_float64_irradiance() {
                             sh_rotation: envlight::passes::shade::Rotation::Zxzxz,
                             split: None,
                             shadows: false,
+                            lights: None,
                         },
                     )
                     .unwrap();
@@ -155,6 +156,113 @@ fn diffuse_spheres_match_float64_irradiance() {
                 );
             }
         }
+    }
+    common::finish(ctx);
+}
+
+/// SH irradiance with lights extracted, through the shading pass: every object pixel equals
+/// albedo·(max(0, E_res(n)) + Σ_t L_t·∫_t max(0, n·ω) dω)/π in float64 — the residual's f64
+/// projection and basis, and `math::lights::light_sum` with the cosine over the light texels
+/// — within 1e-4 relative, on the sky whose sun is 5·10⁴ × the zenith (64 × 32, so the light
+/// texels are large and their nodes are used), turned 30° and mirrored. Without the light
+/// texels (lights not bound) the same pixels lose the sun's direct light: the pass adds them.
+#[test]
+fn diffuse_with_lights_matches_float64() {
+    use envlight::math::lights::{extract, light_sum, prepare, ExtractOptions, LightKernel};
+    use envlight::math::synth::Sky;
+    use envlight::passes::GpuLights;
+    let ctx = common::ctx();
+    {
+        let sky = Sky::default();
+        let map = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, move |d| sky.radiance(d));
+        let o = Orientation {
+            flip_u: true,
+            flip_v: false,
+            rotate_y_degrees: 30.0,
+        };
+        let f2w = o.world_to_file().transpose();
+        let ex = extract(&map, &ExtractOptions::default());
+        assert!(!ex.lights.is_empty());
+        let prepared = prepare(&map, &ex, f2w, 1.0);
+        assert!(prepared[0].nodes.len() == 4);
+        let gpu_lights = GpuLights::upload(&ctx, &prepared).unwrap();
+        let env = GpuEnvMap::upload(&ctx, &map).unwrap();
+        let res = GpuEnvMap::upload(&ctx, &ex.residual).unwrap();
+        let projector = ShProjector::new(&ctx, Subgroups::Auto).unwrap();
+        let gpass = GBufferPass::new(&ctx).unwrap();
+        let shade = Shade::new(&ctx).unwrap();
+        let lmax = 2;
+        let (c, _) = projector.run_oriented(&res, lmax, &o).unwrap();
+        let irr_gpu = sh::irradiance_coeffs(&c.coeffs);
+        let irr_cpu = sh::irradiance_coeffs(&sh::project_oriented(&ex.residual, lmax, f2w));
+        let objects = scene();
+        let shapes: Vec<Shape> = objects.iter().map(|o| o.shape).collect();
+        let cam = Camera {
+            projection: Projection::Orthographic { height: 4.0 },
+            eye: [3.0, 4.0, 5.0],
+            target: [0.0, 0.0, 0.0],
+            up: [0.0, 1.0, 0.0],
+            width: 40,
+            height: 40,
+        };
+        let mut records: Vec<_> = objects.iter().map(|o| o.gpu(lmax)).collect();
+        for r in &mut records {
+            r.extra[3] = 1.0;
+        }
+        let (gbuf, _) = gpass.run(&cam, &records).unwrap();
+        let mut frames = Vec::new();
+        for lights in [Some(&gpu_lights), None] {
+            let (frame, _) = shade
+                .run(
+                    &gbuf,
+                    &ShadeInputs {
+                        env: &env,
+                        orientation: o,
+                        sh: Some(&irr_gpu),
+                        dp: None,
+                        prefiltered: None,
+                        mc: None,
+                        brdf_sh: None,
+                        sh_rotation: envlight::passes::shade::Rotation::Zxzxz,
+                        split: None,
+                        shadows: false,
+                        lights,
+                    },
+                )
+                .unwrap();
+            frames.push(frame.download(&ctx).unwrap());
+        }
+        let (mut compared, mut worst, mut sunlit) = (0, 0.0f64, 0);
+        for j in 0..cam.height {
+            for i in 0..cam.width {
+                let (o_ray, d) = cam.ray(i, j);
+                let Some(hit) = trace(&shapes, o_ray, d) else {
+                    continue;
+                };
+                if hit.margin < 1e-3 {
+                    continue;
+                }
+                let e = sh::eval(&irr_cpu, hit.normal);
+                let l = light_sum(&prepared, hit.normal, LightKernel::Cosine);
+                let a = objects[hit.index].albedo;
+                let k = (j * cam.width + i) as usize;
+                for ch in 0..3 {
+                    let want = a[ch] * (e[ch].max(0.0) + l[ch]) / PI;
+                    let got = frames[0].texels[k][ch] as f64;
+                    let rel = (got - want).abs() / want;
+                    worst = worst.max(rel);
+                    assert!(rel < 1e-4, "pixel ({i}, {j}) ch {ch}: {got} vs {want}");
+                }
+                if l[1] > 0.1 * e[1] {
+                    sunlit += 1;
+                    assert!(frames[1].texels[k][1] < 0.95 * frames[0].texels[k][1]);
+                }
+                compared += 1;
+            }
+        }
+        eprintln!("{compared} pixels within {worst:.1e}, {sunlit} sunlit");
+        assert!(compared > 300 && sunlit > 100, "{compared} {sunlit}");
+        drop(gpu_lights);
     }
     common::finish(ctx);
 }

@@ -165,9 +165,7 @@ pub fn cells_for(ex: &Extraction, alpha: f64) -> u32 {
     ((PER_WIDTH * rho / a).ceil() as u32).clamp(1, 8)
 }
 
-/// Cells per lobe scale below which a light texel takes its centre alone (see
-/// [`light_sum`]); the GPU pass is pushed the same.
-pub const PER_WIDTH: f64 = 4.0;
+pub use crate::abi::lights::PER_WIDTH;
 
 /// A kernel the light texels are summed with.
 #[derive(Clone, Copy, Debug, PartialEq)]

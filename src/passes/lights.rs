@@ -37,6 +37,16 @@ impl GpuLights {
     pub fn count(&self) -> u32 {
         self.count
     }
+
+    /// vec4s per light texel in the buffer.
+    pub fn stride(&self) -> u32 {
+        crate::abi::lights::HEADER_VEC4S + self.nodes
+    }
+
+    /// The buffer ([`crate::math::lights::gpu_list`]'s layout).
+    pub fn buffer(&self) -> &Buffer {
+        &self.buffer
+    }
 }
 
 /// The lights pass.

@@ -4,6 +4,7 @@
 //! sampling, or the Monte Carlo accumulation) and shows the environment behind.
 
 use super::gbuffer::{target, GBuffer};
+use super::lights::GpuLights;
 use super::map::GpuEnvMap;
 pub use super::sh_brdf::Rotation;
 use crate::abi::{binding, push::ShadePush, ShaderId};
@@ -34,6 +35,9 @@ pub struct ShadeInputs<'a> {
     pub split: Option<(&'a GpuEnvMap, &'a Buffer)>,
     /// Trace shadow rays.
     pub shadows: bool,
+    /// Extracted light texels, whose irradiance SH objects marked for them add to their
+    /// residual's SH (see [`crate::math::lights`]).
+    pub lights: Option<&'a GpuLights>,
 }
 
 /// The shading pass.
@@ -111,7 +115,9 @@ impl Shade {
             shadows: inputs.shadows as u32,
             mc_samples: inputs.mc.map(|m| m.1).unwrap_or(0),
             sh_rotation: inputs.sh_rotation.id(),
-            pad: [0; 3],
+            lights: inputs.lights.map_or(0, |l| l.count()),
+            light_stride: inputs.lights.map_or(0, |l| l.stride()),
+            pad: 0,
         };
         rec.span("shade", |rec| {
             rec.draw_fullscreen(
@@ -162,6 +168,10 @@ impl Shade {
                     (
                         binding::SHADE_DFG,
                         Bind::Buffer(inputs.split.map(|s| s.1).unwrap_or(&self.dummy_buffer)),
+                    ),
+                    (
+                        binding::SHADE_LIGHTS,
+                        Bind::Buffer(inputs.lights.map_or(&self.dummy_buffer, |l| l.buffer())),
                     ),
                 ],
                 &push,

@@ -189,6 +189,7 @@ pub fn run(
                             sh_rotation: envlight::passes::shade::Rotation::Zxzxz,
                             split: None,
                             shadows: false,
+                            lights: None,
                         };
                         // The faster of two draws (the first may pay for warming caches).
                         let (_, t1) = shade.run(&g, &inputs)?;
