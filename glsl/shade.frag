@@ -98,7 +98,34 @@ vec3 fis(Object ob, vec3 n, vec3 v, vec3 p, uvec2 pix) {
         if (pc.shadows != 0u && occluded(origin, d)) continue;
         sum += w * dp_lookup(d, lod);
     }
-    return sum / float(count);
+    sum /= float(count);
+    // With lights extracted the chain holds the residual; the light texels are added by the
+    // BRDF itself (math::lights::light_sum_brdf's rule; extra.z the lobe's scale).
+    if (ob.extra.y > 0.5) {
+        vec3 r = 2.0 * dot(v, n) * n - v;
+        for (uint i = 0u; i < pc.lights; i++) {
+            uint at = i * pc.light_stride;
+            vec4 centre = lights[at];
+            vec4 light = lights[at + 1u];
+            if (pc.shadows != 0u && occluded(origin, centre.xyz)) continue;
+            vec3 e = r - centre.xyz;
+            float w2 = max(ob.extra.z * ob.extra.z, dot(e, e) / 64.0);
+            float cw = 5.0 * LIGHT_PER_WIDTH * light.w;
+            float k = 0.0;
+            if (pc.light_stride == LIGHT_HEADER_VEC4S || cw * cw < w2) {
+                vec3 wi = vec3(dot(centre.xyz, t), dot(centre.xyz, bt), dot(centre.xyz, n));
+                k = brdf_eval_cos(b, wo, wi) * centre.w;
+            } else {
+                for (uint q = at + LIGHT_HEADER_VEC4S; q < at + pc.light_stride; q++) {
+                    vec3 d = lights[q].xyz;
+                    vec3 wi = vec3(dot(d, t), dot(d, bt), dot(d, n));
+                    k += brdf_eval_cos(b, wo, wi) * lights[q].w;
+                }
+            }
+            sum += k * light.rgb;
+        }
+    }
+    return sum;
 }
 
 // Twin of math::sh_brdf::shade. extra = (grid, environment coefficients' offset, band, table offset).

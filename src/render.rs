@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, Recorder, Timing, Usage};
 use crate::math::brdf::Brdf;
 use crate::math::filter::Kernel;
-use crate::math::lights::{extract, prepare};
+use crate::math::lights::{extract, lobe_scale, prepare};
 use crate::math::sh::Window;
 use crate::math::sh_brdf::ViewGrid;
 use crate::math::{sh, Mapping, Orientation};
@@ -354,20 +354,37 @@ impl Renderer {
             )?),
             None => None,
         };
-        // Lights: SH objects take the residual's SH plus the light texels' exact irradiance.
-        let sh_lights = scene.environment.lights == LightsMode::Extract
-            && scene
-                .objects
-                .iter()
-                .any(|o| matches!(o.material.technique(), Technique::Sh { .. }));
-        let extraction = sh_lights
+        // Lights: SH objects take the residual's SH plus the light texels' exact irradiance;
+        // FIS objects the residual's paraboloid plus the light texels under their BRDF. FIS
+        // keeps the whole map where a mirror reads it by FIS (no texel quadrature resolves a
+        // delta) or split-sum shares its paraboloid.
+        let extracting = scene.environment.lights == LightsMode::Extract;
+        let has = |f: &dyn Fn(&SceneObject) -> bool| scene.objects.iter().any(f);
+        let sh_lights = extracting
+            && sh_pass.is_some()
+            && has(&|o| matches!(o.material.technique(), Technique::Sh { .. }));
+        let fis_lights = extracting
+            && dp_passes.is_some()
+            && has(&|o| matches!(o.material.technique(), Technique::Fis { .. }))
+            && !has(&|o| matches!(o.material.technique(), Technique::SplitSum))
+            && !has(&|o| {
+                matches!(o.material.technique(), Technique::Fis { .. })
+                    && lobe_scale(&o.material.kind).is_none()
+            });
+        let extraction = (sh_lights || fis_lights)
             .then(|| extract(env, &scene.environment.extract_options()))
             .filter(|e| !e.lights.is_empty());
-        let residual = match (&extraction, sh_pass) {
-            (Some(ex), Some(_)) => {
+        // The finest lobe the light texels' nodes must resolve.
+        let finest = scene
+            .objects
+            .iter()
+            .filter(|o| fis_lights && matches!(o.material.technique(), Technique::Fis { .. }))
+            .filter_map(|o| lobe_scale(&o.material.kind))
+            .fold(1.0, f64::min);
+        let residual = match &extraction {
+            Some(ex) => {
                 let file_to_world = orientation.checked_world_to_file()?.transpose();
-                // The cosine's scale is a radian: one cell of nodes, never read (centres).
-                let lights = GpuLights::upload(ctx, &prepare(env, ex, file_to_world, 1.0))?;
+                let lights = GpuLights::upload(ctx, &prepare(env, ex, file_to_world, finest))?;
                 let map = GpuEnvMap::new(
                     ctx,
                     "environment residual",
@@ -375,17 +392,21 @@ impl Renderer {
                     env.width,
                     env.height,
                 )?;
-                let out = Buffer::new(
-                    ctx,
-                    "sh coefficients of the residual",
-                    ShProjector::output_bytes(lmax),
-                    vk::BufferUsageFlags::TRANSFER_DST,
-                    MemoryLocation::GpuToCpu,
-                )?;
+                let out = match sh_lights {
+                    true => Some(Buffer::new(
+                        ctx,
+                        "sh coefficients of the residual",
+                        ShProjector::output_bytes(lmax),
+                        vk::BufferUsageFlags::TRANSFER_DST,
+                        MemoryLocation::GpuToCpu,
+                    )?),
+                    false => None,
+                };
                 Some((ex, map, out, lights))
             }
-            _ => None,
+            None => None,
         };
+        let fis_lights = fis_lights && residual.is_some();
 
         // FIS: the dual paraboloid and its MIP chain.
         let dp = match dp_passes {
@@ -488,6 +509,17 @@ impl Renderer {
                 }
             }
         }
+        if fis_lights {
+            // extra.y = 1: add the light texels; extra.z: the lobe's scale for their rule.
+            for (g, o) in gbuf_objects.iter_mut().zip(&scene.objects) {
+                if let (Technique::Fis { .. }, Some(scale)) =
+                    (o.material.technique(), lobe_scale(&o.material.kind))
+                {
+                    g.extra[1] = 1.0;
+                    g.extra[2] = scale as f32;
+                }
+            }
+        }
         let mut gbuf = GBuffer::new(ctx, scene.camera.width, scene.camera.height, &gbuf_objects)?;
 
         // Everything before shading, in one submission.
@@ -500,12 +532,14 @@ impl Renderer {
                 })?;
                 rec.use_buffer(out, Usage::HostRead);
             }
-            if let (Some(p), Some((ex, map, out, _))) = (sh_pass, &residual) {
+            if let Some((ex, map, out, _)) = &residual {
                 map.record_upload(rec, &ex.residual)?;
-                marks.record(rec, PassKind::ShProjection, |rec| {
-                    p.record(rec, map, lmax, &orientation, out)
-                })?;
-                rec.use_buffer(out, Usage::HostRead);
+                if let (Some(p), Some(out)) = (sh_pass, out) {
+                    marks.record(rec, PassKind::ShProjection, |rec| {
+                        p.record(rec, map, lmax, &orientation, out)
+                    })?;
+                    rec.use_buffer(out, Usage::HostRead);
+                }
             }
             if let (Some(p), Some(buf)) = (brdf_pass, &table_buffer) {
                 for (brdf, order, grid, off) in &tables {
@@ -521,8 +555,12 @@ impl Renderer {
                     orientation,
                     supersample: None,
                 };
+                let source = match &residual {
+                    Some((_, res, _, _)) if fis_lights => res,
+                    _ => &env_gpu,
+                };
                 marks.record(rec, PassKind::DualParaboloid, |rec| {
-                    conv.record(rec, &env_gpu, map, &opts)
+                    conv.record(rec, source, map, &opts)
                 })?;
                 marks.record(rec, PassKind::MipChain, |rec| mip.record(rec, map))?;
                 if let Some((p, chain, tables, forms)) = &split {
@@ -566,7 +604,7 @@ impl Renderer {
                     .collect()
             };
             let c = read(out);
-            let c_res = residual.as_ref().map(|r| read(&r.2));
+            let c_res = residual.as_ref().and_then(|r| r.2.as_ref()).map(read);
             let mut objects = gbuf_objects.clone();
             for (k, o) in scene.objects.iter().enumerate() {
                 match o.material.technique() {

@@ -12,6 +12,7 @@
 //! plus residual equal the map to float32 rounding. A texel's light is its excess over the
 //! clamp, spread over the texel as the map spreads its radiance.
 
+use super::brdf::{local_view, Brdf, Frame};
 use super::mapping::Coord;
 use crate::envmap::luminance;
 use crate::EnvMap;
@@ -244,6 +245,52 @@ pub fn light_sum(lights: &[PreparedLight], r: DVec3, kernel: LightKernel) -> [f6
             kern(t.dir) * t.omega
         } else {
             t.nodes.iter().map(|&(d, w)| kern(d) * w).sum()
+        };
+        for (s, l) in sum.iter_mut().zip(t.radiance) {
+            *s += k * l;
+        }
+    }
+    sum
+}
+
+/// The angular scale of `brdf`'s lobe about the reflected direction, what [`light_sum_brdf`]
+/// compares a light texel's size with: α for GGX, 1/√n for Phong, 2/√n for Blinn (a
+/// half-vector lobe), the narrower α for Ward, a radian for Lambert; `None` for the mirror,
+/// whose lobe no texel quadrature resolves (it reads the whole map instead).
+pub fn lobe_scale(brdf: &Brdf) -> Option<f64> {
+    match *brdf {
+        Brdf::Mirror => None,
+        Brdf::Lambert => Some(1.0),
+        Brdf::Ggx { alpha, .. } => Some(alpha.max(super::brdf::GGX_ALPHA_MIN)),
+        Brdf::Phong { n } => Some(1.0 / n.max(1.0).sqrt()),
+        Brdf::Blinn { n } => Some(2.0 / n.max(1.0).sqrt()),
+        Brdf::Ward { ax, ay } => Some(ax.min(ay).max(super::brdf::WARD_ALPHA_MIN)),
+    }
+}
+
+/// Σ_t L_t·∫_t f(v, ω)·cos θ dω over the light texels at a surface of normal `n` seen along
+/// `v` (unit, towards the eye): each texel by its centre where [`PER_WIDTH`]·ρ < 0.2·w, w the
+/// lobe's `scale` ([`lobe_scale`]) or, in the tail, 1/8 of the chord to the reflected
+/// direction, else by its nodes. In the frame and with the view lift of
+/// [`super::fis::estimate`]; the float64 twin of `shade.frag`'s lights for FIS materials.
+pub fn light_sum_brdf(
+    lights: &[PreparedLight],
+    brdf: &Brdf,
+    n: DVec3,
+    v: DVec3,
+    scale: f64,
+) -> [f64; 3] {
+    let frame = Frame::new(n);
+    let wo = local_view(&frame, v);
+    let r = 2.0 * n.dot(v) * n - v;
+    let eval = |d: DVec3| brdf.eval_cos(wo, frame.to_local(d));
+    let mut sum = [0.0; 3];
+    for t in lights {
+        let width = scale.max(0.125 * (r - t.dir).length());
+        let k = if t.nodes.is_empty() || PER_WIDTH * t.rho < 0.2 * width {
+            eval(t.dir) * t.omega
+        } else {
+            t.nodes.iter().map(|&(d, w)| eval(d) * w).sum()
         };
         for (s, l) in sum.iter_mut().zip(t.radiance) {
             *s += k * l;
