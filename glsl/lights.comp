@@ -7,6 +7,7 @@
 // n = v = r. Float64 twin: math::lights::light_sum.
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
+#include "lights.glsl"
 
 layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_LIGHTS_TEXELS) readonly buffer Texels { vec4 lt[]; };
@@ -14,15 +15,6 @@ layout(set = 0, binding = BINDING_LIGHTS_DST, rgba32f) uniform image2DArray dst;
 
 // The push block, generated from src/abi.rs.
 PUSH_LightsPush
-
-// split_sum::chain_kernel from the gap g = |r − l|²/2, with a2 = α²: D·G/4 with
-// D = a2/(π s²) and G = 2x/(x + √(a2 + (1 − a2)x²)), folded into one division.
-float chain_kernel(float a2, float g) {
-    float x = 1.0 - g;
-    if (x <= 0.0) return 0.0;
-    float s = 0.5 * g + a2 * (1.0 - 0.5 * g);
-    return a2 * x / (2.0 * PI * s * s * (x + sqrt(a2 + (1.0 - a2) * x * x)));
-}
 
 float kern(float a2, vec3 r, vec3 w) {
     vec3 e = r - w;

@@ -11,6 +11,7 @@
 // Misses show the environment along the ray. Shadows (V_em) apply to LOOKUP and FIS.
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
+#include "lights.glsl"
 #include "sh.glsl"
 #include "scene.glsl"
 #include "sequence.glsl"
@@ -176,6 +177,32 @@ vec3 split_sum(Object ob, vec3 n, vec3 v, vec3 r) {
     uvec2 i1 = min(i0 + 1u, uvec2(size - 1u));
     vec2 ab = mix(mix(dfg[off + i0.y * size + i0.x], dfg[off + i0.y * size + i1.x], f.x),
                   mix(dfg[off + i1.y * size + i0.x], dfg[off + i1.y * size + i1.x], f.x), f.y);
+    // With lights extracted the chain holds the residual; the light texels are added at this
+    // α exactly (extra.w = 1/∫K; math::lights::light_sum's rule).
+    if (ob.extra.w > 0.0) {
+        float a = max(ob.brdf.y, GGX_ALPHA_MIN);
+        float a2 = a * a;
+        vec3 sum = vec3(0.0);
+        for (uint i = 0u; i < pc.lights; i++) {
+            uint at = i * pc.light_stride;
+            vec4 centre = lights[at];
+            vec4 light = lights[at + 1u];
+            vec3 e = r - centre.xyz;
+            float w2 = max(a2, dot(e, e) / 64.0);
+            float cw = 5.0 * LIGHT_PER_WIDTH * light.w;
+            float k = 0.0;
+            if (pc.light_stride == LIGHT_HEADER_VEC4S || cw * cw < w2) {
+                k = chain_kernel(a2, 0.5 * dot(e, e)) * centre.w;
+            } else {
+                for (uint q = at + LIGHT_HEADER_VEC4S; q < at + pc.light_stride; q++) {
+                    vec3 d = r - lights[q].xyz;
+                    k += chain_kernel(a2, 0.5 * dot(d, d)) * lights[q].w;
+                }
+            }
+            sum += k * light.rgb;
+        }
+        p += sum * ob.extra.w;
+    }
     return p * (ab.x + ab.y);
 }
 

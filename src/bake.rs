@@ -12,7 +12,7 @@ use crate::envmap::luminance;
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, InFlight, Timing, Usage};
 use crate::math::exact::ExactFilter;
-use crate::math::lights::{extract, prepare, ExtractOptions, LightKernel};
+use crate::math::lights::{extract, prepare, resolves, ExtractOptions, LightKernel};
 use crate::math::sh;
 use crate::math::split_sum::level_alpha;
 use crate::math::Orientation;
@@ -387,14 +387,16 @@ impl Baker {
         let dp = GpuEnvMap::with_mips(ctx, "bake: paraboloid", Mapping::DualParaboloid, w, h)?;
         let cube = SplitSum::cube_chain(ctx, opts.specular_size, opts.specular_levels)?;
         // With lights: the residual's own upload, SH and paraboloid, and the light texels.
+        // The finest lobe the light texels' quadrature must resolve: level 1's (a source too
+        // coarse for it bakes without lights, as `resolves` says).
+        let finest = level_alpha(1, opts.specular_levels.max(2));
         let extraction = opts
             .lights
             .then(|| extract(env, &ExtractOptions::default()))
-            .filter(|e| !e.lights.is_empty());
+            .filter(|e| !e.lights.is_empty() && resolves(e, finest));
         let residual = match &extraction {
             Some(ex) => {
                 let file_to_world = orientation.checked_world_to_file()?.transpose();
-                let finest = level_alpha(1, opts.specular_levels.max(2));
                 let lights = GpuLights::upload(ctx, &prepare(env, ex, file_to_world, finest))?;
                 let map =
                     GpuEnvMap::new(ctx, "bake: residual", env.mapping, env.width, env.height)?;

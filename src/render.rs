@@ -7,9 +7,10 @@ use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, Recorder, Timing, Usage};
 use crate::math::brdf::Brdf;
 use crate::math::filter::Kernel;
-use crate::math::lights::{extract, lobe_scale, prepare};
+use crate::math::lights::{extract, lobe_scale, prepare, resolves};
 use crate::math::sh::Window;
 use crate::math::sh_brdf::ViewGrid;
+use crate::math::split_sum::chain_norm;
 use crate::math::{sh, Mapping, Orientation};
 use crate::passes::gbuffer::{shape_record, target, GBuffer, GpuObject};
 use crate::passes::mc::{McEnv, McOptions};
@@ -355,32 +356,38 @@ impl Renderer {
             None => None,
         };
         // Lights: SH objects take the residual's SH plus the light texels' exact irradiance;
-        // FIS objects the residual's paraboloid plus the light texels under their BRDF. FIS
-        // keeps the whole map where a mirror reads it by FIS (no texel quadrature resolves a
-        // delta) or split-sum shares its paraboloid.
+        // FIS and split-sum objects the residual's paraboloid plus the light texels under
+        // their lobes. The paraboloid keeps the whole map where a mirror is read by FIS, or a
+        // lobe is too narrow for the light texels' quadrature ([`resolves`]).
         let extracting = scene.environment.lights == LightsMode::Extract;
         let has = |f: &dyn Fn(&SceneObject) -> bool| scene.objects.iter().any(f);
+        let on_chain = |o: &SceneObject| {
+            matches!(
+                o.material.technique(),
+                Technique::Fis { .. } | Technique::SplitSum
+            )
+        };
         let sh_lights = extracting
             && sh_pass.is_some()
             && has(&|o| matches!(o.material.technique(), Technique::Sh { .. }));
-        let fis_lights = extracting
+        let dp_lights = extracting
             && dp_passes.is_some()
-            && has(&|o| matches!(o.material.technique(), Technique::Fis { .. }))
-            && !has(&|o| matches!(o.material.technique(), Technique::SplitSum))
-            && !has(&|o| {
-                matches!(o.material.technique(), Technique::Fis { .. })
-                    && lobe_scale(&o.material.kind).is_none()
-            });
-        let extraction = (sh_lights || fis_lights)
-            .then(|| extract(env, &scene.environment.extract_options()))
-            .filter(|e| !e.lights.is_empty());
+            && has(&on_chain)
+            && !has(&|o| on_chain(o) && lobe_scale(&o.material.kind).is_none());
         // The finest lobe the light texels' nodes must resolve.
         let finest = scene
             .objects
             .iter()
-            .filter(|o| fis_lights && matches!(o.material.technique(), Technique::Fis { .. }))
+            .filter(|o| on_chain(o))
             .filter_map(|o| lobe_scale(&o.material.kind))
             .fold(1.0, f64::min);
+        let extraction = (sh_lights || dp_lights)
+            .then(|| extract(env, &scene.environment.extract_options()))
+            .filter(|e| !e.lights.is_empty());
+        let dp_lights = dp_lights && extraction.as_ref().is_some_and(|e| resolves(e, finest));
+        // Nothing reads the lights when only the chain asked and its lobes are too narrow.
+        let extraction = extraction.filter(|_| sh_lights || dp_lights);
+        let finest = if dp_lights { finest } else { 1.0 };
         let residual = match &extraction {
             Some(ex) => {
                 let file_to_world = orientation.checked_world_to_file()?.transpose();
@@ -406,7 +413,7 @@ impl Renderer {
             }
             None => None,
         };
-        let fis_lights = fis_lights && residual.is_some();
+        let dp_lights = dp_lights && residual.is_some();
 
         // FIS: the dual paraboloid and its MIP chain.
         let dp = match dp_passes {
@@ -509,14 +516,21 @@ impl Renderer {
                 }
             }
         }
-        if fis_lights {
-            // extra.y = 1: add the light texels; extra.z: the lobe's scale for their rule.
+        if dp_lights {
             for (g, o) in gbuf_objects.iter_mut().zip(&scene.objects) {
-                if let (Technique::Fis { .. }, Some(scale)) =
-                    (o.material.technique(), lobe_scale(&o.material.kind))
-                {
-                    g.extra[1] = 1.0;
-                    g.extra[2] = scale as f32;
+                match (o.material.technique(), o.material.kind) {
+                    // extra.y = 1: add the light texels; extra.z: the lobe's scale.
+                    (Technique::Fis { .. }, kind) => {
+                        if let Some(scale) = lobe_scale(&kind) {
+                            g.extra[1] = 1.0;
+                            g.extra[2] = scale as f32;
+                        }
+                    }
+                    // extra.w = 1/∫K at the material's α.
+                    (Technique::SplitSum, Brdf::Ggx { alpha, .. }) => {
+                        g.extra[3] = (1.0 / chain_norm(alpha)) as f32;
+                    }
+                    _ => {}
                 }
             }
         }
@@ -556,7 +570,7 @@ impl Renderer {
                     supersample: None,
                 };
                 let source = match &residual {
-                    Some((_, res, _, _)) if fis_lights => res,
+                    Some((_, res, _, _)) if dp_lights => res,
                     _ => &env_gpu,
                 };
                 marks.record(rec, PassKind::DualParaboloid, |rec| {

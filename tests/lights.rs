@@ -472,3 +472,46 @@ fn light_texels_cast_shadows() {
     }
     common::finish(ctx);
 }
+
+/// A lobe too narrow for the light texels' quadrature (Phong n = 10⁶ by FIS, whose lobe is a
+/// tenth of a 256-wide map's texel) on the sun sky: the render reads the whole map instead
+/// (`math::lights::resolves`), so it equals the `lights = "none"` render bit for bit, finite.
+#[test]
+fn lobes_too_narrow_for_the_light_texels_read_the_whole_map() {
+    use common::scenes::{object, scene, sphere_camera, unit_sphere};
+    use envlight::math::brdf::Brdf;
+    use envlight::render::Renderer;
+    use envlight::scene::{LightsMode, Technique};
+    let ctx = common::ctx();
+    {
+        let env = sky(Mapping::LatLong, 256);
+        let ex = extract(&env, &ExtractOptions::default());
+        assert!(!envlight::math::lights::resolves(&ex, 1e-3));
+        let renderer = Renderer::new(&ctx);
+        let frames: Vec<EnvMap> = [LightsMode::Extract, LightsMode::None]
+            .into_iter()
+            .map(|lights| {
+                let mut s = scene(
+                    sphere_camera(16),
+                    vec![object(
+                        unit_sphere(),
+                        Brdf::Phong { n: 1e6 },
+                        [1.0; 3],
+                        Technique::Fis {
+                            samples: 16,
+                            bias: None,
+                            rotate: false,
+                        },
+                    )],
+                    false,
+                    128,
+                );
+                s.environment.lights = lights;
+                renderer.render(&s, &env).unwrap().frame
+            })
+            .collect();
+        assert!(frames[0].texels.iter().flatten().all(|v| v.is_finite()));
+        assert_eq!(frames[0].texels, frames[1].texels);
+    }
+    common::finish(ctx);
+}

@@ -157,6 +157,14 @@ pub fn nodes(map: &EnvMap, t: &LightTexel, cells: u32) -> Vec<(DVec3, f64)> {
     v
 }
 
+/// Whether light texels' quadratures resolve lobes down to `scale` (at most 8 cells a side
+/// needed, [`cells_for`]'s cap): a narrower lobe (a Phong n of 10⁶, GGX near the mirror)
+/// would fall between the nodes, so techniques read the whole map instead.
+pub fn resolves(ex: &Extraction, scale: f64) -> bool {
+    let rho = ex.lights.iter().map(|t| t.omega.sqrt()).fold(0.0, f64::max);
+    PER_WIDTH * rho <= 8.0 * scale
+}
+
 /// Cells per side of every light texel's quadrature for lobes down to `alpha`:
 /// ⌈[`PER_WIDTH`]·ρ/α⌉ for the largest texel, 1 to 8 (the exact oracle's rule,
 /// [`super::exact::ExactFilter::ggx`], at the lobe's peak).
