@@ -1,8 +1,8 @@
 #version 460
 // Light texels (src/math/lights.rs) added exactly to one level of a cube: at each texel
 // centre r, (1/∫K)·Σ_t L_t·∫_t K(r·ω) dω over the light texels t, each integral by one node
-// at t's centre where t is small next to the kernel's scale there (per_width·ρ/w < 0.2,
-// w = α at the peak and θ/8 in GGX's θ⁻⁴ tail, a radian for the cosine), else by t's
+// at t's centre where t is small next to the kernel's scale there (light_centre_only: α at
+// the peak, a fraction of the chord in GGX's θ⁻⁴ tail, a radian for the cosine), else by t's
 // quadrature nodes. The kernel is the clamped cosine (irradiance) or split-sum's GGX at
 // n = v = r. Float64 twin: math::lights::light_sum.
 #extension GL_GOOGLE_include_directive : require
@@ -38,11 +38,9 @@ void main() {
         vec4 centre = lt[t * stride];
         vec4 light = lt[t * stride + 1u];
         vec3 e = r - centre.xyz;
-        // per_width·ρ < 0.2·w, squared (w = max(α, chord/8) for GGX, 1 for the cosine).
-        float w2 = pc.kernel == 0u ? 1.0 : max(a2, dot(e, e) / 64.0);
-        float cw = 5.0 * pc.per_width * light.w;
+        float w2 = light_scale2(pc.kernel == 0u ? 1.0 : a, e);
         float k = 0.0;
-        if (pc.nodes == 0u || cw * cw < w2) {
+        if (light_centre_only(light.w, w2, stride)) {
             k = kern(a2, r, centre.xyz) * centre.w;
         } else {
             for (uint n = 0u; n < pc.nodes; n++) {

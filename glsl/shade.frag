@@ -109,11 +109,8 @@ vec3 fis(Object ob, vec3 n, vec3 v, vec3 p, uvec2 pix) {
             vec4 centre = lights[at];
             vec4 light = lights[at + 1u];
             if (pc.shadows != 0u && occluded(origin, centre.xyz)) continue;
-            vec3 e = r - centre.xyz;
-            float w2 = max(ob.extra.z * ob.extra.z, dot(e, e) / 64.0);
-            float cw = 5.0 * LIGHT_PER_WIDTH * light.w;
             float k = 0.0;
-            if (pc.light_stride == LIGHT_HEADER_VEC4S || cw * cw < w2) {
+            if (light_centre_only(light.w, light_scale2(ob.extra.z, r - centre.xyz), pc.light_stride)) {
                 vec3 wi = vec3(dot(centre.xyz, t), dot(centre.xyz, bt), dot(centre.xyz, n));
                 k = brdf_eval_cos(b, wo, wi) * centre.w;
             } else {
@@ -188,10 +185,8 @@ vec3 split_sum(Object ob, vec3 n, vec3 v, vec3 r) {
             vec4 centre = lights[at];
             vec4 light = lights[at + 1u];
             vec3 e = r - centre.xyz;
-            float w2 = max(a2, dot(e, e) / 64.0);
-            float cw = 5.0 * LIGHT_PER_WIDTH * light.w;
             float k = 0.0;
-            if (pc.light_stride == LIGHT_HEADER_VEC4S || cw * cw < w2) {
+            if (light_centre_only(light.w, light_scale2(a, e), pc.light_stride)) {
                 k = chain_kernel(a2, 0.5 * dot(e, e)) * centre.w;
             } else {
                 for (uint q = at + LIGHT_HEADER_VEC4S; q < at + pc.light_stride; q++) {
@@ -238,7 +233,7 @@ void main() {
                 vec4 centre = lights[at];
                 vec4 light = lights[at + 1u];
                 float k = 0.0;
-                if (pc.light_stride == LIGHT_HEADER_VEC4S || 5.0 * LIGHT_PER_WIDTH * light.w < 1.0) {
+                if (light_centre_only(light.w, 1.0, pc.light_stride)) {
                     k = max(dot(n, centre.xyz), 0.0) * centre.w;
                 } else {
                     for (uint q = at + LIGHT_HEADER_VEC4S; q < at + pc.light_stride; q++) {

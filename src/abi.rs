@@ -339,9 +339,14 @@ pub mod lights {
     /// vec4s per light texel in the GPU's list: (world centre, Ω), (excess rgb, ρ = √Ω),
     /// then its quadrature nodes' (world direction, weight).
     pub const HEADER_VEC4S: u32 = 2;
-    /// A light texel takes its centre alone where PER_WIDTH·ρ < 0.2·w (w the kernel's scale
-    /// there), its nodes elsewhere.
+    /// A light texel takes its centre alone where PER_WIDTH·ρ < CENTRE_BELOW·w (w the
+    /// kernel's scale there), its nodes elsewhere.
     pub const PER_WIDTH: f64 = 4.0;
+    /// See [`PER_WIDTH`]: the centre's error is then about (ρ/w)²/24 of the texel's term.
+    pub const CENTRE_BELOW: f64 = 0.2;
+    /// A lobe's scale at chord c from its axis is at least this times c: K ∝ θ⁻⁴ in GGX's tail
+    /// varies on a scale of θ/4, taken with a margin.
+    pub const TAIL_FRACTION: f64 = 0.125;
 }
 
 /// Workgroup size of the SH passes: one texel (or partial sum) per invocation.
@@ -692,10 +697,8 @@ pub mod push {
             alpha: f32 = "float",
             /// 1 / ∫ K dω, the kernel's normalisation (1 for the cosine).
             inv_norm: f32 = "float",
-            /// Cells per lobe scale below which a texel takes its centre alone.
-            per_width: f32 = "float",
             /// Padding.
-            pad: u32 = "uint",
+            pad: [u32; 2] = "uint[2]",
         }
         /// `glsl/sh_rotate.comp`.
         ShRotatePush {
@@ -917,6 +920,16 @@ pub fn generated_header() -> String {
     let _ = writeln!(s, "#define BRUTE_TILE {BRUTE_TILE}u");
     let _ = writeln!(s, "#define LIGHT_HEADER_VEC4S {}u", lights::HEADER_VEC4S);
     let _ = writeln!(s, "#define LIGHT_PER_WIDTH {:?}", lights::PER_WIDTH as f32);
+    let _ = writeln!(
+        s,
+        "#define LIGHT_CENTRE_BELOW {:?}",
+        lights::CENTRE_BELOW as f32
+    );
+    let _ = writeln!(
+        s,
+        "#define LIGHT_TAIL_FRACTION {:?}",
+        lights::TAIL_FRACTION as f32
+    );
     let _ = writeln!(s, "#define FILTER_EDGE_CELLS {}u", filter_rule::EDGE_CELLS);
     let _ = writeln!(s, "#define FILTER_MAX_CELLS {}u", filter_rule::MAX_CELLS);
     let f = |x: f64| format!("{:?}", x as f32);

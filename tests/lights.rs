@@ -189,17 +189,7 @@ fn sh_irradiance_with_lights_against_mc_on_real_probes() {
         let cam = sphere_camera(32);
         let renderer = Renderer::new(&ctx);
         let pixels = sphere_pixels(&cam);
-        let rel_rms = |a: &EnvMap, b: &EnvMap| {
-            let (mut se, mut sw) = (0.0, 0.0);
-            for &(k, _, _) in &pixels {
-                for ch in 0..3 {
-                    let (x, m) = (a.texels[k][ch] as f64, b.texels[k][ch] as f64);
-                    se += (x - m).powi(2);
-                    sw += m * m;
-                }
-            }
-            (se / sw).sqrt()
-        };
+        let rel_rms = |a: &EnvMap, b: &EnvMap| common::scenes::rel_rms(a, b, &pixels);
         // (probe, light ratio and texels, bound with lights, bound without)
         let cases = [
             ("spiaggia_di_mondello_1k.hdr", None, 0.0081, 0.0568),
@@ -279,17 +269,7 @@ fn fis_with_lights_against_mc_on_real_probes() {
         let cam = sphere_camera(32);
         let renderer = Renderer::new(&ctx);
         let pixels = sphere_pixels(&cam);
-        let rel_rms = |a: &EnvMap, b: &EnvMap| {
-            let (mut se, mut sw) = (0.0, 0.0);
-            for &(k, _, _) in &pixels {
-                for ch in 0..3 {
-                    let (x, m) = (a.texels[k][ch] as f64, b.texels[k][ch] as f64);
-                    se += (x - m).powi(2);
-                    sw += m * m;
-                }
-            }
-            (se / sw).sqrt()
-        };
+        let rel_rms = |a: &EnvMap, b: &EnvMap| common::scenes::rel_rms(a, b, &pixels);
         // (probe, [(α, bound with lights, bound without)])
         let cases = [
             (

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::scenes::{object, scene, sphere_camera, sphere_pixels, unit_sphere};
+use common::scenes::{object, rel_rms, scene, sphere_camera, sphere_pixels, unit_sphere};
 use envlight::math::brdf::{local_view, Brdf, Frame};
 use envlight::math::split_sum::{self, dfg_table, prefiltered_chain};
 use envlight::math::synth::{smooth_env, Sky};
@@ -214,19 +214,6 @@ fn furnace_shows_the_albedo() {
         assert!(bins[1] < 4e-3, "beyond 80°: {:e}", bins[1]);
     }
     common::finish(ctx);
-}
-
-/// Relative RMS of `a` against `b` over the sphere's pixels, all channels.
-fn rel_rms(a: &EnvMap, b: &EnvMap, pixels: &[(usize, DVec3, DVec3)]) -> f64 {
-    let (mut se, mut sw) = (0.0, 0.0);
-    for &(k, _, _) in pixels {
-        for ch in 0..3 {
-            let (x, m) = (a.texels[k][ch] as f64, b.texels[k][ch] as f64);
-            se += (x - m).powi(2);
-            sw += m * m;
-        }
-    }
-    (se / sw).sqrt()
 }
 
 /// What users pay for split-sum: its error against the Monte Carlo reference (4096 samples

@@ -11,4 +11,17 @@ float chain_kernel(float a2, float g) {
     float s = 0.5 * g + a2 * (1.0 - 0.5 * g);
     return a2 * x / (2.0 * PI * s * s * (x + sqrt(a2 + (1.0 - a2) * x * x)));
 }
+
+// The squared scale of a lobe of scale `lobe` at a light texel `e` = axis − centre away:
+// the lobe's own near the axis, TAIL_FRACTION of the chord in the tail (math::lights).
+float light_scale2(float lobe, vec3 e) {
+    return max(lobe * lobe, LIGHT_TAIL_FRACTION * LIGHT_TAIL_FRACTION * dot(e, e));
+}
+
+// Whether a light texel of angular size `rho` takes its centre alone where the kernel's
+// squared scale is `w2` (PER_WIDTH·ρ < CENTRE_BELOW·w), or has no nodes (`stride`).
+bool light_centre_only(float rho, float w2, uint stride) {
+    float c = LIGHT_PER_WIDTH * rho / LIGHT_CENTRE_BELOW;
+    return stride == LIGHT_HEADER_VEC4S || c * c < w2;
+}
 #endif

@@ -6,6 +6,7 @@
 
 use super::mapping::{Coord, Mapping};
 use super::split_sum::chain_kernel;
+use crate::abi::lights::{CENTRE_BELOW, TAIL_FRACTION};
 use crate::EnvMap;
 use glam::{DMat3, DVec3};
 
@@ -94,12 +95,12 @@ impl<'a> ExactFilter<'a> {
             let chord2 = (t.dir - r).length_squared();
             let gap = 0.5 * chord2;
             // The chord, below the angle θ, stands for it (more cells, never fewer).
-            let width = a.max(0.125 * chord2.sqrt());
+            let width = a.max(TAIL_FRACTION * chord2.sqrt());
             let cells = per_width * t.rho / width;
             // One node at the centre where the texel is small next to the lobe's scale (its
             // error is about (ρ/w)²/24 of the texel's term); Gauss cells elsewhere, whose
             // error falls as the fourth power of the cell's size against the lobe's.
-            let k = if cells < 0.2 {
+            let k = if cells < CENTRE_BELOW {
                 chain_kernel(a, gap) * t.omega
             } else {
                 let s = cells.ceil().min(8.0 * per_width) as u32;

@@ -174,7 +174,19 @@ pub fn cells_for(ex: &Extraction, alpha: f64) -> u32 {
     ((PER_WIDTH * rho / a).ceil() as u32).clamp(1, 8)
 }
 
-pub use crate::abi::lights::PER_WIDTH;
+pub use crate::abi::lights::{CENTRE_BELOW, PER_WIDTH, TAIL_FRACTION};
+
+/// A kernel's scale at a light texel `chord` from the lobe's axis: the lobe's own `scale`,
+/// or [`TAIL_FRACTION`] of the chord in the tail.
+fn scale_at(scale: f64, chord: f64) -> f64 {
+    scale.max(TAIL_FRACTION * chord)
+}
+
+/// Whether light texel `t` takes its centre alone where the kernel's scale is `width`
+/// ([`PER_WIDTH`]·ρ < [`CENTRE_BELOW`]·w), or has no nodes.
+fn centre_only(t: &PreparedLight, width: f64) -> bool {
+    t.nodes.is_empty() || PER_WIDTH * t.rho < CENTRE_BELOW * width
+}
 
 /// A kernel the light texels are summed with.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -230,9 +242,9 @@ pub fn prepare(
 }
 
 /// Σ_t L_t·∫_t K(r·ω) dω over the light texels (not normalised), each integral by one node
-/// at the texel's centre where [`PER_WIDTH`]·ρ < 0.2·w, w the kernel's scale there (α at
-/// GGX's peak, θ/8 in its θ⁻⁴ tail with the chord for θ, a radian for the cosine), else by its
-/// nodes. The float64 twin of `glsl/lights.comp`.
+/// at the texel's centre where [`PER_WIDTH`]·ρ < [`CENTRE_BELOW`]·w, w the kernel's scale
+/// there (α at GGX's peak, [`TAIL_FRACTION`] of the chord in its θ⁻⁴ tail, a radian for the
+/// cosine), else by its nodes. The float64 twin of `glsl/lights.comp`.
 pub fn light_sum(lights: &[PreparedLight], r: DVec3, kernel: LightKernel) -> [f64; 3] {
     let kern = |w: DVec3| {
         let g = 0.5 * (r - w).length_squared();
@@ -244,12 +256,12 @@ pub fn light_sum(lights: &[PreparedLight], r: DVec3, kernel: LightKernel) -> [f6
     let mut sum = [0.0; 3];
     for t in lights {
         let width = match kernel {
-            LightKernel::Cosine => 1.0,
-            LightKernel::Ggx { alpha } => alpha
-                .max(super::brdf::GGX_ALPHA_MIN)
-                .max(0.125 * (r - t.dir).length()),
+            LightKernel::Cosine => scale_at(1.0, (r - t.dir).length()),
+            LightKernel::Ggx { alpha } => {
+                scale_at(alpha.max(super::brdf::GGX_ALPHA_MIN), (r - t.dir).length())
+            }
         };
-        let k = if t.nodes.is_empty() || PER_WIDTH * t.rho < 0.2 * width {
+        let k = if centre_only(t, width) {
             kern(t.dir) * t.omega
         } else {
             t.nodes.iter().map(|&(d, w)| kern(d) * w).sum()
@@ -277,9 +289,9 @@ pub fn lobe_scale(brdf: &Brdf) -> Option<f64> {
 }
 
 /// Σ_t L_t·∫_t f(v, ω)·cos θ dω over the light texels at a surface of normal `n` seen along
-/// `v` (unit, towards the eye): each texel by its centre where [`PER_WIDTH`]·ρ < 0.2·w, w the
-/// lobe's `scale` ([`lobe_scale`]) or, in the tail, 1/8 of the chord to the reflected
-/// direction, else by its nodes. In the frame and with the view lift of
+/// `v` (unit, towards the eye): each texel by its centre where [`PER_WIDTH`]·ρ <
+/// [`CENTRE_BELOW`]·w, w the lobe's `scale` ([`lobe_scale`]) or, in the tail,
+/// [`TAIL_FRACTION`] of the chord to the reflected direction, else by its nodes. In the frame and with the view lift of
 /// [`super::fis::estimate`]; the float64 twin of `shade.frag`'s lights for FIS materials.
 pub fn light_sum_brdf(
     lights: &[PreparedLight],
@@ -294,8 +306,7 @@ pub fn light_sum_brdf(
     let eval = |d: DVec3| brdf.eval_cos(wo, frame.to_local(d));
     let mut sum = [0.0; 3];
     for t in lights {
-        let width = scale.max(0.125 * (r - t.dir).length());
-        let k = if t.nodes.is_empty() || PER_WIDTH * t.rho < 0.2 * width {
+        let k = if centre_only(t, scale_at(scale, (r - t.dir).length())) {
             eval(t.dir) * t.omega
         } else {
             t.nodes.iter().map(|&(d, w)| eval(d) * w).sum()

@@ -6,7 +6,7 @@ use super::map::GpuEnvMap;
 use crate::abi::{binding, push::LightsPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder};
-use crate::math::lights::{gpu_list, LightKernel, PreparedLight, PER_WIDTH};
+use crate::math::lights::{gpu_list, LightKernel, PreparedLight};
 use crate::math::split_sum::chain_norm;
 use crate::Mapping;
 
@@ -95,8 +95,7 @@ impl LightsPass {
             kernel: kind,
             alpha: alpha as f32,
             inv_norm: inv_norm as f32,
-            per_width: PER_WIDTH as f32,
-            pad: 0,
+            pad: [0; 2],
         };
         rec.span("lights", |rec| {
             rec.dispatch(

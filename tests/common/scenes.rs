@@ -63,3 +63,20 @@ pub fn sphere_pixels(cam: &Camera) -> Vec<(usize, glam::DVec3, glam::DVec3)> {
     }
     v
 }
+
+/// Relative RMS of `a` against `b` over `pixels` ([`sphere_pixels`]), all channels.
+pub fn rel_rms(
+    a: &envlight::EnvMap,
+    b: &envlight::EnvMap,
+    pixels: &[(usize, glam::DVec3, glam::DVec3)],
+) -> f64 {
+    let (mut se, mut sw) = (0.0, 0.0);
+    for &(k, _, _) in pixels {
+        for ch in 0..3 {
+            let (x, m) = (a.texels[k][ch] as f64, b.texels[k][ch] as f64);
+            se += (x - m).powi(2);
+            sw += m * m;
+        }
+    }
+    (se / sw).sqrt()
+}
