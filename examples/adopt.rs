@@ -43,6 +43,7 @@ pub fn run() -> Result<usize, Box<dyn std::error::Error>> {
             size: 16,
             orientation: Default::default(),
             supersample: None,
+            nearest: false,
         };
         let (cube, timings) = conv.run(&gpu, &opts)?;
         let back = cube.download(&ctx)?;

@@ -167,7 +167,9 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
         let orientation = scene.environment.orientation();
         let env_gpu = GpuEnvMap::new(&ctx, "environment", env.mapping, env.width, env.height)?;
         let objects: Vec<GpuObject> = scene.objects.iter().map(|o| object_record(o, 0)).collect();
-        let gbuf = GBuffer::new(&ctx, fw, fh, &objects)?;
+        let mut gbuf = GBuffer::new(&ctx, fw, fh, &objects)?;
+        // Footprint-filtered mirrors cast sub-pixel rays of this camera.
+        gbuf.camera = Some(scene.camera);
 
         let begin = vk::CommandBufferBeginInfo::default()
             .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
@@ -182,6 +184,7 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
             size: dp_size,
             orientation,
             supersample: None,
+            nearest: envlight::render::chain_of_texel_means(&scene),
         };
         converter.record(&mut rec, &env_gpu, &dp, &opts)?;
         mip.record(&mut rec, &dp)?;
@@ -198,6 +201,7 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
             split: None,
             shadows: scene.shadows,
             lights: None,
+            footprint: envlight::render::footprint_of(&scene, true, false),
         };
         shade.record(&mut rec, &gbuf, &inputs, &target)?;
         let readback = target.record_download(&mut rec, 0)?;

@@ -3,7 +3,8 @@
 // weighted mean of ss x ss samples spread over its footprint, so minification filters instead
 // of aliasing (see footprint_weight for the angular and paraboloid rims). Built twice: with SRC_CUBE
 // the source is a cube view (hardware filtering crosses faces), otherwise a 2D array read with
-// masked bilinear filtering that never touches texels outside the source's domain.
+// masked bilinear filtering that never touches texels outside the source's domain. With
+// `nearest` each sample reads the texel it falls in (the cube view through a nearest sampler).
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
 
@@ -41,6 +42,10 @@ vec3 sample_src(vec3 d) {
 #else
     Coord c = dir_to_coord(SRC_MAPPING, f);
     ivec2 size = ivec2(pc.src_size);
+    if (pc.nearest != 0u) {
+        ivec2 q = clamp(ivec2(floor(c.uv * vec2(size))), ivec2(0), size - 1);
+        return texelFetch(src, ivec3(q, int(c.layer)), 0).rgb;
+    }
     vec2 p = c.uv * vec2(size) - 0.5;
     ivec2 i0 = ivec2(floor(p));
     vec2 t = p - vec2(i0);

@@ -16,15 +16,9 @@ layout(location = 1) out vec4 out_position;  // hit position, distance
 layout(location = 2) out vec4 out_view;      // unit direction to the eye (misses: -ray)
 
 void main() {
-    vec2 ndc = vec2(2.0 * gl_FragCoord.x / float(pc.size.x) - 1.0, 1.0 - 2.0 * gl_FragCoord.y / float(pc.size.y));
     vec3 o, d;
-    if (pc.ortho != 0u) {
-        o = pc.eye.xyz + ndc.x * pc.right.xyz + ndc.y * pc.up.xyz;
-        d = pc.forward.xyz;
-    } else {
-        o = pc.eye.xyz;
-        d = normalize(pc.forward.xyz + ndc.x * pc.right.xyz + ndc.y * pc.up.xyz);
-    }
+    camera_ray(vec4(pc.eye.xyz, float(pc.ortho)), pc.forward.xyz, pc.right.xyz, pc.up.xyz,
+               vec2(pc.size), gl_FragCoord.xy, o, d);
     float best = 1e30;
     int index = -1;
     vec3 normal = vec3(0.0);

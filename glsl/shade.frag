@@ -1,6 +1,7 @@
 #version 460
 // Shades every G-buffer pixel by its material's technique and composites the frame:
-// - LOOKUP: the mirror, one nearest-texel lookup of the reflected direction;
+// - LOOKUP: the mirror: the mean over the pixel's footprint from the dual-paraboloid chain
+//   (plus the light texels it covers), or one nearest-texel lookup of the reflected direction;
 // - SH: albedo·E(n)/π from SH irradiance coefficients (R&H 2001), clamped at 0;
 // - PREFILTERED: a prefiltered lat-long map (#3), irradiance by n or Phong by r, bilinear;
 // - FIS: filtered importance sampling (Colbert & Křivánek 2007): N Hammersley samples of the
@@ -8,7 +9,7 @@
 // - MC: the mean the Monte Carlo pass accumulated;
 // - SH_BRDF: Kautz et al. 2002: the BRDF's SH vector at the local view (bilinear over the view
 //   grid), rotated to world space, dotted with the environment's radiance coefficients.
-// Misses show the environment along the ray. Shadows (V_em) apply to LOOKUP and FIS.
+// Misses show the environment along the ray, footprint-filtered as mirrors are where asked. Shadows (V_em) apply to LOOKUP and FIS.
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
 #include "lights.glsl"
@@ -32,6 +33,7 @@ layout(std430, set = 0, binding = BINDING_SHADE_X90) readonly buffer X90 { float
 layout(set = 0, binding = BINDING_SHADE_SPLIT) uniform sampler2DArray split_chain;
 layout(std430, set = 0, binding = BINDING_SHADE_DFG) readonly buffer Dfg { vec2 dfg[]; };
 layout(std430, set = 0, binding = BINDING_SHADE_LIGHTS) readonly buffer Lights { vec4 lights[]; };
+layout(std430, set = 0, binding = BINDING_SHADE_CAMERA) readonly buffer Cam { vec4 cam[]; };
 #define SH_X90(i) x90[i]
 #include "sh_rotate.glsl"
 
@@ -60,6 +62,145 @@ vec3 dp_lookup(vec3 d, float lod) {
     Coord c = dir_to_coord(MAPPING_DUAL_PARABOLOID, d);
     vec4 v = textureLod(dp, vec3(c.uv, float(c.layer)), lod);
     return v.a > 0.0 ? v.rgb / v.a : vec3(0.0);
+}
+
+// What pixel q looks up where it sees what index `index` names (-1: the background): the
+// reflected direction, or the view ray; false where it sees something else or lies outside.
+bool looked_up(ivec2 q, float index, out vec3 d) {
+    d = vec3(0.0);
+    ivec2 size = textureSize(gbuf_normal, 0).xy;
+    if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) return false;
+    vec4 nrm = texelFetch(gbuf_normal, ivec3(q, 0), 0);
+    if (nrm.w != index) return false;
+    vec3 v = texelFetch(gbuf_view, ivec3(q, 0), 0).xyz;
+    if (index < 0.0) {
+        d = -v;
+    } else {
+        vec3 n = normalize(nrm.xyz);
+        d = 2.0 * dot(v, n) * n - v;
+    }
+    return true;
+}
+
+// Twin of math::footprint::spread: the differential of the looked-up direction c along
+// `step`, from the neighbours that see the same.
+vec3 spread(ivec2 q, ivec2 step, float index, vec3 c) {
+    vec3 m, p;
+    bool hm = looked_up(q - step, index, m);
+    bool hp = looked_up(q + step, index, p);
+    vec3 d = hm && hp ? 0.5 * (p - m) : (hp ? p - c : (hm ? c - m : vec3(0.0)));
+    return d - c * dot(c, d);
+}
+
+// What image point px looks up for a pixel that sees what `index` names (-1: the
+// background): the ray's reflection off that object, or the ray itself where it meets nothing
+// (background pixels: always); false where it meets another object (twin of
+// math::footprint::camera_tap).
+bool tap_dir(vec2 px, float index, out vec3 dir) {
+    vec3 o, d;
+    camera_ray(cam[0], cam[1].xyz, cam[2].xyz, cam[3].xyz, cam[4].xy, px, o, d);
+    dir = d;
+    if (index < 0.0) return true;
+    float best = 1e30;
+    int hit = -1;
+    vec3 hn = vec3(0.0);
+    for (uint k = 0u; k < pc.count; k++) {
+        vec3 n;
+        float t = object_hit(objects[k], o, d, n);
+        if (t > 0.0 && t < best) {
+            best = t;
+            hit = int(k);
+            hn = n;
+        }
+    }
+    if (hit < 0) return true;
+    if (float(hit) != index) return false;
+    dir = d - 2.0 * dot(hn, d) * hn;
+    return true;
+}
+
+// Twin of math::footprint::lookup: the mean over pixel q's footprint from the chain, by a
+// grid of sub-pixel rays (na along x, nb along y from the differentials a, b), each read at
+// the lod whose texel is the taps' spacing.
+vec3 footprint_lookup(ivec2 q, float index, vec3 r, vec3 a, vec3 b) {
+    float la = length(a), lb = length(b);
+    float s = max(max(la, lb) / float(FOOTPRINT_MAX_TAPS), min(la, lb) / float(FOOTPRINT_MIN_TAPS));
+    uint na = 1u, nb = 1u;
+    if (s > 0.0) {
+        na = clamp(uint(max(ceil(la / s - 1e-3), 0.0)), 1u, FOOTPRINT_MAX_TAPS);
+        nb = clamp(uint(max(ceil(lb / s - 1e-3), 0.0)), 1u, FOOTPRINT_MAX_TAPS);
+    }
+    float spacing = max(max(la / float(na), lb / float(nb)), FOOTPRINT_MIN_SPREAD);
+    vec3 acc = vec3(0.0);
+    uint n = 0u;
+    for (uint j = 0u; j < nb; j++) {
+        for (uint i = 0u; i < na; i++) {
+            vec2 f = (vec2(i, j) + 0.5) / vec2(na, nb) - 0.5;
+            vec3 d;
+            if (!tap_dir(vec2(q) + 0.5 + f, index, d)) continue;
+            float lod = 0.5 * log2(spacing * spacing / dp_texel_solid_angle(d, pc.dp_size));
+            acc += dp_lookup(d, clamp(lod + FOOTPRINT_LOD_BIAS, 0.0, pc.max_lod));
+            n++;
+        }
+    }
+    if (n == 0u) {
+        float lod = 0.5 * log2(spacing * spacing / dp_texel_solid_angle(r, pc.dp_size));
+        return dp_lookup(r, clamp(lod + FOOTPRINT_LOD_BIAS, 0.0, pc.max_lod));
+    }
+    return acc / float(n);
+}
+
+// Length of [s - h, s + h] within [-1/2, 1/2].
+float overlap(float s, float h) {
+    return max(min(s + h, 0.5) - max(s - h, -0.5), 0.0);
+}
+
+// Twin of math::footprint::light_overlap: each light texel's excess times the share of the
+// pixel it covers (the texel's square mapped to pixel coordinates by the footprint's inverse).
+vec3 footprint_lights(vec3 r, vec3 a, vec3 b) {
+    vec3 t, bt;
+    shading_frame(r, t, bt);
+    float j00 = dot(a, t), j01 = dot(b, t), j10 = dot(a, bt), j11 = dot(b, bt);
+    float det = j00 * j11 - j01 * j10;
+    bool point = abs(det) < FOOTPRINT_MIN_SPREAD * FOOTPRINT_MIN_SPREAD;
+    float i00 = 0.0, i01 = 0.0, i10 = 0.0, i11 = 0.0, k = 0.0;
+    if (!point) {
+        i00 = j11 / det;
+        i01 = -j01 / det;
+        i10 = -j10 / det;
+        i11 = j00 / det;
+        k = 0.5 / sqrt(length(vec2(i00, i01)) * length(vec2(i10, i11)) * abs(det));
+    }
+    float n0 = length(vec2(i00, i01)), n1 = length(vec2(i10, i11));
+    vec3 sum = vec3(0.0);
+    for (uint i = 0u; i < pc.lights; i++) {
+        uint at = i * pc.light_stride;
+        vec4 centre = lights[at];
+        vec4 light = lights[at + 1u];
+        float c = dot(centre.xyz, r);
+        if (c <= 0.0) continue;
+        vec3 e = centre.xyz / c - r;
+        float ex = dot(e, t), ey = dot(e, bt);
+        float share;
+        if (point) {
+            float h = 0.5 * light.w;
+            share = abs(ex) <= h && abs(ey) <= h ? 1.0 : 0.0;
+        } else {
+            float h = k * light.w;
+            share = overlap(i00 * ex + i01 * ey, h * n0) * overlap(i10 * ex + i11 * ey, h * n1);
+        }
+        sum += share * light.rgb;
+    }
+    return sum;
+}
+
+// The pixel's mean radiance about r seen where `index` is seen (footprint filtering).
+vec3 footprint_radiance(ivec2 q, float index, vec3 r) {
+    vec3 a = spread(q, ivec2(1, 0), index, r);
+    vec3 b = spread(q, ivec2(0, 1), index, r);
+    vec3 l = footprint_lookup(q, index, r, a, b);
+    if ((pc.footprint & FOOTPRINT_LIGHTS) != 0u) l += footprint_lights(r, a, b);
+    return l;
 }
 
 // Bilinear lookup in a w x w/2 lat-long map stored at pre[off...], wrapping in u.
@@ -207,7 +348,8 @@ void main() {
     vec4 nrm = texelFetch(gbuf_normal, q, 0);
     vec3 v = texelFetch(gbuf_view, q, 0).xyz;
     if (nrm.w < 0.0) {
-        out_color = vec4(env_lookup(-v), 1.0);
+        bool filtered = (pc.footprint & FOOTPRINT_BACKGROUND) != 0u;
+        out_color = vec4(filtered ? footprint_radiance(q.xy, -1.0, -v) : env_lookup(-v), 1.0);
         return;
     }
     Object ob = objects[uint(nrm.w)];
@@ -254,7 +396,9 @@ void main() {
         color = ob.albedo.rgb * sh_brdf(ob, n, v);
     } else if (tech == TECH_LOOKUP) {
         bool dark = pc.shadows != 0u && occluded(shadow_origin(p, n), r);
-        color = dark ? vec3(0.0) : ob.albedo.rgb * env_lookup(r);
+        bool filtered = (pc.footprint & FOOTPRINT_MIRROR) != 0u;
+        vec3 l = filtered ? footprint_radiance(q.xy, nrm.w, r) : env_lookup(r);
+        color = dark ? vec3(0.0) : ob.albedo.rgb * l;
     } else {
         color = ob.albedo.rgb * fis(ob, n, v, p, pix);
     }

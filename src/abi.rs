@@ -142,6 +142,9 @@ pub mod binding {
         SHADE_DFG = 12;
         /// shade: extracted light texels (float buffer, as `lights` takes them).
         SHADE_LIGHTS = 13;
+        /// shade: the camera (vec4 buffer, [`crate::passes::gbuffer::camera_record`]), for
+        /// footprint lookups' sub-pixel rays.
+        SHADE_CAMERA = 14;
         /// dfg: the tables, (A, B) per entry (float buffer), summed over one dispatch per panel.
         DFG_TABLE = 0;
         /// prefilter_ggx: the source dual-paraboloid MIP chain (sampler2DArray, trilinear).
@@ -349,6 +352,27 @@ pub mod lights {
     pub const TAIL_FRACTION: f64 = 0.125;
 }
 
+/// Footprint-filtered lookups (mirrors and the background, issue #10): the pixel's footprint
+/// in direction space, from G-buffer differences, read from the dual-paraboloid chain by a
+/// row of taps along its major axis ([`crate::math::footprint`]).
+pub mod footprint {
+    /// Taps across a footprint's minor axis: a tap's trilinear read spreads over about two
+    /// texels of its level, so finer taps keep a bright texel beside the footprint out of it.
+    pub const MIN_TAPS: u32 = 8;
+    /// Most taps along a footprint's major axis; beyond that ratio the taps blur more.
+    pub const MAX_TAPS: u32 = 16;
+    /// Lod bias of each tap (log2 of the texel side over the tap's spacing).
+    pub const LOD_BIAS: f64 = -0.5;
+    /// Shortest differential kept (radians per pixel): a footprint no wider is a point.
+    pub const MIN_SPREAD: f64 = 1e-6;
+    /// Push flag: mirror lookups are footprint-filtered.
+    pub const MIRROR: u32 = 1;
+    /// Push flag: the background is footprint-filtered.
+    pub const BACKGROUND: u32 = 2;
+    /// Push flag: the chain holds the residual; footprint lookups add the light texels.
+    pub const LIGHTS: u32 = 4;
+}
+
 /// Workgroup size of the SH passes: one texel (or partial sum) per invocation.
 pub const SH_WORKGROUP: u32 = 64;
 /// Texels each SH projection invocation sums in registers before the workgroup sums, on
@@ -502,8 +526,8 @@ pub mod push {
             dst_mapping: u32 = "uint",
             /// Samples per axis per output texel.
             ss: u32 = "uint",
-            /// Padding to 16 bytes.
-            pad: u32 = "uint",
+            /// 1: each sample reads the source's nearest texel (box reconstruction).
+            nearest: u32 = "uint",
         }
         /// `glsl/mapping_probe.comp`.
         ProbePush {
@@ -635,8 +659,8 @@ pub mod push {
             lights: u32 = "uint",
             /// vec4s per light texel in their buffer.
             light_stride: u32 = "uint",
-            /// Padding.
-            pad: u32 = "uint",
+            /// Footprint filtering: FOOTPRINT_MIRROR | FOOTPRINT_BACKGROUND | FOOTPRINT_LIGHTS.
+            footprint: u32 = "uint",
         }
         /// `glsl/sh_brdf.comp`.
         ShBrdfPush {
@@ -819,7 +843,8 @@ macro_rules! shader_table {
                  (SHADE_DP, Sampled, Read), (SHADE_PREFILTERED, StorageBuffer, Read),
                  (SHADE_MC, Sampled, Read), (SHADE_BRDF_SH, StorageBuffer, Read),
                  (SHADE_X90, StorageBuffer, Read), (SHADE_SPLIT, Sampled, Read),
-                 (SHADE_DFG, StorageBuffer, Read), (SHADE_LIGHTS, StorageBuffer, Read)];
+                 (SHADE_DFG, StorageBuffer, Read), (SHADE_LIGHTS, StorageBuffer, Read),
+                 (SHADE_CAMERA, StorageBuffer, Read)];
             /// The split-sum DFG table (A, B) per n·v and √α.
             Dfg = "dfg", "dfg.comp", Compute, [], DfgPush,
                 [(DFG_TABLE, StorageBuffer, ReadWrite)];
@@ -930,6 +955,11 @@ pub fn generated_header() -> String {
         "#define LIGHT_TAIL_FRACTION {:?}",
         lights::TAIL_FRACTION as f32
     );
+    let _ = writeln!(s, "#define FOOTPRINT_MIN_TAPS {}u", footprint::MIN_TAPS);
+    let _ = writeln!(s, "#define FOOTPRINT_MAX_TAPS {}u", footprint::MAX_TAPS);
+    let _ = writeln!(s, "#define FOOTPRINT_MIRROR {}u", footprint::MIRROR);
+    let _ = writeln!(s, "#define FOOTPRINT_BACKGROUND {}u", footprint::BACKGROUND);
+    let _ = writeln!(s, "#define FOOTPRINT_LIGHTS {}u", footprint::LIGHTS);
     let _ = writeln!(s, "#define FILTER_EDGE_CELLS {}u", filter_rule::EDGE_CELLS);
     let _ = writeln!(s, "#define FILTER_MAX_CELLS {}u", filter_rule::MAX_CELLS);
     let f = |x: f64| format!("{:?}", x as f32);
@@ -950,6 +980,8 @@ pub fn generated_header() -> String {
         ("RIM_PULL_IN", constants::RIM_PULL_IN),
         ("GAUSS2_OFFSET", constants::GAUSS2_OFFSET),
         ("GGX_ALPHA_MIN", brdf::GGX_ALPHA_MIN),
+        ("FOOTPRINT_LOD_BIAS", footprint::LOD_BIAS),
+        ("FOOTPRINT_MIN_SPREAD", footprint::MIN_SPREAD),
     ];
     for (name, v) in floats {
         let _ = writeln!(s, "#define {name} {}", f(v));

@@ -428,6 +428,7 @@ impl Baker {
                 size: dp_size,
                 orientation,
                 supersample: Some(supersample(env, dp_size)),
+                nearest: false,
             };
             self.convert.record(rec, &src, &dp, &c)?;
             self.mip.record(rec, &dp)?;

@@ -52,6 +52,7 @@
 //!         size: 256,
 //!         orientation: Orientation::default(),
 //!         supersample: None,
+//!         nearest: false,
 //!     };
 //!     converter.record(&mut rec, &source, &dp, &opts)?;
 //!     mip.record(&mut rec, &dp)?;

@@ -15,7 +15,7 @@ use crate::math::{sh, Mapping, Orientation};
 use crate::passes::gbuffer::{shape_record, target, GBuffer, GpuObject};
 use crate::passes::mc::{McEnv, McOptions};
 use crate::passes::sh_project::Subgroups;
-use crate::passes::shade::{Rotation, ShadeInputs};
+use crate::passes::shade::{Footprint, Rotation, ShadeInputs};
 use crate::passes::GpuLights;
 use crate::passes::ShBrdfProjector;
 use crate::passes::{
@@ -24,8 +24,8 @@ use crate::passes::{
 };
 use crate::passes::{PrefilterOptions, SplitSum};
 use crate::scene::{
-    plan, LightsMode, PassKind, Plan, Scene, SceneObject, SplitSumSettings, Technique,
-    DEFAULT_FIS_BIAS,
+    plan, LightsMode, LookupFilter, PassKind, Plan, Scene, SceneObject, SplitSumSettings,
+    Technique, DEFAULT_FIS_BIAS,
 };
 use crate::EnvMap;
 use ash::vk;
@@ -370,9 +370,11 @@ impl Renderer {
         let sh_lights = extracting
             && sh_pass.is_some()
             && has(&|o| matches!(o.material.technique(), Technique::Sh { .. }));
+        // Footprint lookups read the chain too, and add the light texels they cover.
+        let footprint_reads = scene.environment.filter != LookupFilter::Point;
         let dp_lights = extracting
             && dp_passes.is_some()
-            && has(&on_chain)
+            && (has(&on_chain) || footprint_reads)
             && !has(&|o| on_chain(o) && lobe_scale(&o.material.kind).is_none());
         // The finest lobe the light texels' nodes must resolve.
         let finest = scene
@@ -535,6 +537,7 @@ impl Renderer {
             }
         }
         let mut gbuf = GBuffer::new(ctx, scene.camera.width, scene.camera.height, &gbuf_objects)?;
+        gbuf.camera = Some(scene.camera);
 
         // Everything before shading, in one submission.
         let mut marks = Marks(Vec::new());
@@ -568,6 +571,7 @@ impl Renderer {
                     size: *size,
                     orientation,
                     supersample: None,
+                    nearest: chain_of_texel_means(scene),
                 };
                 let source = match &residual {
                     Some((_, res, _, _)) if dp_lights => res,
@@ -722,6 +726,7 @@ impl Renderer {
             split: split.as_ref().map(|s| (&s.1, &s.2)),
             shadows: scene.shadows,
             lights: residual.as_ref().map(|r| &r.3),
+            footprint: footprint_of(scene, dp.is_some(), dp_lights),
         };
         let mut marks = Marks(Vec::new());
         let (readback, t) = ctx.run("rendering: shading", |rec| {
@@ -761,6 +766,30 @@ impl Renderer {
             plan,
             mc: mc_summary,
         })
+    }
+}
+
+/// Whether `scene`'s dual paraboloid is converted with nearest-texel reads (the means of the
+/// source's texels): where footprint-filtered mirrors read it, or the background is asked to
+/// be; a bilinear reconstruction spreads a bright texel into its neighbours' pixels.
+pub fn chain_of_texel_means(scene: &Scene) -> bool {
+    let filter = scene.environment.filter;
+    filter == LookupFilter::Footprint
+        || (filter == LookupFilter::Auto
+            && scene
+                .objects
+                .iter()
+                .any(|o| matches!(o.material.technique(), Technique::Lookup)))
+}
+
+/// Which lookups of `scene` are footprint-filtered, given whether the render builds the
+/// dual-paraboloid chain and whether that chain holds the residual of extracted lights.
+pub fn footprint_of(scene: &Scene, chain: bool, residual: bool) -> Footprint {
+    let filter = scene.environment.filter;
+    Footprint {
+        mirror: chain && filter != LookupFilter::Point,
+        background: chain && filter != LookupFilter::Point,
+        lights: chain && residual,
     }
 }
 

@@ -56,8 +56,10 @@ pub struct Environment {
     #[serde(default = "one")]
     pub intensity: f64,
     /// Light extraction ([`crate::math::lights`]): with `extract`, SH irradiance materials
-    /// shade by the residual's SH plus the light texels' exact irradiance; `none` projects
-    /// the whole map. Other techniques do not use the lights yet.
+    /// shade by the residual's SH plus the light texels' exact irradiance, and FIS,
+    /// split-sum and footprint lookups read the residual's chain plus the light texels;
+    /// `none` uses the whole map everywhere. Prefiltered maps, SH-BRDF and MC do not use the
+    /// lights yet.
     #[serde(default)]
     pub lights: LightsMode,
     /// A texel is a light texel above this many times the map's mean luminance (default 32).
@@ -67,6 +69,24 @@ pub struct Environment {
     /// 2.4% in tests/lights.rs).
     #[serde(default)]
     pub light_texels: Option<u32>,
+    /// How mirror lookups and the background read the map (see [`LookupFilter`]).
+    #[serde(default)]
+    pub filter: LookupFilter,
+}
+
+/// How mirror lookups and the background read the environment.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LookupFilter {
+    /// Mirrors are filtered over each pixel's footprint (which builds the dual-paraboloid
+    /// chain); the background is too wherever the scene builds that chain anyway, else it is
+    /// one texel per pixel (a diffuse-only scene builds no chain for its background).
+    #[default]
+    Auto,
+    /// Mirrors and the background are both filtered over the pixel's footprint.
+    Footprint,
+    /// One texel per pixel: the texel the pixel centre's direction falls in.
+    Point,
 }
 
 impl Environment {
@@ -357,6 +377,7 @@ impl Scene {
                 lights: LightsMode::default(),
                 light_ratio: None,
                 light_texels: None,
+                filter: LookupFilter::default(),
             },
             camera,
             shadows: false,
@@ -676,8 +697,23 @@ pub fn plan(scene: &Scene, source: crate::math::Mapping) -> Plan {
             ),
         });
     }
-    if !fis.is_empty() || !split.is_empty() {
+    let filter = scene.environment.filter;
+    let footprint_mirrors = filter != LookupFilter::Point && !lookup.is_empty();
+    if !fis.is_empty()
+        || !split.is_empty()
+        || footprint_mirrors
+        || filter == LookupFilter::Footprint
+    {
         let mut why = Vec::new();
+        if footprint_mirrors {
+            why.push(format!(
+                "objects {} are mirrors filtered over each pixel's footprint",
+                list(&lookup)
+            ));
+        }
+        if filter == LookupFilter::Footprint {
+            why.push("the background is filtered over each pixel's footprint".into());
+        }
         if !fis.is_empty() {
             why.push(format!(
                 "objects {} use filtered importance sampling",
@@ -696,7 +732,11 @@ pub fn plan(scene: &Scene, source: crate::math::Mapping) -> Plan {
         });
         passes.push(PlannedPass {
             kind: PassKind::MipChain,
-            why: "FIS reads each sample at the MIP level its pdf calls for".into(),
+            why: if fis.is_empty() && split.is_empty() {
+                "footprint lookups read the MIP level of their taps' spacing".into()
+            } else {
+                "FIS reads each sample at the MIP level its pdf calls for".into()
+            },
         });
     }
     if !split.is_empty() {
@@ -765,8 +805,11 @@ pub fn plan(scene: &Scene, source: crate::math::Mapping) -> Plan {
             }
         ));
     }
-    if fis.is_empty() && split.is_empty() {
-        notes.push("no dual paraboloid or MIP chain: no material uses FIS or split-sum".into());
+    if !passes.iter().any(|p| p.kind == PassKind::MipChain) {
+        notes.push(
+            "no dual paraboloid or MIP chain: no material uses FIS, split-sum or footprint lookups"
+                .into(),
+        );
     }
     Plan { passes, notes }
 }

@@ -89,6 +89,7 @@ fn live_objects_return_to_zero() {
             size: 8,
             orientation: Default::default(),
             supersample: None,
+            nearest: false,
         };
         let (out, _) = conv.run(&g, &opts).unwrap();
         drop(g);

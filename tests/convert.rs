@@ -51,6 +51,7 @@ fn convert(
                 size,
                 orientation: o,
                 supersample: None,
+                nearest: false,
             },
         )
         .unwrap();

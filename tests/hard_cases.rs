@@ -173,6 +173,7 @@ fn conversion_of_every_hard_map() {
                         size,
                         orientation: Orientation::default(),
                         supersample: None,
+                        nearest: false,
                     };
                     let out = conv.run(&g, &opts).unwrap().0.download(&ctx).unwrap();
                     let what = format!("{} -> {to:?} {size}", c.name);

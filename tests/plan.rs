@@ -5,7 +5,7 @@ mod common;
 use envlight::math::synth::Sky;
 use envlight::math::Mapping;
 use envlight::render::render;
-use envlight::scene::{plan, PassKind, Scene};
+use envlight::scene::{plan, LookupFilter, PassKind, Scene};
 use envlight::EnvMap;
 use std::path::Path;
 
@@ -23,7 +23,15 @@ fn renders_run_exactly_the_planned_passes() {
             "diffuse.toml",
             &[PassKind::ShProjection, PassKind::GBuffer, PassKind::Shade],
         ),
-        ("mirror.toml", &[PassKind::GBuffer, PassKind::Shade]),
+        (
+            "mirror.toml",
+            &[
+                PassKind::DualParaboloid,
+                PassKind::MipChain,
+                PassKind::GBuffer,
+                PassKind::Shade,
+            ],
+        ),
         (
             "sh_brdf.toml",
             &[
@@ -75,6 +83,16 @@ fn renders_run_exactly_the_planned_passes() {
             ],
         ),
     ];
+    // Point lookups need no chain; a background asked to be filtered builds one.
+    let mut mirror = Scene::load(&dir.join("mirror.toml")).unwrap();
+    mirror.environment.filter = LookupFilter::Point;
+    let point = [PassKind::GBuffer, PassKind::Shade];
+    assert_eq!(plan(&mirror, Mapping::LatLong).kinds(), point);
+    let mut diffuse = Scene::load(&dir.join("diffuse.toml")).unwrap();
+    diffuse.environment.filter = LookupFilter::Footprint;
+    assert!(plan(&diffuse, Mapping::LatLong)
+        .kinds()
+        .contains(&PassKind::MipChain));
     for (file, kinds) in expect {
         let mut sc = Scene::load(&dir.join(file)).unwrap();
         let p = plan(&sc, Mapping::LatLong);

@@ -123,6 +123,7 @@ fn conversion_preserves_power_of_every_real_probe() {
                                 size,
                                 orientation: Orientation::default(),
                                 supersample: None,
+                                nearest: false,
                             },
                         )
                         .unwrap();
@@ -191,6 +192,7 @@ fn grace_probe_and_latlong_agree_after_flips() {
                         size: 256,
                         orientation: o,
                         supersample: None,
+                        nearest: false,
                     },
                 )
                 .unwrap();

@@ -107,6 +107,7 @@ fn diffuse_spheres_match_float64_irradiance() {
                             split: None,
                             shadows: false,
                             lights: None,
+                            footprint: Default::default(),
                         },
                     )
                     .unwrap();
@@ -227,6 +228,7 @@ fn diffuse_with_lights_matches_float64() {
                         split: None,
                         shadows: false,
                         lights,
+                        footprint: Default::default(),
                     },
                 )
                 .unwrap();

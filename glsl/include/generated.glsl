@@ -60,6 +60,7 @@
 #define BINDING_SHADE_SPLIT 11
 #define BINDING_SHADE_DFG 12
 #define BINDING_SHADE_LIGHTS 13
+#define BINDING_SHADE_CAMERA 14
 #define BINDING_DFG_TABLE 0
 #define BINDING_PREFILTER_GGX_SRC 0
 #define BINDING_PREFILTER_GGX_DST 1
@@ -73,6 +74,11 @@
 #define LIGHT_PER_WIDTH 4.0
 #define LIGHT_CENTRE_BELOW 0.2
 #define LIGHT_TAIL_FRACTION 0.125
+#define FOOTPRINT_MIN_TAPS 8u
+#define FOOTPRINT_MAX_TAPS 16u
+#define FOOTPRINT_MIRROR 1u
+#define FOOTPRINT_BACKGROUND 2u
+#define FOOTPRINT_LIGHTS 4u
 #define FILTER_EDGE_CELLS 4u
 #define FILTER_MAX_CELLS 16u
 #define FILTER_CELLS_PER_WIDTH 2.0
@@ -91,6 +97,8 @@
 #define RIM_PULL_IN 0.0001
 #define GAUSS2_OFFSET 0.28867513
 #define GGX_ALPHA_MIN 0.0001
+#define FOOTPRINT_LOD_BIAS -0.5
+#define FOOTPRINT_MIN_SPREAD 1e-6
 #define LUMINANCE vec3(0.2126, 0.7152, 0.0722)
 const float SH_K[45] = float[45](2.820947918e-1, 4.886025119e-1, 3.454941495e-1, 6.307831305e-1, 2.575161347e-1, 1.287580673e-1, 7.463526652e-1, 2.154534561e-1, 6.813236510e-2, 2.781492158e-2, 8.462843753e-1, 1.892349392e-1, 4.460310290e-2, 1.192068068e-2, 4.214597071e-3, 9.356025796e-1, 1.708168792e-1, 3.228135587e-2, 6.589404174e-3, 1.553137459e-3, 4.911451888e-4, 1.017107236e0, 1.569430538e-1, 2.481487565e-2, 4.135812609e-3, 7.550926198e-4, 1.609862875e-4, 4.647273820e-5, 1.092548431e0, 1.459979252e-1, 1.986780113e-2, 2.809731381e-3, 4.235829432e-4, 7.059715721e-5, 1.384524162e-5, 3.700296471e-6, 1.163106623e0, 1.370734301e-1, 1.638340852e-2, 2.016658182e-3, 2.603494518e-4, 3.610397300e-5, 5.570963980e-6, 1.017114213e-6, 2.542785532e-7);
 #define BRDF_LAMBERT 0u
@@ -118,7 +126,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define MAPPING_ANGULAR 1u
 #define MAPPING_CUBE 2u
 #define MAPPING_DUAL_PARABOLOID 3u
-#define PUSH_ConvertPush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint ss; uint pad; } pc;
+#define PUSH_ConvertPush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint ss; uint nearest; } pc;
 #define PUSH_ProbePush layout(push_constant) uniform Push { uint mode; uint mapping; uint count; uint width; uint height; uint[3] pad; } pc;
 #define PUSH_CopyPush layout(push_constant) uniform Push { uvec2 size; uint[2] pad; } pc;
 #define PUSH_BusyPush layout(push_constant) uniform Push { uint iterations; uint count; uint[2] pad; } pc;
@@ -127,7 +135,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_BrutePush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint texels; float exponent; uint chunk_begin; uint chunk_end; uint src_layers; uint src_level; } pc;
 #define PUSH_ShEvalPush layout(push_constant) uniform Push { uvec2 dst_size; uint dst_mapping; uint lmax; } pc;
 #define PUSH_GBufferPush layout(push_constant) uniform Push { vec4 eye; vec4 forward; vec4 right; vec4 up; uvec2 size; uint ortho; uint count; } pc;
-#define PUSH_ShadePush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint env_mapping; uint count; uint dp_size; float max_lod; uint shadows; uint mc_samples; uint sh_rotation; uint lights; uint light_stride; uint pad; } pc;
+#define PUSH_ShadePush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint env_mapping; uint count; uint dp_size; float max_lod; uint shadows; uint mc_samples; uint sh_rotation; uint lights; uint light_stride; uint footprint; } pc;
 #define PUSH_ShBrdfPush layout(push_constant) uniform Push { uint grid; float p0; float p1; uint offset; uint panel; uint[3] pad; } pc;
 #define PUSH_DfgPush layout(push_constant) uniform Push { uint size; uint correlated; uint offset; uint panel; } pc;
 #define PUSH_PrefilterGgxPush layout(push_constant) uniform Push { uint size; uint src_size; float src_max_lod; float alpha; uint samples; float bias; uint dst_mapping; uint pad; } pc;

@@ -37,6 +37,21 @@ float object_hit(Object ob, vec3 o, vec3 d, out vec3 n) {
     return t;
 }
 
+// The ray through image point px (pixels from the top-left corner) of a camera: eye (w: 1
+// for orthographic), unit forward, right and up scaled by the half extents, image size (twin
+// of math::camera::Camera::ray_at; passes::gbuffer::camera_record writes these).
+void camera_ray(vec4 eye, vec3 forward, vec3 right, vec3 up, vec2 size, vec2 px, out vec3 o,
+                out vec3 d) {
+    vec2 ndc = vec2(2.0 * px.x / size.x - 1.0, 1.0 - 2.0 * px.y / size.y);
+    if (eye.w != 0.0) {
+        o = eye.xyz + ndc.x * right + ndc.y * up;
+        d = forward;
+    } else {
+        o = eye.xyz;
+        d = normalize(forward + ndc.x * right + ndc.y * up);
+    }
+}
+
 // Where a shadow ray starts: off the surface by a margin relative to the scene's scale, so
 // the surface it leaves never shadows itself.
 vec3 shadow_origin(vec3 p, vec3 n) {

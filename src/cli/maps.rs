@@ -152,6 +152,7 @@ pub fn convert(g: &Global, a: &ConvertArgs) -> Result<()> {
         size: a.size,
         orientation: a.orient.orientation(),
         supersample: a.supersample,
+        nearest: false,
     };
     let (dst, timings) = Converter::new(&ctx)?.run(&src, &opts)?;
     let out = dst.download(&ctx)?;

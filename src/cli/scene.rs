@@ -114,6 +114,7 @@ fn demo_maps(cli: &Global, input: &Path, out: &Path, size: u32) -> Result<()> {
             size: n.max(1),
             orientation: Orientation::default(),
             supersample: None,
+            nearest: false,
         };
         let (dst, timings) = conv.run(&src, &opts)?;
         let result = dst.download(&ctx)?;

@@ -135,10 +135,15 @@ impl Camera {
 
     /// The ray through the centre of pixel (i, j): origin and unit direction.
     pub fn ray(&self, i: u32, j: u32) -> (DVec3, DVec3) {
+        self.ray_at(i as f64 + 0.5, j as f64 + 0.5)
+    }
+
+    /// The ray through image point (x, y) in pixels from the top-left corner (supersampling).
+    pub fn ray_at(&self, px: f64, py: f64) -> (DVec3, DVec3) {
         let f = self.frame();
         let (hx, hy) = self.half_extent();
-        let x = 2.0 * (i as f64 + 0.5) / self.width as f64 - 1.0;
-        let y = 1.0 - 2.0 * (j as f64 + 0.5) / self.height as f64;
+        let x = 2.0 * px / self.width as f64 - 1.0;
+        let y = 1.0 - 2.0 * py / self.height as f64;
         let eye = DVec3::from(self.eye);
         match self.projection {
             Projection::Perspective { .. } => (

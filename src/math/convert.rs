@@ -100,9 +100,36 @@ pub fn sample(map: &EnvMap, d: DVec3) -> [f64; 3] {
     }
 }
 
+/// The texel of `map` that `d` falls in (the conversion's `nearest` reconstruction).
+pub fn sample_nearest(map: &EnvMap, d: DVec3) -> [f64; 3] {
+    let c = map.mapping.dir_to_coord(d);
+    let i = ((c.u * map.width as f64).floor() as i64).clamp(0, map.width as i64 - 1);
+    let j = ((c.v * map.height as f64).floor() as i64).clamp(0, map.height as i64 - 1);
+    fetch(map, c.layer, i, j)
+}
+
 /// Converts `map` to `to` at `size` with `ss × ss` samples per output texel, `world_to_file`
 /// orienting the source (see [`super::Orientation::world_to_file`]).
 pub fn convert(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3, ss: u32) -> EnvMap {
+    convert_with(map, to, size, world_to_file, ss, false)
+}
+
+/// [`convert`], each sample reading the source's nearest texel where `nearest` is set.
+pub fn convert_with(
+    map: &EnvMap,
+    to: Mapping,
+    size: u32,
+    world_to_file: DMat3,
+    ss: u32,
+    nearest: bool,
+) -> EnvMap {
+    let read = |d: DVec3| {
+        if nearest {
+            sample_nearest(map, d)
+        } else {
+            sample(map, d)
+        }
+    };
     let (w, h) = to.extent_for_size(size);
     let mut texels = Vec::with_capacity((w * h * to.layers()) as usize);
     for layer in 0..to.layers() {
@@ -121,7 +148,7 @@ pub fn convert(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3, ss: u
                             v: (j as f64 + (b as f64 + 0.5) / ss as f64) / h as f64,
                         };
                         let wt = to.footprint_weight(c);
-                        let l = sample(map, world_to_file * to.coord_to_dir(c));
+                        let l = read(world_to_file * to.coord_to_dir(c));
                         for k in 0..3 {
                             acc[k] += wt * l[k];
                         }
@@ -141,7 +168,7 @@ pub fn convert(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3, ss: u
                         c.u = 0.5 * (s * k + 1.0);
                         c.v = 0.5 * (t * k + 1.0);
                     }
-                    texels.push(sample(map, world_to_file * to.coord_to_dir(c)).map(|x| x as f32));
+                    texels.push(read(world_to_file * to.coord_to_dir(c)).map(|x| x as f32));
                 }
             }
         }

@@ -10,6 +10,7 @@ pub mod envsample;
 pub mod exact;
 pub mod filter;
 pub mod fis;
+pub mod footprint;
 pub mod lights;
 pub mod mapping;
 pub mod mc;

@@ -21,6 +21,10 @@ pub struct ConvertOptions {
     /// Samples per axis per output texel; `None` picks it from the resolutions
     /// ([`Converter::supersampling`]).
     pub supersample: Option<u32>,
+    /// Read the source's nearest texel at each sample instead of filtering bilinearly: the
+    /// output texels are then the means of the source texels under them (a box
+    /// reconstruction), and a bright texel stays within its own footprint.
+    pub nearest: bool,
 }
 
 /// Texels that cover the sphere (those inside the disc for angular and paraboloid maps).
@@ -40,6 +44,7 @@ pub struct Converter {
     /// One pipeline per (source, destination) mapping pair, specialised on both.
     pipelines: [OnceLock<Pipeline>; 16],
     sampler: Sampler,
+    nearest: Sampler,
 }
 
 impl Converter {
@@ -49,6 +54,7 @@ impl Converter {
             ctx: ctx.clone(),
             pipelines: Default::default(),
             sampler: Sampler::linear_clamp(ctx, "convert sampler")?,
+            nearest: Sampler::nearest_clamp(ctx, "convert nearest sampler")?,
         })
     }
 
@@ -103,7 +109,7 @@ impl Converter {
             src_mapping: src.mapping.id(),
             dst_mapping: opts.to.id(),
             ss,
-            pad: 0,
+            nearest: opts.nearest as u32,
         };
         let cube = src.mapping == Mapping::Cube;
         let pipeline = self.pipeline(src.mapping, opts.to)?;
@@ -119,7 +125,15 @@ impl Converter {
                 &[
                     (
                         binding::CONVERT_SRC,
-                        Bind::Sampled(&src.image, &self.sampler, cube),
+                        Bind::Sampled(
+                            &src.image,
+                            if opts.nearest {
+                                &self.nearest
+                            } else {
+                                &self.sampler
+                            },
+                            cube,
+                        ),
                     ),
                     (binding::CONVERT_DST, Bind::Storage(&dst.image)),
                 ],

@@ -107,6 +107,25 @@ pub struct GBuffer {
     pub objects: Buffer,
     /// How many.
     pub count: u32,
+    /// The camera whose rays made it, where known: footprint lookups cast sub-pixel rays.
+    pub camera: Option<Camera>,
+}
+
+/// The camera as `glsl/include/scene.glsl`'s `camera_ray` reads it: eye (w: 1 for
+/// orthographic), unit forward, right and up scaled by the image plane's half extents, and
+/// the image size.
+pub fn camera_record(camera: &Camera) -> [[f32; 4]; 5] {
+    let f = camera.frame();
+    let (hx, hy) = camera.half_extent();
+    let v4 = |v: glam::DVec3, w: f32| [v.x as f32, v.y as f32, v.z as f32, w];
+    let ortho = matches!(camera.projection, Projection::Orthographic { .. });
+    [
+        v4(glam::DVec3::from(camera.eye), ortho as u32 as f32),
+        v4(f.forward, 0.0),
+        v4(f.right * hx, 0.0),
+        v4(f.up * hy, 0.0),
+        [camera.width as f32, camera.height as f32, 0.0, 0.0],
+    ]
 }
 
 /// A colour target: a one-layer image stored as a [`GpuEnvMap`] (its mapping field is
@@ -146,6 +165,7 @@ impl GBuffer {
             view: target(ctx, "gbuffer view", w, h)?,
             objects: Buffer::storage(ctx, "scene objects", objects)?,
             count: objects.len() as u32,
+            camera: None,
         })
     }
 }

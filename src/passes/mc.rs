@@ -64,6 +64,7 @@ impl McEnv {
                 size: width,
                 orientation: *orientation,
                 supersample: None,
+                nearest: false,
             },
         )?;
         Ok((

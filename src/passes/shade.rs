@@ -38,6 +38,30 @@ pub struct ShadeInputs<'a> {
     /// Extracted light texels, whose irradiance SH objects marked for them add to their
     /// residual's SH (see [`crate::math::lights`]).
     pub lights: Option<&'a GpuLights>,
+    /// Which lookups are filtered over the pixel's footprint (they read `dp`).
+    pub footprint: Footprint,
+}
+
+/// Which lookups read the dual-paraboloid chain over the pixel's footprint
+/// ([`crate::math::footprint`]) instead of one texel of the environment.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Footprint {
+    /// Mirror (`lookup`) materials.
+    pub mirror: bool,
+    /// The background.
+    pub background: bool,
+    /// The chain holds the residual: footprint lookups add the light texels they cover.
+    pub lights: bool,
+}
+
+impl Footprint {
+    /// The push constant's flags.
+    pub fn flags(self) -> u32 {
+        use crate::abi::footprint::{BACKGROUND, LIGHTS, MIRROR};
+        (self.mirror as u32 * MIRROR)
+            | (self.background as u32 * BACKGROUND)
+            | (self.lights as u32 * LIGHTS)
+    }
 }
 
 /// The shading pass.
@@ -117,7 +141,20 @@ impl Shade {
             sh_rotation: inputs.sh_rotation.id(),
             lights: inputs.lights.map_or(0, |l| l.count()),
             light_stride: inputs.lights.map_or(0, |l| l.stride()),
-            pad: 0,
+            footprint: inputs.footprint.flags(),
+        };
+        let camera = match (inputs.footprint.flags(), gbuf.camera) {
+            (0, _) => None,
+            (_, Some(c)) => Some(Buffer::storage(
+                &self.ctx,
+                "shade camera",
+                &super::gbuffer::camera_record(&c),
+            )?),
+            (_, None) => {
+                return Err(crate::Error::Invalid(
+                    "footprint lookups need the G-buffer's camera (GBuffer::camera)".into(),
+                ))
+            }
         };
         rec.span("shade", |rec| {
             rec.draw_fullscreen(
@@ -173,12 +210,19 @@ impl Shade {
                         binding::SHADE_LIGHTS,
                         Bind::Buffer(inputs.lights.map_or(&self.dummy_buffer, |l| l.buffer())),
                     ),
+                    (
+                        binding::SHADE_CAMERA,
+                        Bind::Buffer(camera.as_ref().unwrap_or(&self.dummy_buffer)),
+                    ),
                 ],
                 &push,
                 &[&frame.image],
             )
         })?;
         if let Some(c) = coeffs {
+            rec.keep(c);
+        }
+        if let Some(c) = camera {
             rec.keep(c);
         }
         Ok(())

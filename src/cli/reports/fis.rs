@@ -129,6 +129,7 @@ pub fn run(
                 size: default_dp_size(map),
                 orientation: Orientation::default(),
                 supersample: None,
+                nearest: false,
             },
         )?;
         mip.run(&dp)?;
@@ -190,6 +191,7 @@ pub fn run(
                             split: None,
                             shadows: false,
                             lights: None,
+                            footprint: Default::default(),
                         };
                         // The faster of two draws (the first may pay for warming caches).
                         let (_, t1) = shade.run(&g, &inputs)?;

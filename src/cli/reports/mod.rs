@@ -261,6 +261,7 @@ fn bench_convert(cli: &Global, sizes: &[u32], reps: usize) -> Result<()> {
                 size,
                 orientation: Orientation::default(),
                 supersample,
+                nearest: false,
             };
             let (ow, oh) = to.extent_for_size(size);
             let ss = supersample.unwrap_or_else(|| {

@@ -1,0 +1,285 @@
+//! Footprint-filtered lookups (issue #10, item 3), the float64 twin of `glsl/shade.frag`'s
+//! `footprint_lookup` and `footprint_lights`.
+//!
+//! A pixel of a mirror (or of the background) sees not one direction but the set its area
+//! maps to. Its footprint is the parallelogram spanned by the directional differentials
+//! `a` = ∂r/∂x and `b` = ∂r/∂y about the looked-up direction r, taken from the G-buffer's
+//! neighbours ([`spread`]: central differences where both neighbours see the same object,
+//! one-sided at its edge). The pixel's mean radiance is then read from the dual-paraboloid
+//! MIP chain by a grid of taps over the pixel ([`lookup`]), each a sub-pixel camera ray
+//! reflected off the object exactly ([`camera_tap`], so a pixel on a silhouette mixes the
+//! mirror and the background as its area does):
+//! [`MIN_TAPS`](crate::abi::footprint::MIN_TAPS) across the minor axis and as many at that
+//! spacing along the major one, up to [`MAX_TAPS`](crate::abi::footprint::MAX_TAPS), each
+//! trilinear at the lod whose texel is the taps' spacing.
+//!
+//! With light texels extracted the chain holds the residual, and each light texel adds its
+//! excess radiance times the share of the pixel it covers ([`light_overlap`]): the texel,
+//! a square of side ρ = √Ω in the tangent plane, mapped to pixel coordinates by the inverse
+//! of the footprint's Jacobian and intersected with the pixel's square.
+
+use super::brdf::Frame;
+use super::camera::{trace, Camera, Shape};
+use super::fis;
+use super::lights::PreparedLight;
+use super::mip::{texel_solid_angle, Level};
+use crate::abi::footprint::{LOD_BIAS, MAX_TAPS, MIN_SPREAD, MIN_TAPS};
+use glam::DVec3;
+
+/// The differential of the looked-up direction along one image axis at a pixel looking up
+/// `c`: half the difference of its two neighbours' directions where both see what the pixel
+/// sees, else the one-sided difference, else zero; its component along `c` removed.
+pub fn spread(c: DVec3, minus: Option<DVec3>, plus: Option<DVec3>) -> DVec3 {
+    let d = match (minus, plus) {
+        (Some(m), Some(p)) => 0.5 * (p - m),
+        (Some(m), None) => c - m,
+        (None, Some(p)) => p - c,
+        (None, None) => DVec3::ZERO,
+    };
+    d - c * c.dot(d)
+}
+
+/// What pixel (i, j) of `cam` looks up: the shape its centre ray hits (`None`: the
+/// background) and the direction, reflected about the normal or the ray's own; `None` outside
+/// the image.
+pub fn looked_up(cam: &Camera, shapes: &[Shape], i: i64, j: i64) -> Option<(Option<usize>, DVec3)> {
+    if i < 0 || j < 0 || i >= cam.width as i64 || j >= cam.height as i64 {
+        return None;
+    }
+    let (o, d) = cam.ray(i as u32, j as u32);
+    Some(match trace(shapes, o, d) {
+        Some(h) => (Some(h.index), d - 2.0 * h.normal.dot(d) * h.normal),
+        None => (None, d),
+    })
+}
+
+/// Pixel (i, j)'s footprint as `shade.frag` takes it from the G-buffer: what it hits, the
+/// direction r it looks up, and [`spread`] along x and y from the neighbours that hit the same.
+pub fn pixel_footprint(
+    cam: &Camera,
+    shapes: &[Shape],
+    i: u32,
+    j: u32,
+) -> (Option<usize>, DVec3, DVec3, DVec3) {
+    let (i, j) = (i as i64, j as i64);
+    let (what, r) = looked_up(cam, shapes, i, j).unwrap_or((None, DVec3::Z));
+    let same = |i, j| {
+        looked_up(cam, shapes, i, j)
+            .filter(|(w, _)| *w == what)
+            .map(|(_, d)| d)
+    };
+    let a = spread(r, same(i - 1, j), same(i + 1, j));
+    let b = spread(r, same(i, j - 1), same(i, j + 1));
+    (what, r, a, b)
+}
+
+/// Taps along `a` and `b`: the tap spacing is the footprint's minor axis over [`MIN_TAPS`],
+/// or its major axis over [`MAX_TAPS`] where that is longer.
+pub fn taps(la: f64, lb: f64) -> (u32, u32) {
+    let s = (la.max(lb) / MAX_TAPS as f64).max(la.min(lb) / MIN_TAPS as f64);
+    let n = |l: f64| {
+        if s > 0.0 {
+            // 1e-3 keeps a ratio of exactly k from rounding up to k + 1 in float32.
+            ((l / s - 1e-3).ceil() as u32).clamp(1, MAX_TAPS)
+        } else {
+            1
+        }
+    };
+    (n(la), n(lb))
+}
+
+/// The mean radiance over the footprint of `r` (unit) spanned by `a` and `b`, read from the
+/// premultiplied dual-paraboloid `chain` (level 0 `chain[0].size` a side): a grid of taps,
+/// `tap(fa, fb)` giving the direction at pixel offset (fa, fb) ∈ [−½, ½]² or `None` where the
+/// tap is not the pixel's to filter; each read at the lod whose texel is the taps' spacing.
+/// With no tap left, `r` alone.
+pub fn lookup(
+    chain: &[Level],
+    r: DVec3,
+    a: DVec3,
+    b: DVec3,
+    tap: impl Fn(f64, f64) -> Option<DVec3>,
+) -> [f64; 3] {
+    let size = chain[0].size;
+    let max_lod = (chain.len() - 1) as f64;
+    let (la, lb) = (a.length(), b.length());
+    let (na, nb) = taps(la, lb);
+    let spacing = (la / na as f64).max(lb / nb as f64).max(MIN_SPREAD);
+    let read = |d: DVec3| {
+        let lod = 0.5 * (spacing * spacing / texel_solid_angle(d, size)).log2() + LOD_BIAS;
+        fis::lookup(chain, d, lod.clamp(0.0, max_lod))
+    };
+    let mut acc = [0.0; 3];
+    let mut n = 0;
+    for j in 0..nb {
+        for i in 0..na {
+            let fa = (i as f64 + 0.5) / na as f64 - 0.5;
+            let fb = (j as f64 + 0.5) / nb as f64 - 0.5;
+            let Some(d) = tap(fa, fb) else {
+                continue;
+            };
+            for (s, x) in acc.iter_mut().zip(read(d)) {
+                *s += x;
+            }
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return read(r);
+    }
+    acc.map(|s| s / n as f64)
+}
+
+/// The tap of pixel (i, j) at offset (fa, fb) as `shade.frag` casts it: the ray through that
+/// image point, reflected off the shape `what` where it meets that shape first, itself where
+/// it meets nothing or `what` is the background (`None`), and no tap where it meets another.
+pub fn camera_tap(
+    cam: &Camera,
+    shapes: &[Shape],
+    what: Option<usize>,
+    i: u32,
+    j: u32,
+    fa: f64,
+    fb: f64,
+) -> Option<DVec3> {
+    let (o, d) = cam.ray_at(i as f64 + 0.5 + fa, j as f64 + 0.5 + fb);
+    if what.is_none() {
+        return Some(d);
+    }
+    match trace(shapes, o, d) {
+        None => Some(d),
+        Some(h) if Some(h.index) == what => Some(d - 2.0 * h.normal.dot(d) * h.normal),
+        Some(_) => None,
+    }
+}
+
+/// Pixel (i, j)'s footprint-filtered radiance, as `shade.frag` computes it for a mirror (of
+/// albedo 1) or the background: [`lookup`] with [`camera_tap`]s, plus [`light_overlap`] of
+/// `lights` where the chain holds the residual.
+pub fn pixel(
+    chain: &[Level],
+    cam: &Camera,
+    shapes: &[Shape],
+    lights: &[PreparedLight],
+    i: u32,
+    j: u32,
+) -> [f64; 3] {
+    let (what, r, a, b) = pixel_footprint(cam, shapes, i, j);
+    let mut l = lookup(chain, r, a, b, |fa, fb| {
+        camera_tap(cam, shapes, what, i, j, fa, fb)
+    });
+    let e = light_overlap(lights, r, a, b);
+    for (x, y) in l.iter_mut().zip(e) {
+        *x += y;
+    }
+    l
+}
+
+/// Length of [s − h, s + h] ∩ [−½, ½].
+fn overlap(s: f64, h: f64) -> f64 {
+    ((s + h).min(0.5) - (s - h).max(-0.5)).max(0.0)
+}
+
+/// Σ over `lights` of the excess radiance times the share of the pixel (footprint `a`, `b`
+/// about `r`) the texel covers. A footprint of area below [`MIN_SPREAD`]² is a point, which
+/// a texel covers wholly or not at all.
+pub fn light_overlap(lights: &[PreparedLight], r: DVec3, a: DVec3, b: DVec3) -> [f64; 3] {
+    let f = Frame::new(r);
+    let (j00, j01, j10, j11) = (a.dot(f.t), b.dot(f.t), a.dot(f.b), b.dot(f.b));
+    let det = j00 * j11 - j01 * j10;
+    let point = det.abs() < MIN_SPREAD * MIN_SPREAD;
+    // Rows of J⁻¹ and their lengths.
+    let (i00, i01, i10, i11) = (j11 / det, -j01 / det, -j10 / det, j00 / det);
+    let (n0, n1) = (i00.hypot(i01), i10.hypot(i11));
+    let mut sum = [0.0; 3];
+    for t in lights {
+        let c = t.dir.dot(r);
+        if c <= 0.0 {
+            continue;
+        }
+        // Gnomonic projection of the texel's centre onto the tangent plane at r.
+        let e = t.dir / c - r;
+        let (ex, ey) = (e.dot(f.t), e.dot(f.b));
+        let share = if point {
+            let h = 0.5 * t.rho;
+            if ex.abs() <= h && ey.abs() <= h {
+                1.0
+            } else {
+                0.0
+            }
+        } else {
+            let (s, q) = (i00 * ex + i01 * ey, i10 * ex + i11 * ey);
+            // Half sides in pixels, scaled so that the texel's area is Ω/|det J|.
+            let k = 0.5 * t.rho / (n0 * n1 * det.abs()).sqrt();
+            overlap(s, k * n0) * overlap(q, k * n1)
+        };
+        for (x, l) in sum.iter_mut().zip(t.radiance) {
+            *x += share * l;
+        }
+    }
+    sum
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn taps_follow_the_major_axis() {
+        let (lo, hi) = (MIN_TAPS, MAX_TAPS);
+        assert_eq!(taps(0.0, 0.0), (1, 1));
+        assert_eq!(taps(1.0, 1.0), (lo, lo));
+        assert_eq!(taps(2.0, 1.0), ((2 * lo).min(hi), lo.min(hi / 2)));
+        assert_eq!(taps(1e3, 1.0), (hi, 1));
+        assert_eq!(taps(16.0, 0.0), (hi, 1));
+    }
+
+    /// A light texel well inside a large footprint gives Ω/|a×b| of its excess (its share
+    /// of the pixel's solid angle); a texel around a point footprint gives all of it; one
+    /// beyond the footprint nothing; and a texel straddling the footprint's edge about half.
+    #[test]
+    fn light_overlap_is_the_covered_share() {
+        let r = DVec3::Z;
+        let f = Frame::new(r);
+        let (a, b) = (0.1 * f.t, 0.05 * f.b);
+        let light = |dir: DVec3, rho: f64| PreparedLight {
+            dir: dir.normalize(),
+            omega: rho * rho,
+            radiance: [1.0, 2.0, 3.0],
+            rho,
+            nodes: Vec::new(),
+        };
+        let inside = light(r + 0.01 * f.t, 0.01);
+        let s = light_overlap(std::slice::from_ref(&inside), r, a, b);
+        let want = 1e-4 / (0.1 * 0.05);
+        assert!((s[0] - want).abs() < 1e-3 * want, "{s:?} {want}");
+        assert!((s[2] - 3.0 * want).abs() < 3e-3 * want);
+        let z = DVec3::ZERO;
+        assert_eq!(light_overlap(&[light(r, 0.01)], r, z, z), [1.0, 2.0, 3.0]);
+        assert_eq!(
+            light_overlap(&[light(r + 0.02 * f.t, 0.01)], r, z, z),
+            [0.0; 3]
+        );
+        assert_eq!(
+            light_overlap(&[light(r + 0.2 * f.t, 0.01)], r, a, b),
+            [0.0; 3]
+        );
+        let edge = light_overlap(&[light(r + 0.05 * f.t, 0.01)], r, a, b);
+        assert!((edge[0] - 0.5 * want).abs() < 0.02 * want, "{edge:?}");
+        assert_eq!(light_overlap(&[light(-r, 0.01)], r, a, b), [0.0; 3]);
+    }
+
+    /// `spread` takes central differences inside, one-sided at an edge, and keeps only the
+    /// part tangent to the looked-up direction.
+    #[test]
+    fn spread_is_tangent() {
+        let c = DVec3::Z;
+        let m = DVec3::new(-0.1, 0.0, 1.0).normalize();
+        let p = DVec3::new(0.1, 0.0, 1.0).normalize();
+        let s = spread(c, Some(m), Some(p));
+        assert!((s.x - p.x).abs() < 1e-12 && s.z.abs() < 1e-12);
+        let s = spread(c, None, Some(p));
+        assert!((s.x - p.x).abs() < 1e-12 && s.z.abs() < 1e-12);
+        assert_eq!(spread(c, None, None), DVec3::ZERO);
+    }
+}
