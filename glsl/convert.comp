@@ -4,7 +4,7 @@
 // of aliasing (see footprint_weight for the angular and paraboloid rims). Built twice: with SRC_CUBE
 // the source is a cube view (hardware filtering crosses faces), otherwise a 2D array read with
 // masked bilinear filtering that never touches texels outside the source's domain. With
-// `nearest` each sample reads the texel it falls in (the cube view through a nearest sampler).
+// `nearest` each sample reads the texel it falls in.
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
 
@@ -38,6 +38,14 @@ vec3 sample_src(vec3 d) {
     vec3 f = vec3(dot(pc.world_to_file[0].xyz, d), dot(pc.world_to_file[1].xyz, d),
                   dot(pc.world_to_file[2].xyz, d));
 #ifdef SRC_CUBE
+    if (pc.nearest != 0u) {
+        // The texel f falls in, read at its centre (where bilinear weights are 1, 0, 0, 0),
+        // by the same face and texel rule as the float64 twin.
+        Coord c = dir_to_coord(MAPPING_CUBE, f);
+        vec2 size = vec2(pc.src_size);
+        c.uv = (min(floor(c.uv * size), size - 1.0) + 0.5) / size;
+        f = coord_to_dir(MAPPING_CUBE, c);
+    }
     return textureLod(src_cube, f, 0.0).rgb;
 #else
     Coord c = dir_to_coord(SRC_MAPPING, f);

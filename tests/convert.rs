@@ -483,3 +483,86 @@ fn copy_pass_is_exact() {
     }
     common::finish(ctx);
 }
+
+/// The nearest-texel conversion (`ConvertOptions::nearest`, what footprint-filtered mirrors'
+/// chain is built from) against its float64 twin (`math::convert::convert_with`), on maps
+/// whose every texel differs from its neighbours (a hash), so any sample reading the wrong
+/// texel shows: lat-long, angular and cube sources to a dual paraboloid. Texels with a sample
+/// within 1e-5 texel of a source texel's edge are left out (ties: the paraboloid's diagonals
+/// meet the cube's edges exactly, where float32 and float64 may pick either side); every other
+/// texel must agree within 1e-5 relative (float32 sums of 9 samples).
+#[test]
+fn nearest_conversion_matches_its_float64_twin() {
+    let ctx = common::ctx();
+    {
+        let conv = Converter::new(&ctx).unwrap();
+        let hash = |layer: u32, i: u32, j: u32| {
+            let h = (layer.wrapping_mul(73856093)
+                ^ i.wrapping_mul(19349663)
+                ^ j.wrapping_mul(83492791))
+            .wrapping_mul(2654435761);
+            0.1 + (h >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let (size, ss) = (29, 3);
+        let (dw, dh) = Mapping::DualParaboloid.extent_for_size(size);
+        for (mapping, w, h) in [
+            (Mapping::LatLong, 58, 29),
+            (Mapping::Angular, 45, 45),
+            (Mapping::Cube, 13, 13),
+        ] {
+            let texels = (0..mapping.layers())
+                .flat_map(|l| (0..h).flat_map(move |j| (0..w).map(move |i| (l, i, j))))
+                .map(|(l, i, j)| {
+                    let v = hash(l, i, j);
+                    [v, 0.5 * v, 1.0 - 0.5 * v]
+                })
+                .collect();
+            let src = EnvMap::new(mapping, w, h, texels);
+            let g = GpuEnvMap::upload(&ctx, &src).unwrap();
+            let opts = ConvertOptions {
+                to: Mapping::DualParaboloid,
+                size,
+                orientation: Orientation::default(),
+                supersample: Some(ss),
+                nearest: true,
+            };
+            let (out, _) = conv.run(&g, &opts).unwrap();
+            let out = out.download(&ctx).unwrap();
+            let want = envlight::math::convert::convert_with(
+                &src,
+                Mapping::DualParaboloid,
+                size,
+                Orientation::default().world_to_file(),
+                ss,
+                true,
+            );
+            let tie = |k: usize| {
+                let (layer, i, j) = (k as u32 / (dw * dh), k as u32 % dw, (k as u32 / dw) % dh);
+                (0..ss * ss).any(|s| {
+                    let c = envlight::math::Coord {
+                        layer,
+                        u: (i as f64 + ((s % ss) as f64 + 0.5) / ss as f64) / dw as f64,
+                        v: (j as f64 + ((s / ss) as f64 + 0.5) / ss as f64) / dh as f64,
+                    };
+                    let e = mapping.dir_to_coord(Mapping::DualParaboloid.coord_to_dir(c));
+                    let (x, y) = (e.u * w as f64, e.v * h as f64);
+                    (x - x.round()).abs() < 1e-5 || (y - y.round()).abs() < 1e-5
+                })
+            };
+            let (mut worst, mut ties) = (0.0f32, 0);
+            for (k, (a, b)) in out.texels.iter().zip(&want.texels).enumerate() {
+                if tie(k) {
+                    ties += 1;
+                    continue;
+                }
+                for c in 0..3 {
+                    worst = worst.max((a[c] - b[c]).abs() / b[c].abs().max(1e-3));
+                }
+            }
+            eprintln!("{mapping:?}: worst {worst:.1e}, {ties} texels at ties left out");
+            assert!(ties * 4 < out.texels.len(), "{mapping:?}: {ties} ties");
+            assert!(worst < 1e-5, "{mapping:?}: worst {worst}");
+        }
+    }
+    common::finish(ctx);
+}

@@ -422,37 +422,15 @@ impl Sampler {
         Sampler::clamped(ctx, name, vk::SamplerMipmapMode::LINEAR, vk::LOD_CLAMP_NONE)
     }
 
-    /// A nearest-texel sampler clamping to the edge, level 0 only (cube views still pick
-    /// their face by the direction).
-    pub fn nearest_clamp(ctx: &Context, name: &str) -> Result<Sampler> {
-        Sampler::with_filter(
-            ctx,
-            name,
-            vk::Filter::NEAREST,
-            vk::SamplerMipmapMode::NEAREST,
-            0.0,
-        )
-    }
-
     fn clamped(
         ctx: &Context,
         name: &str,
         mipmap: vk::SamplerMipmapMode,
         max_lod: f32,
     ) -> Result<Sampler> {
-        Sampler::with_filter(ctx, name, vk::Filter::LINEAR, mipmap, max_lod)
-    }
-
-    fn with_filter(
-        ctx: &Context,
-        name: &str,
-        filter: vk::Filter,
-        mipmap: vk::SamplerMipmapMode,
-        max_lod: f32,
-    ) -> Result<Sampler> {
         let info = vk::SamplerCreateInfo::default()
-            .mag_filter(filter)
-            .min_filter(filter)
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
             .mipmap_mode(mipmap)
             .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)

@@ -44,7 +44,6 @@ pub struct Converter {
     /// One pipeline per (source, destination) mapping pair, specialised on both.
     pipelines: [OnceLock<Pipeline>; 16],
     sampler: Sampler,
-    nearest: Sampler,
 }
 
 impl Converter {
@@ -54,7 +53,6 @@ impl Converter {
             ctx: ctx.clone(),
             pipelines: Default::default(),
             sampler: Sampler::linear_clamp(ctx, "convert sampler")?,
-            nearest: Sampler::nearest_clamp(ctx, "convert nearest sampler")?,
         })
     }
 
@@ -125,15 +123,7 @@ impl Converter {
                 &[
                     (
                         binding::CONVERT_SRC,
-                        Bind::Sampled(
-                            &src.image,
-                            if opts.nearest {
-                                &self.nearest
-                            } else {
-                                &self.sampler
-                            },
-                            cube,
-                        ),
+                        Bind::Sampled(&src.image, &self.sampler, cube),
                     ),
                     (binding::CONVERT_DST, Bind::Storage(&dst.image)),
                 ],
