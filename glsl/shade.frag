@@ -127,8 +127,8 @@ vec3 footprint_lookup(ivec2 q, float index, vec3 r, vec3 a, vec3 b) {
     float s = max(max(la, lb) / float(FOOTPRINT_MAX_TAPS), min(la, lb) / float(FOOTPRINT_MIN_TAPS));
     uint na = 1u, nb = 1u;
     if (s > 0.0) {
-        na = clamp(uint(max(ceil(la / s - 1e-3), 0.0)), 1u, FOOTPRINT_MAX_TAPS);
-        nb = clamp(uint(max(ceil(lb / s - 1e-3), 0.0)), 1u, FOOTPRINT_MAX_TAPS);
+        na = clamp(uint(max(ceil(la / s - FOOTPRINT_TAP_SLACK), 0.0)), 1u, FOOTPRINT_MAX_TAPS);
+        nb = clamp(uint(max(ceil(lb / s - FOOTPRINT_TAP_SLACK), 0.0)), 1u, FOOTPRINT_MAX_TAPS);
     }
     float spacing = max(max(la / float(na), lb / float(nb)), FOOTPRINT_MIN_SPREAD);
     vec3 acc = vec3(0.0);
@@ -163,15 +163,11 @@ vec3 footprint_lights(vec3 r, vec3 a, vec3 b) {
     float j00 = dot(a, t), j01 = dot(b, t), j10 = dot(a, bt), j11 = dot(b, bt);
     float det = j00 * j11 - j01 * j10;
     bool point = abs(det) < FOOTPRINT_MIN_SPREAD * FOOTPRINT_MIN_SPREAD;
-    float i00 = 0.0, i01 = 0.0, i10 = 0.0, i11 = 0.0, k = 0.0;
-    if (!point) {
-        i00 = j11 / det;
-        i01 = -j01 / det;
-        i10 = -j10 / det;
-        i11 = j00 / det;
-        k = 0.5 / sqrt(length(vec2(i00, i01)) * length(vec2(i10, i11)) * abs(det));
-    }
+    // Rows of J^-1 and their lengths; k scales half sides so a texel's area is Ω/|det J|.
+    float inv = point ? 0.0 : 1.0 / det;
+    float i00 = j11 * inv, i01 = -j01 * inv, i10 = -j10 * inv, i11 = j00 * inv;
     float n0 = length(vec2(i00, i01)), n1 = length(vec2(i10, i11));
+    float k = point ? 0.0 : 0.5 / sqrt(n0 * n1 * abs(det));
     vec3 sum = vec3(0.0);
     for (uint i = 0u; i < pc.lights; i++) {
         uint at = i * pc.light_stride;

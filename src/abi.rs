@@ -365,6 +365,9 @@ pub mod footprint {
     /// finer offsets the tent a trilinear read adds to the box (measured in
     /// docs/BENCHMARKS.md: studio_small 4.7% -> 3.9% before the other refinements).
     pub const LOD_BIAS: f64 = -0.5;
+    /// Taken off a footprint's length over the tap spacing before rounding up, so that a
+    /// ratio of exactly k gives k taps in float32 as in float64, not k + 1.
+    pub const TAP_SLACK: f64 = 1e-3;
     /// Shortest differential kept (radians per pixel): a footprint no wider is a point.
     pub const MIN_SPREAD: f64 = 1e-6;
     /// Push flag: mirror lookups are footprint-filtered.
@@ -984,6 +987,7 @@ pub fn generated_header() -> String {
         ("GGX_ALPHA_MIN", brdf::GGX_ALPHA_MIN),
         ("FOOTPRINT_LOD_BIAS", footprint::LOD_BIAS),
         ("FOOTPRINT_MIN_SPREAD", footprint::MIN_SPREAD),
+        ("FOOTPRINT_TAP_SLACK", footprint::TAP_SLACK),
     ];
     for (name, v) in floats {
         let _ = writeln!(s, "#define {name} {}", f(v));

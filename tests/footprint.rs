@@ -12,14 +12,6 @@ use envlight::scene::{LightsMode, LookupFilter, Scene, Technique};
 use envlight::EnvMap;
 use glam::DVec3;
 
-/// The texel of `env` that direction `d` falls in (the point lookup).
-fn nearest(env: &EnvMap, d: DVec3) -> [f64; 3] {
-    let c = env.coord(d);
-    let i = ((c.u.rem_euclid(1.0) * env.width as f64) as u32).min(env.width - 1);
-    let j = ((c.v.clamp(0.0, 1.0) * env.height as f64) as u32).min(env.height - 1);
-    env.texel(c.layer, i, j).map(f64::from)
-}
-
 /// The mirror scene rendered with `n`×`n` point lookups per pixel, averaged: the pixel-area
 /// mean the footprint filter estimates (subsamples that miss the shapes see the background).
 fn supersampled(env: &EnvMap, cam: &Camera, shapes: &[Shape], n: u32) -> EnvMap {
@@ -35,7 +27,7 @@ fn supersampled(env: &EnvMap, cam: &Camera, shapes: &[Shape], n: u32) -> EnvMap 
                     Some(h) => d - 2.0 * h.normal.dot(d) * h.normal,
                     None => d,
                 };
-                let l = nearest(env, dir);
+                let l = envlight::math::convert::sample_nearest(env, dir);
                 for c in 0..3 {
                     acc[c] += l[c];
                 }

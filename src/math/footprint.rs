@@ -23,7 +23,7 @@ use super::camera::{trace, Camera, Shape};
 use super::fis;
 use super::lights::PreparedLight;
 use super::mip::{texel_solid_angle, Level};
-use crate::abi::footprint::{LOD_BIAS, MAX_TAPS, MIN_SPREAD, MIN_TAPS};
+use crate::abi::footprint::{LOD_BIAS, MAX_TAPS, MIN_SPREAD, MIN_TAPS, TAP_SLACK};
 use glam::DVec3;
 
 /// The differential of the looked-up direction along one image axis at a pixel looking up
@@ -79,8 +79,7 @@ pub fn taps(la: f64, lb: f64) -> (u32, u32) {
     let s = (la.max(lb) / MAX_TAPS as f64).max(la.min(lb) / MIN_TAPS as f64);
     let n = |l: f64| {
         if s > 0.0 {
-            // 1e-3 keeps a ratio of exactly k from rounding up to k + 1 in float32.
-            ((l / s - 1e-3).ceil() as u32).clamp(1, MAX_TAPS)
+            ((l / s - TAP_SLACK).ceil() as u32).clamp(1, MAX_TAPS)
         } else {
             1
         }
@@ -188,9 +187,15 @@ pub fn light_overlap(lights: &[PreparedLight], r: DVec3, a: DVec3, b: DVec3) -> 
     let (j00, j01, j10, j11) = (a.dot(f.t), b.dot(f.t), a.dot(f.b), b.dot(f.b));
     let det = j00 * j11 - j01 * j10;
     let point = det.abs() < MIN_SPREAD * MIN_SPREAD;
-    // Rows of J⁻¹ and their lengths.
-    let (i00, i01, i10, i11) = (j11 / det, -j01 / det, -j10 / det, j00 / det);
+    // Rows of J⁻¹ and their lengths; k scales half sides so a texel's area is Ω/|det J|.
+    let inv = if point { 0.0 } else { 1.0 / det };
+    let (i00, i01, i10, i11) = (j11 * inv, -j01 * inv, -j10 * inv, j00 * inv);
     let (n0, n1) = (i00.hypot(i01), i10.hypot(i11));
+    let k = if point {
+        0.0
+    } else {
+        0.5 / (n0 * n1 * det.abs()).sqrt()
+    };
     let mut sum = [0.0; 3];
     for t in lights {
         let c = t.dir.dot(r);
@@ -209,9 +214,8 @@ pub fn light_overlap(lights: &[PreparedLight], r: DVec3, a: DVec3, b: DVec3) -> 
             }
         } else {
             let (s, q) = (i00 * ex + i01 * ey, i10 * ex + i11 * ey);
-            // Half sides in pixels, scaled so that the texel's area is Ω/|det J|.
-            let k = 0.5 * t.rho / (n0 * n1 * det.abs()).sqrt();
-            overlap(s, k * n0) * overlap(q, k * n1)
+            let h = k * t.rho;
+            overlap(s, h * n0) * overlap(q, h * n1)
         };
         for (x, l) in sum.iter_mut().zip(t.radiance) {
             *x += share * l;
