@@ -370,6 +370,12 @@ impl Renderer {
         let sh_lights = extracting
             && sh_pass.is_some()
             && has(&|o| matches!(o.material.technique(), Technique::Sh { .. }));
+        // Prefiltered irradiance maps too: the residual's map plus the lights' irradiance.
+        let diffuse_prefiltered = |o: &SceneObject| {
+            matches!(o.material.technique(), Technique::Prefiltered { .. })
+                && matches!(o.material.kind, Brdf::Lambert)
+        };
+        let pre_lights = extracting && brute.is_some() && has(&diffuse_prefiltered);
         // Footprint lookups read the chain too, and add the light texels they cover.
         let footprint_reads = scene.environment.filter != LookupFilter::Point;
         let dp_lights = extracting
@@ -383,12 +389,13 @@ impl Renderer {
             .filter(|o| on_chain(o))
             .filter_map(|o| lobe_scale(&o.material.kind))
             .fold(1.0, f64::min);
-        let extraction = (sh_lights || dp_lights)
+        let extraction = (sh_lights || pre_lights || dp_lights)
             .then(|| extract(env, &scene.environment.extract_options()))
             .filter(|e| !e.lights.is_empty());
         let dp_lights = dp_lights && extraction.as_ref().is_some_and(|e| resolves(e, finest));
         // Nothing reads the lights when only the chain asked and its lobes are too narrow.
-        let extraction = extraction.filter(|_| sh_lights || dp_lights);
+        let extraction = extraction.filter(|_| sh_lights || pre_lights || dp_lights);
+        let pre_lights = pre_lights && extraction.is_some();
         let finest = if dp_lights { finest } else { 1.0 };
         let residual = match &extraction {
             Some(ex) => {
@@ -430,13 +437,13 @@ impl Renderer {
             None => None,
         };
 
-        // Prefiltered maps, one per distinct (kernel, size), concatenated into one buffer on
+        // Prefiltered maps, one per distinct (kernel, size, of the residual or not), concatenated into one buffer on
         // the GPU; each object's record holds its map's offset.
         let mut pre_offsets = vec![0u32; scene.objects.len()];
-        let mut pre_maps: Vec<(Kernel, GpuEnvMap, u32)> = Vec::new();
+        let mut pre_maps: Vec<(Kernel, GpuEnvMap, u32, bool)> = Vec::new();
         let mut pre_texels = 0u32;
         if brute.is_some() {
-            let mut made: Vec<(u64, u32, u32)> = Vec::new();
+            let mut made: Vec<(u64, u32, bool, u32)> = Vec::new();
             for (k, o) in scene.objects.iter().enumerate() {
                 let Technique::Prefiltered { size } = o.material.technique() else {
                     continue;
@@ -449,15 +456,20 @@ impl Renderer {
                     Kernel::Phong { n } => n.to_bits(),
                     Kernel::Cosine => u64::MAX,
                 };
-                if let Some(&(_, _, off)) = made.iter().find(|m| m.0 == key && m.1 == size) {
+                // Irradiance maps of the residual where the lights are added per pixel.
+                let lit = pre_lights && diffuse_prefiltered(o);
+                if let Some(&(.., off)) = made
+                    .iter()
+                    .find(|m| m.0 == key && m.1 == size && m.2 == lit)
+                {
                     pre_offsets[k] = off;
                     continue;
                 }
                 let (w, h) = Mapping::LatLong.extent_for_size(size);
                 let map = GpuEnvMap::new(ctx, "prefiltered", Mapping::LatLong, w, h)?;
-                made.push((key, size, pre_texels));
+                made.push((key, size, lit, pre_texels));
                 pre_offsets[k] = pre_texels;
-                pre_maps.push((kernel, map, pre_texels));
+                pre_maps.push((kernel, map, pre_texels, lit));
                 pre_texels += w * h;
             }
         }
@@ -515,6 +527,14 @@ impl Renderer {
                     let form = forms.iter().position(|&c| c == correlated).unwrap_or(0);
                     let entries = (form * SplitSum::dfg_floats(ss.dfg_size) / 2) as u32;
                     split_record(g, chain.mips(), entries, ss.dfg_size);
+                }
+            }
+        }
+        if pre_lights {
+            for (g, o) in gbuf_objects.iter_mut().zip(&scene.objects) {
+                // extra.w = 1: the shader adds the light texels' irradiance.
+                if diffuse_prefiltered(o) {
+                    g.extra[3] = 1.0;
                 }
             }
         }
@@ -598,9 +618,13 @@ impl Renderer {
                 }
             }
             if let (Some(b), Some(buf)) = (brute, &pre_buffer) {
-                for (kernel, map, off) in &pre_maps {
+                for (kernel, map, off, lit) in &pre_maps {
+                    let source = match &residual {
+                        Some((_, res, _, _)) if *lit => res,
+                        _ => &env_gpu,
+                    };
                     marks.record(rec, PassKind::Prefilter, |rec| {
-                        b.record(rec, &env_gpu, &orientation, *kernel, map)
+                        b.record(rec, source, &orientation, *kernel, map)
                     })?;
                     rec.copy_image_to_buffer(&map.image, 0, buf, *off as u64 * 16);
                 }

@@ -55,11 +55,11 @@ pub struct Environment {
     /// A scale on its radiance.
     #[serde(default = "one")]
     pub intensity: f64,
-    /// Light extraction ([`crate::math::lights`]): with `extract`, SH irradiance materials
-    /// shade by the residual's SH plus the light texels' exact irradiance, and FIS,
-    /// split-sum and footprint lookups read the residual's chain plus the light texels;
-    /// `none` uses the whole map everywhere. Prefiltered maps, SH-BRDF and MC do not use the
-    /// lights yet.
+    /// Light extraction ([`crate::math::lights`]): with `extract`, SH irradiance and
+    /// prefiltered diffuse materials shade by the residual's SH or irradiance map plus the
+    /// light texels' exact irradiance, and FIS, split-sum and footprint lookups read the
+    /// residual's chain plus the light texels; `none` uses the whole map everywhere.
+    /// Prefiltered Phong maps, SH-BRDF and MC do not use the lights yet.
     #[serde(default)]
     pub lights: LightsMode,
     /// A texel is a light texel above this many times the map's mean luminance (default 32).
