@@ -6,38 +6,12 @@ mod common;
 use common::scenes::{object, scene, sphere_camera, unit_sphere};
 use envlight::math::brdf::Brdf;
 use envlight::math::camera::{trace, Camera, Shape};
+use envlight::math::footprint;
 use envlight::math::Mapping;
 use envlight::render::render;
 use envlight::scene::{LightsMode, LookupFilter, Scene, Technique};
 use envlight::EnvMap;
 use glam::DVec3;
-
-/// The mirror scene rendered with `n`×`n` point lookups per pixel, averaged: the pixel-area
-/// mean the footprint filter estimates (subsamples that miss the shapes see the background).
-fn supersampled(env: &EnvMap, cam: &Camera, shapes: &[Shape], n: u32) -> EnvMap {
-    let mut texels = Vec::with_capacity((cam.width * cam.height) as usize);
-    for j in 0..cam.height {
-        for i in 0..cam.width {
-            let mut acc = [0.0; 3];
-            for s in 0..n * n {
-                let x = i as f64 + ((s % n) as f64 + 0.5) / n as f64;
-                let y = j as f64 + ((s / n) as f64 + 0.5) / n as f64;
-                let (o, d) = cam.ray_at(x, y);
-                let dir = match trace(shapes, o, d) {
-                    Some(h) => d - 2.0 * h.normal.dot(d) * h.normal,
-                    None => d,
-                };
-                let l = envlight::math::convert::sample_nearest(env, dir);
-                for c in 0..3 {
-                    acc[c] += l[c];
-                }
-            }
-            let k = (n * n) as f64;
-            texels.push(acc.map(|a| (a / k) as f32));
-        }
-    }
-    EnvMap::new(Mapping::LatLong, cam.width, cam.height, texels)
-}
 
 /// Errors of `frame` against `reference` over the pixels whose centre sees the unit sphere:
 /// (relative RMS of all channels, per-pixel relative RMS of luminance, mean ratio).
@@ -126,7 +100,6 @@ fn box_dp(env: &EnvMap, size: u32) -> EnvMap {
 /// weight or a share moves a pixel by a few 1e-4.
 #[test]
 fn footprint_lookups_match_their_float64_twin() {
-    use envlight::math::footprint;
     use envlight::math::lights::{extract, prepare, ExtractOptions};
     let ctx = common::ctx();
     {
@@ -213,7 +186,7 @@ fn footprint_mirror_matches_its_supersampled_render() {
     {
         let env = EnvMap::from_fn(Mapping::LatLong, 256, 128, 2, checker_sky);
         let cam = sphere_camera(64);
-        let reference = supersampled(&env, &cam, &[unit_sphere()], 16);
+        let reference = footprint::supersampled(&env, &cam, &[unit_sphere()], 16);
         let mut errs = Vec::new();
         for filter in [LookupFilter::Point, LookupFilter::Auto] {
             let size = envlight::render::default_dp_size(&env);
@@ -263,8 +236,8 @@ fn mirror_footprint_on_real_probes() {
         for (name, m256, m16) in cases {
             let env = envlight::io::load(dir.join(name), &Default::default()).unwrap();
             let size = envlight::render::default_dp_size(&env);
-            let r16 = supersampled(&env, &cam, &[unit_sphere()], 4);
-            let r256 = supersampled(&env, &cam, &[unit_sphere()], 16);
+            let r16 = footprint::supersampled(&env, &cam, &[unit_sphere()], 4);
+            let r256 = footprint::supersampled(&env, &cam, &[unit_sphere()], 16);
             let own = errors(&r16, &r256, &cam);
             let point = render(&ctx, &mirror_scene(cam, LookupFilter::Point, size), &env)
                 .unwrap()

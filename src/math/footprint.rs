@@ -224,6 +224,36 @@ pub fn light_overlap(lights: &[PreparedLight], r: DVec3, a: DVec3, b: DVec3) -> 
     sum
 }
 
+/// The pixel-area mean a footprint-filtered render estimates, by brute force: each pixel of
+/// `cam`'s image the mean of `n`×`n` sub-pixel camera rays, each reflected off the first of
+/// `shapes` it meets (a mirror) or seeing the background, and read from `env` at the texel
+/// its direction falls in (no filtering: [`super::convert::sample_nearest`]). `env` in its
+/// file's frame (no orientation). The reference of the footprint filter's accuracy.
+pub fn supersampled(env: &crate::EnvMap, cam: &Camera, shapes: &[Shape], n: u32) -> crate::EnvMap {
+    let mut texels = Vec::with_capacity((cam.width * cam.height) as usize);
+    for j in 0..cam.height {
+        for i in 0..cam.width {
+            let mut acc = [0.0; 3];
+            for s in 0..n * n {
+                let x = i as f64 + ((s % n) as f64 + 0.5) / n as f64;
+                let y = j as f64 + ((s / n) as f64 + 0.5) / n as f64;
+                let (o, d) = cam.ray_at(x, y);
+                let dir = match trace(shapes, o, d) {
+                    Some(h) => d - 2.0 * h.normal.dot(d) * h.normal,
+                    None => d,
+                };
+                let l = super::convert::sample_nearest(env, dir);
+                for c in 0..3 {
+                    acc[c] += l[c];
+                }
+            }
+            let k = (n * n) as f64;
+            texels.push(acc.map(|a| (a / k) as f32));
+        }
+    }
+    crate::EnvMap::new(super::Mapping::LatLong, cam.width, cam.height, texels)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
