@@ -7,6 +7,7 @@ pub mod fis;
 pub mod fis_report;
 pub mod peers;
 pub mod report;
+pub mod table;
 
 use super::{context, Global};
 use anyhow::{Context as _, Result};

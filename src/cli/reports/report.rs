@@ -29,13 +29,25 @@ pub struct ReportArgs {
     /// a few minutes on lavapipe
     #[arg(long)]
     quick: bool,
-    /// Side of the sphere image (default 64, quick 24)
+    /// Side of the sphere image (default 64, quick 24, table 128)
     #[arg(long)]
     size: Option<u32>,
     /// Samples per pixel of each of the two Monte Carlo reference renders (default 16384,
-    /// quick 1024)
+    /// quick 1024, table 4096)
     #[arg(long)]
     reference: Option<u32>,
+    /// Instead: issue #10's accuracy table (table.md, table.csv, error_maps.png): five
+    /// probes, diffuse by SH 2 and 8 and prefiltered, GGX α 0.05 to 0.6 by FIS 16/64/256
+    /// (sequence rotation off and on) and the mirror, with light extraction and without,
+    /// per-pixel errors against the reference (default size 128, reference 2 × 4096 spp)
+    #[arg(long)]
+    table: bool,
+    /// With --table: only these materials ("diffuse", "ggx 0.05" … "ggx 0.6", "mirror")
+    #[arg(long, value_delimiter = ',')]
+    materials: Vec<String>,
+    /// With --table: only the probes whose file names contain one of these
+    #[arg(long, value_delimiter = ',')]
+    only: Vec<String>,
     /// Instead: split-sum's error against the reference on every probe of the folder at GGX
     /// α 0.1, 0.2, 0.3, 0.45, 0.6 (split_sum.md, split_sum.csv)
     #[arg(long)]
@@ -176,7 +188,7 @@ fn cases(brdf: &Brdf, quick: bool) -> Vec<(Technique, String)> {
     v
 }
 
-fn scene(
+pub(super) fn scene(
     cam: Camera,
     brdf: Brdf,
     t: Technique,
@@ -229,7 +241,7 @@ fn process_seconds(g: &Global, sc: &Scene, dir: &Path) -> Result<f64> {
 }
 
 /// Pixels that see the sphere away from its silhouette, with their tile (8 × 8 pixels).
-fn sphere_pixels(cam: &Camera) -> Vec<(usize, u32)> {
+pub(super) fn sphere_pixels(cam: &Camera) -> Vec<(usize, u32)> {
     let tiles_x = cam.width.div_ceil(8);
     let sphere = [Shape::Sphere {
         center: [0.0; 3],
@@ -273,7 +285,7 @@ fn errors(a: &EnvMap, m: &EnvMap, pixels: &[(usize, u32)]) -> (f64, f64, f64) {
     ((se / sm2).sqrt(), (sa - sm) / sm, worst)
 }
 
-fn average(a: &EnvMap, b: &EnvMap) -> EnvMap {
+pub(super) fn average(a: &EnvMap, b: &EnvMap) -> EnvMap {
     let mut out = a.clone();
     for (o, t) in out.texels.iter_mut().zip(&b.texels) {
         for ch in 0..3 {
@@ -291,8 +303,16 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         .or_else(|| std::env::var_os("ENVLIGHT_PROBES").map(PathBuf::from))
         .unwrap_or_else(|| PathBuf::from("../shared/probes"));
     let quick = args.quick;
-    let size = args.size.unwrap_or(if quick { 24 } else { 64 });
-    let reference = args.reference.unwrap_or(if quick { 1024 } else { 16384 });
+    let size = args.size.unwrap_or(match (args.table, quick) {
+        (true, _) => 128,
+        (_, true) => 24,
+        _ => 64,
+    });
+    let reference = args.reference.unwrap_or(match (args.table, quick) {
+        (true, _) => 4096,
+        (_, true) => 1024,
+        _ => 16384,
+    });
     // Quick: a 256² paraboloid instead of the source-sized one, so lavapipe converts fast.
     let dp = quick.then_some(256);
     let ctx = context(g)?;
@@ -302,6 +322,13 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     let cam = sphere_camera(size);
     let pixels = sphere_pixels(&cam);
     let split = args.split();
+    if args.table {
+        let pick = super::table::Pick {
+            materials: args.materials.clone(),
+            probes: args.only.clone(),
+        };
+        return super::table::table(&renderer, &dir, size, reference, &args.out, &device, &pick);
+    }
     if args.split_sum_every_probe {
         return split_sweep(&renderer, &dir, cam, reference, &args.out, &device, split);
     }
