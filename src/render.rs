@@ -423,6 +423,10 @@ impl Renderer {
             None => None,
         };
         let dp_lights = dp_lights && residual.is_some();
+        // The whole map's SH: for SH objects without lights, and for SH-BRDF objects (which
+        // do not use the lights). With lights SH objects read only the residual's.
+        let full_sh = residual.as_ref().is_none_or(|r| r.2.is_none())
+            || has(&|o| matches!(o.material.technique(), Technique::ShBrdf { .. }));
 
         // FIS: the dual paraboloid and its MIP chain.
         let dp = match dp_passes {
@@ -563,7 +567,7 @@ impl Renderer {
         let mut marks = Marks(Vec::new());
         let ((), t) = ctx.run("rendering: inputs", |rec| {
             env_gpu.record_upload(rec, env)?;
-            if let (Some(p), Some(out)) = (sh_pass, &sh_out) {
+            if let (Some(p), Some(out), true) = (sh_pass, &sh_out, full_sh) {
                 marks.record(rec, PassKind::ShProjection, |rec| {
                     p.record(rec, &env_gpu, lmax, &orientation, out)
                 })?;
@@ -645,7 +649,7 @@ impl Renderer {
                     .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
                     .collect()
             };
-            let c = read(out);
+            let c = if full_sh { read(out) } else { Vec::new() };
             let c_res = residual.as_ref().and_then(|r| r.2.as_ref()).map(read);
             let mut objects = gbuf_objects.clone();
             for (k, o) in scene.objects.iter().enumerate() {

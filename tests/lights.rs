@@ -606,3 +606,53 @@ fn prefiltered_irradiance_with_lights_matches_its_float64_twin() {
     }
     common::finish(ctx);
 }
+
+/// Simulate only what the scene calls for: with lights extracted, SH objects read only the
+/// residual's coefficients, so the whole map is projected only where an SH-BRDF object (which
+/// does not use the lights) or `lights = "none"` needs it.
+#[test]
+fn sh_projects_the_whole_map_only_where_it_is_read() {
+    use common::scenes::{object, scene, sphere_camera, unit_sphere};
+    use envlight::math::brdf::Brdf;
+    use envlight::math::camera::Shape;
+    use envlight::render::render;
+    use envlight::scene::{LightsMode, PassKind, Technique};
+    let ctx = common::ctx();
+    {
+        let map = sky(Mapping::LatLong, 64);
+        assert!(!extract(&map, &ExtractOptions::default()).lights.is_empty());
+        let sh = object(
+            unit_sphere(),
+            Brdf::Lambert,
+            [1.0; 3],
+            Technique::Sh { order: 2 },
+        );
+        let other = Shape::Sphere {
+            center: [2.5, 0.0, 0.0],
+            radius: 1.0,
+        };
+        let sh_brdf = object(
+            other,
+            Brdf::Phong { n: 8.0 },
+            [1.0; 3],
+            Technique::ShBrdf {
+                order: 2,
+                grid: 4,
+                window: None,
+            },
+        );
+        let projections = |objects, lights| {
+            let mut sc = scene(sphere_camera(8), objects, false, 16);
+            sc.environment.lights = lights;
+            let r = render(&ctx, &sc, &map).unwrap();
+            r.records
+                .iter()
+                .filter(|p| p.kind == PassKind::ShProjection)
+                .count()
+        };
+        assert_eq!(projections(vec![sh.clone()], LightsMode::Extract), 1);
+        assert_eq!(projections(vec![sh.clone()], LightsMode::None), 1);
+        assert_eq!(projections(vec![sh, sh_brdf], LightsMode::Extract), 2);
+    }
+    common::finish(ctx);
+}
