@@ -355,9 +355,9 @@ impl Renderer {
             )?),
             None => None,
         };
-        // Lights: SH objects take the residual's SH plus the light texels' exact irradiance;
-        // FIS and split-sum objects the residual's paraboloid plus the light texels under
-        // their lobes. The paraboloid keeps the whole map where a mirror is read by FIS, or a
+        // Lights: SH and prefiltered diffuse objects take the residual's SH or irradiance map
+        // plus the light texels' exact irradiance; FIS and split-sum objects the residual's
+        // paraboloid plus the light texels under their lobes. The paraboloid keeps the whole map where a mirror is read by FIS, or a
         // lobe is too narrow for the light texels' quadrature ([`resolves`]).
         let extracting = scene.environment.lights == LightsMode::Extract;
         let has = |f: &dyn Fn(&SceneObject) -> bool| scene.objects.iter().any(f);
@@ -441,8 +441,8 @@ impl Renderer {
             None => None,
         };
 
-        // Prefiltered maps, one per distinct (kernel, size, of the residual or not), concatenated into one buffer on
-        // the GPU; each object's record holds its map's offset.
+        // Prefiltered maps, one per distinct (kernel, size, of the residual or not),
+        // concatenated into one buffer on the GPU; each object's record holds its map's offset.
         let mut pre_offsets = vec![0u32; scene.objects.len()];
         let mut pre_maps: Vec<(Kernel, GpuEnvMap, u32, bool)> = Vec::new();
         let mut pre_texels = 0u32;

@@ -236,40 +236,25 @@ pub fn table(
         .into_iter()
         .filter(|c| pick.materials.is_empty() || pick.materials.contains(&c.material))
         .collect();
-    // Pipelines are built, and lavapipe compiles shaders, on first use: one small render of
-    // each kind of case first keeps that out of the GPU times.
-    if let Some((file, _)) = PROBES.first() {
-        let path = dir.join(file);
-        let env = envlight::io::load(&path, &envlight::io::LoadOptions::default())
-            .with_context(|| format!("report --table: probe {} (set --probes)", path.display()))?;
-        let small = envlight::math::camera::sphere_camera(8);
-        let mut seen: Vec<(&'static str, LightsMode, LookupFilter, &'static str)> = Vec::new();
-        for c in &all {
-            let key = (c.technique.name(), c.lights, c.filter, c.rotate());
-            if seen.contains(&key) || matches!(c.technique, Technique::Prefiltered { .. }) {
-                continue;
-            }
-            seen.push(key);
-            let mut sc = scene(small, c.brdf, c.technique, None, 7, split);
-            with_case(&mut sc, c);
-            renderer.render(&sc, &env)?;
+    let mut materials: Vec<(String, Brdf)> = Vec::new();
+    for c in &all {
+        if !materials.iter().any(|m| m.0 == c.material) {
+            materials.push((c.material.clone(), c.brdf));
         }
     }
     let probes = PROBES
         .iter()
         .filter(|p| pick.probes.is_empty() || pick.probes.iter().any(|q| p.0.contains(q.as_str())));
-    for (file, _) in probes {
+    for (n, (file, _)) in probes.enumerate() {
         let path = dir.join(file);
         let env = envlight::io::load(&path, &envlight::io::LoadOptions::default())
             .with_context(|| format!("report --table: probe {} (set --probes)", path.display()))?;
         let probe = file.trim_end_matches(".hdr").to_string();
-        let mut materials: Vec<(String, Brdf)> = Vec::new();
-        for c in &all {
-            if !materials.iter().any(|m| m.0 == c.material) {
-                materials.push((c.material.clone(), c.brdf));
-            }
+        if n == 0 {
+            warm_up(renderer, &env, &all, split)?;
         }
-        for (material, brdf) in materials {
+        for (material, brdf) in &materials {
+            let (material, brdf) = (material.as_str(), *brdf);
             let (truth, noise) =
                 reference_of(renderer, &env, cam, brdf, reference, &pixels, split)?;
             for c in all.iter().filter(|c| c.material == material) {
@@ -323,6 +308,24 @@ pub fn table(
         out.display(),
         rows.len()
     );
+    Ok(())
+}
+
+/// Pipelines are built, and lavapipe compiles shaders, on first use: one small render of
+/// each kind of case in `all` keeps that out of the GPU times measured after it.
+fn warm_up(renderer: &Renderer, env: &EnvMap, all: &[Case], split: SplitSumSettings) -> Result<()> {
+    let small = envlight::math::camera::sphere_camera(8);
+    let mut seen: Vec<(&'static str, LightsMode, LookupFilter, &'static str)> = Vec::new();
+    for c in all {
+        let key = (c.technique.name(), c.lights, c.filter, c.rotate());
+        if seen.contains(&key) || matches!(c.technique, Technique::Prefiltered { .. }) {
+            continue;
+        }
+        seen.push(key);
+        let mut sc = scene(small, c.brdf, c.technique, None, 7, split);
+        with_case(&mut sc, c);
+        renderer.render(&sc, env)?;
+    }
     Ok(())
 }
 
