@@ -338,23 +338,13 @@ vec3 split_sum(Object ob, vec3 n, vec3 v, vec3 r) {
     return p * (ab.x + ab.y);
 }
 
-// The light texels' irradiance at normal n (math::lights::light_sum, LightKernel::Cosine): a
-// texel by its centre where it is small next to the cosine's radian, else by its nodes.
+// The light clusters' irradiance at normal n (math::lights::cluster_irradiance): per
+// channel max(0, n·V), V = Σ L·Ω·ω over a cell's light texels.
 vec3 lights_irradiance(vec3 n) {
     vec3 e = vec3(0.0);
-    for (uint t = 0u; t < pc.lights; t++) {
-        uint at = t * pc.light_stride;
-        vec4 centre = lights[at];
-        vec4 light = lights[at + 1u];
-        float k = 0.0;
-        if (light_centre_only(light.w, 1.0, pc.light_stride)) {
-            k = max(dot(n, centre.xyz), 0.0) * centre.w;
-        } else {
-            for (uint q = at + LIGHT_HEADER_VEC4S; q < at + pc.light_stride; q++) {
-                k += max(dot(n, lights[q].xyz), 0.0) * lights[q].w;
-            }
-        }
-        e += k * light.rgb;
+    for (uint c = 0u; c < pc.clusters; c++) {
+        uint at = pc.cluster_at + c * LIGHT_CLUSTER_VEC4S;
+        e += max(vec3(dot(n, lights[at].xyz), dot(n, lights[at + 1u].xyz), dot(n, lights[at + 2u].xyz)), vec3(0.0));
     }
     return e;
 }
@@ -384,13 +374,13 @@ void main() {
         vec3 e = vec3(0.0);
         for (uint k = 0u; k < (lmax + 1u) * (lmax + 1u); k++) e += coeffs[off + k].rgb * y[k];
         e = max(e, vec3(0.0));
-        // The residual's SH plus the light texels' irradiance.
+        // The residual's SH plus the light clusters' irradiance.
         if (ob.extra.w > 0.5) e += lights_irradiance(n);
         color = ob.albedo.rgb * e / PI;
     } else if (tech == TECH_PREFILTERED) {
         bool diffuse = uint(ob.brdf.x) == BRDF_LAMBERT;
         vec3 l = prefiltered_lookup(uint(ob.extra.y), int(ob.extra.z), diffuse ? n : r);
-        // The residual's irradiance map plus the light texels' irradiance.
+        // The residual's irradiance map plus the light clusters' irradiance.
         if (diffuse && ob.extra.w > 0.5) l += lights_irradiance(n);
         color = ob.albedo.rgb * (diffuse ? l / PI : l);
     } else if (tech == TECH_SPLIT_SUM) {

@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, Recorder, Timing, Usage};
 use crate::math::brdf::Brdf;
 use crate::math::filter::Kernel;
-use crate::math::lights::{extract, lobe_scale, prepare, resolves};
+use crate::math::lights::{clusters, extract, lobe_scale, prepare, resolves, CLUSTER_GRID};
 use crate::math::sh::Window;
 use crate::math::sh_brdf::ViewGrid;
 use crate::math::split_sum::chain_norm;
@@ -355,10 +355,11 @@ impl Renderer {
             )?),
             None => None,
         };
-        // Lights: SH and prefiltered diffuse objects take the residual's SH or irradiance map
-        // plus the light texels' exact irradiance; FIS and split-sum objects the residual's
-        // paraboloid plus the light texels under their lobes. The paraboloid keeps the whole map where a mirror is read by FIS, or a
-        // lobe is too narrow for the light texels' quadrature ([`resolves`]).
+        // Lights: SH and prefiltered diffuse objects take the diffuse residual's SH or
+        // irradiance map plus its light clusters' irradiance (a deep extraction, summed by
+        // cells); FIS and split-sum objects the residual's paraboloid plus the light texels
+        // under their lobes. The paraboloid keeps the whole map where a mirror is read by FIS,
+        // or a lobe is too narrow for the light texels' quadrature ([`resolves`]).
         let extracting = scene.environment.lights == LightsMode::Extract;
         let has = |f: &dyn Fn(&SceneObject) -> bool| scene.objects.iter().any(f);
         let on_chain = |o: &SceneObject| {
@@ -389,25 +390,40 @@ impl Renderer {
             .filter(|o| on_chain(o))
             .filter_map(|o| lobe_scale(&o.material.kind))
             .fold(1.0, f64::min);
-        let extraction = (sh_lights || pre_lights || dp_lights)
+        let file_to_world = orientation.checked_world_to_file()?.transpose();
+        // The chain's extraction, where its lobes are wide enough for the texels' nodes.
+        let chain_ex = dp_lights
             .then(|| extract(env, &scene.environment.extract_options()))
+            .filter(|e| !e.lights.is_empty() && resolves(e, finest));
+        let dp_lights = chain_ex.is_some();
+        // The diffuse extraction: deeper, its texels summed by clusters.
+        let diffuse_ex = (sh_lights || pre_lights)
+            .then(|| extract(env, &scene.environment.diffuse_extract_options()))
             .filter(|e| !e.lights.is_empty());
-        let dp_lights = dp_lights && extraction.as_ref().is_some_and(|e| resolves(e, finest));
-        // Nothing reads the lights when only the chain asked and its lobes are too narrow.
-        let extraction = extraction.filter(|_| sh_lights || pre_lights || dp_lights);
-        let pre_lights = pre_lights && extraction.is_some();
-        let finest = if dp_lights { finest } else { 1.0 };
-        let residual = match &extraction {
+        let (sh_lights, pre_lights) = match diffuse_ex {
+            Some(_) => (sh_lights, pre_lights),
+            None => (false, false),
+        };
+        let lights = match (&chain_ex, &diffuse_ex) {
+            (None, None) => None,
+            (c, d) => Some(GpuLights::upload_with_clusters(
+                ctx,
+                &c.as_ref()
+                    .map(|ex| prepare(env, ex, file_to_world, finest))
+                    .unwrap_or_default(),
+                &d.as_ref()
+                    .map(|ex| clusters(ex, file_to_world, CLUSTER_GRID))
+                    .unwrap_or_default(),
+            )?),
+        };
+        let residual_map = |name| GpuEnvMap::new(ctx, name, env.mapping, env.width, env.height);
+        let chain_residual = match &chain_ex {
+            Some(ex) => Some((ex, residual_map("environment residual")?)),
+            None => None,
+        };
+        // The diffuse residual, with its SH where SH objects read it.
+        let diffuse_residual = match &diffuse_ex {
             Some(ex) => {
-                let file_to_world = orientation.checked_world_to_file()?.transpose();
-                let lights = GpuLights::upload(ctx, &prepare(env, ex, file_to_world, finest))?;
-                let map = GpuEnvMap::new(
-                    ctx,
-                    "environment residual",
-                    env.mapping,
-                    env.width,
-                    env.height,
-                )?;
                 let out = match sh_lights {
                     true => Some(Buffer::new(
                         ctx,
@@ -418,15 +434,14 @@ impl Renderer {
                     )?),
                     false => None,
                 };
-                Some((ex, map, out, lights))
+                Some((ex, residual_map("diffuse residual")?, out))
             }
             None => None,
         };
-        let dp_lights = dp_lights && residual.is_some();
         // The whole map's SH: for SH objects without lights, and for SH-BRDF objects (which
         // do not use the lights). With lights SH objects read only the residual's.
-        let full_sh = residual.as_ref().is_none_or(|r| r.2.is_none())
-            || has(&|o| matches!(o.material.technique(), Technique::ShBrdf { .. }));
+        let full_sh =
+            !sh_lights || has(&|o| matches!(o.material.technique(), Technique::ShBrdf { .. }));
 
         // FIS: the dual paraboloid and its MIP chain.
         let dp = match dp_passes {
@@ -536,7 +551,7 @@ impl Renderer {
         }
         if pre_lights {
             for (g, o) in gbuf_objects.iter_mut().zip(&scene.objects) {
-                // extra.w = 1: the shader adds the light texels' irradiance.
+                // extra.w = 1: the shader adds the light clusters' irradiance.
                 if diffuse_prefiltered(o) {
                     g.extra[3] = 1.0;
                 }
@@ -573,7 +588,10 @@ impl Renderer {
                 })?;
                 rec.use_buffer(out, Usage::HostRead);
             }
-            if let Some((ex, map, out, _)) = &residual {
+            if let Some((ex, map)) = &chain_residual {
+                map.record_upload(rec, &ex.residual)?;
+            }
+            if let Some((ex, map, out)) = &diffuse_residual {
                 map.record_upload(rec, &ex.residual)?;
                 if let (Some(p), Some(out)) = (sh_pass, out) {
                     marks.record(rec, PassKind::ShProjection, |rec| {
@@ -597,9 +615,9 @@ impl Renderer {
                     supersample: None,
                     nearest: chain_of_texel_means(scene),
                 };
-                let source = match &residual {
-                    Some((_, res, _, _)) if dp_lights => res,
-                    _ => &env_gpu,
+                let source = match &chain_residual {
+                    Some((_, res)) => res,
+                    None => &env_gpu,
                 };
                 marks.record(rec, PassKind::DualParaboloid, |rec| {
                     conv.record(rec, source, map, &opts)
@@ -623,8 +641,8 @@ impl Renderer {
             }
             if let (Some(b), Some(buf)) = (brute, &pre_buffer) {
                 for (kernel, map, off, lit) in &pre_maps {
-                    let source = match &residual {
-                        Some((_, res, _, _)) if *lit => res,
+                    let source = match &diffuse_residual {
+                        Some((_, res, _)) if *lit => res,
                         _ => &env_gpu,
                     };
                     marks.record(rec, PassKind::Prefilter, |rec| {
@@ -650,7 +668,10 @@ impl Renderer {
                     .collect()
             };
             let c = if full_sh { read(out) } else { Vec::new() };
-            let c_res = residual.as_ref().and_then(|r| r.2.as_ref()).map(read);
+            let c_res = diffuse_residual
+                .as_ref()
+                .and_then(|r| r.2.as_ref())
+                .map(read);
             let mut objects = gbuf_objects.clone();
             for (k, o) in scene.objects.iter().enumerate() {
                 match o.material.technique() {
@@ -658,7 +679,7 @@ impl Renderer {
                         objects[k] = object_record(o, sh_coeffs.len() as u32);
                         let c = match &c_res {
                             Some(r) => {
-                                // extra.w = 1: the shader adds the light texels.
+                                // extra.w = 1: the shader adds the light clusters.
                                 objects[k].extra[3] = 1.0;
                                 r
                             }
@@ -753,7 +774,7 @@ impl Renderer {
             sh_rotation: self.sh_rotation,
             split: split.as_ref().map(|s| (&s.1, &s.2)),
             shadows: scene.shadows,
-            lights: residual.as_ref().map(|r| &r.3),
+            lights: lights.as_ref(),
             footprint: footprint_of(scene, dp.is_some(), dp_lights),
         };
         let mut marks = Marks(Vec::new());

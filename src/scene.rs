@@ -57,18 +57,24 @@ pub struct Environment {
     pub intensity: f64,
     /// Light extraction ([`crate::math::lights`]): with `extract`, SH irradiance and
     /// prefiltered diffuse materials shade by the residual's SH or irradiance map plus the
-    /// light texels' exact irradiance, and FIS, split-sum and footprint lookups read the
-    /// residual's chain plus the light texels; `none` uses the whole map everywhere.
-    /// Prefiltered Phong maps, SH-BRDF and MC do not use the lights yet.
+    /// light clusters' exact irradiance (a deeper extraction of their own,
+    /// `diffuse_light_ratio`), and FIS, split-sum and footprint lookups read the residual's
+    /// chain plus the light texels; `none` uses the whole map everywhere. Prefiltered Phong
+    /// maps, SH-BRDF and MC do not use the lights yet.
     #[serde(default)]
     pub lights: LightsMode,
-    /// A texel is a light texel above this many times the map's mean luminance (default 32).
+    /// FIS, split-sum and footprint lookups: a texel is a light texel above this many times
+    /// the map's mean luminance (default 32).
     #[serde(default)]
     pub light_ratio: Option<f64>,
-    /// Most light texels (default 256; 4096 took studio_small_08's SH 2 error from 4.1% to
-    /// 2.4% in tests/lights.rs).
+    /// Most light texels for FIS, split-sum and footprint lookups (default 256).
     #[serde(default)]
     pub light_texels: Option<u32>,
+    /// Diffuse techniques (SH and prefiltered irradiance) extract texels above this many
+    /// times the map's mean luminance, uncapped, and sum them by clusters (default 2,
+    /// [`crate::math::lights::DIFFUSE_RATIO`]).
+    #[serde(default)]
+    pub diffuse_light_ratio: Option<f64>,
     /// How mirror lookups and the background read the map (see [`LookupFilter`]).
     #[serde(default)]
     pub filter: LookupFilter,
@@ -90,6 +96,14 @@ pub enum LookupFilter {
 }
 
 impl Environment {
+    /// The light extraction this environment's diffuse techniques ask for.
+    pub fn diffuse_extract_options(&self) -> crate::math::lights::ExtractOptions {
+        crate::math::lights::diffuse_options(
+            self.diffuse_light_ratio
+                .unwrap_or(crate::math::lights::DIFFUSE_RATIO),
+        )
+    }
+
     /// The light extraction this environment asks for.
     pub fn extract_options(&self) -> crate::math::lights::ExtractOptions {
         let d = crate::math::lights::ExtractOptions::default();
@@ -377,6 +391,7 @@ impl Scene {
                 lights: LightsMode::default(),
                 light_ratio: None,
                 light_texels: None,
+                diffuse_light_ratio: None,
                 filter: LookupFilter::default(),
             },
             camera,
@@ -425,6 +440,13 @@ impl Scene {
             if !(r.is_finite() && r > 0.0) {
                 return Err(format!(
                     "environment light_ratio {r} must be positive and finite"
+                ));
+            }
+        }
+        if let Some(r) = self.environment.diffuse_light_ratio {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(format!(
+                    "environment diffuse_light_ratio {r} must be positive and finite"
                 ));
             }
         }

@@ -162,14 +162,17 @@ fn diffuse_spheres_match_float64_irradiance() {
 }
 
 /// SH irradiance with lights extracted, through the shading pass: every object pixel equals
-/// albedo·(max(0, E_res(n)) + Σ_t L_t·∫_t max(0, n·ω) dω)/π in float64 — the residual's f64
-/// projection and basis, and `math::lights::light_sum` with the cosine over the light texels
-/// — within 1e-4 relative, on the sky whose sun is 5·10⁴ × the zenith (64 × 32, so the light
-/// texels are large and their nodes are used), turned 30° and mirrored. Without the light
-/// texels (lights not bound) the same pixels lose the sun's direct light: the pass adds them.
+/// albedo·(max(0, E_res(n)) + Σ_c max(0, n·V_c))/π in float64 — the diffuse residual's f64
+/// projection and basis, and `math::lights::cluster_irradiance` over the light clusters of
+/// the diffuse extraction — within 1e-4 relative, on the sky whose sun is 5·10⁴ × the zenith
+/// (64 × 32), turned 30° and mirrored. Without the clusters (lights not bound) the same
+/// pixels lose the sun's direct light: the pass adds them. The clusters in turn sum their
+/// texels exactly away from the horizon (math::lights' unit tests).
 #[test]
 fn diffuse_with_lights_matches_float64() {
-    use envlight::math::lights::{extract, light_sum, prepare, ExtractOptions, LightKernel};
+    use envlight::math::lights::{
+        cluster_irradiance, clusters, diffuse_options, extract, CLUSTER_GRID, DIFFUSE_RATIO,
+    };
     use envlight::math::synth::Sky;
     use envlight::passes::GpuLights;
     let ctx = common::ctx();
@@ -182,11 +185,10 @@ fn diffuse_with_lights_matches_float64() {
             rotate_y_degrees: 30.0,
         };
         let f2w = o.world_to_file().transpose();
-        let ex = extract(&map, &ExtractOptions::default());
-        assert!(!ex.lights.is_empty());
-        let prepared = prepare(&map, &ex, f2w, 1.0);
-        assert!(prepared[0].nodes.len() == 4);
-        let gpu_lights = GpuLights::upload(&ctx, &prepared).unwrap();
+        let ex = extract(&map, &diffuse_options(DIFFUSE_RATIO));
+        let cl = clusters(&ex, f2w, CLUSTER_GRID);
+        assert!(!cl.is_empty());
+        let gpu_lights = GpuLights::upload_with_clusters(&ctx, &[], &cl).unwrap();
         let env = GpuEnvMap::upload(&ctx, &map).unwrap();
         let res = GpuEnvMap::upload(&ctx, &ex.residual).unwrap();
         let projector = ShProjector::new(&ctx, Subgroups::Auto).unwrap();
@@ -245,7 +247,7 @@ fn diffuse_with_lights_matches_float64() {
                     continue;
                 }
                 let e = sh::eval(&irr_cpu, hit.normal);
-                let l = light_sum(&prepared, hit.normal, LightKernel::Cosine);
+                let l = cluster_irradiance(&cl, hit.normal);
                 let a = objects[hit.index].albedo;
                 let k = (j * cam.width + i) as usize;
                 for ch in 0..3 {

@@ -6,31 +6,58 @@ use super::map::GpuEnvMap;
 use crate::abi::{binding, push::LightsPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder};
-use crate::math::lights::{gpu_list, LightKernel, PreparedLight};
+use crate::math::lights::{cluster_list, gpu_list, Cluster, LightKernel, PreparedLight};
 use crate::math::split_sum::chain_norm;
 use crate::Mapping;
 
-/// The light texels on the GPU, uploaded once per map.
+/// The light texels on the GPU, uploaded once per map, and the clusters diffuse techniques
+/// sum ([`crate::math::lights::Cluster`]) after them in the same buffer.
 pub struct GpuLights {
     buffer: Buffer,
     count: u32,
     nodes: u32,
+    clusters: u32,
 }
 
 impl GpuLights {
     /// Uploads `lights` (all with the same number of nodes).
     pub fn upload(ctx: &Context, lights: &[PreparedLight]) -> Result<GpuLights> {
+        Self::upload_with_clusters(ctx, lights, &[])
+    }
+
+    /// Uploads `lights` (all with the same number of nodes) and `clusters`.
+    pub fn upload_with_clusters(
+        ctx: &Context,
+        lights: &[PreparedLight],
+        clusters: &[Cluster],
+    ) -> Result<GpuLights> {
         let nodes = lights.first().map_or(0, |t| t.nodes.len()) as u32;
         if lights.iter().any(|t| t.nodes.len() as u32 != nodes) {
             return Err(Error::Invalid(
                 "light texels with different node counts".into(),
             ));
         }
+        let mut list = gpu_list(lights);
+        list.extend(cluster_list(clusters));
+        if list.is_empty() {
+            list.push([0.0; 4]);
+        }
         Ok(GpuLights {
-            buffer: Buffer::storage(ctx, "light texels", &gpu_list(lights))?,
+            buffer: Buffer::storage(ctx, "light texels", &list)?,
             count: lights.len() as u32,
             nodes,
+            clusters: clusters.len() as u32,
         })
+    }
+
+    /// Clusters held.
+    pub fn clusters(&self) -> u32 {
+        self.clusters
+    }
+
+    /// Where the clusters start in the buffer, in vec4s.
+    pub fn cluster_at(&self) -> u32 {
+        self.count * self.stride()
     }
 
     /// Light texels held.

@@ -35,8 +35,9 @@ pub struct ShadeInputs<'a> {
     pub split: Option<(&'a GpuEnvMap, &'a Buffer)>,
     /// Trace shadow rays.
     pub shadows: bool,
-    /// Extracted light texels, whose irradiance SH objects marked for them add to their
-    /// residual's SH (see [`crate::math::lights`]).
+    /// Extracted lights ([`crate::math::lights`]): texels that FIS, split-sum and footprint
+    /// lookups add, clusters whose irradiance SH and prefiltered irradiance objects marked for
+    /// them add to their residual's.
     pub lights: Option<&'a GpuLights>,
     /// Which lookups are filtered over the pixel's footprint (they read `dp`).
     pub footprint: Footprint,
@@ -141,6 +142,8 @@ impl Shade {
             sh_rotation: inputs.sh_rotation.id(),
             lights: inputs.lights.map_or(0, |l| l.count()),
             light_stride: inputs.lights.map_or(0, |l| l.stride()),
+            clusters: inputs.lights.map_or(0, |l| l.clusters()),
+            cluster_at: inputs.lights.map_or(0, |l| l.cluster_at()),
             footprint: inputs.footprint.flags(),
         };
         let camera = match (inputs.footprint.flags(), gbuf.camera) {
