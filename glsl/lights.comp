@@ -4,7 +4,8 @@
 // at t's centre where t is small next to the kernel's scale there (light_centre_only: α at
 // the peak, a fraction of the chord in GGX's θ⁻⁴ tail, a radian for the cosine), else by t's
 // quadrature nodes. The kernel is the clamped cosine (irradiance) or split-sum's GGX at
-// n = v = r. Float64 twin: math::lights::light_sum.
+// n = v = r. Float64 twin: math::lights::light_sum. Kernel 2 adds light clusters'
+// irradiance instead (math::lights::cluster_irradiance).
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
 #include "lights.glsl"
@@ -30,6 +31,17 @@ void main() {
     c.layer = id.z;
     c.uv = (vec2(id.xy) + 0.5) / float(pc.size);
     vec3 r = coord_to_dir(MAPPING_CUBE, c);
+    if (pc.kernel == 2u) {
+        // Light clusters (math::lights::cluster_irradiance): max(0, r·V) per channel.
+        vec3 e = vec3(0.0);
+        for (uint k = 0u; k < pc.count; k++) {
+            uint at = pc.at + k * LIGHT_CLUSTER_VEC4S;
+            e += max(vec3(dot(r, lt[at].xyz), dot(r, lt[at + 1u].xyz), dot(r, lt[at + 2u].xyz)), vec3(0.0));
+        }
+        vec4 prev = imageLoad(dst, ivec3(id));
+        imageStore(dst, ivec3(id), vec4(prev.rgb + e, prev.a));
+        return;
+    }
     float a = max(pc.alpha, GGX_ALPHA_MIN);
     float a2 = a * a;
     uint stride = LIGHT_HEADER_VEC4S + pc.nodes;

@@ -2,7 +2,9 @@
 // Irradiance from SH coefficients at the centre of every texel of a map (R&H 2001 eq. 7 with
 // the general A_l): E(n) = Σ_lm c_lm·f_lm·Y_lm(n), c_lm in a coefficient's rgb and a factor
 // f_lm in its alpha: 1 where the caller folded Â_l and any window into c_lm, Â_l where the
-// radiance coefficients were copied in on the GPU. Negative values (ringing) are clamped to 0
+// radiance coefficients were copied in on the GPU; minus coefficients d_lm stored after them
+// (zero unless the caller subtracts the SH of extracted lights, leaving the residual's).
+// Negative values (ringing) are clamped to 0
 // here; the CPU reports where they were.
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
@@ -29,6 +31,7 @@ void main() {
     sh_basis(pc.lmax, coord_to_dir(pc.dst_mapping, c), y);
     vec3 e = vec3(0.0);
     uint n = (pc.lmax + 1u) * (pc.lmax + 1u);
-    for (uint k = 0u; k < n; k++) e += coeffs[k].rgb * (coeffs[k].a * y[k]);
+    // coeffs[n + k].rgb: what to subtract (a map's light texels' irradiance coefficients).
+    for (uint k = 0u; k < n; k++) e += (coeffs[k].rgb * coeffs[k].a - coeffs[n + k].rgb) * y[k];
     imageStore(dst, ivec3(id), vec4(max(e, vec3(0.0)), 1.0));
 }

@@ -735,14 +735,17 @@ pub mod push {
             count: u32 = "uint",
             /// Quadrature nodes per light texel.
             nodes: u32 = "uint",
-            /// 0: the clamped cosine (irradiance); 1: split-sum's GGX kernel at α.
+            /// 0: the clamped cosine (irradiance); 1: split-sum's GGX kernel at α; 2: the
+            /// light clusters' irradiance (`count` clusters from `at`).
             kernel: u32 = "uint",
             /// GGX α.
             alpha: f32 = "float",
             /// 1 / ∫ K dω, the kernel's normalisation (1 for the cosine).
             inv_norm: f32 = "float",
+            /// Where the clusters start in the buffer, in vec4s.
+            at: u32 = "uint",
             /// Padding.
-            pad: [u32; 2] = "uint[2]",
+            pad: u32 = "uint",
         }
         /// `glsl/sh_rotate.comp`.
         ShRotatePush {

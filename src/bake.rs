@@ -12,7 +12,10 @@ use crate::envmap::luminance;
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, InFlight, Timing, Usage};
 use crate::math::exact::ExactFilter;
-use crate::math::lights::{extract, prepare, resolves, ExtractOptions, LightKernel};
+use crate::math::lights::{
+    clusters, diffuse_options, extract_each, light_sh, prepare, resolves, ExtractOptions,
+    LightKernel, CLUSTER_GRID, DIFFUSE_RATIO,
+};
 use crate::math::sh;
 use crate::math::split_sum::level_alpha;
 use crate::math::Orientation;
@@ -386,27 +389,47 @@ impl Baker {
         let (w, h) = Mapping::DualParaboloid.extent_for_size(dp_size);
         let dp = GpuEnvMap::with_mips(ctx, "bake: paraboloid", Mapping::DualParaboloid, w, h)?;
         let cube = SplitSum::cube_chain(ctx, opts.specular_size, opts.specular_levels)?;
-        // With lights: the residual's own upload, SH and paraboloid, and the light texels.
-        // The finest lobe the light texels' quadrature must resolve: level 1's (a source too
-        // coarse for it bakes without lights, as `resolves` says).
+        // With lights: the residual's own upload and paraboloid, and the light texels, for the
+        // specular levels. The finest lobe the light texels' quadrature must resolve: level
+        // 1's (a source too coarse for it bakes its specular levels without lights, as
+        // `resolves` says).
         let finest = level_alpha(1, opts.specular_levels.max(2));
-        let extraction = opts
-            .lights
-            .then(|| extract(env, &ExtractOptions::default()))
-            .filter(|e| !e.lights.is_empty() && resolves(e, finest));
+        // The irradiance cube: the whole map's SH less its diffuse light texels' (a deeper
+        // extraction), plus those texels' clusters, as SH objects render.
+        let (extraction, diffuse) = match opts.lights {
+            true => {
+                let mut each = extract_each(
+                    env,
+                    &[ExtractOptions::default(), diffuse_options(DIFFUSE_RATIO)],
+                );
+                let diffuse = each.pop().filter(|e| !e.lights.is_empty());
+                let extraction = each
+                    .pop()
+                    .filter(|e| !e.lights.is_empty() && resolves(e, finest));
+                (extraction, diffuse)
+            }
+            false => (None, None),
+        };
+        let file_to_world = orientation.checked_world_to_file()?.transpose();
+        let lights = match (&extraction, &diffuse) {
+            (None, None) => None,
+            (e, d) => Some(GpuLights::upload_with_clusters(
+                ctx,
+                &e.as_ref()
+                    .map(|ex| prepare(env, ex, file_to_world, finest))
+                    .unwrap_or_default(),
+                &d.as_ref()
+                    .map(|ex| clusters(ex, file_to_world, CLUSTER_GRID))
+                    .unwrap_or_default(),
+            )?),
+        };
+        let minus = diffuse
+            .as_ref()
+            .map(|ex| sh::irradiance_coeffs(&light_sh(env, ex, file_to_world, lmax)));
         let residual = match &extraction {
             Some(ex) => {
-                let file_to_world = orientation.checked_world_to_file()?.transpose();
-                let lights = GpuLights::upload(ctx, &prepare(env, ex, file_to_world, finest))?;
                 let map =
                     GpuEnvMap::new(ctx, "bake: residual", env.mapping, env.width, env.height)?;
-                let sh = Buffer::new(
-                    ctx,
-                    "bake: residual SH",
-                    ShProjector::output_bytes(lmax),
-                    vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC,
-                    MemoryLocation::GpuOnly,
-                )?;
                 let dp = GpuEnvMap::with_mips(
                     ctx,
                     "bake: residual paraboloid",
@@ -414,7 +437,7 @@ impl Baker {
                     w,
                     h,
                 )?;
-                Some((ex, map, sh, dp, lights))
+                Some((ex, map, dp))
             }
             None => None,
         };
@@ -437,20 +460,27 @@ impl Baker {
                 samples: opts.samples,
                 bias: opts.bias,
             };
-            match &residual {
-                None => {
+            match (&minus, &lights) {
+                (Some(minus), Some(lights)) => {
+                    self.eval.record_irradiance_minus(
+                        rec,
+                        &sh_out,
+                        lmax,
+                        minus,
+                        &irradiance_map,
+                    )?;
+                    self.lights
+                        .record_clusters(rec, lights, &irradiance_map, 0)?;
+                }
+                _ => {
                     self.eval
                         .record_irradiance(rec, &sh_out, lmax, &irradiance_map)?;
-                    self.split.record_prefilter(rec, &dp, &cube, &p)?;
                 }
-                Some((ex, map, sh, rdp, lights)) => {
+            }
+            match (&residual, &lights) {
+                (Some((ex, map, rdp)), Some(lights)) => {
                     // The mirror from the whole map; the rest from the residual plus lights.
                     map.record_upload(rec, &ex.residual)?;
-                    self.sh.record(rec, map, lmax, &orientation, sh)?;
-                    self.eval
-                        .record_irradiance(rec, sh, lmax, &irradiance_map)?;
-                    self.lights
-                        .record(rec, lights, LightKernel::Cosine, &irradiance_map, 0)?;
                     self.convert.record(rec, map, rdp, &c)?;
                     self.mip.record(rec, rdp)?;
                     self.split
@@ -468,6 +498,7 @@ impl Baker {
                             .record(rec, lights, LightKernel::Ggx { alpha }, &cube, k)?;
                     }
                 }
+                _ => self.split.record_prefilter(rec, &dp, &cube, &p)?,
             }
             rec.use_buffer(&sh_out, Usage::HostRead);
             let irradiance = irradiance_map.record_download(rec, 0)?;
@@ -482,8 +513,11 @@ impl Baker {
                 Vec::new()
             };
             rec.keep((src, irradiance_map, dp, cube));
-            if let Some((_, map, sh, rdp, lights)) = residual {
-                rec.keep((map, sh, rdp, lights));
+            if let Some((_, map, rdp)) = residual {
+                rec.keep((map, rdp));
+            }
+            if let Some(lights) = lights {
+                rec.keep(lights);
             }
             Ok(Downloads {
                 sh: sh_out,

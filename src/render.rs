@@ -7,7 +7,9 @@ use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, Recorder, Timing, Usage};
 use crate::math::brdf::Brdf;
 use crate::math::filter::Kernel;
-use crate::math::lights::{clusters, extract, lobe_scale, prepare, resolves, CLUSTER_GRID};
+use crate::math::lights::{
+    clusters, extract_each, light_sh, lobe_scale, prepare, resolves, ExtractOptions, CLUSTER_GRID,
+};
 use crate::math::sh::Window;
 use crate::math::sh_brdf::ViewGrid;
 use crate::math::split_sum::chain_norm;
@@ -392,14 +394,22 @@ impl Renderer {
             .fold(1.0, f64::min);
         let file_to_world = orientation.checked_world_to_file()?.transpose();
         // The chain's extraction, where its lobes are wide enough for the texels' nodes.
+        // And the diffuse extraction: deeper, its texels summed by clusters. Both from one
+        // pass over the map.
+        let asked: Vec<ExtractOptions> = [
+            dp_lights.then(|| scene.environment.extract_options()),
+            (sh_lights || pre_lights).then(|| scene.environment.diffuse_extract_options()),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        let mut each = extract_each(env, &asked).into_iter();
         let chain_ex = dp_lights
-            .then(|| extract(env, &scene.environment.extract_options()))
+            .then(|| each.next())
+            .flatten()
             .filter(|e| !e.lights.is_empty() && resolves(e, finest));
         let dp_lights = chain_ex.is_some();
-        // The diffuse extraction: deeper, its texels summed by clusters.
-        let diffuse_ex = (sh_lights || pre_lights)
-            .then(|| extract(env, &scene.environment.diffuse_extract_options()))
-            .filter(|e| !e.lights.is_empty());
+        let diffuse_ex = each.next().filter(|e| !e.lights.is_empty());
         let (sh_lights, pre_lights) = match diffuse_ex {
             Some(_) => (sh_lights, pre_lights),
             None => (false, false),
@@ -421,27 +431,17 @@ impl Renderer {
             Some(ex) => Some((ex, residual_map("environment residual")?)),
             None => None,
         };
-        // The diffuse residual, with its SH where SH objects read it.
+        // The diffuse residual's map, where prefiltered irradiance maps are filtered from it.
+        // SH objects need no projection of it: the whole map's coefficients less the light
+        // texels' ([`light_sh`]) are its coefficients.
         let diffuse_residual = match &diffuse_ex {
-            Some(ex) => {
-                let out = match sh_lights {
-                    true => Some(Buffer::new(
-                        ctx,
-                        "sh coefficients of the residual",
-                        ShProjector::output_bytes(lmax),
-                        vk::BufferUsageFlags::TRANSFER_DST,
-                        MemoryLocation::GpuToCpu,
-                    )?),
-                    false => None,
-                };
-                Some((ex, residual_map("diffuse residual")?, out))
-            }
-            None => None,
+            Some(ex) if pre_lights => Some((ex, residual_map("diffuse residual")?)),
+            _ => None,
         };
-        // The whole map's SH: for SH objects without lights, and for SH-BRDF objects (which
-        // do not use the lights). With lights SH objects read only the residual's.
-        let full_sh =
-            !sh_lights || has(&|o| matches!(o.material.technique(), Technique::ShBrdf { .. }));
+        let lights_sh = match &diffuse_ex {
+            Some(ex) if sh_lights => Some(light_sh(env, ex, file_to_world, lmax)),
+            _ => None,
+        };
 
         // FIS: the dual paraboloid and its MIP chain.
         let dp = match dp_passes {
@@ -582,7 +582,7 @@ impl Renderer {
         let mut marks = Marks(Vec::new());
         let ((), t) = ctx.run("rendering: inputs", |rec| {
             env_gpu.record_upload(rec, env)?;
-            if let (Some(p), Some(out), true) = (sh_pass, &sh_out, full_sh) {
+            if let (Some(p), Some(out)) = (sh_pass, &sh_out) {
                 marks.record(rec, PassKind::ShProjection, |rec| {
                     p.record(rec, &env_gpu, lmax, &orientation, out)
                 })?;
@@ -591,14 +591,8 @@ impl Renderer {
             if let Some((ex, map)) = &chain_residual {
                 map.record_upload(rec, &ex.residual)?;
             }
-            if let Some((ex, map, out)) = &diffuse_residual {
+            if let Some((ex, map)) = &diffuse_residual {
                 map.record_upload(rec, &ex.residual)?;
-                if let (Some(p), Some(out)) = (sh_pass, out) {
-                    marks.record(rec, PassKind::ShProjection, |rec| {
-                        p.record(rec, map, lmax, &orientation, out)
-                    })?;
-                    rec.use_buffer(out, Usage::HostRead);
-                }
             }
             if let (Some(p), Some(buf)) = (brdf_pass, &table_buffer) {
                 for (brdf, order, grid, off) in &tables {
@@ -642,7 +636,7 @@ impl Renderer {
             if let (Some(b), Some(buf)) = (brute, &pre_buffer) {
                 for (kernel, map, off, lit) in &pre_maps {
                     let source = match &diffuse_residual {
-                        Some((_, res, _)) if *lit => res,
+                        Some((_, res)) if *lit => res,
                         _ => &env_gpu,
                     };
                     marks.record(rec, PassKind::Prefilter, |rec| {
@@ -667,11 +661,14 @@ impl Renderer {
                     .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
                     .collect()
             };
-            let c = if full_sh { read(out) } else { Vec::new() };
-            let c_res = diffuse_residual
-                .as_ref()
-                .and_then(|r| r.2.as_ref())
-                .map(read);
+            let c = read(out);
+            // The residual's: the whole map's less the light texels'.
+            let c_res: Option<Vec<[f64; 3]>> = lights_sh.as_ref().map(|l| {
+                c.iter()
+                    .zip(l)
+                    .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+                    .collect()
+            });
             let mut objects = gbuf_objects.clone();
             for (k, o) in scene.objects.iter().enumerate() {
                 match o.material.technique() {

@@ -164,14 +164,16 @@ fn diffuse_spheres_match_float64_irradiance() {
 /// SH irradiance with lights extracted, through the shading pass: every object pixel equals
 /// albedo·(max(0, E_res(n)) + Σ_c max(0, n·V_c))/π in float64 — the diffuse residual's f64
 /// projection and basis, and `math::lights::cluster_irradiance` over the light clusters of
-/// the diffuse extraction — within 1e-4 relative, on the sky whose sun is 5·10⁴ × the zenith
+/// the diffuse extraction — within 1e-4 relative, where the GPU's residual coefficients are,
+/// as the renderer makes them, the whole map's GPU projection less `light_sh`, on the sky whose sun is 5·10⁴ × the zenith
 /// (64 × 32), turned 30° and mirrored. Without the clusters (lights not bound) the same
 /// pixels lose the sun's direct light: the pass adds them. The clusters in turn sum their
 /// texels exactly away from the horizon (math::lights' unit tests).
 #[test]
 fn diffuse_with_lights_matches_float64() {
     use envlight::math::lights::{
-        cluster_irradiance, clusters, diffuse_options, extract, CLUSTER_GRID, DIFFUSE_RATIO,
+        cluster_irradiance, clusters, diffuse_options, extract, light_sh, CLUSTER_GRID,
+        DIFFUSE_RATIO,
     };
     use envlight::math::synth::Sky;
     use envlight::passes::GpuLights;
@@ -190,13 +192,20 @@ fn diffuse_with_lights_matches_float64() {
         assert!(!cl.is_empty());
         let gpu_lights = GpuLights::upload_with_clusters(&ctx, &[], &cl).unwrap();
         let env = GpuEnvMap::upload(&ctx, &map).unwrap();
-        let res = GpuEnvMap::upload(&ctx, &ex.residual).unwrap();
         let projector = ShProjector::new(&ctx, Subgroups::Auto).unwrap();
         let gpass = GBufferPass::new(&ctx).unwrap();
         let shade = Shade::new(&ctx).unwrap();
         let lmax = 2;
-        let (c, _) = projector.run_oriented(&res, lmax, &o).unwrap();
-        let irr_gpu = sh::irradiance_coeffs(&c.coeffs);
+        // As the renderer does: the whole map's GPU coefficients less the light texels'.
+        let (c, _) = projector.run_oriented(&env, lmax, &o).unwrap();
+        let minus = light_sh(&map, &ex, f2w, lmax);
+        let res: Vec<[f64; 3]> = c
+            .coeffs
+            .iter()
+            .zip(&minus)
+            .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+            .collect();
+        let irr_gpu = sh::irradiance_coeffs(&res);
         let irr_cpu = sh::irradiance_coeffs(&sh::project_oriented(&ex.residual, lmax, f2w));
         let objects = scene();
         let shapes: Vec<Shape> = objects.iter().map(|o| o.shape).collect();

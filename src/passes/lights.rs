@@ -122,9 +122,58 @@ impl LightsPass {
             kernel: kind,
             alpha: alpha as f32,
             inv_norm: inv_norm as f32,
-            pad: [0; 2],
+            at: 0,
+            pad: 0,
         };
         rec.span("lights", |rec| {
+            rec.dispatch(
+                &self.pipeline,
+                &[
+                    (binding::LIGHTS_TEXELS, Bind::Buffer(&lights.buffer)),
+                    (binding::LIGHTS_DST, Bind::StorageLevel(&dst.image, level)),
+                ],
+                &push,
+                [
+                    groups(size, WORKGROUP_2D[0]),
+                    groups(size, WORKGROUP_2D[1]),
+                    6,
+                ],
+            )
+        })
+    }
+
+    /// Records the addition of `lights`' clusters' irradiance
+    /// ([`crate::math::lights::cluster_irradiance`]) to level `level` of the cube `dst`.
+    /// Span: "light clusters".
+    pub fn record_clusters(
+        &self,
+        rec: &mut Recorder,
+        lights: &GpuLights,
+        dst: &GpuEnvMap,
+        level: u32,
+    ) -> Result<()> {
+        if dst.mapping != Mapping::Cube || level >= dst.mips() {
+            return Err(Error::Invalid(format!(
+                "light clusters: level {level} of a {} map with {} levels (a cube's level expected)",
+                dst.mapping.name(),
+                dst.mips()
+            )));
+        }
+        if lights.clusters == 0 {
+            return Ok(());
+        }
+        let size = dst.level_size(level).0;
+        let push = LightsPush {
+            size,
+            count: lights.clusters,
+            nodes: 0,
+            kernel: 2,
+            alpha: 0.0,
+            inv_norm: 1.0,
+            at: lights.cluster_at(),
+            pad: 0,
+        };
+        rec.span("light clusters", |rec| {
             rec.dispatch(
                 &self.pipeline,
                 &[

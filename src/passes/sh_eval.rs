@@ -36,10 +36,12 @@ impl ShEvaluator {
                 coeffs.len()
             )));
         }
-        let data: Vec<[f32; 4]> = coeffs
+        let mut data: Vec<[f32; 4]> = coeffs
             .iter()
             .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 1.0])
             .collect();
+        // Nothing subtracted.
+        data.resize(2 * coeffs.len(), [0.0; 4]);
         let buf = Buffer::storage(rec.context(), "sh eval coefficients", &data)?;
         self.dispatch(rec, buf, lmax, dst)
     }
@@ -58,22 +60,46 @@ impl ShEvaluator {
         lmax: u32,
         dst: &GpuEnvMap,
     ) -> Result<()> {
+        self.record_irradiance_minus(rec, radiance, lmax, &[], dst)
+    }
+
+    /// [`ShEvaluator::record_irradiance`] less the irradiance coefficients `minus` (bands up
+    /// to `lmax`, Â_l folded in; empty for none) before the clamp: the residual's irradiance
+    /// from the whole map's coefficients and the SH of its extracted lights
+    /// ([`crate::math::lights::light_sh`]).
+    pub fn record_irradiance_minus(
+        &self,
+        rec: &mut Recorder,
+        radiance: &Buffer,
+        lmax: u32,
+        minus: &[[f64; 3]],
+        dst: &GpuEnvMap,
+    ) -> Result<()> {
         if lmax > SH_MAX_LMAX {
             return Err(Error::Invalid(format!(
                 "SH order {lmax} is above the maximum, {SH_MAX_LMAX}"
             )));
         }
         let n = sh::count(lmax);
-        let mut data = vec![[0.0f32; 4]; n];
+        if !minus.is_empty() && minus.len() != n {
+            return Err(Error::Invalid(format!(
+                "{} coefficients to subtract from order {lmax}'s {n}",
+                minus.len()
+            )));
+        }
+        let mut data = vec![[0.0f32; 4]; 2 * n];
         for l in 0..=lmax {
             for m in -(l as i32)..=(l as i32) {
                 data[sh::index(l, m)][3] = sh::cosine_lobe(l) as f32;
             }
         }
+        for (d, c) in data[n..].iter_mut().zip(minus) {
+            *d = [c[0] as f32, c[1] as f32, c[2] as f32, 0.0];
+        }
         let buf = Buffer::new(
             rec.context(),
             "sh eval coefficients (from the GPU)",
-            (n * 16) as u64,
+            (2 * n * 16) as u64,
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::CpuToGpu,
         )?;
