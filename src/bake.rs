@@ -13,8 +13,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, InFlight, Timing, Usage};
 use crate::math::exact::ExactFilter;
 use crate::math::lights::{
-    clusters, diffuse_options, extract_each, light_sh, prepare, resolves, ExtractOptions,
-    LightKernel, CLUSTER_GRID, DIFFUSE_RATIO,
+    diffuse_options, extract_each, light_sh, resolves, ExtractOptions, LightKernel, DIFFUSE_RATIO,
 };
 use crate::math::sh;
 use crate::math::split_sum::level_alpha;
@@ -411,18 +410,14 @@ impl Baker {
             false => (None, None),
         };
         let file_to_world = orientation.checked_world_to_file()?.transpose();
-        let lights = match (&extraction, &diffuse) {
-            (None, None) => None,
-            (e, d) => Some(GpuLights::upload_with_clusters(
-                ctx,
-                &e.as_ref()
-                    .map(|ex| prepare(env, ex, file_to_world, finest))
-                    .unwrap_or_default(),
-                &d.as_ref()
-                    .map(|ex| clusters(ex, file_to_world, CLUSTER_GRID))
-                    .unwrap_or_default(),
-            )?),
-        };
+        let lights = GpuLights::of_extractions(
+            ctx,
+            env,
+            extraction.as_ref(),
+            diffuse.as_ref(),
+            file_to_world,
+            finest,
+        )?;
         let minus = diffuse
             .as_ref()
             .map(|ex| sh::irradiance_coeffs(&light_sh(env, ex, file_to_world, lmax)));

@@ -7,9 +7,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, Recorder, Timing, Usage};
 use crate::math::brdf::Brdf;
 use crate::math::filter::Kernel;
-use crate::math::lights::{
-    clusters, extract_each, light_sh, lobe_scale, prepare, resolves, ExtractOptions, CLUSTER_GRID,
-};
+use crate::math::lights::{extract_each, light_sh, lobe_scale, resolves, ExtractOptions};
 use crate::math::sh::Window;
 use crate::math::sh_brdf::ViewGrid;
 use crate::math::split_sum::chain_norm;
@@ -414,18 +412,14 @@ impl Renderer {
             Some(_) => (sh_lights, pre_lights),
             None => (false, false),
         };
-        let lights = match (&chain_ex, &diffuse_ex) {
-            (None, None) => None,
-            (c, d) => Some(GpuLights::upload_with_clusters(
-                ctx,
-                &c.as_ref()
-                    .map(|ex| prepare(env, ex, file_to_world, finest))
-                    .unwrap_or_default(),
-                &d.as_ref()
-                    .map(|ex| clusters(ex, file_to_world, CLUSTER_GRID))
-                    .unwrap_or_default(),
-            )?),
-        };
+        let lights = GpuLights::of_extractions(
+            ctx,
+            env,
+            chain_ex.as_ref(),
+            diffuse_ex.as_ref(),
+            file_to_world,
+            finest,
+        )?;
         let residual_map = |name| GpuEnvMap::new(ctx, name, env.mapping, env.width, env.height);
         let chain_residual = match &chain_ex {
             Some(ex) => Some((ex, residual_map("environment residual")?)),

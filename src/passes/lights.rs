@@ -6,8 +6,12 @@ use super::map::GpuEnvMap;
 use crate::abi::{binding, push::LightsPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder};
-use crate::math::lights::{cluster_list, gpu_list, Cluster, LightKernel, PreparedLight};
+use crate::math::lights::{
+    cluster_list, clusters, gpu_list, prepare, Cluster, Extraction, LightKernel, PreparedLight,
+    CLUSTER_GRID,
+};
 use crate::math::split_sum::chain_norm;
+use crate::EnvMap;
 use crate::Mapping;
 
 /// The light texels on the GPU, uploaded once per map, and the clusters diffuse techniques
@@ -48,6 +52,26 @@ impl GpuLights {
             nodes,
             clusters: clusters.len() as u32,
         })
+    }
+
+    /// The lights of `map` on the GPU, or `None` where neither extraction is given: the
+    /// light texels of `texels` ([`prepare`]d for lobes down to `finest`) and the clusters
+    /// of `diffuse` ([`clusters`] on [`CLUSTER_GRID`]), file directions turned to the world
+    /// by `file_to_world`.
+    pub fn of_extractions(
+        ctx: &Context,
+        map: &EnvMap,
+        texels: Option<&Extraction>,
+        diffuse: Option<&Extraction>,
+        file_to_world: glam::DMat3,
+        finest: f64,
+    ) -> Result<Option<GpuLights>> {
+        if texels.is_none() && diffuse.is_none() {
+            return Ok(None);
+        }
+        let t = texels.map(|ex| prepare(map, ex, file_to_world, finest));
+        let c = diffuse.map(|ex| clusters(ex, file_to_world, CLUSTER_GRID));
+        Self::upload_with_clusters(ctx, &t.unwrap_or_default(), &c.unwrap_or_default()).map(Some)
     }
 
     /// Clusters held.
@@ -100,23 +124,12 @@ impl LightsPass {
         dst: &GpuEnvMap,
         level: u32,
     ) -> Result<()> {
-        if dst.mapping != Mapping::Cube || level >= dst.mips() {
-            return Err(Error::Invalid(format!(
-                "lights: level {level} of a {} map with {} levels (a cube's level expected)",
-                dst.mapping.name(),
-                dst.mips()
-            )));
-        }
-        if lights.count == 0 {
-            return Ok(());
-        }
         let (kind, alpha, inv_norm) = match kernel {
             LightKernel::Cosine => (0, 0.0, 1.0),
             LightKernel::Ggx { alpha } => (1, alpha, 1.0 / chain_norm(alpha)),
         };
-        let size = dst.level_size(level).0;
         let push = LightsPush {
-            size,
+            size: 0,
             count: lights.count,
             nodes: lights.nodes,
             kernel: kind,
@@ -125,21 +138,7 @@ impl LightsPass {
             at: 0,
             pad: 0,
         };
-        rec.span("lights", |rec| {
-            rec.dispatch(
-                &self.pipeline,
-                &[
-                    (binding::LIGHTS_TEXELS, Bind::Buffer(&lights.buffer)),
-                    (binding::LIGHTS_DST, Bind::StorageLevel(&dst.image, level)),
-                ],
-                &push,
-                [
-                    groups(size, WORKGROUP_2D[0]),
-                    groups(size, WORKGROUP_2D[1]),
-                    6,
-                ],
-            )
-        })
+        self.dispatch(rec, "lights", lights, push, dst, level)
     }
 
     /// Records the addition of `lights`' clusters' irradiance
@@ -152,19 +151,8 @@ impl LightsPass {
         dst: &GpuEnvMap,
         level: u32,
     ) -> Result<()> {
-        if dst.mapping != Mapping::Cube || level >= dst.mips() {
-            return Err(Error::Invalid(format!(
-                "light clusters: level {level} of a {} map with {} levels (a cube's level expected)",
-                dst.mapping.name(),
-                dst.mips()
-            )));
-        }
-        if lights.clusters == 0 {
-            return Ok(());
-        }
-        let size = dst.level_size(level).0;
         let push = LightsPush {
-            size,
+            size: 0,
             count: lights.clusters,
             nodes: 0,
             kernel: 2,
@@ -173,7 +161,32 @@ impl LightsPass {
             at: lights.cluster_at(),
             pad: 0,
         };
-        rec.span("light clusters", |rec| {
+        self.dispatch(rec, "light clusters", lights, push, dst, level)
+    }
+
+    /// One dispatch over level `level` of the cube `dst` (nothing where `push.count` is 0).
+    fn dispatch(
+        &self,
+        rec: &mut Recorder,
+        span: &str,
+        lights: &GpuLights,
+        mut push: LightsPush,
+        dst: &GpuEnvMap,
+        level: u32,
+    ) -> Result<()> {
+        if dst.mapping != Mapping::Cube || level >= dst.mips() {
+            return Err(Error::Invalid(format!(
+                "{span}: level {level} of a {} map with {} levels (a cube's level expected)",
+                dst.mapping.name(),
+                dst.mips()
+            )));
+        }
+        if push.count == 0 {
+            return Ok(());
+        }
+        let size = dst.level_size(level).0;
+        push.size = size;
+        rec.span(span, |rec| {
             rec.dispatch(
                 &self.pipeline,
                 &[
