@@ -4,7 +4,7 @@
 // at t's centre where t is small next to the kernel's scale there (light_centre_only: α at
 // the peak, a fraction of the chord in GGX's θ⁻⁴ tail, a radian for the cosine), else by t's
 // quadrature nodes. The kernel is the clamped cosine (irradiance) or split-sum's GGX at
-// n = v = r. Float64 twin: math::lights::light_sum. Kernel 2 adds light clusters'
+// n = v = r. Float64 twin: math::lights::light_sum. LIGHTS_KERNEL_CLUSTERS adds light clusters'
 // irradiance instead (math::lights::cluster_irradiance).
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
@@ -20,7 +20,7 @@ PUSH_LightsPush
 float kern(float a2, vec3 r, vec3 w) {
     vec3 e = r - w;
     float g = 0.5 * dot(e, e);
-    if (pc.kernel == 0u) return max(1.0 - g, 0.0);
+    if (pc.kernel == LIGHTS_KERNEL_COSINE) return max(1.0 - g, 0.0);
     return chain_kernel(a2, g);
 }
 
@@ -31,7 +31,7 @@ void main() {
     c.layer = id.z;
     c.uv = (vec2(id.xy) + 0.5) / float(pc.size);
     vec3 r = coord_to_dir(MAPPING_CUBE, c);
-    if (pc.kernel == 2u) {
+    if (pc.kernel == LIGHTS_KERNEL_CLUSTERS) {
         // Light clusters (math::lights::cluster_irradiance): max(0, r·V) per channel.
         vec3 e = vec3(0.0);
         for (uint k = 0u; k < pc.count; k++) {
@@ -50,7 +50,7 @@ void main() {
         vec4 centre = lt[t * stride];
         vec4 light = lt[t * stride + 1u];
         vec3 e = r - centre.xyz;
-        float w2 = light_scale2(pc.kernel == 0u ? 1.0 : a, e);
+        float w2 = light_scale2(pc.kernel == LIGHTS_KERNEL_COSINE ? 1.0 : a, e);
         float k = 0.0;
         if (light_centre_only(light.w, w2, stride)) {
             k = kern(a2, r, centre.xyz) * centre.w;

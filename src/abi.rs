@@ -350,6 +350,12 @@ pub mod lights {
     pub const CLUSTER_GRID: u32 = 64;
     /// vec4s per cluster in the GPU's list: (Σ L·Ω·ω, 0) for red, green and blue.
     pub const CLUSTER_VEC4S: u32 = 3;
+    /// `LightsPush::kernel`: the clamped cosine over light texels (irradiance).
+    pub const KERNEL_COSINE: u32 = 0;
+    /// `LightsPush::kernel`: split-sum's GGX at n = v = r over light texels.
+    pub const KERNEL_GGX: u32 = 1;
+    /// `LightsPush::kernel`: the light clusters' irradiance.
+    pub const KERNEL_CLUSTERS: u32 = 2;
     /// vec4s per light texel in the GPU's list: (world centre, Ω), (excess rgb, ρ = √Ω),
     /// then its quadrature nodes' (world direction, weight).
     pub const HEADER_VEC4S: u32 = 2;
@@ -735,8 +741,8 @@ pub mod push {
             count: u32 = "uint",
             /// Quadrature nodes per light texel.
             nodes: u32 = "uint",
-            /// 0: the clamped cosine (irradiance); 1: split-sum's GGX kernel at α; 2: the
-            /// light clusters' irradiance (`count` clusters from `at`).
+            /// `lights::KERNEL_COSINE` (irradiance), `KERNEL_GGX` (split-sum's GGX at α) or
+            /// `KERNEL_CLUSTERS` (the light clusters' irradiance, `count` from `at`).
             kernel: u32 = "uint",
             /// GGX α.
             alpha: f32 = "float",
@@ -968,6 +974,13 @@ pub fn generated_header() -> String {
     let _ = writeln!(s, "#define BRUTE_TILE {BRUTE_TILE}u");
     let _ = writeln!(s, "#define LIGHT_HEADER_VEC4S {}u", lights::HEADER_VEC4S);
     let _ = writeln!(s, "#define LIGHT_CLUSTER_VEC4S {}u", lights::CLUSTER_VEC4S);
+    let _ = writeln!(s, "#define LIGHTS_KERNEL_COSINE {}u", lights::KERNEL_COSINE);
+    let _ = writeln!(s, "#define LIGHTS_KERNEL_GGX {}u", lights::KERNEL_GGX);
+    let _ = writeln!(
+        s,
+        "#define LIGHTS_KERNEL_CLUSTERS {}u",
+        lights::KERNEL_CLUSTERS
+    );
     let _ = writeln!(s, "#define LIGHT_PER_WIDTH {:?}", lights::PER_WIDTH as f32);
     let _ = writeln!(
         s,

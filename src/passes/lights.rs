@@ -3,6 +3,7 @@
 //! n = v = r) cubes get their lights this way, on top of what the residual map gives.
 
 use super::map::GpuEnvMap;
+use crate::abi::lights::{KERNEL_CLUSTERS, KERNEL_COSINE, KERNEL_GGX};
 use crate::abi::{binding, push::LightsPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder};
@@ -125,8 +126,8 @@ impl LightsPass {
         level: u32,
     ) -> Result<()> {
         let (kind, alpha, inv_norm) = match kernel {
-            LightKernel::Cosine => (0, 0.0, 1.0),
-            LightKernel::Ggx { alpha } => (1, alpha, 1.0 / chain_norm(alpha)),
+            LightKernel::Cosine => (KERNEL_COSINE, 0.0, 1.0),
+            LightKernel::Ggx { alpha } => (KERNEL_GGX, alpha, 1.0 / chain_norm(alpha)),
         };
         let push = LightsPush {
             size: 0,
@@ -155,7 +156,7 @@ impl LightsPass {
             size: 0,
             count: lights.clusters,
             nodes: 0,
-            kernel: 2,
+            kernel: KERNEL_CLUSTERS,
             alpha: 0.0,
             inv_norm: 1.0,
             at: lights.cluster_at(),
