@@ -1,9 +1,10 @@
 #version 460
 // The dual-paraboloid MIP chain, stored premultiplied: each texel holds (Σ w·L, Σ w)/area
-// over its footprint, w the solid-angle density 4/(1+s²+t²)² times the part of the level-0
-// texel inside the unit disc. A lookup divides rgb by alpha, so texels outside the disc weigh
-// nothing in the down-filter or in bilinear and trilinear filtering, and the rim's fourfold
-// denser solid angle is counted. Twin of src/math/mip.rs.
+// over its footprint, w the part of the level-0 texel inside the unit disc (1 inside, its
+// covered share of solid angle on the rim). A lookup divides rgb by alpha, so texels outside
+// the disc weigh nothing in the down-filter or in bilinear and trilinear filtering. Radiance
+// is averaged evenly over the (s, t) plane, not by solid angle, which would lean coarse
+// texels towards the pole (src/math/mip.rs). Twin of src/math/mip.rs.
 // MODE 0 premultiplies level 0 in place; MODE 1 box-filters a finer level into the next,
 // with fractional footprints for sizes that are not powers of two.
 #extension GL_GOOGLE_include_directive : require
@@ -21,9 +22,15 @@ void main() {
     if (any(greaterThanEqual(id.xy, uvec2(pc.dst_size)))) return;
     if (pc.mode == 0u) {
         vec4 t = imageLoad(src, ivec3(id));
-        // Solid angle over the texel's (s, t) area: the density, clipped at the rim.
-        float side = 2.0 / float(pc.src_size);
-        float w = texel_solid_angle(MAPPING_DUAL_PARABOLOID, uvec2(pc.src_size), ivec2(id.xy)) / (side * side);
+        // Twin of math::mip::weight.
+        vec2 lo = 2.0 * vec2(id.xy) / float(pc.src_size) - 1.0;
+        vec2 hi = 2.0 * vec2(id.xy + 1u) / float(pc.src_size) - 1.0;
+        vec2 far_ = max(abs(lo), abs(hi));
+        float w = 1.0;
+        if (dot(far_, far_) > 1.0) {
+            float inside = clipped_square(MAPPING_DUAL_PARABOLOID, lo, hi);
+            w = inside > 0.0 ? min(inside / gl8_square(MAPPING_DUAL_PARABOLOID, lo, hi), 1.0) : 0.0;
+        }
         imageStore(dst, ivec3(id), vec4(t.rgb * w, w));
         return;
     }

@@ -19,11 +19,8 @@ layout(rgba32f, set = 0, binding = BINDING_PREFILTER_GGX_DST) uniform writeonly 
 // The push block, generated from src/abi.rs.
 PUSH_PrefilterGgxPush
 
-// Premultiplied chain (glsl/mip.comp): rgb / weight.
 vec3 src_lookup(vec3 d, float lod) {
-    Coord c = dir_to_coord(MAPPING_DUAL_PARABOLOID, d);
-    vec4 v = textureLod(src, vec3(c.uv, float(c.layer)), lod);
-    return v.a > 0.0 ? v.rgb / v.a : vec3(0.0);
+    return dp_chain_lookup(src, d, lod, pc.src_size, pc.src_max_lod);
 }
 
 void main() {

@@ -57,11 +57,8 @@ bool occluded(vec3 o, vec3 d) {
     return false;
 }
 
-// Texels are premultiplied by their solid-angle weight (glsl/mip.comp).
 vec3 dp_lookup(vec3 d, float lod) {
-    Coord c = dir_to_coord(MAPPING_DUAL_PARABOLOID, d);
-    vec4 v = textureLod(dp, vec3(c.uv, float(c.layer)), lod);
-    return v.a > 0.0 ? v.rgb / v.a : vec3(0.0);
+    return dp_chain_lookup(dp, d, lod, pc.dp_size, pc.max_lod);
 }
 
 // What pixel q looks up where it sees what index `index` names (-1: the background): the

@@ -265,8 +265,8 @@ pub mod defaults {
     pub const SH_ORDER: u32 = 2;
     /// FIS samples per pixel.
     pub const FIS_SAMPLES: u32 = 64;
-    /// FIS lod bias (chosen by measurement, docs/BENCHMARKS.md).
-    pub const FIS_BIAS: f64 = 0.25;
+    /// FIS lod bias (chosen by measurement, docs/BENCHMARKS.md "Centred MIP chain").
+    pub const FIS_BIAS: f64 = 0.0;
     /// Side of prefiltered lat-long maps.
     pub const PREFILTERED_SIZE: u32 = 64;
 }

@@ -136,7 +136,13 @@ fn render_matches_its_float64_twin() {
             bias: None,
             dfg_size: 16,
         };
-        let chain = prefiltered_chain(&mip::chain(&dp), 32, 3, 16, 0.25);
+        let chain = prefiltered_chain(
+            &mip::chain(&dp),
+            32,
+            3,
+            16,
+            envlight::abi::defaults::FIS_BIAS,
+        );
         let cam = sphere_camera(24);
         let renderer = Renderer::new(&ctx);
         for b in [ggx(0.05, false), ggx(0.3, true), ggx(0.9, false)] {
@@ -300,7 +306,13 @@ fn render_with_lights_matches_its_float64_twin() {
             bias: None,
             dfg_size: 16,
         };
-        let chain = prefiltered_chain(&mip::chain(&dp), 32, 3, 16, 0.25);
+        let chain = prefiltered_chain(
+            &mip::chain(&dp),
+            32,
+            3,
+            16,
+            envlight::abi::defaults::FIS_BIAS,
+        );
         let cam = sphere_camera(24);
         let renderer = Renderer::new(&ctx);
         for b in [ggx(0.1, false), ggx(0.4, true)] {

@@ -422,19 +422,49 @@ impl Sampler {
         Sampler::clamped(ctx, name, vk::SamplerMipmapMode::LINEAR, vk::LOD_CLAMP_NONE)
     }
 
+    /// A trilinear sampler over every MIP level that reads transparent black beyond the
+    /// image: premultiplied dual-paraboloid chains read along a direction continued past a
+    /// half's rim (`dp_chain_lookup`), where repeating the edge texel would count it twice.
+    pub fn trilinear_border(ctx: &Context, name: &str) -> Result<Sampler> {
+        Sampler::create(
+            ctx,
+            name,
+            vk::SamplerMipmapMode::LINEAR,
+            vk::LOD_CLAMP_NONE,
+            vk::SamplerAddressMode::CLAMP_TO_BORDER,
+        )
+    }
+
     fn clamped(
         ctx: &Context,
         name: &str,
         mipmap: vk::SamplerMipmapMode,
         max_lod: f32,
     ) -> Result<Sampler> {
+        Sampler::create(
+            ctx,
+            name,
+            mipmap,
+            max_lod,
+            vk::SamplerAddressMode::CLAMP_TO_EDGE,
+        )
+    }
+
+    fn create(
+        ctx: &Context,
+        name: &str,
+        mipmap: vk::SamplerMipmapMode,
+        max_lod: f32,
+        address: vk::SamplerAddressMode,
+    ) -> Result<Sampler> {
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(vk::Filter::LINEAR)
             .min_filter(vk::Filter::LINEAR)
             .mipmap_mode(mipmap)
-            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_u(address)
+            .address_mode_v(address)
+            .address_mode_w(address)
+            .border_color(vk::BorderColor::FLOAT_TRANSPARENT_BLACK)
             .max_lod(max_lod);
         // SAFETY: valid device and create info.
         let raw =

@@ -349,6 +349,14 @@ impl Mapping {
     }
 }
 
+/// Solid angle of the square [x0, x1] × [y0, y1] of a paraboloid half's (s, t) plane under
+/// its density 4/(1+s²+t²)² continued past the rim (the divergence theorem on its four
+/// edges, unclipped): what the square would cover if the disc did not end.
+pub fn paraboloid_square_solid_angle(x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
+    paraboloid_edge(x1, y0, y1) - paraboloid_edge(x0, y0, y1) + paraboloid_edge(y1, x0, x1)
+        - paraboloid_edge(y0, x0, x1)
+}
+
 /// Flux of V = h(r)·(x, y) through the segment x = c, y ∈ [a, b] for the paraboloid, whose
 /// dω/(ds dt) = 4/(1+r²)² = div V with h(r) = 2/(1+r²).
 fn paraboloid_edge(c: f64, a: f64, b: f64) -> f64 {

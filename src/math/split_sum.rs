@@ -20,7 +20,7 @@
 //!   sampler's unit square, 4 × 4 Gauss–Legendre nodes a panel).
 
 use super::brdf::{local_view, Brdf, Frame};
-use super::fis::{lookup, sample_lod};
+use super::fis::{lookup, lookup_own_half, sample_lod};
 use super::mapping::{Coord, Mapping};
 use super::mip::Level;
 use super::sequence::hammersley;
@@ -197,7 +197,7 @@ pub fn level_size(size: u32, k: u32) -> u32 {
 }
 
 /// The prefiltered chain the GPU builds from `chain`: `levels` levels of a `size`-side dual
-/// paraboloid, stored as [`Level`]s of weight 1 (so [`lookup`] reads them).
+/// paraboloid, stored as [`Level`]s of weight 1 (so [`lookup_own_half`] reads them).
 pub fn prefiltered_chain(
     chain: &[Level],
     size: u32,
@@ -274,7 +274,7 @@ pub fn shade(
     let frame = Frame::new(n);
     let wo = local_view(&frame, v);
     let r = (2.0 * n.dot(v) * n - v).normalize();
-    let p = lookup(prefiltered, r, alpha_lod(alpha, prefiltered.len() as u32));
+    let p = lookup_own_half(prefiltered, r, alpha_lod(alpha, prefiltered.len() as u32));
     let ab = dfg_lookup(table, table_size, wo.z, alpha);
     p.map(|x| x * (ab[0] + ab[1]))
 }

@@ -71,6 +71,7 @@ pub struct Shade {
     pipeline: Pipeline,
     plain: Sampler,
     trilinear: Sampler,
+    border: Sampler,
     dummy_image: GpuEnvMap,
     dummy_buffer: Buffer,
     x90: Buffer,
@@ -90,6 +91,7 @@ impl Shade {
             )?,
             plain: Sampler::linear_clamp(ctx, "shade sampler")?,
             trilinear: Sampler::trilinear_clamp(ctx, "shade trilinear sampler")?,
+            border: Sampler::trilinear_border(ctx, "shade paraboloid chain sampler")?,
             dummy_image: GpuEnvMap::new(ctx, "shade: unused image", Mapping::LatLong, 1, 1)?,
             dummy_buffer,
             x90: super::sh_brdf::x90_buffer(ctx)?,
@@ -186,7 +188,7 @@ impl Shade {
                     ),
                     (
                         binding::SHADE_DP,
-                        Bind::Sampled(&dp.image, &self.trilinear, false),
+                        Bind::Sampled(&dp.image, &self.border, false),
                     ),
                     (
                         binding::SHADE_PREFILTERED,

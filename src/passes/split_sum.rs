@@ -39,7 +39,7 @@ impl SplitSum {
             ctx: ctx.clone(),
             dfg: Pipeline::compute(ctx, ShaderId::Dfg, &[WORKGROUP_1D])?,
             prefilter: Pipeline::compute(ctx, ShaderId::PrefilterGgx, &WORKGROUP_2D)?,
-            trilinear: Sampler::trilinear_clamp(ctx, "split-sum source sampler")?,
+            trilinear: Sampler::trilinear_border(ctx, "split-sum source sampler")?,
         })
     }
 
