@@ -4,6 +4,8 @@
 #ifndef ENVLIGHT_FIS_GLSL
 #define ENVLIGHT_FIS_GLSL
 
+#include "mappings.glsl"
+
 // Solid angle of a level-0 texel at d of a paraboloid `size` a side: 4/(1+s²+t²)² · (2/size)²,
 // and 1+s²+t² = 2/(1+|d.y|).
 float dp_texel_solid_angle(vec3 d, uint size) {
@@ -25,15 +27,14 @@ float fis_lod(float pdf, uint count, vec3 d, uint size, float bias, float max_lo
 // coordinate lies over 3 texels of the coarser level beyond its rim: a bilinear tap reaches
 // at most 2.12 texels (√2 to the tap's centre, √2/2 across it), so the skip drops only zeros.
 vec3 dp_chain_lookup(sampler2DArray chain, vec3 d, float lod, uint size, float max_lod) {
-    float ay = abs(d.y);
-    float own = d.y >= 0.0 ? 0.0 : 1.0;
-    vec4 v = textureLod(chain, vec3(0.5 * d.xz / (1.0 + ay) + 0.5, own), lod);
-    float far_k = 1.0 - ay;
+    Coord c = dir_to_coord(MAPPING_DUAL_PARABOLOID, d);
+    vec4 v = textureLod(chain, vec3(c.uv, float(c.layer)), lod);
+    float far_k = 1.0 - abs(d.y);
     if (far_k > 0.0) {
         vec2 st = d.xz / far_k;
         float texel = 2.0 / float(max(size >> uint(min(ceil(lod), max_lod)), 1u));
         if (length(st) - 1.0 < 3.0 * texel) {
-            v += textureLod(chain, vec3(0.5 * st + 0.5, 1.0 - own), lod);
+            v += textureLod(chain, vec3(0.5 * st + 0.5, float(1u - c.layer)), lod);
         }
     }
     return v.a > 0.0 ? v.rgb / v.a : vec3(0.0);
