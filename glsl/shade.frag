@@ -165,24 +165,63 @@ vec3 footprint_lights(vec3 r, vec3 a, vec3 b) {
     float i00 = j11 * inv, i01 = -j01 * inv, i10 = -j10 * inv, i11 = j00 * inv;
     float n0 = length(vec2(i00, i01)), n1 = length(vec2(i10, i11));
     float k = point ? 0.0 : 0.5 / sqrt(n0 * n1 * abs(det));
+    float jn = length(vec4(j00, j01, j10, j11));
     vec3 sum = vec3(0.0);
-    for (uint i = 0u; i < pc.lights; i++) {
-        uint at = i * pc.light_stride;
-        vec4 centre = lights[at];
-        vec4 light = lights[at + 1u];
-        float c = dot(centre.xyz, r);
-        if (c <= 0.0) continue;
-        vec3 e = centre.xyz / c - r;
-        float ex = dot(e, t), ey = dot(e, bt);
-        float share;
-        if (point) {
-            float h = 0.5 * light.w;
-            share = abs(ex) <= h && abs(ey) <= h ? 1.0 : 0.0;
-        } else {
-            float h = k * light.w;
-            share = overlap(i00 * ex + i01 * ey, h * n0) * overlap(i10 * ex + i11 * ey, h * n1);
+    // One item per iteration, a texel of the current leaf or a node (see fis_lights).
+    uint i = 0u, j = 0u, end = 0u;
+    for (uint step = 0u; step < pc.tree_nodes + pc.lights; step++) {
+        if (j >= end && i >= pc.tree_nodes) break;
+        if (j < end) {
+            uint q0 = j * pc.light_stride;
+            j++;
+            vec4 centre = lights[q0];
+            vec4 light = lights[q0 + 1u];
+            float cj = dot(centre.xyz, r);
+            if (cj <= 0.0) continue;
+            vec3 ej = centre.xyz / cj - r;
+            float ejx = dot(ej, t), ejy = dot(ej, bt);
+            float share;
+            if (point) {
+                float h = 0.5 * light.w;
+                share = abs(ejx) <= h && abs(ejy) <= h ? 1.0 : 0.0;
+            } else {
+                float h = k * light.w;
+                share = overlap(i00 * ejx + i01 * ejy, h * n0) * overlap(i10 * ejx + i11 * ejy, h * n1);
+            }
+            sum += share * light.rgb;
+            continue;
         }
-        sum += share * light.rgb;
+        uint at = pc.tree_at + i * LIGHT_TREE_VEC4S;
+        vec4 node = lights[at];
+        uvec4 range = uvec4(lights[at + 4u]);
+        // Skip a node none of whose texels can touch the pixel (math::footprint::OverlapShape::misses).
+        float c = dot(node.xyz, r), low = c - node.w;
+        float rho = lights[at + 1u].w;
+        float e_max = point ? 0.70710678 * rho
+                            : jn * length(vec2(0.5 + k * rho * n0, 0.5 + k * rho * n1));
+        bool miss = c + node.w < inversesqrt(1.0 + e_max * e_max);
+        if (!miss && low > 0.0) {
+            float g = 0.5 * PI * node.w / (low * low);
+            vec3 e = node.xyz / c - r;
+            float ex = dot(e, t), ey = dot(e, bt);
+            if (point) {
+                float h = 0.5 * rho;
+                miss = abs(ex) - g > h || abs(ey) - g > h;
+            } else {
+                float h = k * rho;
+                miss = abs(i00 * ex + i01 * ey) - n0 * g >= 0.5 + h * n0
+                    || abs(i10 * ex + i11 * ey) - n1 * g >= 0.5 + h * n1;
+            }
+        }
+        if (miss) {
+            i = range.z;
+        } else if (range.y > LIGHT_LEAF_TEXELS) {
+            i++;
+        } else {
+            j = range.x;
+            end = range.x + range.y;
+            i = range.z;
+        }
     }
     return sum;
 }
@@ -214,6 +253,88 @@ vec3 prefiltered_lookup(uint off, int w, vec3 d) {
     return acc;
 }
 
+// The light texels under the BRDF by their tree (math::light_tree::LightTree::sum_brdf): a
+// leaf's texels one by one (math::lights::light_sum_brdf's rule), a node taken whole by
+// the BRDF's mean over its four sigma points; shadow rays along each direction evaluated.
+float brdf_eval_world(Brdf b, vec3 wo, vec3 t, vec3 bt, vec3 n, vec3 d) {
+    return brdf_eval_cos(b, wo, vec3(dot(d, t), dot(d, bt), dot(d, n)));
+}
+
+vec3 fis_lights(Brdf b, vec3 wo, vec3 t, vec3 bt, vec3 n, vec3 r, float scale, vec3 origin) {
+    bool shadows = pc.shadows != 0u;
+    vec3 sum = vec3(0.0);
+    // One item per iteration, a texel of the current leaf or a node, each at most four
+    // weighted directions, so that lanes walking different paths run one short body.
+    uint i = 0u, j = 0u, end = 0u;
+    // Bounded (every step visits a node or a texel): llvmpipe miscompiled the unbounded
+    // while, zeroing other pixels of the frame.
+    for (uint step = 0u; step < pc.tree_nodes + pc.lights; step++) {
+        if (j >= end && i >= pc.tree_nodes) break;
+        vec3 d[4];
+        vec4 w = vec4(0.25);
+        vec3 light;
+        uint m = 4u, q0 = 0u;
+        bool many = false;
+        vec3 shadow_dir = vec3(0.0);
+        if (j < end) {
+            q0 = j * pc.light_stride;
+            vec4 centre = lights[q0];
+            vec4 l = lights[q0 + 1u];
+            light = l.rgb;
+            shadow_dir = centre.xyz;
+            j++;
+            if (light_centre_only(l.w, light_scale2(scale, r - centre.xyz), pc.light_stride)) {
+                d[0] = centre.xyz;
+                w.x = centre.w;
+                m = 1u;
+            } else if (pc.light_stride == LIGHT_HEADER_VEC4S + 4u) {
+                vec4 p0 = lights[q0 + 2u], p1 = lights[q0 + 3u], p2 = lights[q0 + 4u], p3 = lights[q0 + 5u];
+                d = vec3[4](p0.xyz, p1.xyz, p2.xyz, p3.xyz);
+                w = vec4(p0.w, p1.w, p2.w, p3.w);
+            } else {
+                many = true;
+            }
+        } else {
+            uint at = pc.tree_at + i * LIGHT_TREE_VEC4S;
+            vec4 node = lights[at];
+            uvec4 range = uvec4(lights[at + 4u]);
+            if (range.y <= LIGHT_LEAF_TEXELS) {
+                j = range.x;
+                end = range.x + range.y;
+                i = range.z;
+                continue;
+            }
+            if (!light_tree_whole(node, r, scale, n)) {
+                i++;
+                continue;
+            }
+            vec3 a0 = lights[at + 2u].xyz, a1 = lights[at + 3u].xyz;
+            d = vec3[4](normalize(node.xyz + a0), normalize(node.xyz - a0),
+                        normalize(node.xyz + a1), normalize(node.xyz - a1));
+            light = lights[at + 1u].rgb;
+            i = range.z;
+        }
+        // A texel's shadow ray runs along its centre (as one by one); a node's along each of
+        // its sigma points.
+        bool texel = shadow_dir != vec3(0.0);
+        if (shadows && texel && occluded(origin, shadow_dir)) continue;
+        float k = 0.0;
+        if (many) {
+            // A texel by more than four quadrature nodes (large texels, narrow lobes).
+            for (uint q = q0 + LIGHT_HEADER_VEC4S; q < q0 + pc.light_stride; q++) {
+                k += brdf_eval_world(b, wo, t, bt, n, lights[q].xyz) * lights[q].w;
+            }
+        } else {
+            for (uint s = 0u; s < m; s++) {
+                if (shadows && !texel && occluded(origin, d[s])) continue;
+                k += brdf_eval_world(b, wo, t, bt, n, d[s]) * w[s];
+            }
+        }
+        sum += k * light;
+    }
+    return sum;
+}
+
 vec3 fis(Object ob, vec3 n, vec3 v, vec3 p, uvec2 pix) {
     Brdf b = Brdf(uint(ob.brdf.x), ob.brdf.y, ob.brdf.z);
     uint count = uint(ob.brdf.w);
@@ -236,27 +357,7 @@ vec3 fis(Object ob, vec3 n, vec3 v, vec3 p, uvec2 pix) {
     sum /= float(count);
     // With lights extracted the chain holds the residual; the light texels are added by the
     // BRDF itself (math::lights::light_sum_brdf's rule; extra.z the lobe's scale).
-    if (ob.extra.y > 0.5) {
-        vec3 r = 2.0 * dot(v, n) * n - v;
-        for (uint i = 0u; i < pc.lights; i++) {
-            uint at = i * pc.light_stride;
-            vec4 centre = lights[at];
-            vec4 light = lights[at + 1u];
-            if (pc.shadows != 0u && occluded(origin, centre.xyz)) continue;
-            float k = 0.0;
-            if (light_centre_only(light.w, light_scale2(ob.extra.z, r - centre.xyz), pc.light_stride)) {
-                vec3 wi = vec3(dot(centre.xyz, t), dot(centre.xyz, bt), dot(centre.xyz, n));
-                k = brdf_eval_cos(b, wo, wi) * centre.w;
-            } else {
-                for (uint q = at + LIGHT_HEADER_VEC4S; q < at + pc.light_stride; q++) {
-                    vec3 d = lights[q].xyz;
-                    vec3 wi = vec3(dot(d, t), dot(d, bt), dot(d, n));
-                    k += brdf_eval_cos(b, wo, wi) * lights[q].w;
-                }
-            }
-            sum += k * light.rgb;
-        }
-    }
+    if (ob.extra.y > 0.5) sum += fis_lights(b, wo, t, bt, n, 2.0 * dot(v, n) * n - v, ob.extra.z, origin);
     return sum;
 }
 
@@ -314,21 +415,65 @@ vec3 split_sum(Object ob, vec3 n, vec3 v, vec3 r) {
         float a = max(ob.brdf.y, GGX_ALPHA_MIN);
         float a2 = a * a;
         vec3 sum = vec3(0.0);
-        for (uint i = 0u; i < pc.lights; i++) {
-            uint at = i * pc.light_stride;
-            vec4 centre = lights[at];
-            vec4 light = lights[at + 1u];
-            vec3 e = r - centre.xyz;
-            float k = 0.0;
-            if (light_centre_only(light.w, light_scale2(a, e), pc.light_stride)) {
-                k = chain_kernel(a2, 0.5 * dot(e, e)) * centre.w;
+        // One item per iteration, a texel of the current leaf or a node (see fis_lights).
+        uint i = 0u, j = 0u, end = 0u;
+        for (uint step = 0u; step < pc.tree_nodes + pc.lights; step++) {
+            if (j >= end && i >= pc.tree_nodes) break;
+            vec3 d[4];
+            vec4 w = vec4(0.25);
+            vec3 light;
+            uint m = 4u, q0 = 0u;
+            bool many = false;
+            if (j < end) {
+                q0 = j * pc.light_stride;
+                vec4 centre = lights[q0];
+                vec4 l = lights[q0 + 1u];
+                light = l.rgb;
+                j++;
+                if (light_centre_only(l.w, light_scale2(a, r - centre.xyz), pc.light_stride)) {
+                    d[0] = centre.xyz;
+                    w.x = centre.w;
+                    m = 1u;
+                } else if (pc.light_stride == LIGHT_HEADER_VEC4S + 4u) {
+                    vec4 p0 = lights[q0 + 2u], p1 = lights[q0 + 3u], p2 = lights[q0 + 4u], p3 = lights[q0 + 5u];
+                    d = vec3[4](p0.xyz, p1.xyz, p2.xyz, p3.xyz);
+                    w = vec4(p0.w, p1.w, p2.w, p3.w);
+                } else {
+                    many = true;
+                }
             } else {
-                for (uint q = at + LIGHT_HEADER_VEC4S; q < at + pc.light_stride; q++) {
-                    vec3 d = r - lights[q].xyz;
-                    k += chain_kernel(a2, 0.5 * dot(d, d)) * lights[q].w;
+                uint at = pc.tree_at + i * LIGHT_TREE_VEC4S;
+                vec4 node = lights[at];
+                uvec4 range = uvec4(lights[at + 4u]);
+                if (range.y <= LIGHT_LEAF_TEXELS) {
+                    j = range.x;
+                    end = range.x + range.y;
+                    i = range.z;
+                    continue;
+                }
+                if (!light_tree_whole(node, r, a, r)) {
+                    i++;
+                    continue;
+                }
+                vec3 a0 = lights[at + 2u].xyz, a1 = lights[at + 3u].xyz;
+                d = vec3[4](normalize(node.xyz + a0), normalize(node.xyz - a0),
+                            normalize(node.xyz + a1), normalize(node.xyz - a1));
+                light = lights[at + 1u].rgb;
+                i = range.z;
+            }
+            float k = 0.0;
+            if (many) {
+                for (uint q = q0 + LIGHT_HEADER_VEC4S; q < q0 + pc.light_stride; q++) {
+                    vec3 e = r - lights[q].xyz;
+                    k += chain_kernel(a2, 0.5 * dot(e, e)) * lights[q].w;
+                }
+            } else {
+                for (uint s = 0u; s < m; s++) {
+                    vec3 e = r - d[s];
+                    k += chain_kernel(a2, 0.5 * dot(e, e)) * w[s];
                 }
             }
-            sum += k * light.rgb;
+            sum += k * light;
         }
         p += sum * ob.extra.w;
     }

@@ -64,10 +64,11 @@ pub struct Environment {
     #[serde(default)]
     pub lights: LightsMode,
     /// FIS, split-sum and footprint lookups: a texel is a light texel above this many times
-    /// the map's mean luminance (default 32).
+    /// the map's mean luminance (default 2, [`crate::abi::lights::CHAIN_RATIO`]).
     #[serde(default)]
     pub light_ratio: Option<f64>,
-    /// Most light texels for FIS, split-sum and footprint lookups (default 256).
+    /// Most light texels for FIS, split-sum and footprint lookups (default and most 16384,
+    /// [`crate::abi::lights::CHAIN_MAX_TEXELS`]).
     #[serde(default)]
     pub light_texels: Option<u32>,
     /// Diffuse techniques (SH and prefiltered irradiance) extract texels above this many
@@ -106,7 +107,7 @@ impl Environment {
 
     /// The light extraction this environment asks for.
     pub fn extract_options(&self) -> crate::math::lights::ExtractOptions {
-        let d = crate::math::lights::ExtractOptions::default();
+        let d = crate::math::lights::ExtractOptions::chain();
         crate::math::lights::ExtractOptions {
             ratio: self.light_ratio.unwrap_or(d.ratio),
             max_texels: self.light_texels.map_or(d.max_texels, |n| n as usize),
@@ -451,9 +452,10 @@ impl Scene {
             }
         }
         if let Some(n) = self.environment.light_texels {
-            if !(1..=65536).contains(&n) {
+            if !(1..=crate::abi::lights::CHAIN_MAX_TEXELS).contains(&n) {
                 return Err(format!(
-                    "environment light_texels {n} is outside 1 to 65536"
+                    "environment light_texels {n} is outside 1 to {}",
+                    crate::abi::lights::CHAIN_MAX_TEXELS
                 ));
             }
         }

@@ -391,12 +391,15 @@ fn fis_pass_matches_its_float64_twin() {
                 bias: None,
                 rotate,
             };
-            let sc = scene(
+            let mut sc = scene(
                 cam,
                 vec![object(unit_sphere(), kind, [1.0; 3], technique)],
                 false,
                 size,
             );
+            // The pass alone: the chain holds the whole map (a smooth map still has texels
+            // above the default extraction's 2 × the mean).
+            sc.environment.lights = envlight::scene::LightsMode::None;
             let r = render(&ctx, &sc, &env).unwrap();
             let (mut worst, mut n) = (0.0f64, 0);
             for j in 0..cam.height {
@@ -433,19 +436,20 @@ fn fis_pass_matches_its_float64_twin() {
 
 /// FIS with lights extracted (the default) against its float64 twin: the estimate over the
 /// residual's float64 conversion and MIP chain (`math::fis::estimate`) plus the light texels
-/// under the BRDF (`math::lights::light_sum_brdf`), on the sky whose sun is 5·10⁴ × the
+/// under the BRDF through their tree (`math::light_tree::LightTree::sum_brdf`), on the sky whose sun is 5·10⁴ × the
 /// zenith, for GGX, Phong, Ward and Lambert, 16 samples. Tolerance 1e-4 relative as above
 /// (measured: printed); and the sun's light reaches the lit pixels (the lights are added).
 #[test]
 fn fis_with_lights_matches_its_float64_twin() {
     use envlight::math::fis as fis64;
-    use envlight::math::lights::{extract, light_sum_brdf, lobe_scale, prepare, ExtractOptions};
+    use envlight::math::light_tree::LightTree;
+    use envlight::math::lights::{extract, lobe_scale, prepare, ExtractOptions};
     use envlight::math::synth::Sky;
     let ctx = common::ctx();
     {
         let sky = Sky::default();
         let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, move |d| sky.radiance(d));
-        let ex = extract(&env, &ExtractOptions::default());
+        let ex = extract(&env, &ExtractOptions::chain());
         assert!(!ex.lights.is_empty());
         let size = 32;
         let chain = mip::chain(&common::dp_f64(&ex.residual, size));
@@ -460,7 +464,7 @@ fn fis_with_lights_matches_its_float64_twin() {
             Brdf::Lambert,
         ] {
             let scale = lobe_scale(&kind).unwrap();
-            let prepared = prepare(&env, &ex, glam::DMat3::IDENTITY, scale.min(1.0));
+            let tree = LightTree::new(prepare(&env, &ex, glam::DMat3::IDENTITY, scale.min(1.0)));
             let technique = Technique::Fis {
                 samples: 16,
                 bias: None,
@@ -485,7 +489,7 @@ fn fis_with_lights_matches_its_float64_twin() {
                     }
                     let bias = envlight::abi::defaults::FIS_BIAS;
                     let f = fis64::estimate(&chain, &kind, hit.normal, -d, 16, bias, [0.0; 2]);
-                    let l = light_sum_brdf(&prepared, &kind, hit.normal, -d, scale);
+                    let l = tree.sum_brdf(&kind, hit.normal, -d, scale);
                     let px = r.frame.texels[(j * cam.width + i) as usize];
                     for c in 0..3 {
                         let want = f[c] + l[c];

@@ -133,7 +133,7 @@ fn footprint_lookups_match_their_float64_twin() {
             let frame = render(&ctx, &sc, &env).unwrap().frame;
             let (source, prepared) = match lights {
                 LightsMode::Extract => {
-                    let ex = extract(&env, &ExtractOptions::default());
+                    let ex = extract(&env, &ExtractOptions::chain());
                     assert!(!ex.lights.is_empty());
                     let p = prepare(&env, &ex, glam::DMat3::IDENTITY, 1.0);
                     (ex.residual, p)
@@ -229,7 +229,9 @@ fn mirror_footprint_on_real_probes() {
         let cases = [
             ("spiaggia_di_mondello_1k.hdr", 0.0082, 0.0338),
             ("quarry_01_1k.hdr", 0.0064, 0.0406),
-            ("studio_small_08_1k.hdr", 0.0139, 0.0582),
+            // Session 17's deep extraction (2 × the mean) moves its softboxes from the chain
+            // to the light texels' linearised shares: 1.39% → 2.57% (FIS there: 19% → 5%).
+            ("studio_small_08_1k.hdr", 0.0257, 0.0621),
             ("photo_studio_01_1k.hdr", 0.0073, 0.0370),
             ("venice_sunset_1k.hdr", 0.0073, 0.0235),
         ];

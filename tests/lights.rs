@@ -472,7 +472,7 @@ fn lobes_too_narrow_for_the_light_texels_read_the_whole_map() {
     let ctx = common::ctx();
     {
         let env = sky(Mapping::LatLong, 256);
-        let ex = extract(&env, &ExtractOptions::default());
+        let ex = extract(&env, &ExtractOptions::chain());
         assert!(!envlight::math::lights::resolves(&ex, 1e-3));
         let renderer = Renderer::new(&ctx);
         let frames: Vec<EnvMap> = [LightsMode::Extract, LightsMode::None]

@@ -78,6 +78,10 @@
 #define LIGHT_PER_WIDTH 4.0
 #define LIGHT_CENTRE_BELOW 0.2
 #define LIGHT_TAIL_FRACTION 0.125
+#define LIGHT_TREE_BELOW 0.35
+#define LIGHT_LEAF_TEXELS 4u
+#define LIGHT_TREE_TAIL 0.25
+#define LIGHT_TREE_VEC4S 5u
 #define FOOTPRINT_MIN_TAPS 8u
 #define FOOTPRINT_MAX_TAPS 16u
 #define FOOTPRINT_MIRROR 1u
@@ -140,7 +144,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_BrutePush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint texels; float exponent; uint chunk_begin; uint chunk_end; uint src_layers; uint src_level; } pc;
 #define PUSH_ShEvalPush layout(push_constant) uniform Push { uvec2 dst_size; uint dst_mapping; uint lmax; } pc;
 #define PUSH_GBufferPush layout(push_constant) uniform Push { vec4 eye; vec4 forward; vec4 right; vec4 up; uvec2 size; uint ortho; uint count; } pc;
-#define PUSH_ShadePush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint env_mapping; uint count; uint dp_size; float max_lod; uint shadows; uint mc_samples; uint sh_rotation; uint lights; uint light_stride; uint footprint; uint clusters; uint cluster_at; } pc;
+#define PUSH_ShadePush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint env_mapping; uint count; uint dp_size; float max_lod; uint shadows; uint mc_samples; uint sh_rotation; uint lights; uint light_stride; uint footprint; uint clusters; uint cluster_at; uint tree_nodes; uint tree_at; } pc;
 #define PUSH_ShBrdfPush layout(push_constant) uniform Push { uint grid; float p0; float p1; uint offset; uint panel; uint[3] pad; } pc;
 #define PUSH_DfgPush layout(push_constant) uniform Push { uint size; uint correlated; uint offset; uint panel; } pc;
 #define PUSH_PrefilterGgxPush layout(push_constant) uniform Push { uint size; uint src_size; float src_max_lod; float alpha; uint samples; float bias; uint dst_mapping; uint pad; } pc;

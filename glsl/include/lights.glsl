@@ -24,4 +24,12 @@ bool light_centre_only(float rho, float w2, uint stride) {
     float c = LIGHT_PER_WIDTH * rho / LIGHT_CENTRE_BELOW;
     return stride == LIGHT_HEADER_VEC4S || c * c < w2;
 }
+
+// Whether a light tree node (centre.xyz, reach in .w) is taken whole by a kernel of scale
+// `scale` about r whose cut plane has normal `cut` (math::light_tree::takes_whole).
+bool light_tree_whole(vec4 node, vec3 r, float scale, vec3 cut) {
+    float far = max(length(r - node.xyz) - node.w, 0.0);
+    float w = max(scale, LIGHT_TREE_TAIL * far);
+    return node.w < LIGHT_TREE_BELOW * w && abs(dot(cut, node.xyz)) > node.w;
+}
 #endif

@@ -183,45 +183,118 @@ fn overlap(s: f64, h: f64) -> f64 {
 /// about `r`) the texel covers. A footprint of area below [`MIN_SPREAD`]² is a point, which
 /// a texel covers wholly or not at all.
 pub fn light_overlap(lights: &[PreparedLight], r: DVec3, a: DVec3, b: DVec3) -> [f64; 3] {
-    let f = Frame::new(r);
-    let (j00, j01, j10, j11) = (a.dot(f.t), b.dot(f.t), a.dot(f.b), b.dot(f.b));
-    let det = j00 * j11 - j01 * j10;
-    let point = det.abs() < MIN_SPREAD * MIN_SPREAD;
-    // Rows of J⁻¹ and their lengths; k scales half sides so a texel's area is Ω/|det J|.
-    let inv = if point { 0.0 } else { 1.0 / det };
-    let (i00, i01, i10, i11) = (j11 * inv, -j01 * inv, -j10 * inv, j00 * inv);
-    let (n0, n1) = (i00.hypot(i01), i10.hypot(i11));
-    let k = if point {
-        0.0
-    } else {
-        0.5 / (n0 * n1 * det.abs()).sqrt()
-    };
-    let mut sum = [0.0; 3];
-    for t in lights {
-        let c = t.dir.dot(r);
-        if c <= 0.0 {
-            continue;
-        }
-        // Gnomonic projection of the texel's centre onto the tangent plane at r.
-        let e = t.dir / c - r;
-        let (ex, ey) = (e.dot(f.t), e.dot(f.b));
-        let share = if point {
-            let h = 0.5 * t.rho;
-            if ex.abs() <= h && ey.abs() <= h {
-                1.0
-            } else {
-                0.0
-            }
+    OverlapShape::new(r, a, b).sum(lights)
+}
+
+/// A pixel's footprint (`a`, `b` about `r`) as [`light_overlap`] measures texels against it:
+/// the tangent frame at r and the inverse of the footprint's Jacobian there.
+pub struct OverlapShape {
+    r: DVec3,
+    f: Frame,
+    point: bool,
+    inv: [f64; 4],
+    n: [f64; 2],
+    k: f64,
+    /// The Jacobian's Frobenius norm.
+    jn: f64,
+}
+
+impl OverlapShape {
+    /// The shape of footprint `a`, `b` about `r`.
+    pub fn new(r: DVec3, a: DVec3, b: DVec3) -> OverlapShape {
+        let f = Frame::new(r);
+        let (j00, j01, j10, j11) = (a.dot(f.t), b.dot(f.t), a.dot(f.b), b.dot(f.b));
+        let det = j00 * j11 - j01 * j10;
+        let point = det.abs() < MIN_SPREAD * MIN_SPREAD;
+        // Rows of J⁻¹ and their lengths; k scales half sides so a texel's area is Ω/|det J|.
+        let inv = if point { 0.0 } else { 1.0 / det };
+        let (i00, i01, i10, i11) = (j11 * inv, -j01 * inv, -j10 * inv, j00 * inv);
+        let (n0, n1) = (i00.hypot(i01), i10.hypot(i11));
+        let k = if point {
+            0.0
         } else {
-            let (s, q) = (i00 * ex + i01 * ey, i10 * ex + i11 * ey);
-            let h = k * t.rho;
-            overlap(s, h * n0) * overlap(q, h * n1)
+            0.5 / (n0 * n1 * det.abs()).sqrt()
         };
-        for (x, l) in sum.iter_mut().zip(t.radiance) {
-            *x += share * l;
+        OverlapShape {
+            r,
+            f,
+            point,
+            inv: [i00, i01, i10, i11],
+            n: [n0, n1],
+            k,
+            jn: (j00 * j00 + j01 * j01 + j10 * j10 + j11 * j11).sqrt(),
         }
     }
-    sum
+
+    /// Σ over `lights` of the excess radiance times the share of the pixel each covers.
+    pub fn sum(&self, lights: &[PreparedLight]) -> [f64; 3] {
+        let [i00, i01, i10, i11] = self.inv;
+        let [n0, n1] = self.n;
+        let mut sum = [0.0; 3];
+        for t in lights {
+            let c = t.dir.dot(self.r);
+            if c <= 0.0 {
+                continue;
+            }
+            // Gnomonic projection of the texel's centre onto the tangent plane at r.
+            let e = t.dir / c - self.r;
+            let (ex, ey) = (e.dot(self.f.t), e.dot(self.f.b));
+            let share = if self.point {
+                let h = 0.5 * t.rho;
+                if ex.abs() <= h && ey.abs() <= h {
+                    1.0
+                } else {
+                    0.0
+                }
+            } else {
+                let (s, q) = (i00 * ex + i01 * ey, i10 * ex + i11 * ey);
+                let h = self.k * t.rho;
+                overlap(s, h * n0) * overlap(q, h * n1)
+            };
+            for (x, l) in sum.iter_mut().zip(t.radiance) {
+                *x += share * l;
+            }
+        }
+        sum
+    }
+
+    /// Whether no texel of `node` can cover any of the pixel: every texel centre lies within
+    /// chord `reach` of the node's centre, so on the arc between them the dot with r is at
+    /// least c − reach, the gnomonic map stretches by at most 1/(c − reach)², and the arc is
+    /// at most π/2 times the chord: the texel's gnomonic point lies within G = π/2·reach/(c −
+    /// reach)² of the centre's. The texel's box reaches
+    /// k·ρ·n from its point in pixel units (½ρ in the plane for a point footprint).
+    /// Also, a texel it covers has its gnomonic point e within the pixel's box grown by the
+    /// texel's, so |e| = tan θ ≤ E (½ρ·√2 for a point footprint, else |J|·|(½ + k·ρ·n0, ½ +
+    /// k·ρ·n1)|): a node whose texels all lie further from r than that misses.
+    pub fn misses(&self, node: &super::light_tree::TreeNode) -> bool {
+        let c = node.centre.dot(self.r);
+        let e_max = if self.point {
+            std::f64::consts::FRAC_1_SQRT_2 * node.rho
+        } else {
+            let h = self.k * node.rho;
+            self.jn * (0.5 + h * self.n[0]).hypot(0.5 + h * self.n[1])
+        };
+        if c + node.reach < 1.0 / (1.0 + e_max * e_max).sqrt() {
+            return true;
+        }
+        let low = c - node.reach;
+        if low <= 0.0 {
+            return false;
+        }
+        let g = std::f64::consts::FRAC_PI_2 * node.reach / (low * low);
+        let e = node.centre / c - self.r;
+        let (ex, ey) = (e.dot(self.f.t), e.dot(self.f.b));
+        if self.point {
+            let h = 0.5 * node.rho;
+            return ex.abs() - g > h || ey.abs() - g > h;
+        }
+        let [i00, i01, i10, i11] = self.inv;
+        let [n0, n1] = self.n;
+        let h = self.k * node.rho;
+        let (s, q) = (i00 * ex + i01 * ey, i10 * ex + i11 * ey);
+        s.abs() - n0 * g >= 0.5 + h * n0 || q.abs() - n1 * g >= 0.5 + h * n1
+    }
 }
 
 /// The pixel-area mean a footprint-filtered render estimates, by brute force: each pixel of

@@ -36,6 +36,19 @@ impl Default for ExtractOptions {
     }
 }
 
+impl ExtractOptions {
+    /// The renderer's default for the chain that FIS, split-sum and footprint lookups read
+    /// ([`crate::abi::lights::CHAIN_RATIO`], [`crate::abi::lights::CHAIN_MAX_TEXELS`]):
+    /// deeper than [`Default`] (the bake's, whose per-texel sums have no tree), the texels
+    /// summed through a [`super::light_tree::LightTree`].
+    pub fn chain() -> ExtractOptions {
+        ExtractOptions {
+            ratio: crate::abi::lights::CHAIN_RATIO,
+            max_texels: crate::abi::lights::CHAIN_MAX_TEXELS as usize,
+        }
+    }
+}
+
 /// One light texel: its excess radiance over the residual's clamp.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightTexel {
@@ -268,31 +281,41 @@ pub fn prepare(
 /// there (α at GGX's peak, [`TAIL_FRACTION`] of the chord in its θ⁻⁴ tail, a radian for the
 /// cosine), else by its nodes. The float64 twin of `glsl/lights.comp`.
 pub fn light_sum(lights: &[PreparedLight], r: DVec3, kernel: LightKernel) -> [f64; 3] {
-    let kern = |w: DVec3| {
-        let g = 0.5 * (r - w).length_squared();
-        match kernel {
-            LightKernel::Cosine => (1.0 - g).max(0.0),
-            LightKernel::Ggx { alpha } => super::split_sum::chain_kernel(alpha, g),
-        }
-    };
+    let (scale, kern) = kernel_of(kernel, r);
     let mut sum = [0.0; 3];
     for t in lights {
-        let width = match kernel {
-            LightKernel::Cosine => scale_at(1.0, (r - t.dir).length()),
-            LightKernel::Ggx { alpha } => {
-                scale_at(alpha.max(super::brdf::GGX_ALPHA_MIN), (r - t.dir).length())
-            }
-        };
-        let k = if centre_only(t, width) {
-            kern(t.dir) * t.omega
-        } else {
-            t.nodes.iter().map(|&(d, w)| kern(d) * w).sum()
-        };
+        let k = texel_integral(t, scale, r, &kern);
         for (s, l) in sum.iter_mut().zip(t.radiance) {
             *s += k * l;
         }
     }
     sum
+}
+
+/// A kernel's scale and its value along a direction, about `r`.
+pub(crate) fn kernel_of(kernel: LightKernel, r: DVec3) -> (f64, impl Fn(DVec3) -> f64) {
+    let scale = match kernel {
+        LightKernel::Cosine => 1.0,
+        LightKernel::Ggx { alpha } => alpha.max(super::brdf::GGX_ALPHA_MIN),
+    };
+    (scale, move |w: DVec3| {
+        let g = 0.5 * (r - w).length_squared();
+        match kernel {
+            LightKernel::Cosine => (1.0 - g).max(0.0),
+            LightKernel::Ggx { alpha } => super::split_sum::chain_kernel(alpha, g),
+        }
+    })
+}
+
+/// ∫_t K dω over light texel `t` (radiance not applied) for a kernel `kern` of scale `scale`
+/// about `r`: by its centre where [`PER_WIDTH`]·ρ < [`CENTRE_BELOW`]·w (w the scale, or
+/// [`TAIL_FRACTION`] of the chord to `r` in the tail), else by its nodes.
+pub fn texel_integral(t: &PreparedLight, scale: f64, r: DVec3, kern: impl Fn(DVec3) -> f64) -> f64 {
+    if centre_only(t, scale_at(scale, (r - t.dir).length())) {
+        kern(t.dir) * t.omega
+    } else {
+        t.nodes.iter().map(|&(d, w)| kern(d) * w).sum()
+    }
 }
 
 /// The angular scale of `brdf`'s lobe about the reflected direction, what [`light_sum_brdf`]
@@ -328,11 +351,7 @@ pub fn light_sum_brdf(
     let eval = |d: DVec3| brdf.eval_cos(wo, frame.to_local(d));
     let mut sum = [0.0; 3];
     for t in lights {
-        let k = if centre_only(t, scale_at(scale, (r - t.dir).length())) {
-            eval(t.dir) * t.omega
-        } else {
-            t.nodes.iter().map(|&(d, w)| eval(d) * w).sum()
-        };
+        let k = texel_integral(t, scale, r, eval);
         for (s, l) in sum.iter_mut().zip(t.radiance) {
             *s += k * l;
         }

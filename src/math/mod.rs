@@ -11,6 +11,7 @@ pub mod exact;
 pub mod filter;
 pub mod fis;
 pub mod footprint;
+pub mod light_tree;
 pub mod lights;
 pub mod mapping;
 pub mod mc;

@@ -7,6 +7,7 @@ use crate::abi::lights::{KERNEL_CLUSTERS, KERNEL_COSINE, KERNEL_GGX};
 use crate::abi::{binding, push::LightsPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder};
+use crate::math::light_tree::LightTree;
 use crate::math::lights::{
     cluster_list, clusters, gpu_list, prepare, Cluster, Extraction, LightKernel, PreparedLight,
     CLUSTER_GRID,
@@ -22,6 +23,7 @@ pub struct GpuLights {
     count: u32,
     nodes: u32,
     clusters: u32,
+    tree_nodes: u32,
 }
 
 impl GpuLights {
@@ -30,7 +32,8 @@ impl GpuLights {
         Self::upload_with_clusters(ctx, lights, &[])
     }
 
-    /// Uploads `lights` (all with the same number of nodes) and `clusters`.
+    /// Uploads `lights` (all with the same number of nodes) in the order of their tree
+    /// ([`LightTree`]), then `clusters`, then the tree's nodes.
     pub fn upload_with_clusters(
         ctx: &Context,
         lights: &[PreparedLight],
@@ -42,8 +45,10 @@ impl GpuLights {
                 "light texels with different node counts".into(),
             ));
         }
-        let mut list = gpu_list(lights);
+        let tree = LightTree::new(lights.to_vec());
+        let mut list = gpu_list(&tree.lights);
         list.extend(cluster_list(clusters));
+        list.extend(tree.gpu_nodes());
         if list.is_empty() {
             list.push([0.0; 4]);
         }
@@ -52,7 +57,18 @@ impl GpuLights {
             count: lights.len() as u32,
             nodes,
             clusters: clusters.len() as u32,
+            tree_nodes: tree.nodes.len() as u32,
         })
+    }
+
+    /// Nodes of the light texels' tree.
+    pub fn tree_nodes(&self) -> u32 {
+        self.tree_nodes
+    }
+
+    /// Where the tree's nodes start in the buffer, in vec4s.
+    pub fn tree_at(&self) -> u32 {
+        self.cluster_at() + self.clusters * crate::abi::lights::CLUSTER_VEC4S
     }
 
     /// The lights of `map` on the GPU, or `None` where neither extraction is given: the
@@ -95,7 +111,7 @@ impl GpuLights {
         crate::abi::lights::HEADER_VEC4S + self.nodes
     }
 
-    /// The buffer ([`crate::math::lights::gpu_list`]'s layout).
+    /// The buffer ([`crate::math::lights::gpu_list`]'s layout for the texels, in tree order).
     pub fn buffer(&self) -> &Buffer {
         &self.buffer
     }

@@ -146,6 +146,8 @@ impl Shade {
             light_stride: inputs.lights.map_or(0, |l| l.stride()),
             clusters: inputs.lights.map_or(0, |l| l.clusters()),
             cluster_at: inputs.lights.map_or(0, |l| l.cluster_at()),
+            tree_nodes: inputs.lights.map_or(0, |l| l.tree_nodes()),
+            tree_at: inputs.lights.map_or(0, |l| l.tree_at()),
             footprint: inputs.footprint.flags(),
         };
         let camera = match (inputs.footprint.flags(), gbuf.camera) {
