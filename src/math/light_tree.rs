@@ -182,7 +182,7 @@ impl LightTree {
 
 /// Whether node `n` is taken whole by a kernel of scale `scale` about `r` whose cut plane has
 /// normal `cut`: small against the kernel's scale at its nearest point (TREE_BELOW·w, w the
-/// scale or TAIL_FRACTION of the chord in the tail), and clear of the cut.
+/// scale or TREE_TAIL of the chord in the tail), and clear of the cut.
 pub fn takes_whole(n: &TreeNode, r: DVec3, scale: f64, cut: DVec3) -> bool {
     let far = ((r - n.centre).length() - n.reach).max(0.0);
     let w = scale.max(TREE_TAIL * far);
