@@ -209,6 +209,7 @@ pub struct Renderer {
     sh_brdf: OnceCell<ShBrdfProjector>,
     split: OnceCell<SplitSum>,
     sh_rotation: Rotation,
+    subgroups: Subgroups,
 }
 
 /// The pass in `cell`, built by `make` on first use.
@@ -263,7 +264,15 @@ impl Renderer {
             sh_brdf: OnceCell::new(),
             split: OnceCell::new(),
             sh_rotation: Rotation::Zxzxz,
+            subgroups: Subgroups::Auto,
         }
+    }
+
+    /// Whether passes built from now on may use subgroup operations (the default: where the
+    /// device has them); [`Subgroups::Off`] tests the fallbacks. Passes already built keep
+    /// theirs.
+    pub fn set_subgroups(&mut self, subgroups: Subgroups) {
+        self.subgroups = subgroups;
     }
 
     /// Rotates SH-BRDF vectors with `rotation` from now on (the default is zxzxz).
@@ -291,7 +300,7 @@ impl Renderer {
 
         // Build the passes first: pipeline creation is not GPU work.
         let sh_pass = if needs(PassKind::ShProjection) {
-            Some(pass(&self.sh, || ShProjector::new(ctx, Subgroups::Auto))?)
+            Some(pass(&self.sh, || ShProjector::new(ctx, self.subgroups))?)
         } else {
             None
         };
@@ -752,7 +761,7 @@ impl Renderer {
             mc = Some(res);
         }
 
-        let shade = pass(&self.shade, || Shade::new(ctx))?;
+        let shade = pass(&self.shade, || Shade::with_subgroups(ctx, self.subgroups))?;
         let frame = target(ctx, "shaded frame", gbuf.width, gbuf.height)?;
         let inputs = ShadeInputs {
             env: &env_gpu,

@@ -337,9 +337,11 @@ fn render_with_lights_matches_its_float64_twin() {
                 let v = -d;
                 let base = split_sum::shade(&chain, &table, 16, alpha, normal, v);
                 let rdir = 2.0 * normal.dot(v) * normal - v;
-                let l = tree.sum(rdir, LightKernel::Ggx { alpha });
                 let mu = local_view(&Frame::new(normal), v).z.clamp(0.0, 1.0);
                 let ab = split_sum::dfg_lookup(&table, 16, mu, alpha);
+                // The chain's own radiance, in the light sum's units.
+                let chain_lum = envlight::envmap::luminance(base) / (ab[0] + ab[1]) * norm;
+                let l = tree.sum(rdir, LightKernel::Ggx { alpha }, chain_lum);
                 for c in 0..3 {
                     let want = base[c] + l[c] / norm * (ab[0] + ab[1]);
                     let g = r.frame.texels[k][c] as f64;

@@ -25,11 +25,19 @@ bool light_centre_only(float rho, float w2, uint stride) {
     return stride == LIGHT_HEADER_VEC4S || c * c < w2;
 }
 
-// Whether a light tree node (centre.xyz, reach in .w) is taken whole by a kernel of scale
-// `scale` about r whose cut plane has normal `cut` (math::light_tree::takes_whole).
-bool light_tree_whole(vec4 node, vec3 r, float scale, vec3 cut) {
+// Whether a light tree node (centre.xyz, reach in .w; its power's luminance `lum`) is taken
+// whole by a kernel of scale `scale` about r whose cut plane has normal `cut`, a node
+// allowed an error `allowance` (math::light_tree::takes_whole).
+bool light_tree_whole(vec4 node, float lum, vec3 r, float scale, vec3 cut, float allowance) {
     float far = max(length(r - node.xyz) - node.w, 0.0);
     float w = max(scale, LIGHT_TREE_TAIL * far);
-    return node.w < LIGHT_TREE_BELOW * w && abs(dot(cut, node.xyz)) > node.w;
+    float q = node.w / w;
+    bool clear = abs(dot(cut, node.xyz)) > node.w;
+    if (clear && q < LIGHT_TREE_BELOW) return true;
+    // math::light_tree::kernel_bound
+    float s2 = scale * scale, d = s2 + 0.25 * far * far;
+    float e = lum * s2 / (PI * d * d);
+    if (clear) e *= q * q * q * q;
+    return q < LIGHT_TREE_BUDGET_REACH && e <= allowance;
 }
 #endif

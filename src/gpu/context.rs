@@ -171,6 +171,8 @@ pub struct DeviceInfo {
     pub subgroup_size: u32,
     /// Whether compute shaders have subgroup arithmetic (subgroupAdd).
     pub subgroup_arithmetic: bool,
+    /// Whether fragment shaders have subgroup vote operations (subgroupAll).
+    pub fragment_vote: bool,
     /// Largest workgroup count in one dispatch dimension.
     pub max_workgroup_count: u32,
     /// Most loop iterations one shader invocation may run before the driver cuts its loops
@@ -421,6 +423,12 @@ impl Context {
                 && subgroup.supported_operations.contains(
                     vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::ARITHMETIC,
                 ),
+            fragment_vote: subgroup
+                .supported_stages
+                .contains(vk::ShaderStageFlags::FRAGMENT)
+                && subgroup
+                    .supported_operations
+                    .contains(vk::SubgroupFeatureFlags::VOTE),
             max_workgroup_count: props.limits.max_compute_work_group_count[0],
             loop_iteration_limit: (driver_props.driver_id == vk::DriverId::MESA_LLVMPIPE)
                 .then_some(65535),

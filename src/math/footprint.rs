@@ -266,7 +266,9 @@ impl OverlapShape {
     /// k·ρ·n from its point in pixel units (½ρ in the plane for a point footprint).
     /// Also, a texel it covers has its gnomonic point e within the pixel's box grown by the
     /// texel's, so |e| = tan θ ≤ E (½ρ·√2 for a point footprint, else |J|·|(½ + k·ρ·n0, ½ +
-    /// k·ρ·n1)|): a node whose texels all lie further from r than that misses.
+    /// k·ρ·n1)|), and its centre lies within chord 2·sin(θ/2) ≤ tan θ ≤ E of r: a node whose
+    /// centre lies further than reach + E from r misses (a bound in chords: in cosines it
+    /// was √(2·reach) wide, and a point footprint on studio_small_08 walked 71 nodes).
     pub fn misses(&self, node: &super::light_tree::TreeNode) -> bool {
         let c = node.centre.dot(self.r);
         let e_max = if self.point {
@@ -275,7 +277,7 @@ impl OverlapShape {
             let h = self.k * node.rho;
             self.jn * (0.5 + h * self.n[0]).hypot(0.5 + h * self.n[1])
         };
-        if c + node.reach < 1.0 / (1.0 + e_max * e_max).sqrt() {
+        if (node.centre - self.r).length() > node.reach + e_max {
             return true;
         }
         let low = c - node.reach;

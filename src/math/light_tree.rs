@@ -8,8 +8,10 @@
 //! small against the kernel's scale there ([`TREE_BELOW`]) and no cut (the horizon) crosses
 //! it: its power times the kernel's mean over four sigma points, which match the node's
 //! luminance-weighted mean and covariance of direction, so the error is of fourth order in
-//! the node's size. Elsewhere the walk descends, and leaves sum their texels by the
-//! per-texel rule of [`super::lights::light_sum`]. Footprint lookups only cull: a node whose
+//! the node's size. A node up to the kernel's scale wide, or one the horizon crosses, is
+//! also taken whole where the error it can make is below [`TREE_BUDGET`] of the pixel's
+//! estimate without the lights. Elsewhere the walk descends, and leaves sum their texels by
+//! the per-texel rule of [`super::lights::light_sum`]. Footprint lookups only cull: a node whose
 //! texels cannot touch the pixel is skipped, so their sum is the brute one exactly.
 
 use super::brdf::{local_view, Brdf, Frame};
@@ -17,7 +19,9 @@ use super::lights::{kernel_of, texel_integral, LightKernel, PreparedLight};
 use crate::envmap::luminance;
 use glam::DVec3;
 
-pub use crate::abi::lights::{LEAF_TEXELS, TREE_BELOW, TREE_TAIL, TREE_VEC4S};
+pub use crate::abi::lights::{
+    LEAF_TEXELS, TREE_BELOW, TREE_BUDGET, TREE_BUDGET_REACH, TREE_TAIL, TREE_VEC4S,
+};
 
 /// A node of a [`LightTree`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -73,7 +77,7 @@ impl LightTree {
     }
 
     /// The GPU's list of nodes, [`TREE_VEC4S`] each: (centre, reach), (power, ρ), (axis 0,
-    /// 0), (axis 1, 0), (first, count, skip, 0) as float values (exact below 2²⁴; as bits
+    /// the power's luminance), (axis 1, 0), (first, count, skip, 0) as float values (exact below 2²⁴; as bits
     /// they would be denormals, which llvmpipe flushes to zero).
     pub fn gpu_nodes(&self) -> Vec<[f32; 4]> {
         let bits = |u: u32| u as f32;
@@ -85,7 +89,7 @@ impl LightTree {
                 [
                     v(n.centre, n.reach),
                     [p[0] as f32, p[1] as f32, p[2] as f32, n.rho as f32],
-                    v(n.axes[0], 0.0),
+                    v(n.axes[0], luminance(n.power)),
                     v(n.axes[1], 0.0),
                     [bits(n.first), bits(n.count), bits(n.skip), 0.0],
                 ]
@@ -93,8 +97,8 @@ impl LightTree {
             .collect()
     }
 
-    /// Walks the tree: a leaf's texels by `texel` (its kernel integral, times its radiance);
-    /// an inner node that `whole` accepts by its power times `node`'s kernel mean; others
+    /// Walks the tree: a node that `whole` accepts by its power times `node`'s kernel mean;
+    /// other leaves' texels by `texel` (its kernel integral, times its radiance); other nodes
     /// descend.
     fn walk(
         &self,
@@ -106,19 +110,19 @@ impl LightTree {
         let mut i = 0;
         while i < self.nodes.len() {
             let n = &self.nodes[i];
-            if n.count <= LEAF_TEXELS {
+            if whole(n) {
+                let k = node(n);
+                for (s, p) in sum.iter_mut().zip(n.power) {
+                    *s += k * p;
+                }
+                i = n.skip as usize;
+            } else if n.count <= LEAF_TEXELS {
                 let at = n.first as usize;
                 for t in &self.lights[at..at + n.count as usize] {
                     let k = texel(t);
                     for (s, l) in sum.iter_mut().zip(t.radiance) {
                         *s += k * l;
                     }
-                }
-                i = n.skip as usize;
-            } else if whole(n) {
-                let k = node(n);
-                for (s, p) in sum.iter_mut().zip(n.power) {
-                    *s += k * p;
                 }
                 i = n.skip as usize;
             } else {
@@ -129,24 +133,30 @@ impl LightTree {
     }
 
     /// [`super::lights::light_sum`] through the tree: the texels under `kernel` about `r`.
-    pub fn sum(&self, r: DVec3, kernel: LightKernel) -> [f64; 3] {
+    /// `estimate` is the luminance of the rest of the pixel's sum in the same units (the
+    /// residual's), which sets the error a node may make ([`TREE_BUDGET`] of it); 0 keeps the
+    /// geometric rule alone.
+    pub fn sum(&self, r: DVec3, kernel: LightKernel, estimate: f64) -> [f64; 3] {
         let (scale, kern) = kernel_of(kernel, r);
+        let allowance = TREE_BUDGET * estimate;
         self.walk(
-            |n| takes_whole(n, r, scale, r),
+            |n| takes_whole(n, r, scale, r, allowance),
             |n| 0.25 * n.sigma().iter().map(|&d| kern(d)).sum::<f64>(),
             |t| texel_integral(t, scale, r, &kern),
         )
     }
 
     /// [`super::lights::light_sum_brdf`] through the tree: the texels under `brdf` at normal
-    /// `n` seen along `v`, the lobe's scale `scale`.
-    pub fn sum_brdf(&self, brdf: &Brdf, n: DVec3, v: DVec3, scale: f64) -> [f64; 3] {
+    /// `n` seen along `v`, the lobe's scale `scale`; `estimate` as in [`LightTree::sum`] (the
+    /// luminance of FIS's estimate over the residual).
+    pub fn sum_brdf(&self, brdf: &Brdf, n: DVec3, v: DVec3, scale: f64, estimate: f64) -> [f64; 3] {
         let frame = Frame::new(n);
         let wo = local_view(&frame, v);
         let r = 2.0 * n.dot(v) * n - v;
         let eval = |d: DVec3| brdf.eval_cos(wo, frame.to_local(d));
+        let allowance = TREE_BUDGET * estimate * brdf_slack(wo.z, scale);
         self.walk(
-            |node| takes_whole(node, r, scale, n),
+            |node| takes_whole(node, r, scale, n, allowance),
             |node| 0.25 * node.sigma().iter().map(|&d| eval(d)).sum::<f64>(),
             |t| texel_integral(t, scale, r, eval),
         )
@@ -182,11 +192,37 @@ impl LightTree {
 
 /// Whether node `n` is taken whole by a kernel of scale `scale` about `r` whose cut plane has
 /// normal `cut`: small against the kernel's scale at its nearest point (TREE_BELOW·w, w the
-/// scale or TREE_TAIL of the chord in the tail), and clear of the cut.
-pub fn takes_whole(n: &TreeNode, r: DVec3, scale: f64, cut: DVec3) -> bool {
+/// scale or TREE_TAIL of the chord in the tail) and clear of the cut; or, up to
+/// TREE_BUDGET_REACH·w, where its luminance times [`kernel_bound`] (times (reach/w)⁴ where
+/// clear of the cut) is at most `allowance`, the error a node may make in the sum's units
+/// over [`brdf_slack`].
+pub fn takes_whole(n: &TreeNode, r: DVec3, scale: f64, cut: DVec3, allowance: f64) -> bool {
     let far = ((r - n.centre).length() - n.reach).max(0.0);
     let w = scale.max(TREE_TAIL * far);
-    n.reach < TREE_BELOW * w && cut.dot(n.centre).abs() > n.reach
+    let q = n.reach / w;
+    let clear = cut.dot(n.centre).abs() > n.reach;
+    if clear && q < TREE_BELOW {
+        return true;
+    }
+    let e = luminance(n.power) * kernel_bound(scale, far);
+    q < TREE_BUDGET_REACH && if clear { e * q.powi(4) } else { e } <= allowance
+}
+
+/// What the budget rule takes as the size of a kernel of scale `s` at chord `far` from its
+/// axis: GGX's D (α = s) at half that chord, s²/(π(s² + far²/4)²). It does not vanish
+/// behind the lobe, it bounds split-sum's kernel (D·G/4), and over [`brdf_slack`] it
+/// estimates a BRDF's D·G·F/(4 cos θ_o) at that chord (an estimate, not a bound: the
+/// half-vector is the BRDF's own).
+pub fn kernel_bound(s: f64, far: f64) -> f64 {
+    let s2 = s * s;
+    let d = s2 + 0.25 * far * far;
+    s2 / (std::f64::consts::PI * d * d)
+}
+
+/// A BRDF's lobe grows as 1/cos θ_o towards grazing views (GGX's masking caps it near
+/// 1/α): the allowance is scaled by max(cos θ_o, scale) to keep [`kernel_bound`] above it.
+pub fn brdf_slack(cos_o: f64, scale: f64) -> f64 {
+    cos_o.max(scale)
 }
 
 /// Builds the subtree over `order[..]` (indices into `lights`), its texels starting at
@@ -361,17 +397,17 @@ mod tests {
             for n in normals() {
                 let v = (n + 1.7 * n.any_orthonormal_vector()).normalize();
                 let want = light_sum_brdf(&p, &brdf, n, v, alpha);
-                let got = tree.sum_brdf(&brdf, n, v, alpha);
+                let got = tree.sum_brdf(&brdf, n, v, alpha, 0.0);
                 let r = 2.0 * n.dot(v) * n - v;
                 let k = LightKernel::Ggx { alpha };
-                let (w2, g2) = (light_sum(&p, r, k), tree.sum(r, k));
+                let (w2, g2) = (light_sum(&p, r, k), tree.sum(r, k, 0.0));
                 for c in 0..3 {
                     worst = worst.max((got[c] - want[c]).abs() / want[c].max(1e-9));
                     worst = worst.max((g2[c] - w2[c]).abs() / w2[c].max(1e-9));
                 }
                 // The same walk with nodes at their centres instead of sigma points.
                 let centre = tree.walk(
-                    |node| takes_whole(node, r, alpha, r),
+                    |node| takes_whole(node, r, alpha, r, 0.0),
                     |node| {
                         super::super::split_sum::chain_kernel(
                             alpha,
@@ -391,7 +427,7 @@ mod tests {
                 evals += tree
                     .nodes
                     .iter()
-                    .filter(|nd| takes_whole(nd, r, alpha, n))
+                    .filter(|nd| takes_whole(nd, r, alpha, n, 0.0))
                     .count();
             }
             eprintln!(
@@ -403,11 +439,68 @@ mod tests {
         let n = DVec3::new(0.3, 0.8, 0.5).normalize();
         let (want, got) = (
             light_sum(&p, n, LightKernel::Cosine),
-            tree.sum(n, LightKernel::Cosine),
+            tree.sum(n, LightKernel::Cosine, 0.0),
         );
         assert!((got[1] - want[1]).abs() < 5e-3 * want[1]);
         eprintln!("nodes at their centres: worst {centre_worst:.2e}");
         assert!(centre_worst > 5e-3);
+    }
+
+    /// The budget rule (an estimate of the rest of the pixel given): against the texels one
+    /// by one, the error relative to the pixel (estimate plus lights) stays within 3e-3
+    /// (measured ≤ 1.2e-3, printed), while the walk visits at least 1.5× fewer nodes and
+    /// texels than under the geometric rule alone (measured 1.6–1.7×, with the estimate as
+    /// bright as the lights or a tenth of them; real probes: 2–25×, see abi::lights).
+    #[test]
+    fn budget_bounds_the_error_and_cuts_the_walk() {
+        use std::cell::Cell;
+        let (_, p) = studio();
+        let tree = LightTree::new(p.clone());
+        for alpha in [0.05, 0.3, 1.0] {
+            let brdf = Brdf::Ggx {
+                alpha,
+                correlated: true,
+            };
+            let (mut worst, mut steps) = (0.0f64, [0usize; 2]);
+            for (k, n) in normals().into_iter().enumerate() {
+                let v = (n + 1.7 * n.any_orthonormal_vector()).normalize();
+                let want = light_sum_brdf(&p, &brdf, n, v, alpha);
+                // A dim and a bright residual against the lights.
+                let estimate = luminance(want) * [0.1, 1.0][k % 2];
+                let frame = Frame::new(n);
+                let wo = local_view(&frame, v);
+                let r = 2.0 * n.dot(v) * n - v;
+                for (b, e) in [(0, 0.0), (1, estimate)] {
+                    let count = Cell::new(0usize);
+                    let allowance = TREE_BUDGET * e * brdf_slack(wo.z, alpha);
+                    let eval = |d: DVec3| brdf.eval_cos(wo, frame.to_local(d));
+                    let got = tree.walk(
+                        |node| {
+                            count.set(count.get() + 1);
+                            takes_whole(node, r, alpha, n, allowance)
+                        },
+                        |node| 0.25 * node.sigma().iter().map(|&d| eval(d)).sum::<f64>(),
+                        |t| {
+                            count.set(count.get() + 1);
+                            texel_integral(t, alpha, r, eval)
+                        },
+                    );
+                    steps[b] += count.get();
+                    if b == 1 {
+                        assert_eq!(got, tree.sum_brdf(&brdf, n, v, alpha, estimate));
+                        let e =
+                            (luminance(got) - luminance(want)).abs() / (estimate + luminance(want));
+                        worst = worst.max(e);
+                    }
+                }
+            }
+            eprintln!(
+                "α {alpha}: worst {worst:.2e}, steps {} -> {}",
+                steps[0], steps[1]
+            );
+            assert!(worst < 3e-3, "α {alpha}: {worst:e}");
+            assert!(3 * steps[1] < 2 * steps[0], "α {alpha}: {steps:?}");
+        }
     }
 
     /// Footprint culling drops only texels that cover nothing: the tree's overlap equals the

@@ -75,13 +75,15 @@ impl ShCoefficients {
     }
 }
 
-/// Whether the projection may use subgroup operations.
+/// Whether a pass (the SH projection, the shade pass) may use subgroup operations.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Subgroups {
-    /// Use them where the device has subgroup arithmetic in compute shaders.
+    /// Use them where the device has them (the SH projection: arithmetic in compute
+    /// shaders; the shade pass: vote in fragment shaders).
     #[default]
     Auto,
-    /// Never (the shared-memory tree), e.g. to test the fallback.
+    /// Never (the SH projection: the shared-memory tree; the shade pass: each lane ends its
+    /// walks alone), e.g. to test the fallback.
     Off,
 }
 

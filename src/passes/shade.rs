@@ -7,6 +7,7 @@ use super::gbuffer::{target, GBuffer};
 use super::lights::GpuLights;
 use super::map::GpuEnvMap;
 pub use super::sh_brdf::Rotation;
+pub use super::sh_project::Subgroups;
 use crate::abi::{binding, push::ShadePush, ShaderId};
 use crate::error::Result;
 use crate::gpu::{mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
@@ -78,15 +79,27 @@ pub struct Shade {
 }
 
 impl Shade {
-    /// Builds the pipeline.
+    /// Builds the pipeline: the light tree walks end on a subgroup vote where the device
+    /// has vote operations in fragment shaders.
     pub fn new(ctx: &Context) -> Result<Shade> {
+        Shade::with_subgroups(ctx, Subgroups::Auto)
+    }
+
+    /// [`Shade::new`], or without subgroup operations ([`Subgroups::Off`]: the same sums;
+    /// on llvmpipe each walk then runs to its bound, e.g. to test the fallback).
+    pub fn with_subgroups(ctx: &Context, subgroups: Subgroups) -> Result<Shade> {
         let dummy_buffer = Buffer::storage(ctx, "shade: unused buffer", &[0.0f32; 4])?;
+        let vote = subgroups == Subgroups::Auto && ctx.info().fragment_vote;
         Ok(Shade {
             ctx: ctx.clone(),
             pipeline: Pipeline::fullscreen(
                 ctx,
                 ShaderId::FullscreenVert,
-                ShaderId::Shade,
+                if vote {
+                    ShaderId::ShadeVote
+                } else {
+                    ShaderId::Shade
+                },
                 &[super::gbuffer::FORMAT],
             )?,
             plain: Sampler::linear_clamp(ctx, "shade sampler")?,
