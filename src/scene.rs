@@ -631,7 +631,8 @@ impl PassKind {
     }
 
     /// The shader modules whose pipelines the pass creates (either of a pair where the
-    /// device decides: cube or 2D sources, subgroups or shared memory).
+    /// device decides: cube or 2D sources, subgroups or shared memory, shade with or
+    /// without vote).
     pub fn pipelines(self) -> &'static [ShaderId] {
         use ShaderId::*;
         match self {
@@ -648,7 +649,7 @@ impl PassKind {
             PassKind::SplitSum => &[Dfg, PrefilterGgx],
             PassKind::Prefilter => &[BrutePrepare, BruteTiles, Brute],
             PassKind::MonteCarlo => &[Mc],
-            PassKind::Shade => &[Shade],
+            PassKind::Shade => &[Shade, ShadeVote],
         }
     }
 }
