@@ -25,7 +25,7 @@ use crate::passes::{
 use crate::passes::{PrefilterOptions, SplitSum};
 use crate::scene::{
     plan, LightsMode, LookupFilter, PassKind, Plan, Scene, SceneObject, SplitSumSettings,
-    Technique, DEFAULT_FIS_BIAS,
+    Technique, DEFAULT_FIS_BIAS, DEFAULT_FIS_BIAS_RESIDUAL,
 };
 use crate::EnvMap;
 use ash::vk;
@@ -403,8 +403,19 @@ impl Renderer {
         // The chain's extraction, where its lobes are wide enough for the texels' nodes.
         // And the diffuse extraction: deeper, its texels summed by clusters. Both from one
         // pass over the map.
+        // The filled residual serves filtered sampling; footprint lookups alone keep the
+        // clamp, since they take light texels by shares linearised over the pixel (a mirror
+        // on studio_small_08 erred by 3.52% filled, 2.57% clamped).
+        let chain_options = || ExtractOptions {
+            fill: scene
+                .environment
+                .extract_options()
+                .fill
+                .filter(|_| has(&on_chain)),
+            ..scene.environment.extract_options()
+        };
         let asked: Vec<ExtractOptions> = [
-            dp_lights.then(|| scene.environment.extract_options()),
+            dp_lights.then(chain_options),
             (sh_lights || pre_lights).then(|| scene.environment.diffuse_extract_options()),
         ]
         .into_iter()
@@ -563,11 +574,13 @@ impl Renderer {
         if dp_lights {
             for (g, o) in gbuf_objects.iter_mut().zip(&scene.objects) {
                 match (o.material.technique(), o.material.kind) {
-                    // extra.y = 1: add the light texels; extra.z: the lobe's scale.
-                    (Technique::Fis { .. }, kind) => {
+                    // extra.y = 1: add the light texels; extra.z: the lobe's scale; extra.x:
+                    // the residual's default bias where the scene sets none.
+                    (Technique::Fis { bias, .. }, kind) => {
                         if let Some(scale) = lobe_scale(&kind) {
                             g.extra[1] = 1.0;
                             g.extra[2] = scale as f32;
+                            g.extra[0] = bias.unwrap_or(DEFAULT_FIS_BIAS_RESIDUAL) as f32;
                         }
                     }
                     // extra.w = 1/∫K at the material's α.

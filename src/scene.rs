@@ -111,6 +111,7 @@ impl Environment {
         crate::math::lights::ExtractOptions {
             ratio: self.light_ratio.unwrap_or(d.ratio),
             max_texels: self.light_texels.map_or(d.max_texels, |n| n as usize),
+            fill: d.fill,
         }
     }
 }
@@ -262,6 +263,10 @@ fn white() -> [f64; 3] {
 /// measurement that chose it).
 pub const DEFAULT_FIS_BIAS: f64 = defaults::FIS_BIAS;
 
+/// The default lod bias of filtered importance sampling where it reads the residual of
+/// extracted lights (see [`defaults::FIS_BIAS_RESIDUAL`]).
+pub const DEFAULT_FIS_BIAS_RESIDUAL: f64 = defaults::FIS_BIAS_RESIDUAL;
+
 /// How a material is shaded.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
@@ -273,7 +278,8 @@ pub enum Technique {
         /// Samples per pixel.
         #[serde(default = "fis_samples")]
         samples: u32,
-        /// Lod bias; [`DEFAULT_FIS_BIAS`] when absent.
+        /// Lod bias; when absent [`DEFAULT_FIS_BIAS`], or [`DEFAULT_FIS_BIAS_RESIDUAL`]
+        /// where the lights are extracted and the samples read the residual.
         #[serde(default)]
         bias: Option<f64>,
         /// Rotate the sample set per pixel (noise instead of banding).

@@ -487,7 +487,7 @@ fn fis_with_lights_matches_its_float64_twin() {
                     if hit.margin < 1e-3 {
                         continue;
                     }
-                    let bias = envlight::abi::defaults::FIS_BIAS;
+                    let bias = envlight::abi::defaults::FIS_BIAS_RESIDUAL;
                     let f = fis64::estimate(&chain, &kind, hit.normal, -d, 16, bias, [0.0; 2]);
                     let lum = envlight::envmap::luminance(f);
                     let l = tree.sum_brdf(&kind, hit.normal, -d, scale, lum);

@@ -132,7 +132,8 @@ fn extraction_keeps_the_exact_filter() {
 }
 
 /// `envlight lights --json` on a written sky names one light in the sun's direction with its
-/// share; a missing file is an error naming it, not a panic.
+/// share (with `--fill 2`, more texels and a larger share); a missing file is an error naming
+/// it, not a panic.
 #[test]
 fn lights_command_reports_the_sun() {
     let dir = std::env::temp_dir().join(format!("envlight-lights-{}", std::process::id()));
@@ -161,6 +162,18 @@ fn lights_command_reports_the_sun() {
     assert!(DVec3::new(d[0], d[1], d[2]).dot(sun) > 0.999, "{d:?}");
     let share = lights[0]["share"].as_f64().unwrap();
     assert!(share > 0.5 && share < 1.0, "{share}");
+    // --fill grows the light set around the sun and gives it more of the power.
+    let filled = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .args(["lights", path.to_str().unwrap(), "--json", "--fill", "2"])
+        .output()
+        .unwrap();
+    assert!(filled.status.success());
+    let f: serde_json::Value = serde_json::from_slice(&filled.stdout).unwrap();
+    assert_eq!(f["options"]["fill"].as_u64(), Some(2), "{f}");
+    let count = |v: &serde_json::Value| v["light_texels"].as_u64().unwrap();
+    assert!(count(&f) > count(&v), "{} {}", count(&f), count(&v));
+    let fshare = f["lights"][0]["share"].as_f64().unwrap();
+    assert!(fshare > share && fshare <= 1.0, "{fshare} {share}");
     let missing = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
         .args(["lights", dir.join("none.hdr").to_str().unwrap()])
         .output()

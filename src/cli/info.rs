@@ -28,6 +28,11 @@ pub struct LightsArgs {
     /// Most light texels kept (the threshold rises to keep to it)
     #[arg(long, default_value_t = envlight::abi::lights::MAX_TEXELS as usize)]
     max_texels: usize,
+    /// Grow the lights by this many rings of texels and fill the residual under them from
+    /// around them, as the renderer's chain does (default: clamp the residual at the
+    /// threshold)
+    #[arg(long)]
+    fill: Option<u32>,
     /// Print JSON instead of a table
     #[arg(long)]
     json: bool,
@@ -42,7 +47,7 @@ fn print_lights(map: &EnvMap, opts: &ExtractOptions) {
     let share: f64 = lights.iter().map(|l| l.share).sum();
     let mean = envlight::envmap::luminance(map.stats().power) / (4.0 * std::f64::consts::PI);
     println!(
-        "lights:    {} ({} texels above {:.4e} = {:.1} x the mean luminance{}; {:.1}% of the power)",
+        "lights:    {} ({} texels above {:.4e} = {:.1} x the mean luminance{}{}; {:.1}% of the power)",
         lights.len(),
         ex.lights.len(),
         ex.threshold,
@@ -51,6 +56,13 @@ fn print_lights(map: &EnvMap, opts: &ExtractOptions) {
             format!(", raised from {} x to keep at most {} texels", opts.ratio, opts.max_texels)
         } else {
             String::new()
+        },
+        match opts.fill {
+            Some(d) => format!(
+                ", grown by up to {d} rings of texels where the cap leaves room, the residual \
+                 under them filled from around them"
+            ),
+            None => String::new(),
         },
         100.0 * share
     );
@@ -80,6 +92,7 @@ pub fn lights(a: &LightsArgs) -> Result<()> {
     let opts = ExtractOptions {
         ratio: a.ratio,
         max_texels: a.max_texels,
+        fill: a.fill,
     };
     if a.json {
         let ex = extract(&map, &opts);

@@ -11,6 +11,11 @@
 //! luminance clamped at τ (chroma kept, so it stays continuous around a light), and lights
 //! plus residual equal the map to float32 rounding. A texel's light is its excess over the
 //! clamp, spread over the texel as the map spreads its radiance.
+//!
+//! Filtered sampling wants no plateau in the residual, whose edge its few filtered samples
+//! alias: with [`ExtractOptions::fill`] the light set first grows by rings of texels around
+//! it (the glow at a softbox's rim, below τ), and the residual under it continues its
+//! surroundings ([`fill`]) instead of the clamp; lights plus residual still equal the map.
 
 use super::brdf::{local_view, Brdf, Frame};
 use super::mapping::Coord;
@@ -25,6 +30,12 @@ pub struct ExtractOptions {
     pub ratio: f64,
     /// Most light texels kept (the threshold rises to keep to it).
     pub max_texels: usize,
+    /// How the residual under the lights is shaped: `None` clamps each light texel's
+    /// luminance at the threshold; `Some(d)` first grows the lights by the texels within `d`
+    /// of them (where the cap leaves room) and fills the residual under them from the texels
+    /// around them ([`fill`]), so that no plateau edge is left for filtered lookups to alias.
+    #[serde(default)]
+    pub fill: Option<u32>,
 }
 
 impl Default for ExtractOptions {
@@ -32,19 +43,22 @@ impl Default for ExtractOptions {
         ExtractOptions {
             ratio: crate::abi::lights::DEFAULT_RATIO,
             max_texels: crate::abi::lights::MAX_TEXELS as usize,
+            fill: None,
         }
     }
 }
 
 impl ExtractOptions {
     /// The renderer's default for the chain that FIS, split-sum and footprint lookups read
-    /// ([`crate::abi::lights::CHAIN_RATIO`], [`crate::abi::lights::CHAIN_MAX_TEXELS`]):
+    /// ([`crate::abi::lights::CHAIN_RATIO`], [`crate::abi::lights::CHAIN_MAX_TEXELS`], the
+    /// residual filled under lights grown by [`crate::abi::lights::CHAIN_FILL`]):
     /// deeper than [`Default`] (the bake's, whose per-texel sums have no tree), the texels
     /// summed through a [`super::light_tree::LightTree`].
     pub fn chain() -> ExtractOptions {
         ExtractOptions {
             ratio: crate::abi::lights::CHAIN_RATIO,
             max_texels: crate::abi::lights::CHAIN_MAX_TEXELS as usize,
+            fill: Some(crate::abi::lights::CHAIN_FILL),
         }
     }
 }
@@ -127,6 +141,9 @@ fn split(
             residual: map.clone(),
         };
     }
+    if let Some(d) = opts.fill {
+        return filled(map, texels, threshold, &candidates, d, opts.max_texels);
+    }
     let mut residual = map.clone();
     let mut lights = Vec::with_capacity(candidates.len());
     for &(y, layer, i, j, omega) in &candidates {
@@ -157,6 +174,169 @@ fn split(
         lights,
         residual,
     }
+}
+
+/// [`split`] with a filled residual ([`ExtractOptions::fill`]): the stored texels under
+/// `candidates` (their sources), grown by up to `grow` rings of their 8-neighbours in the same
+/// layer (a ring only while the cap `max` has room for all of it), form the light set. Each
+/// gets the residual luminance [`fill`] finds for it, at most its own and τ, chroma kept;
+/// every texel reading a texel of the set is a light texel holding its excess over that
+/// residual. Texels are not joined across cube faces or paraboloid halves.
+fn filled(
+    map: &EnvMap,
+    texels: &[(f64, u32, u32, u32, f64)],
+    threshold: f64,
+    candidates: &[(f64, u32, u32, u32, f64)],
+    grow: u32,
+    max: usize,
+) -> Extraction {
+    let (w, h) = (map.width, map.height);
+    let source = |i: u32, j: u32| map.mapping.integration_source(w, h, i, j);
+    // Luminance of every stored texel the mapping reads (NaN elsewhere).
+    let mut y = vec![f64::NAN; map.texels.len()];
+    for &(yy, layer, i, j, _) in texels {
+        if source(i, j) == Some((i, j)) {
+            y[map.index(layer, i, j)] = yy;
+        }
+    }
+    let mut set = vec![false; map.texels.len()];
+    let mut count = 0;
+    for &(_, layer, i, j, _) in candidates {
+        let (si, sj) = source(i, j).unwrap_or((i, j));
+        let k = map.index(layer, si, sj);
+        count += usize::from(!set[k]);
+        set[k] = true;
+    }
+    let wrap = map.mapping == super::mapping::Mapping::LatLong;
+    let near = |layer: u32, i: u32, j: u32, d: i64| {
+        let mut v = Vec::new();
+        for dj in -d..=d {
+            for di in -d..=d {
+                let (ii, jj) = (i as i64 + di, j as i64 + dj);
+                let ii = if wrap { ii.rem_euclid(w as i64) } else { ii };
+                if (di, dj) != (0, 0) && (0..w as i64).contains(&ii) && (0..h as i64).contains(&jj)
+                {
+                    v.push(map.index(layer, ii as u32, jj as u32));
+                }
+            }
+        }
+        v
+    };
+    let coords = |k: usize| {
+        let k = k as u32;
+        (k / (w * h), k % w, (k / w) % h)
+    };
+    // Grown one texel at a time, while the cap leaves room for the whole ring.
+    let mut edge: Vec<usize> = (0..set.len()).filter(|&k| set[k]).collect();
+    for _ in 0..grow {
+        let mut ring = Vec::new();
+        for &k in &edge {
+            let (layer, i, j) = coords(k);
+            for n in near(layer, i, j, 1) {
+                if !set[n] && y[n] > 0.0 {
+                    set[n] = true;
+                    ring.push(n);
+                }
+            }
+        }
+        if count + ring.len() > max {
+            for &k in &ring {
+                set[k] = false;
+            }
+            break;
+        }
+        count += ring.len();
+        edge = ring;
+    }
+    let f = fill(map, &y, &set, &near);
+    let mut residual = map.clone();
+    for k in 0..set.len() {
+        if set[k] && y[k] > 0.0 {
+            let keep = (f[k].min(threshold).min(y[k]) / y[k]) as f32;
+            residual.texels[k] = map.texels[k].map(|c| c * keep);
+        }
+    }
+    let mut lights = Vec::new();
+    for &(yy, layer, i, j, omega) in texels {
+        let (si, sj) = source(i, j).unwrap_or((i, j));
+        let k = map.index(layer, si, sj);
+        if !set[k] {
+            continue;
+        }
+        let (l, r) = (map.texels[k], residual.texels[k]);
+        let excess = [l[0] - r[0], l[1] - r[1], l[2] - r[2]];
+        if excess.iter().all(|&e| e == 0.0) {
+            continue;
+        }
+        lights.push((
+            yy,
+            LightTexel {
+                layer,
+                i,
+                j,
+                dir: map.texel_dir(layer, i, j),
+                omega,
+                radiance: excess,
+            },
+        ));
+    }
+    lights.sort_by(|a, b| {
+        b.0.total_cmp(&a.0)
+            .then((a.1.layer, a.1.j, a.1.i).cmp(&(b.1.layer, b.1.j, b.1.i)))
+    });
+    Extraction {
+        threshold,
+        lights: lights.into_iter().map(|l| l.1).collect(),
+        residual,
+    }
+}
+
+/// The residual luminance under a light set: texels outside `set` keep their own (`y`);
+/// those in it take, round by round from the set's edge inwards, the mean of their
+/// neighbours (`near` at distance 1) that earlier rounds settled, so the residual continues
+/// the surroundings under a light instead of stopping at a plateau. Texels no round reaches
+/// (a layer wholly in the set) get infinity, which the caller clamps to the threshold.
+fn fill(
+    map: &EnvMap,
+    y: &[f64],
+    set: &[bool],
+    near: &dyn Fn(u32, u32, u32, i64) -> Vec<usize>,
+) -> Vec<f64> {
+    let (w, h) = (map.width, map.height);
+    let mut f: Vec<f64> = (0..y.len())
+        .map(|k| if set[k] { f64::NAN } else { y[k] })
+        .collect();
+    let mut open: Vec<usize> = (0..y.len()).filter(|&k| set[k] && !y[k].is_nan()).collect();
+    while !open.is_empty() {
+        let mut settled = Vec::new();
+        for &k in &open {
+            let kk = k as u32;
+            let (layer, i, j) = (kk / (w * h), kk % w, (kk / w) % h);
+            let (mut sum, mut n) = (0.0, 0);
+            for m in near(layer, i, j, 1) {
+                // 4-neighbours only: the diagonal ones sit √2 away.
+                let mm = m as u32;
+                if (mm % w != i && (mm / w) % h != j) || f[m].is_nan() {
+                    continue;
+                }
+                sum += f[m];
+                n += 1;
+            }
+            if n > 0 {
+                settled.push((k, sum / n as f64));
+            }
+        }
+        if settled.is_empty() {
+            break;
+        }
+        for &(k, v) in &settled {
+            f[k] = v;
+        }
+        open.retain(|&k| f[k].is_nan());
+    }
+    f.iter()
+        .map(|v| if v.is_nan() { f64::INFINITY } else { *v })
+        .collect()
 }
 
 /// The quadrature nodes of light texel `t` of `map`: `cells` × `cells` cells of 2 × 2
@@ -401,6 +581,7 @@ pub fn diffuse_options(ratio: f64) -> ExtractOptions {
     ExtractOptions {
         ratio,
         max_texels: usize::MAX,
+        fill: None,
     }
 }
 
@@ -562,46 +743,136 @@ mod tests {
             Mapping::DualParaboloid,
         ] {
             let map = sky_map(mapping, 64);
-            let ex = extract(&map, &ExtractOptions::default());
-            assert!(!ex.lights.is_empty(), "{mapping:?}");
-            let mut back = ex.residual.clone();
-            for t in &ex.lights {
-                let (si, sj) = map
-                    .mapping
-                    .integration_source(map.width, map.height, t.i, t.j)
-                    .unwrap();
-                if (si, sj) == (t.i, t.j) {
-                    let k = back.index(t.layer, t.i, t.j);
-                    for c in 0..3 {
-                        back.texels[k][c] += t.radiance[c];
-                    }
-                }
+            let filled = ExtractOptions {
+                fill: Some(2),
+                ..ExtractOptions::default()
+            };
+            for opts in [ExtractOptions::default(), filled] {
+                let ex = extract(&map, &opts);
+                add_back(&map, &ex, mapping);
             }
-            for (a, b) in back.texels.iter().zip(&map.texels) {
+        }
+    }
+
+    /// Checks that `ex`'s lights plus its residual give back `map`.
+    fn add_back(map: &EnvMap, ex: &Extraction, mapping: Mapping) {
+        assert!(!ex.lights.is_empty(), "{mapping:?}");
+        let mut back = ex.residual.clone();
+        for t in &ex.lights {
+            let (si, sj) = map
+                .mapping
+                .integration_source(map.width, map.height, t.i, t.j)
+                .unwrap();
+            if (si, sj) == (t.i, t.j) {
+                let k = back.index(t.layer, t.i, t.j);
                 for c in 0..3 {
-                    assert!(
-                        (a[c] - b[c]).abs() <= 2.0 * f32::EPSILON * b[c],
-                        "{a:?} {b:?}"
-                    );
+                    back.texels[k][c] += t.radiance[c];
                 }
             }
-            let p_map = luminance(map.stats().power);
-            let p_res = luminance(ex.residual.stats().power);
-            let p_lights: f64 = ex
-                .lights
-                .iter()
-                .map(|t| luminance(t.radiance.map(f64::from)) * t.omega)
-                .sum();
-            assert!(
-                ((p_res + p_lights) - p_map).abs() <= 1e-6 * p_map,
-                "{mapping:?}"
+        }
+        for (a, b) in back.texels.iter().zip(&map.texels) {
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() <= 2.0 * f32::EPSILON * b[c],
+                    "{a:?} {b:?}"
+                );
+            }
+        }
+        let p_map = luminance(map.stats().power);
+        let p_res = luminance(ex.residual.stats().power);
+        let p_lights: f64 = ex
+            .lights
+            .iter()
+            .map(|t| luminance(t.radiance.map(f64::from)) * t.omega)
+            .sum();
+        assert!(
+            ((p_res + p_lights) - p_map).abs() <= 1e-6 * p_map,
+            "{mapping:?}"
+        );
+        let top = ex.residual.stats().max_luminance;
+        assert!(
+            top <= ex.threshold * (1.0 + 1e-6),
+            "{mapping:?}: {top} > {}",
+            ex.threshold
+        );
+    }
+
+    /// A softbox (a bright disc with a glow at its edge) over a gradient. Clamped, the
+    /// residual under it is a plateau at τ: its worst distance from the gradient is 0.93 τ.
+    /// Filled, with two rings grown over the glow, the residual continues the gradient
+    /// (measured 0.008 τ; bound 1/20 of the clamp's). A cap without room for a ring keeps
+    /// the light set and fills from the glow's texels below τ (0.84 τ: why the rings).
+    #[test]
+    fn filled_residual_continues_the_surroundings() {
+        let ground = |d: DVec3| 1.0 + 0.5 * d.x + 0.25 * d.y;
+        let centre = DVec3::new(0.3, 0.2, 0.9).normalize();
+        let softbox = move |d: DVec3| {
+            // A disc of chord radius 0.15, 1000 × the ground, whose glow falls by e every
+            // 0.01 beyond it (about 0.4 texel): the texels two out sit below τ, above ground.
+            let out = ((d - centre * d.dot(centre)).length() - 0.15).max(0.0);
+            let glow = if d.dot(centre) > 0.0 {
+                1000.0 * (-out / 0.01).exp()
+            } else {
+                0.0
+            };
+            let y = ground(d) + glow;
+            [y, y, y]
+        };
+        for mapping in [Mapping::LatLong, Mapping::Angular] {
+            let (w, h) = mapping.extent_for_size(128);
+            let map = EnvMap::from_fn(mapping, w, h, 1, softbox);
+            let opts = ExtractOptions {
+                ratio: 2.0,
+                max_texels: usize::MAX,
+                fill: None,
+            };
+            let clamped = extract(&map, &opts);
+            let filled = extract(
+                &map,
+                &ExtractOptions {
+                    fill: Some(2),
+                    ..opts
+                },
             );
-            let top = ex.residual.stats().max_luminance;
-            assert!(
-                top <= ex.threshold * (1.0 + 1e-6),
-                "{mapping:?}: {top} > {}",
-                ex.threshold
+            add_back(&map, &filled, mapping);
+            assert!(filled.lights.len() > clamped.lights.len(), "{mapping:?}");
+            // Worst distance of the residual from the gradient, as a share of τ: under the
+            // lights, and anywhere (the ramp included).
+            let under = |ex: &Extraction| {
+                let mut worst = 0.0f64;
+                for t in &ex.lights {
+                    let r = luminance(ex.residual.texel(t.layer, t.i, t.j).map(f64::from));
+                    worst = worst.max((r - ground(t.dir)).abs());
+                }
+                worst / ex.threshold
+            };
+            let anywhere = |ex: &Extraction| {
+                let mut worst = 0.0f64;
+                ex.residual.for_each_texel(|layer, i, j, t, _| {
+                    let r = luminance(t.map(f64::from));
+                    worst = worst.max((r - ground(map.texel_dir(layer, i, j))).abs());
+                });
+                worst / ex.threshold
+            };
+            // A cap at the clamped count leaves no room for a ring.
+            let tight = extract(
+                &map,
+                &ExtractOptions {
+                    max_texels: clamped.lights.len(),
+                    fill: Some(2),
+                    ..opts
+                },
             );
+            assert_eq!(tight.lights.len(), clamped.lights.len(), "{mapping:?}");
+            let (c, f, t) = (
+                [under(&clamped), anywhere(&clamped)],
+                [under(&filled), anywhere(&filled)],
+                [under(&tight), anywhere(&tight)],
+            );
+            assert!(c[0] > 0.5 && c[1] > 0.5, "{mapping:?}: {c:?}");
+            assert!(f[1] < 0.05 * c[1], "{mapping:?}: {f:?} {c:?}");
+            assert!(t[0] <= c[0], "{mapping:?}: {t:?} {c:?}");
+            add_back(&map, &tight, mapping);
         }
     }
 
