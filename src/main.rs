@@ -48,6 +48,13 @@ enum Command {
 }
 
 fn main() {
+    // Output piped into a reader that stops early (`| head`) ends the process as other Unix
+    // tools end, instead of making println! panic on EPIPE.
+    #[cfg(unix)]
+    // SAFETY: called first, before any thread exists; SIG_DFL is a valid action for SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let g = &cli.global;
     let result = match &cli.command {

@@ -513,3 +513,24 @@ fn sizes_beyond_the_device_are_refused() {
     }
     common::finish(ctx);
 }
+
+/// A reader that stops early (`envlight lights MAP | head`) ends the command quietly, as it
+/// ends other Unix tools, instead of a panic in println! on the closed pipe. The pipe is
+/// closed before the command has loaded its map, so its first line meets it closed.
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_output_without_a_panic() {
+    let exe = env!("CARGO_BIN_EXE_envlight");
+    let input = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/sky_latlong.exr");
+    let mut child = std::process::Command::new(exe)
+        .arg("lights")
+        .arg(&input)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "stderr: {err}");
+}
