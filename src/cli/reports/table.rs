@@ -297,8 +297,17 @@ pub fn table(
          half their difference); of the mirror: its 16×16-supersampled render (the \
          pixel-area mean). `rms`: per-pixel relative RMS of luminance; `ratio`: mean \
          luminance against the reference's; `tile`: the worst 8×8 tile's |ratio − 1|. \
-         Defaults elsewhere: the FIS paraboloid sized by the source, lod bias 0.25, \
-         extraction above 32 × the mean luminance, up to 256 light texels. Run took {:.0} s.",
+         Defaults elsewhere: the FIS paraboloid sized by the source; FIS lod bias {} ({} \
+         reading the residual); FIS, split-sum and footprint lookups extract above {} × the \
+         mean luminance, up to {} light texels (grown by {} rings, the residual filled under \
+         them, where FIS or split-sum reads it); diffuse techniques above {} ×. Run took \
+         {:.0} s.",
+        envlight::scene::DEFAULT_FIS_BIAS,
+        envlight::scene::DEFAULT_FIS_BIAS_RESIDUAL,
+        envlight::abi::lights::CHAIN_RATIO,
+        envlight::abi::lights::CHAIN_MAX_TEXELS,
+        envlight::abi::lights::CHAIN_FILL,
+        envlight::math::lights::DIFFUSE_RATIO,
         started.elapsed().as_secs_f64()
     );
     std::fs::write(out.join("table.md"), markdown(&rows, &settings)).with_context(|| "table.md")?;
