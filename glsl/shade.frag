@@ -182,6 +182,9 @@ vec3 footprint_lights(vec3 r, vec3 a, vec3 b) {
     float k = point ? 0.0 : 0.5 / sqrt(n0 * n1 * abs(det));
     float jn = length(vec4(j00, j01, j10, j11));
     vec3 sum = vec3(0.0);
+    // The shares' total: the texels' squares do not tile the pixel, so where they overlap it
+    // may pass 1, and the sum is divided by it.
+    float total = 0.0;
     // One item per iteration, a texel of the current leaf or a node (see fis_lights).
     uint i = 0u, j = 0u, end = 0u;
     for (uint step = 0u; step < pc.tree_nodes + pc.lights; step++) {
@@ -206,6 +209,7 @@ vec3 footprint_lights(vec3 r, vec3 a, vec3 b) {
                 share = overlap(i00 * ejx + i01 * ejy, h * n0) * overlap(i10 * ejx + i11 * ejy, h * n1);
             }
             sum += share * light.rgb;
+            total += share;
             continue;
         }
         uint at = pc.tree_at + i * LIGHT_TREE_VEC4S;
@@ -240,7 +244,7 @@ vec3 footprint_lights(vec3 r, vec3 a, vec3 b) {
             i = range.z;
         }
     }
-    return sum;
+    return total > 1.0 ? sum / total : sum;
 }
 
 // The pixel's mean radiance about r seen where `index` is seen (footprint filtering).

@@ -166,7 +166,7 @@ impl LightTree {
     /// pixel: equal to the brute sum term for term.
     pub fn overlap(&self, r: DVec3, a: DVec3, b: DVec3) -> [f64; 3] {
         let shape = super::footprint::OverlapShape::new(r, a, b);
-        let mut sum = [0.0; 3];
+        let (mut sum, mut total) = ([0.0; 3], 0.0);
         let mut i = 0;
         while i < self.nodes.len() {
             let n = &self.nodes[i];
@@ -176,17 +176,18 @@ impl LightTree {
                 let at = n.first as usize;
                 // Texel by texel, so the sum adds the brute sum's terms in its order.
                 for t in &self.lights[at..at + n.count as usize] {
-                    let s = shape.sum(std::slice::from_ref(t));
-                    for (x, y) in sum.iter_mut().zip(s) {
-                        *x += y;
+                    let share = shape.share(t);
+                    for (x, l) in sum.iter_mut().zip(t.radiance) {
+                        *x += share * l;
                     }
+                    total += share;
                 }
                 i = n.skip as usize;
             } else {
                 i += 1;
             }
         }
-        sum
+        super::footprint::OverlapShape::normalised(sum, total)
     }
 }
 
