@@ -59,6 +59,10 @@ pub struct Rendered {
     pub plan: Plan,
     /// Monte Carlo samples per pixel and the final relative error estimate, if MC ran.
     pub mc: Option<(u32, Option<f64>)>,
+    /// Host milliseconds spent extracting lights, then preparing them for the GPU (texel
+    /// quadratures, the light tree, clusters, the upload's list), where the scene extracted
+    /// any.
+    pub lights_ms: Option<[f64; 2]>,
 }
 
 impl Rendered {
@@ -421,7 +425,9 @@ impl Renderer {
         .into_iter()
         .flatten()
         .collect();
+        let lights_started = std::time::Instant::now();
         let mut each = extract_each(env, &asked).into_iter();
+        let extract_ms = 1e3 * lights_started.elapsed().as_secs_f64();
         let chain_ex = dp_lights
             .then(|| each.next())
             .flatten()
@@ -440,6 +446,12 @@ impl Renderer {
             file_to_world,
             finest,
         )?;
+        let lights_ms = (!asked.is_empty()).then(|| {
+            [
+                extract_ms,
+                1e3 * lights_started.elapsed().as_secs_f64() - extract_ms,
+            ]
+        });
         let residual_map = |name| GpuEnvMap::new(ctx, name, env.mapping, env.width, env.height);
         let chain_residual = match &chain_ex {
             Some(ex) => Some((ex, residual_map("environment residual")?)),
@@ -827,6 +839,7 @@ impl Renderer {
             records,
             plan,
             mc: mc_summary,
+            lights_ms,
         })
     }
 }

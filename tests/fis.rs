@@ -477,6 +477,7 @@ fn fis_with_lights_matches_its_float64_twin() {
                 size,
             );
             let r = render(&ctx, &sc, &env).unwrap();
+            assert!(r.lights_ms.is_some_and(|ms| ms[0] >= 0.0 && ms[1] >= 0.0));
             let (mut worst, mut n, mut lit) = (0.0f64, 0, 0);
             for j in 0..cam.height {
                 for i in 0..cam.width {

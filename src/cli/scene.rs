@@ -190,6 +190,11 @@ fn render_scene(cli: &Global, scene: &Path, output: &Path) -> Result<()> {
         total += rec.ms();
     }
     println!("{:<16} {:>11.3}  (wall {wall:.2} s)", "total", total);
+    if let Some([extract, prepare]) = r.lights_ms {
+        println!(
+            "lights (host): extraction {extract:.1} ms, quadratures, tree and clusters {prepare:.1} ms"
+        );
+    }
     if let Some((n, e)) = r.mc {
         match e {
             Some(e) => println!("monte carlo: {n} samples per pixel, relative error {e:.2e}"),
