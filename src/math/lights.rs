@@ -208,31 +208,21 @@ fn filled(
         set[k] = true;
     }
     let wrap = map.mapping == super::mapping::Mapping::LatLong;
-    let near = |layer: u32, i: u32, j: u32, d: i64| {
-        let mut v = Vec::new();
-        for dj in -d..=d {
-            for di in -d..=d {
-                let (ii, jj) = (i as i64 + di, j as i64 + dj);
-                let ii = if wrap { ii.rem_euclid(w as i64) } else { ii };
-                if (di, dj) != (0, 0) && (0..w as i64).contains(&ii) && (0..h as i64).contains(&jj)
-                {
-                    v.push(map.index(layer, ii as u32, jj as u32));
-                }
-            }
-        }
-        v
-    };
-    let coords = |k: usize| {
+    // Texel k's neighbour at (di, dj) in its layer, wrapping in u on a lat-long.
+    let step = |k: usize, di: i64, dj: i64| {
         let k = k as u32;
-        (k / (w * h), k % w, (k / w) % h)
+        let (layer, i, j) = (k / (w * h), k % w, (k / w) % h);
+        let (ii, jj) = (i as i64 + di, j as i64 + dj);
+        let ii = if wrap { ii.rem_euclid(w as i64) } else { ii };
+        ((0..w as i64).contains(&ii) && (0..h as i64).contains(&jj))
+            .then(|| map.index(layer, ii as u32, jj as u32))
     };
     // Grown one texel at a time, while the cap leaves room for the whole ring.
     let mut edge: Vec<usize> = (0..set.len()).filter(|&k| set[k]).collect();
     for _ in 0..grow {
         let mut ring = Vec::new();
         for &k in &edge {
-            let (layer, i, j) = coords(k);
-            for n in near(layer, i, j, 1) {
+            for n in RING.iter().filter_map(|&(di, dj)| step(k, di, dj)) {
                 if !set[n] && y[n] > 0.0 {
                     set[n] = true;
                     ring.push(n);
@@ -248,7 +238,7 @@ fn filled(
         count += ring.len();
         edge = ring;
     }
-    let f = fill(map, &y, &set, &near);
+    let f = fill(&y, &set, &step);
     let mut residual = map.clone();
     for k in 0..set.len() {
         if set[k] && y[k] > 0.0 {
@@ -291,18 +281,27 @@ fn filled(
     }
 }
 
+/// A texel's 8 neighbours (rows, then columns, in order).
+const RING: [(i64, i64); 8] = [
+    (-1, -1),
+    (0, -1),
+    (1, -1),
+    (-1, 0),
+    (1, 0),
+    (-1, 1),
+    (0, 1),
+    (1, 1),
+];
+
+/// A texel's 4 edge neighbours, in [`RING`]'s order (the diagonal ones sit √2 away).
+const EDGE: [(i64, i64); 4] = [(0, -1), (-1, 0), (1, 0), (0, 1)];
+
 /// The residual luminance under a light set: texels outside `set` keep their own (`y`);
-/// those in it take, round by round from the set's edge inwards, the mean of their
-/// neighbours (`near` at distance 1) that earlier rounds settled, so the residual continues
-/// the surroundings under a light instead of stopping at a plateau. Texels no round reaches
+/// those in it take, round by round from the set's edge inwards, the mean of their edge
+/// neighbours (`step`) that earlier rounds settled, so the residual continues the
+/// surroundings under a light instead of stopping at a plateau. Texels no round reaches
 /// (a layer wholly in the set) get infinity, which the caller clamps to the threshold.
-fn fill(
-    map: &EnvMap,
-    y: &[f64],
-    set: &[bool],
-    near: &dyn Fn(u32, u32, u32, i64) -> Vec<usize>,
-) -> Vec<f64> {
-    let (w, h) = (map.width, map.height);
+fn fill(y: &[f64], set: &[bool], step: &dyn Fn(usize, i64, i64) -> Option<usize>) -> Vec<f64> {
     let mut f: Vec<f64> = (0..y.len())
         .map(|k| if set[k] { f64::NAN } else { y[k] })
         .collect();
@@ -310,17 +309,12 @@ fn fill(
     while !open.is_empty() {
         let mut settled = Vec::new();
         for &k in &open {
-            let kk = k as u32;
-            let (layer, i, j) = (kk / (w * h), kk % w, (kk / w) % h);
             let (mut sum, mut n) = (0.0, 0);
-            for m in near(layer, i, j, 1) {
-                // 4-neighbours only: the diagonal ones sit √2 away.
-                let mm = m as u32;
-                if (mm % w != i && (mm / w) % h != j) || f[m].is_nan() {
-                    continue;
+            for m in EDGE.iter().filter_map(|&(di, dj)| step(k, di, dj)) {
+                if !f[m].is_nan() {
+                    sum += f[m];
+                    n += 1;
                 }
-                sum += f[m];
-                n += 1;
             }
             if n > 0 {
                 settled.push((k, sum / n as f64));
