@@ -410,13 +410,12 @@ impl Renderer {
         // The filled residual serves filtered sampling; footprint lookups alone keep the
         // clamp, since they take light texels by shares linearised over the pixel (a mirror
         // on studio_small_08 erred by 3.52% filled, 2.57% clamped).
-        let chain_options = || ExtractOptions {
-            fill: scene
-                .environment
-                .extract_options()
-                .fill
-                .filter(|_| has(&on_chain)),
-            ..scene.environment.extract_options()
+        let chain_options = || {
+            let mut o = scene.environment.extract_options();
+            if !has(&on_chain) {
+                o.fill = None;
+            }
+            o
         };
         let asked: Vec<ExtractOptions> = [
             dp_lights.then(chain_options),
