@@ -1,8 +1,8 @@
 //! `envlight convert`, `sh`, `irradiance` and `prefilter`: one map in, one result out.
 
 use super::{
-    context, finite_f32, finite_f64, load_input, print_timings, save, spinner, write_map,
-    FilterOut, Global, Input, MappingArg, Orient,
+    finite_f32, finite_f64, load_with_context, print_timings, save, spinner, upload_while,
+    write_map, FilterOut, Global, HostClock, Input, MappingArg, Orient,
 };
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, ValueEnum};
@@ -138,15 +138,24 @@ pub struct PrefilterArgs {
     out: FilterOut,
 }
 
+/// Host span labels shared by the commands here (`bench peers` reads them back).
+const LOAD: &str = "load file ∥ create device";
+const UPLOAD: &str = "upload ∥ build pipelines";
+const RUN: &str = "record, GPU work, wait";
+const DOWNLOAD_WRITE: &str = "download, write";
+
 /// `envlight convert`.
 pub fn convert(g: &Global, a: &ConvertArgs) -> Result<()> {
     if a.size == 0 || a.size > 16384 {
         bail!("--size must be between 1 and 16384 (got {})", a.size);
     }
-    let map = load_input(&a.input)?;
-    let ctx = context(g)?;
+    let mut clock = HostClock::start();
+    let (map, ctx) = load_with_context(g, &a.input)?;
+    clock.lap(LOAD);
     let pb = spinner("converting on the GPU");
-    let src = GpuEnvMap::upload(&ctx, &map)?;
+    let conv = Converter::new(&ctx)?;
+    let (src, ()) = upload_while(&ctx, &map, || conv.prepare(map.mapping, a.to.into()))?;
+    clock.lap(UPLOAD);
     let opts = ConvertOptions {
         to: a.to.into(),
         size: a.size,
@@ -154,45 +163,66 @@ pub fn convert(g: &Global, a: &ConvertArgs) -> Result<()> {
         supersample: a.supersample,
         nearest: false,
     };
-    let (dst, timings) = Converter::new(&ctx)?.run(&src, &opts)?;
+    let (dst, timings) = conv.run(&src, &opts)?;
+    clock.lap(RUN);
     let out = dst.download(&ctx)?;
+    clock.lap("download");
     pb.finish_and_clear();
     let tm = ToneMap {
         exposure: a.exposure,
     };
     save(&out, &a.output, a.png.then_some(tm))?;
+    clock.lap("write");
     print_timings(&timings);
+    clock.print();
     Ok(())
 }
 
 /// `envlight sh`.
 pub fn sh(g: &Global, a: &ShArgs) -> Result<()> {
-    let map = load_input(&a.input)?;
-    let ctx = context(g)?;
+    let mut clock = HostClock::start();
+    let (map, ctx) = load_with_context(g, &a.input)?;
+    clock.lap(LOAD);
     let pb = spinner("projecting onto SH on the GPU");
     let proj = ShProjector::new(&ctx, Subgroups::Auto)?;
-    let gm = GpuEnvMap::upload(&ctx, &map)?;
+    let (gm, ()) = upload_while(&ctx, &map, || proj.prepare(a.order, map.mapping))?;
+    clock.lap(UPLOAD);
     let (coeffs, timings) = proj.run_oriented(&gm, a.order, &a.orient.orientation())?;
+    clock.lap(RUN);
     pb.finish_and_clear();
     let text = serde_json::to_string_pretty(&coeffs.to_json())?;
     std::fs::write(&a.output, text).with_context(|| a.output.display().to_string())?;
+    clock.lap("write");
     println!(
         "wrote {} ({} coefficients per channel)",
         a.output.display(),
         coeffs.coeffs.len()
     );
     print_timings(&timings);
+    clock.print();
     Ok(())
 }
 
 /// `envlight irradiance`.
 pub fn irradiance(g: &Global, a: &IrradianceArgs) -> Result<()> {
-    let map = load_input(&a.input)?;
-    let ctx = context(g)?;
-    let gm = GpuEnvMap::upload(&ctx, &map)?;
+    let mut clock = HostClock::start();
+    let (map, ctx) = load_with_context(g, &a.input)?;
+    clock.lap(LOAD);
+    let order = a.order;
+    let projector = match a.method {
+        Method::Sh => Some(ShProjector::new(&ctx, Subgroups::Auto)?),
+        Method::Brute => None,
+    };
+    let (gm, evaluator) = upload_while(&ctx, &map, || match &projector {
+        Some(p) => {
+            p.prepare(order, map.mapping)?;
+            ShEvaluator::new(&ctx).map(Some)
+        }
+        None => Ok(None),
+    })?;
+    clock.lap(UPLOAD);
     let target = a.out.target();
     let o = a.orient.orientation();
-    let order = a.order;
     let (out, timings) = match a.method {
         Method::Brute => {
             let pb = spinner("brute-force irradiance on the GPU");
@@ -201,8 +231,8 @@ pub fn irradiance(g: &Global, a: &IrradianceArgs) -> Result<()> {
             r
         }
         Method::Sh => {
-            let (c, mut timings) =
-                ShProjector::new(&ctx, Subgroups::Auto)?.run_oriented(&gm, order, &o)?;
+            let projector = projector.context("the SH projector is built for --method sh")?;
+            let (c, mut timings) = projector.run_oriented(&gm, order, &o)?;
             let dirs = envlight::math::synth::fibonacci_sphere(20_000);
             let raw = sh::negativity(&sh::irradiance_coeffs(&c.coeffs), &dirs);
             if raw.fraction > 0.0 {
@@ -237,30 +267,39 @@ pub fn irradiance(g: &Global, a: &IrradianceArgs) -> Result<()> {
                 );
             }
             let irr = sh::irradiance_coeffs(&w.apply(&c.coeffs));
-            let (out, t) = ShEvaluator::new(&ctx)?.run(&irr, target)?;
+            let evaluator = evaluator.context("the SH evaluator is built for --method sh")?;
+            let (out, t) = evaluator.run(&irr, target)?;
             timings.extend(t);
             (out, timings)
         }
     };
+    clock.lap(RUN);
     write_map(&ctx, &out, &a.out.output, a.out.png)?;
+    clock.lap(DOWNLOAD_WRITE);
     print_timings(&timings);
+    clock.print();
     Ok(())
 }
 
 /// `envlight prefilter`.
 pub fn prefilter(g: &Global, a: &PrefilterArgs) -> Result<()> {
-    let map = load_input(&a.input)?;
-    let ctx = context(g)?;
+    let mut clock = HostClock::start();
+    let (map, ctx) = load_with_context(g, &a.input)?;
+    clock.lap(LOAD);
     let gm = GpuEnvMap::upload(&ctx, &map)?;
+    clock.lap("upload");
     let pb = spinner("brute-force Phong prefiltering on the GPU");
     let filter = BruteFilter::new(&ctx)?;
     let o = a.orient.orientation();
     let Some(count) = a.phong_levels else {
         let n = a.phong.context("--phong or --phong-levels is required")?;
         let (out, timings) = filter.run(&gm, &o, Kernel::Phong { n }, a.out.target())?;
+        clock.lap(RUN);
         pb.finish_and_clear();
         write_map(&ctx, &out, &a.out.output, a.out.png)?;
+        clock.lap(DOWNLOAD_WRITE);
         print_timings(&timings);
+        clock.print();
         return Ok(());
     };
     let levels = PhongLevels {
@@ -269,6 +308,7 @@ pub fn prefilter(g: &Global, a: &PrefilterArgs) -> Result<()> {
         bias: a.gloss_bias,
     };
     let (maps, sources, timings) = filter.run_levels(&gm, &o, &levels, a.out.target())?;
+    clock.lap(RUN);
     pb.finish_and_clear();
     let stem = a.out.output.with_extension("");
     let mut listing = Vec::new();
@@ -295,6 +335,8 @@ pub fn prefilter(g: &Global, a: &PrefilterArgs) -> Result<()> {
     std::fs::write(&json, serde_json::to_string_pretty(&doc)?)
         .with_context(|| json.display().to_string())?;
     println!("wrote {}", json.display());
+    clock.lap(DOWNLOAD_WRITE);
     print_timings(&timings);
+    clock.print();
     Ok(())
 }

@@ -16,7 +16,7 @@ use envlight::passes::FilterTarget;
 use envlight::{EnvMap, GpuEnvMap, Mapping, Orientation};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// Options every subcommand takes.
 #[derive(Args, Clone)]
@@ -228,6 +228,37 @@ pub fn load_input(input: &Input) -> Result<EnvMap> {
     Ok(map?)
 }
 
+/// Loads the input map on a second thread while this one creates the Vulkan device: each
+/// takes tens of milliseconds (decoding a 1k .hdr; loading the driver), and neither needs the
+/// other. A bad file is reported before a missing driver, as when they ran in turn.
+pub fn load_with_context(g: &Global, input: &Input) -> Result<(EnvMap, Context)> {
+    std::thread::scope(|s| {
+        let loading = s.spawn(|| load_input(input));
+        let ctx = context(g);
+        let map = loading
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
+        Ok((map, ctx?))
+    })
+}
+
+/// Uploads `map` while a second thread runs `prepare` (building the pipelines that will read
+/// it: on lavapipe each compiles its SPIR-V for tens of milliseconds, on every run).
+pub fn upload_while<T: Send>(
+    ctx: &Context,
+    map: &EnvMap,
+    prepare: impl FnOnce() -> envlight::Result<T> + Send,
+) -> Result<(GpuEnvMap, T)> {
+    std::thread::scope(|s| {
+        let building = s.spawn(prepare);
+        let uploaded = GpuEnvMap::upload(ctx, map);
+        let built = building
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
+        Ok((uploaded?, built))
+    })
+}
+
 /// Writes a map as EXR, and a tone-mapped PNG beside it when asked.
 pub fn write_map(ctx: &Context, map: &GpuEnvMap, output: &Path, png: bool) -> Result<()> {
     save(&map.download(ctx)?, output, png.then(ToneMap::default))
@@ -245,6 +276,39 @@ pub fn save(map: &EnvMap, output: &Path, png: Option<ToneMap>) -> Result<()> {
         println!("wrote {} ({})", p.display(), tm.describe());
     }
     Ok(())
+}
+
+/// Host wall-clock spans of a command, printed as "host x ms label" lines beside its GPU
+/// spans, so that where a whole process's time goes can be read off its output (`bench peers`
+/// tabulates them).
+pub struct HostClock {
+    last: Instant,
+    spans: Vec<(&'static str, f64)>,
+}
+
+impl HostClock {
+    /// Starts the clock.
+    pub fn start() -> HostClock {
+        HostClock {
+            last: Instant::now(),
+            spans: Vec::new(),
+        }
+    }
+
+    /// Ends the current span under `label` and starts the next.
+    pub fn lap(&mut self, label: &'static str) {
+        let now = Instant::now();
+        self.spans
+            .push((label, (now - self.last).as_secs_f64() * 1e3));
+        self.last = now;
+    }
+
+    /// Prints the spans, one per line.
+    pub fn print(&self) {
+        for (label, ms) in &self.spans {
+            println!("  host {ms:>8.3} ms  {label}");
+        }
+    }
 }
 
 /// Prints GPU timings, one per line.

@@ -126,6 +126,22 @@ impl Buffer {
         slice[..bytes.len()].copy_from_slice(bytes);
     }
 
+    /// Fills the first `count` values of `T` of a host-visible buffer in place, through `fill`
+    /// (no staging copy in host memory: an 8 MB map's upload is written once, not twice).
+    pub fn write_with<T: bytemuck::Pod, R>(
+        &mut self,
+        count: usize,
+        fill: impl FnOnce(&mut [T]) -> R,
+    ) -> R {
+        let n = count * std::mem::size_of::<T>();
+        let slice = self
+            .allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .unwrap_or_else(|| panic!("write_with() needs a host-visible buffer"));
+        fill(bytemuck::cast_slice_mut(&mut slice[..n]))
+    }
+
     /// Reads `count` values of `T` from the start of a host-visible buffer.
     pub fn read<T: bytemuck::Pod>(&self, count: usize) -> Vec<T> {
         let slice = self

@@ -175,7 +175,7 @@ pub fn write_half_channels(path: &Path, w: u32, h: u32, channels: &[(&str, &[f32
     let layer = Layer::new(
         (w as usize, h as usize),
         LayerAttributes::named("test"),
-        Encoding::SMALL_FAST_LOSSLESS,
+        Encoding::UNCOMPRESSED,
         AnyChannels::sort(SmallVec::from_vec(list)),
     );
     Image::from_layer(layer)
@@ -202,7 +202,7 @@ pub fn save_exr(map: &EnvMap, path: impl AsRef<Path>) -> Result<()> {
     let layer = Layer::new(
         (w as usize, h as usize),
         attrs,
-        Encoding::SMALL_FAST_LOSSLESS,
+        Encoding::UNCOMPRESSED,
         channels,
     );
     Image::from_layer(layer)

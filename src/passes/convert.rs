@@ -67,6 +67,13 @@ impl Converter {
         Pipeline::compute_once(cell, &self.ctx, id, &spec)
     }
 
+    /// Builds the pipeline that converts `from` maps to `to` now rather than at the first
+    /// [`Converter::record`] that needs it (from another thread while a map uploads, or
+    /// before an engine's frame).
+    pub fn prepare(&self, from: Mapping, to: Mapping) -> Result<()> {
+        self.pipeline(from, to).map(|_| ())
+    }
+
     /// Samples per axis for an output texel: about two per source texel spacing, so that
     /// minification averages every source texel the footprint covers (1 when magnifying).
     pub fn supersampling(src: (Mapping, u32, u32), dst: (Mapping, u32, u32)) -> u32 {

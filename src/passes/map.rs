@@ -133,20 +133,29 @@ impl GpuEnvMap {
     /// [`crate::io::load`] guarantees); anything else is refused so that no pass ever sees
     /// or makes NaN.
     pub fn record_upload(&self, rec: &mut Recorder, map: &EnvMap) -> Result<()> {
-        check_radiance(map)?;
         assert_eq!(
             (map.mapping, map.width, map.height),
             (self.mapping, self.width, self.height)
         );
-        let rgba: Vec<[f32; 4]> = map.texels.iter().map(|t| [t[0], t[1], t[2], 1.0]).collect();
+        let n = map.texels.len();
         let mut staging = Buffer::new(
             rec.context(),
             "upload staging",
-            (rgba.len() * 16) as u64,
+            (n * 16) as u64,
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
-        staging.write(&rgba);
+        // One pass checks each texel and writes it as RGBA straight into the mapped staging
+        // memory (a separate check and an RGBA copy in host memory cost a 1k map 10 ms more).
+        staging.write_with(n, |rgba: &mut [[f32; 4]]| {
+            for (k, (d, t)) in rgba.iter_mut().zip(&map.texels).enumerate() {
+                if t.iter().any(|c| !(c.is_finite() && *c >= 0.0)) {
+                    return Err(bad_texel(map, k));
+                }
+                *d = [t[0], t[1], t[2], 1.0];
+            }
+            Ok(())
+        })?;
         rec.copy_buffer_to_image(&staging, &self.image, 0, true);
         rec.keep(staging);
         Ok(())
@@ -216,17 +225,11 @@ impl Readback {
     }
 }
 
-fn check_radiance(map: &EnvMap) -> Result<()> {
-    if let Some(k) = map
-        .texels
-        .iter()
-        .position(|t| t.iter().any(|c| !c.is_finite() || *c < 0.0))
-    {
-        return Err(Error::Invalid(format!(
-            "texel {k} of the {} map is {:?}; radiance must be finite and non-negative",
-            map.mapping.name(),
-            map.texels[k]
-        )));
-    }
-    Ok(())
+/// The error for texel `k`, which is not finite and non-negative radiance.
+fn bad_texel(map: &EnvMap, k: usize) -> Error {
+    Error::Invalid(format!(
+        "texel {k} of the {} map is {:?}; radiance must be finite and non-negative",
+        map.mapping.name(),
+        map.texels[k]
+    ))
 }

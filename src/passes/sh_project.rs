@@ -133,6 +133,28 @@ impl ShProjector {
         }
     }
 
+    fn project_pipeline(&self, lmax: u32, mapping: Mapping) -> Result<&Pipeline> {
+        Pipeline::compute_once(
+            &self.project[(lmax + (SH_MAX_LMAX + 1) * mapping.id()) as usize],
+            &self.ctx,
+            self.project_shader,
+            &[SH_WORKGROUP, lmax, mapping.id(), Self::run_length(mapping)],
+        )
+    }
+
+    /// Builds the projection pipeline for band `lmax` of `mapping` maps now rather than at
+    /// the first [`ShProjector::record`] that needs it: from another thread while a map
+    /// loads or uploads (it takes tens of milliseconds on lavapipe, which compiles SPIR-V on
+    /// every run), or before an engine's frame.
+    pub fn prepare(&self, lmax: u32, mapping: Mapping) -> Result<()> {
+        if lmax > SH_MAX_LMAX {
+            return Err(Error::Invalid(format!(
+                "SH order {lmax} is above the maximum, {SH_MAX_LMAX}"
+            )));
+        }
+        self.project_pipeline(lmax, mapping).map(|_| ())
+    }
+
     /// Whether this projector uses subgroup operations.
     pub fn uses_subgroups(&self) -> bool {
         self.subgroups
@@ -207,12 +229,7 @@ impl ShProjector {
             texels,
             pad: [0; 3],
         };
-        let pipeline = Pipeline::compute_once(
-            &self.project[(lmax + (SH_MAX_LMAX + 1) * map.mapping.id()) as usize],
-            &self.ctx,
-            self.project_shader,
-            &[SH_WORKGROUP, lmax, map.mapping.id(), run],
-        )?;
+        let pipeline = self.project_pipeline(lmax, map.mapping)?;
         rec.span("sh project", |rec| {
             rec.dispatch(
                 pipeline,
