@@ -577,6 +577,27 @@ macro_rules! push_blocks {
     };
 }
 
+/// The lat-long → cube conversion by exact footprint areas (`math::convert::area_*`,
+/// `glsl/convert_area.comp`).
+pub mod area {
+    /// Points per edge of a cube texel's footprint polygon in the (U, z) plane: the chords
+    /// err by about 1e-4 of a texel's area away from the poles (measured 5e-6 of the power of
+    /// a map with suns at the poles and the seam, 1024 x 512 to cube 256).
+    pub const EDGE_STEPS: u32 = 2;
+    /// Points per edge whose nearer end is within [`POLE_NEAR`] / size of the pole's axis,
+    /// where great circles curve strongly in (U, z).
+    pub const POLE_STEPS: u32 = 8;
+    /// See [`POLE_STEPS`].
+    pub const POLE_NEAR: f64 = 8.0;
+    /// Most polygon vertices: four edges of [`POLE_STEPS`] points, and three closing the
+    /// polygon along a pole's line.
+    pub const MAX_VERTICES: u32 = 4 * POLE_STEPS + 3;
+    /// The conversion serves sizes with size × (source texels per output texel) at most
+    /// this (host only): its longest walk, at a pole, then stays near 2e4 steps, under
+    /// llvmpipe's loop limit of 65 535 per invocation.
+    pub const WALK_BOUND: f64 = 8000.0;
+}
+
 /// Push-constant blocks, one per shader family. GLSL reads them as `pc` through the
 /// `PUSH_<Name>` macro of the generated header.
 pub mod push {
@@ -866,6 +887,9 @@ macro_rules! shader_table {
             /// Resampling between mappings from a cube source.
             ConvertCube = "convert_cube", "convert.comp", Compute, [("SRC_CUBE", "1")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write)];
+            /// Lat-long to cube by exact footprint areas (power-conserving).
+            ConvertArea = "convert_area", "convert_area.comp", Compute, [], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write)];
             /// Mapping functions exposed for tests.
             MappingProbe = "mapping_probe", "mapping_probe.comp", Compute, [], ProbePush,
                 [(PROBE_IN, StorageBuffer, Read), (PROBE_OUT, StorageBuffer, Write)];
@@ -1074,6 +1098,10 @@ pub fn generated_header() -> String {
     let _ = writeln!(s, "#define LIGHT_LEAF_TEXELS {}u", lights::LEAF_TEXELS);
     let _ = writeln!(s, "#define LIGHT_TREE_TAIL {:?}", lights::TREE_TAIL as f32);
     let _ = writeln!(s, "#define LIGHT_TREE_VEC4S {}u", lights::TREE_VEC4S);
+    let _ = writeln!(s, "#define AREA_EDGE_STEPS {}u", area::EDGE_STEPS);
+    let _ = writeln!(s, "#define AREA_POLE_STEPS {}u", area::POLE_STEPS);
+    let _ = writeln!(s, "#define AREA_POLE_NEAR {:?}", area::POLE_NEAR as f32);
+    let _ = writeln!(s, "#define AREA_MAX_VERTICES {}u", area::MAX_VERTICES);
     let _ = writeln!(s, "#define FOOTPRINT_MIN_TAPS {}u", footprint::MIN_TAPS);
     let _ = writeln!(s, "#define FOOTPRINT_MAX_TAPS {}u", footprint::MAX_TAPS);
     let _ = writeln!(s, "#define FOOTPRINT_MIRROR {}u", footprint::MIRROR);

@@ -209,7 +209,20 @@ fn every_mapping_to_every_other_matches_the_analytic_environment() {
                     (!(to == Mapping::DualParaboloid && outside))
                         .then(|| smooth_env(out.texel_dir(l, i, j)))
                 });
-                let tol_m = (m + 2.0 * g) * hs * hs / 4.0;
+                // Lat-long to cube takes exact footprint areas of the source held constant
+                // over each texel (power-conserving): first order where a footprint cuts a
+                // source texel, which differs from the function across it by up to g·hs/2.
+                let area = Converter::uses_area(
+                    (from, w, h),
+                    &ConvertOptions {
+                        to,
+                        size: m_out,
+                        orientation: Orientation::default(),
+                        supersample: None,
+                        nearest: false,
+                    },
+                );
+                let tol_m = (m + 2.0 * g) * hs * hs / 4.0 + if area { g * hs / 2.0 } else { 0.0 };
                 let tol_c = g * hd / 6.0 + m * (hs * hs / 6.0 + hd * hd / 12.0);
                 let tol_s = g * (hs + hd) / 2.0 + tol_c;
                 eprintln!(
@@ -268,7 +281,19 @@ fn gpu_matches_the_float64_reference_conversion() {
                 let (ow, oh) = to.extent_for_size(size);
                 let ss = Converter::supersampling((from, w, h), (to, ow, oh));
                 let gpu = convert(&ctx, &conv, &src, to, size, o);
-                let cpu = envlight::math::convert::convert(&src, to, size, o.world_to_file(), ss);
+                let opts = ConvertOptions {
+                    to,
+                    size,
+                    orientation: o,
+                    supersample: None,
+                    nearest: false,
+                };
+                let area = Converter::uses_area((from, w, h), &opts);
+                let cpu = if area {
+                    envlight::math::convert::latlong_to_cube_area(&src, size, o.world_to_file())
+                } else {
+                    envlight::math::convert::convert(&src, to, size, o.world_to_file(), ss)
+                };
                 let tol = if from == Mapping::Cube { 3e-4 } else { 1e-5 };
                 let (mut worst, mut at) = (0.0f64, (0, 0, 0));
                 for layer in 0..gpu.layers() {
@@ -284,7 +309,14 @@ fn gpu_matches_the_float64_reference_conversion() {
                         }
                     }
                 }
-                eprintln!("{from:?} -> {to:?} (ss {ss}): GPU vs f64 worst {worst:.2e} at {at:?}");
+                eprintln!(
+                    "{from:?} -> {to:?} ({}): GPU vs f64 worst {worst:.2e} at {at:?}",
+                    if area {
+                        "area".to_string()
+                    } else {
+                        format!("ss {ss}")
+                    }
+                );
                 if worst > tol {
                     common::dump_pair(&format!("ref_{}_{}", from.name(), to.name()), &gpu, &cpu);
                 }
@@ -562,6 +594,138 @@ fn nearest_conversion_matches_its_float64_twin() {
             eprintln!("{mapping:?}: worst {worst:.1e}, {ties} texels at ties left out");
             assert!(ties * 4 < out.texels.len(), "{mapping:?}: {ties} ties");
             assert!(worst < 1e-5, "{mapping:?}: worst {worst}");
+        }
+    }
+    common::finish(ctx);
+}
+
+/// A lat-long map with the hard cases of the area conversion: a texel at each pole and on the
+/// seam 10⁵ × the sky, another mid-sky, over smooth texel-to-texel variation.
+fn suns_at_poles_and_seam(w: u32) -> EnvMap {
+    let h = w / 2;
+    let mut m = EnvMap::from_fn(Mapping::LatLong, w, h, 1, |d| {
+        let s = (13.0 * d.x + 7.0 * d.y).sin();
+        [1.0 + 0.5 * s, 1.0 + 0.25 * (5.0 * d.z).cos(), 1.0]
+    });
+    let (w, h) = (w as usize, h as usize);
+    for (i, j) in [
+        (0, 0),
+        (w / 2, 0),
+        (0, h / 2),
+        (w - 1, h / 3),
+        (w / 3, h - 1),
+        (w / 5, h / 2),
+    ] {
+        m.texels[j * w + i] = [1e5, 2e5, 5e4];
+    }
+    m
+}
+
+/// Lat-long to cube by exact footprint areas, on the GPU against its float64 twin
+/// (`math::convert::latlong_to_cube_area`, the same polygons and band walks), at even and odd
+/// cube sizes (a pole on a corner or inside a texel) and turned and flipped. What differs is
+/// float32: polygon points to ~1e-7 of a column, so a share of ~1e-5 of a source texel can
+/// move between neighbouring output texels; on this map (texel values 0.5–2, no suns) that
+/// is ~1e-5 of a value; tolerance 5e-5 relative.
+#[test]
+fn area_conversion_matches_its_float64_twin() {
+    let ctx = common::ctx();
+    {
+        let conv = Converter::new(&ctx).unwrap();
+        let src = EnvMap::from_fn(Mapping::LatLong, 96, 48, 1, |d| {
+            let s = (13.0 * d.x + 7.0 * d.y).sin();
+            [
+                1.0 + 0.5 * s,
+                1.0 + 0.5 * (9.0 * d.z).cos(),
+                1.25 + 0.75 * d.y,
+            ]
+        });
+        for (size, o) in [
+            (8, Orientation::default()),
+            (7, Orientation::default()),
+            (
+                13,
+                Orientation {
+                    flip_u: true,
+                    flip_v: true,
+                    rotate_y_degrees: 33.0,
+                },
+            ),
+        ] {
+            let opts = ConvertOptions {
+                to: Mapping::Cube,
+                size,
+                orientation: o,
+                supersample: None,
+                nearest: false,
+            };
+            assert!(Converter::uses_area((Mapping::LatLong, 96, 48), &opts));
+            let gpu = convert(&ctx, &conv, &src, Mapping::Cube, size, o);
+            let cpu = envlight::math::convert::latlong_to_cube_area(&src, size, o.world_to_file());
+            let worst = gpu
+                .texels
+                .iter()
+                .flatten()
+                .zip(cpu.texels.iter().flatten())
+                .map(|(a, b)| ((a - b) / b) as f64)
+                .fold(0.0f64, |m, e| m.max(e.abs()));
+            eprintln!("area, cube {size}: GPU vs f64 worst {worst:.2e}");
+            assert!(worst <= 5e-5, "cube {size}: GPU vs f64 {worst:e}");
+        }
+    }
+    common::finish(ctx);
+}
+
+/// The area conversion conserves power: with suns 10⁵ × the sky at both poles, on the seam
+/// and mid-sky, the cube's power is the map's to 2e-5 (float64 twin: 5e-6 at 1024 → 256,
+/// the chords of the footprint polygons; supersampling erred by 2.2e-3 on this map), and a
+/// constant map stays constant to float32 rounding.
+#[test]
+fn area_conversion_conserves_power() {
+    let ctx = common::ctx();
+    {
+        let conv = Converter::new(&ctx).unwrap();
+        let src = suns_at_poles_and_seam(1024);
+        for (size, o) in [
+            (256, Orientation::default()),
+            (
+                255,
+                Orientation {
+                    flip_u: false,
+                    flip_v: true,
+                    rotate_y_degrees: 17.0,
+                },
+            ),
+        ] {
+            let out = convert(&ctx, &conv, &src, Mapping::Cube, size, o);
+            let (p, q) = (out.power(), src.power());
+            let worst = (0..3)
+                .map(|c| (p[c] / q[c] - 1.0).abs())
+                .fold(0.0, f64::max);
+            eprintln!("area, cube {size}: power error {worst:.2e}");
+            assert!(worst <= 2e-5, "cube {size}: power off by {worst:e}");
+            assert!(out
+                .texels
+                .iter()
+                .flatten()
+                .all(|v| v.is_finite() && *v >= 0.0));
+        }
+        let flat = EnvMap::new(Mapping::LatLong, 64, 32, vec![[2.0, 3.0, 4.0]; 64 * 32]);
+        for size in [5, 16] {
+            let out = convert(
+                &ctx,
+                &conv,
+                &flat,
+                Mapping::Cube,
+                size,
+                Orientation::default(),
+            );
+            let worst = out
+                .texels
+                .iter()
+                .map(|t| (t[1] as f64 / 3.0 - 1.0).abs())
+                .fold(0.0, f64::max);
+            assert!(worst <= 2e-6, "constant map, cube {size}: off by {worst:e}");
         }
     }
     common::finish(ctx);

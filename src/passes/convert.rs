@@ -43,6 +43,8 @@ pub struct Converter {
     ctx: Context,
     /// One pipeline per (source, destination) mapping pair, specialised on both.
     pipelines: [OnceLock<Pipeline>; 16],
+    /// Lat-long to cube by exact footprint areas.
+    area: OnceLock<Pipeline>,
     sampler: Sampler,
 }
 
@@ -52,6 +54,7 @@ impl Converter {
         Ok(Converter {
             ctx: ctx.clone(),
             pipelines: Default::default(),
+            area: OnceLock::new(),
             sampler: Sampler::linear_clamp(ctx, "convert sampler")?,
         })
     }
@@ -71,7 +74,27 @@ impl Converter {
     /// [`Converter::record`] that needs it (from another thread while a map uploads, or
     /// before an engine's frame).
     pub fn prepare(&self, from: Mapping, to: Mapping) -> Result<()> {
+        if from == Mapping::LatLong && to == Mapping::Cube {
+            // The area pipeline, which serves lat-long to cube at all but extreme minification.
+            return self.area_pipeline().map(|_| ());
+        }
         self.pipeline(from, to).map(|_| ())
+    }
+
+    fn area_pipeline(&self) -> Result<&Pipeline> {
+        Pipeline::compute_once(&self.area, &self.ctx, ShaderId::ConvertArea, &WORKGROUP_2D)
+    }
+
+    /// Whether converting a `src` map (mapping, width, height) with `opts` takes exact
+    /// footprint areas (lat-long to cube, no sample count or nearest reads asked for, and not
+    /// so strongly minified that its walks at the poles grow long: `math::convert::area_serves`),
+    /// which conserves power, rather than `ss` × `ss` bilinear samples per texel.
+    pub fn uses_area(src: (Mapping, u32, u32), opts: &ConvertOptions) -> bool {
+        src.0 == Mapping::LatLong
+            && opts.to == Mapping::Cube
+            && opts.supersample.is_none()
+            && !opts.nearest
+            && crate::math::convert::area_serves(src.1, src.2, opts.size)
     }
 
     /// Samples per axis for an output texel: about two per source texel spacing, so that
@@ -117,7 +140,11 @@ impl Converter {
             nearest: opts.nearest as u32,
         };
         let cube = src.mapping == Mapping::Cube;
-        let pipeline = self.pipeline(src.mapping, opts.to)?;
+        let pipeline = if Converter::uses_area((src.mapping, src.width, src.height), opts) {
+            self.area_pipeline()?
+        } else {
+            self.pipeline(src.mapping, opts.to)?
+        };
         let label = format!(
             "convert {} -> {} {w}x{h}",
             src.mapping.name(),

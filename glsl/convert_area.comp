@@ -1,0 +1,172 @@
+#version 460
+// Lat-long to cube, conserving power: each output texel holds the mean of the source (constant
+// over each of its texels) over the texel's footprint. In the equal-area plane (U, z) =
+// (φ·W/2π, cos θ) lat-long texels are rectangles; the footprint is the polygon of points along
+// the texel's edges (with the pole's line where a point sits on a pole or the texel holds
+// one), and its overlap with each source texel is integrated exactly, band of rows by band,
+// as ∮ (z − z_band) dU along the polygon clipped to the band. Neighbours share their edge
+// points bit for bit and split shared edges from a canonical endpoint order, so the polygons
+// tile the plane and each source texel's power is counted once. The float64 twin is
+// math::convert::latlong_to_cube_area, step for step.
+#extension GL_GOOGLE_include_directive : require
+#include "mappings.glsl"
+
+layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
+
+layout(set = 0, binding = BINDING_CONVERT_SRC) uniform sampler2DArray src;
+layout(set = 0, binding = BINDING_CONVERT_DST, rgba32f) uniform writeonly image2DArray dst;
+
+// The push block, generated from src/abi.rs.
+PUSH_ConvertPush
+
+const uint MAXV = 2u * AREA_MAX_VERTICES;  // a clip at most doubles a polygon
+vec2 poly[MAXV];
+vec2 tmp[MAXV];
+vec2 band[MAXV];
+uint npoly;
+
+vec3 point(uint face, uint a, uint b, uint m) {
+    Coord c;
+    c.layer = face;
+    c.uv = vec2(float(a), float(b)) / float(pc.dst_size.x * m);
+    vec3 d = coord_to_dir(MAPPING_CUBE, c);
+    return vec3(dot(pc.world_to_file[0].xyz, d), dot(pc.world_to_file[1].xyz, d),
+                dot(pc.world_to_file[2].xyz, d));
+}
+
+bool on_pole(vec3 d) { return d.x == 0.0 && d.z == 0.0; }
+
+bool before(vec2 a, vec2 b) { return a.x < b.x || (a.x == b.x && a.y <= b.y); }
+
+// src clipped to z >= bound (above) or z <= bound, into dst; returns the vertex count. A
+// macro, so that the arrays stay globals instead of copies.
+#define CUT(dst, src, n, bound, above, out) { \
+    uint k_ = 0u; \
+    for (uint i_ = 0u; i_ < (n); i_++) { \
+        vec2 a_ = src[i_], b_ = src[(i_ + 1u) % (n)]; \
+        bool ia_ = (above) ? a_.y >= (bound) : a_.y <= (bound); \
+        bool ib_ = (above) ? b_.y >= (bound) : b_.y <= (bound); \
+        if (ia_) dst[k_++] = a_; \
+        if (ia_ != ib_) { \
+            bool f_ = before(a_, b_); \
+            vec2 p_ = f_ ? a_ : b_, q_ = f_ ? b_ : a_; \
+            float t_ = ((bound) - p_.y) / (q_.y - p_.y); \
+            dst[k_++] = vec2(p_.x + (q_.x - p_.x) * t_, (bound)); \
+        } \
+    } \
+    out = k_; \
+}
+
+float band_edge(int row, int h) {
+    if (row <= 0) return 1.0;
+    if (row >= h) return -1.0;
+    return cos(PI * float(row) / float(h));
+}
+
+void main() {
+    uvec3 id = gl_GlobalInvocationID;
+    if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
+    uint face = id.z, i = id.x, j = id.y, n = pc.dst_size.x;
+    int w = int(pc.src_size.x), h = int(pc.src_size.y);
+    float wf = float(w), scale = wf / (2.0 * PI);
+
+    // The boundary points and their unwrapped U (as area_polygon in math/convert.rs).
+    const uvec2 steps[4] = uvec2[4](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 1));
+    vec3 ds[4u * AREA_POLE_STEPS];
+    uint count = 0u;
+    for (uint k = 0u; k < 4u; k++) {
+        uvec2 e0 = uvec2(i, j) + steps[k], e1 = uvec2(i, j) + steps[(k + 1u) % 4u];
+        vec3 pa = point(face, e0.x, e0.y, 1u), pb = point(face, e1.x, e1.y, 1u);
+        bool near = min(length(pa.xz), length(pb.xz)) < AREA_POLE_NEAR / float(n);
+        uint m = near ? AREA_POLE_STEPS : AREA_EDGE_STEPS;
+        for (uint q = 0u; q < m; q++) {
+            uvec2 ab = e0 * (m - q) + e1 * q;
+            ds[count++] = point(face, ab.x, ab.y, m);
+        }
+    }
+    float us[4u * AREA_POLE_STEPS];
+    bool have_prev = false, pole = false;
+    float prev = 0.0;
+    for (uint k = 0u; k < count; k++) {
+        us[k] = 0.0;
+        if (on_pole(ds[k])) continue;
+        float u = atan(ds[k].x, -ds[k].z) * scale;
+        if (have_prev) {
+            float d = u - prev;
+            u = prev + (d - wf * round(d / wf));
+        }
+        us[k] = u;
+        prev = u;
+        have_prev = true;
+    }
+    npoly = 0u;
+    for (uint k = 0u; k < count; k++) {
+        if (on_pole(ds[k])) {
+            pole = true;
+            float zp = sign(ds[k].y);
+            poly[npoly++] = vec2(us[(k + count - 1u) % count], zp);
+            poly[npoly++] = vec2(us[(k + 1u) % count], zp);
+        } else {
+            poly[npoly++] = vec2(us[k], ds[k].y);
+        }
+    }
+    if (!pole) {
+        float first = us[0], last = us[count - 1u];
+        float d = first - last;
+        float closed = last + (d - wf * round(d / wf));
+        if (abs(closed - first) > 0.5 * wf) {
+            float zp = sign(ds[0].y);
+            poly[npoly++] = vec2(closed, ds[0].y);
+            poly[npoly++] = vec2(closed, zp);
+            poly[npoly++] = vec2(first, zp);
+        }
+    }
+
+    float zmin = 2.0, zmax = -2.0;
+    for (uint k = 0u; k < npoly; k++) {
+        zmin = min(zmin, poly[k].y);
+        zmax = max(zmax, poly[k].y);
+    }
+    // The rows the polygon meets, by the same band edges as the clip.
+    int r0 = clamp(int(floor(acos(clamp(zmax, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
+    int r1 = clamp(int(floor(acos(clamp(zmin, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
+    while (r0 > 0 && band_edge(r0, h) < zmax) r0--;
+    while (r0 < r1 && band_edge(r0 + 1, h) >= zmax) r0++;
+    while (r1 < h - 1 && band_edge(r1 + 1, h) > zmin) r1++;
+    while (r1 > r0 && band_edge(r1, h) <= zmin) r1--;
+
+    // Sums of (L − L0) rather than L: a constant map comes out exact, whatever the pieces'
+    // rounding.
+    vec3 l0 = texelFetch(src, ivec3(((int(floor(poly[0].x)) % w) + w) % w, r0, 0), 0).rgb;
+    vec3 num = vec3(0.0);
+    float den = 0.0;
+    for (int row = r0; row <= r1; row++) {
+        float zhi = band_edge(row, h), zlo = band_edge(row + 1, h);
+        uint nb;
+        CUT(tmp, poly, npoly, zlo, true, nb);
+        CUT(band, tmp, nb, zhi, false, nb);
+        for (uint k = 0u; k < nb; k++) {
+            vec2 a = band[k], b = band[(k + 1u) % nb];
+            bool fwd = before(a, b);
+            vec2 p = fwd ? a : b, q = fwd ? b : a;
+            float sgn = fwd ? 1.0 : -1.0;
+            if (p.x == q.x) continue;
+            int c = int(floor(p.x));
+            for (;;) {
+                float u0 = max(p.x, float(c)), u1 = min(q.x, float(c + 1));
+                if (u1 > u0) {
+                    float z0 = p.y + (q.y - p.y) * ((u0 - p.x) / (q.x - p.x));
+                    float z1 = p.y + (q.y - p.y) * ((u1 - p.x) / (q.x - p.x));
+                    float piece = sgn * (u1 - u0) * (0.5 * (z0 + z1) - zlo);
+                    int col = ((c % w) + w) % w;
+                    num += piece * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0);
+                    den += piece;
+                }
+                c++;
+                if (float(c) >= q.x) break;
+            }
+        }
+    }
+    vec3 result = den != 0.0 ? l0 + num / den : l0;
+    imageStore(dst, ivec3(id), vec4(max(result, vec3(0.0)), 1.0));
+}
