@@ -4,7 +4,9 @@
 // (φ·W/2π, cos θ) lat-long texels are rectangles; the footprint is the polygon of points along
 // the texel's edges (with the pole's line where a point sits on a pole or the texel holds
 // one), and its overlap with each source texel is integrated exactly, band of rows by band,
-// as ∮ (z − z_band) dU along the polygon clipped to the band. Neighbours share their edge
+// as ∮ (z − z_band) dU along the polygon clipped to the band. The source is each texel's
+// value plus its limited slopes (convert_slopes.comp): second order on smooth maps, flat at
+// extrema. Neighbours share their edge
 // points bit for bit and split shared edges from a canonical endpoint order, so the polygons
 // tile the plane and each source texel's power is counted once. The float64 twin is
 // math::convert::latlong_to_cube_area, step for step.
@@ -15,6 +17,10 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 
 layout(set = 0, binding = BINDING_CONVERT_SRC) uniform sampler2DArray src;
 layout(set = 0, binding = BINDING_CONVERT_DST, rgba32f) uniform writeonly image2DArray dst;
+// Limited slopes of each source texel (convert_slopes.comp): (dL/dU rgb, 0), (dL/dz rgb, 0).
+layout(set = 0, binding = BINDING_CONVERT_SLOPES, std430) readonly buffer Slopes {
+    vec4 slopes[];
+};
 
 // The push block, generated from src/abi.rs.
 PUSH_ConvertPush
@@ -142,6 +148,7 @@ void main() {
     float den = 0.0;
     for (int row = r0; row <= r1; row++) {
         float zhi = band_edge(row, h), zlo = band_edge(row + 1, h);
+        float zc = 0.5 * (zhi + zlo), base = (zlo - zc) * (zlo - zc);
         uint nb;
         CUT(tmp, poly, npoly, zlo, true, nb);
         CUT(band, tmp, nb, zhi, false, nb);
@@ -155,12 +162,26 @@ void main() {
             for (;;) {
                 float u0 = max(p.x, float(c)), u1 = min(q.x, float(c + 1));
                 if (u1 > u0) {
+                    // ∫∫ 1, ∫∫ (U − Uc) and ∫∫ (z − zc) over this piece (Green's theorem;
+                    // Simpson's rule, exact for these quadratics), as area_mean's.
+                    float um = 0.5 * (u0 + u1);
                     float z0 = p.y + (q.y - p.y) * ((u0 - p.x) / (q.x - p.x));
+                    float zm = p.y + (q.y - p.y) * ((um - p.x) / (q.x - p.x));
                     float z1 = p.y + (q.y - p.y) * ((u1 - p.x) / (q.x - p.x));
-                    float piece = sgn * (u1 - u0) * (0.5 * (z0 + z1) - zlo);
+                    float d = sgn * (u1 - u0);
+                    float uc = float(c) + 0.5;
+                    float area = d * (0.5 * (z0 + z1) - zlo);
+                    float mu = d / 6.0 * ((u0 - uc) * (z0 - zlo) + 4.0 * (um - uc) * (zm - zlo) +
+                                          (u1 - uc) * (z1 - zlo));
+                    float mz = d / 6.0 * 0.5 *
+                               (((z0 - zc) * (z0 - zc) - base) + 4.0 * ((zm - zc) * (zm - zc) - base) +
+                                ((z1 - zc) * (z1 - zc) - base));
                     int col = ((c % w) + w) % w;
-                    num += piece * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0);
-                    den += piece;
+                    uint o = 2u * uint(row * w + col);
+                    vec3 gu = slopes[o].xyz, gz = slopes[o + 1u].xyz;
+                    num += area * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + mu * gu +
+                           mz * gz;
+                    den += area;
                 }
                 c++;
                 if (float(c) >= q.x) break;

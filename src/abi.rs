@@ -25,6 +25,9 @@ pub mod binding {
         CONVERT_SRC = 0;
         /// convert: the destination map (rgba32f image2DArray).
         CONVERT_DST = 1;
+        /// convert_slopes, convert_area: per lat-long texel its limited slopes dL/dU, dL/dz
+        /// (two vec4, rgb used; storage buffer).
+        CONVERT_SLOPES = 2;
         /// mapping_probe: input directions (vec4 storage buffer).
         PROBE_IN = 0;
         /// mapping_probe: results (vec4 storage buffer).
@@ -889,7 +892,11 @@ macro_rules! shader_table {
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write)];
             /// Lat-long to cube by exact footprint areas (power-conserving).
             ConvertArea = "convert_area", "convert_area.comp", Compute, [], ConvertPush,
-                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write)];
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
+                 (CONVERT_SLOPES, StorageBuffer, Read)];
+            /// The limited slopes of a lat-long source that ConvertArea integrates.
+            ConvertSlopes = "convert_slopes", "convert_slopes.comp", Compute, [], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_SLOPES, StorageBuffer, Write)];
             /// Mapping functions exposed for tests.
             MappingProbe = "mapping_probe", "mapping_probe.comp", Compute, [], ProbePush,
                 [(PROBE_IN, StorageBuffer, Read), (PROBE_OUT, StorageBuffer, Write)];

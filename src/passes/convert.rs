@@ -4,8 +4,10 @@
 use super::map::GpuEnvMap;
 use crate::abi::{binding, push::ConvertPush, ShaderId, WORKGROUP_2D};
 use crate::error::Result;
-use crate::gpu::{groups, mat3_rows, Bind, Context, Pipeline, Recorder, Sampler, Timing};
+use crate::gpu::{groups, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing};
 use crate::math::{Mapping, Orientation};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
 use std::sync::OnceLock;
 
 /// Per-call options of [`Converter::run`].
@@ -43,8 +45,9 @@ pub struct Converter {
     ctx: Context,
     /// One pipeline per (source, destination) mapping pair, specialised on both.
     pipelines: [OnceLock<Pipeline>; 16],
-    /// Lat-long to cube by exact footprint areas.
+    /// Lat-long to cube by exact footprint areas, and the source slopes it integrates.
     area: OnceLock<Pipeline>,
+    slopes: OnceLock<Pipeline>,
     sampler: Sampler,
 }
 
@@ -55,6 +58,7 @@ impl Converter {
             ctx: ctx.clone(),
             pipelines: Default::default(),
             area: OnceLock::new(),
+            slopes: OnceLock::new(),
             sampler: Sampler::linear_clamp(ctx, "convert sampler")?,
         })
     }
@@ -76,6 +80,12 @@ impl Converter {
     pub fn prepare(&self, from: Mapping, to: Mapping) -> Result<()> {
         if from == Mapping::LatLong && to == Mapping::Cube {
             // The area pipeline, which serves lat-long to cube at all but extreme minification.
+            Pipeline::compute_once(
+                &self.slopes,
+                &self.ctx,
+                ShaderId::ConvertSlopes,
+                &WORKGROUP_2D,
+            )?;
             return self.area_pipeline().map(|_| ());
         }
         self.pipeline(from, to).map(|_| ())
@@ -140,11 +150,10 @@ impl Converter {
             nearest: opts.nearest as u32,
         };
         let cube = src.mapping == Mapping::Cube;
-        let pipeline = if Converter::uses_area((src.mapping, src.width, src.height), opts) {
-            self.area_pipeline()?
-        } else {
-            self.pipeline(src.mapping, opts.to)?
-        };
+        if Converter::uses_area((src.mapping, src.width, src.height), opts) {
+            return self.record_area(rec, src, dst, &push, (w, h));
+        }
+        let pipeline = self.pipeline(src.mapping, opts.to)?;
         let label = format!(
             "convert {} -> {} {w}x{h}",
             src.mapping.name(),
@@ -169,6 +178,65 @@ impl Converter {
                 ],
             )
         })
+    }
+
+    /// The lat-long to cube conversion by exact footprint areas: the source's limited slopes,
+    /// then the footprints' integrals.
+    fn record_area(
+        &self,
+        rec: &mut Recorder,
+        src: &GpuEnvMap,
+        dst: &GpuEnvMap,
+        push: &ConvertPush,
+        (w, h): (u32, u32),
+    ) -> Result<()> {
+        let slopes = Buffer::new(
+            &self.ctx,
+            "convert slopes",
+            src.width as u64 * src.height as u64 * 32,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuOnly,
+        )?;
+        let slopes_pipeline = Pipeline::compute_once(
+            &self.slopes,
+            &self.ctx,
+            ShaderId::ConvertSlopes,
+            &WORKGROUP_2D,
+        )?;
+        let area = self.area_pipeline()?;
+        let source = || {
+            (
+                binding::CONVERT_SRC,
+                Bind::Sampled(&src.image, &self.sampler, false),
+            )
+        };
+        rec.discard(&dst.image);
+        rec.span("convert slopes", |rec| {
+            rec.dispatch(
+                slopes_pipeline,
+                &[source(), (binding::CONVERT_SLOPES, Bind::Buffer(&slopes))],
+                push,
+                [
+                    groups(src.width, WORKGROUP_2D[0]),
+                    groups(src.height, WORKGROUP_2D[1]),
+                    1,
+                ],
+            )
+        })?;
+        rec.span(&format!("convert latlong -> cube {w}x{h} (areas)"), |rec| {
+            rec.dispatch(
+                area,
+                &[
+                    source(),
+                    (binding::CONVERT_DST, Bind::Storage(&dst.image)),
+                    (binding::CONVERT_SLOPES, Bind::Buffer(&slopes)),
+                ],
+                push,
+                [groups(w, WORKGROUP_2D[0]), groups(h, WORKGROUP_2D[1]), 6],
+            )
+        })?;
+        rec.keep(slopes);
+        Ok(())
     }
 
     /// Converts `src` to `opts.to` at `opts.size`; returns the new map and the GPU time.

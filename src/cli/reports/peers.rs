@@ -64,6 +64,18 @@ fn median(v: &mut [f64]) -> f64 {
     }
 }
 
+/// The "host x ms label" lines envlight prints, in order.
+fn host_spans(stdout: &str) -> Vec<(String, f64)> {
+    stdout
+        .lines()
+        .filter_map(|l| {
+            let rest = l.trim_start().strip_prefix("host")?;
+            let (ms, label) = rest.trim_start().split_once(" ms")?;
+            Some((label.trim().to_string(), ms.trim().parse::<f64>().ok()?))
+        })
+        .collect()
+}
+
 /// Sum of the "GPU  x ms  label" lines envlight prints.
 fn gpu_ms(stdout: &str) -> f64 {
     stdout
@@ -282,6 +294,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
 
     let src = load_any(opts.map)?;
     let mut rows = Vec::new();
+    let mut breakdown = Vec::new();
     for job in &jobs {
         eprintln!("{} …", job.name);
         // One untimed run of each warms the file cache and Mesa's shader cache.
@@ -291,10 +304,17 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         }
         let (mut te, mut tc) = (Vec::new(), Vec::new());
         let mut gpu = Vec::new();
+        let mut spans: Vec<(String, Vec<f64>)> = Vec::new();
         for _ in 0..job.reps.max(1) {
             let (s, out) = run(&me, &job.envlight, &[])?;
             te.push(s);
             gpu.push(gpu_ms(&out));
+            for (k, (label, ms)) in host_spans(&out).into_iter().enumerate() {
+                if spans.len() <= k {
+                    spans.push((label, Vec::new()));
+                }
+                spans[k].1.push(ms);
+            }
             if let Some(c) = opts.cmft {
                 tc.push(run(c, &job.cmft, &[])?.0);
             }
@@ -302,6 +322,11 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         // A first run as a new user has it: no shader cache, so llvmpipe compiles every shader.
         let (cold, _) = run(&me, &job.envlight, &[("MESA_SHADER_CACHE_DISABLE", "true")])?;
         let (e_err, c_err) = errors(job.name, &src, &tmp, opts.cmft.is_some())?;
+        let spans: Vec<(String, f64)> = spans
+            .into_iter()
+            .map(|(label, mut v)| (label, median(&mut v)))
+            .collect();
+        breakdown.push((job.name, median(&mut te), spans));
         rows.push((
             job,
             median(&mut te),
@@ -368,6 +393,24 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
          their face frame is not yet matched to DESIGN.md's, so a difference would measure the \
          frames; ../shared/peers/README.md measured 1–16% lobe-tail error for its Phong.\n",
     );
+    md.push_str(
+        "\nWhere envlight's whole-process time goes: the host spans each command prints \
+         ('host x ms label'; '∥' marks work on two threads at once), medians of the timed runs; \
+         'rest' is the whole process less their sum (process start, argument parsing, exit and \
+         teardown).\n\n| job | whole s | host spans, ms | rest, ms |\n|---|---|---|---|\n",
+    );
+    for (name, whole, spans) in &breakdown {
+        let sum: f64 = spans.iter().map(|(_, ms)| ms).sum();
+        let list: Vec<String> = spans
+            .iter()
+            .map(|(label, ms)| format!("{label} {ms:.1}"))
+            .collect();
+        md.push_str(&format!(
+            "| {name} | {whole:.3} | {} | {:.1} |\n",
+            list.join("; "),
+            whole * 1e3 - sum
+        ));
+    }
     println!("{md}");
     if let Some(out) = opts.out {
         std::fs::write(out, &md).with_context(|| out.display().to_string())?;
@@ -461,4 +504,23 @@ fn tempdir() -> Result<PathBuf> {
     let d = std::env::temp_dir().join(format!("envlight-peers-{}", std::process::id()));
     std::fs::create_dir_all(&d).with_context(|| d.display().to_string())?;
     Ok(d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The breakdown reads back exactly what the commands print (`cli::HostClock`).
+    #[test]
+    fn host_spans_are_read_back() {
+        let out = "wrote x.json\n  GPU    13.920 ms  sh project\n  host   34.418 ms  load file ∥ create device\n  host    0.564 ms  write\n";
+        assert_eq!(
+            host_spans(out),
+            vec![
+                ("load file ∥ create device".to_string(), 34.418),
+                ("write".to_string(), 0.564)
+            ]
+        );
+        assert!((gpu_ms(out) - 13.92).abs() < 1e-9);
+    }
 }
