@@ -1,6 +1,6 @@
 //! `envlight render`, `plan` and `demo`.
 
-use super::{context, preview, Global};
+use super::{context, preview, Global, HostClock};
 use anyhow::{Context as _, Result};
 use clap::Args;
 use envlight::io::{self, LoadOptions, ToneMap};
@@ -161,13 +161,24 @@ fn demo_scene(cli: &Global, out: &Path) -> Result<()> {
 }
 
 fn render_scene(cli: &Global, scene: &Path, output: &Path) -> Result<()> {
+    let mut clock = HostClock::start();
     let sc = envlight::scene::Scene::load(scene)?;
     let base = scene.parent().unwrap_or(Path::new("."));
-    let env = envlight::render::load_environment(&sc, base)?;
-    let ctx = context(cli)?;
+    // The environment loads on a second thread while the device is created (as the map
+    // commands do); a bad file is reported before a missing driver.
+    let (env, ctx) = std::thread::scope(|s| {
+        let loading = s.spawn(|| envlight::render::load_environment(&sc, base));
+        let ctx = context(cli);
+        let env = loading
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
+        anyhow::Ok((env, ctx?))
+    })?;
+    clock.lap("load scene and map ∥ create device");
     let t0 = std::time::Instant::now();
     let r = envlight::render::render(&ctx, &sc, &env)?;
     let wall = t0.elapsed().as_secs_f64();
+    clock.lap("render (pipelines, passes, waits)");
     if let Some(dir) = output.parent() {
         std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
     }
@@ -177,6 +188,7 @@ fn render_scene(cli: &Global, scene: &Path, output: &Path) -> Result<()> {
     preview::preview(&r.frame, tm)
         .save(&png)
         .with_context(|| png.display().to_string())?;
+    clock.lap("write EXR and PNG");
     println!("{}  {}", output.display(), png.display());
     println!("{:<16} {:>11}  spans", "pass", "GPU ms");
     let mut total = 0.0;
@@ -205,5 +217,6 @@ fn render_scene(cli: &Global, scene: &Path, output: &Path) -> Result<()> {
     for n in r.plan.notes.iter().filter(|n| n.starts_with("ringing")) {
         println!("{n}");
     }
+    clock.print();
     Ok(())
 }

@@ -30,7 +30,8 @@ pub struct PeersOptions<'a> {
 struct Job {
     name: &'static str,
     envlight: Vec<String>,
-    cmft: Vec<String>,
+    /// cmft's arguments; `None` where cmft has no such job.
+    cmft: Option<Vec<String>>,
     reps: usize,
     goal: &'static str,
 }
@@ -76,13 +77,13 @@ fn host_spans(stdout: &str) -> Vec<(String, f64)> {
         .collect()
 }
 
-/// Sum of the "GPU  x ms  label" lines envlight prints.
+/// Sum of the "GPU  x ms  label" lines envlight prints; for `render`, its "total  x" line.
 fn gpu_ms(stdout: &str) -> f64 {
     stdout
         .lines()
         .filter_map(|l| {
             let mut w = l.split_whitespace();
-            (w.next() == Some("GPU")).then(|| w.next()?.parse::<f64>().ok())?
+            matches!(w.next(), Some("GPU" | "total")).then(|| w.next()?.parse::<f64>().ok())?
         })
         .sum()
 }
@@ -188,7 +189,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         Job {
             name: "SH coefficients (envlight l = 2; cmft l = 4)",
             envlight: strings(&["sh", &map, "--order", "2", "-o", &t("sh.json")]),
-            cmft: cmft_common("shcoeffs", &t("cmft_sh")),
+            cmft: Some(cmft_common("shcoeffs", &t("cmft_sh"))),
             reps: opts.reps,
             goal: "≤ 1.0×",
         },
@@ -208,11 +209,11 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
                 "-o",
                 &t("irr.exr"),
             ]),
-            cmft: {
+            cmft: Some({
                 let mut v = cmft_common("irradiance", &t("cmft_irr"));
                 v.extend(strings(&["--dstFaceSize", "64"]));
                 v
-            },
+            }),
             reps: opts.reps,
             goal: "≤ 1.0×",
         },
@@ -228,11 +229,11 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
                 "-o",
                 &t("conv.exr"),
             ]),
-            cmft: {
+            cmft: Some({
                 let mut v = cmft_common("none", &t("cmft_conv"));
                 v.extend(strings(&["--dstFaceSize", "256"]));
                 v
-            },
+            }),
             reps: opts.reps,
             goal: "≤ 2×, power within 0.01%",
         },
@@ -250,7 +251,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
                 "-o",
                 &t("phong.exr"),
             ]),
-            cmft: cmft_phong("cmft_phong", 1),
+            cmft: Some(cmft_phong("cmft_phong", 1)),
             reps: opts.phong_reps,
             goal: "≤ 1.0×, error ≤ 1e-3",
         },
@@ -268,11 +269,31 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
                 "-o",
                 &t("levels.exr"),
             ]),
-            cmft: cmft_phong("cmft_levels", BENCH_LEVELS.count),
+            cmft: Some(cmft_phong("cmft_levels", BENCH_LEVELS.count)),
             reps: opts.phong_reps,
             goal: "≤ 1.0×, every level within 1e-3",
         },
+        Job {
+            name: FIS_JOB,
+            envlight: strings(&["render", &t("fis.toml"), "-o", &t("fis.exr")]),
+            cmft: None,
+            reps: opts.reps,
+            goal: "≤ 0.15 s whole process",
+        },
     ];
+    // The issue's FIS row: a GGX α 0.3 unit sphere, 128², FIS with 64 samples, lit by the map
+    // (lights extracted, the default), seen orthographically.
+    let map_abs = std::fs::canonicalize(opts.map).with_context(|| map.clone())?;
+    std::fs::write(
+        tmp.join("fis.toml"),
+        format!(
+            "[environment]\nfile = {:?}\n\n[camera]\nprojection = {{ kind = \"orthographic\", height = 2.2 }}\n\
+             eye = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nwidth = 128\nheight = 128\n\n\
+             [[objects]]\nshape = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n\
+             material = {{ type = \"ggx\", alpha = 0.3, technique = {{ kind = \"fis\", samples = 64 }} }}\n",
+            map_abs.display().to_string()
+        ),
+    )?;
 
     let (_, devices) = run(&me, &strings(&["devices"]), &[])?;
     let device = devices
@@ -291,6 +312,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     };
     let floor_devices = floor(&strings(&["devices"]))?;
     let floor_info = floor(&strings(&["info", &map]))?;
+    // `info` also extracts the map's lights; the breakdown below has the load alone.
 
     let src = load_any(opts.map)?;
     let mut rows = Vec::new();
@@ -299,8 +321,9 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         eprintln!("{} …", job.name);
         // One untimed run of each warms the file cache and Mesa's shader cache.
         run(&me, &job.envlight, &[])?;
-        if let Some(c) = opts.cmft {
-            run(c, &job.cmft, &[])?;
+        let cmft = opts.cmft.zip(job.cmft.as_ref());
+        if let Some((c, args)) = cmft {
+            run(c, args, &[])?;
         }
         let (mut te, mut tc) = (Vec::new(), Vec::new());
         let mut gpu = Vec::new();
@@ -315,13 +338,13 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
                 }
                 spans[k].1.push(ms);
             }
-            if let Some(c) = opts.cmft {
-                tc.push(run(c, &job.cmft, &[])?.0);
+            if let Some((c, args)) = cmft {
+                tc.push(run(c, args, &[])?.0);
             }
         }
         // A first run as a new user has it: no shader cache, so llvmpipe compiles every shader.
         let (cold, _) = run(&me, &job.envlight, &[("MESA_SHADER_CACHE_DISABLE", "true")])?;
-        let (e_err, c_err) = errors(job.name, &src, &tmp, opts.cmft.is_some())?;
+        let (e_err, c_err) = errors(job.name, &src, &tmp, cmft.is_some())?;
         let spans: Vec<(String, f64)> = spans
             .into_iter()
             .map(|(label, mut v)| (label, median(&mut v)))
@@ -361,12 +384,13 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     ));
     md.push_str(&format!(
         "Floor of any envlight job here: process start + Vulkan instance and device \
-         (`envlight devices`) {floor_devices:.3} s; + loading the map (`envlight info`) \
-         {floor_info:.3} s.\n\n"
+         (`envlight devices`) {floor_devices:.3} s; `envlight info` (loading the map, its \
+         statistics and its lights) {floor_info:.3} s. The load itself runs beside device \
+         creation: see the breakdown below.\n\n"
     ));
     md.push_str("| job | cmft s | envlight s | ratio | envlight cold s | envlight GPU ms | envlight error | cmft error | goal |\n|---|---|---|---|---|---|---|---|---|\n");
     for (job, te, tc, cold, gpu, ee, ce) in &rows {
-        let have_c = opts.cmft.is_some();
+        let have_c = opts.cmft.is_some() && job.cmft.is_some();
         md.push_str(&format!(
             "| {} | {} | {te:.3} | {} | {cold:.3} | {gpu:.1} | {ee} | {} | {} |\n",
             job.name,
@@ -448,6 +472,11 @@ fn errors(job: &str, src: &EnvMap, tmp: &Path, cmft: bool) -> Result<(String, St
         let c = if cmft { NOT_COMPARED.into() } else { dash() };
         return Ok((e, c));
     }
+    if job == FIS_JOB {
+        // Its accuracy against converged Monte Carlo is docs/accuracy's table (FIS-64 with
+        // lights within 2.42% on five probes).
+        return Ok(("see docs/accuracy".into(), dash()));
+    }
     if job.starts_with("lat-long") {
         let e = power_error(&load_any(&tmp.join("conv.exr"))?, src);
         let c = if cmft {
@@ -496,6 +525,9 @@ const BENCH_LEVELS: PhongLevels = PhongLevels {
     scale: 10.0,
     bias: 1.0,
 };
+
+/// The FIS render row of the issue's table (cmft has no such job).
+const FIS_JOB: &str = "FIS render, 128² GGX α 0.3 sphere, 64 samples, lights";
 
 /// What the cmft error column says where its output's frame is not matched to envlight's.
 const NOT_COMPARED: &str = "not compared (frame)";
