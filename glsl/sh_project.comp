@@ -39,6 +39,7 @@ vec3 to_world(vec3 f) {
 }
 
 
+#ifndef GRID_ONLY
 // ∫ Y_k over a texel the rim of an angular or paraboloid disc cuts: the clipped Gauss-Legendre
 // rule of clipped_square (mappings.glsl), evaluating the basis at every node. Only rim texels
 // take this path; it makes the sums over texels exact to the rule's precision instead of
@@ -83,6 +84,7 @@ float sh_clipped(uint m, uint layer, vec2 lo, vec2 hi, bool add, vec3 l, inout v
     }
     return wsum;
 }
+#endif
 
 #ifdef USE_SUBGROUPS
 shared vec3 sums[SH_WORKGROUP];  // one slot per subgroup (at most SH_WORKGROUP of them)
@@ -104,6 +106,8 @@ void add_texel(uint i, inout vec3 acc[NC]) {
     vec2 lo = 2.0 * vec2(p) / vec2(pc.size) - 1.0;
     vec2 hi = 2.0 * vec2(p + 1) / vec2(pc.size) - 1.0;
     vec2 far_ = max(abs(lo), abs(hi));
+#ifndef GRID_ONLY
+    // (Built with GRID_ONLY for lat-long and cube maps, which have no rim: a smaller module.)
     if ((MAPPING == MAPPING_ANGULAR || MAPPING == MAPPING_DUAL_PARABOLOID) && dot(far_, far_) > 1.0) {
         float wsum = sh_clipped(MAPPING, layer, lo, hi, false, vec3(0.0), acc);
         if (wsum > 0.0) {
@@ -111,6 +115,7 @@ void add_texel(uint i, inout vec3 acc[NC]) {
             return;
         }
     }
+#endif
     vec3 dirs[4];
     float w[4];
     if (MAPPING == MAPPING_LATLONG) {

@@ -917,6 +917,15 @@ macro_rules! shader_table {
             /// SH projection, first level, shared-memory tree.
             ShProjectShared = "sh_project_shared", "sh_project.comp", Compute, [], ShProjectPush,
                 [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
+            /// SH projection of lat-long and cube maps (no disc rim rule in the module, which
+            /// lavapipe compiles at every run: 38 → 24 ms), with subgroup arithmetic.
+            ShProjectGridSubgroup = "sh_project_grid_subgroup", "sh_project.comp", Compute,
+                [("USE_SUBGROUPS", "1"), ("GRID_ONLY", "1")], ShProjectPush,
+                [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
+            /// SH projection of lat-long and cube maps, shared-memory tree.
+            ShProjectGridShared = "sh_project_grid_shared", "sh_project.comp", Compute,
+                [("GRID_ONLY", "1")], ShProjectPush,
+                [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
             /// SH partial-sum reduction with subgroup arithmetic.
             ShReduceSubgroup = "sh_reduce_subgroup", "sh_reduce.comp", Compute,
                 [("USE_SUBGROUPS", "1")], ShReducePush,

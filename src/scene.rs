@@ -647,8 +647,10 @@ impl PassKind {
             PassKind::MipChain => &[Mip],
             PassKind::ShProjection => &[
                 ShProjectSubgroup,
+                ShProjectGridSubgroup,
                 ShReduceSubgroup,
                 ShProjectShared,
+                ShProjectGridShared,
                 ShReduceShared,
             ],
             PassKind::ShBrdfTable => &[ShBrdf],

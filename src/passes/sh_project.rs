@@ -96,6 +96,8 @@ pub struct ShProjector {
     /// One projection pipeline per band and mapping (specialisation constants), built on first use.
     project: [OnceLock<Pipeline>; PROJECT_VARIANTS],
     project_shader: ShaderId,
+    /// The same without the disc rim rule, for lat-long and cube maps.
+    grid_shader: ShaderId,
     reduce: Pipeline,
     sampler: Sampler,
     subgroups: bool,
@@ -110,15 +112,24 @@ impl ShProjector {
     /// Builds the pipelines (subgroup variants where allowed and available).
     pub fn new(ctx: &Context, subgroups: Subgroups) -> Result<ShProjector> {
         let use_sg = subgroups == Subgroups::Auto && ctx.info().subgroup_arithmetic;
-        let (p, r) = if use_sg {
-            (ShaderId::ShProjectSubgroup, ShaderId::ShReduceSubgroup)
+        let (p, grid, r) = if use_sg {
+            (
+                ShaderId::ShProjectSubgroup,
+                ShaderId::ShProjectGridSubgroup,
+                ShaderId::ShReduceSubgroup,
+            )
         } else {
-            (ShaderId::ShProjectShared, ShaderId::ShReduceShared)
+            (
+                ShaderId::ShProjectShared,
+                ShaderId::ShProjectGridShared,
+                ShaderId::ShReduceShared,
+            )
         };
         Ok(ShProjector {
             ctx: ctx.clone(),
             project: std::array::from_fn(|_| OnceLock::new()),
             project_shader: p,
+            grid_shader: grid,
             reduce: Pipeline::compute(ctx, r, &[SH_WORKGROUP])?,
             sampler: Sampler::linear_clamp(ctx, "sh sampler")?,
             subgroups: use_sg,
@@ -137,7 +148,10 @@ impl ShProjector {
         Pipeline::compute_once(
             &self.project[(lmax + (SH_MAX_LMAX + 1) * mapping.id()) as usize],
             &self.ctx,
-            self.project_shader,
+            match mapping {
+                Mapping::LatLong | Mapping::Cube => self.grid_shader,
+                Mapping::Angular | Mapping::DualParaboloid => self.project_shader,
+            },
             &[SH_WORKGROUP, lmax, mapping.id(), Self::run_length(mapping)],
         )
     }
