@@ -209,16 +209,24 @@ pub fn irradiance(g: &Global, a: &IrradianceArgs) -> Result<()> {
     let (map, ctx) = load_with_context(g, &a.input)?;
     clock.lap(LOAD);
     let order = a.order;
-    let projector = match a.method {
-        Method::Sh => Some(ShProjector::new(&ctx, Subgroups::Auto)?),
-        Method::Brute => None,
-    };
-    let (gm, evaluator) = upload_while(&ctx, &map, || match &projector {
-        Some(p) => {
+    let sh = a.method == Method::Sh;
+    // The projector's pipelines build on a second thread while this one uploads the map and
+    // then builds the evaluator's.
+    let (gm, projector, evaluator) = std::thread::scope(|s| {
+        let building = s.spawn(|| -> envlight::Result<Option<ShProjector>> {
+            if !sh {
+                return Ok(None);
+            }
+            let p = ShProjector::new(&ctx, Subgroups::Auto)?;
             p.prepare(order, map.mapping)?;
-            ShEvaluator::new(&ctx).map(Some)
-        }
-        None => Ok(None),
+            Ok(Some(p))
+        });
+        let gm = GpuEnvMap::upload(&ctx, &map);
+        let evaluator = sh.then(|| ShEvaluator::new(&ctx)).transpose();
+        let projector = building
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        anyhow::Ok((gm?, projector?, evaluator?))
     })?;
     clock.lap(UPLOAD);
     let target = a.out.target();
