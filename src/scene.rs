@@ -648,9 +648,11 @@ impl PassKind {
             PassKind::ShProjection => &[
                 ShProjectSubgroup,
                 ShProjectGridSubgroup,
+                ShProjectLatLong2Subgroup,
                 ShReduceSubgroup,
                 ShProjectShared,
                 ShProjectGridShared,
+                ShProjectLatLong2Shared,
                 ShReduceShared,
             ],
             PassKind::ShBrdfTable => &[ShBrdf],

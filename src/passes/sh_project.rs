@@ -98,6 +98,8 @@ pub struct ShProjector {
     project_shader: ShaderId,
     /// The same without the disc rim rule, for lat-long and cube maps.
     grid_shader: ShaderId,
+    /// Lat-long maps to l = 2, with band and mapping fixed at compile time.
+    latlong2_shader: ShaderId,
     reduce: Pipeline,
     sampler: Sampler,
     subgroups: bool,
@@ -112,16 +114,18 @@ impl ShProjector {
     /// Builds the pipelines (subgroup variants where allowed and available).
     pub fn new(ctx: &Context, subgroups: Subgroups) -> Result<ShProjector> {
         let use_sg = subgroups == Subgroups::Auto && ctx.info().subgroup_arithmetic;
-        let (p, grid, r) = if use_sg {
+        let (p, grid, latlong2, r) = if use_sg {
             (
                 ShaderId::ShProjectSubgroup,
                 ShaderId::ShProjectGridSubgroup,
+                ShaderId::ShProjectLatLong2Subgroup,
                 ShaderId::ShReduceSubgroup,
             )
         } else {
             (
                 ShaderId::ShProjectShared,
                 ShaderId::ShProjectGridShared,
+                ShaderId::ShProjectLatLong2Shared,
                 ShaderId::ShReduceShared,
             )
         };
@@ -130,6 +134,7 @@ impl ShProjector {
             project: std::array::from_fn(|_| OnceLock::new()),
             project_shader: p,
             grid_shader: grid,
+            latlong2_shader: latlong2,
             reduce: Pipeline::compute(ctx, r, &[SH_WORKGROUP])?,
             sampler: Sampler::linear_clamp(ctx, "sh sampler")?,
             subgroups: use_sg,
@@ -149,6 +154,7 @@ impl ShProjector {
             &self.project[(lmax + (SH_MAX_LMAX + 1) * mapping.id()) as usize],
             &self.ctx,
             match mapping {
+                Mapping::LatLong if lmax == 2 => self.latlong2_shader,
                 Mapping::LatLong | Mapping::Cube => self.grid_shader,
                 Mapping::Angular | Mapping::DualParaboloid => self.project_shader,
             },
