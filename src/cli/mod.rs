@@ -232,13 +232,22 @@ pub fn load_input(input: &Input) -> Result<EnvMap> {
 /// takes tens of milliseconds (decoding a 1k .hdr; loading the driver), and neither needs the
 /// other. A bad file is reported before a missing driver, as when they ran in turn.
 pub fn load_with_context(g: &Global, input: &Input) -> Result<(EnvMap, Context)> {
+    context_while(g, || load_input(input))
+}
+
+/// Runs `load` on a second thread while this one creates the Vulkan device (see
+/// [`load_with_context`]); `load`'s error comes first.
+pub fn context_while<T: Send>(
+    g: &Global,
+    load: impl FnOnce() -> Result<T> + Send,
+) -> Result<(T, Context)> {
     std::thread::scope(|s| {
-        let loading = s.spawn(|| load_input(input));
+        let loading = s.spawn(load);
         let ctx = context(g);
-        let map = loading
+        let loaded = loading
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
-        Ok((map, ctx?))
+        Ok((loaded, ctx?))
     })
 }
 

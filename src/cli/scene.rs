@@ -1,6 +1,6 @@
 //! `envlight render`, `plan` and `demo`.
 
-use super::{context, preview, Global, HostClock};
+use super::{context, context_while, preview, Global, HostClock};
 use anyhow::{Context as _, Result};
 use clap::Args;
 use envlight::io::{self, LoadOptions, ToneMap};
@@ -166,14 +166,7 @@ fn render_scene(cli: &Global, scene: &Path, output: &Path) -> Result<()> {
     let base = scene.parent().unwrap_or(Path::new("."));
     // The environment loads on a second thread while the device is created (as the map
     // commands do); a bad file is reported before a missing driver.
-    let (env, ctx) = std::thread::scope(|s| {
-        let loading = s.spawn(|| envlight::render::load_environment(&sc, base));
-        let ctx = context(cli);
-        let env = loading
-            .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))?;
-        anyhow::Ok((env, ctx?))
-    })?;
+    let (env, ctx) = context_while(cli, || Ok(envlight::render::load_environment(&sc, base)?))?;
     clock.lap("load scene and map ∥ create device");
     let t0 = std::time::Instant::now();
     let r = envlight::render::render(&ctx, &sc, &env)?;
