@@ -275,7 +275,7 @@ fn gpu_matches_the_float64_reference_conversion() {
                     supersample: None,
                     nearest: false,
                 };
-                let area = Converter::uses_area((from, w, h), &opts);
+                let area = conv.uses_area((from, w, h), &opts);
                 let cpu = if area {
                     envlight::math::convert::latlong_to_cube_area(&src, size, o.world_to_file())
                 } else {
@@ -646,7 +646,7 @@ fn area_conversion_matches_its_float64_twin() {
                 supersample: None,
                 nearest: false,
             };
-            assert!(Converter::uses_area((Mapping::LatLong, 96, 48), &opts));
+            assert!(conv.uses_area((Mapping::LatLong, 96, 48), &opts));
             let gpu = convert(&ctx, &conv, &src, Mapping::Cube, size, o);
             let cpu = envlight::math::convert::latlong_to_cube_area(&src, size, o.world_to_file());
             let worst = gpu

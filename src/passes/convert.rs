@@ -40,6 +40,11 @@ fn texels_on_sphere(m: Mapping, w: u32, h: u32) -> f64 {
     }
 }
 
+/// Bytes of a `w` × `h` lat-long map's slopes (two vec4 a texel, `glsl/convert_slopes.comp`).
+fn slopes_bytes(w: u32, h: u32) -> u64 {
+    w as u64 * h as u64 * 32
+}
+
 /// The conversion pass. Pipelines are built on first use, one per source kind.
 pub struct Converter {
     ctx: Context,
@@ -96,15 +101,17 @@ impl Converter {
     }
 
     /// Whether converting a `src` map (mapping, width, height) with `opts` takes exact
-    /// footprint areas (lat-long to cube, no sample count or nearest reads asked for, and not
-    /// so strongly minified that its walks at the poles grow long: `math::convert::area_serves`),
-    /// which conserves power, rather than `ss` × `ss` bilinear samples per texel.
-    pub fn uses_area(src: (Mapping, u32, u32), opts: &ConvertOptions) -> bool {
+    /// footprint areas (lat-long to cube, no sample count or nearest reads asked for, not so
+    /// strongly minified that its walks at the poles grow long, `math::convert::area_serves`,
+    /// and a source whose slopes fit one storage buffer of this device), which conserves
+    /// power, rather than `ss` × `ss` bilinear samples per texel.
+    pub fn uses_area(&self, src: (Mapping, u32, u32), opts: &ConvertOptions) -> bool {
         src.0 == Mapping::LatLong
             && opts.to == Mapping::Cube
             && opts.supersample.is_none()
             && !opts.nearest
             && crate::math::convert::area_serves(src.1, src.2, opts.size)
+            && slopes_bytes(src.1, src.2) <= self.ctx.info().max_storage_buffer_range
     }
 
     /// Samples per axis for an output texel: about two per source texel spacing, so that
@@ -150,7 +157,7 @@ impl Converter {
             nearest: opts.nearest as u32,
         };
         let cube = src.mapping == Mapping::Cube;
-        if Converter::uses_area((src.mapping, src.width, src.height), opts) {
+        if self.uses_area((src.mapping, src.width, src.height), opts) {
             return self.record_area(rec, src, dst, &push, (w, h));
         }
         let pipeline = self.pipeline(src.mapping, opts.to)?;
@@ -193,7 +200,7 @@ impl Converter {
         let slopes = Buffer::new(
             &self.ctx,
             "convert slopes",
-            src.width as u64 * src.height as u64 * 32,
+            slopes_bytes(src.width, src.height),
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::GpuOnly,
         )?;
