@@ -1,14 +1,13 @@
 #version 460
-// Lat-long to cube, conserving power: each output texel holds the mean of the source (constant
-// over each of its texels) over the texel's footprint. In the equal-area plane (U, z) =
-// (φ·W/2π, cos θ) lat-long texels are rectangles; the footprint is the polygon of points along
+// Lat-long to cube, conserving power: each output texel holds the mean of the source over the
+// texel's footprint. In the equal-area plane (U, z) = (φ·W/2π, cos θ) lat-long texels are
+// rectangles, each reconstructed as its value plus its limited slopes (convert_slopes.comp:
+// second order on smooth maps, flat at extrema); the footprint is the polygon of points along
 // the texel's edges (with the pole's line where a point sits on a pole or the texel holds
 // one), and its overlap with each source texel is integrated exactly, band of rows by band,
-// as ∮ (z − z_band) dU along the polygon clipped to the band. The source is each texel's
-// value plus its limited slopes (convert_slopes.comp): second order on smooth maps, flat at
-// extrema. Neighbours share their edge
-// points bit for bit and split shared edges from a canonical endpoint order, so the polygons
-// tile the plane and each source texel's power is counted once. The float64 twin is
+// along the polygon clipped to the band (Green's theorem). Neighbours share their edge points
+// bit for bit and split shared edges from a canonical endpoint order, so the polygons tile the
+// plane and each source texel's power is counted once. The float64 twin is
 // math::convert::latlong_to_cube_area, step for step.
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
