@@ -62,12 +62,6 @@ bool before(vec2 a, vec2 b) { return a.x < b.x || (a.x == b.x && a.y <= b.y); }
     out = k_; \
 }
 
-float band_edge(int row, int h) {
-    if (row <= 0) return 1.0;
-    if (row >= h) return -1.0;
-    return cos(PI * float(row) / float(h));
-}
-
 void main() {
     uvec3 id = gl_GlobalInvocationID;
     if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
@@ -135,10 +129,10 @@ void main() {
     // The rows the polygon meets, by the same band edges as the clip.
     int r0 = clamp(int(floor(acos(clamp(zmax, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
     int r1 = clamp(int(floor(acos(clamp(zmin, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
-    while (r0 > 0 && band_edge(r0, h) < zmax) r0--;
-    while (r0 < r1 && band_edge(r0 + 1, h) >= zmax) r0++;
-    while (r1 < h - 1 && band_edge(r1 + 1, h) > zmin) r1++;
-    while (r1 > r0 && band_edge(r1, h) <= zmin) r1--;
+    while (r0 > 0 && latlong_band_edge(r0, h) < zmax) r0--;
+    while (r0 < r1 && latlong_band_edge(r0 + 1, h) >= zmax) r0++;
+    while (r1 < h - 1 && latlong_band_edge(r1 + 1, h) > zmin) r1++;
+    while (r1 > r0 && latlong_band_edge(r1, h) <= zmin) r1--;
 
     // Sums of (L − L0) rather than L: a constant map comes out exact, whatever the pieces'
     // rounding.
@@ -146,7 +140,7 @@ void main() {
     vec3 num = vec3(0.0);
     float den = 0.0;
     for (int row = r0; row <= r1; row++) {
-        float zhi = band_edge(row, h), zlo = band_edge(row + 1, h);
+        float zhi = latlong_band_edge(row, h), zlo = latlong_band_edge(row + 1, h);
         float zc = 0.5 * (zhi + zlo), base = (zlo - zc) * (zlo - zc);
         uint nb;
         CUT(tmp, poly, npoly, zlo, true, nb);

@@ -18,13 +18,7 @@ layout(set = 0, binding = BINDING_CONVERT_SLOPES, std430) writeonly buffer Slope
 // The push block, generated from src/abi.rs (src_size only).
 PUSH_ConvertPush
 
-float band_edge(int row, int h) {
-    if (row <= 0) return 1.0;
-    if (row >= h) return -1.0;
-    return cos(PI * float(row) / float(h));
-}
-
-float zc(int r, int h) { return 0.5 * (band_edge(r, h) + band_edge(r + 1, h)); }
+float zc(int r, int h) { return 0.5 * (latlong_band_edge(r, h) + latlong_band_edge(r + 1, h)); }
 
 vec3 at(int c, int r) { return texelFetch(src, ivec3(c, r, 0), 0).rgb; }
 
@@ -48,7 +42,7 @@ void main() {
     }
     lo = min(lo, min(up, down));
     hi = max(hi, max(up, down));
-    float half_dz = 0.5 * (band_edge(r, h) - band_edge(r + 1, h));
+    float half_dz = 0.5 * (latlong_band_edge(r, h) - latlong_band_edge(r + 1, h));
     vec3 reach = 0.5 * abs(gu) + half_dz * abs(gz);
     vec3 phi = vec3(1.0);
     for (int k = 0; k < 3; k++) {

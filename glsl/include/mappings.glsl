@@ -286,4 +286,12 @@ float texel_solid_angle(uint m, uvec2 size, ivec2 p) {
     if (dot(far_, far_) <= 1.0) return gl8_square(m, lo, hi);
     return clipped_square(m, lo, hi);
 }
+
+// z = cos θ at the top of lat-long row `row` of `h` (row h: the south pole), the band edges of
+// the area conversion (convert_slopes.comp, convert_area.comp; math::convert::band_edge).
+float latlong_band_edge(int row, int h) {
+    if (row <= 0) return 1.0;
+    if (row >= h) return -1.0;
+    return cos(PI * float(row) / float(h));
+}
 #endif
