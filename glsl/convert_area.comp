@@ -170,7 +170,7 @@ void main() {
                                (((z0 - zc) * (z0 - zc) - base) + 4.0 * ((zm - zc) * (zm - zc) - base) +
                                 ((z1 - zc) * (z1 - zc) - base));
                     int col = ((c % w) + w) % w;
-                    uint o = 2u * uint(row * w + col);
+                    uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
                     vec3 gu = slopes[o].xyz, gz = slopes[o + 1u].xyz;
                     num += area * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + mu * gu +
                            mz * gz;

@@ -50,7 +50,7 @@ void main() {
     }
     gu *= phi;
     gz *= phi;
-    uint o = 2u * uint(r * w + c);
+    uint o = AREA_SLOPE_VEC4S * uint(r * w + c);
     slopes[o] = vec4(gu, 0.0);
     slopes[o + 1u] = vec4(gz, 0.0);
 }

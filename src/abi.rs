@@ -595,6 +595,9 @@ pub mod area {
     /// Most polygon vertices: four edges of [`POLE_STEPS`] points, and three closing the
     /// polygon along a pole's line.
     pub const MAX_VERTICES: u32 = 4 * POLE_STEPS + 3;
+    /// vec4s of limited slopes per source texel (dL/dU rgb, then dL/dz rgb), the layout of
+    /// the buffer convert_slopes.comp writes and convert_area.comp reads.
+    pub const SLOPE_VEC4S: u32 = 2;
     /// The conversion serves sizes with size × (source texels per output texel) at most
     /// this (host only): its longest walk, at a pole, then stays near 2e4 steps, under
     /// llvmpipe's loop limit of 65 535 per invocation.
@@ -1129,6 +1132,7 @@ pub fn generated_header() -> String {
     let _ = writeln!(s, "#define AREA_POLE_STEPS {}u", area::POLE_STEPS);
     let _ = writeln!(s, "#define AREA_POLE_NEAR {:?}", area::POLE_NEAR as f32);
     let _ = writeln!(s, "#define AREA_MAX_VERTICES {}u", area::MAX_VERTICES);
+    let _ = writeln!(s, "#define AREA_SLOPE_VEC4S {}u", area::SLOPE_VEC4S);
     let _ = writeln!(s, "#define FOOTPRINT_MIN_TAPS {}u", footprint::MIN_TAPS);
     let _ = writeln!(s, "#define FOOTPRINT_MAX_TAPS {}u", footprint::MAX_TAPS);
     let _ = writeln!(s, "#define FOOTPRINT_MIRROR {}u", footprint::MIRROR);

@@ -40,9 +40,9 @@ fn texels_on_sphere(m: Mapping, w: u32, h: u32) -> f64 {
     }
 }
 
-/// Bytes of a `w` × `h` lat-long map's slopes (two vec4 a texel, `glsl/convert_slopes.comp`).
+/// Bytes of a `w` × `h` lat-long map's slopes (`abi::area::SLOPE_VEC4S` vec4s a texel).
 fn slopes_bytes(w: u32, h: u32) -> u64 {
-    w as u64 * h as u64 * 32
+    w as u64 * h as u64 * 16 * crate::abi::area::SLOPE_VEC4S as u64
 }
 
 /// The conversion pass. Pipelines are built on first use, one per source kind.
