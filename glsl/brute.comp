@@ -1,6 +1,6 @@
 #version 460
 // Brute-force convolution of a whole map with the clamped cosine or a normalised Phong lobe
-// (Miller & Hoffman 1984), the float64 twin being src/math/filter.rs. Built twice:
+// (Miller & Hoffman 1984), the float64 twin being src/math/filter.rs. Built five ways:
 // - PREPARE: one invocation per source texel writes its centre direction (world), the cosine of
 //   its angular radius, its radiance and its exact solid angle (0 where it holds no sphere),
 //   and its shape for the tilted rule;
@@ -9,13 +9,14 @@
 // - MOMENTS: one invocation per texel of level src_level of the power-moment pyramid (2^s × 2^s
 //   prepared texels each) writes its cone and, per channel, its light's power and the uniform
 //   parallelogram with the light's centroid and covariance (twin of moments::MomentLevel::new);
-// - otherwise: one invocation per output texel sums L·∫K over every source texel, choosing per
-//   texel the same rule as the CPU (skip, centre node, the tilted rule, or s×s cells of 3×3
-//   Gauss points), with
-//   Kahan compensation so a sun 1e5 times the sky does not swamp the sum. The source is taken
-//   in chunks, one dispatch each, accumulating into dst (and the compensation buffer), so that
-//   no invocation runs more loop iterations than llvmpipe allows (DeviceInfo::
-//   loop_iteration_limit); the node loops are unrolled for the same reason. Texels are
+// - otherwise: one invocation per output texel and part of the source sums L·∫K over the
+//   part's texels, choosing per texel the same rule as the CPU (skip, centre node, the tilted
+//   rule, or s×s cells of 3×3 Gauss points), with Kahan compensation so a sun 1e5 times the
+//   sky does not swamp the sum, into its partial sum; parts let a small output (a coarse Phong
+//   level) fill the device. The source is taken in chunks, one dispatch each, accumulating
+//   into the partial sums, so that no invocation runs more loop iterations than llvmpipe
+//   allows (DeviceInfo::loop_iteration_limit); the node loops are unrolled for the same reason;
+// - RESOLVE: one invocation per output texel adds its parts' sums into the map. Texels are
 //   walked tile by tile ("slots": tile-major, BRUTE_TILE² per tile, the chunks count slots),
 //   and a tile whose cone lies wholly where the rule skips texels is skipped whole: every
 //   texel in it would have been skipped, so the sum is the same, term for term.
@@ -34,6 +35,10 @@ layout(std430, set = 0, binding = BINDING_BRUTE_MOM_RADIANCE) readonly buffer Ra
 layout(std430, set = 0, binding = BINDING_BRUTE_MOM_SHAPES) readonly buffer Shapes { vec4 shapes[]; };
 layout(std430, set = 0, binding = BINDING_BRUTE_MOM_CONES) writeonly buffer Cones { vec4 cones[]; };
 layout(std430, set = 0, binding = BINDING_BRUTE_MOM_LIGHT) writeonly buffer Light { vec4 light[]; };
+#elif defined(RESOLVE)
+layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
+layout(std430, set = 0, binding = BINDING_BRUTE_RESOLVE_PARTIALS) readonly buffer Partials { vec4 partials[]; };
+layout(set = 0, binding = BINDING_BRUTE_RESOLVE_DST, rgba32f) uniform writeonly image2DArray dst;
 #elif defined(PREPARE)
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(set = 0, binding = BINDING_BRUTE_PREP_SRC) uniform sampler2DArray src;
@@ -44,8 +49,7 @@ layout(std430, set = 0, binding = BINDING_BRUTE_PREP_SHAPES) writeonly buffer Sh
 layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_BRUTE_CONES) readonly buffer Cones { vec4 cones[]; };
 layout(std430, set = 0, binding = BINDING_BRUTE_RADIANCE) readonly buffer Rad { vec4 rad[]; };
-layout(set = 0, binding = BINDING_BRUTE_DST, rgba32f) uniform image2DArray dst;
-layout(std430, set = 0, binding = BINDING_BRUTE_COMP) buffer Comp { vec4 comp_buf[]; };
+layout(std430, set = 0, binding = BINDING_BRUTE_PARTIALS) buffer Partials { vec4 partials[]; };
 layout(std430, set = 0, binding = BINDING_BRUTE_TILES) readonly buffer Tiles { vec4 tiles[]; };
 layout(std430, set = 0, binding = BINDING_BRUTE_SHAPES) readonly buffer Shapes { vec4 shapes[]; };
 layout(std430, set = 0, binding = BINDING_BRUTE_COARSE_CONES) readonly buffer CoarseCones { vec4 coarse_cones[]; };
@@ -101,6 +105,19 @@ int slot_texel(uint tile, uint s) {
     uvec2 q = uvec2(r % g.x, r / g.x) * BRUTE_TILE + uvec2(s % BRUTE_TILE, s / BRUTE_TILE);
     if (any(greaterThanEqual(q, pc.src_size))) return -1;
     return int((layer * pc.src_size.y + q.y) * pc.src_size.x + q.x);
+}
+
+// Output texels in all layers.
+uint dst_texels() {
+    return pc.dst_size.x * pc.dst_size.y * (DST_MAPPING == MAPPING_CUBE ? 6u : 1u);
+}
+
+// Kahan summation, so a sun 1e5 times the sky does not swamp the sum.
+void kahan_add(inout vec3 sum, inout vec3 comp, vec3 term) {
+    precise vec3 y = term - comp;
+    precise vec3 t = sum + y;
+    comp = (t - sum) - y;
+    sum = t;
 }
 
 #if defined(PREPARE) || defined(MOMENTS)
@@ -305,6 +322,28 @@ void main() {
     rad[i] = vec4(texelFetch(src, ivec3(source, int(layer)), 0).rgb, omega);
     write_shape(i, layer, p);
 }
+#elif defined(RESOLVE)
+
+// One invocation per output texel adds its parts' sums in part order (deterministic), each
+// part's compensation too, and writes the texel.
+void main() {
+    uvec3 id = gl_GlobalInvocationID;
+    if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
+    if (DST_MAPPING == MAPPING_ANGULAR && !texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy))) {
+        imageStore(dst, ivec3(id), vec4(0.0, 0.0, 0.0, 1.0));
+        return;
+    }
+    uint o = (id.z * pc.dst_size.y + id.y) * pc.dst_size.x + id.x;
+    uint parts = pc.parts.x * pc.parts.y;
+    precise vec3 sum = partials[2u * o].rgb;
+    precise vec3 comp = partials[2u * o + 1u].rgb;
+    for (uint k = 1u; k < parts; k++) {
+        uint e = 2u * (k * dst_texels() + o);
+        kahan_add(sum, comp, partials[e].rgb);
+        kahan_add(sum, comp, -partials[e + 1u].rgb);
+    }
+    imageStore(dst, ivec3(id), vec4(sum - comp, 1.0));
+}
 #else
 
 // Mean of the kernel over texel t split into s×s cells of 3×3 Gauss points, or over the
@@ -455,14 +494,6 @@ float texel_weight(vec3 axis, float n, float ln_scale, uint t) {
     return k < 0.0 ? kernel_eval(pc.exponent, axis, cone.xyz) : k;
 }
 
-// Kahan summation, so a sun 1e5 times the sky does not swamp the sum.
-void kahan_add(inout vec3 sum, inout vec3 comp, vec3 term) {
-    precise vec3 y = term - comp;
-    precise vec3 t = sum + y;
-    comp = (t - sum) - y;
-    sum = t;
-}
-
 // Texel t's term L·∫K: a prepared texel, or with MOMENT_SOURCE a texel of the pyramid's level,
 // taken whole (each channel's parallelogram) where the rule takes it by centre or tilt, and
 // from its 2^s × 2^s prepared texels elsewhere (twin of MomentLevel::convolve).
@@ -500,38 +531,43 @@ void add_texel(vec3 axis, float n, float ln_scale, uint t, inout vec3 sum, inout
     }
 }
 
+// One invocation per output texel and part of the source: the grid holds pc.parts blocks of
+// the output's size, block k summing slots [k·part_slots, (k + 1)·part_slots) of this
+// dispatch's chunk, so that small outputs (the coarse Phong levels) still fill the device.
 void main() {
-    uvec3 id = gl_GlobalInvocationID;
-    if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
-    if (DST_MAPPING == MAPPING_ANGULAR && !texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy))) {
-        imageStore(dst, ivec3(id), vec4(0.0, 0.0, 0.0, 1.0));
-        return;
-    }
+    uvec3 gid = gl_GlobalInvocationID;
+    uvec2 block = gid.xy / pc.dst_size;
+    if (any(greaterThanEqual(block, pc.parts))) return;
+    uvec3 id = uvec3(gid.xy - block * pc.dst_size, gid.z);
+    if (DST_MAPPING == MAPPING_ANGULAR && !texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy))) return;
+    uint part = block.y * pc.parts.x + block.x;
+    uint begin = min(pc.chunk_begin + part * pc.part_slots, pc.chunk_end);
+    uint end = min(begin + pc.part_slots, pc.chunk_end);
     Coord oc;
     oc.layer = id.z;
     oc.uv = (vec2(id.xy) + 0.5) / vec2(pc.dst_size);
     vec3 axis = coord_to_dir(DST_MAPPING, oc);
     float n = pc.exponent == 0.0 ? 1.0 : pc.exponent;
     float ln_scale = pc.exponent == 0.0 ? 0.0 : log((n + 1.0) / TAU);
-    uint o = (id.z * pc.dst_size.y + id.y) * pc.dst_size.x + id.x;
+    uint o = 2u * (part * dst_texels() + (id.z * pc.dst_size.y + id.y) * pc.dst_size.x + id.x);
     precise vec3 sum = vec3(0.0);
     precise vec3 comp = vec3(0.0);
     if (pc.chunk_begin > 0u) {
-        sum = imageLoad(dst, ivec3(id)).rgb;
-        comp = comp_buf[o].rgb;
+        sum = partials[o].rgb;
+        comp = partials[o + 1u].rgb;
     }
     const uint per_tile = BRUTE_TILE * BRUTE_TILE;
-    for (uint tile = pc.chunk_begin / per_tile; tile * per_tile < pc.chunk_end; tile++) {
+    for (uint tile = begin / per_tile; tile * per_tile < end; tile++) {
         if (cone_skipped(axis, n, tiles[tile])) continue;
-        uint first = max(pc.chunk_begin, tile * per_tile) - tile * per_tile;
-        uint last = min(pc.chunk_end, (tile + 1u) * per_tile) - tile * per_tile;
+        uint first = max(begin, tile * per_tile) - tile * per_tile;
+        uint last = min(end, (tile + 1u) * per_tile) - tile * per_tile;
         for (uint s = first; s < last; s++) {
             int ti = slot_texel(tile, s);
             if (ti < 0) continue;
             add_texel(axis, n, ln_scale, uint(ti), sum, comp);
         }
     }
-    comp_buf[o] = vec4(comp, 0.0);
-    imageStore(dst, ivec3(id), vec4(sum, 1.0));
+    partials[o] = vec4(sum, 0.0);
+    partials[o + 1u] = vec4(comp, 0.0);
 }
 #endif

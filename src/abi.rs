@@ -59,10 +59,9 @@ pub mod binding {
         BRUTE_CONES = 0;
         /// brute: the radiance and solid angles written by brute_prepare.
         BRUTE_RADIANCE = 1;
-        /// brute: the output map (rgba32f image2DArray), accumulated over chunks.
-        BRUTE_DST = 2;
-        /// brute: the Kahan compensation per output texel, carried between chunks (vec4 buffer).
-        BRUTE_COMP = 3;
+        /// brute: per part of the source and output texel, the Kahan sum and its compensation
+        /// (2 vec4, part-major), carried between rounds of chunks.
+        BRUTE_PARTIALS = 3;
         /// brute: per-tile bounding cones written by brute_tiles (vec4 buffer).
         BRUTE_TILES = 4;
         /// brute: the texel shapes written by brute_prepare.
@@ -72,6 +71,10 @@ pub mod binding {
         /// brute: with a moment source, the level's light: per texel and channel 3 vec4
         /// (centroid and power, then the parallelogram's two half-edges).
         BRUTE_LIGHT = 7;
+        /// brute_resolve: the partial sums written by brute.
+        BRUTE_RESOLVE_PARTIALS = 0;
+        /// brute_resolve: the output map (rgba32f image2DArray).
+        BRUTE_RESOLVE_DST = 1;
         /// brute_moments: the prepared texels' radiance and solid angles.
         BRUTE_MOM_RADIANCE = 0;
         /// brute_moments: the prepared texels' shapes.
@@ -706,6 +709,12 @@ pub mod push {
             src_layers: u32 = "uint",
             /// Level of the moment pyramid `src_size` is the size of (0: the prepared texels).
             src_level: u32 = "uint",
+            /// Parts the source is split into, laid out as a grid of output-sized blocks (x, y).
+            parts: [u32; 2] = "uvec2",
+            /// Source slots per part in one dispatch.
+            part_slots: u32 = "uint",
+            /// Padding.
+            pad: u32 = "uint",
         }
         /// `glsl/sh_eval.comp`.
         ShEvalPush {
@@ -962,9 +971,12 @@ macro_rules! shader_table {
             /// Brute-force convolution with the cosine or a Phong lobe.
             Brute = "brute", "brute.comp", Compute, [], BrutePush,
                 [(BRUTE_CONES, StorageBuffer, Read), (BRUTE_RADIANCE, StorageBuffer, Read),
-                 (BRUTE_DST, StorageImage, ReadWrite), (BRUTE_COMP, StorageBuffer, ReadWrite),
+                 (BRUTE_PARTIALS, StorageBuffer, ReadWrite),
                  (BRUTE_TILES, StorageBuffer, Read), (BRUTE_SHAPES, StorageBuffer, Read),
                  (BRUTE_COARSE_CONES, StorageBuffer, Read), (BRUTE_LIGHT, StorageBuffer, Read)];
+            /// Brute-force convolution: the parts' sums, added per output texel into the map.
+            BruteResolve = "brute_resolve", "brute.comp", Compute, [("RESOLVE", "1")], BrutePush,
+                [(BRUTE_RESOLVE_PARTIALS, StorageBuffer, Read), (BRUTE_RESOLVE_DST, StorageImage, Write)];
             /// Irradiance from SH coefficients into a map.
             ShEval = "sh_eval", "sh_eval.comp", Compute, [], ShEvalPush,
                 [(SH_EVAL_COEFFS, StorageBuffer, Read), (SH_EVAL_DST, StorageImage, Write)];

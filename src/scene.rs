@@ -657,7 +657,7 @@ impl PassKind {
             ],
             PassKind::ShBrdfTable => &[ShBrdf],
             PassKind::SplitSum => &[Dfg, PrefilterGgx],
-            PassKind::Prefilter => &[BrutePrepare, BruteTiles, Brute],
+            PassKind::Prefilter => &[BrutePrepare, BruteTiles, Brute, BruteResolve],
             PassKind::MonteCarlo => &[Mc],
             PassKind::Shade => &[Shade, ShadeVote],
         }

@@ -19,12 +19,13 @@
 #define BINDING_BRUTE_PREP_SHAPES 3
 #define BINDING_BRUTE_CONES 0
 #define BINDING_BRUTE_RADIANCE 1
-#define BINDING_BRUTE_DST 2
-#define BINDING_BRUTE_COMP 3
+#define BINDING_BRUTE_PARTIALS 3
 #define BINDING_BRUTE_TILES 4
 #define BINDING_BRUTE_SHAPES 5
 #define BINDING_BRUTE_COARSE_CONES 6
 #define BINDING_BRUTE_LIGHT 7
+#define BINDING_BRUTE_RESOLVE_PARTIALS 0
+#define BINDING_BRUTE_RESOLVE_DST 1
 #define BINDING_BRUTE_MOM_RADIANCE 0
 #define BINDING_BRUTE_MOM_SHAPES 1
 #define BINDING_BRUTE_MOM_CONES 2
@@ -149,7 +150,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_BusyPush layout(push_constant) uniform Push { uint iterations; uint count; uint[2] pad; } pc;
 #define PUSH_ShProjectPush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 size; uint mapping; uint lmax; uint texels; uint[3] pad; } pc;
 #define PUSH_ShReducePush layout(push_constant) uniform Push { uint rows; uint coeffs; uint[2] pad; } pc;
-#define PUSH_BrutePush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint texels; float exponent; uint chunk_begin; uint chunk_end; uint src_layers; uint src_level; } pc;
+#define PUSH_BrutePush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint texels; float exponent; uint chunk_begin; uint chunk_end; uint src_layers; uint src_level; uvec2 parts; uint part_slots; uint pad; } pc;
 #define PUSH_ShEvalPush layout(push_constant) uniform Push { uvec2 dst_size; uint dst_mapping; uint lmax; } pc;
 #define PUSH_GBufferPush layout(push_constant) uniform Push { vec4 eye; vec4 forward; vec4 right; vec4 up; uvec2 size; uint ortho; uint count; } pc;
 #define PUSH_ShadePush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint env_mapping; uint count; uint dp_size; float max_lod; uint shadows; uint mc_samples; uint sh_rotation; uint lights; uint light_stride; uint footprint; uint clusters; uint cluster_at; uint tree_nodes; uint tree_at; } pc;

@@ -42,8 +42,17 @@ pub struct BruteFilter {
     /// Per (source, destination) mapping pair and source kind (texels or a moment level),
     /// specialised on all three.
     brute: [OnceLock<Pipeline>; 32],
+    /// Per destination mapping.
+    resolve: [OnceLock<Pipeline>; 4],
     sampler: Sampler,
+    target_invocations: u32,
 }
+
+/// Invocations a convolution keeps busy by default: outputs smaller than this (the coarse
+/// Phong levels: 6 texels at 1²) split the source among parts, each summed by its own
+/// invocation, then added per texel. An H100 holds ~270 000 resident invocations; beyond
+/// 65 536 the coarse levels measured no faster.
+pub const DEFAULT_TARGET_INVOCATIONS: u32 = 1 << 16;
 
 impl BruteFilter {
     /// Builds the tile pipeline; the others are built, specialised, when a run needs them.
@@ -54,8 +63,17 @@ impl BruteFilter {
             tiles: Pipeline::compute(ctx, ShaderId::BruteTiles, &[WORKGROUP_1D])?,
             moments: Default::default(),
             brute: Default::default(),
+            resolve: Default::default(),
             sampler: Sampler::linear_clamp(ctx, "brute sampler")?,
+            target_invocations: DEFAULT_TARGET_INVOCATIONS,
         })
+    }
+
+    /// Sets how many invocations a convolution aims to keep busy by splitting the source among
+    /// parts where the output has fewer texels (default [`DEFAULT_TARGET_INVOCATIONS`]; 1
+    /// never splits). The parts' sums differ from one sum by float rounding only.
+    pub fn set_target_invocations(&mut self, invocations: u32) {
+        self.target_invocations = invocations.max(1);
     }
 
     /// Records the convolution of `src` (oriented by `orientation`) with `kernel` into
@@ -155,6 +173,9 @@ impl BruteFilter {
             chunk_end: 0,
             src_layers: src.mapping.layers(),
             src_level: 0,
+            parts: [1, 1],
+            part_slots: 0,
+            pad: 0,
         };
         let from = src.mapping.id();
         // Prepare reads only the source mapping (constant 3 is unused there).
@@ -270,19 +291,33 @@ impl BruteFilter {
         let exponent = check_kernel(kernel)?;
         let ctx = rec.context().clone();
         let (w, h) = (dst.width, dst.height);
-        let comp = scratch(
-            &ctx,
-            "brute compensation",
-            (w * h * dst.mapping.layers()) as u64 * 16,
-        )?;
         let base = coarse.map_or(prep.push, |c| c.push);
+        let slots = tile_count(&base) * BRUTE_TILE * BRUTE_TILE;
+        let fine_chunk = self.chunk_size(prep, kernel);
+        // A coarse texel may descend to all of its 4^s prepared texels.
+        let chunk = match coarse {
+            Some(c) => (fine_chunk >> (2 * c.push.src_level)).max(1),
+            None => fine_chunk,
+        };
+        let split = Split::new(
+            w * h * dst.mapping.layers(),
+            slots,
+            chunk,
+            self.target_invocations,
+        );
+        let partials = scratch(
+            &ctx,
+            "brute partial sums",
+            (w * h * dst.mapping.layers()) as u64 * split.parts() as u64 * 32,
+        )?;
         let push = BrutePush {
             dst_size: [w, h],
             dst_mapping: dst.mapping.id(),
             exponent,
+            parts: split.grid,
+            part_slots: split.part_slots,
             ..base
         };
-        let slots = tile_count(&push) * BRUTE_TILE * BRUTE_TILE;
         let (from, to) = (prep.mapping.id(), dst.mapping.id());
         let moment = coarse.is_some() as usize;
         let brute = Pipeline::compute_once(
@@ -291,33 +326,34 @@ impl BruteFilter {
             ShaderId::Brute,
             &[WORKGROUP_2D[0], WORKGROUP_2D[1], from, to, moment as u32],
         )?;
+        // The resolve reads only the destination mapping (constant 2 is unused there).
+        let resolve = Pipeline::compute_once(
+            &self.resolve[to as usize],
+            &self.ctx,
+            ShaderId::BruteResolve,
+            &[WORKGROUP_2D[0], WORKGROUP_2D[1], 0, to],
+        )?;
         let label = match kernel {
             Kernel::Cosine => "brute irradiance",
             Kernel::Phong { .. } => "brute phong",
-        };
-        let fine_chunk = self.chunk_size(prep, kernel);
-        // A coarse texel may descend to all of its 4^s prepared texels.
-        let chunk = match coarse {
-            Some(c) => (fine_chunk >> (2 * c.push.src_level)).max(1),
-            None => fine_chunk,
         };
         let tiles = coarse.map_or(&prep.tiles, |c| &c.tiles);
         // Without a moment source, the level bindings are not read: bind the fine buffers.
         let (coarse_cones, light) =
             coarse.map_or((&prep.cones, &prep.shapes), |c| (&c.cones, &c.light));
-        // The first chunk starts the sums (its shader run sees chunk_begin = 0).
+        let per_dispatch = split.parts() * split.part_slots;
         rec.discard(&dst.image);
         rec.span(label, |rec| {
+            // The first chunk starts the sums (its shader run sees chunk_begin = 0).
             let mut begin = 0;
             while begin < slots {
-                let end = slots.min(begin.saturating_add(chunk));
+                let end = slots.min(begin.saturating_add(per_dispatch));
                 rec.dispatch(
                     brute,
                     &[
                         (binding::BRUTE_CONES, Bind::Buffer(&prep.cones)),
                         (binding::BRUTE_RADIANCE, Bind::Buffer(&prep.rad)),
-                        (binding::BRUTE_DST, Bind::Storage(&dst.image)),
-                        (binding::BRUTE_COMP, Bind::Buffer(&comp)),
+                        (binding::BRUTE_PARTIALS, Bind::Buffer(&partials)),
                         (binding::BRUTE_TILES, Bind::Buffer(tiles)),
                         (binding::BRUTE_SHAPES, Bind::Buffer(&prep.shapes)),
                         (binding::BRUTE_COARSE_CONES, Bind::Buffer(coarse_cones)),
@@ -329,16 +365,28 @@ impl BruteFilter {
                         ..push
                     },
                     [
-                        groups(w, WORKGROUP_2D[0]),
-                        groups(h, WORKGROUP_2D[1]),
+                        groups(w * split.grid[0], WORKGROUP_2D[0]),
+                        groups(h * split.grid[1], WORKGROUP_2D[1]),
                         dst.mapping.layers(),
                     ],
                 )?;
                 begin = end;
             }
-            Ok(())
+            rec.dispatch(
+                resolve,
+                &[
+                    (binding::BRUTE_RESOLVE_PARTIALS, Bind::Buffer(&partials)),
+                    (binding::BRUTE_RESOLVE_DST, Bind::Storage(&dst.image)),
+                ],
+                &push,
+                [
+                    groups(w, WORKGROUP_2D[0]),
+                    groups(h, WORKGROUP_2D[1]),
+                    dst.mapping.layers(),
+                ],
+            )
         })?;
-        rec.keep(comp);
+        rec.keep(partials);
         Ok(())
     }
 
@@ -461,6 +509,35 @@ fn grid_1d(ctx: &Context, items: u32) -> [u32; 3] {
     [gx, groups.div_ceil(gx), 1]
 }
 
+/// How one convolution splits its source slots among parts, each summed by its own invocation
+/// per output texel: as many parts as bring the invocations to the target, at least one slot
+/// each, and no part longer than the device's loop chunk.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Split {
+    /// Parts per dispatch, as a grid of output-sized blocks.
+    grid: [u32; 2],
+    /// Slots each part sums in one dispatch.
+    part_slots: u32,
+}
+
+impl Split {
+    fn new(texels: u32, slots: u32, chunk: u32, target: u32) -> Split {
+        let slots = slots.max(1);
+        let want = target.div_ceil(texels.max(1)).clamp(1, slots);
+        let part_slots = slots.div_ceil(want).min(chunk).max(1);
+        let parts = want.min(slots.div_ceil(part_slots));
+        let gx = (parts as f64).sqrt().ceil() as u32;
+        Split {
+            grid: [gx, parts.div_ceil(gx)],
+            part_slots,
+        }
+    }
+
+    fn parts(&self) -> u32 {
+        self.grid[0] * self.grid[1]
+    }
+}
+
 /// The source prepared for the sums: per-texel cones, radiance and shapes, and the tiles.
 struct PreparedSource {
     cones: Buffer,
@@ -522,5 +599,44 @@ impl BruteFilter {
         };
         let per_texel = 1.0 + (s * s).max(rim);
         ((0.9 * limit as f64 / per_texel) as u32).max(1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Split;
+
+    /// Every slot is summed once: the parts of all dispatches cover the slots, no part runs
+    /// longer than the loop chunk, and the invocations come within a factor of two of the
+    /// target (parts of whole slots round it down, the grid rounds it up).
+    #[test]
+    fn split_covers_the_slots_within_the_chunk() {
+        for (texels, slots, chunk, target) in [
+            (6, 8192, u32::MAX, 65536),
+            (6, 8192, 1000, 65536),
+            (24576, 524288, u32::MAX, 65536),
+            (24576, 524288, 1180, 65536),
+            (393216, 524288, u32::MAX, 65536),
+            (1, 1, u32::MAX, 65536),
+            (6, 3, 1, 65536),
+            (96, 131072, 7, 1),
+        ] {
+            let s = Split::new(texels, slots, chunk, target);
+            let per_dispatch = s.parts() * s.part_slots;
+            assert!(s.part_slots >= 1 && s.part_slots <= chunk, "{s:?}");
+            let dispatches = slots.div_ceil(per_dispatch);
+            assert!(dispatches * per_dispatch >= slots, "{s:?}");
+            if chunk == u32::MAX {
+                assert_eq!(dispatches, 1, "{s:?}");
+            }
+            let invocations = texels as u64 * s.parts() as u64;
+            let wanted = (target as u64)
+                .max(texels as u64)
+                .min(texels as u64 * slots as u64);
+            assert!(invocations <= 2 * wanted.max(texels as u64), "{s:?}");
+            if chunk == u32::MAX {
+                assert!(2 * invocations >= wanted, "{s:?}");
+            }
+        }
     }
 }
