@@ -1,14 +1,15 @@
 #version 460
-// Lat-long to cube, conserving power: each output texel holds the mean of the source over the
-// texel's footprint. In the equal-area plane (U, z) = (φ·W/2π, cos θ) lat-long texels are
+// Lat-long to cube or dual paraboloid, conserving power: each output texel holds the mean of
+// the source over the texel's footprint. In the equal-area plane (U, z) = (φ·W/2π, cos θ) lat-long texels are
 // rectangles, each reconstructed as its value plus its limited slopes (convert_slopes.comp:
 // second order on smooth maps, flat at extrema); the footprint is the polygon of points along
 // the texel's edges (with the pole's line where a point sits on a pole or the texel holds
-// one), and its overlap with each source texel is integrated exactly, band of rows by band,
+// one; a paraboloid texel's clipped to its half, z >= 0 or z <= 0, the rim being the equator),
+// and its overlap with each source texel is integrated exactly, band of rows by band,
 // along the polygon clipped to the band (Green's theorem). Neighbours share their edge points
 // bit for bit and split shared edges from a canonical endpoint order, so the polygons tile the
 // plane and each source texel's power is counted once. The float64 twin is
-// math::convert::latlong_to_cube_area, step for step.
+// math::convert::latlong_area, step for step.
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
 
@@ -24,6 +25,10 @@ layout(set = 0, binding = BINDING_CONVERT_SLOPES, std430) readonly buffer Slopes
 // The push block, generated from src/abi.rs.
 PUSH_ConvertPush
 
+// The destination mapping: cube or dual paraboloid (the push block's, as a constant so that the
+// other's branches vanish).
+layout(constant_id = 3) const uint DST_MAPPING = MAPPING_CUBE;
+
 const uint MAXV = 2u * AREA_MAX_VERTICES;  // a clip at most doubles a polygon
 vec2 poly[MAXV];
 vec2 tmp[MAXV];
@@ -34,7 +39,7 @@ vec3 point(uint face, uint a, uint b, uint m) {
     Coord c;
     c.layer = face;
     c.uv = vec2(float(a), float(b)) / float(pc.dst_size.x * m);
-    vec3 d = coord_to_dir(MAPPING_CUBE, c);
+    vec3 d = coord_to_dir(DST_MAPPING, c);
     return vec3(dot(pc.world_to_file[0].xyz, d), dot(pc.world_to_file[1].xyz, d),
                 dot(pc.world_to_file[2].xyz, d));
 }
@@ -62,9 +67,29 @@ bool before(vec2 a, vec2 b) { return a.x < b.x || (a.x == b.x && a.y <= b.y); }
     out = k_; \
 }
 
+// A paraboloid texel outside its disc: the source texel at its own half's rim nearest its
+// centre (as the sampled conversion; twin rim_nearest and sample_nearest).
+void store_rim(uvec3 id) {
+    Coord c;
+    c.layer = id.z;
+    vec2 st = 2.0 * ((vec2(id.xy) + 0.5) / vec2(pc.dst_size)) - 1.0;
+    st *= (1.0 - RIM_PULL_IN) / max(length(st), 1.0 - RIM_PULL_IN);
+    c.uv = 0.5 * (st + 1.0);
+    vec3 d = coord_to_dir(DST_MAPPING, c);
+    d = vec3(dot(pc.world_to_file[0].xyz, d), dot(pc.world_to_file[1].xyz, d),
+             dot(pc.world_to_file[2].xyz, d));
+    Coord s = dir_to_coord(MAPPING_LATLONG, d);
+    ivec2 p = clamp(ivec2(floor(s.uv * vec2(pc.src_size))), ivec2(0), ivec2(pc.src_size) - 1);
+    imageStore(dst, ivec3(id), vec4(texelFetch(src, ivec3(p, 0), 0).rgb, 1.0));
+}
+
 void main() {
     uvec3 id = gl_GlobalInvocationID;
     if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
+    if (DST_MAPPING == MAPPING_DUAL_PARABOLOID && !texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy))) {
+        store_rim(id);
+        return;
+    }
     uint face = id.z, i = id.x, j = id.y, n = pc.dst_size.x;
     int w = int(pc.src_size.x), h = int(pc.src_size.y);
     float wf = float(w), scale = wf / (2.0 * PI);
@@ -77,7 +102,8 @@ void main() {
         uvec2 e0 = uvec2(i, j) + steps[k], e1 = uvec2(i, j) + steps[(k + 1u) % 4u];
         vec3 pa = point(face, e0.x, e0.y, 1u), pb = point(face, e1.x, e1.y, 1u);
         bool near = min(length(pa.xz), length(pb.xz)) < AREA_POLE_NEAR / float(n);
-        uint m = near ? AREA_POLE_STEPS : AREA_EDGE_STEPS;
+        uint m = near ? AREA_POLE_STEPS
+                      : (DST_MAPPING == MAPPING_DUAL_PARABOLOID ? AREA_PARABOLOID_EDGE_STEPS : AREA_EDGE_STEPS);
         for (uint q = 0u; q < m; q++) {
             uvec2 ab = e0 * (m - q) + e1 * q;
             ds[count++] = point(face, ab.x, ab.y, m);
@@ -121,6 +147,19 @@ void main() {
         }
     }
 
+    if (DST_MAPPING == MAPPING_DUAL_PARABOLOID) {
+        // The half's rim is the equator: keep z >= 0 (layer 0) or z <= 0.
+        uint nc;
+        CUT(tmp, poly, npoly, 0.0, face == 0u, nc);
+        for (uint k = 0u; k < nc; k++) poly[k] = tmp[k];
+        npoly = nc;
+        if (npoly < 3u) {
+            // Inside the disc by less than the chords' error.
+            store_rim(id);
+            return;
+        }
+    }
+
     float zmin = 2.0, zmax = -2.0;
     for (uint k = 0u; k < npoly; k++) {
         zmin = min(zmin, poly[k].y);
@@ -135,8 +174,15 @@ void main() {
     while (r1 > r0 && latlong_band_edge(r1, h) <= zmin) r1--;
 
     // Sums of (L − L0) rather than L: a constant map comes out exact, whatever the pieces'
-    // rounding.
-    vec3 l0 = texelFetch(src, ivec3(((int(floor(poly[0].x)) % w) + w) % w, r0, 0), 0).rgb;
+    // rounding. L0 is the least, per channel, of the texels under the polygon's points: one
+    // that merely touches the footprint may be a sun 1e5 × the mean, whose cancellation would
+    // cost float32 its digits; the least is at most the mean.
+    vec3 l0 = vec3(3.4e38);
+    for (uint k = 0u; k < npoly; k++) {
+        int row = clamp(int(floor(acos(clamp(poly[k].y, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
+        int col = ((int(floor(poly[k].x)) % w) + w) % w;
+        l0 = min(l0, texelFetch(src, ivec3(col, row, 0), 0).rgb);
+    }
     vec3 num = vec3(0.0);
     float den = 0.0;
     for (int row = r0; row <= r1; row++) {

@@ -583,28 +583,35 @@ macro_rules! push_blocks {
     };
 }
 
-/// The lat-long → cube conversion by exact footprint areas (`math::convert::area_*`,
-/// `glsl/convert_area.comp`).
+/// The lat-long → cube and dual-paraboloid conversion by exact footprint areas
+/// (`math::convert::area_*`, `glsl/convert_area.comp`).
 pub mod area {
     /// Points per edge of a cube texel's footprint polygon in the (U, z) plane: the chords
     /// err by about 1e-4 of a texel's area away from the poles (measured 5e-6 of the power of
     /// a map with suns at the poles and the seam, 1024 x 512 to cube 256).
     pub const EDGE_STEPS: u32 = 2;
+    /// Points per edge of a dual-paraboloid texel's polygon: z = cos θ bends across its
+    /// texels as much at the rim as anywhere, and a sun there lands whole in one rim texel, so
+    /// that its power errs by that texel's chord error: 3.8e-5 of a map with a sun on the
+    /// equator at 2 points, 9.5e-6 at 4 and 2.4e-6 at 8 (1024 x 512 to paraboloid 256,
+    /// float64), the cube's 5e-6 at 2.
+    pub const PARABOLOID_EDGE_STEPS: u32 = 8;
     /// Points per edge whose nearer end is within [`POLE_NEAR`] / size of the pole's axis,
     /// where great circles curve strongly in (U, z).
     pub const POLE_STEPS: u32 = 8;
     /// See [`POLE_STEPS`].
     pub const POLE_NEAR: f64 = 8.0;
-    /// Most polygon vertices: four edges of [`POLE_STEPS`] points, and three closing the
-    /// polygon along a pole's line.
+    /// Most polygon vertices: four edges of [`POLE_STEPS`] (or [`PARABOLOID_EDGE_STEPS`])
+    /// points, and three closing the polygon along a pole's line.
     pub const MAX_VERTICES: u32 = 4 * POLE_STEPS + 3;
+    const _: () = assert!(PARABOLOID_EDGE_STEPS <= POLE_STEPS && EDGE_STEPS <= POLE_STEPS);
     /// vec4s of limited slopes per source texel (dL/dU rgb, then dL/dz rgb), the layout of
     /// the buffer convert_slopes.comp writes and convert_area.comp reads.
     pub const SLOPE_VEC4S: u32 = 2;
-    /// The conversion serves sizes with size × (source texels per output texel) at most
-    /// this (host only): its longest walk, at a pole, then stays near 2e4 steps, under
-    /// llvmpipe's loop limit of 65 535 per invocation.
-    pub const WALK_BOUND: f64 = 8000.0;
+    /// The conversion serves sizes whose longest polygon walk
+    /// (`math::convert::area_walk_steps`) takes at most this many loop steps (host only), under
+    /// llvmpipe's limit of 65 535 per invocation with room for the estimate's error.
+    pub const WALK_STEPS: f64 = 40_000.0;
 }
 
 /// Push-constant blocks, one per shader family. GLSL reads them as `pc` through the
@@ -1142,6 +1149,11 @@ pub fn generated_header() -> String {
     let _ = writeln!(s, "#define LIGHT_TREE_VEC4S {}u", lights::TREE_VEC4S);
     let _ = writeln!(s, "#define AREA_EDGE_STEPS {}u", area::EDGE_STEPS);
     let _ = writeln!(s, "#define AREA_POLE_STEPS {}u", area::POLE_STEPS);
+    let _ = writeln!(
+        s,
+        "#define AREA_PARABOLOID_EDGE_STEPS {}u",
+        area::PARABOLOID_EDGE_STEPS
+    );
     let _ = writeln!(s, "#define AREA_POLE_NEAR {:?}", area::POLE_NEAR as f32);
     let _ = writeln!(s, "#define AREA_MAX_VERTICES {}u", area::MAX_VERTICES);
     let _ = writeln!(s, "#define AREA_SLOPE_VEC4S {}u", area::SLOPE_VEC4S);

@@ -177,44 +177,98 @@ pub fn convert_with(
     EnvMap::new(to, w, h, texels)
 }
 
-/// Whether [`latlong_to_cube_area`] serves a `width`-wide lat-long → `size` cube conversion:
-/// its polygon walks stay short. A texel at a pole spans a quarter of every row it meets
-/// (the whole row where the pole is inside it), about 2.3·size·ratio² column steps in all,
-/// and llvmpipe ends a loop after 65 535 iterations per invocation.
-pub fn area_serves(width: u32, height: u32, size: u32) -> bool {
-    let ratio2 = (width as f64 * height as f64) / (6.0 * size as f64 * size as f64);
-    size as f64 * ratio2 <= area::WALK_BOUND
+/// Whether [`latlong_area`] serves a `width` × `height` lat-long → `to` at `size` conversion: a
+/// cube, or a dual paraboloid whose axis is the lat-long's polar axis (`world_to_file` keeps
+/// +Y), so that its rim is the equator, the line z = 0 of the (U, z) plane; and polygon walks
+/// that stay within [`area::WALK_STEPS`] ([`area_walk_steps`]).
+pub fn area_serves(width: u32, height: u32, to: Mapping, size: u32, world_to_file: DMat3) -> bool {
+    let mapped = match to {
+        Mapping::Cube => true,
+        Mapping::DualParaboloid => world_to_file.y_axis == DVec3::Y,
+        _ => false,
+    };
+    mapped && area_walk_steps(width, height, to, size) <= area::WALK_STEPS
 }
 
-/// A lat-long → cube conversion that conserves power: each output texel holds the mean of
-/// the source over its footprint, the source taken as constant over each of its texels.
-/// Lat-long texels are rectangles in the equal-area plane (U, z) = (φ·W/2π, cos θ), where
-/// dω = (2π/W)·dU·dz; each output texel's footprint is the polygon of its corners there
-/// (with the pole's line where a corner sits on a pole or the texel holds one), and its
-/// overlap with each source texel is integrated exactly, row band by row band, as
-/// ∮ (z − z_band) dU along the clipped polygon's edges. Neighbouring texels share their
-/// corners bit for bit, so the polygons tile the plane: every source texel's power lands in
+/// Loop steps of the longest polygon walk of a `width` × `height` lat-long → `to` at `size`
+/// conversion (llvmpipe ends an invocation's loops after 65 535 steps in all): the texel with
+/// a corner on a pole, which meets the rows down to its far corner (2√2/size of a face's
+/// side, 2× that on a paraboloid, whose texels are twice as wide there), and in each clips
+/// its polygon twice (2 · [`area::MAX_VERTICES`] steps) and walks a quarter of the row's
+/// columns along each of its two edges that leave the pole.
+pub fn area_walk_steps(width: u32, height: u32, to: Mapping, size: u32) -> f64 {
+    let reach = match to {
+        Mapping::DualParaboloid => 4.0 * std::f64::consts::SQRT_2,
+        _ => 2.0 * std::f64::consts::SQRT_2,
+    } / size.max(1) as f64;
+    let rows = (reach / PI * height as f64).ceil() + 1.0;
+    rows * (2.0 * area::MAX_VERTICES as f64 + 0.5 * width as f64)
+}
+
+/// A lat-long → cube or dual-paraboloid conversion that conserves power: each output texel
+/// holds the mean of the source over its footprint, the source reconstructed per texel as its
+/// value plus its limited slopes ([`area_slopes`]). Lat-long texels are rectangles in the
+/// equal-area plane (U, z) = (φ·W/2π, cos θ), where dω = (2π/W)·dU·dz; each output texel's
+/// footprint is the polygon of points along its edges there (with the pole's line where a
+/// point sits on a pole or the texel holds one; a paraboloid texel's clipped to its half, z ≥ 0
+/// or z ≤ 0), and its overlap with each source texel is integrated exactly, row band by row
+/// band, along the clipped polygon's edges (Green's theorem). Neighbouring texels share their
+/// points bit for bit, so the polygons tile the plane: every source texel's power lands in
 /// the output, once. Shared edges are split at band and column lines from a canonical
 /// endpoint order, so both sides compute the same pieces (glsl/convert_area.comp is the
-/// float32 twin, step for step).
-pub fn latlong_to_cube_area(map: &EnvMap, size: u32, world_to_file: DMat3) -> EnvMap {
+/// float32 twin, step for step). Paraboloid texels wholly outside their disc hold the source
+/// texel at their own half's rim nearest their centre, as the sampled conversion's do.
+/// Panics unless [`area_serves`] maps `to` with `world_to_file`.
+pub fn latlong_area(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3) -> EnvMap {
     assert_eq!(map.mapping, Mapping::LatLong);
+    assert!(
+        area_serves(1, 1, to, size.max(1), world_to_file),
+        "no area conversion to {to:?} with this orientation"
+    );
     let (w, h) = (map.width as i64, map.height as i64);
     let slopes = area_slopes(map);
     let cell = |row: i64, col: i64| Cell {
         l: fetch(map, 0, col, row),
         slopes: slopes[(row * w + col) as usize],
     };
-    let mut texels = Vec::with_capacity((6 * size * size) as usize);
-    for face in 0..6 {
-        for j in 0..size {
-            for i in 0..size {
-                let poly = area_polygon(face, i, j, size, w, world_to_file);
+    let (ow, oh) = to.extent_for_size(size);
+    let mut texels = Vec::with_capacity((ow * oh * to.layers()) as usize);
+    for layer in 0..to.layers() {
+        for j in 0..oh {
+            for i in 0..ow {
+                if !to.texel_in_domain(ow, oh, i, j) {
+                    let c = rim_nearest(ow, oh, layer, i, j);
+                    let d = world_to_file * to.coord_to_dir(c);
+                    texels.push(sample_nearest(map, d).map(|x| x as f32));
+                    continue;
+                }
+                let mut poly = area_polygon(to, layer, i, j, size, w, world_to_file);
+                if to == Mapping::DualParaboloid {
+                    poly = cut(&poly, 0.0, layer == 0);
+                }
+                if poly.len() < 3 {
+                    // Inside the disc by less than the chords' error.
+                    let c = rim_nearest(ow, oh, layer, i, j);
+                    let d = world_to_file * to.coord_to_dir(c);
+                    texels.push(sample_nearest(map, d).map(|x| x as f32));
+                    continue;
+                }
                 texels.push(area_mean(&poly, w, h, cell));
             }
         }
     }
-    EnvMap::new(Mapping::Cube, size, size, texels)
+    EnvMap::new(to, ow, oh, texels)
+}
+
+/// The coordinate on its own half's rim nearest the centre of paraboloid texel (i, j).
+fn rim_nearest(w: u32, h: u32, layer: u32, i: u32, j: u32) -> Coord {
+    let mut c = Mapping::texel_center(w, h, layer, i, j);
+    let (s, t) = (2.0 * c.u - 1.0, 2.0 * c.v - 1.0);
+    let r = 1.0 - crate::abi::constants::RIM_PULL_IN;
+    let k = r / (s * s + t * t).sqrt().max(r);
+    c.u = 0.5 * (s * k + 1.0);
+    c.v = 0.5 * (t * k + 1.0);
+    c
 }
 
 /// A source texel as the area conversion reconstructs it: its value at its centroid and its
@@ -272,13 +326,26 @@ pub fn area_slopes(map: &EnvMap) -> Vec<[[f64; 3]; 2]> {
     out
 }
 
-/// The footprint of cube texel (face, i, j) in the (U, z) plane of a `w`-wide lat-long map:
-/// at most 7 vertices, U unwrapped continuously from the first corner.
-fn area_polygon(face: u32, i: u32, j: u32, n: u32, w: i64, world_to_file: DMat3) -> Vec<[f64; 2]> {
-    let m = area::EDGE_STEPS;
-    // Boundary points: the corners and m − 1 points along each edge, all on the great
-    // circles of the texel's edges (straight lines in (s, t)), from integer coordinates so
-    // that the neighbour sharing an edge computes the same points.
+/// The footprint of texel (face, i, j) of a `to` map of side `n` (a cube or a dual
+/// paraboloid) in the (U, z) plane of a `w`-wide lat-long map: at most
+/// [`area::MAX_VERTICES`] vertices, U unwrapped continuously from the first point.
+fn area_polygon(
+    to: Mapping,
+    face: u32,
+    i: u32,
+    j: u32,
+    n: u32,
+    w: i64,
+    world_to_file: DMat3,
+) -> Vec<[f64; 2]> {
+    let m = if to == Mapping::DualParaboloid {
+        area::PARABOLOID_EDGE_STEPS
+    } else {
+        area::EDGE_STEPS
+    };
+    // Boundary points: the corners and m − 1 points along each edge (straight lines in the
+    // map's (s, t): great circles for a cube, circles for a paraboloid), from integer
+    // coordinates so that the neighbour sharing an edge computes the same points.
     let steps = [(0, 0), (1, 0), (1, 1), (0, 1)];
     let point = |a: u32, b: u32, m: u32| {
         let c = Coord {
@@ -286,7 +353,7 @@ fn area_polygon(face: u32, i: u32, j: u32, n: u32, w: i64, world_to_file: DMat3)
             u: a as f64 / (n * m) as f64,
             v: b as f64 / (n * m) as f64,
         };
-        world_to_file * Mapping::Cube.coord_to_dir(c)
+        world_to_file * to.coord_to_dir(c)
     };
     let mut ds = Vec::with_capacity(area::MAX_VERTICES as usize);
     for k in 0..4 {
@@ -378,8 +445,18 @@ fn area_mean(poly: &[[f64; 2]], w: i64, h: i64, cell: impl Fn(i64, i64) -> Cell)
     while r1 > r0 && band_edge(r1, h) <= zmin {
         r1 -= 1;
     }
-    // Sums of (L − L0), as the GLSL (where a constant map then comes out exact).
-    let l0 = cell(r0, (poly[0][0].floor() as i64).rem_euclid(w)).l;
+    // Sums of (L − L0), as the GLSL (where a constant map then comes out exact). L0 is the
+    // least, per channel, of the texels under the polygon's points: a texel that merely
+    // touches the footprint may be a sun 1e5 × the mean, whose cancellation would cost float32
+    // (the GLSL) its digits; the least is at most the mean.
+    let row_at = |z: f64| ((z.clamp(-1.0, 1.0).acos() / PI * hf).floor() as i64).clamp(0, h - 1);
+    let mut l0 = [f64::MAX; 3];
+    for p in poly {
+        let t = cell(row_at(p[1]), (p[0].floor() as i64).rem_euclid(w)).l;
+        for ch in 0..3 {
+            l0[ch] = l0[ch].min(t[ch]);
+        }
+    }
     let (mut num, mut den) = ([0.0f64; 3], 0.0f64);
     for row in r0..=r1 {
         let zhi = band_edge(row, h);
@@ -445,39 +522,40 @@ fn band_edge(row: i64, h: i64) -> f64 {
     }
 }
 
-/// `poly` clipped to zlo ≤ z ≤ zhi (Sutherland–Hodgman, intersections from a canonical
-/// endpoint order).
-fn clip_band(poly: &[[f64; 2]], zlo: f64, zhi: f64) -> Vec<[f64; 2]> {
-    let cut = |pts: &[[f64; 2]], bound: f64, keep_above: bool| -> Vec<[f64; 2]> {
-        let inside = |p: &[f64; 2]| {
-            if keep_above {
-                p[1] >= bound
-            } else {
-                p[1] <= bound
-            }
-        };
-        let mut out = Vec::with_capacity(pts.len() + 2);
-        let n = pts.len();
-        for k in 0..n {
-            let (a, b) = (pts[k], pts[(k + 1) % n]);
-            let (ia, ib) = (inside(&a), inside(&b));
-            if ia {
-                out.push(a);
-            }
-            if ia != ib {
-                let (p, q) = if (a[0], a[1]) <= (b[0], b[1]) {
-                    (a, b)
-                } else {
-                    (b, a)
-                };
-                let t = (bound - p[1]) / (q[1] - p[1]);
-                out.push([p[0] + (q[0] - p[0]) * t, bound]);
-            }
+/// `pts` clipped to z ≥ bound (`keep_above`) or z ≤ bound (Sutherland–Hodgman, intersections
+/// from a canonical endpoint order, so that two polygons sharing an edge cut it at one point).
+fn cut(pts: &[[f64; 2]], bound: f64, keep_above: bool) -> Vec<[f64; 2]> {
+    let inside = |p: &[f64; 2]| {
+        if keep_above {
+            p[1] >= bound
+        } else {
+            p[1] <= bound
         }
-        out
     };
-    let above = cut(poly, zlo, true);
-    cut(&above, zhi, false)
+    let mut out = Vec::with_capacity(pts.len() + 2);
+    let n = pts.len();
+    for k in 0..n {
+        let (a, b) = (pts[k], pts[(k + 1) % n]);
+        let (ia, ib) = (inside(&a), inside(&b));
+        if ia {
+            out.push(a);
+        }
+        if ia != ib {
+            let (p, q) = if (a[0], a[1]) <= (b[0], b[1]) {
+                (a, b)
+            } else {
+                (b, a)
+            };
+            let t = (bound - p[1]) / (q[1] - p[1]);
+            out.push([p[0] + (q[0] - p[0]) * t, bound]);
+        }
+    }
+    out
+}
+
+/// `poly` clipped to zlo ≤ z ≤ zhi.
+fn clip_band(poly: &[[f64; 2]], zlo: f64, zhi: f64) -> Vec<[f64; 2]> {
+    cut(&cut(poly, zlo, true), zhi, false)
 }
 
 #[cfg(test)]
@@ -512,18 +590,64 @@ mod tests {
                 flip_v: rot > 0.0,
                 rotate_y_degrees: rot,
             };
-            assert!(area_serves(w, h, n));
-            let out = latlong_to_cube_area(&m, n, o.world_to_file());
+            assert!(area_serves(w, h, Mapping::Cube, n, DMat3::IDENTITY));
+            let out = latlong_area(&m, Mapping::Cube, n, o.world_to_file());
             let (p, q) = (out.power(), m.power());
             let worst = (0..3)
                 .map(|c| (p[c] / q[c] - 1.0).abs())
                 .fold(0.0, f64::max);
             assert!(worst <= 3e-5, "cube {n}: power off by {worst:e}");
         }
+        // A paraboloid's rim is the equator, z = 0 in (U, z): its halves tile the plane too.
+        // Turned about the axis and mirrored, which keep it; flipped upside down, which does
+        // not (the sampled conversion serves that one).
+        for (n, rot, flip_u) in [(256u32, 0.0, false), (255, 17.0, true), (64, 90.0, false)] {
+            let o = Orientation {
+                flip_u,
+                flip_v: false,
+                rotate_y_degrees: rot,
+            };
+            assert!(area_serves(
+                w,
+                h,
+                Mapping::DualParaboloid,
+                n,
+                o.world_to_file()
+            ));
+            let out = latlong_area(&m, Mapping::DualParaboloid, n, o.world_to_file());
+            let (p, q) = (out.power(), m.power());
+            let worst = (0..3)
+                .map(|c| (p[c] / q[c] - 1.0).abs())
+                .fold(0.0, f64::max);
+            eprintln!("paraboloid {n}: power off by {worst:.2e}");
+            assert!(worst <= 3e-5, "paraboloid {n}: power off by {worst:e}");
+        }
+        let upside_down = Orientation {
+            flip_u: false,
+            flip_v: true,
+            rotate_y_degrees: 0.0,
+        };
+        assert!(!area_serves(
+            w,
+            h,
+            Mapping::DualParaboloid,
+            64,
+            upside_down.world_to_file()
+        ));
         let flat = EnvMap::new(Mapping::LatLong, 64, 32, vec![[2.0, 3.0, 4.0]; 64 * 32]);
-        for n in [1, 7, 8] {
-            let out = latlong_to_cube_area(&flat, n, DMat3::IDENTITY);
-            assert!(out.texels.iter().all(|t| *t == [2.0, 3.0, 4.0]), "cube {n}");
+        for (to, n) in [
+            (Mapping::Cube, 1),
+            (Mapping::Cube, 7),
+            (Mapping::Cube, 8),
+            (Mapping::DualParaboloid, 1),
+            (Mapping::DualParaboloid, 7),
+            (Mapping::DualParaboloid, 8),
+        ] {
+            let out = latlong_area(&flat, to, n, DMat3::IDENTITY);
+            assert!(
+                out.texels.iter().all(|t| *t == [2.0, 3.0, 4.0]),
+                "{to:?} {n}"
+            );
         }
     }
 
@@ -544,7 +668,7 @@ mod tests {
             })
             .collect();
         let map = EnvMap::new(Mapping::LatLong, w, h, texels);
-        let out = latlong_to_cube_area(&map, n, DMat3::IDENTITY);
+        let out = latlong_area(&map, Mapping::Cube, n, DMat3::IDENTITY);
         let (wi, hi) = (w as i64, h as i64);
         let mut box_err: f64 = 0.0;
         let mut worst: f64 = 0.0;
@@ -570,7 +694,7 @@ mod tests {
                     let want = num / den;
                     let got = out.texel(face, i, j)[0] as f64;
                     worst = worst.max((got / want - 1.0).abs());
-                    let poly = area_polygon(face, i, j, n, wi, DMat3::IDENTITY);
+                    let poly = area_polygon(Mapping::Cube, face, i, j, n, wi, DMat3::IDENTITY);
                     let flat = area_mean(&poly, wi, hi, |row, col| Cell {
                         l: fetch(&map, 0, col, row),
                         slopes: [[0.0; 3]; 2],
@@ -589,7 +713,7 @@ mod tests {
         sun.texels[(10 * w + 20) as usize] = [1e5; 3];
         let slopes = area_slopes(&sun);
         assert_eq!(slopes[(10 * w + 20) as usize], [[0.0; 3]; 2]);
-        let out = latlong_to_cube_area(&sun, n, DMat3::IDENTITY);
+        let out = latlong_area(&sun, Mapping::Cube, n, DMat3::IDENTITY);
         assert!(out.texels.iter().flatten().all(|v| *v >= 1.0 - 1e-6));
     }
 

@@ -50,8 +50,9 @@ pub struct Converter {
     ctx: Context,
     /// One pipeline per (source, destination) mapping pair, specialised on both.
     pipelines: [OnceLock<Pipeline>; 16],
-    /// Lat-long to cube by exact footprint areas, and the source slopes it integrates.
-    area: OnceLock<Pipeline>,
+    /// Lat-long to cube and to dual paraboloid (indexed by mapping id) by exact footprint
+    /// areas, and the source slopes they integrate.
+    area: [OnceLock<Pipeline>; 4],
     slopes: OnceLock<Pipeline>,
     sampler: Sampler,
 }
@@ -62,7 +63,7 @@ impl Converter {
         Ok(Converter {
             ctx: ctx.clone(),
             pipelines: Default::default(),
-            area: OnceLock::new(),
+            area: Default::default(),
             slopes: OnceLock::new(),
             sampler: Sampler::linear_clamp(ctx, "convert sampler")?,
         })
@@ -83,34 +84,44 @@ impl Converter {
     /// [`Converter::record`] that needs it (from another thread while a map uploads, or
     /// before an engine's frame).
     pub fn prepare(&self, from: Mapping, to: Mapping) -> Result<()> {
-        if from == Mapping::LatLong && to == Mapping::Cube {
-            // The area pipeline, which serves lat-long to cube at all but extreme minification.
+        if from == Mapping::LatLong && matches!(to, Mapping::Cube | Mapping::DualParaboloid) {
+            // The area pipeline, which serves lat-long to cube and dual paraboloid at all but
+            // extreme minification (and, for the paraboloid, orientations that tilt its axis).
             Pipeline::compute_once(
                 &self.slopes,
                 &self.ctx,
                 ShaderId::ConvertSlopes,
                 &WORKGROUP_2D,
             )?;
-            return self.area_pipeline().map(|_| ());
+            return self.area_pipeline(to).map(|_| ());
         }
         self.pipeline(from, to).map(|_| ())
     }
 
-    fn area_pipeline(&self) -> Result<&Pipeline> {
-        Pipeline::compute_once(&self.area, &self.ctx, ShaderId::ConvertArea, &WORKGROUP_2D)
+    fn area_pipeline(&self, to: Mapping) -> Result<&Pipeline> {
+        // Constant 3 is the destination mapping (constant 2, the source's, is unused there).
+        Pipeline::compute_once(
+            &self.area[to.id() as usize],
+            &self.ctx,
+            ShaderId::ConvertArea,
+            &[WORKGROUP_2D[0], WORKGROUP_2D[1], 0, to.id()],
+        )
     }
 
     /// Whether converting a `src` map (mapping, width, height) with `opts` takes exact
-    /// footprint areas (lat-long to cube, no sample count or nearest reads asked for, not so
-    /// strongly minified that its walks at the poles grow long, `math::convert::area_serves`,
-    /// and a source whose slopes fit one storage buffer of this device), which conserves
-    /// power, rather than `ss` × `ss` bilinear samples per texel.
+    /// footprint areas, which conserves power, rather than `ss` × `ss` bilinear samples per
+    /// texel: lat-long to cube, or to dual paraboloid where the orientation keeps the
+    /// paraboloid's axis on the lat-long's, with no sample count or nearest reads asked for,
+    /// not so strongly minified that the walks at the poles grow long
+    /// (`math::convert::area_serves`), and a source whose slopes fit one storage buffer.
     pub fn uses_area(&self, src: (Mapping, u32, u32), opts: &ConvertOptions) -> bool {
+        let Ok(world_to_file) = opts.orientation.checked_world_to_file() else {
+            return false;
+        };
         src.0 == Mapping::LatLong
-            && opts.to == Mapping::Cube
             && opts.supersample.is_none()
             && !opts.nearest
-            && crate::math::convert::area_serves(src.1, src.2, opts.size)
+            && crate::math::convert::area_serves(src.1, src.2, opts.to, opts.size, world_to_file)
             && slopes_bytes(src.1, src.2) <= self.ctx.info().max_storage_buffer_range
     }
 
@@ -187,8 +198,8 @@ impl Converter {
         })
     }
 
-    /// The lat-long to cube conversion by exact footprint areas: the source's limited slopes,
-    /// then the footprints' integrals.
+    /// The lat-long to cube or dual-paraboloid conversion by exact footprint areas: the
+    /// source's limited slopes, then the footprints' integrals.
     fn record_area(
         &self,
         rec: &mut Recorder,
@@ -210,7 +221,8 @@ impl Converter {
             ShaderId::ConvertSlopes,
             &WORKGROUP_2D,
         )?;
-        let area = self.area_pipeline()?;
+        let to = dst.mapping;
+        let area = self.area_pipeline(to)?;
         let source = || {
             (
                 binding::CONVERT_SRC,
@@ -230,18 +242,25 @@ impl Converter {
                 ],
             )
         })?;
-        rec.span(&format!("convert latlong -> cube {w}x{h} (areas)"), |rec| {
-            rec.dispatch(
-                area,
-                &[
-                    source(),
-                    (binding::CONVERT_DST, Bind::Storage(&dst.image)),
-                    (binding::CONVERT_SLOPES, Bind::Buffer(&slopes)),
-                ],
-                push,
-                [groups(w, WORKGROUP_2D[0]), groups(h, WORKGROUP_2D[1]), 6],
-            )
-        })?;
+        rec.span(
+            &format!("convert latlong -> {} {w}x{h} (areas)", to.name()),
+            |rec| {
+                rec.dispatch(
+                    area,
+                    &[
+                        source(),
+                        (binding::CONVERT_DST, Bind::Storage(&dst.image)),
+                        (binding::CONVERT_SLOPES, Bind::Buffer(&slopes)),
+                    ],
+                    push,
+                    [
+                        groups(w, WORKGROUP_2D[0]),
+                        groups(h, WORKGROUP_2D[1]),
+                        to.layers(),
+                    ],
+                )
+            },
+        )?;
         rec.keep(slopes);
         Ok(())
     }
