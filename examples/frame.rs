@@ -17,7 +17,7 @@ use envlight::passes::gbuffer::{GBuffer, GpuObject};
 use envlight::passes::map::{full_mips, map_desc};
 use envlight::passes::shade::ShadeInputs;
 use envlight::passes::{ConvertOptions, Converter, GBufferPass, GpuEnvMap, MipChain, Shade};
-use envlight::render::{default_dp_size, load_environment, object_record};
+use envlight::render::{fis_dp_size, load_environment, object_record};
 use envlight::scene::{Scene, Technique};
 use envlight::{EnvMap, Mapping};
 use std::path::Path;
@@ -102,7 +102,7 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
     let cmd = unsafe { engine.device.allocate_command_buffers(&alloc)? }[0];
 
     // The engine's images: the dual-paraboloid chain and the frame.
-    let dp_size = scene.fis.size.unwrap_or_else(|| default_dp_size(&env));
+    let dp_size = fis_dp_size(&scene, &env);
     let (dw, dh) = Mapping::DualParaboloid.extent_for_size(dp_size);
     let dp_desc = map_desc(Mapping::DualParaboloid, dw, dh, full_mips(dw, dh));
     let (fw, fh) = (scene.camera.width, scene.camera.height);

@@ -114,6 +114,71 @@ pub fn default_dp_size(map: &EnvMap) -> u32 {
     (side.max(1.0) as u32).next_power_of_two().clamp(16, 1024)
 }
 
+/// Side of `scene`'s FIS dual paraboloid: the scene's `[fis] size`; else only as fine as its
+/// lobes read ([`crate::math::fis::dp_size_for`], at most [`default_dp_size`]) where nothing
+/// else reads the chain's fine levels (no split-sum, no footprint-filtered mirror, no
+/// background filtered by request or seen through a perspective camera) and the lat-long
+/// source converts to that size by exact footprint areas, so that its power is kept; else
+/// [`default_dp_size`].
+pub fn fis_dp_size(scene: &Scene, env: &EnvMap) -> u32 {
+    if let Some(s) = scene.fis.size {
+        return s;
+    }
+    let full = default_dp_size(env);
+    let filter = scene.environment.filter;
+    let ortho = matches!(
+        scene.camera.projection,
+        crate::math::camera::Projection::Orthographic { .. }
+    );
+    let others = scene.objects.iter().any(|o| match o.material.technique() {
+        Technique::SplitSum => true,
+        Technique::Lookup => filter != LookupFilter::Point,
+        _ => false,
+    });
+    let background = match filter {
+        LookupFilter::Point => false,
+        LookupFilter::Footprint => true,
+        LookupFilter::Auto => !ortho,
+    };
+    let Ok(world_to_file) = scene.environment.orientation().checked_world_to_file() else {
+        return full;
+    };
+    if others || background || env.mapping != Mapping::LatLong {
+        return full;
+    }
+    let lobes = scene
+        .objects
+        .iter()
+        .filter_map(|o| match o.material.technique() {
+            Technique::Fis { samples, bias, .. } => {
+                // The residual's default bias reads finer than the whole map's.
+                let bias = bias.unwrap_or(DEFAULT_FIS_BIAS.min(DEFAULT_FIS_BIAS_RESIDUAL));
+                Some(crate::math::fis::dp_size_for(
+                    &o.material.kind,
+                    samples,
+                    bias,
+                ))
+            }
+            _ => None,
+        })
+        .max();
+    let Some(mut size) = lobes else {
+        return full;
+    };
+    while size < full
+        && !crate::math::convert::area_serves(
+            env.width,
+            env.height,
+            Mapping::DualParaboloid,
+            size,
+            world_to_file,
+        )
+    {
+        size *= 2;
+    }
+    size.min(full)
+}
+
 /// The GPU record of a scene object; `data_offset` locates its SH coefficients or its
 /// prefiltered map (0 for other techniques).
 pub fn object_record(o: &SceneObject, data_offset: u32) -> GpuObject {
@@ -471,7 +536,7 @@ impl Renderer {
         // FIS: the dual paraboloid and its MIP chain.
         let dp = match dp_passes {
             Some(_) => {
-                let size = scene.fis.size.unwrap_or_else(|| default_dp_size(env));
+                let size = fis_dp_size(scene, env);
                 let (w, h) = Mapping::DualParaboloid.extent_for_size(size);
                 Some((
                     GpuEnvMap::with_mips(ctx, "fis paraboloid", Mapping::DualParaboloid, w, h)?,
@@ -857,12 +922,19 @@ pub fn chain_of_texel_means(scene: &Scene) -> bool {
 }
 
 /// Which lookups of `scene` are footprint-filtered, given whether the render builds the
-/// dual-paraboloid chain and whether that chain holds the residual of extracted lights.
+/// dual-paraboloid chain and whether that chain holds the residual of extracted lights. Under
+/// `filter = "auto"` an orthographic camera's background reads the map itself: each of its
+/// pixels sees one direction, so there is no footprint to filter.
 pub fn footprint_of(scene: &Scene, chain: bool, residual: bool) -> Footprint {
     let filter = scene.environment.filter;
+    let ortho = matches!(
+        scene.camera.projection,
+        crate::math::camera::Projection::Orthographic { .. }
+    );
     Footprint {
         mirror: chain && filter != LookupFilter::Point,
-        background: chain && filter != LookupFilter::Point,
+        background: chain
+            && (filter == LookupFilter::Footprint || (filter == LookupFilter::Auto && !ortho)),
         lights: chain && residual,
     }
 }

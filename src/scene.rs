@@ -643,7 +643,9 @@ impl PassKind {
         use ShaderId::*;
         match self {
             PassKind::GBuffer => &[GBuffer],
-            PassKind::DualParaboloid | PassKind::LatLong => &[Convert2d, ConvertCube],
+            // A lat-long source takes exact footprint areas (slopes, then areas).
+            PassKind::DualParaboloid => &[Convert2d, ConvertCube, ConvertSlopes, ConvertArea],
+            PassKind::LatLong => &[Convert2d, ConvertCube],
             PassKind::MipChain => &[Mip],
             PassKind::ShProjection => &[
                 ShProjectSubgroup,

@@ -142,6 +142,44 @@ pub fn estimate(
     sum.map(|s| s / samples as f64)
 }
 
+/// Views up to this angle from the normal (degrees) get level-0 texels no coarser than their
+/// densest FIS sample calls for, in [`dp_size_for`]; more grazing views (the outer 1.5% of a
+/// sphere's radius) may read level 0 where they would want finer.
+pub const DP_SIZE_VIEW_LIMIT_DEG: f64 = 80.0;
+
+/// The largest sampling density of `brdf` over views up to [`DP_SIZE_VIEW_LIMIT_DEG`]: its
+/// pdf at the mirror direction (the peak of every lobe here) and at the normal (Lambert's),
+/// along both tangent axes (Ward's two).
+pub fn pdf_peak(brdf: &Brdf) -> f64 {
+    let mut peak = 0.0f64;
+    for k in 0..=32 {
+        let t = (k as f64 / 32.0 * DP_SIZE_VIEW_LIMIT_DEG).to_radians();
+        for wo in [
+            DVec3::new(t.sin(), 0.0, t.cos()),
+            DVec3::new(0.0, t.sin(), t.cos()),
+        ] {
+            let mirror = DVec3::new(-wo.x, -wo.y, wo.z);
+            peak = peak.max(brdf.pdf(wo, mirror)).max(brdf.pdf(wo, DVec3::Z));
+        }
+    }
+    peak
+}
+
+/// The dual-paraboloid side a FIS material reads: the smallest power of two from 16 to 4096
+/// at which its densest sample (Ωs = 1/(N·[`pdf_peak`])) reads lod ≥ 0 even where level-0
+/// texels are largest (16/size² sr, at a half's centre): ½·log2(Ωs·size²/16) + bias ≥ 0.
+/// A finer chain's extra levels would never be read. 4096 for a delta BRDF.
+pub fn dp_size_for(brdf: &Brdf, samples: u32, bias: f64) -> u32 {
+    let peak = pdf_peak(brdf);
+    if !(peak.is_finite() && peak > 0.0) {
+        return 4096;
+    }
+    let side = 4.0 * (f64::from(samples.max(1)) * peak).sqrt() / bias.exp2();
+    (side.ceil().min(4096.0) as u32)
+        .next_power_of_two()
+        .clamp(16, 4096)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -201,5 +239,40 @@ mod tests {
             eprintln!("α {alpha}: mean ratio − 1 = {:+.3}%", 100.0 * bias);
             assert!(bias.abs() < 1e-2, "α {alpha}: {bias}");
         }
+    }
+
+    /// The chosen side is the smallest power of two at which the densest sample reads lod ≥ 0,
+    /// for lobes from broad to sharp; sharper lobes and more samples need finer maps.
+    #[test]
+    fn dp_size_is_the_smallest_that_keeps_lod_nonnegative() {
+        let lod = |brdf: &Brdf, n: u32, bias: f64, size: u32| {
+            let omega_s = 1.0 / (f64::from(n) * pdf_peak(brdf));
+            0.5 * (omega_s / (16.0 / f64::from(size * size))).log2() + bias
+        };
+        let ggx = |alpha: f64| Brdf::Ggx {
+            alpha,
+            correlated: false,
+        };
+        for (brdf, n) in [
+            (Brdf::Lambert, 16),
+            (ggx(0.6), 64),
+            (ggx(0.3), 64),
+            (ggx(0.05), 64),
+            (Brdf::Phong { n: 1000.0 }, 64),
+            (Brdf::Blinn { n: 200.0 }, 32),
+            (Brdf::Ward { ax: 0.05, ay: 0.3 }, 64),
+        ] {
+            for bias in [-0.5, 0.0, 1.0] {
+                let s = dp_size_for(&brdf, n, bias);
+                assert!(s.is_power_of_two() && (16..=4096).contains(&s));
+                assert!(lod(&brdf, n, bias, s) >= 0.0, "{brdf:?} {n} {bias}: {s}");
+                if s > 16 {
+                    assert!(lod(&brdf, n, bias, s / 2) < 0.0, "{brdf:?} {n} {bias}: {s}");
+                }
+            }
+        }
+        let g = |a: f64, n: u32| dp_size_for(&ggx(a), n, 0.0);
+        assert!(g(0.05, 64) > g(0.3, 64) && g(0.3, 64) > g(0.6, 64) && g(0.3, 256) > g(0.3, 16));
+        assert_eq!(dp_size_for(&Brdf::Mirror, 64, 0.0), 4096);
     }
 }

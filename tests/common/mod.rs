@@ -92,11 +92,30 @@ pub fn dump_pair(name: &str, actual: &envlight::EnvMap, expected: &envlight::Env
     eprintln!("wrote {}/{name}_{{actual,expected}}.exr", dir.display());
 }
 
-/// The float64 conversion of `env` to a dual paraboloid `size` a side, at the supersampling
-/// the GPU converter picks for it: the level 0 the GPU's MIP chains are tested against.
+/// The float64 conversion of `env` to a dual paraboloid `size` a side, as the GPU converter
+/// takes it (exact footprint areas from a lat-long where they serve, else its supersampling):
+/// the level 0 the GPU's MIP chains are tested against.
 #[allow(dead_code)]
 pub fn dp_f64(env: &envlight::EnvMap, size: u32) -> envlight::EnvMap {
     use envlight::math::Mapping;
+    let world_to_file = envlight::Orientation::default().world_to_file();
+    // As the converter: exact footprint areas where they serve, else samples.
+    if env.mapping == Mapping::LatLong
+        && envlight::math::convert::area_serves(
+            env.width,
+            env.height,
+            Mapping::DualParaboloid,
+            size,
+            world_to_file,
+        )
+    {
+        return envlight::math::convert::latlong_area(
+            env,
+            Mapping::DualParaboloid,
+            size,
+            world_to_file,
+        );
+    }
     let (w, h) = Mapping::DualParaboloid.extent_for_size(size);
     let ss = envlight::passes::Converter::supersampling(
         (env.mapping, env.width, env.height),
