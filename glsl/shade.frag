@@ -526,13 +526,26 @@ vec3 lights_irradiance(vec3 n) {
     return e;
 }
 
+// Which code this pipeline keeps (specialisation constant 0, set from the inputs a render
+// binds: bit t for technique t, FOOTPRINT_CODE for footprint lookups): the others' branches
+// fold away, and llvmpipe compiles a FIS-only shade in a fraction of the whole one's time.
+layout(constant_id = 0) const uint CODE = 0xffffffffu;
+
+bool has(uint bit) {
+    return (CODE & bit) != 0u;
+}
+
+bool has_tech(uint t) {
+    return has(1u << t);
+}
+
 void main() {
     uvec2 pix = uvec2(gl_FragCoord.xy);
     ivec3 q = ivec3(pix, 0);
     vec4 nrm = texelFetch(gbuf_normal, q, 0);
     vec3 v = texelFetch(gbuf_view, q, 0).xyz;
     if (nrm.w < 0.0) {
-        bool filtered = (pc.footprint & FOOTPRINT_BACKGROUND) != 0u;
+        bool filtered = has(FOOTPRINT_CODE) && (pc.footprint & FOOTPRINT_BACKGROUND) != 0u;
         out_color = vec4(filtered ? footprint_radiance(q.xy, -1.0, -v) : env_lookup(-v), 1.0);
         return;
     }
@@ -542,9 +555,9 @@ void main() {
     vec3 p = texelFetch(gbuf_position, q, 0).xyz;
     vec3 r = 2.0 * dot(v, n) * n - v;
     vec3 color;
-    if (tech == TECH_MC) {
+    if (has_tech(TECH_MC) && tech == TECH_MC) {
         color = texelFetch(mc_accum, q, 0).rgb / float(max(pc.mc_samples, 1u));
-    } else if (tech == TECH_SH) {
+    } else if (has_tech(TECH_SH) && tech == TECH_SH) {
         float y[SH_MAX_COEFFS];
         uint lmax = uint(ob.extra.z), off = uint(ob.extra.y);
         sh_basis(lmax, n, y);
@@ -554,23 +567,25 @@ void main() {
         // The residual's SH plus the light clusters' irradiance.
         if (ob.extra.w > 0.5) e += lights_irradiance(n);
         color = ob.albedo.rgb * e / PI;
-    } else if (tech == TECH_PREFILTERED) {
+    } else if (has_tech(TECH_PREFILTERED) && tech == TECH_PREFILTERED) {
         bool diffuse = uint(ob.brdf.x) == BRDF_LAMBERT;
         vec3 l = prefiltered_lookup(uint(ob.extra.y), int(ob.extra.z), diffuse ? n : r);
         // The residual's irradiance map plus the light clusters' irradiance.
         if (diffuse && ob.extra.w > 0.5) l += lights_irradiance(n);
         color = ob.albedo.rgb * (diffuse ? l / PI : l);
-    } else if (tech == TECH_SPLIT_SUM) {
+    } else if (has_tech(TECH_SPLIT_SUM) && tech == TECH_SPLIT_SUM) {
         color = ob.albedo.rgb * split_sum(ob, n, v, r);
-    } else if (tech == TECH_SH_BRDF) {
+    } else if (has_tech(TECH_SH_BRDF) && tech == TECH_SH_BRDF) {
         color = ob.albedo.rgb * sh_brdf(ob, n, v);
     } else if (tech == TECH_LOOKUP) {
         bool dark = pc.shadows != 0u && occluded(shadow_origin(p, n), r);
-        bool filtered = (pc.footprint & FOOTPRINT_MIRROR) != 0u;
+        bool filtered = has(FOOTPRINT_CODE) && (pc.footprint & FOOTPRINT_MIRROR) != 0u;
         vec3 l = filtered ? footprint_radiance(q.xy, nrm.w, r) : env_lookup(r);
         color = dark ? vec3(0.0) : ob.albedo.rgb * l;
-    } else {
+    } else if (has_tech(TECH_FIS) && tech == TECH_FIS) {
         color = ob.albedo.rgb * fis(ob, n, v, p, pix);
+    } else {
+        color = vec3(0.0);
     }
     out_color = vec4(color, 1.0);
 }

@@ -448,6 +448,9 @@ pub mod footprint {
     pub const BACKGROUND: u32 = 2;
     /// Push flag: the chain holds the residual; footprint lookups add the light texels.
     pub const LIGHTS: u32 = 4;
+    /// Bit of shade.frag's specialisation constant 0 (its code mask: bit t for technique t)
+    /// that keeps the footprint lookups' code.
+    pub const CODE: u32 = 1 << 16;
 }
 
 /// Workgroup size of the SH passes: one texel (or partial sum) per invocation.
@@ -1162,6 +1165,7 @@ pub fn generated_header() -> String {
     let _ = writeln!(s, "#define FOOTPRINT_MIRROR {}u", footprint::MIRROR);
     let _ = writeln!(s, "#define FOOTPRINT_BACKGROUND {}u", footprint::BACKGROUND);
     let _ = writeln!(s, "#define FOOTPRINT_LIGHTS {}u", footprint::LIGHTS);
+    let _ = writeln!(s, "#define FOOTPRINT_CODE {}u", footprint::CODE);
     let _ = writeln!(s, "#define FILTER_EDGE_CELLS {}u", filter_rule::EDGE_CELLS);
     let _ = writeln!(s, "#define FILTER_MAX_CELLS {}u", filter_rule::MAX_CELLS);
     let f = |x: f64| format!("{:?}", x as f32);

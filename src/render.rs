@@ -922,17 +922,22 @@ pub fn chain_of_texel_means(scene: &Scene) -> bool {
 }
 
 /// Which lookups of `scene` are footprint-filtered, given whether the render builds the
-/// dual-paraboloid chain and whether that chain holds the residual of extracted lights. Under
-/// `filter = "auto"` an orthographic camera's background reads the map itself: each of its
-/// pixels sees one direction, so there is no footprint to filter.
+/// dual-paraboloid chain and whether that chain holds the residual of extracted lights (the
+/// mirror flag only where a mirror is drawn, so that the shade pipeline keeps no footprint
+/// code it would not run). Under `filter = "auto"` an orthographic camera's background reads
+/// the map itself: each of its pixels sees one direction, so there is no footprint to filter.
 pub fn footprint_of(scene: &Scene, chain: bool, residual: bool) -> Footprint {
     let filter = scene.environment.filter;
     let ortho = matches!(
         scene.camera.projection,
         crate::math::camera::Projection::Orthographic { .. }
     );
+    let mirrors = scene
+        .objects
+        .iter()
+        .any(|o| matches!(o.material.technique(), Technique::Lookup));
     Footprint {
-        mirror: chain && filter != LookupFilter::Point,
+        mirror: chain && mirrors && filter != LookupFilter::Point,
         background: chain
             && (filter == LookupFilter::Footprint || (filter == LookupFilter::Auto && !ortho)),
         lights: chain && residual,

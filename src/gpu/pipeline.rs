@@ -98,13 +98,7 @@ impl Pipeline {
         let shared = &ctx.shared;
         let mut p = Pipeline::layouts(shared, shader, vk::ShaderStageFlags::COMPUTE)?;
         let module = shader_module(shared, shader)?;
-        let entries: Vec<_> = (0..spec.len() as u32)
-            .map(|i| vk::SpecializationMapEntry {
-                constant_id: i,
-                offset: 4 * i,
-                size: 4,
-            })
-            .collect();
+        let entries = spec_entries(spec);
         let data: &[u8] = bytemuck::cast_slice(spec);
         let spec_info = vk::SpecializationInfo::default()
             .map_entries(&entries)
@@ -143,6 +137,18 @@ impl Pipeline {
         frag: ShaderId,
         formats: &[vk::Format],
     ) -> Result<Pipeline> {
+        Pipeline::fullscreen_with(ctx, vert, frag, formats, &[])
+    }
+
+    /// [`Pipeline::fullscreen`] with the fragment shader's specialisation constants 0, 1, …
+    /// set to `spec`.
+    pub fn fullscreen_with(
+        ctx: &Context,
+        vert: ShaderId,
+        frag: ShaderId,
+        formats: &[vk::Format],
+        spec: &[u32],
+    ) -> Result<Pipeline> {
         let shared = &ctx.shared;
         assert!(vert.interface().bindings.is_empty() && vert.interface().push_size == 0);
         let mut p = Pipeline::layouts(shared, frag, vk::ShaderStageFlags::FRAGMENT)?;
@@ -155,15 +161,23 @@ impl Pipeline {
                 return Err(e);
             }
         };
+        let entries = spec_entries(spec);
+        let spec_info = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(bytemuck::cast_slice(spec));
+        let mut frag_stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::FRAGMENT)
+            .module(fm)
+            .name(c"main");
+        if !spec.is_empty() {
+            frag_stage = frag_stage.specialization_info(&spec_info);
+        }
         let stages = [
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::VERTEX)
                 .module(vm)
                 .name(c"main"),
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::FRAGMENT)
-                .module(fm)
-                .name(c"main"),
+            frag_stage,
         ];
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
         let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
@@ -441,4 +455,15 @@ impl Drop for DescriptorSet {
         unsafe { self.shared.device.destroy_descriptor_pool(self.pool, None) };
         self.shared.untrack();
     }
+}
+
+/// Map entries for specialisation constants 0, 1, … taken from consecutive u32s.
+fn spec_entries(spec: &[u32]) -> Vec<vk::SpecializationMapEntry> {
+    (0..spec.len() as u32)
+        .map(|i| vk::SpecializationMapEntry {
+            constant_id: i,
+            offset: 4 * i,
+            size: 4,
+        })
+        .collect()
 }
