@@ -230,7 +230,7 @@ fn bench_convert(cli: &Global, sizes: &[u32], reps: usize) -> Result<()> {
         "GPU time from timestamps, median of {reps} runs. 'copy' reads and writes every source texel \
          once: the floor. Source: the analytic sky (sun ~1e5 x zenith) as a lat-long.\n"
     );
-    println!("| source | conversion | output | ss | copy ms | convert ms | ratio to copy | power error |");
+    println!("| source | conversion | output | ss (or areas) | copy ms | convert ms | ratio to copy | power error |");
     println!("|---|---|---|---|---|---|---|---|");
     let conv = Converter::new(&ctx)?;
     let copy = CopyPass::new(&ctx)?;
@@ -265,9 +265,16 @@ fn bench_convert(cli: &Global, sizes: &[u32], reps: usize) -> Result<()> {
                 nearest: false,
             };
             let (ow, oh) = to.extent_for_size(size);
-            let ss = supersample.unwrap_or_else(|| {
-                Converter::supersampling((Mapping::LatLong, w, w / 2), (to, ow, oh))
-            });
+            // Exact footprint areas take no samples.
+            let ss = if conv.uses_area((Mapping::LatLong, w, w / 2), &opts) {
+                "areas".to_string()
+            } else {
+                supersample
+                    .unwrap_or_else(|| {
+                        Converter::supersampling((Mapping::LatLong, w, w / 2), (to, ow, oh))
+                    })
+                    .to_string()
+            };
             conv.run(&src, &opts)?;
             let mut ms = Vec::new();
             let mut power = 0.0;
