@@ -15,7 +15,7 @@ use crate::math::{sh, Mapping, Orientation};
 use crate::passes::gbuffer::{shape_record, target, GBuffer, GpuObject};
 use crate::passes::mc::{McEnv, McOptions};
 use crate::passes::sh_project::Subgroups;
-use crate::passes::shade::{Footprint, Rotation, ShadeInputs};
+use crate::passes::shade::{Footprint, Rotation, ShadeCode, ShadeInputs};
 use crate::passes::GpuLights;
 use crate::passes::ShBrdfProjector;
 use crate::passes::{
@@ -489,9 +489,30 @@ impl Renderer {
         .into_iter()
         .flatten()
         .collect();
+        // The shade pipeline builds on a second thread while the host extracts the lights.
+        let shade = pass(&self.shade, || Shade::with_subgroups(ctx, self.subgroups))?;
+        let code = ShadeCode {
+            fis: dp_passes.is_some(),
+            sh: sh_pass.is_some(),
+            prefiltered: brute.is_some(),
+            mc: needs(PassKind::MonteCarlo),
+            sh_brdf: brdf_pass.is_some(),
+            split_sum: needs(PassKind::SplitSum),
+            footprint: {
+                let f = footprint_of(scene, dp_passes.is_some(), false);
+                f.mirror || f.background
+            },
+        };
+        let (each, extract_ms, built) = std::thread::scope(|s| {
+            let build = s.spawn(|| shade.prepare_code(&code));
+            let started = std::time::Instant::now();
+            let each = extract_each(env, &asked);
+            let ms = 1e3 * started.elapsed().as_secs_f64();
+            (each, ms, build.join())
+        });
+        built.map_err(|_| Error::Invalid("building the shade pipeline panicked".into()))??;
         let lights_started = std::time::Instant::now();
-        let mut each = extract_each(env, &asked).into_iter();
-        let extract_ms = 1e3 * lights_started.elapsed().as_secs_f64();
+        let mut each = each.into_iter();
         let chain_ex = dp_lights
             .then(|| each.next())
             .flatten()
@@ -510,12 +531,8 @@ impl Renderer {
             file_to_world,
             finest,
         )?;
-        let lights_ms = (!asked.is_empty()).then(|| {
-            [
-                extract_ms,
-                1e3 * lights_started.elapsed().as_secs_f64() - extract_ms,
-            ]
-        });
+        let lights_ms =
+            (!asked.is_empty()).then(|| [extract_ms, 1e3 * lights_started.elapsed().as_secs_f64()]);
         let residual_map = |name| GpuEnvMap::new(ctx, name, env.mapping, env.width, env.height);
         let chain_residual = match &chain_ex {
             Some(ex) => Some((ex, residual_map("environment residual")?)),

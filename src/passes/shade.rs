@@ -73,16 +73,49 @@ impl Footprint {
 /// a FIS shade in 85–90 ms rather than the whole one's 260–280 ms (an object whose
 /// technique's inputs are missing would draw black).
 pub fn code_mask(inputs: &ShadeInputs<'_>) -> u32 {
+    code_bits(&ShadeCode {
+        fis: inputs.dp.is_some(),
+        sh: inputs.sh.is_some(),
+        prefiltered: inputs.prefiltered.is_some(),
+        mc: inputs.mc.is_some(),
+        sh_brdf: inputs.brdf_sh.is_some(),
+        split_sum: inputs.split.is_some(),
+        footprint: inputs.footprint.mirror || inputs.footprint.background,
+    })
+}
+
+/// Which inputs a draw will bind, known before they exist (to build its pipeline early with
+/// [`Shade::prepare_code`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ShadeCode {
+    /// The dual-paraboloid chain (FIS).
+    pub fis: bool,
+    /// SH coefficients.
+    pub sh: bool,
+    /// Prefiltered maps.
+    pub prefiltered: bool,
+    /// The Monte Carlo accumulation.
+    pub mc: bool,
+    /// SH-BRDF tables.
+    pub sh_brdf: bool,
+    /// The split-sum chain.
+    pub split_sum: bool,
+    /// Footprint-filtered mirrors or background.
+    pub footprint: bool,
+}
+
+/// The code mask of a draw with `code`'s inputs (see [`code_mask`]).
+pub fn code_bits(code: &ShadeCode) -> u32 {
     use crate::abi::brdf::technique as t;
     let bit = |on: bool, tech: u32| (on as u32) << tech;
     bit(true, t::LOOKUP)
-        | bit(inputs.dp.is_some(), t::FIS)
-        | bit(inputs.sh.is_some(), t::SH)
-        | bit(inputs.prefiltered.is_some(), t::PREFILTERED)
-        | bit(inputs.mc.is_some(), t::MC)
-        | bit(inputs.brdf_sh.is_some(), t::SH_BRDF)
-        | bit(inputs.split.is_some(), t::SPLIT_SUM)
-        | if inputs.footprint.mirror || inputs.footprint.background {
+        | bit(code.fis, t::FIS)
+        | bit(code.sh, t::SH)
+        | bit(code.prefiltered, t::PREFILTERED)
+        | bit(code.mc, t::MC)
+        | bit(code.sh_brdf, t::SH_BRDF)
+        | bit(code.split_sum, t::SPLIT_SUM)
+        | if code.footprint {
             crate::abi::footprint::CODE
         } else {
             0
@@ -153,9 +186,10 @@ impl Shade {
         Ok(p)
     }
 
-    /// Builds the pipeline a draw with `inputs` will take now rather than at that draw.
-    pub fn prepare(&self, inputs: &ShadeInputs<'_>) -> Result<()> {
-        self.pipeline(code_mask(inputs)).map(|_| ())
+    /// Builds the pipeline a draw with `code`'s inputs will take now rather than at that draw
+    /// (from another thread while the host works, say).
+    pub fn prepare_code(&self, code: &ShadeCode) -> Result<()> {
+        self.pipeline(code_bits(code)).map(|_| ())
     }
 
     /// Records the shading of `gbuf` into `frame` (a colour target of the G-buffer's size,
