@@ -140,7 +140,9 @@ void main() {
         float d = first - last;
         float closed = last + (d - wf * round(d / wf));
         if (abs(closed - first) > 0.5 * wf) {
-            float zp = sign(ds[0].y);
+            // A paraboloid texel can hold only its own half's pole (the other is at infinity
+            // in (s, t)), and its boundary may lie past the rim, in the other hemisphere.
+            float zp = DST_MAPPING == MAPPING_DUAL_PARABOLOID ? (face == 0u ? 1.0 : -1.0) : sign(ds[0].y);
             poly[npoly++] = vec2(closed, ds[0].y);
             poly[npoly++] = vec2(closed, zp);
             poly[npoly++] = vec2(first, zp);
