@@ -613,6 +613,17 @@ fn suns_at_poles_and_seam(w: u32) -> EnvMap {
     m
 }
 
+/// The options of a conversion to `to` at `size` with orientation `o` and the defaults else.
+fn default_opts(to: Mapping, size: u32, o: Orientation) -> ConvertOptions {
+    ConvertOptions {
+        to,
+        size,
+        orientation: o,
+        supersample: None,
+        nearest: false,
+    }
+}
+
 /// Lat-long to cube and dual paraboloid by exact footprint areas, on the GPU against its
 /// float64 twin (`math::convert::latlong_area`, the same polygons and band walks), at even
 /// and odd sizes (a pole on a corner or inside a texel) and turned and flipped. What differs
@@ -651,14 +662,7 @@ fn area_conversion_matches_its_float64_twin() {
             (Mapping::DualParaboloid, 2, Orientation::default()),
             (Mapping::Cube, 1, Orientation::default()),
         ] {
-            let opts = ConvertOptions {
-                to,
-                size,
-                orientation: o,
-                supersample: None,
-                nearest: false,
-            };
-            assert!(conv.uses_area((Mapping::LatLong, 96, 48), &opts));
+            assert!(conv.uses_area((Mapping::LatLong, 96, 48), &default_opts(to, size, o)));
             let gpu = convert(&ctx, &conv, &src, to, size, o);
             let cpu = envlight::math::convert::latlong_area(&src, to, size, o.world_to_file());
             let mut worst = 0.0f64;
@@ -680,13 +684,7 @@ fn area_conversion_matches_its_float64_twin() {
             assert!(worst <= 5e-5, "{to:?} {size}: GPU vs f64 {worst:e}");
         }
         // A paraboloid upside down (its axis against the lat-long's) is sampled.
-        let opts = ConvertOptions {
-            to: Mapping::DualParaboloid,
-            size: 8,
-            orientation: turned(true),
-            supersample: None,
-            nearest: false,
-        };
+        let opts = default_opts(Mapping::DualParaboloid, 8, turned(true));
         assert!(!conv.uses_area((Mapping::LatLong, 96, 48), &opts));
     }
     common::finish(ctx);
@@ -719,14 +717,7 @@ fn area_conversion_conserves_power() {
             (Mapping::Cube, 16, Orientation::default(), 1.5e-4),
             (Mapping::DualParaboloid, 32, Orientation::default(), 1.5e-4),
         ] {
-            let opts = ConvertOptions {
-                to,
-                size,
-                orientation: o,
-                supersample: None,
-                nearest: false,
-            };
-            assert!(conv.uses_area((Mapping::LatLong, 1024, 512), &opts));
+            assert!(conv.uses_area((Mapping::LatLong, 1024, 512), &default_opts(to, size, o)));
             let out = convert(&ctx, &conv, &src, to, size, o);
             let (p, q) = (out.power(), src.power());
             let worst = (0..3)
