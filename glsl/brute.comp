@@ -97,14 +97,21 @@ uvec2 tile_grid() {
     return (pc.src_size + BRUTE_TILE - 1u) / BRUTE_TILE;
 }
 
-// The texel in slot s of tile `tile`, or -1 where the tile overhangs the map's edge.
-int slot_texel(uint tile, uint s) {
+// Tile `tile`'s first texel (x, y) and its layer: integer divisions by values known only at
+// run time, which llvmpipe takes lane by lane, so once a tile rather than once a texel.
+uvec3 tile_origin(uint tile) {
     uvec2 g = tile_grid();
     uint per_layer = g.x * g.y;
-    uint layer = tile / per_layer, r = tile % per_layer;
-    uvec2 q = uvec2(r % g.x, r / g.x) * BRUTE_TILE + uvec2(s % BRUTE_TILE, s / BRUTE_TILE);
+    uint r = tile % per_layer;
+    return uvec3(uvec2(r % g.x, r / g.x) * BRUTE_TILE, tile / per_layer);
+}
+
+// The texel in slot s of the tile at `origin` (tile_origin), or -1 where the tile overhangs
+// the map's edge.
+int slot_texel(uvec3 origin, uint s) {
+    uvec2 q = origin.xy + uvec2(s % BRUTE_TILE, s / BRUTE_TILE);
     if (any(greaterThanEqual(q, pc.src_size))) return -1;
-    return int((layer * pc.src_size.y + q.y) * pc.src_size.x + q.x);
+    return int((origin.z * pc.src_size.y + q.y) * pc.src_size.x + q.x);
 }
 
 // Output texels in all layers.
@@ -161,9 +168,10 @@ void main() {
     uvec2 g = tile_grid();
     if (tile >= g.x * g.y * pc.src_layers) return;
     // Axis: the mean of the texel centres; radius: the farthest texel cone edge from it.
+    uvec3 origin = tile_origin(tile);
     vec3 sum = vec3(0.0);
     for (uint s = 0u; s < BRUTE_TILE * BRUTE_TILE; s++) {
-        int t = slot_texel(tile, s);
+        int t = slot_texel(origin, s);
         if (t >= 0 && cones[t].w <= 1.0) sum += cones[t].xyz;
     }
     if (dot(sum, sum) == 0.0) {
@@ -173,7 +181,7 @@ void main() {
     vec3 axis = normalize(sum);
     float radius = 0.0;
     for (uint s = 0u; s < BRUTE_TILE * BRUTE_TILE; s++) {
-        int t = slot_texel(tile, s);
+        int t = slot_texel(origin, s);
         if (t < 0 || cones[t].w > 1.0) continue;
         vec4 c = cones[t];
         float d = clamp(dot(axis, c.xyz), -1.0, 1.0);
@@ -444,6 +452,11 @@ float tilted_mean(vec3 axis, float n, float ln_scale, uint t) {
     return tilted_shape(axis, n, ln_scale, shapes[3u * t].xyz, shapes[3u * t + 1u].xyz, shapes[3u * t + 2u].xyz);
 }
 
+// The cosine below which the lobe is under its cut-off, exp(FILTER_LOG_CUTOFF / n) (0 for
+// n ≤ 1, whose lobes have none): set once per invocation in main, so that the per-texel test
+// is a comparison rather than a logarithm.
+float x_cut = 0.0;
+
 // Whether the rule skips everything inside cone c (axis, cos of radius; w > 1: empty): the
 // largest cosine to the axis over the cone, cos(θc − ρ), is at or below the horizon, or the
 // lobe there is below the cutoff. texel_weight makes the same two tests per texel.
@@ -453,7 +466,7 @@ bool cone_skipped(vec3 axis, float n, vec4 c) {
     float sin_rho = sqrt(max(0.0, (1.0 - c.w) * (1.0 + c.w)));
     float sin_c = sqrt(max(0.0, (1.0 - x) * (1.0 + x)));
     float x_max = x >= c.w ? 1.0 : x * c.w + sin_c * sin_rho;
-    return x_max <= 0.0 || (n > 1.0 && n * log(x_max) < FILTER_LOG_CUTOFF);
+    return x_max <= 0.0 || x_max < x_cut;
 }
 
 const int RULE_SKIP = 0, RULE_CENTRE = 1, RULE_TILTED = 2, RULE_CELLS = 3;
@@ -470,7 +483,7 @@ int texel_rule(vec3 axis, float n, vec4 cone, bool regular, out uint cells) {
     float x_max = x >= cos_rho ? 1.0 : x * cos_rho + sin_c * sin_rho;
     float x_min = x * cos_rho - sin_c * sin_rho;
     if (x_max <= 0.0) return RULE_SKIP;
-    if (n > 1.0 && n * log(x_max) < FILTER_LOG_CUTOFF) return RULE_SKIP;
+    if (x_max < x_cut) return RULE_SKIP;
     float rho2 = 2.0 * (1.0 - cos_rho);
     bool straddles = x_min < 0.0;
     if (!straddles && n * rho2 < FILTER_CENTRE_LIMIT) return RULE_CENTRE;
@@ -549,6 +562,7 @@ void main() {
     vec3 axis = coord_to_dir(DST_MAPPING, oc);
     float n = pc.exponent == 0.0 ? 1.0 : pc.exponent;
     float ln_scale = pc.exponent == 0.0 ? 0.0 : log((n + 1.0) / TAU);
+    x_cut = n > 1.0 ? exp(FILTER_LOG_CUTOFF / n) : 0.0;
     uint o = 2u * (part * dst_texels() + (id.z * pc.dst_size.y + id.y) * pc.dst_size.x + id.x);
     precise vec3 sum = vec3(0.0);
     precise vec3 comp = vec3(0.0);
@@ -561,8 +575,9 @@ void main() {
         if (cone_skipped(axis, n, tiles[tile])) continue;
         uint first = max(begin, tile * per_tile) - tile * per_tile;
         uint last = min(end, (tile + 1u) * per_tile) - tile * per_tile;
+        uvec3 origin = tile_origin(tile);
         for (uint s = first; s < last; s++) {
-            int ti = slot_texel(tile, s);
+            int ti = slot_texel(origin, s);
             if (ti < 0) continue;
             add_texel(axis, n, ln_scale, uint(ti), sum, comp);
         }
