@@ -125,25 +125,16 @@ pub fn fis_dp_size(scene: &Scene, env: &EnvMap) -> u32 {
         return s;
     }
     let full = default_dp_size(env);
-    let filter = scene.environment.filter;
-    let ortho = matches!(
-        scene.camera.projection,
-        crate::math::camera::Projection::Orthographic { .. }
-    );
-    let others = scene.objects.iter().any(|o| match o.material.technique() {
-        Technique::SplitSum => true,
-        Technique::Lookup => filter != LookupFilter::Point,
-        _ => false,
-    });
-    let background = match filter {
-        LookupFilter::Point => false,
-        LookupFilter::Footprint => true,
-        LookupFilter::Auto => !ortho,
-    };
+    // The footprint lookups a chain would serve (mirrors, the background) read its finest levels.
+    let footprint = footprint_of(scene, true, false);
+    let split_sum = scene
+        .objects
+        .iter()
+        .any(|o| matches!(o.material.technique(), Technique::SplitSum));
     let Ok(world_to_file) = scene.environment.orientation().checked_world_to_file() else {
         return full;
     };
-    if others || background || env.mapping != Mapping::LatLong {
+    if split_sum || footprint.mirror || footprint.background || env.mapping != Mapping::LatLong {
         return full;
     }
     let lobes = scene
@@ -883,6 +874,11 @@ impl Renderer {
             lights: lights.as_ref(),
             footprint: footprint_of(scene, dp.is_some(), dp_lights),
         };
+        // The pipeline built beside the extraction is the one the draw takes.
+        debug_assert_eq!(
+            crate::passes::shade::code_mask(&inputs),
+            crate::passes::shade::code_bits(&code)
+        );
         let mut marks = Marks(Vec::new());
         let (readback, t) = ctx.run("rendering: shading", |rec| {
             marks.record(rec, PassKind::Shade, |rec| {
