@@ -131,9 +131,7 @@ void main() {
             c.layer = id.z;
             c.uv = (vec2(id.xy) + 0.5) / vec2(pc.dst_size);
             if (DST_MAPPING == MAPPING_DUAL_PARABOLOID) {
-                vec2 st = 2.0 * c.uv - 1.0;
-                st *= (1.0 - RIM_PULL_IN) / max(length(st), 1.0 - RIM_PULL_IN);
-                c.uv = 0.5 * (st + 1.0);
+                c.uv = 0.5 * (rim_pulled(2.0 * c.uv - 1.0) + 1.0);
             }
             result = sample_src(coord_to_dir(DST_MAPPING, c));
         }

@@ -72,9 +72,7 @@ bool before(vec2 a, vec2 b) { return a.x < b.x || (a.x == b.x && a.y <= b.y); }
 void store_rim(uvec3 id) {
     Coord c;
     c.layer = id.z;
-    vec2 st = 2.0 * ((vec2(id.xy) + 0.5) / vec2(pc.dst_size)) - 1.0;
-    st *= (1.0 - RIM_PULL_IN) / max(length(st), 1.0 - RIM_PULL_IN);
-    c.uv = 0.5 * (st + 1.0);
+    c.uv = 0.5 * (rim_pulled(2.0 * ((vec2(id.xy) + 0.5) / vec2(pc.dst_size)) - 1.0) + 1.0);
     vec3 d = coord_to_dir(DST_MAPPING, c);
     d = vec3(dot(pc.world_to_file[0].xyz, d), dot(pc.world_to_file[1].xyz, d),
              dot(pc.world_to_file[2].xyz, d));

@@ -140,6 +140,12 @@ float footprint_weight(uint m, vec2 uv) {
     return density(m, uv);
 }
 
+// A paraboloid half's (s, t) pulled onto its disc, just inside the rim (RIM_PULL_IN), where it
+// lies outside; unchanged inside (twin: math::convert's rim_nearest).
+vec2 rim_pulled(vec2 st) {
+    return st * ((1.0 - RIM_PULL_IN) / max(length(st), 1.0 - RIM_PULL_IN));
+}
+
 // Whether texel (i, j) of a w x h layer is ever read (DESIGN.md: angular texels whose centre is
 // outside the disc hold captions; paraboloid texels that overlap the disc hold its mean).
 bool texel_in_domain(uint m, uvec2 size, ivec2 p) {

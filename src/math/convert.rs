@@ -161,14 +161,11 @@ pub fn convert_with(
                 } else {
                     // A paraboloid texel whose samples all miss its disc holds its own half's
                     // rim nearest its centre (as glsl/convert.comp).
-                    let mut c = Mapping::texel_center(w, h, layer, i, j);
-                    if to == Mapping::DualParaboloid {
-                        let (s, t) = (2.0 * c.u - 1.0, 2.0 * c.v - 1.0);
-                        let r = 1.0 - crate::abi::constants::RIM_PULL_IN;
-                        let k = r / (s * s + t * t).sqrt().max(r);
-                        c.u = 0.5 * (s * k + 1.0);
-                        c.v = 0.5 * (t * k + 1.0);
-                    }
+                    let c = if to == Mapping::DualParaboloid {
+                        rim_nearest(w, h, layer, i, j)
+                    } else {
+                        Mapping::texel_center(w, h, layer, i, j)
+                    };
                     texels.push(read(world_to_file * to.coord_to_dir(c)).map(|x| x as f32));
                 }
             }
@@ -260,7 +257,9 @@ pub fn latlong_area(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3) 
     EnvMap::new(to, ow, oh, texels)
 }
 
-/// The coordinate on its own half's rim nearest the centre of paraboloid texel (i, j).
+/// The coordinate on its own half's rim nearest the centre of paraboloid texel (i, j), pulled
+/// in by `RIM_PULL_IN` (glsl/include/mappings.glsl's rim_pulled), or the centre where it is
+/// inside the disc.
 fn rim_nearest(w: u32, h: u32, layer: u32, i: u32, j: u32) -> Coord {
     let mut c = Mapping::texel_center(w, h, layer, i, j);
     let (s, t) = (2.0 * c.u - 1.0, 2.0 * c.v - 1.0);
