@@ -116,7 +116,7 @@ int slot_texel(uvec3 origin, uint s) {
 
 // Output texels in all layers.
 uint dst_texels() {
-    return pc.dst_size.x * pc.dst_size.y * (DST_MAPPING == MAPPING_CUBE ? 6u : 1u);
+    return pc.dst_size.x * pc.dst_size.y * mapping_layers(DST_MAPPING);
 }
 
 // Kahan summation, so a sun 1e5 times the sky does not swamp the sum.

@@ -178,7 +178,8 @@ fn large_sources_are_summed_whole() {
 /// Small outputs split the source among parts, each summed by its own invocation, then added
 /// per texel: the split may change float rounding only. A sky with a sun 5·10⁴ × the zenith,
 /// filtered into a 2² cube (24 texels: the default target of 65 536 invocations makes ~2 700
-/// parts) without a split, by default, and with 16× the default: the sums agree to 2e-6
+/// parts) and a 2² dual paraboloid (its two halves' parts must not overlap) without a split,
+/// by default, and with 16× the default: the sums agree to 2e-6
 /// relative (compensated f32 sums of the same terms grouped otherwise, ~1e-7), and each is
 /// within 1e-4 of the float64 twin (the bound of the convolution test above).
 #[test]
@@ -188,13 +189,14 @@ fn source_split_changes_rounding_only() {
         let mut pass = BruteFilter::new(&ctx).unwrap();
         let sky = Sky::default();
         let map = EnvMap::from_fn(Mapping::LatLong, 128, 64, 2, |d| sky.radiance(d));
-        let target = FilterTarget {
-            to: Mapping::Cube,
-            size: 2,
-        };
         let fine = filter::Prepared::new(&map, DMat3::IDENTITY);
-        for kernel in [Kernel::Cosine, Kernel::Phong { n: 30.0 }] {
-            let exact = at_centres(Mapping::Cube, 2, 2, |d| fine.convolve(kernel, d));
+        for (to, kernel) in [
+            (Mapping::Cube, Kernel::Cosine),
+            (Mapping::Cube, Kernel::Phong { n: 30.0 }),
+            (Mapping::DualParaboloid, Kernel::Phong { n: 30.0 }),
+        ] {
+            let target = FilterTarget { to, size: 2 };
+            let exact = at_centres(to, 2, 2, |d| fine.convolve(kernel, d));
             let mut outs = Vec::new();
             for invocations in [
                 1,
@@ -204,16 +206,19 @@ fn source_split_changes_rounding_only() {
                 pass.set_target_invocations(invocations);
                 let out = brute_gpu(&ctx, &pass, &map, kernel, target);
                 let vs_twin = worst_relative(&out, &exact);
-                eprintln!("{kernel:?}, {invocations} invocations: twin {vs_twin:.2e}");
-                assert!(vs_twin < 1e-4, "{kernel:?} {invocations}: {vs_twin:e}");
+                eprintln!("{to:?} {kernel:?}, {invocations} invocations: twin {vs_twin:.2e}");
+                assert!(
+                    vs_twin < 1e-4,
+                    "{to:?} {kernel:?} {invocations}: {vs_twin:e}"
+                );
                 outs.push(out);
             }
             for other in &outs[1..] {
                 let one: Vec<[f64; 3]> =
                     outs[0].texels.iter().map(|t| t.map(|c| c as f64)).collect();
                 let apart = worst_relative(other, &one);
-                eprintln!("{kernel:?}: split against one sum {apart:.2e}");
-                assert!(apart < 2e-6, "{kernel:?}: {apart:e}");
+                eprintln!("{to:?} {kernel:?}: split against one sum {apart:.2e}");
+                assert!(apart < 2e-6, "{to:?} {kernel:?}: {apart:e}");
             }
         }
     }

@@ -140,6 +140,11 @@ float footprint_weight(uint m, vec2 uv) {
     return density(m, uv);
 }
 
+// Layers of a map of mapping m (twin of Mapping::layers).
+uint mapping_layers(uint m) {
+    return m == MAPPING_CUBE ? 6u : (m == MAPPING_DUAL_PARABOLOID ? 2u : 1u);
+}
+
 // A paraboloid half's (s, t) pulled onto its disc, just inside the rim (RIM_PULL_IN), where it
 // lies outside; unchanged inside (twin: math::convert's rim_nearest).
 vec2 rim_pulled(vec2 st) {
