@@ -3,7 +3,9 @@
 // - LOOKUP: the mirror: the mean over the pixel's footprint from the dual-paraboloid chain
 //   (plus the light texels it covers), or one nearest-texel lookup of the reflected direction;
 // - SH: albedo·E(n)/π from SH irradiance coefficients (R&H 2001), clamped at 0;
-// - PREFILTERED: a prefiltered lat-long map (#3), irradiance by n or Phong by r, bilinear;
+// - PREFILTERED: a prefiltered lat-long map (#3), irradiance by n or Phong by r, bilinear
+//   (with lights extracted: of the residual, plus the light clusters' irradiance or the light
+//   texels under the Phong BRDF);
 // - FIS: filtered importance sampling (Colbert & Křivánek 2007): N Hammersley samples of the
 //   BRDF, each read from the dual-paraboloid MIP chain at lod ½·log2(Ωs/Ωp) + bias;
 // - MC: the mean the Monte Carlo pass accumulated;
@@ -276,15 +278,14 @@ vec3 prefiltered_lookup(uint off, int w, vec3 d) {
 
 // The light texels under the BRDF by their tree (math::light_tree::LightTree::sum_brdf): a
 // node taken whole (light_tree_whole) by the BRDF's mean over its four sigma points, other
-// leaves' texels one by one (math::lights::light_sum_brdf's rule); shadow rays along each
-// direction evaluated.
+// leaves' texels one by one (math::lights::light_sum_brdf's rule); with `shadows`, shadow
+// rays along each direction evaluated.
 float brdf_eval_world(Brdf b, vec3 wo, vec3 t, vec3 bt, vec3 n, vec3 d) {
     return brdf_eval_cos(b, wo, vec3(dot(d, t), dot(d, bt), dot(d, n)));
 }
 
 vec3 fis_lights(Brdf b, vec3 wo, vec3 t, vec3 bt, vec3 n, vec3 r, float scale, vec3 origin,
-                float allowance) {
-    bool shadows = pc.shadows != 0u;
+                float allowance, bool shadows) {
     vec3 sum = vec3(0.0);
     // One item per iteration, a texel of the current leaf or a node, each at most four
     // weighted directions, so that lanes walking different paths run one short body.
@@ -386,7 +387,8 @@ vec3 fis(Object ob, vec3 n, vec3 v, vec3 p, uvec2 pix) {
     // A tree node may err by TREE_BUDGET of the estimate so far (math::light_tree::brdf_slack).
     if (ob.extra.y > 0.5) {
         float allowance = LIGHT_TREE_BUDGET * dot(sum, LUMINANCE) * max(wo.z, ob.extra.z);
-        sum += fis_lights(b, wo, t, bt, n, 2.0 * dot(v, n) * n - v, ob.extra.z, origin, allowance);
+        sum += fis_lights(b, wo, t, bt, n, 2.0 * dot(v, n) * n - v, ob.extra.z, origin, allowance,
+                          pc.shadows != 0u);
     }
     return sum;
 }
@@ -570,8 +572,22 @@ void main() {
     } else if (has_tech(TECH_PREFILTERED) && tech == TECH_PREFILTERED) {
         bool diffuse = uint(ob.brdf.x) == BRDF_LAMBERT;
         vec3 l = prefiltered_lookup(uint(ob.extra.y), int(ob.extra.z), diffuse ? n : r);
-        // The residual's irradiance map plus the light clusters' irradiance.
-        if (diffuse && ob.extra.w > 0.5) l += lights_irradiance(n);
+        if (ob.extra.w > 0.5) {
+            if (diffuse) {
+                // The residual's irradiance map plus the light clusters' irradiance.
+                l += lights_irradiance(n);
+            } else {
+                // The residual's Phong map plus the light texels under the Phong BRDF itself
+                // (its horizon clipped, unshadowed as the map is), a node allowed
+                // TREE_BUDGET of the map's value (extra.x: the lobe's scale, 1/√n).
+                Brdf b = Brdf(uint(ob.brdf.x), ob.brdf.y, ob.brdf.z);
+                vec3 t, bt;
+                shading_frame(n, t, bt);
+                vec3 wo = local_view(v, t, bt, n);
+                float allowance = LIGHT_TREE_BUDGET * dot(l, LUMINANCE) * max(wo.z, ob.extra.x);
+                l += fis_lights(b, wo, t, bt, n, r, ob.extra.x, p, allowance, false);
+            }
+        }
         color = ob.albedo.rgb * (diffuse ? l / PI : l);
     } else if (has_tech(TECH_SPLIT_SUM) && tech == TECH_SPLIT_SUM) {
         color = ob.albedo.rgb * split_sum(ob, n, v, r);

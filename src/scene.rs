@@ -58,9 +58,10 @@ pub struct Environment {
     /// Light extraction ([`crate::math::lights`]): with `extract`, SH irradiance and
     /// prefiltered diffuse materials shade by the residual's SH or irradiance map plus the
     /// light clusters' exact irradiance (a deeper extraction of their own,
-    /// `diffuse_light_ratio`), and FIS, split-sum and footprint lookups read the residual's
-    /// chain plus the light texels; `none` uses the whole map everywhere. Prefiltered Phong
-    /// maps, SH-BRDF and MC do not use the lights yet.
+    /// `diffuse_light_ratio`), FIS, split-sum and footprint lookups read the residual's
+    /// chain plus the light texels, and prefiltered Phong maps are the residual's plus the
+    /// light texels under the Phong BRDF; `none` uses the whole map everywhere. SH-BRDF and
+    /// MC do not use the lights.
     #[serde(default)]
     pub lights: LightsMode,
     /// FIS, split-sum and footprint lookups: a texel is a light texel above this many times

@@ -276,10 +276,13 @@ fn brute_force_of_every_hard_map_matches_float64() {
 /// Every technique renders a 10² unit sphere, rim pixels at grazing incidence included, on
 /// every hard map. Output is finite and non-negative; black stays black; no pixel of a
 /// deterministic technique exceeds the brightest texel (albedo 1, energy-conserving lobes,
-/// normalised filters); on a 1×1 map (a constant environment) each pixel is the BRDF's
-/// albedo times the constant: within 2e-3 for FIS at 4096 samples and SH (the furnace test
-/// measures FIS's estimator error), 6e-3 for the brute-force prefiltered map (its rule on one
-/// texel spanning the sphere: 4.3e-3 measured on a 1×1 lat-long, the same in float64), and
+/// normalised filters; by 1e-3, the brute-force prefilter by its furnace error below); on a
+/// 1×1 map (a constant environment) each pixel is the BRDF's albedo (1 for a prefiltered
+/// map, which ignores the horizon) times the constant: within 2e-3 for FIS at 4096 samples
+/// and SH (the furnace test measures FIS's estimator error), 6e-3 for the brute-force
+/// irradiance map (its rule on one texel spanning the sphere: 4.3e-3 measured on a 1×1
+/// lat-long, the same in float64) and 1.5e-2 for a Phong 64 map (1.2e-2 on a 1×1 angular
+/// map, at the rule's limit n·ρ² = 256), and
 /// 0.15 for 256 Monte Carlo samples (4.3e-2 measured, worst of ~60 pixels). Maps too coarse
 /// for SH at an order, or for a Phong lobe's prefilter, are refused with a message.
 #[test]
@@ -293,6 +296,8 @@ fn every_technique_on_every_hard_map() {
             (Brdf::Lambert, Technique::Sh { order: 8 }),
             (Brdf::Lambert, Technique::Prefiltered { size: 8 }),
             (Brdf::Phong { n: 1e6 }, Technique::Prefiltered { size: 8 }),
+            // Wide enough for the light texels: the residual's map plus the lights.
+            (Brdf::Phong { n: 64.0 }, Technique::Prefiltered { size: 8 }),
             (
                 Brdf::Ggx {
                     alpha: 1e-7,
@@ -354,6 +359,16 @@ fn every_technique_on_every_hard_map() {
                 let r = render(&ctx, &sc, &c.map).unwrap_or_else(|e| panic!("{what}: {e}"));
                 finite_nonnegative(&what, &r.frame.texels);
                 let mc = matches!(technique, Technique::Mc { .. });
+                // The brute-force rule on one texel spanning the sphere: 4.3e-3 measured for
+                // the cosine (1×1 lat-long), the same in its float64 twin; 1.2e-2 for Phong
+                // 64 on a 1×1 angular map, where n·ρ² reaches the rule's limit (256: cells
+                // two lobe widths wide; 4e-4 and less on the other mappings). It may exceed
+                // the brightest texel by as much.
+                let rule = match (technique, kind) {
+                    (Technique::Prefiltered { .. }, Brdf::Phong { .. }) => 1.5e-2,
+                    (Technique::Prefiltered { .. }, _) => 6e-3,
+                    _ => 1e-3,
+                };
                 let mut worst = 0.0f64;
                 for (k, px) in r.frame.texels.iter().enumerate() {
                     let (i, j) = (k as u32 % cam.width, k as u32 / cam.width);
@@ -364,7 +379,7 @@ fn every_technique_on_every_hard_map() {
                     if !mc {
                         for ch in px {
                             assert!(
-                                *ch as f64 <= top * 1.001,
+                                *ch as f64 <= top * (1.0 + rule),
                                 "{what}: pixel ({i}, {j}) = {px:?} above the brightest texel {top}"
                             );
                         }
@@ -379,16 +394,18 @@ fn every_technique_on_every_hard_map() {
                     if hit.margin < 1e-3 {
                         continue;
                     }
+                    // A prefiltered Phong map integrates the whole lobe, the horizon ignored
+                    // (Miller & Hoffman): its albedo is 1 at every view.
+                    let whole_lobe = matches!(technique, Technique::Prefiltered { .. });
                     let albedo = match kind {
                         Brdf::Mirror | Brdf::Lambert => 1.0,
+                        Brdf::Phong { .. } if whole_lobe => 1.0,
                         _ => kind.albedo(local_view(&Frame::new(hit.normal), -d)),
                     };
                     let want = albedo * k[1] as f64;
                     let tol = match technique {
                         Technique::Mc { .. } => 0.15,
-                        // The brute-force rule on one texel spanning the sphere: 4.3e-3
-                        // measured (1×1 lat-long), the same in its float64 twin.
-                        Technique::Prefiltered { .. } => 6e-3,
+                        Technique::Prefiltered { .. } => rule,
                         _ => 2e-3,
                     };
                     let e = (px[1] as f64 - want).abs() / k[1] as f64;
