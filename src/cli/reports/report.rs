@@ -38,11 +38,13 @@ pub struct ReportArgs {
     reference: Option<u32>,
     /// Instead: issue #10's accuracy table (table.md, table.csv, error_maps.png): five
     /// probes, diffuse by SH 2 and 8 and prefiltered, GGX α 0.05 to 0.6 by FIS 16/64/256
-    /// (sequence rotation off and on) and the mirror, with light extraction and without,
-    /// per-pixel errors against the reference (default size 128, reference 2 × 4096 spp)
+    /// (sequence rotation off and on), Phong 64 prefiltered and the mirror, with light
+    /// extraction and without, per-pixel errors against the reference (default size 128,
+    /// reference 2 × 4096 spp)
     #[arg(long)]
     table: bool,
-    /// With --table: only these materials ("diffuse", "ggx 0.05" … "ggx 0.6", "mirror")
+    /// With --table: only these materials ("diffuse", "ggx 0.05" … "ggx 0.6", "phong 64",
+    /// "mirror")
     #[arg(long, value_delimiter = ',')]
     materials: Vec<String>,
     /// With --table: only the probes whose file names contain one of these
