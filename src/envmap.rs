@@ -93,6 +93,17 @@ impl EnvMap {
     /// the mapping reads, and the rim slivers of an angular map. The solid angles sum to 4π.
     pub fn for_each_texel(&self, mut f: impl FnMut(u32, u32, u32, [f32; 3], f64)) {
         let (w, h) = (self.width, self.height);
+        if self.mapping == Mapping::LatLong {
+            // Every texel is its own source and a row's texels share one solid angle: no
+            // per-texel table (a 1k map's would be 12 MB to fault in and fill).
+            for j in 0..h {
+                let o = self.mapping.texel_solid_angle(w, h, 0, j);
+                for i in 0..w {
+                    f(0, i, j, self.texel(0, i, j), o);
+                }
+            }
+            return;
+        }
         // Solid angles and sources are the same on every layer; find them once per texel.
         let mut table = Vec::with_capacity((w * h) as usize);
         for j in 0..h {

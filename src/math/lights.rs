@@ -104,29 +104,50 @@ pub fn extract_each(map: &EnvMap, opts: &[ExtractOptions]) -> Vec<Extraction> {
     if opts.is_empty() {
         return Vec::new();
     }
+    // The luminance of the value standing for each texel position that holds part of the
+    // sphere (NaN elsewhere), by index: one array instead of a list of every texel, which on
+    // a 1k map was 17 MB to fault in; solid angles are found again for the few candidates.
     let mut power = 0.0;
-    let mut texels: Vec<(f64, u32, u32, u32, f64)> = Vec::new();
+    let mut y_at = vec![f64::NAN; map.texels.len()];
     map.for_each_texel(|layer, i, j, t, omega| {
         let y = luminance(t.map(f64::from));
         power += y * omega;
-        texels.push((y, layer, i, j, omega));
+        y_at[map.index(layer, i, j)] = y;
     });
     let mean = power / (4.0 * std::f64::consts::PI);
-    opts.iter().map(|o| split(map, mean, &texels, o)).collect()
+    opts.iter().map(|o| split(map, mean, &y_at, o)).collect()
 }
 
-/// One extraction of `map` (mean luminance `mean`, `texels` its (Y, layer, i, j, Ω)).
-fn split(
-    map: &EnvMap,
-    mean: f64,
-    texels: &[(f64, u32, u32, u32, f64)],
-    opts: &ExtractOptions,
-) -> Extraction {
+/// A texel position of `map` from its index: (layer, i, j).
+fn position(map: &EnvMap, k: usize) -> (u32, u32, u32) {
+    let (w, h) = (map.width as usize, map.height as usize);
+    ((k / (w * h)) as u32, (k % w) as u32, (k / w % h) as u32)
+}
+
+/// Whether every texel of `map`'s mapping is its own integration source (no disc rim).
+fn every_texel_its_own(map: &EnvMap) -> bool {
+    matches!(
+        map.mapping,
+        super::mapping::Mapping::LatLong | super::mapping::Mapping::Cube
+    )
+}
+
+/// One extraction of `map` (mean luminance `mean`, `y_at` the luminance at each position).
+fn split(map: &EnvMap, mean: f64, y_at: &[f64], opts: &ExtractOptions) -> Extraction {
+    let (w, h) = (map.width, map.height);
     let mut threshold = opts.ratio * mean;
-    let mut candidates: Vec<(f64, u32, u32, u32, f64)> =
-        texels.iter().copied().filter(|c| c.0 > threshold).collect();
-    // Brightest first; ties broken by position so the order never depends on the sort.
-    candidates.sort_by(|a, b| {
+    let mut candidates: Vec<(f64, u32, u32, u32)> = y_at
+        .iter()
+        .enumerate()
+        .filter(|&(_, &y)| y > threshold)
+        .map(|(k, &y)| {
+            let (layer, i, j) = position(map, k);
+            (y, layer, i, j)
+        })
+        .collect();
+    // Brightest first; ties broken by position so the order never depends on the sort (a
+    // total order: the unstable sort gives the stable one's result).
+    candidates.sort_unstable_by(|a, b| {
         b.0.total_cmp(&a.0)
             .then((a.1, a.3, a.2).cmp(&(b.1, b.3, b.2)))
     });
@@ -142,16 +163,13 @@ fn split(
         };
     }
     if let Some(d) = opts.fill {
-        return filled(map, texels, threshold, &candidates, d, opts.max_texels);
+        return filled(map, y_at, threshold, &candidates, d, opts.max_texels);
     }
     let mut residual = map.clone();
     let mut lights = Vec::with_capacity(candidates.len());
-    for &(y, layer, i, j, omega) in &candidates {
+    for &(y, layer, i, j) in &candidates {
         // The stored texel this one reads (itself, or the texel inside an angular rim).
-        let (si, sj) = map
-            .mapping
-            .integration_source(map.width, map.height, i, j)
-            .unwrap_or((i, j));
+        let (si, sj) = map.mapping.integration_source(w, h, i, j).unwrap_or((i, j));
         let l = map.texel(layer, si, sj);
         let keep = (threshold / y) as f32;
         let r = l.map(|c| c * keep);
@@ -165,7 +183,7 @@ fn split(
             i,
             j,
             dir: map.texel_dir(layer, i, j),
-            omega,
+            omega: map.mapping.texel_solid_angle(w, h, i, j),
             radiance: excess,
         });
     }
@@ -184,93 +202,126 @@ fn split(
 /// residual. Texels are not joined across cube faces or paraboloid halves.
 fn filled(
     map: &EnvMap,
-    texels: &[(f64, u32, u32, u32, f64)],
+    y_at: &[f64],
     threshold: f64,
-    candidates: &[(f64, u32, u32, u32, f64)],
+    candidates: &[(f64, u32, u32, u32)],
     grow: u32,
     max: usize,
 ) -> Extraction {
     let (w, h) = (map.width, map.height);
+    let own = every_texel_its_own(map);
     let source = |i: u32, j: u32| map.mapping.integration_source(w, h, i, j);
-    // Luminance of every stored texel the mapping reads (NaN elsewhere).
-    let mut y = vec![f64::NAN; map.texels.len()];
-    for &(yy, layer, i, j, _) in texels {
-        if source(i, j) == Some((i, j)) {
-            y[map.index(layer, i, j)] = yy;
+    // Luminance of every stored texel the mapping reads (NaN elsewhere): `y_at` itself
+    // where every texel is its own source, else without the rim slivers reading another.
+    let y: std::borrow::Cow<[f64]> = if own {
+        std::borrow::Cow::Borrowed(y_at)
+    } else {
+        let mut y = y_at.to_vec();
+        for (k, v) in y.iter_mut().enumerate() {
+            let (_, i, j) = position(map, k);
+            if !v.is_nan() && source(i, j) != Some((i, j)) {
+                *v = f64::NAN;
+            }
         }
-    }
+        std::borrow::Cow::Owned(y)
+    };
     let mut set = vec![false; map.texels.len()];
     let mut count = 0;
-    for &(_, layer, i, j, _) in candidates {
+    for &(_, layer, i, j) in candidates {
         let (si, sj) = source(i, j).unwrap_or((i, j));
         let k = map.index(layer, si, sj);
         count += usize::from(!set[k]);
         set[k] = true;
     }
     let wrap = map.mapping == super::mapping::Mapping::LatLong;
-    // Texel k's neighbour at (di, dj) in its layer, wrapping in u on a lat-long.
-    let step = |k: usize, di: i64, dj: i64| {
-        let k = k as u32;
-        let (layer, i, j) = (k / (w * h), k % w, (k / w) % h);
-        let (ii, jj) = (i as i64 + di, j as i64 + dj);
+    // A texel's neighbour at (di, dj) in its layer, wrapping in u on a lat-long; positions
+    // carry their coordinates, so a step divides nothing (dividing the index back into
+    // them took most of the growth's time).
+    let step = |p: Pos, di: i64, dj: i64| {
+        let (ii, jj) = (p.i as i64 + di, p.j as i64 + dj);
         let ii = if wrap { ii.rem_euclid(w as i64) } else { ii };
-        ((0..w as i64).contains(&ii) && (0..h as i64).contains(&jj))
-            .then(|| map.index(layer, ii as u32, jj as u32))
+        ((0..w as i64).contains(&ii) && (0..h as i64).contains(&jj)).then(|| Pos {
+            k: map.index(p.layer, ii as u32, jj as u32),
+            layer: p.layer,
+            i: ii as u32,
+            j: jj as u32,
+        })
+    };
+    let at = |k: usize| {
+        let (layer, i, j) = position(map, k);
+        Pos { k, layer, i, j }
     };
     // Grown one texel at a time, while the cap leaves room for the whole ring.
-    let mut edge: Vec<usize> = (0..set.len()).filter(|&k| set[k]).collect();
+    let mut edge: Vec<Pos> = (0..set.len()).filter(|&k| set[k]).map(at).collect();
+    let mut members = edge.clone();
     for _ in 0..grow {
         let mut ring = Vec::new();
-        for &k in &edge {
-            for n in RING.iter().filter_map(|&(di, dj)| step(k, di, dj)) {
-                if !set[n] && y[n] > 0.0 {
-                    set[n] = true;
+        for &p in &edge {
+            for n in RING.iter().filter_map(|&(di, dj)| step(p, di, dj)) {
+                if !set[n.k] && y[n.k] > 0.0 {
+                    set[n.k] = true;
                     ring.push(n);
                 }
             }
         }
         if count + ring.len() > max {
-            for &k in &ring {
-                set[k] = false;
+            for p in &ring {
+                set[p.k] = false;
             }
             break;
         }
         count += ring.len();
+        members.extend_from_slice(&ring);
         edge = ring;
     }
-    let f = fill(&y, &set, &step);
+    let f = fill(&y, &set, &step, &members);
     let mut residual = map.clone();
-    for k in 0..set.len() {
-        if set[k] && y[k] > 0.0 {
+    // In index order, as the lights list is read.
+    let mut members: Vec<usize> = members.iter().map(|p| p.k).collect();
+    members.sort_unstable();
+    for &k in &members {
+        if y[k] > 0.0 {
+            // An unreached texel's NaN takes the threshold here.
             let keep = (f[k].min(threshold).min(y[k]) / y[k]) as f32;
             residual.texels[k] = map.texels[k].map(|c| c * keep);
         }
     }
+    // The positions reading a member: the members themselves where every texel is its own
+    // source, else every position whose source is one.
+    let readers: Vec<(usize, usize)> = if own {
+        members.iter().map(|&k| (k, k)).collect()
+    } else {
+        (0..y_at.len())
+            .filter(|&k| !y_at[k].is_nan())
+            .filter_map(|k| {
+                let (layer, i, j) = position(map, k);
+                let (si, sj) = source(i, j).unwrap_or((i, j));
+                let s = map.index(layer, si, sj);
+                set[s].then_some((k, s))
+            })
+            .collect()
+    };
     let mut lights = Vec::new();
-    for &(yy, layer, i, j, omega) in texels {
-        let (si, sj) = source(i, j).unwrap_or((i, j));
-        let k = map.index(layer, si, sj);
-        if !set[k] {
-            continue;
-        }
+    for (at, k) in readers {
+        let (layer, i, j) = position(map, at);
         let (l, r) = (map.texels[k], residual.texels[k]);
         let excess = [l[0] - r[0], l[1] - r[1], l[2] - r[2]];
         if excess.iter().all(|&e| e == 0.0) {
             continue;
         }
         lights.push((
-            yy,
+            y_at[at],
             LightTexel {
                 layer,
                 i,
                 j,
                 dir: map.texel_dir(layer, i, j),
-                omega,
+                omega: map.mapping.texel_solid_angle(w, h, i, j),
                 radiance: excess,
             },
         ));
     }
-    lights.sort_by(|a, b| {
+    lights.sort_unstable_by(|a, b| {
         b.0.total_cmp(&a.0)
             .then((a.1.layer, a.1.j, a.1.i).cmp(&(b.1.layer, b.1.j, b.1.i)))
     });
@@ -293,44 +344,74 @@ const RING: [(i64, i64); 8] = [
     (1, 1),
 ];
 
+/// A texel position: its index in the map, layer, column and row.
+#[derive(Clone, Copy, Debug)]
+struct Pos {
+    k: usize,
+    layer: u32,
+    i: u32,
+    j: u32,
+}
+
 /// A texel's 4 edge neighbours, in [`RING`]'s order (the diagonal ones sit √2 away).
 const EDGE: [(i64, i64); 4] = [(0, -1), (-1, 0), (1, 0), (0, 1)];
 
 /// The residual luminance under a light set: texels outside `set` keep their own (`y`);
 /// those in it take, round by round from the set's edge inwards, the mean of their edge
 /// neighbours (`step`) that earlier rounds settled, so the residual continues the
-/// surroundings under a light instead of stopping at a plateau. Texels no round reaches
-/// (a layer wholly in the set) get infinity, which the caller clamps to the threshold.
-fn fill(y: &[f64], set: &[bool], step: &dyn Fn(usize, i64, i64) -> Option<usize>) -> Vec<f64> {
-    let mut f: Vec<f64> = (0..y.len())
-        .map(|k| if set[k] { f64::NAN } else { y[k] })
+/// surroundings under a light instead of stopping at a plateau; `members` lists the set's
+/// texels. Texels no round reaches (a layer wholly in the set) stay NaN, which the caller's
+/// clamp turns into the threshold (`f64::min` returns the other operand).
+fn fill(
+    y: &[f64],
+    set: &[bool],
+    step: &dyn Fn(Pos, i64, i64) -> Option<Pos>,
+    members: &[Pos],
+) -> Vec<f64> {
+    let mut f = y.to_vec();
+    for p in members {
+        f[p.k] = f64::NAN;
+    }
+    // A round looks only at the open texels beside the last round's (the first at all of
+    // them): a texel no settled neighbour touches cannot settle, and the rounds' values do
+    // not depend on the order within a round. Rescanning every open texel each round took
+    // most of a 1k studio map's extraction.
+    let open = |k: usize| set[k] && !y[k].is_nan();
+    let mut round: Vec<Pos> = members
+        .iter()
+        .copied()
+        .filter(|p| !y[p.k].is_nan())
         .collect();
-    let mut open: Vec<usize> = (0..y.len()).filter(|&k| set[k] && !y[k].is_nan()).collect();
-    while !open.is_empty() {
+    let mut queued = vec![false; y.len()];
+    while !round.is_empty() {
         let mut settled = Vec::new();
-        for &k in &open {
+        for &p in &round {
+            queued[p.k] = false;
             let (mut sum, mut n) = (0.0, 0);
-            for m in EDGE.iter().filter_map(|&(di, dj)| step(k, di, dj)) {
-                if !f[m].is_nan() {
-                    sum += f[m];
+            for m in EDGE.iter().filter_map(|&(di, dj)| step(p, di, dj)) {
+                if !f[m.k].is_nan() {
+                    sum += f[m.k];
                     n += 1;
                 }
             }
             if n > 0 {
-                settled.push((k, sum / n as f64));
+                settled.push((p, sum / n as f64));
             }
         }
-        if settled.is_empty() {
-            break;
+        for &(p, v) in &settled {
+            f[p.k] = v;
         }
-        for &(k, v) in &settled {
-            f[k] = v;
+        round.clear();
+        for &(p, _) in &settled {
+            for m in EDGE.iter().filter_map(|&(di, dj)| step(p, di, dj)) {
+                if open(m.k) && f[m.k].is_nan() && !queued[m.k] {
+                    queued[m.k] = true;
+                    round.push(m);
+                }
+            }
         }
-        open.retain(|&k| f[k].is_nan());
     }
-    f.iter()
-        .map(|v| if v.is_nan() { f64::INFINITY } else { *v })
-        .collect()
+    f
 }
 
 /// The quadrature nodes of light texel `t` of `map`: `cells` × `cells` cells of 2 × 2
