@@ -315,10 +315,10 @@ pub fn table(
          pixel-area mean). `rms`: per-pixel relative RMS of luminance; `ratio`: mean \
          luminance against the reference's; `tile`: the worst 8×8 tile's |ratio − 1|. \
          Defaults elsewhere: the FIS paraboloid sized by the source; FIS lod bias {} ({} \
-         reading the residual); FIS, split-sum and footprint lookups extract above {} × the \
-         mean luminance, up to {} light texels (grown by {} rings, the residual filled under \
-         them, where FIS or split-sum reads it); diffuse techniques above {} ×. Run took \
-         {:.0} s.",
+         reading the residual); FIS, split-sum, footprint lookups and prefiltered Phong maps \
+         extract above {} × the mean luminance, up to {} light texels (grown by {} rings, the \
+         residual filled under them, where FIS, split-sum or a prefiltered Phong map reads \
+         it); diffuse techniques above {} ×. Run took {:.0} s.",
         envlight::scene::DEFAULT_FIS_BIAS,
         envlight::scene::DEFAULT_FIS_BIAS_RESIDUAL,
         envlight::abi::lights::CHAIN_RATIO,
