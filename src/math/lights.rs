@@ -276,10 +276,7 @@ fn filled(
     }
     let f = fill(&y, &set, &step, &members);
     let mut residual = map.clone();
-    // In index order, as the lights list is read.
-    let mut members: Vec<usize> = members.iter().map(|p| p.k).collect();
-    members.sort_unstable();
-    for &k in &members {
+    for &Pos { k, .. } in &members {
         if y[k] > 0.0 {
             // An unreached texel's NaN takes the threshold here.
             let keep = (f[k].min(threshold).min(y[k]) / y[k]) as f32;
@@ -287,9 +284,10 @@ fn filled(
         }
     }
     // The positions reading a member: the members themselves where every texel is its own
-    // source, else every position whose source is one.
+    // source, else every position whose source is one (in any order: the list is sorted
+    // below).
     let readers: Vec<(usize, usize)> = if own {
-        members.iter().map(|&k| (k, k)).collect()
+        members.iter().map(|p| (p.k, p.k)).collect()
     } else {
         (0..y_at.len())
             .filter(|&k| !y_at[k].is_nan())
