@@ -16,6 +16,24 @@
 #ifdef USE_VOTE
 #extension GL_KHR_shader_subgroup_vote : require
 #endif
+#include "generated.glsl"
+
+// Which code this pipeline keeps (specialisation constant 0, set from what a render binds
+// and draws: bit t for technique t, FOOTPRINT_CODE for footprint lookups, SHADOWS_CODE for
+// shadow rays, bit BRDF_CODE_SHIFT + id for each BRDF its objects use): the others' branches
+// fold away, so llvmpipe compiles a FIS-only shade in a fraction of the whole one's time,
+// and a light tree walk's step (whose whole body llvmpipe runs) carries one BRDF, not six.
+layout(constant_id = 0) const uint CODE = 0xffffffffu;
+#define BRDF_KEPT(k) ((CODE & (1u << (BRDF_CODE_SHIFT + (k)))) != 0u)
+
+bool has(uint bit) {
+    return (CODE & bit) != 0u;
+}
+
+bool has_tech(uint t) {
+    return has(1u << t);
+}
+
 #include "mappings.glsl"
 #include "lights.glsl"
 #include "sh.glsl"
@@ -276,88 +294,129 @@ vec3 prefiltered_lookup(uint off, int w, vec3 d) {
     return acc;
 }
 
-// The light texels under the BRDF by their tree (math::light_tree::LightTree::sum_brdf): a
-// node taken whole (light_tree_whole) by the BRDF's mean over its four sigma points, other
-// leaves' texels one by one (math::lights::light_sum_brdf's rule); with `shadows`, shadow
-// rays along each direction evaluated.
+// A light tree walk (math::light_tree::LightTree::walk): the next node i, the current leaf's
+// texels j..end, and which four of texel j's quadrature nodes come next (c).
+struct Walk {
+    uint i;
+    uint j;
+    uint end;
+    uint c;
+};
+
+// Whether every node and texel of walk k has been visited.
+bool walk_over(Walk k) {
+    return k.j >= k.end && k.i >= pc.tree_nodes;
+}
+
+// Most steps a walk can take (every node, every texel in fours of its quadrature nodes): the
+// loops' bound, which llvmpipe needs (it miscompiled an unbounded while, zeroing other
+// pixels of the frame).
+uint walk_bound() {
+    return pc.tree_nodes + pc.lights * max((pc.light_stride - LIGHT_HEADER_VEC4S) / 4u, 1u);
+}
+
+// One step of walk k for a kernel of scale `scale` about r whose cut plane has normal `cut`,
+// a node allowed an error `allowance` (light_tree_whole).
+// False where it only descended; otherwise what to sum: four weighted directions d·w (a
+// node taken whole: its sigma points, a quarter of its power each; a texel small against
+// the kernel: its centre, then zero weights; else four of its quadrature nodes) and the
+// radiance or power they carry; a texel's centre also in `centre` (zero for a node). Every
+// item is four directions so that the caller evaluates its kernel in one place: llvmpipe
+// runs a loop's whole body at every step, each copy of the kernel included.
+bool walk_step(inout Walk k, vec3 r, float scale, vec3 cut, float allowance,
+               out mat4x3 d, out vec4 w, out vec3 light, out vec3 centre) {
+    d = mat4x3(0.0);
+    w = vec4(0.0);
+    light = vec3(0.0);
+    centre = vec3(0.0);
+    // The same six loads whichever the item (llvmpipe runs both branches' loads, lane by
+    // lane): a texel's header and four quadrature nodes, or a node's five vec4s (the sixth
+    // unused; the buffer ends in padding for it).
+    bool texel = k.j < k.end;
+    uint q0 = k.j * pc.light_stride;
+    uint at = pc.tree_at + k.i * LIGHT_TREE_VEC4S;
+    uint base = texel ? q0 : at;
+    uint more = texel ? q0 + LIGHT_HEADER_VEC4S + 4u * k.c : at + 2u;
+    vec4 v0 = lights[base], v1 = lights[base + 1u];
+    vec4 v2 = lights[more], v3 = lights[more + 1u], v4 = lights[more + 2u], v5 = lights[more + 3u];
+    if (texel) {
+        light = v1.rgb;
+        centre = v0.xyz;
+        if (light_centre_only(v1.w, light_scale2(scale, r - v0.xyz), pc.light_stride)) {
+            d = mat4x3(v0.xyz, v0.xyz, v0.xyz, v0.xyz);
+            w = vec4(v0.w, 0.0, 0.0, 0.0);
+            k.j++;
+        } else {
+            d = mat4x3(v2.xyz, v3.xyz, v4.xyz, v5.xyz);
+            w = vec4(v2.w, v3.w, v4.w, v5.w);
+            k.c++;
+            if (more + 4u >= q0 + pc.light_stride) {
+                k.c = 0u;
+                k.j++;
+            }
+        }
+        return true;
+    }
+    // A node: (centre, reach), (power, ρ), (axis 0, luminance), (axis 1, 0), (first, count, skip).
+    uvec4 range = uvec4(v4);
+    if (!light_tree_whole(v0, v2.w, r, scale, cut, allowance)) {
+        if (range.y <= LIGHT_LEAF_TEXELS) {
+            k.j = range.x;
+            k.end = range.x + range.y;
+            k.i = range.z;
+        } else {
+            k.i++;
+        }
+        return false;
+    }
+    d = mat4x3(normalize(v0.xyz + v2.xyz), normalize(v0.xyz - v2.xyz), normalize(v0.xyz + v3.xyz),
+               normalize(v0.xyz - v3.xyz));
+    w = vec4(0.25);
+    light = v1.rgb;
+    k.i = range.z;
+    return true;
+}
+
+// Whether the scene's shadow rays are traced (and their code kept).
+bool shadows_on() {
+    return has(SHADOWS_CODE) && pc.shadows != 0u;
+}
+
 float brdf_eval_world(Brdf b, vec3 wo, vec3 t, vec3 bt, vec3 n, vec3 d) {
     return brdf_eval_cos(b, wo, vec3(dot(d, t), dot(d, bt), dot(d, n)));
 }
 
+// The light texels under the BRDF by their tree (math::light_tree::LightTree::sum_brdf): a
+// node taken whole (light_tree_whole) by the BRDF's mean over its four sigma points, other
+// leaves' texels one by one (math::lights::light_sum_brdf's rule); with `shadows`, a shadow
+// ray along each texel's centre and each sigma point.
 vec3 fis_lights(Brdf b, vec3 wo, vec3 t, vec3 bt, vec3 n, vec3 r, float scale, vec3 origin,
                 float allowance, bool shadows) {
     vec3 sum = vec3(0.0);
-    // One item per iteration, a texel of the current leaf or a node, each at most four
-    // weighted directions, so that lanes walking different paths run one short body.
-    uint i = 0u, j = 0u, end = 0u;
-    // Bounded (every step visits a node or a texel): llvmpipe miscompiled the unbounded
-    // while, zeroing other pixels of the frame.
-    for (uint step = 0u; step < pc.tree_nodes + pc.lights; step++) {
-        bool done = j >= end && i >= pc.tree_nodes;
+    Walk k = Walk(0u, 0u, 0u, 0u);
+    for (uint step = 0u; step < walk_bound(); step++) {
+        bool done = walk_over(k);
         if (walk_done(done)) break;
         if (done) continue;
-        vec3 d[4];
-        vec4 w = vec4(0.25);
-        vec3 light;
-        uint m = 4u, q0 = 0u;
-        bool many = false;
-        vec3 shadow_dir = vec3(0.0);
-        if (j < end) {
-            q0 = j * pc.light_stride;
-            vec4 centre = lights[q0];
-            vec4 l = lights[q0 + 1u];
-            light = l.rgb;
-            shadow_dir = centre.xyz;
-            j++;
-            if (light_centre_only(l.w, light_scale2(scale, r - centre.xyz), pc.light_stride)) {
-                d[0] = centre.xyz;
-                w.x = centre.w;
-                m = 1u;
-            } else if (pc.light_stride == LIGHT_HEADER_VEC4S + 4u) {
-                vec4 p0 = lights[q0 + 2u], p1 = lights[q0 + 3u], p2 = lights[q0 + 4u], p3 = lights[q0 + 5u];
-                d = vec3[4](p0.xyz, p1.xyz, p2.xyz, p3.xyz);
-                w = vec4(p0.w, p1.w, p2.w, p3.w);
-            } else {
-                many = true;
-            }
-        } else {
-            uint at = pc.tree_at + i * LIGHT_TREE_VEC4S;
-            vec4 node = lights[at];
-            uvec4 range = uvec4(lights[at + 4u]);
-            vec4 axis0 = lights[at + 2u];
-            if (!light_tree_whole(node, axis0.w, r, scale, n, allowance)) {
-                if (range.y <= LIGHT_LEAF_TEXELS) {
-                    j = range.x;
-                    end = range.x + range.y;
-                    i = range.z;
-                } else {
-                    i++;
+        mat4x3 d;
+        vec4 w;
+        vec3 light, centre;
+        if (!walk_step(k, r, scale, n, allowance, d, w, light, centre)) continue;
+        vec4 f = vec4(brdf_eval_world(b, wo, t, bt, n, d[0]), brdf_eval_world(b, wo, t, bt, n, d[1]),
+                      brdf_eval_world(b, wo, t, bt, n, d[2]), brdf_eval_world(b, wo, t, bt, n, d[3]));
+        if (shadows) {
+            bool texel = centre != vec3(0.0);
+            for (uint s = 0u; s < (texel ? 1u : 4u); s++) {
+                if (occluded(origin, texel ? centre : d[s])) {
+                    if (texel) {
+                        w = vec4(0.0);
+                    } else {
+                        w[s] = 0.0;
+                    }
                 }
-                continue;
-            }
-            vec3 a0 = axis0.xyz, a1 = lights[at + 3u].xyz;
-            d = vec3[4](normalize(node.xyz + a0), normalize(node.xyz - a0),
-                        normalize(node.xyz + a1), normalize(node.xyz - a1));
-            light = lights[at + 1u].rgb;
-            i = range.z;
-        }
-        // A texel's shadow ray runs along its centre (as one by one); a node's along each of
-        // its sigma points.
-        bool texel = shadow_dir != vec3(0.0);
-        if (shadows && texel && occluded(origin, shadow_dir)) continue;
-        float k = 0.0;
-        if (many) {
-            // A texel by more than four quadrature nodes (large texels, narrow lobes).
-            for (uint q = q0 + LIGHT_HEADER_VEC4S; q < q0 + pc.light_stride; q++) {
-                k += brdf_eval_world(b, wo, t, bt, n, lights[q].xyz) * lights[q].w;
-            }
-        } else {
-            for (uint s = 0u; s < m; s++) {
-                if (shadows && !texel && occluded(origin, d[s])) continue;
-                k += brdf_eval_world(b, wo, t, bt, n, d[s]) * w[s];
             }
         }
-        sum += k * light;
+        sum += dot(f, w) * light;
     }
     return sum;
 }
@@ -378,7 +437,7 @@ vec3 fis(Object ob, vec3 n, vec3 v, vec3 p, uvec2 pix) {
         float pdf = brdf_pdf(b, wo, wi);
         vec3 d = normalize(t * wi.x + bt * wi.y + n * wi.z);
         float lod = fis_lod(pdf, count, d, pc.dp_size, ob.extra.x, pc.max_lod);
-        if (pc.shadows != 0u && occluded(origin, d)) continue;
+        if (shadows_on() && occluded(origin, d)) continue;
         sum += w * dp_lookup(d, lod);
     }
     sum /= float(count);
@@ -388,7 +447,7 @@ vec3 fis(Object ob, vec3 n, vec3 v, vec3 p, uvec2 pix) {
     if (ob.extra.y > 0.5) {
         float allowance = LIGHT_TREE_BUDGET * dot(sum, LUMINANCE) * max(wo.z, ob.extra.z);
         sum += fis_lights(b, wo, t, bt, n, 2.0 * dot(v, n) * n - v, ob.extra.z, origin, allowance,
-                          pc.shadows != 0u);
+                          shadows_on());
     }
     return sum;
 }
@@ -449,68 +508,19 @@ vec3 split_sum(Object ob, vec3 n, vec3 v, vec3 r) {
         vec3 sum = vec3(0.0);
         // The error a node may make, in the light sum's units: TREE_BUDGET of the chain's.
         float allowance = LIGHT_TREE_BUDGET * dot(p, LUMINANCE) / ob.extra.w;
-        // One item per iteration, a texel of the current leaf or a node (see fis_lights).
-        uint i = 0u, j = 0u, end = 0u;
-        for (uint step = 0u; step < pc.tree_nodes + pc.lights; step++) {
-            bool done = j >= end && i >= pc.tree_nodes;
-        if (walk_done(done)) break;
-        if (done) continue;
-            vec3 d[4];
-            vec4 w = vec4(0.25);
-            vec3 light;
-            uint m = 4u, q0 = 0u;
-            bool many = false;
-            if (j < end) {
-                q0 = j * pc.light_stride;
-                vec4 centre = lights[q0];
-                vec4 l = lights[q0 + 1u];
-                light = l.rgb;
-                j++;
-                if (light_centre_only(l.w, light_scale2(a, r - centre.xyz), pc.light_stride)) {
-                    d[0] = centre.xyz;
-                    w.x = centre.w;
-                    m = 1u;
-                } else if (pc.light_stride == LIGHT_HEADER_VEC4S + 4u) {
-                    vec4 p0 = lights[q0 + 2u], p1 = lights[q0 + 3u], p2 = lights[q0 + 4u], p3 = lights[q0 + 5u];
-                    d = vec3[4](p0.xyz, p1.xyz, p2.xyz, p3.xyz);
-                    w = vec4(p0.w, p1.w, p2.w, p3.w);
-                } else {
-                    many = true;
-                }
-            } else {
-                uint at = pc.tree_at + i * LIGHT_TREE_VEC4S;
-                vec4 node = lights[at];
-                uvec4 range = uvec4(lights[at + 4u]);
-                vec4 axis0 = lights[at + 2u];
-                if (!light_tree_whole(node, axis0.w, r, a, r, allowance)) {
-                    if (range.y <= LIGHT_LEAF_TEXELS) {
-                        j = range.x;
-                        end = range.x + range.y;
-                        i = range.z;
-                    } else {
-                        i++;
-                    }
-                    continue;
-                }
-                vec3 a0 = axis0.xyz, a1 = lights[at + 3u].xyz;
-                d = vec3[4](normalize(node.xyz + a0), normalize(node.xyz - a0),
-                            normalize(node.xyz + a1), normalize(node.xyz - a1));
-                light = lights[at + 1u].rgb;
-                i = range.z;
-            }
-            float k = 0.0;
-            if (many) {
-                for (uint q = q0 + LIGHT_HEADER_VEC4S; q < q0 + pc.light_stride; q++) {
-                    vec3 e = r - lights[q].xyz;
-                    k += chain_kernel(a2, 0.5 * dot(e, e)) * lights[q].w;
-                }
-            } else {
-                for (uint s = 0u; s < m; s++) {
-                    vec3 e = r - d[s];
-                    k += chain_kernel(a2, 0.5 * dot(e, e)) * w[s];
-                }
-            }
-            sum += k * light;
+        Walk k = Walk(0u, 0u, 0u, 0u);
+        for (uint step = 0u; step < walk_bound(); step++) {
+            bool done = walk_over(k);
+            if (walk_done(done)) break;
+            if (done) continue;
+            mat4x3 d;
+            vec4 w;
+            vec3 light, centre;
+            if (!walk_step(k, r, a, r, allowance, d, w, light, centre)) continue;
+            vec3 e0 = r - d[0], e1 = r - d[1], e2 = r - d[2], e3 = r - d[3];
+            vec4 f = vec4(chain_kernel(a2, 0.5 * dot(e0, e0)), chain_kernel(a2, 0.5 * dot(e1, e1)),
+                          chain_kernel(a2, 0.5 * dot(e2, e2)), chain_kernel(a2, 0.5 * dot(e3, e3)));
+            sum += dot(f, w) * light;
         }
         p += sum * ob.extra.w;
     }
@@ -526,19 +536,6 @@ vec3 lights_irradiance(vec3 n) {
         e += max(vec3(dot(n, lights[at].xyz), dot(n, lights[at + 1u].xyz), dot(n, lights[at + 2u].xyz)), vec3(0.0));
     }
     return e;
-}
-
-// Which code this pipeline keeps (specialisation constant 0, set from the inputs a render
-// binds: bit t for technique t, FOOTPRINT_CODE for footprint lookups): the others' branches
-// fold away, and llvmpipe compiles a FIS-only shade in a fraction of the whole one's time.
-layout(constant_id = 0) const uint CODE = 0xffffffffu;
-
-bool has(uint bit) {
-    return (CODE & bit) != 0u;
-}
-
-bool has_tech(uint t) {
-    return has(1u << t);
 }
 
 void main() {
@@ -594,7 +591,7 @@ void main() {
     } else if (has_tech(TECH_SH_BRDF) && tech == TECH_SH_BRDF) {
         color = ob.albedo.rgb * sh_brdf(ob, n, v);
     } else if (tech == TECH_LOOKUP) {
-        bool dark = pc.shadows != 0u && occluded(shadow_origin(p, n), r);
+        bool dark = shadows_on() && occluded(shadow_origin(p, n), r);
         bool filtered = has(FOOTPRINT_CODE) && (pc.footprint & FOOTPRINT_MIRROR) != 0u;
         vec3 l = filtered ? footprint_radiance(q.xy, nrm.w, r) : env_lookup(r);
         color = dark ? vec3(0.0) : ob.albedo.rgb * l;

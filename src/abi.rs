@@ -424,6 +424,17 @@ pub mod lights {
     pub const TREE_VEC4S: u32 = 5;
 }
 
+/// Bits of shade.frag's code mask (its specialisation constant 0) beside the techniques' and
+/// [`footprint::CODE`]: llvmpipe runs every branch of a loop's body whether or not a lane
+/// takes it, so a light tree walk that could meet all six BRDFs and shadow rays pays for all
+/// of them at every step; a pipeline keeps only the code its scene can reach.
+pub mod shade_code {
+    /// Keeps the shadow rays' code (scenes with `shadows`).
+    pub const SHADOWS: u32 = 1 << 17;
+    /// Bit `BRDF_SHIFT + id` keeps BRDF `id`'s code ([`super::brdf::ids`]).
+    pub const BRDF_SHIFT: u32 = 20;
+}
+
 /// Footprint-filtered lookups (mirrors and the background, issue #10): the pixel's footprint
 /// in direction space, from G-buffer differences, read from the dual-paraboloid chain by a
 /// row of taps along its major axis ([`crate::math::footprint`]).
@@ -1166,6 +1177,8 @@ pub fn generated_header() -> String {
     let _ = writeln!(s, "#define FOOTPRINT_BACKGROUND {}u", footprint::BACKGROUND);
     let _ = writeln!(s, "#define FOOTPRINT_LIGHTS {}u", footprint::LIGHTS);
     let _ = writeln!(s, "#define FOOTPRINT_CODE {}u", footprint::CODE);
+    let _ = writeln!(s, "#define SHADOWS_CODE {}u", shade_code::SHADOWS);
+    let _ = writeln!(s, "#define BRDF_CODE_SHIFT {}u", shade_code::BRDF_SHIFT);
     let _ = writeln!(s, "#define FILTER_EDGE_CELLS {}u", filter_rule::EDGE_CELLS);
     let _ = writeln!(s, "#define FILTER_MAX_CELLS {}u", filter_rule::MAX_CELLS);
     let f = |x: f64| format!("{:?}", x as f32);

@@ -504,6 +504,11 @@ impl Renderer {
                 let f = footprint_of(scene, dp_passes.is_some(), false);
                 f.mirror || f.background
             },
+            shadows: scene.shadows,
+            brdfs: scene
+                .objects
+                .iter()
+                .fold(0, |bits, o| bits | 1 << o.material.kind.id()),
         };
         let (each, extract_ms, built) = std::thread::scope(|s| {
             let build = s.spawn(|| shade.prepare_code(&code));
@@ -914,7 +919,7 @@ impl Renderer {
         };
         // The pipeline built beside the extraction is the one the draw takes.
         debug_assert_eq!(
-            crate::passes::shade::code_mask(&inputs),
+            crate::passes::shade::code_mask(&inputs, &gbuf),
             crate::passes::shade::code_bits(&code)
         );
         let mut marks = Marks(Vec::new());

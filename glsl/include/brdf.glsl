@@ -12,6 +12,17 @@ struct Brdf {
     float p1;
 };
 
+// Whether the code of BRDF k is kept: a shader that includes this file may define
+// BRDF_KEPT(k) from a specialisation constant so that BRDFs its draw never meets fold away
+// (shade.frag: llvmpipe runs every branch of a loop's body).
+#ifndef BRDF_KEPT
+#define BRDF_KEPT(k) true
+#endif
+
+bool brdf_is(Brdf b, uint k) {
+    return BRDF_KEPT(k) && b.id == k;
+}
+
 // Tangent ŷ × n (x̂ × n near the poles) and bitangent n × t.
 void shading_frame(vec3 n, out vec3 t, out vec3 b) {
     vec3 a = abs(n.y) < POLE_THRESHOLD ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
@@ -87,13 +98,13 @@ float ward_exponent(float ax, float ay, vec3 h) {
 
 float brdf_eval_cos(Brdf b, vec3 wo, vec3 wi) {
     if (wo.z <= 0.0 || wi.z <= 0.0) return 0.0;
-    if (b.id == BRDF_LAMBERT) return wi.z / PI;
-    if (b.id == BRDF_PHONG) return phong_lobe(b.p0, wo, wi);
-    if (b.id == BRDF_BLINN) {
+    if (brdf_is(b, BRDF_LAMBERT)) return wi.z / PI;
+    if (brdf_is(b, BRDF_PHONG)) return phong_lobe(b.p0, wo, wi);
+    if (brdf_is(b, BRDF_BLINN)) {
         vec3 h = normalize(wo + wi);
         return (b.p0 + 8.0) / (8.0 * PI) * pow_from_gap(b.p0, gap(h, vec3(0.0, 0.0, 1.0))) * wi.z;
     }
-    if (b.id == BRDF_GGX) {
+    if (brdf_is(b, BRDF_GGX)) {
         float a = max(b.p0, GGX_ALPHA_MIN);
         vec3 h = normalize(wo + wi);
         float g = b.p1 != 0.0
@@ -101,7 +112,7 @@ float brdf_eval_cos(Brdf b, vec3 wo, vec3 wi) {
             : ggx_g1(a, wo.z) * ggx_g1(a, wi.z);
         return ggx_d(a, h) * g / (4.0 * wo.z);
     }
-    if (b.id == BRDF_WARD) {
+    if (brdf_is(b, BRDF_WARD)) {
         vec3 h = normalize(wo + wi);
         return exp(ward_exponent(b.p0, b.p1, h)) / (4.0 * PI * b.p0 * b.p1 * sqrt(wi.z * wo.z)) * wi.z;
     }
@@ -109,13 +120,13 @@ float brdf_eval_cos(Brdf b, vec3 wo, vec3 wi) {
 }
 
 vec3 brdf_sample(Brdf b, vec3 wo, vec2 u) {
-    if (b.id == BRDF_LAMBERT) {
+    if (brdf_is(b, BRDF_LAMBERT)) {
         float r = sqrt(u.x), phi = TAU * u.y;
         return vec3(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u.x, 0.0)));
     }
-    if (b.id == BRDF_PHONG) return sample_power_lobe(vec3(-wo.x, -wo.y, wo.z), b.p0, u);
-    if (b.id == BRDF_BLINN) return reflect_about(wo, sample_power_lobe(vec3(0.0, 0.0, 1.0), b.p0, u));
-    if (b.id == BRDF_GGX) {
+    if (brdf_is(b, BRDF_PHONG)) return sample_power_lobe(vec3(-wo.x, -wo.y, wo.z), b.p0, u);
+    if (brdf_is(b, BRDF_BLINN)) return reflect_about(wo, sample_power_lobe(vec3(0.0, 0.0, 1.0), b.p0, u));
+    if (brdf_is(b, BRDF_GGX)) {
         float a = max(b.p0, GGX_ALPHA_MIN);
         vec3 vh = normalize(vec3(a * wo.x, a * wo.y, wo.z));
         float lensq = vh.x * vh.x + vh.y * vh.y;
@@ -129,7 +140,7 @@ vec3 brdf_sample(Brdf b, vec3 wo, vec2 u) {
         vec3 h = normalize(vec3(a * nh.x, a * nh.y, max(nh.z, 0.0)));
         return reflect_about(wo, h);
     }
-    if (b.id == BRDF_WARD) {
+    if (brdf_is(b, BRDF_WARD)) {
         float phi = TAU * u.y;
         float ps = b.p1 * sin(phi), pc = b.p0 * cos(phi);
         float len = sqrt(ps * ps + pc * pc);
@@ -142,22 +153,22 @@ vec3 brdf_sample(Brdf b, vec3 wo, vec2 u) {
 }
 
 float brdf_pdf(Brdf b, vec3 wo, vec3 wi) {
-    if (b.id == BRDF_LAMBERT) return max(wi.z, 0.0) / PI;
-    if (b.id == BRDF_PHONG) return phong_lobe(b.p0, wo, wi);
-    if (b.id == BRDF_BLINN) {
+    if (brdf_is(b, BRDF_LAMBERT)) return max(wi.z, 0.0) / PI;
+    if (brdf_is(b, BRDF_PHONG)) return phong_lobe(b.p0, wo, wi);
+    if (brdf_is(b, BRDF_BLINN)) {
         vec3 h = normalize(wo + wi);
         float oh = dot(wo, h);
         if (oh <= 0.0 || h.z <= 0.0) return 0.0;
         return (b.p0 + 1.0) / TAU * pow_from_gap(b.p0, gap(h, vec3(0.0, 0.0, 1.0))) / (4.0 * oh);
     }
-    if (b.id == BRDF_GGX) {
+    if (brdf_is(b, BRDF_GGX)) {
         if (wo.z <= 0.0) return 0.0;
         float a = max(b.p0, GGX_ALPHA_MIN);
         vec3 h = normalize(wo + wi);
         if (h.z <= 0.0) return 0.0;
         return ggx_g1(a, wo.z) * ggx_d(a, h) / (4.0 * wo.z);
     }
-    if (b.id == BRDF_WARD) {
+    if (brdf_is(b, BRDF_WARD)) {
         vec3 h = normalize(wo + wi);
         float oh = dot(wo, h);
         if (oh <= 0.0 || h.z <= 0.0) return 0.0;
@@ -168,11 +179,11 @@ float brdf_pdf(Brdf b, vec3 wo, vec3 wi) {
 
 float brdf_weight(Brdf b, vec3 wo, vec3 wi) {
     if (wo.z <= 0.0 || wi.z <= 0.0) return 0.0;
-    if (b.id == BRDF_BLINN) {
+    if (brdf_is(b, BRDF_BLINN)) {
         vec3 h = normalize(wo + wi);
         return max((b.p0 + 8.0) / (b.p0 + 1.0) * wi.z * dot(wo, h), 0.0);
     }
-    if (b.id == BRDF_GGX) {
+    if (brdf_is(b, BRDF_GGX)) {
         float a = max(b.p0, GGX_ALPHA_MIN);
         if (b.p1 != 0.0) {
             float ro = ggx_root(a, wo.z), ri = ggx_root(a, wi.z);
@@ -180,7 +191,7 @@ float brdf_weight(Brdf b, vec3 wo, vec3 wi) {
         }
         return ggx_g1(a, wi.z);
     }
-    if (b.id == BRDF_WARD) {
+    if (brdf_is(b, BRDF_WARD)) {
         vec3 h = normalize(wo + wi);
         return max(h.z * h.z * h.z * dot(wo, h) * sqrt(wi.z / wo.z), 0.0);
     }

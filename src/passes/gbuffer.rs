@@ -91,6 +91,14 @@ pub fn shape_record(shape: &Shape) -> GpuObject {
     }
 }
 
+/// The BRDFs `objects` use: bit `id` for each BRDF id ([`crate::abi::brdf::ids`]) among
+/// their records.
+pub fn brdf_bits(objects: &[GpuObject]) -> u32 {
+    objects.iter().fold(0, |bits, o| {
+        bits | 1u32.checked_shl(o.brdf[0] as u32).unwrap_or(0)
+    })
+}
+
 /// The G-buffer of one frame: three RGBA32F images, and the objects it was made from.
 pub struct GBuffer {
     /// Width in pixels.
@@ -107,6 +115,8 @@ pub struct GBuffer {
     pub objects: Buffer,
     /// How many.
     pub count: u32,
+    /// The BRDFs they use, bit `id` for BRDF `id` ([`brdf_bits`]).
+    pub brdfs: u32,
     /// The camera whose rays made it, where known: footprint lookups cast sub-pixel rays.
     pub camera: Option<Camera>,
 }
@@ -165,6 +175,7 @@ impl GBuffer {
             view: target(ctx, "gbuffer view", w, h)?,
             objects: Buffer::storage(ctx, "scene objects", objects)?,
             count: objects.len() as u32,
+            brdfs: brdf_bits(objects),
             camera: None,
         })
     }

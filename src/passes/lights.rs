@@ -49,9 +49,11 @@ impl GpuLights {
         let mut list = gpu_list(&tree.lights);
         list.extend(cluster_list(clusters));
         list.extend(tree.gpu_nodes());
-        if list.is_empty() {
-            list.push([0.0; 4]);
-        }
+        // shade.frag's walk step loads a texel's header and four quadrature nodes from any
+        // item, so from the last node it reads past its TREE_VEC4S: zeros there.
+        use crate::abi::lights::{HEADER_VEC4S, TREE_VEC4S};
+        let pad = (HEADER_VEC4S + 4).saturating_sub(TREE_VEC4S).max(1);
+        list.extend(std::iter::repeat_n([0.0; 4], pad as usize));
         Ok(GpuLights {
             buffer: Buffer::storage(ctx, "light texels", &list)?,
             count: lights.len() as u32,

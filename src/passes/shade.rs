@@ -67,12 +67,14 @@ impl Footprint {
     }
 }
 
-/// Which of shade.frag's code a draw with `inputs` runs (its specialisation constant 0): a
-/// bit per technique whose inputs are bound (`dp` stands for FIS), mirrors' lookups always,
-/// and the footprint lookups where asked. The rest folds away, so that llvmpipe builds, say,
-/// a FIS shade in 85–90 ms rather than the whole one's 260–280 ms (an object whose
-/// technique's inputs are missing would draw black).
-pub fn code_mask(inputs: &ShadeInputs<'_>) -> u32 {
+/// Which of shade.frag's code a draw of `gbuf` with `inputs` runs (its specialisation
+/// constant 0): a bit per technique whose inputs are bound (`dp` stands for FIS), mirrors'
+/// lookups always, the footprint lookups and shadow rays where asked, and the BRDFs of
+/// `gbuf`'s objects. The rest folds away, so that llvmpipe builds, say, a FIS shade in
+/// 85–90 ms rather than the whole one's 260–280 ms (an object whose technique's inputs are
+/// missing would draw black), and runs a light tree walk's steps without the code of BRDFs
+/// and shadows the scene lacks (llvmpipe runs a loop's whole body at every step).
+pub fn code_mask(inputs: &ShadeInputs<'_>, gbuf: &GBuffer) -> u32 {
     code_bits(&ShadeCode {
         fis: inputs.dp.is_some(),
         sh: inputs.sh.is_some(),
@@ -81,6 +83,8 @@ pub fn code_mask(inputs: &ShadeInputs<'_>) -> u32 {
         sh_brdf: inputs.brdf_sh.is_some(),
         split_sum: inputs.split.is_some(),
         footprint: inputs.footprint.mirror || inputs.footprint.background,
+        shadows: inputs.shadows,
+        brdfs: gbuf.brdfs,
     })
 }
 
@@ -102,6 +106,10 @@ pub struct ShadeCode {
     pub split_sum: bool,
     /// Footprint-filtered mirrors or background.
     pub footprint: bool,
+    /// Shadow rays.
+    pub shadows: bool,
+    /// The BRDFs the objects use ([`super::gbuffer::brdf_bits`]).
+    pub brdfs: u32,
 }
 
 /// The code mask of a draw with `code`'s inputs (see [`code_mask`]).
@@ -120,7 +128,16 @@ pub fn code_bits(code: &ShadeCode) -> u32 {
         } else {
             0
         }
+        | if code.shadows {
+            crate::abi::shade_code::SHADOWS
+        } else {
+            0
+        }
+        | (code.brdfs & ((1 << BRDF_IDS) - 1)) << crate::abi::shade_code::BRDF_SHIFT
 }
+
+/// BRDF ids the code mask has room for (bits BRDF_SHIFT… of 32).
+const BRDF_IDS: u32 = 32 - crate::abi::shade_code::BRDF_SHIFT;
 
 /// The shading pass.
 pub struct Shade {
@@ -257,7 +274,7 @@ impl Shade {
                 ))
             }
         };
-        let pipeline = self.pipeline(code_mask(inputs))?;
+        let pipeline = self.pipeline(code_mask(inputs, gbuf))?;
         rec.span("shade", |rec| {
             rec.draw_fullscreen(
                 &pipeline,
