@@ -315,15 +315,15 @@ uint walk_bound() {
     return pc.tree_nodes + pc.lights * max((pc.light_stride - LIGHT_HEADER_VEC4S) / 4u, 1u);
 }
 
-// One step of walk k for a kernel of scale `scale` about r whose cut plane has normal `cut`,
-// a node allowed an error `allowance` (light_tree_whole).
+// One step of walk k for a kernel of scale `scale` about r whose cut plane has normal `cut`
+// (fading as cos^fade towards it), a node allowed an error `allowance` (light_tree_whole).
 // False where it only descended; otherwise what to sum: four weighted directions d·w (a
 // node taken whole: its sigma points, a quarter of its power each; a texel small against
 // the kernel: its centre, then zero weights; else four of its quadrature nodes) and the
 // radiance or power they carry; a texel's centre also in `centre` (zero for a node). Every
 // item is four directions so that the caller evaluates its kernel in one place: llvmpipe
 // runs a loop's whole body at every step, each copy of the kernel included.
-bool walk_step(inout Walk k, vec3 r, float scale, vec3 cut, float allowance,
+bool walk_step(inout Walk k, vec3 r, float scale, vec3 cut, float fade, float allowance,
                out mat4x3 d, out vec4 w, out vec3 light, out vec3 centre) {
     d = mat4x3(0.0);
     w = vec4(0.0);
@@ -359,7 +359,7 @@ bool walk_step(inout Walk k, vec3 r, float scale, vec3 cut, float allowance,
     }
     // A node: (centre, reach), (power, ρ), (axis 0, luminance), (axis 1, 0), (first, count, skip).
     uvec4 range = uvec4(v4);
-    if (!light_tree_whole(v0, v2.w, r, scale, cut, allowance)) {
+    if (!light_tree_whole(v0, v2.w, r, scale, cut, allowance, fade)) {
         if (range.y <= LIGHT_LEAF_TEXELS) {
             k.j = range.x;
             k.end = range.x + range.y;
@@ -393,6 +393,7 @@ float brdf_eval_world(Brdf b, vec3 wo, vec3 t, vec3 bt, vec3 n, vec3 d) {
 vec3 fis_lights(Brdf b, vec3 wo, vec3 t, vec3 bt, vec3 n, vec3 r, float scale, vec3 origin,
                 float allowance, bool shadows) {
     vec3 sum = vec3(0.0);
+    float fade = BRDF_HORIZON_FADE[b.id];
     Walk k = Walk(0u, 0u, 0u, 0u);
     for (uint step = 0u; step < walk_bound(); step++) {
         bool done = walk_over(k);
@@ -401,7 +402,7 @@ vec3 fis_lights(Brdf b, vec3 wo, vec3 t, vec3 bt, vec3 n, vec3 r, float scale, v
         mat4x3 d;
         vec4 w;
         vec3 light, centre;
-        if (!walk_step(k, r, scale, n, allowance, d, w, light, centre)) continue;
+        if (!walk_step(k, r, scale, n, fade, allowance, d, w, light, centre)) continue;
         vec4 f = vec4(brdf_eval_world(b, wo, t, bt, n, d[0]), brdf_eval_world(b, wo, t, bt, n, d[1]),
                       brdf_eval_world(b, wo, t, bt, n, d[2]), brdf_eval_world(b, wo, t, bt, n, d[3]));
         if (shadows) {
@@ -516,7 +517,7 @@ vec3 split_sum(Object ob, vec3 n, vec3 v, vec3 r) {
             mat4x3 d;
             vec4 w;
             vec3 light, centre;
-            if (!walk_step(k, r, a, r, allowance, d, w, light, centre)) continue;
+            if (!walk_step(k, r, a, r, LIGHT_KERNEL_FADE, allowance, d, w, light, centre)) continue;
             vec3 e0 = r - d[0], e1 = r - d[1], e2 = r - d[2], e3 = r - d[3];
             vec4 f = vec4(chain_kernel(a2, 0.5 * dot(e0, e0)), chain_kernel(a2, 0.5 * dot(e1, e1)),
                           chain_kernel(a2, 0.5 * dot(e2, e2)), chain_kernel(a2, 0.5 * dot(e3, e3)));

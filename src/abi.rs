@@ -198,6 +198,12 @@ pub mod brdf {
         /// Split-sum: one prefiltered lookup times the DFG table (Karis 2013).
         pub const SPLIT_SUM: u32 = 6;
     }
+    /// How each BRDF's f·cos fades towards the surface's horizon, by id: f·cos ≤ C·cos^fade
+    /// there, with C about its lobe's size (what a light tree node the horizon crosses may
+    /// be taken whole by, [`crate::math::light_tree::horizon_share`]). Lambert and Blinn
+    /// carry the cosine, GGX its masking (G ≤ 2 cos θ/α); Ward's 1/√cos leaves √cos; the
+    /// normalised Phong lobe and mirrors do not fade.
+    pub const HORIZON_FADE: [f64; 6] = [1.0, 0.0, 0.0, 1.0, 1.0, 0.5];
     /// GGX roughness below this is taken as this (the mirror limit with finite numbers).
     pub const GGX_ALPHA_MIN: f64 = 1e-4;
     /// Smallest Ward roughness accepted.
@@ -418,6 +424,9 @@ pub mod lights {
     pub const TREE_BUDGET: f64 = 1e-2;
     /// See [`TREE_BUDGET`]: beyond the kernel's scale the sigma points stop being a rule.
     pub const TREE_BUDGET_REACH: f64 = 1.0;
+    /// How the light sums' own kernels fade towards their cut (`math::light_tree::
+    /// horizon_share`): the cosine and split-sum's GGX (D·G/4, its masking) both linearly.
+    pub const KERNEL_FADE: f64 = 1.0;
     /// A light tree's leaves hold at most this many texels.
     pub const LEAF_TEXELS: u32 = 4;
     /// vec4s per light tree node in the GPU's list (math::light_tree::LightTree::gpu_nodes).
@@ -1158,6 +1167,11 @@ pub fn generated_header() -> String {
         "#define LIGHT_TREE_BUDGET_REACH {:?}",
         lights::TREE_BUDGET_REACH as f32
     );
+    let _ = writeln!(
+        s,
+        "#define LIGHT_KERNEL_FADE {:?}",
+        lights::KERNEL_FADE as f32
+    );
     let _ = writeln!(s, "#define LIGHT_LEAF_TEXELS {}u", lights::LEAF_TEXELS);
     let _ = writeln!(s, "#define LIGHT_TREE_TAIL {:?}", lights::TREE_TAIL as f32);
     let _ = writeln!(s, "#define LIGHT_TREE_VEC4S {}u", lights::TREE_VEC4S);
@@ -1258,6 +1272,14 @@ pub fn generated_header() -> String {
     let (x, w) = sh_brdf::gauss4();
     let list = |v: [f64; 4]| v.map(|a| format!("{a:.9e}")).join(", ");
     let _ = writeln!(s, "const float SH_BRDF_GL_X[4] = float[4]({});", list(x));
+    let fades: Vec<String> = brdf::HORIZON_FADE.iter().map(|&x| f(x)).collect();
+    let _ = writeln!(
+        s,
+        "const float BRDF_HORIZON_FADE[{}] = float[{}]({});",
+        fades.len(),
+        fades.len(),
+        fades.join(", ")
+    );
     let _ = writeln!(s, "const float SH_BRDF_GL_W[4] = float[4]({});", list(w));
     for (i, name) in MAPPING_NAMES.iter().enumerate() {
         let _ = writeln!(s, "#define MAPPING_{name} {i}u");

@@ -26,18 +26,21 @@ bool light_centre_only(float rho, float w2, uint stride) {
 }
 
 // Whether a light tree node (centre.xyz, reach in .w; its power's luminance `lum`) is taken
-// whole by a kernel of scale `scale` about r whose cut plane has normal `cut`, a node
-// allowed an error `allowance` (math::light_tree::takes_whole).
-bool light_tree_whole(vec4 node, float lum, vec3 r, float scale, vec3 cut, float allowance) {
+// whole by a kernel of scale `scale` about r whose cut plane has normal `cut`, fading as
+// cos^fade towards it, a node allowed an error `allowance` (math::light_tree::takes_whole).
+bool light_tree_whole(vec4 node, float lum, vec3 r, float scale, vec3 cut, float allowance,
+                      float fade) {
     float far = max(length(r - node.xyz) - node.w, 0.0);
     float w = max(scale, LIGHT_TREE_TAIL * far);
     float q = node.w / w;
-    bool clear = abs(dot(cut, node.xyz)) > node.w;
+    float height = abs(dot(cut, node.xyz));
+    bool clear = height > node.w;
     if (clear && q < LIGHT_TREE_BELOW) return true;
     // math::light_tree::kernel_bound
     float s2 = scale * scale, d = s2 + 0.25 * far * far;
     float e = lum * s2 / (PI * d * d);
-    if (clear) e *= q * q * q * q;
+    // math::light_tree::horizon_share (its argument is positive: a node's reach is)
+    e *= clear ? q * q * q * q : pow(min(2.0 * (height + node.w) / scale, 1.0), fade);
     return q < LIGHT_TREE_BUDGET_REACH && e <= allowance;
 }
 #endif

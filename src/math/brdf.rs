@@ -196,6 +196,11 @@ impl Brdf {
         }
     }
 
+    /// How its f·cos fades towards the horizon ([`crate::abi::brdf::HORIZON_FADE`]).
+    pub fn horizon_fade(&self) -> f64 {
+        crate::abi::brdf::HORIZON_FADE[self.id() as usize]
+    }
+
     /// The two parameters the shaders read: (n, 0), (α, correlated) or (αx, αy).
     pub fn params(&self) -> [f64; 2] {
         match *self {
