@@ -72,7 +72,14 @@ impl LightTree {
         if !lights.is_empty() {
             build(&lights, &mut order, 0, &mut nodes);
         }
-        let lights = order.iter().map(|&k| lights[k].clone()).collect();
+        // Moved into tree order, not cloned (each texel owns its quadrature's list).
+        let mut rank = vec![0; order.len()];
+        for (r, &k) in order.iter().enumerate() {
+            rank[k] = r;
+        }
+        let mut ranked: Vec<(usize, PreparedLight)> = rank.into_iter().zip(lights).collect();
+        ranked.sort_unstable_by_key(|&(r, _)| r);
+        let lights = ranked.into_iter().map(|(_, t)| t).collect();
         LightTree { lights, nodes }
     }
 
@@ -321,12 +328,15 @@ fn build(lights: &[PreparedLight], order: &mut [usize], first: u32, nodes: &mut 
         } else {
             2
         };
-        order.sort_by(|&a, &b| {
+        // A median split needs the halves, not their order: selection is O(n) where a sort
+        // made the build O(n log² n) (studio_small_08's 15 158 texels: 7.5 ms). The order is
+        // total, so the halves are those a sort gives.
+        let m = order.len() / 2;
+        order.select_nth_unstable_by(m, |&a, &b| {
             lights[a].dir[axis]
                 .total_cmp(&lights[b].dir[axis])
                 .then(a.cmp(&b))
         });
-        let m = order.len() / 2;
         let (left, right) = order.split_at_mut(m);
         build(lights, left, first, nodes);
         build(lights, right, first + m as u32, nodes);

@@ -39,13 +39,23 @@ impl GpuLights {
         lights: &[PreparedLight],
         clusters: &[Cluster],
     ) -> Result<GpuLights> {
+        Self::upload_owned(ctx, lights.to_vec(), clusters)
+    }
+
+    /// [`GpuLights::upload_with_clusters`] of lights it may reorder in place.
+    fn upload_owned(
+        ctx: &Context,
+        lights: Vec<PreparedLight>,
+        clusters: &[Cluster],
+    ) -> Result<GpuLights> {
         let nodes = lights.first().map_or(0, |t| t.nodes.len()) as u32;
         if lights.iter().any(|t| t.nodes.len() as u32 != nodes) {
             return Err(Error::Invalid(
                 "light texels with different node counts".into(),
             ));
         }
-        let tree = LightTree::new(lights.to_vec());
+        let count = lights.len() as u32;
+        let tree = LightTree::new(lights);
         let mut list = gpu_list(&tree.lights);
         list.extend(cluster_list(clusters));
         list.extend(tree.gpu_nodes());
@@ -56,7 +66,7 @@ impl GpuLights {
         list.extend(std::iter::repeat_n([0.0; 4], pad as usize));
         Ok(GpuLights {
             buffer: Buffer::storage(ctx, "light texels", &list)?,
-            count: lights.len() as u32,
+            count,
             nodes,
             clusters: clusters.len() as u32,
             tree_nodes: tree.nodes.len() as u32,
@@ -90,7 +100,7 @@ impl GpuLights {
         }
         let t = texels.map(|ex| prepare(map, ex, file_to_world, finest));
         let c = diffuse.map(|ex| clusters(ex, file_to_world, CLUSTER_GRID));
-        Self::upload_with_clusters(ctx, &t.unwrap_or_default(), &c.unwrap_or_default()).map(Some)
+        Self::upload_owned(ctx, t.unwrap_or_default(), &c.unwrap_or_default()).map(Some)
     }
 
     /// Clusters held.
