@@ -205,7 +205,7 @@ vec3 footprint_lights(vec3 r, vec3 a, vec3 b) {
     // The shares' total: the texels' squares do not tile the pixel, so where they overlap it
     // may pass 1, and the sum is divided by it.
     float total = 0.0;
-    // One item per iteration, a texel of the current leaf or a node (see fis_lights).
+    // One item per iteration, a texel of the current leaf or a node (as walk_step).
     uint i = 0u, j = 0u, end = 0u;
     for (uint step = 0u; step < pc.tree_nodes + pc.lights; step++) {
         bool done = j >= end && i >= pc.tree_nodes;

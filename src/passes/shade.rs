@@ -138,6 +138,10 @@ pub fn code_bits(code: &ShadeCode) -> u32 {
 
 /// BRDF ids the code mask has room for (bits BRDF_SHIFT… of 32).
 const BRDF_IDS: u32 = 32 - crate::abi::shade_code::BRDF_SHIFT;
+const _: () = assert!(
+    crate::abi::brdf::ids::WARD < BRDF_IDS,
+    "a BRDF id past the mask"
+);
 
 /// The shading pass.
 pub struct Shade {
@@ -359,5 +363,45 @@ impl Shade {
             .ctx
             .run("shading", |rec| self.record(rec, gbuf, inputs, &frame))?;
         Ok((frame, t))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::gbuffer::{brdf_bits, GpuObject};
+    use super::*;
+    use crate::abi::brdf::{ids, technique};
+    use crate::abi::shade_code::{BRDF_SHIFT, SHADOWS};
+
+    /// The code mask keeps the shadow rays' code only where asked and one bit per BRDF the
+    /// objects use, in bits no technique or footprint bit shares.
+    #[test]
+    fn code_mask_keeps_shadows_and_the_objects_brdfs() {
+        let object = |id: u32| GpuObject {
+            brdf: [id as f32, 0.3, 1.0, 64.0],
+            ..Default::default()
+        };
+        let objects = [object(ids::GGX), object(ids::LAMBERT), object(ids::GGX)];
+        let brdfs = brdf_bits(&objects);
+        assert_eq!(brdfs, (1 << ids::GGX) | (1 << ids::LAMBERT));
+        let code = ShadeCode {
+            fis: true,
+            brdfs,
+            ..Default::default()
+        };
+        let bits = code_bits(&code);
+        assert_eq!(bits >> BRDF_SHIFT, brdfs);
+        assert_eq!(bits & SHADOWS, 0);
+        assert_ne!(bits & (1 << technique::FIS), 0);
+        let shadowed = code_bits(&ShadeCode {
+            shadows: true,
+            ..code
+        });
+        assert_eq!(shadowed, bits | SHADOWS);
+        // The layout: techniques below the footprint bit, below SHADOWS, below the BRDFs.
+        let techniques = (1 << (technique::SPLIT_SUM + 1)) - 1;
+        let fixed = techniques | crate::abi::footprint::CODE | SHADOWS;
+        assert_eq!(fixed & (u32::MAX << BRDF_SHIFT), 0);
+        assert_eq!(techniques & (crate::abi::footprint::CODE | SHADOWS), 0);
     }
 }
