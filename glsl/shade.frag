@@ -312,7 +312,7 @@ bool walk_over(Walk k) {
 // loops' bound, which llvmpipe needs (it miscompiled an unbounded while, zeroing other
 // pixels of the frame).
 uint walk_bound() {
-    return pc.tree_nodes + pc.lights * max((pc.light_stride - LIGHT_HEADER_VEC4S) / 4u, 1u);
+    return pc.tree_nodes + pc.lights * max((pc.light_stride - LIGHT_HEADER_VEC4S) / LIGHT_STEP_NODES, 1u);
 }
 
 // One step of walk k for a kernel of scale `scale` about r whose cut plane has normal `cut`
@@ -336,7 +336,7 @@ bool walk_step(inout Walk k, vec3 r, float scale, vec3 cut, float fade, float al
     uint q0 = k.j * pc.light_stride;
     uint at = pc.tree_at + k.i * LIGHT_TREE_VEC4S;
     uint base = texel ? q0 : at;
-    uint more = texel ? q0 + LIGHT_HEADER_VEC4S + 4u * k.c : at + 2u;
+    uint more = texel ? q0 + LIGHT_HEADER_VEC4S + LIGHT_STEP_NODES * k.c : at + 2u;
     vec4 v0 = lights[base], v1 = lights[base + 1u];
     vec4 v2 = lights[more], v3 = lights[more + 1u], v4 = lights[more + 2u], v5 = lights[more + 3u];
     if (texel) {
@@ -350,7 +350,7 @@ bool walk_step(inout Walk k, vec3 r, float scale, vec3 cut, float fade, float al
             d = mat4x3(v2.xyz, v3.xyz, v4.xyz, v5.xyz);
             w = vec4(v2.w, v3.w, v4.w, v5.w);
             k.c++;
-            if (more + 4u >= q0 + pc.light_stride) {
+            if (more + LIGHT_STEP_NODES >= q0 + pc.light_stride) {
                 k.c = 0u;
                 k.j++;
             }

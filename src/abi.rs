@@ -396,6 +396,9 @@ pub mod lights {
     /// vec4s per light texel in the GPU's list: (world centre, Ω), (excess rgb, ρ = √Ω),
     /// then its quadrature nodes' (world direction, weight).
     pub const HEADER_VEC4S: u32 = 2;
+    /// Directions a light walk step hands its kernel (shade.frag's walk_step: a node's sigma
+    /// points, or this many of a texel's quadrature nodes, whose count is a multiple of it).
+    pub const STEP_NODES: u32 = 4;
     /// A light texel takes its centre alone where PER_WIDTH·ρ < CENTRE_BELOW·w (w the
     /// kernel's scale there), its nodes elsewhere.
     pub const PER_WIDTH: f64 = 4.0;
@@ -1133,6 +1136,7 @@ pub fn generated_header() -> String {
     let _ = writeln!(s, "#define SH_WORKGROUP {SH_WORKGROUP}");
     let _ = writeln!(s, "#define BRUTE_TILE {BRUTE_TILE}u");
     let _ = writeln!(s, "#define LIGHT_HEADER_VEC4S {}u", lights::HEADER_VEC4S);
+    let _ = writeln!(s, "#define LIGHT_STEP_NODES {}u", lights::STEP_NODES);
     let _ = writeln!(s, "#define LIGHT_CLUSTER_VEC4S {}u", lights::CLUSTER_VEC4S);
     let _ = writeln!(s, "#define LIGHTS_KERNEL_COSINE {}u", lights::KERNEL_COSINE);
     let _ = writeln!(s, "#define LIGHTS_KERNEL_GGX {}u", lights::KERNEL_GGX);

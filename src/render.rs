@@ -12,7 +12,7 @@ use crate::math::sh::Window;
 use crate::math::sh_brdf::ViewGrid;
 use crate::math::split_sum::chain_norm;
 use crate::math::{sh, Mapping, Orientation};
-use crate::passes::gbuffer::{shape_record, target, GBuffer, GpuObject};
+use crate::passes::gbuffer::{brdf_bits, shape_record, target, GBuffer, GpuObject};
 use crate::passes::mc::{McEnv, McOptions};
 use crate::passes::sh_project::Subgroups;
 use crate::passes::shade::{Footprint, Rotation, ShadeCode, ShadeInputs};
@@ -505,10 +505,7 @@ impl Renderer {
                 f.mirror || f.background
             },
             shadows: scene.shadows,
-            brdfs: scene
-                .objects
-                .iter()
-                .fold(0, |bits, o| bits | 1 << o.material.kind.id()),
+            brdfs: brdf_bits(scene.objects.iter().map(|o| o.material.kind.id())),
         };
         let (each, extract_ms, built) = std::thread::scope(|s| {
             let build = s.spawn(|| shade.prepare_code(&code));

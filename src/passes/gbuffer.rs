@@ -91,12 +91,10 @@ pub fn shape_record(shape: &Shape) -> GpuObject {
     }
 }
 
-/// The BRDFs `objects` use: bit `id` for each BRDF id ([`crate::abi::brdf::ids`]) among
-/// their records.
-pub fn brdf_bits(objects: &[GpuObject]) -> u32 {
-    objects.iter().fold(0, |bits, o| {
-        bits | 1u32.checked_shl(o.brdf[0] as u32).unwrap_or(0)
-    })
+/// Bit `id` for each BRDF id among `ids` ([`crate::abi::brdf::ids`]).
+pub fn brdf_bits(ids: impl IntoIterator<Item = u32>) -> u32 {
+    ids.into_iter()
+        .fold(0, |bits, id| bits | 1u32.checked_shl(id).unwrap_or(0))
 }
 
 /// The G-buffer of one frame: three RGBA32F images, and the objects it was made from.
@@ -175,7 +173,7 @@ impl GBuffer {
             view: target(ctx, "gbuffer view", w, h)?,
             objects: Buffer::storage(ctx, "scene objects", objects)?,
             count: objects.len() as u32,
-            brdfs: brdf_bits(objects),
+            brdfs: brdf_bits(objects.iter().map(|o| o.brdf[0] as u32)),
             camera: None,
         })
     }

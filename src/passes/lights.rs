@@ -59,10 +59,12 @@ impl GpuLights {
         let mut list = gpu_list(&tree.lights);
         list.extend(cluster_list(clusters));
         list.extend(tree.gpu_nodes());
-        // shade.frag's walk step loads a texel's header and four quadrature nodes from any
-        // item, so from the last node it reads past its TREE_VEC4S: zeros there.
-        use crate::abi::lights::{HEADER_VEC4S, TREE_VEC4S};
-        let pad = (HEADER_VEC4S + 4).saturating_sub(TREE_VEC4S).max(1);
+        // shade.frag's walk step loads a texel's header and STEP_NODES quadrature nodes from
+        // any item, so from the last node it reads past its TREE_VEC4S: zeros there.
+        use crate::abi::lights::{HEADER_VEC4S, STEP_NODES, TREE_VEC4S};
+        let pad = (HEADER_VEC4S + STEP_NODES)
+            .saturating_sub(TREE_VEC4S)
+            .max(1);
         list.extend(std::iter::repeat_n([0.0; 4], pad as usize));
         Ok(GpuLights {
             buffer: Buffer::storage(ctx, "light texels", &list)?,
@@ -128,6 +130,9 @@ impl GpuLights {
         &self.buffer
     }
 }
+
+// shade.frag's walk step hands its kernel the STEP_NODES directions as one mat4x3.
+const _: () = assert!(crate::abi::lights::STEP_NODES == 4, "walk_step's mat4x3");
 
 /// The lights pass.
 pub struct LightsPass {

@@ -382,7 +382,7 @@ mod tests {
             ..Default::default()
         };
         let objects = [object(ids::GGX), object(ids::LAMBERT), object(ids::GGX)];
-        let brdfs = brdf_bits(&objects);
+        let brdfs = brdf_bits(objects.iter().map(|o| o.brdf[0] as u32));
         assert_eq!(brdfs, (1 << ids::GGX) | (1 << ids::LAMBERT));
         let code = ShadeCode {
             fis: true,
