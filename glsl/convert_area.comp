@@ -11,6 +11,7 @@
 // plane and each source texel's power is counted once. The float64 twin is
 // math::convert::latlong_area, step for step.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 #include "mappings.glsl"
 
 layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
@@ -44,6 +45,14 @@ vec3 point(uint face, uint a, uint b, uint m) {
                 dot(pc.world_to_file[2].xyz, d));
 }
 
+// Column c (U unwrapped) in [0, w), by a float quotient and a fix-up rather than integer
+// remainders, which llvmpipe takes lane by lane.
+int wrap_column(int c, int w) {
+    c -= w * int(floor(float(c) / float(w)));
+    c += c < 0 ? w : 0;
+    return c >= w ? c - w : c;
+}
+
 bool on_pole(vec3 d) { return d.x == 0.0 && d.z == 0.0; }
 
 bool before(vec2 a, vec2 b) { return a.x < b.x || (a.x == b.x && a.y <= b.y); }
@@ -53,7 +62,7 @@ bool before(vec2 a, vec2 b) { return a.x < b.x || (a.x == b.x && a.y <= b.y); }
 #define CUT(dst, src, n, bound, above, out) { \
     uint k_ = 0u; \
     for (uint i_ = 0u; i_ < (n); i_++) { \
-        vec2 a_ = src[i_], b_ = src[(i_ + 1u) % (n)]; \
+        vec2 a_ = src[i_], b_ = src[i_ + 1u == (n) ? 0u : i_ + 1u]; \
         bool ia_ = (above) ? a_.y >= (bound) : a_.y <= (bound); \
         bool ib_ = (above) ? b_.y >= (bound) : b_.y <= (bound); \
         if (ia_) dst[k_++] = a_; \
@@ -65,6 +74,23 @@ bool before(vec2 a, vec2 b) { return a.x < b.x || (a.x == b.x && a.y <= b.y); }
         } \
     } \
     out = k_; \
+}
+
+// The rows a polygon spanning z in [zmin, zmax] meets, by the same band edges as the clip.
+ivec2 rows_met(float zmin, float zmax, int h) {
+    int r0 = clamp(int(floor(acos(clamp(zmax, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
+    int r1 = clamp(int(floor(acos(clamp(zmin, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
+    while (r0 > 0 && latlong_band_edge(r0, h) < zmax) r0--;
+    while (r0 < r1 && latlong_band_edge(r0 + 1, h) >= zmax) r0++;
+    while (r1 < h - 1 && latlong_band_edge(r1 + 1, h) > zmin) r1++;
+    while (r1 > r0 && latlong_band_edge(r1, h) <= zmin) r1--;
+    return ivec2(r0, r1);
+}
+
+// The source texel under point v of the (U, z) plane.
+vec3 texel_under(vec2 v, int w, int h) {
+    int row = clamp(int(floor(acos(clamp(v.y, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
+    return texelFetch(src, ivec3(wrap_column(int(floor(v.x)), w), row, 0), 0).rgb;
 }
 
 // A paraboloid texel outside its disc: the source texel at its own half's rim nearest its
@@ -81,9 +107,9 @@ void store_rim(uvec3 id) {
     imageStore(dst, ivec3(id), vec4(texelFetch(src, ivec3(p, 0), 0).rgb, 1.0));
 }
 
-void main() {
-    uvec3 id = gl_GlobalInvocationID;
-    if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
+// The texel's footprint walked band by band (any texel: a pole on its boundary or inside it,
+// a paraboloid's rim).
+void general(uvec3 id) {
     if (DST_MAPPING == MAPPING_DUAL_PARABOLOID && !texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy))) {
         store_rim(id);
         return;
@@ -165,24 +191,15 @@ void main() {
         zmin = min(zmin, poly[k].y);
         zmax = max(zmax, poly[k].y);
     }
-    // The rows the polygon meets, by the same band edges as the clip.
-    int r0 = clamp(int(floor(acos(clamp(zmax, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
-    int r1 = clamp(int(floor(acos(clamp(zmin, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
-    while (r0 > 0 && latlong_band_edge(r0, h) < zmax) r0--;
-    while (r0 < r1 && latlong_band_edge(r0 + 1, h) >= zmax) r0++;
-    while (r1 < h - 1 && latlong_band_edge(r1 + 1, h) > zmin) r1++;
-    while (r1 > r0 && latlong_band_edge(r1, h) <= zmin) r1--;
+    ivec2 rows = rows_met(zmin, zmax, h);
+    int r0 = rows.x, r1 = rows.y;
 
     // Sums of (L − L0) rather than L: a constant map comes out exact, whatever the pieces'
     // rounding. L0 is the least, per channel, of the texels under the polygon's points: one
     // that merely touches the footprint may be a sun 1e5 × the mean, whose cancellation would
     // cost float32 its digits; the least is at most the mean.
     vec3 l0 = vec3(3.4e38);
-    for (uint k = 0u; k < npoly; k++) {
-        int row = clamp(int(floor(acos(clamp(poly[k].y, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
-        int col = ((int(floor(poly[k].x)) % w) + w) % w;
-        l0 = min(l0, texelFetch(src, ivec3(col, row, 0), 0).rgb);
-    }
+    for (uint k = 0u; k < npoly; k++) l0 = min(l0, texel_under(poly[k], w, h));
     vec3 num = vec3(0.0);
     float den = 0.0;
     for (int row = r0; row <= r1; row++) {
@@ -192,7 +209,7 @@ void main() {
         CUT(tmp, poly, npoly, zlo, true, nb);
         CUT(band, tmp, nb, zhi, false, nb);
         for (uint k = 0u; k < nb; k++) {
-            vec2 a = band[k], b = band[(k + 1u) % nb];
+            vec2 a = band[k], b = band[k + 1u == nb ? 0u : k + 1u];
             bool fwd = before(a, b);
             vec2 p = fwd ? a : b, q = fwd ? b : a;
             float sgn = fwd ? 1.0 : -1.0;
@@ -215,7 +232,7 @@ void main() {
                     float mz = d / 6.0 * 0.5 *
                                (((z0 - zc) * (z0 - zc) - base) + 4.0 * ((zm - zc) * (zm - zc) - base) +
                                 ((z1 - zc) * (z1 - zc) - base));
-                    int col = ((c % w) + w) % w;
+                    int col = wrap_column(c, w);
                     uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
                     vec3 gu = slopes[o].xyz, gz = slopes[o + 1u].xyz;
                     num += area * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + mu * gu +
@@ -230,3 +247,128 @@ void main() {
     vec3 result = den != 0.0 ? l0 + num / den : l0;
     imageStore(dst, ivec3(id), vec4(max(result, vec3(0.0)), 1.0));
 }
+
+// Whether texel (i, j) of layer `face` is left to the general walk (general()): every texel of
+// a small output, and on the faces that hold the poles (+Y and −Y: the orientations turn about
+// Y and may flip it) a window of AREA_FAST_WINDOW texels either side of the centre, which holds
+// every texel with a corner near the pole's axis (AREA_POLE_NEAR). Integers, so that
+// the fast and the general dispatch split the texels exactly (twin:
+// math::convert::area_general_texel).
+bool general_texel(uint face, uint i, uint j, uint n) {
+    if (n < AREA_FAST_MIN_SIZE) return true;
+    if (face != 2u && face != 3u) return false;
+    int lim = 2 * int(AREA_FAST_WINDOW);
+    return abs(int(2u * i + 1u) - int(n)) <= lim && abs(int(2u * j + 1u) - int(n)) <= lim;
+}
+
+#if defined(FAST)
+// The fast path for a cube texel away from the poles: its polygon is the EDGE_STEPS points a
+// side, with no pole on or inside it. Rather than clipping it band by band, each source texel
+// (cell) of its bounding box takes, from each edge, the integrals under the edge clamped to the
+// cell's band, ∫(clamp(z, zlo, zhi) − zlo) dU and the moments (Green's theorem again: the
+// clamped edges bound the polygon's overlap with the band), so there are no arrays indexed at
+// run time and no loops over clipped vertices, which llvmpipe takes lane by lane.
+const uint FAST_POINTS = 4u * AREA_EDGE_STEPS;
+
+// (area, ∫∫(U − uc), ∫∫(z − zc)) of the polygon edge a → b within column [c, c + 1] and the
+// band [zlo, zhi] (zc its centre, uc the column's), signed by the edge's direction, computed
+// from the canonical endpoint order so that neighbours sharing the edge cancel exactly.
+vec3 edge_cell(vec2 a, vec2 b, float c, float uc, float zlo, float zhi, float zc) {
+    bool fwd = before(a, b);
+    vec2 p = fwd ? a : b, q = fwd ? b : a;
+    float u0 = max(p.x, c), u1 = min(q.x, c + 1.0);
+    if (!(u1 > u0)) return vec3(0.0);
+    float sgn = fwd ? 1.0 : -1.0;
+    float z0 = p.y + (q.y - p.y) * ((u0 - p.x) / (q.x - p.x));
+    float z1 = p.y + (q.y - p.y) * ((u1 - p.x) / (q.x - p.x));
+    float dz = z1 - z0;
+    // Where the piece crosses the band's edges (as fractions of it), in order.
+    float ta = dz != 0.0 ? clamp((zlo - z0) / dz, 0.0, 1.0) : 0.0;
+    float tb = dz != 0.0 ? clamp((zhi - z0) / dz, 0.0, 1.0) : 0.0;
+    float ts[4] = float[4](0.0, min(ta, tb), max(ta, tb), 1.0);
+    float base = (zlo - zc) * (zlo - zc);
+    vec3 acc = vec3(0.0);
+    [[unroll]] for (int k = 0; k < 3; k++) {
+        float s0 = ts[k], s1 = ts[k + 1], sm = 0.5 * (s0 + s1);
+        float ua = u0 + (u1 - u0) * s0, ub = u0 + (u1 - u0) * s1, um = 0.5 * (ua + ub);
+        float ga = clamp(z0 + dz * s0, zlo, zhi), gm = clamp(z0 + dz * sm, zlo, zhi),
+              gb = clamp(z0 + dz * s1, zlo, zhi);
+        float d = sgn * (ub - ua);
+        acc.x += d * (0.5 * (ga + gb) - zlo);
+        acc.y += d / 6.0 * ((ua - uc) * (ga - zlo) + 4.0 * (um - uc) * (gm - zlo) + (ub - uc) * (gb - zlo));
+        acc.z += d / 12.0 * (((ga - zc) * (ga - zc) - base) + 4.0 * ((gm - zc) * (gm - zc) - base) +
+                             ((gb - zc) * (gb - zc) - base));
+    }
+    return acc;
+}
+
+void main() {
+    uvec3 id = gl_GlobalInvocationID;
+    if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
+    uint face = id.z, i = id.x, j = id.y, n = pc.dst_size.x;
+    if (general_texel(face, i, j, n)) return;
+    int w = int(pc.src_size.x), h = int(pc.src_size.y);
+    float wf = float(w), scale = wf / (2.0 * PI);
+
+    // The boundary points, U unwrapped from the first (as general()).
+    const uvec2 steps[4] = uvec2[4](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 1));
+    vec2 v[FAST_POINTS];
+    [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
+        uint e = k / AREA_EDGE_STEPS, q = k % AREA_EDGE_STEPS, m = AREA_EDGE_STEPS;
+        uvec2 e0 = uvec2(i, j) + steps[e], e1 = uvec2(i, j) + steps[(e + 1u) % 4u];
+        uvec2 ab = e0 * (m - q) + e1 * q;
+        vec3 d = point(face, ab.x, ab.y, m);
+        float u = atan(d.x, -d.z) * scale;
+        if (k > 0u) {
+            float dd = u - v[k - 1u].x;
+            u = v[k - 1u].x + (dd - wf * round(dd / wf));
+        }
+        v[k] = vec2(u, d.y);
+    }
+    vec2 lo = v[0], hi = v[0];
+    [[unroll]] for (uint k = 1u; k < FAST_POINTS; k++) {
+        lo = min(lo, v[k]);
+        hi = max(hi, v[k]);
+    }
+    ivec2 rows = rows_met(lo.y, hi.y, h);
+    int c0 = int(floor(lo.x)), c1 = int(floor(hi.x));
+    vec3 l0 = vec3(3.4e38);
+    [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) l0 = min(l0, texel_under(v[k], w, h));
+
+    vec3 num = vec3(0.0);
+    float den = 0.0;
+    for (int row = rows.x; row <= rows.y; row++) {
+        float zhi = latlong_band_edge(row, h), zlo = latlong_band_edge(row + 1, h);
+        float zc = 0.5 * (zhi + zlo);
+        for (int c = c0; c <= c1; c++) {
+            float cf = float(c), uc = cf + 0.5;
+            vec3 m = vec3(0.0);
+            [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
+                m += edge_cell(v[k], v[(k + 1u) % FAST_POINTS], cf, uc, zlo, zhi, zc);
+            }
+            int col = wrap_column(c, w);
+            uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
+            num += m.x * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + m.y * slopes[o].xyz +
+                   m.z * slopes[o + 1u].xyz;
+            den += m.x;
+        }
+    }
+    vec3 result = den != 0.0 ? l0 + num / den : l0;
+    imageStore(dst, ivec3(id), vec4(max(result, vec3(0.0)), 1.0));
+}
+#elif defined(LIST)
+layout(std430, set = 0, binding = BINDING_CONVERT_LIST) readonly buffer List {
+    uvec4 list[];  // (i, j, layer, 0) of each texel general_texel leaves to this dispatch
+};
+
+void main() {
+    if (gl_GlobalInvocationID.x >= uint(list.length())) return;
+    general(list[gl_GlobalInvocationID.x].xyz);
+}
+#else
+void main() {
+    uvec3 id = gl_GlobalInvocationID;
+    if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
+    general(id);
+}
+#endif

@@ -28,6 +28,9 @@ pub mod binding {
         /// convert_slopes, convert_area: per lat-long texel its limited slopes dL/dU, dL/dz
         /// (two vec4, rgb used; storage buffer).
         CONVERT_SLOPES = 2;
+        /// convert_area (LIST): the texels the general walk takes, (i, j, layer, 0) each
+        /// (uvec4 storage buffer).
+        CONVERT_LIST = 3;
         /// mapping_probe: input directions (vec4 storage buffer).
         PROBE_IN = 0;
         /// mapping_probe: results (vec4 storage buffer).
@@ -634,6 +637,15 @@ pub mod area {
     /// vec4s of limited slopes per source texel (dL/dU rgb, then dL/dz rgb), the layout of
     /// the buffer convert_slopes.comp writes and convert_area.comp reads.
     pub const SLOPE_VEC4S: u32 = 2;
+    /// Cube outputs at least this large take the fast path (glsl/convert_area.comp, FAST)
+    /// away from the poles; smaller ones take the general walk everywhere.
+    pub const FAST_MIN_SIZE: u32 = 32;
+    /// On the cube faces that hold the poles, the texels within this many texels of the
+    /// centre (Chebyshev, from the texel's centre) take the general walk: at size ≥
+    /// [`FAST_MIN_SIZE`] every texel with a corner nearer the pole's axis than
+    /// [`POLE_NEAR`] / size lies within 4.13 + 0.5 texels of it.
+    pub const FAST_WINDOW: u32 = 6;
+    const _: () = assert!(POLE_NEAR <= 8.0 && FAST_MIN_SIZE >= 32 && FAST_WINDOW >= 5);
     /// The conversion serves sizes whose longest polygon walk
     /// (`math::convert::area_walk_steps`) takes at most this many loop steps (host only), under
     /// llvmpipe's limit of 65 535 per invocation with room for the estimate's error.
@@ -939,6 +951,14 @@ macro_rules! shader_table {
             ConvertArea = "convert_area", "convert_area.comp", Compute, [], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
                  (CONVERT_SLOPES, StorageBuffer, Read)];
+            /// ConvertArea's fast path for cube texels away from the poles.
+            ConvertAreaFast = "convert_area_fast", "convert_area.comp", Compute, [("FAST", "1")], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
+                 (CONVERT_SLOPES, StorageBuffer, Read)];
+            /// ConvertArea's general walk over a list of texels (those the fast path leaves).
+            ConvertAreaList = "convert_area_list", "convert_area.comp", Compute, [("LIST", "1")], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
+                 (CONVERT_SLOPES, StorageBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
             /// The limited slopes of a lat-long source that ConvertArea integrates.
             ConvertSlopes = "convert_slopes", "convert_slopes.comp", Compute, [], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_SLOPES, StorageBuffer, Write)];
@@ -1189,6 +1209,8 @@ pub fn generated_header() -> String {
     let _ = writeln!(s, "#define AREA_POLE_NEAR {:?}", area::POLE_NEAR as f32);
     let _ = writeln!(s, "#define AREA_MAX_VERTICES {}u", area::MAX_VERTICES);
     let _ = writeln!(s, "#define AREA_SLOPE_VEC4S {}u", area::SLOPE_VEC4S);
+    let _ = writeln!(s, "#define AREA_FAST_WINDOW {}u", area::FAST_WINDOW);
+    let _ = writeln!(s, "#define AREA_FAST_MIN_SIZE {}u", area::FAST_MIN_SIZE);
     let _ = writeln!(s, "#define FOOTPRINT_MIN_TAPS {}u", footprint::MIN_TAPS);
     let _ = writeln!(s, "#define FOOTPRINT_MAX_TAPS {}u", footprint::MAX_TAPS);
     let _ = writeln!(s, "#define FOOTPRINT_MIRROR {}u", footprint::MIRROR);

@@ -661,6 +661,10 @@ fn area_conversion_matches_its_float64_twin() {
             (Mapping::DualParaboloid, 1, Orientation::default()),
             (Mapping::DualParaboloid, 2, Orientation::default()),
             (Mapping::Cube, 1, Orientation::default()),
+            // Large enough for the fast path away from the poles (and the general walk over
+            // the window about them): even and odd, upright and turned upside down.
+            (Mapping::Cube, 40, Orientation::default()),
+            (Mapping::Cube, 33, turned(true)),
         ] {
             assert!(conv.uses_area((Mapping::LatLong, 96, 48), &default_opts(to, size, o)));
             let gpu = convert(&ctx, &conv, &src, to, size, o);

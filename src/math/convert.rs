@@ -202,6 +202,48 @@ pub fn area_walk_steps(width: u32, height: u32, to: Mapping, size: u32) -> f64 {
     rows * (2.0 * area::MAX_VERTICES as f64 + 0.5 * width as f64)
 }
 
+/// Whether the area conversion to a cube of side `n` leaves texel (`i`, `j`) of `face` to the
+/// general walk rather than its fast path (glsl/convert_area.comp, twin of `general_texel`):
+/// every texel below [`area::FAST_MIN_SIZE`], and the window of [`area::FAST_WINDOW`] texels
+/// about the centre of the faces that hold the poles (+Y, −Y), where the polygons meet the
+/// pole's axis or come near it. Integer tests, so that the two dispatches split the texels
+/// exactly.
+pub fn area_general_texel(face: u32, i: u32, j: u32, n: u32) -> bool {
+    if n < area::FAST_MIN_SIZE {
+        return true;
+    }
+    if face != 2 && face != 3 {
+        return false;
+    }
+    let lim = 2 * area::FAST_WINDOW as i64;
+    (2 * i as i64 + 1 - n as i64).abs() <= lim && (2 * j as i64 + 1 - n as i64).abs() <= lim
+}
+
+/// The texels of a cube of side `n` that [`area_general_texel`] leaves to the general walk,
+/// as (i, j, face, 0), face by face and row by row.
+pub fn area_general_texels(n: u32) -> Vec<[u32; 4]> {
+    let mut list = Vec::new();
+    for face in 0..6 {
+        // Only the pole faces' windows, unless the cube is small enough to be all general.
+        let (lo, hi) = if n < area::FAST_MIN_SIZE {
+            (0, n)
+        } else if face == 2 || face == 3 {
+            let half = area::FAST_WINDOW + 1;
+            ((n / 2).saturating_sub(half), (n / 2 + half).min(n))
+        } else {
+            continue;
+        };
+        for j in lo..hi {
+            for i in lo..hi {
+                if area_general_texel(face, i, j, n) {
+                    list.push([i, j, face, 0]);
+                }
+            }
+        }
+    }
+    list
+}
+
 /// A lat-long → cube or dual-paraboloid conversion that conserves power: each output texel
 /// holds the mean of the source over its footprint, the source reconstructed per texel as its
 /// value plus its limited slopes ([`area_slopes`]). Lat-long texels are rectangles in the
@@ -573,6 +615,65 @@ mod tests {
         (0..3)
             .map(|c| (p[c] / q[c] - 1.0).abs())
             .fold(0.0, f64::max)
+    }
+
+    /// The fast path's split: the list holds exactly the texels `area_general_texel` names,
+    /// and every texel with a corner nearer the pole's axis than POLE_NEAR / size (where the
+    /// general walk takes more points, and where a pole can lie on or inside the polygon) is
+    /// among them, upright and upside down, at even and odd sizes from the smallest fast one.
+    #[test]
+    fn fast_path_leaves_every_texel_near_a_pole_to_the_general_walk() {
+        use crate::math::Orientation;
+        for n in (area::FAST_MIN_SIZE - 2..area::FAST_MIN_SIZE + 40).chain([255, 256, 1000]) {
+            let list = area_general_texels(n);
+            let mut all = Vec::new();
+            for face in 0..6 {
+                for j in 0..n {
+                    for i in 0..n {
+                        if area_general_texel(face, i, j, n) {
+                            all.push([i, j, face, 0]);
+                        }
+                    }
+                }
+            }
+            assert_eq!(list, all, "size {n}");
+            for flip_v in [false, true] {
+                let o = Orientation {
+                    flip_u: false,
+                    flip_v,
+                    rotate_y_degrees: 29.0,
+                };
+                let wtf = o.world_to_file();
+                let near = |face: u32, a: u32, b: u32| {
+                    let c = Coord {
+                        layer: face,
+                        u: a as f64 / n as f64,
+                        v: b as f64 / n as f64,
+                    };
+                    let d = wtf * Mapping::Cube.coord_to_dir(c);
+                    // The GLSL tests in float32: a margin of 1e-3 of the radius covers it.
+                    d.x.hypot(d.z) < area::POLE_NEAR / n as f64 * (1.0 + 1e-3)
+                };
+                let mut nears = 0;
+                for face in 0..6 {
+                    for j in 0..n {
+                        for i in 0..n {
+                            let any = [(0, 0), (1, 0), (1, 1), (0, 1)]
+                                .iter()
+                                .any(|&(a, b)| near(face, i + a, j + b));
+                            if any {
+                                nears += 1;
+                                assert!(
+                                    area_general_texel(face, i, j, n),
+                                    "size {n} {face} {i} {j}"
+                                );
+                            }
+                        }
+                    }
+                }
+                assert!(nears > 0, "size {n}: no texel near a pole");
+            }
+        }
     }
 
     /// The twin's own check on the hard map of tests/convert.rs (suns 10⁵ × the sky at both

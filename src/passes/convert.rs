@@ -29,6 +29,9 @@ pub struct ConvertOptions {
     pub nearest: bool,
 }
 
+/// Invocations a workgroup of the general walk over a list of texels.
+const LIST_GROUP: u32 = 64;
+
 /// Texels that cover the sphere (those inside the disc for angular and paraboloid maps).
 fn texels_on_sphere(m: Mapping, w: u32, h: u32) -> f64 {
     let n = w as f64 * h as f64;
@@ -53,6 +56,10 @@ pub struct Converter {
     /// Lat-long to cube and to dual paraboloid (indexed by mapping id) by exact footprint
     /// areas, and the source slopes they integrate.
     area: [OnceLock<Pipeline>; 4],
+    /// Lat-long to cube by areas in two dispatches: the fast path, then the general walk over
+    /// the texels it leaves (`math::convert::area_general_texels`).
+    area_fast: OnceLock<Pipeline>,
+    area_list: OnceLock<Pipeline>,
     slopes: OnceLock<Pipeline>,
     sampler: Sampler,
 }
@@ -64,6 +71,8 @@ impl Converter {
             ctx: ctx.clone(),
             pipelines: Default::default(),
             area: Default::default(),
+            area_fast: OnceLock::new(),
+            area_list: OnceLock::new(),
             slopes: OnceLock::new(),
             sampler: Sampler::linear_clamp(ctx, "convert sampler")?,
         })
@@ -93,6 +102,10 @@ impl Converter {
                 ShaderId::ConvertSlopes,
                 &WORKGROUP_2D,
             )?;
+            if to == Mapping::Cube {
+                self.area_split_pipelines()?;
+                return Ok(());
+            }
             return self.area_pipeline(to).map(|_| ());
         }
         self.pipeline(from, to).map(|_| ())
@@ -106,6 +119,20 @@ impl Converter {
             ShaderId::ConvertArea,
             &[WORKGROUP_2D[0], WORKGROUP_2D[1], 0, to.id()],
         )
+    }
+
+    /// The cube's fast-path and list pipelines.
+    fn area_split_pipelines(&self) -> Result<(&Pipeline, &Pipeline)> {
+        let spec = [WORKGROUP_2D[0], WORKGROUP_2D[1], 0, Mapping::Cube.id()];
+        let fast =
+            Pipeline::compute_once(&self.area_fast, &self.ctx, ShaderId::ConvertAreaFast, &spec)?;
+        let list = Pipeline::compute_once(
+            &self.area_list,
+            &self.ctx,
+            ShaderId::ConvertAreaList,
+            &[LIST_GROUP, 1, 0, Mapping::Cube.id()],
+        )?;
+        Ok((fast, list))
     }
 
     /// Whether converting a `src` map (mapping, width, height) with `opts` takes exact
@@ -169,7 +196,11 @@ impl Converter {
         };
         let cube = src.mapping == Mapping::Cube;
         if self.uses_area((src.mapping, src.width, src.height), opts) {
-            return self.record_area(rec, src, dst, &push, (w, h));
+            // The fast path's window sits where the poles are for orientations that keep the
+            // Y axis (all that Orientation makes).
+            let split = opts.to == Mapping::Cube
+                && opts.orientation.checked_world_to_file()?.y_axis.abs() == glam::DVec3::Y;
+            return self.record_area(rec, src, dst, &push, (w, h), split);
         }
         let pipeline = self.pipeline(src.mapping, opts.to)?;
         let label = format!(
@@ -207,6 +238,7 @@ impl Converter {
         dst: &GpuEnvMap,
         push: &ConvertPush,
         (w, h): (u32, u32),
+        split: bool,
     ) -> Result<()> {
         let slopes = Buffer::new(
             &self.ctx,
@@ -222,7 +254,6 @@ impl Converter {
             &WORKGROUP_2D,
         )?;
         let to = dst.mapping;
-        let area = self.area_pipeline(to)?;
         let source = || {
             (
                 binding::CONVERT_SRC,
@@ -242,9 +273,10 @@ impl Converter {
                 ],
             )
         })?;
-        rec.span(
-            &format!("convert latlong -> {} {w}x{h} (areas)", to.name()),
-            |rec| {
+        let label = format!("convert latlong -> {} {w}x{h} (areas)", to.name());
+        if !split {
+            let area = self.area_pipeline(to)?;
+            rec.span(&label, |rec| {
                 rec.dispatch(
                     area,
                     &[
@@ -259,8 +291,42 @@ impl Converter {
                         to.layers(),
                     ],
                 )
-            },
-        )?;
+            })?;
+        } else {
+            let (fast, general) = self.area_split_pipelines()?;
+            let texels = crate::math::convert::area_general_texels(w);
+            let list = Buffer::storage(&self.ctx, "convert general texels", &texels)?;
+            rec.span(&label, |rec| {
+                if texels.len() < (w * h * 6) as usize {
+                    rec.dispatch(
+                        fast,
+                        &[
+                            source(),
+                            (binding::CONVERT_DST, Bind::Storage(&dst.image)),
+                            (binding::CONVERT_SLOPES, Bind::Buffer(&slopes)),
+                        ],
+                        push,
+                        [
+                            groups(w, WORKGROUP_2D[0]),
+                            groups(h, WORKGROUP_2D[1]),
+                            to.layers(),
+                        ],
+                    )?;
+                }
+                rec.dispatch(
+                    general,
+                    &[
+                        source(),
+                        (binding::CONVERT_DST, Bind::Storage(&dst.image)),
+                        (binding::CONVERT_SLOPES, Bind::Buffer(&slopes)),
+                        (binding::CONVERT_LIST, Bind::Buffer(&list)),
+                    ],
+                    push,
+                    [groups(texels.len() as u32, LIST_GROUP), 1, 1],
+                )
+            })?;
+            rec.keep(list);
+        }
         rec.keep(slopes);
         Ok(())
     }
