@@ -283,22 +283,27 @@ vec3 edge_cell(vec2 a, vec2 b, float c, float uc, float zlo, float zhi, float zc
     float z1 = p.y + (q.y - p.y) * ((u1 - p.x) / (q.x - p.x));
     float dz = z1 - z0;
     // Where the piece crosses the band's edges (as fractions of it), in order.
+    // (A level piece is all middle: its z may lie inside the band.)
     float ta = dz != 0.0 ? clamp((zlo - z0) / dz, 0.0, 1.0) : 0.0;
-    float tb = dz != 0.0 ? clamp((zhi - z0) / dz, 0.0, 1.0) : 0.0;
-    float ts[4] = float[4](0.0, min(ta, tb), max(ta, tb), 1.0);
+    float tb = dz != 0.0 ? clamp((zhi - z0) / dz, 0.0, 1.0) : 1.0;
+    float t1 = min(ta, tb), t2 = max(ta, tb);
     float base = (zlo - zc) * (zlo - zc);
-    vec3 acc = vec3(0.0);
-    [[unroll]] for (int k = 0; k < 3; k++) {
-        float s0 = ts[k], s1 = ts[k + 1], sm = 0.5 * (s0 + s1);
-        float ua = u0 + (u1 - u0) * s0, ub = u0 + (u1 - u0) * s1, um = 0.5 * (ua + ub);
-        float ga = clamp(z0 + dz * s0, zlo, zhi), gm = clamp(z0 + dz * sm, zlo, zhi),
-              gb = clamp(z0 + dz * s1, zlo, zhi);
-        float d = sgn * (ub - ua);
-        acc.x += d * (0.5 * (ga + gb) - zlo);
-        acc.y += d / 6.0 * ((ua - uc) * (ga - zlo) + 4.0 * (um - uc) * (gm - zlo) + (ub - uc) * (gb - zlo));
-        acc.z += d / 12.0 * (((ga - zc) * (ga - zc) - base) + 4.0 * ((gm - zc) * (gm - zc) - base) +
-                             ((gb - zc) * (gb - zc) - base));
-    }
+    // Outside [t1, t2] the clamped z is constant, at zlo or zhi: ∫∫(z − zc) vanishes there, and
+    // the area and ∫∫(U − uc) are a rectangle's.
+    float du = sgn * (u1 - u0);
+    float ga = clamp(z0, zlo, zhi), gb = clamp(z1, zlo, zhi);
+    float ha = du * t1 * (ga - zlo), hb = du * (1.0 - t2) * (gb - zlo);
+    vec3 acc = vec3(ha + hb, ha * (u0 + 0.5 * (u1 - u0) * t1 - uc) + hb * (u1 - 0.5 * (u1 - u0) * (1.0 - t2) - uc),
+                    0.0);
+    // Within [t1, t2], z itself: Simpson's rule, exact for these quadratics.
+    float ua = u0 + (u1 - u0) * t1, ub = u0 + (u1 - u0) * t2, um = 0.5 * (ua + ub);
+    float za = clamp(z0 + dz * t1, zlo, zhi), zb = clamp(z0 + dz * t2, zlo, zhi),
+          zm = clamp(z0 + dz * (0.5 * (t1 + t2)), zlo, zhi);
+    float d = sgn * (ub - ua);
+    acc.x += d * (0.5 * (za + zb) - zlo);
+    acc.y += d / 6.0 * ((ua - uc) * (za - zlo) + 4.0 * (um - uc) * (zm - zlo) + (ub - uc) * (zb - zlo));
+    acc.z += d / 12.0 * (((za - zc) * (za - zc) - base) + 4.0 * ((zm - zc) * (zm - zc) - base) +
+                         ((zb - zc) * (zb - zc) - base));
     return acc;
 }
 
