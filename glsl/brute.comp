@@ -97,13 +97,13 @@ uvec2 tile_grid() {
     return (pc.src_size + BRUTE_TILE - 1u) / BRUTE_TILE;
 }
 
-// Tile `tile`'s first texel (x, y) and its layer: integer divisions by values known only at
-// run time, which llvmpipe takes lane by lane, so once a tile rather than once a texel.
+// Tile `tile`'s first texel (x, y) and its layer: divisions by values known only at run
+// time, once a tile rather than once a texel.
 uvec3 tile_origin(uint tile) {
     uvec2 g = tile_grid();
-    uint per_layer = g.x * g.y;
-    uint r = tile % per_layer;
-    return uvec3(uvec2(r % g.x, r / g.x) * BRUTE_TILE, tile / per_layer);
+    uvec2 lr = div_rem(tile, g.x * g.y);
+    uvec2 yx = div_rem(lr.y, g.x);
+    return uvec3(uvec2(yx.y, yx.x) * BRUTE_TILE, lr.x);
 }
 
 // The texel in slot s of the tile at `origin` (tile_origin), or -1 where the tile overhangs
@@ -357,9 +357,11 @@ void main() {
 // Mean of the kernel over texel t split into s×s cells of 3×3 Gauss points, or over the
 // clipped rule (pieces and chords split s ways, s ≤ 4) when a disc's rim cuts it.
 float texel_mean(vec3 axis, uint t, uint s) {
-    uint per_layer = fine_size().x * fine_size().y;
-    uint layer = t / per_layer, r = t % per_layer;
-    ivec2 p = ivec2(r % fine_size().x, r / fine_size().x);
+    // (div_rem: llvmpipe runs this for every texel the loop visits, whatever its rule.)
+    uvec2 lr = div_rem(t, fine_size().x * fine_size().y);
+    uint layer = lr.x;
+    uvec2 yx = div_rem(lr.y, fine_size().x);
+    ivec2 p = ivec2(yx.y, yx.x);
     float acc = 0.0, wsum = 0.0;
     if (rim_cut(p)) {
         uint split = min(s, 4u);
@@ -531,11 +533,12 @@ void add_texel(vec3 axis, float n, float ln_scale, uint t, inout vec3 sum, inout
         kahan_add(sum, comp, term);
         return;
     }
-    uint per_layer = pc.src_size.x * pc.src_size.y;
-    uint layer = t / per_layer, rr = t % per_layer;
+    uvec2 lr = div_rem(t, pc.src_size.x * pc.src_size.y);
+    uint layer = lr.x;
     uint side = 1u << pc.src_level;
     uvec2 fine = fine_size();
-    uvec2 base = uvec2(rr % pc.src_size.x, rr / pc.src_size.x) * side;
+    uvec2 yx = div_rem(lr.y, pc.src_size.x);
+    uvec2 base = uvec2(yx.y, yx.x) * side;
     for (uint k = 0u; k < side * side; k++) {
         uvec2 q = base + uvec2(k % side, k / side);
         uint f = (layer * fine.y + q.y) * fine.x + q.x;

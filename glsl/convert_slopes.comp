@@ -27,7 +27,7 @@ void main() {
     int c = int(gl_GlobalInvocationID.x), r = int(gl_GlobalInvocationID.y);
     if (c >= w || r >= h) return;
     vec3 l = at(c, r);
-    vec3 left = at((c + w - 1) % w, r), right = at((c + 1) % w, r);
+    vec3 left = at(c == 0 ? w - 1 : c - 1, r), right = at(c + 1 == w ? 0 : c + 1, r);
     vec3 gu = 0.5 * (right - left);
     vec3 lo = min(l, min(left, right)), hi = max(l, max(left, right));
     vec3 gz = vec3(0.0);

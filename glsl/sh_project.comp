@@ -106,9 +106,10 @@ shared vec3 tree[SH_WORKGROUP];
 // density (fourth order) and add each node's basis straight into acc, so no per-texel array
 // of NC floats competes for registers; texels the rim of a disc cuts take the clipped rule.
 void add_texel(uint i, inout vec3 acc[NC]) {
-    uint per_layer = pc.size.x * pc.size.y;
-    uint layer = i / per_layer, r = i % per_layer;
-    ivec2 p = ivec2(r % pc.size.x, r / pc.size.x);
+    uvec2 lr = div_rem(i, pc.size.x * pc.size.y);
+    uint layer = lr.x;
+    uvec2 yx = div_rem(lr.y, pc.size.x);
+    ivec2 p = ivec2(yx.y, yx.x);
     ivec2 source = integration_source(MAPPING, pc.size, p);
     if (source.x < 0) return;
     float omega = texel_solid_angle(MAPPING, pc.size, p);

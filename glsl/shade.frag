@@ -286,7 +286,7 @@ vec3 prefiltered_lookup(uint off, int w, vec3 d) {
     vec3 acc = vec3(0.0);
     for (int k = 0; k < 4; k++) {
         ivec2 q = i0 + ivec2(k & 1, k >> 1);
-        q.x = (q.x % w + w) % w;
+        q.x += q.x < 0 ? w : (q.x >= w ? -w : 0);  // q.x in [-1, w]; no lane-by-lane remainder
         q.y = clamp(q.y, 0, h - 1);
         float wgt = ((k & 1) == 1 ? t.x : 1.0 - t.x) * ((k >> 1) == 1 ? t.y : 1.0 - t.y);
         acc += wgt * pre[off + uint(q.y * w + q.x)].rgb;

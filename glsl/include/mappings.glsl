@@ -12,6 +12,17 @@ struct Coord {
     vec2 uv;
 };
 
+// (a / b, a % b) for b > 0 and a / b < 2^22 (texel indices: layer and row, row and column),
+// by a float quotient and one fix-up each way: llvmpipe divides integers lane by lane, a
+// float quotient in one vector instruction.
+uvec2 div_rem(uint a, uint b) {
+    int q = int(float(a) / float(b));
+    int r = int(a) - q * int(b);
+    if (r < 0) { q--; r += int(b); }
+    if (r >= int(b)) { q++; r -= int(b); }
+    return uvec2(q, r);
+}
+
 // atan2 accurate to a few ulps, defined at the origin. GLSL's atan may be off by 4096 ulps
 // (lavapipe's is ~1e-6 rad off), which would show in round trips and in the short arcs of rim
 // texel solid angles. Two half-angle reductions bring |t| under 0.21, where 8 odd Taylor terms
