@@ -256,7 +256,7 @@ void general(uvec3 id) {
 // math::convert::area_general_texel).
 bool general_texel(uint face, uint i, uint j, uint n) {
     if (n < AREA_FAST_MIN_SIZE) return true;
-    if (face != 2u && face != 3u) return false;
+    if (face != AREA_POLE_FACE_0 && face != AREA_POLE_FACE_1) return false;
     int lim = 2 * int(AREA_FAST_WINDOW);
     return abs(int(2u * i + 1u) - int(n)) <= lim && abs(int(2u * j + 1u) - int(n)) <= lim;
 }

@@ -645,6 +645,9 @@ pub mod area {
     /// [`FAST_MIN_SIZE`] every texel with a corner nearer the pole's axis than
     /// [`POLE_NEAR`] / size lies within 4.13 + 0.5 texels of it.
     pub const FAST_WINDOW: u32 = 6;
+    /// The cube faces (Vulkan order) whose centres are +Y and −Y, the poles of a lat-long
+    /// source under every `Orientation` (turns about Y, flips of Y).
+    pub const POLE_FACES: [u32; 2] = [2, 3];
     const _: () = assert!(POLE_NEAR <= 8.0 && FAST_MIN_SIZE >= 32 && FAST_WINDOW >= 5);
     /// The conversion serves sizes whose longest polygon walk
     /// (`math::convert::area_walk_steps`) takes at most this many loop steps (host only), under
@@ -1211,6 +1214,9 @@ pub fn generated_header() -> String {
     let _ = writeln!(s, "#define AREA_SLOPE_VEC4S {}u", area::SLOPE_VEC4S);
     let _ = writeln!(s, "#define AREA_FAST_WINDOW {}u", area::FAST_WINDOW);
     let _ = writeln!(s, "#define AREA_FAST_MIN_SIZE {}u", area::FAST_MIN_SIZE);
+    for (k, face) in area::POLE_FACES.iter().enumerate() {
+        let _ = writeln!(s, "#define AREA_POLE_FACE_{k} {face}u");
+    }
     let _ = writeln!(s, "#define FOOTPRINT_MIN_TAPS {}u", footprint::MIN_TAPS);
     let _ = writeln!(s, "#define FOOTPRINT_MAX_TAPS {}u", footprint::MAX_TAPS);
     let _ = writeln!(s, "#define FOOTPRINT_MIRROR {}u", footprint::MIRROR);

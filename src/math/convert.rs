@@ -212,7 +212,7 @@ pub fn area_general_texel(face: u32, i: u32, j: u32, n: u32) -> bool {
     if n < area::FAST_MIN_SIZE {
         return true;
     }
-    if face != 2 && face != 3 {
+    if !area::POLE_FACES.contains(&face) {
         return false;
     }
     let lim = 2 * area::FAST_WINDOW as i64;
@@ -227,7 +227,7 @@ pub fn area_general_texels(n: u32) -> Vec<[u32; 4]> {
         // Only the pole faces' windows, unless the cube is small enough to be all general.
         let (lo, hi) = if n < area::FAST_MIN_SIZE {
             (0, n)
-        } else if face == 2 || face == 3 {
+        } else if area::POLE_FACES.contains(&face) {
             let half = area::FAST_WINDOW + 1;
             ((n / 2).saturating_sub(half), (n / 2 + half).min(n))
         } else {
@@ -624,6 +624,14 @@ mod tests {
     #[test]
     fn fast_path_leaves_every_texel_near_a_pole_to_the_general_walk() {
         use crate::math::Orientation;
+        for (face, y) in area::POLE_FACES.iter().zip([1.0, -1.0]) {
+            let c = Coord {
+                layer: *face,
+                u: 0.5,
+                v: 0.5,
+            };
+            assert!((Mapping::Cube.coord_to_dir(c) - DVec3::new(0.0, y, 0.0)).length() < 1e-12);
+        }
         for n in (area::FAST_MIN_SIZE - 2..area::FAST_MIN_SIZE + 40).chain([255, 256, 1000]) {
             let list = area_general_texels(n);
             let mut all = Vec::new();

@@ -287,44 +287,33 @@ impl Converter {
             )
         })?;
         let label = format!("convert latlong -> {} {w}x{h} (areas)", to.name());
+        // One invocation per output texel: the whole walk, or the fast path.
+        let over_map = |rec: &mut Recorder, pipeline: &Pipeline| {
+            rec.dispatch(
+                pipeline,
+                &[
+                    source(),
+                    (binding::CONVERT_DST, Bind::Storage(&dst.image)),
+                    (binding::CONVERT_SLOPES, Bind::Buffer(&slopes)),
+                ],
+                push,
+                [
+                    groups(w, WORKGROUP_2D[0]),
+                    groups(h, WORKGROUP_2D[1]),
+                    to.layers(),
+                ],
+            )
+        };
         if !split {
             let area = self.area_pipeline(to)?;
-            rec.span(&label, |rec| {
-                rec.dispatch(
-                    area,
-                    &[
-                        source(),
-                        (binding::CONVERT_DST, Bind::Storage(&dst.image)),
-                        (binding::CONVERT_SLOPES, Bind::Buffer(&slopes)),
-                    ],
-                    push,
-                    [
-                        groups(w, WORKGROUP_2D[0]),
-                        groups(h, WORKGROUP_2D[1]),
-                        to.layers(),
-                    ],
-                )
-            })?;
+            rec.span(&label, |rec| over_map(rec, area))?;
         } else {
             let (fast, general) = self.area_split_pipelines()?;
             let texels = crate::math::convert::area_general_texels(w);
             let list = Buffer::storage(&self.ctx, "convert general texels", &texels)?;
             rec.span(&label, |rec| {
                 if texels.len() < (w * h * 6) as usize {
-                    rec.dispatch(
-                        fast,
-                        &[
-                            source(),
-                            (binding::CONVERT_DST, Bind::Storage(&dst.image)),
-                            (binding::CONVERT_SLOPES, Bind::Buffer(&slopes)),
-                        ],
-                        push,
-                        [
-                            groups(w, WORKGROUP_2D[0]),
-                            groups(h, WORKGROUP_2D[1]),
-                            to.layers(),
-                        ],
-                    )?;
+                    over_map(rec, fast)?;
                 }
                 rec.dispatch(
                     general,
