@@ -124,6 +124,10 @@ impl Converter {
     /// The cube's fast-path and list pipelines, built side by side (llvmpipe takes ~20 ms
     /// for each).
     fn area_split_pipelines(&self) -> Result<(&Pipeline, &Pipeline)> {
+        if let (Some(fast), Some(list)) = (self.area_fast.get(), self.area_list.get()) {
+            // Built: no thread to start (a bake records one conversion per probe).
+            return Ok((fast, list));
+        }
         let spec = [WORKGROUP_2D[0], WORKGROUP_2D[1], 0, Mapping::Cube.id()];
         let (fast, list) = std::thread::scope(|s| {
             let list = s.spawn(|| {
