@@ -9,7 +9,8 @@
 // along the polygon clipped to the band (Green's theorem). Neighbours share their edge points
 // bit for bit and split shared edges from a canonical endpoint order, so the polygons tile the
 // plane and each source texel's power is counted once. The float64 twin is
-// math::convert::latlong_area, step for step.
+// math::convert::latlong_area, step for step for the general walk; the cube's fast path (FAST,
+// below) takes the same integrals over the same polygons without clipping.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #include "mappings.glsl"

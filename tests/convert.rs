@@ -625,8 +625,9 @@ fn default_opts(to: Mapping, size: u32, o: Orientation) -> ConvertOptions {
 }
 
 /// Lat-long to cube and dual paraboloid by exact footprint areas, on the GPU against its
-/// float64 twin (`math::convert::latlong_area`, the same polygons and band walks), at even
-/// and odd sizes (a pole on a corner or inside a texel) and turned and flipped. What differs
+/// float64 twin (`math::convert::latlong_area`, the same polygons and band walks; at cube
+/// sizes from 32 the fast path's clamped edges away from the poles), at even and odd sizes (a
+/// pole on a corner or inside a texel) and turned and flipped. What differs
 /// is float32: polygon points to ~1e-7 of a column, so a share of ~1e-5 of a source texel can
 /// move between neighbouring output texels; on this map (texel values 0.5–2, no suns) that
 /// is ~1e-5 of a value; tolerance 5e-5 relative. Paraboloid texels outside their disc hold a
