@@ -551,7 +551,7 @@ pub enum Access {
 }
 
 /// Descriptor bindings (set 0) and push-constant size a module expects.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Interface {
     /// (binding, kind, access) triples.
     pub bindings: &'static [(u32, Kind, Access)],
@@ -1040,26 +1040,71 @@ macro_rules! shader_table {
             GBuffer = "gbuffer", "gbuffer.frag", Fragment, [], GBufferPush,
                 [(GBUF_OBJECTS, StorageBuffer, Read)];
             /// Shading of every material, and the frame's composite.
-            Shade = "shade", "shade.frag", Fragment, [], ShadePush,
-                [(SHADE_NORMAL, Sampled, Read), (SHADE_VIEW, Sampled, Read),
-                 (SHADE_OBJECTS, StorageBuffer, Read), (SHADE_COEFFS, StorageBuffer, Read),
-                 (SHADE_ENV, Sampled, Read), (SHADE_POSITION, Sampled, Read),
-                 (SHADE_DP, Sampled, Read), (SHADE_PREFILTERED, StorageBuffer, Read),
-                 (SHADE_MC, Sampled, Read), (SHADE_BRDF_SH, StorageBuffer, Read),
-                 (SHADE_X90, StorageBuffer, Read), (SHADE_SPLIT, Sampled, Read),
-                 (SHADE_DFG, StorageBuffer, Read), (SHADE_LIGHTS, StorageBuffer, Read),
-                 (SHADE_CAMERA, StorageBuffer, Read)];
+            Shade = "shade", "shade.frag", Fragment, [], ShadePush, SHADE_BINDINGS;
             /// [`ShaderId::Shade`] whose light tree walks end on a subgroup vote (see
             /// shade.frag's walk_done), where fragment shaders have vote operations.
             ShadeVote = "shade_vote", "shade.frag", Fragment, [("USE_VOTE", "1")], ShadePush,
-                [(SHADE_NORMAL, Sampled, Read), (SHADE_VIEW, Sampled, Read),
-                 (SHADE_OBJECTS, StorageBuffer, Read), (SHADE_COEFFS, StorageBuffer, Read),
-                 (SHADE_ENV, Sampled, Read), (SHADE_POSITION, Sampled, Read),
-                 (SHADE_DP, Sampled, Read), (SHADE_PREFILTERED, StorageBuffer, Read),
-                 (SHADE_MC, Sampled, Read), (SHADE_BRDF_SH, StorageBuffer, Read),
-                 (SHADE_X90, StorageBuffer, Read), (SHADE_SPLIT, Sampled, Read),
-                 (SHADE_DFG, StorageBuffer, Read), (SHADE_LIGHTS, StorageBuffer, Read),
-                 (SHADE_CAMERA, StorageBuffer, Read)];
+                SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of mirrors and the background
+            /// alone (shade.frag's ONLY_TECHS).
+            ShadeLookup = "shade_lookup", "shade.frag", Fragment,
+                [("ONLY_TECHS", "0u")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of filtered importance
+            /// sampling alone (shade.frag's ONLY_TECHS).
+            ShadeFis = "shade_fis", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_FIS")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of SH irradiance alone (shade.frag's ONLY_TECHS).
+            ShadeSh = "shade_sh", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_SH")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of prefiltered maps alone (shade.frag's ONLY_TECHS).
+            ShadePrefiltered = "shade_prefiltered", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_PREFILTERED")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of Monte Carlo alone (shade.frag's ONLY_TECHS).
+            ShadeMc = "shade_mc", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_MC")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of SH-BRDF (with SH, whose
+            /// projection it reads) alone (shade.frag's ONLY_TECHS).
+            ShadeShBrdf = "shade_sh_brdf", "shade.frag", Fragment,
+                [("ONLY_TECHS", "(1u << TECH_SH) | (1u << TECH_SH_BRDF)")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of split-sum (with FIS, whose
+            /// chain it reads) alone (shade.frag's ONLY_TECHS).
+            ShadeSplitSum = "shade_split_sum", "shade.frag", Fragment,
+                [("ONLY_TECHS", "(1u << TECH_FIS) | (1u << TECH_SPLIT_SUM)")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of mirrors and the background alone.
+            ShadeVoteLookup = "shade_vote_lookup", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "0u")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of filtered importance sampling alone.
+            ShadeVoteFis = "shade_vote_fis", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_FIS")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of SH irradiance alone.
+            ShadeVoteSh = "shade_vote_sh", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_SH")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of prefiltered maps alone.
+            ShadeVotePrefiltered = "shade_vote_prefiltered", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_PREFILTERED")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of Monte Carlo alone.
+            ShadeVoteMc = "shade_vote_mc", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_MC")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of SH-BRDF (with SH) alone.
+            ShadeVoteShBrdf = "shade_vote_sh_brdf", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "(1u << TECH_SH) | (1u << TECH_SH_BRDF)")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of split-sum (with FIS) alone.
+            ShadeVoteSplitSum = "shade_vote_split_sum", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "(1u << TECH_FIS) | (1u << TECH_SPLIT_SUM)")],
+                ShadePush, SHADE_BINDINGS;
             /// The split-sum DFG table (A, B) per n·v and √α.
             Dfg = "dfg", "dfg.comp", Compute, [], DfgPush,
                 [(DFG_TABLE, StorageBuffer, ReadWrite)];
@@ -1092,9 +1137,38 @@ macro_rules! shader_table {
 #[allow(unused_imports)]
 pub(crate) use shader_table;
 
+/// A shader's bindings: a list of (binding, kind, access), or the name of a shared one.
+macro_rules! binding_list {
+    ([$(($b:ident, $kind:ident, $acc:ident)),*]) => {
+        &[$((binding::$b, Kind::$kind, Access::$acc)),*]
+    };
+    ($shared:ident) => {
+        $shared
+    };
+}
+
+/// The bindings of shade.frag, whichever of its variants.
+const SHADE_BINDINGS: &[(u32, Kind, Access)] = binding_list!([
+    (SHADE_NORMAL, Sampled, Read),
+    (SHADE_VIEW, Sampled, Read),
+    (SHADE_OBJECTS, StorageBuffer, Read),
+    (SHADE_COEFFS, StorageBuffer, Read),
+    (SHADE_ENV, Sampled, Read),
+    (SHADE_POSITION, Sampled, Read),
+    (SHADE_DP, Sampled, Read),
+    (SHADE_PREFILTERED, StorageBuffer, Read),
+    (SHADE_MC, Sampled, Read),
+    (SHADE_BRDF_SH, StorageBuffer, Read),
+    (SHADE_X90, StorageBuffer, Read),
+    (SHADE_SPLIT, Sampled, Read),
+    (SHADE_DFG, StorageBuffer, Read),
+    (SHADE_LIGHTS, StorageBuffer, Read),
+    (SHADE_CAMERA, StorageBuffer, Read)
+]);
+
 macro_rules! define_shaders {
     ($( $(#[$m:meta])* $id:ident = $name:literal, $file:literal, $stage:ident,
-        [$(($k:literal, $v:literal)),*], $push:ty, [$(($b:ident, $kind:ident, $acc:ident)),*]; )*) => {
+        [$(($k:literal, $v:literal)),*], $push:ty, $binds:tt; )*) => {
         /// A shader module envlight uses.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
         pub enum ShaderId { $( $(#[$m])* $id, )* }
@@ -1122,7 +1196,7 @@ macro_rules! define_shaders {
             pub fn interface(self) -> Interface {
                 match self {$(
                     ShaderId::$id => Interface {
-                        bindings: &[$((binding::$b, Kind::$kind, Access::$acc)),*],
+                        bindings: binding_list!($binds),
                         push_size: std::mem::size_of::<$push>() as u32,
                         push_fields: <$push as PushBlock>::FIELDS,
                     },

@@ -270,6 +270,7 @@ pub struct Renderer {
     split: OnceCell<SplitSum>,
     sh_rotation: Rotation,
     subgroups: Subgroups,
+    whole_shade: bool,
 }
 
 /// The pass in `cell`, built by `make` on first use.
@@ -325,6 +326,7 @@ impl Renderer {
             split: OnceCell::new(),
             sh_rotation: Rotation::Zxzxz,
             subgroups: Subgroups::Auto,
+            whole_shade: false,
         }
     }
 
@@ -333,6 +335,13 @@ impl Renderer {
     /// theirs.
     pub fn set_subgroups(&mut self, subgroups: Subgroups) {
         self.subgroups = subgroups;
+    }
+
+    /// Shades every scene with the whole shade shader, where a scene of one technique would
+    /// take the variant built for it ([`crate::passes::shade::module`]); for tests, which
+    /// compare the two. Takes effect if the shade pass is not built yet.
+    pub fn set_whole_shade(&mut self) {
+        self.whole_shade = true;
     }
 
     /// Rotates SH-BRDF vectors with `rotation` from now on (the default is zxzxz).
@@ -350,8 +359,56 @@ impl Renderer {
     /// (its sampling tables are built on the CPU) come back to the host before shading.
     pub fn render(&self, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
         scene.validate().map_err(Error::Invalid)?;
-        let ctx = &self.ctx;
         let plan = plan(scene, env.mapping);
+        let code = shade_code(scene, &plan);
+        let shade = pass(&self.shade, || {
+            let mut s = Shade::with_subgroups(&self.ctx, self.subgroups)?;
+            if self.whole_shade {
+                s.whole_shader_only();
+            }
+            Ok(s)
+        })?;
+        // The shade pipeline is the longest build (llvmpipe: ~100 ms, a compute pass's 2-30):
+        // it builds on a second thread while this one builds the other passes, extracts the
+        // lights and records and runs everything before the shading.
+        // So does the dual paraboloid's conversion (llvmpipe: 36 ms), on a third.
+        let dp = match plan.kinds().contains(&PassKind::DualParaboloid) {
+            true => Some((self.converter()?, dp_convert_options(scene, env))),
+            false => None,
+        };
+        std::thread::scope(|s| {
+            let shade_build = s.spawn(|| shade.prepare_code(&code));
+            let convert_build = s.spawn(|| match dp {
+                Some((conv, opts)) => conv.prepare_for((env.mapping, env.width, env.height), &opts),
+                None => Ok(()),
+            });
+            let joined = |what: &'static str| {
+                move |r: std::thread::Result<Result<()>>| -> Result<()> {
+                    r.map_err(|_| Error::Invalid(format!("building the {what} panicked")))?
+                }
+            };
+            let builds = Builds {
+                shade: Box::new(move || joined("shade pipeline")(shade_build.join())),
+                convert: Box::new(move || joined("conversion pipelines")(convert_build.join())),
+            };
+            self.render_planned(scene, env, plan, shade, &code, dp.map(|d| d.1), builds)
+        })
+    }
+
+    /// [`Renderer::render`] once the shade pipeline for `code`, and the conversion to the
+    /// dual paraboloid with `dp_opts` where there is one, are being built.
+    #[allow(clippy::too_many_arguments)]
+    fn render_planned(
+        &self,
+        scene: &Scene,
+        env: &EnvMap,
+        plan: Plan,
+        shade: &Shade,
+        code: &ShadeCode,
+        dp_opts: Option<ConvertOptions>,
+        builds: Builds<'_>,
+    ) -> Result<Rendered> {
+        let ctx = &self.ctx;
         let kinds = plan.kinds();
         let needs = |k: PassKind| kinds.contains(&k);
         let orientation: Orientation = scene.environment.orientation();
@@ -491,30 +548,9 @@ impl Renderer {
         .into_iter()
         .flatten()
         .collect();
-        // The shade pipeline builds on a second thread while the host extracts the lights.
-        let shade = pass(&self.shade, || Shade::with_subgroups(ctx, self.subgroups))?;
-        let code = ShadeCode {
-            fis: dp_passes.is_some(),
-            sh: sh_pass.is_some(),
-            prefiltered: brute.is_some(),
-            mc: needs(PassKind::MonteCarlo),
-            sh_brdf: brdf_pass.is_some(),
-            split_sum: needs(PassKind::SplitSum),
-            footprint: {
-                let f = footprint_of(scene, dp_passes.is_some(), false);
-                f.mirror || f.background
-            },
-            shadows: scene.shadows,
-            brdfs: brdf_bits(scene.objects.iter().map(|o| o.material.kind.id())),
-        };
-        let (each, extract_ms, built) = std::thread::scope(|s| {
-            let build = s.spawn(|| shade.prepare_code(&code));
-            let started = std::time::Instant::now();
-            let each = extract_each(env, &asked);
-            let ms = 1e3 * started.elapsed().as_secs_f64();
-            (each, ms, build.join())
-        });
-        built.map_err(|_| Error::Invalid("building the shade pipeline panicked".into()))??;
+        let started = std::time::Instant::now();
+        let each = extract_each(env, &asked);
+        let extract_ms = 1e3 * started.elapsed().as_secs_f64();
         let lights_started = std::time::Instant::now();
         let mut each = each.into_iter();
         let chain_ex = (dp_lights || phong_lights)
@@ -575,16 +611,15 @@ impl Renderer {
         };
 
         // FIS: the dual paraboloid and its MIP chain.
-        let dp = match dp_passes {
-            Some(_) => {
-                let size = fis_dp_size(scene, env);
-                let (w, h) = Mapping::DualParaboloid.extent_for_size(size);
+        let dp = match (dp_passes, &dp_opts) {
+            (Some(_), Some(opts)) => {
+                let (w, h) = Mapping::DualParaboloid.extent_for_size(opts.size);
                 Some((
                     GpuEnvMap::with_mips(ctx, "fis paraboloid", Mapping::DualParaboloid, w, h)?,
-                    size,
+                    opts.size,
                 ))
             }
-            None => None,
+            _ => None,
         };
 
         // Prefiltered maps, one per distinct (kernel, size, of the residual or not),
@@ -737,20 +772,15 @@ impl Renderer {
                     })?;
                 }
             }
-            if let (Some((conv, mip)), Some((map, size))) = (dp_passes, &dp) {
-                let opts = ConvertOptions {
-                    to: Mapping::DualParaboloid,
-                    size: *size,
-                    orientation,
-                    supersample: None,
-                    nearest: chain_of_texel_means(scene),
-                };
+            if let (Some((conv, mip)), Some((map, _)), Some(opts)) = (dp_passes, &dp, &dp_opts) {
+                // After the uploads' staging copies, which this thread makes meanwhile.
+                (builds.convert)()?;
                 let source = match &chain_residual {
                     Some((_, res)) if dp_lights => res,
                     _ => &env_gpu,
                 };
                 marks.record(rec, PassKind::DualParaboloid, |rec| {
-                    conv.record(rec, source, map, &opts)
+                    conv.record(rec, source, map, opts)
                 })?;
                 marks.record(rec, PassKind::MipChain, |rec| mip.record(rec, map))?;
                 if let Some((p, chain, tables, forms)) = &split {
@@ -898,7 +928,6 @@ impl Renderer {
             mc = Some(res);
         }
 
-        let shade = pass(&self.shade, || Shade::with_subgroups(ctx, self.subgroups))?;
         let frame = target(ctx, "shaded frame", gbuf.width, gbuf.height)?;
         let inputs = ShadeInputs {
             env: &env_gpu,
@@ -917,8 +946,9 @@ impl Renderer {
         // The pipeline built beside the extraction is the one the draw takes.
         debug_assert_eq!(
             crate::passes::shade::code_mask(&inputs, &gbuf),
-            crate::passes::shade::code_bits(&code)
+            crate::passes::shade::code_bits(code)
         );
+        (builds.shade)()?;
         let mut marks = Marks(Vec::new());
         let (readback, t) = ctx.run("rendering: shading", |rec| {
             marks.record(rec, PassKind::Shade, |rec| {
@@ -958,6 +988,46 @@ impl Renderer {
             mc: mc_summary,
             lights_ms,
         })
+    }
+}
+
+/// The pipeline builds a render starts on other threads; each call waits for its build.
+struct Builds<'a> {
+    shade: Box<dyn FnOnce() -> Result<()> + 'a>,
+    convert: Box<dyn FnOnce() -> Result<()> + 'a>,
+}
+
+/// How `scene`'s FIS dual paraboloid is converted from `env`: [`fis_dp_size`], nearest reads
+/// where [`chain_of_texel_means`].
+fn dp_convert_options(scene: &Scene, env: &EnvMap) -> ConvertOptions {
+    ConvertOptions {
+        to: Mapping::DualParaboloid,
+        size: fis_dp_size(scene, env),
+        orientation: scene.environment.orientation(),
+        supersample: None,
+        nearest: chain_of_texel_means(scene),
+    }
+}
+
+/// The shade code `scene`'s draw takes under `plan`: known before any input exists, so that
+/// its pipeline builds while the inputs are made.
+fn shade_code(scene: &Scene, plan: &Plan) -> ShadeCode {
+    let kinds = plan.kinds();
+    let needs = |k: PassKind| kinds.contains(&k);
+    let fis = needs(PassKind::DualParaboloid);
+    ShadeCode {
+        fis,
+        sh: needs(PassKind::ShProjection),
+        prefiltered: needs(PassKind::Prefilter),
+        mc: needs(PassKind::MonteCarlo),
+        sh_brdf: needs(PassKind::ShBrdfTable),
+        split_sum: needs(PassKind::SplitSum),
+        footprint: {
+            let f = footprint_of(scene, fis, false);
+            f.mirror || f.background
+        },
+        shadows: scene.shadows,
+        brdfs: brdf_bits(scene.objects.iter().map(|o| o.material.kind.id())),
     }
 }
 

@@ -639,7 +639,7 @@ impl PassKind {
 
     /// The shader modules whose pipelines the pass creates (either of a pair where the
     /// device decides: cube or 2D sources, subgroups or shared memory, shade with or
-    /// without vote).
+    /// without vote, whole or for the scene's one technique).
     pub fn pipelines(self) -> &'static [ShaderId] {
         use ShaderId::*;
         match self {
@@ -662,7 +662,24 @@ impl PassKind {
             PassKind::SplitSum => &[Dfg, PrefilterGgx],
             PassKind::Prefilter => &[BrutePrepare, BruteTiles, Brute, BruteResolve],
             PassKind::MonteCarlo => &[Mc],
-            PassKind::Shade => &[Shade, ShadeVote],
+            PassKind::Shade => &[
+                Shade,
+                ShadeVote,
+                ShadeLookup,
+                ShadeFis,
+                ShadeSh,
+                ShadePrefiltered,
+                ShadeMc,
+                ShadeShBrdf,
+                ShadeSplitSum,
+                ShadeVoteLookup,
+                ShadeVoteFis,
+                ShadeVoteSh,
+                ShadeVotePrefiltered,
+                ShadeVoteMc,
+                ShadeVoteShBrdf,
+                ShadeVoteSplitSum,
+            ],
         }
     }
 }

@@ -4,8 +4,8 @@ mod common;
 
 use envlight::math::synth::Sky;
 use envlight::math::Mapping;
-use envlight::render::render;
-use envlight::scene::{plan, LookupFilter, PassKind, Scene};
+use envlight::render::{render, Renderer};
+use envlight::scene::{plan, LookupFilter, PassKind, Scene, Technique};
 use envlight::EnvMap;
 use std::path::Path;
 
@@ -97,17 +97,7 @@ fn renders_run_exactly_the_planned_passes() {
         let mut sc = Scene::load(&dir.join(file)).unwrap();
         let p = plan(&sc, Mapping::LatLong);
         assert_eq!(p.kinds(), kinds, "{file}: plan");
-        // Small and quick: the plan does not depend on resolution or sample counts.
-        sc.camera.width = 24;
-        sc.camera.height = 16;
-        sc.fis.size = Some(16);
-        for o in &mut sc.objects {
-            match &mut o.material.technique {
-                Some(envlight::scene::Technique::Mc { samples, .. }) => *samples = 8,
-                Some(envlight::scene::Technique::Prefiltered { size }) => *size = 8,
-                _ => {}
-            }
-        }
+        small(&mut sc);
         let ctx = common::ctx();
         {
             let r = render(&ctx, &sc, &env).unwrap();
@@ -140,6 +130,119 @@ fn renders_run_exactly_the_planned_passes() {
     }
 }
 
+/// Makes `sc` small and quick: the plan does not depend on resolution or sample counts.
+fn small(sc: &mut Scene) {
+    sc.camera.width = 24;
+    sc.camera.height = 16;
+    sc.fis.size = Some(16);
+    for o in &mut sc.objects {
+        match &mut o.material.technique {
+            Some(Technique::Mc { samples, .. }) => *samples = 8,
+            Some(Technique::Prefiltered { size }) => *size = 8,
+            _ => {}
+        }
+    }
+}
+
+/// A scene of one technique is shaded by shade.frag's variant for that technique, whose
+/// other techniques' code the preprocessor removes (the whole shader folds it by its
+/// specialisation constant, which llvmpipe compiles 3x slower). Each of the seven
+/// techniques, from the shipped scenes with the objects of one technique kept, and mirrors
+/// with point lookups, render with their variant and with the whole shader on one context: the frames agree within 1e-6 of
+/// the frame's largest value (the same arithmetic once folded; the tolerance leaves the
+/// driver room to order it differently), and the variant built is one shade pipeline besides
+/// the whole shader's.
+#[test]
+fn one_technique_scenes_take_their_shade_variant_and_match_the_whole_shader() {
+    let sky = Sky::default();
+    let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, |d| sky.radiance(d));
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    // Mirrors without a chain: point lookups.
+    let mut point = Scene::load(&dir.join("mirror.toml")).unwrap();
+    point.environment.filter = LookupFilter::Point;
+    small(&mut point);
+    let mut scenes: Vec<(String, Scene)> = vec![("mirror.toml, point".into(), point)];
+    for file in [
+        "mirror.toml",
+        "glossy.toml",
+        "diffuse.toml",
+        "materials.toml",
+        "mixed_shadows.toml",
+        "sh_brdf.toml",
+        "split_sum.toml",
+    ] {
+        let sc = Scene::load(&dir.join(file)).unwrap();
+        for o in &sc.objects {
+            let t = o.material.technique();
+            let kind = std::mem::discriminant(&t);
+            if scenes
+                .iter()
+                .skip(1)
+                .any(|(_, s)| std::mem::discriminant(&s.objects[0].material.technique()) == kind)
+            {
+                continue;
+            }
+            let mut one = sc.clone();
+            one.objects
+                .retain(|p| std::mem::discriminant(&p.material.technique()) == kind);
+            small(&mut one);
+            scenes.push((format!("{file}, {t:?}"), one));
+        }
+    }
+    assert_eq!(scenes.len(), 8, "every technique once, and point mirrors");
+    let mut variants = Vec::new();
+    for (what, sc) in &scenes {
+        let ctx = common::ctx();
+        {
+            let variant = Renderer::new(&ctx).render(sc, &env).unwrap();
+            let shades = |ctx: &envlight::gpu::Context| -> Vec<&str> {
+                ctx.pipelines_created()
+                    .into_iter()
+                    .filter(|p| p.starts_with("shade"))
+                    .collect()
+            };
+            let built = shades(&ctx);
+            let mut renderer = Renderer::new(&ctx);
+            renderer.set_whole_shade();
+            let whole = renderer.render(sc, &env).unwrap();
+            let both = shades(&ctx);
+            let whole_name = if ctx.info().fragment_vote {
+                "shade_vote"
+            } else {
+                "shade"
+            };
+            assert_eq!(built.len(), 1, "{what}: {built:?}");
+            assert!(built[0] != whole_name, "{what}: {built:?}");
+            assert_eq!(both, [built[0], whole_name], "{what}");
+            let peak = whole
+                .frame
+                .texels
+                .iter()
+                .flatten()
+                .fold(0.0f32, |m, &c| m.max(c.abs()));
+            assert!(peak > 0.0, "{what}: a black frame");
+            let worst = variant
+                .frame
+                .texels
+                .iter()
+                .zip(&whole.frame.texels)
+                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+                .fold(0.0f32, f32::max);
+            eprintln!(
+                "{what}: {} vs {whole_name}, worst {:.1e} of {peak}",
+                built[0], worst
+            );
+            assert!(worst <= 1e-6 * peak, "{what}: {worst} of {peak}");
+            variants.push(built[0]);
+        }
+        common::finish(ctx);
+    }
+    // The mirrors with a chain take the FIS variant, which keeps the lookup's code too.
+    variants.sort_unstable();
+    variants.dedup();
+    assert_eq!(variants.len(), 7, "each variant once: {variants:?}");
+}
+
 /// Monte Carlo alone: on a lat-long map it needs nothing but the G-buffer, its frames and the
 /// shading; on a cube map it first converts to lat-long (and so builds that pipeline only).
 #[test]
@@ -169,11 +272,11 @@ fn monte_carlo_alone_plans_and_runs_its_passes() {
             let r = render(&ctx, &sc, &env).unwrap();
             assert_eq!(r.kinds(), kinds);
             assert_eq!(r.mc.map(|m| m.0), Some(8));
-            // The shade pass's vote variant where fragment shaders have subgroup vote.
+            // The shade pass's Monte Carlo variant, with vote where fragment shaders have it.
             let shade = if ctx.info().fragment_vote {
-                "shade_vote"
+                "shade_vote_mc"
             } else {
-                "shade"
+                "shade_mc"
             };
             let mut want: Vec<&str> = pipelines
                 .iter()

@@ -6,7 +6,7 @@ use ash::vk;
 
 macro_rules! define_spirv {
     ($( $(#[$m:meta])* $id:ident = $name:literal, $file:literal, $stage:ident, [$($d:tt)*],
-        $push:ty, [$($b:tt)*]; )*) => {
+        $push:ty, $binds:tt; )*) => {
         /// The committed SPIR-V of `id`.
         pub fn spirv(id: ShaderId) -> &'static [u8] {
             match id {$(

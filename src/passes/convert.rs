@@ -48,6 +48,14 @@ fn slopes_bytes(w: u32, h: u32) -> u64 {
     w as u64 * h as u64 * 16 * crate::abi::area::SLOPE_VEC4S as u64
 }
 
+/// Whether an area conversion with `opts` takes the cube's fast path and list: the fast
+/// path's window sits where the poles are for orientations that keep the Y axis (all that
+/// Orientation makes).
+fn split_area(opts: &ConvertOptions) -> Result<bool> {
+    Ok(opts.to == Mapping::Cube
+        && opts.orientation.checked_world_to_file()?.y_axis.abs() == glam::DVec3::Y)
+}
+
 /// The conversion pass. Pipelines are built on first use, one per source kind.
 pub struct Converter {
     ctx: Context,
@@ -109,6 +117,24 @@ impl Converter {
             return self.area_pipeline(to).map(|_| ());
         }
         self.pipeline(from, to).map(|_| ())
+    }
+
+    /// Builds the pipelines that [`Converter::record`] of a `src` map (mapping, width,
+    /// height) with `opts` takes, and no other, now rather than at that record.
+    pub fn prepare_for(&self, src: (Mapping, u32, u32), opts: &ConvertOptions) -> Result<()> {
+        if !self.uses_area(src, opts) {
+            return self.pipeline(src.0, opts.to).map(|_| ());
+        }
+        Pipeline::compute_once(
+            &self.slopes,
+            &self.ctx,
+            ShaderId::ConvertSlopes,
+            &WORKGROUP_2D,
+        )?;
+        match split_area(opts)? {
+            true => self.area_split_pipelines().map(|_| ()),
+            false => self.area_pipeline(opts.to).map(|_| ()),
+        }
     }
 
     fn area_pipeline(&self, to: Mapping) -> Result<&Pipeline> {
@@ -213,10 +239,7 @@ impl Converter {
         };
         let cube = src.mapping == Mapping::Cube;
         if self.uses_area((src.mapping, src.width, src.height), opts) {
-            // The fast path's window sits where the poles are for orientations that keep the
-            // Y axis (all that Orientation makes).
-            let split = opts.to == Mapping::Cube
-                && opts.orientation.checked_world_to_file()?.y_axis.abs() == glam::DVec3::Y;
+            let split = split_area(opts)?;
             return self.record_area(rec, src, dst, &push, (w, h), split);
         }
         let pipeline = self.pipeline(src.mapping, opts.to)?;

@@ -143,11 +143,51 @@ const _: () = assert!(
     "a BRDF id past the mask"
 );
 
+/// shade.frag's variants for scenes of one technique, built with ONLY_TECHS: (the techniques
+/// kept besides the lookup, as mask bits; plain module; vote module). SH-BRDF keeps SH, whose
+/// projection it reads, and split-sum FIS, whose chain it reads: their masks hold both.
+const VARIANTS: [(u32, ShaderId, ShaderId); 7] = {
+    use crate::abi::brdf::technique as t;
+    use ShaderId::*;
+    [
+        (0, ShadeLookup, ShadeVoteLookup),
+        (1 << t::FIS, ShadeFis, ShadeVoteFis),
+        (1 << t::SH, ShadeSh, ShadeVoteSh),
+        (1 << t::PREFILTERED, ShadePrefiltered, ShadeVotePrefiltered),
+        (1 << t::MC, ShadeMc, ShadeVoteMc),
+        (1 << t::SH | 1 << t::SH_BRDF, ShadeShBrdf, ShadeVoteShBrdf),
+        (
+            1 << t::FIS | 1 << t::SPLIT_SUM,
+            ShadeSplitSum,
+            ShadeVoteSplitSum,
+        ),
+    ]
+};
+
+/// The fragment module a draw with code `mask` takes: where the mask keeps the techniques of
+/// a variant (besides the lookup, the background's), that variant, whose other techniques'
+/// code is gone before the driver compiles it (llvmpipe: 32 ms against the whole shader's
+/// 100 ms for FIS); else the whole shader, which folds them by the constant. `vote`: walks
+/// end on a subgroup vote.
+pub fn module(vote: bool, mask: u32) -> ShaderId {
+    use crate::abi::brdf::technique as t;
+    let techs = VARIANTS.iter().fold(1 << t::LOOKUP, |m, v| m | v.0);
+    let kept = mask & techs & !(1 << t::LOOKUP);
+    match (VARIANTS.iter().find(|v| v.0 == kept), vote) {
+        (Some(v), false) => v.1,
+        (Some(v), true) => v.2,
+        (None, false) => ShaderId::Shade,
+        (None, true) => ShaderId::ShadeVote,
+    }
+}
+
 /// The shading pass.
 pub struct Shade {
     ctx: Context,
-    /// The fragment shader: shade, or shade_vote where walks end on a subgroup vote.
-    frag: ShaderId,
+    /// Whether light tree walks end on a subgroup vote (shade_vote and its variants).
+    vote: bool,
+    /// Whether a mask of one technique takes shade.frag's variant for it ([`module`]).
+    variants: bool,
     /// One pipeline per code mask ([`code_mask`]), built at the first draw that needs it.
     pipelines: Mutex<Vec<(u32, Arc<Pipeline>)>>,
     plain: Sampler,
@@ -172,11 +212,8 @@ impl Shade {
         let vote = subgroups == Subgroups::Auto && ctx.info().fragment_vote;
         Ok(Shade {
             ctx: ctx.clone(),
-            frag: if vote {
-                ShaderId::ShadeVote
-            } else {
-                ShaderId::Shade
-            },
+            vote,
+            variants: true,
             pipelines: Mutex::new(Vec::new()),
             plain: Sampler::linear_clamp(ctx, "shade sampler")?,
             trilinear: Sampler::trilinear_clamp(ctx, "shade trilinear sampler")?,
@@ -185,6 +222,13 @@ impl Shade {
             dummy_buffer,
             x90: super::sh_brdf::x90_buffer(ctx)?,
         })
+    }
+
+    /// Builds the whole shader for every mask from now on, where a mask of one technique
+    /// would take that technique's variant (they give the same frames: tests compare them).
+    /// Pipelines already built stay.
+    pub fn whole_shader_only(&mut self) {
+        self.variants = false;
     }
 
     /// The pipeline specialised on `mask`, built the first time it is asked for.
@@ -196,10 +240,15 @@ impl Shade {
         if let Some((_, p)) = built.iter().find(|(m, _)| *m == mask) {
             return Ok(p.clone());
         }
+
+        let frag = match self.variants {
+            true => module(self.vote, mask),
+            false => module(self.vote, u32::MAX),
+        };
         let p = Arc::new(Pipeline::fullscreen_with(
             &self.ctx,
             ShaderId::FullscreenVert,
-            self.frag,
+            frag,
             &[super::gbuffer::FORMAT],
             &[mask],
         )?);
@@ -403,5 +452,59 @@ mod tests {
         let fixed = techniques | crate::abi::footprint::CODE | SHADOWS;
         assert_eq!(fixed & (u32::MAX << BRDF_SHIFT), 0);
         assert_eq!(techniques & (crate::abi::footprint::CODE | SHADOWS), 0);
+    }
+
+    /// Each variant's ONLY_TECHS define names exactly the techniques its VARIANTS entry
+    /// keeps (read through the generated header's TECH_ constants), in both modules; a mask
+    /// of those techniques takes it, with or without the lookup, footprint, shadow and BRDF
+    /// bits; a mask of two variants' techniques, and the whole mask, take the whole shader.
+    #[test]
+    fn variants_keep_the_techniques_their_masks_name() {
+        let header = crate::abi::generated_header();
+        let value = |name: &str| -> u32 {
+            let line = header
+                .lines()
+                .find(|l| l.starts_with(&format!("#define {name} ")))
+                .unwrap_or_else(|| panic!("{name} is not in the header"));
+            line.rsplit(' ')
+                .next()
+                .unwrap()
+                .trim_end_matches('u')
+                .parse()
+                .unwrap()
+        };
+        for &(bits, plain, vote) in &VARIANTS {
+            for id in [plain, vote] {
+                let define = id
+                    .source()
+                    .defines
+                    .iter()
+                    .find(|(k, _)| *k == "ONLY_TECHS")
+                    .map(|d| d.1)
+                    .unwrap_or_else(|| panic!("{id:?} has no ONLY_TECHS"));
+                let named = define
+                    .split("TECH_")
+                    .skip(1)
+                    .map(|rest| {
+                        let name: String = rest
+                            .chars()
+                            .take_while(|c| c.is_ascii_uppercase() || *c == '_')
+                            .collect();
+                        1u32 << value(&format!("TECH_{name}"))
+                    })
+                    .fold(0, |m, b| m | b);
+                assert_eq!(named, bits, "{id:?}: {define}");
+                let vote_define = id.source().defines.iter().any(|d| d.0 == "USE_VOTE");
+                assert_eq!(vote_define, id == vote, "{id:?}");
+            }
+            let others = crate::abi::footprint::CODE | SHADOWS | 1 << (BRDF_SHIFT + ids::GGX);
+            for extra in [0, 1 << technique::LOOKUP, others] {
+                assert_eq!(module(false, bits | extra), plain);
+                assert_eq!(module(true, bits | extra), vote);
+            }
+        }
+        let fis_and_sh = 1 << technique::FIS | 1 << technique::SH;
+        assert_eq!(module(true, fis_and_sh), ShaderId::ShadeVote);
+        assert_eq!(module(false, u32::MAX), ShaderId::Shade);
     }
 }
