@@ -144,3 +144,19 @@ fn a_leak_reported_at_teardown_reaches_the_log() {
         "no leak reported at teardown: {messages:?}"
     );
 }
+
+/// A context envlight creates says what its creation cost, phase by phase (the floor `envlight
+/// devices` and `bench peers` report): every phase finite and non-negative, the instance and
+/// device together above zero (a driver does work there).
+#[test]
+fn an_owned_context_reports_its_start_up() {
+    let ctx = common::ctx();
+    let s = ctx
+        .startup()
+        .expect("an owned context records its start-up");
+    for ms in [s.loader_ms, s.instance_ms, s.device_ms, s.rest_ms] {
+        assert!(ms.is_finite() && ms >= 0.0, "{s:?}");
+    }
+    assert!(s.instance_ms + s.device_ms > 0.0, "{s:?}");
+    common::finish(ctx);
+}

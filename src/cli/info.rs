@@ -167,7 +167,35 @@ pub fn devices(g: &Global) -> Result<()> {
         "timestamp period {} ns, {} valid bits",
         i.timestamp_period, i.timestamp_valid_bits
     );
+    let startup = ctx.startup();
+    // Destroying the device and instance is the driver's too: part of every job's floor.
+    let started = std::time::Instant::now();
+    drop(ctx);
+    let teardown_ms = 1e3 * started.elapsed().as_secs_f64();
+    if let Some(s) = startup {
+        println!("{}", startup_line(&s, teardown_ms));
+    }
     Ok(())
+}
+
+/// The line `envlight devices` reports its context's start-up and teardown with (read back by
+/// `bench peers`, [`parse_startup_line`]).
+pub fn startup_line(s: &envlight::gpu::Startup, teardown_ms: f64) -> String {
+    format!(
+        "start-up ms: loader {:.1}, instance {:.1}, device {:.1}, rest {:.1}; teardown ms {:.1}",
+        s.loader_ms, s.instance_ms, s.device_ms, s.rest_ms, teardown_ms
+    )
+}
+
+/// The five numbers of a [`startup_line`] (loader, instance, device, rest, teardown), if
+/// `text` holds one.
+pub fn parse_startup_line(text: &str) -> Option<[f64; 5]> {
+    let line = text.lines().find(|l| l.starts_with("start-up ms: "))?;
+    let mut v = line
+        .split(|c: char| c == ',' || c == ';' || c == ':' || c.is_whitespace())
+        .filter_map(|w| w.parse::<f64>().ok());
+    let out = [v.next()?, v.next()?, v.next()?, v.next()?, v.next()?];
+    v.next().is_none().then_some(out)
 }
 
 /// `envlight synth-sky`.

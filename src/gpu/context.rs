@@ -215,6 +215,22 @@ pub(crate) struct Shared {
 #[derive(Clone)]
 pub struct Context {
     pub(crate) shared: Arc<Shared>,
+    startup: Option<Startup>,
+}
+
+/// What creating an owned context cost on the host, in milliseconds: the floor under every
+/// job of a process, which the driver sets (see `envlight devices` and `bench peers`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Startup {
+    /// Loading the Vulkan loader library.
+    pub loader_ms: f64,
+    /// Enumerating layers and extensions and vkCreateInstance (the loader opens every
+    /// installed driver here).
+    pub instance_ms: f64,
+    /// Choosing the physical device and vkCreateDevice.
+    pub device_ms: f64,
+    /// The allocator, the command pool and the device's properties.
+    pub rest_ms: f64,
 }
 
 fn no_device_help() -> &'static str {
@@ -225,8 +241,16 @@ fn no_device_help() -> &'static str {
 impl Context {
     /// Creates a headless instance and device.
     pub fn new(opts: &ContextOptions) -> Result<Context> {
+        let mut clock = std::time::Instant::now();
+        let mut lap = || {
+            let now = std::time::Instant::now();
+            let ms = 1e3 * (now - clock).as_secs_f64();
+            clock = now;
+            ms
+        };
         // SAFETY: loading the system's Vulkan loader runs its initialisers; nothing else to uphold.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::NoLoader(e.to_string()))?;
+        let loader_ms = lap();
         let sink = Arc::<MessageSink>::default();
 
         let mut layers = Vec::new();
@@ -312,6 +336,7 @@ impl Context {
                 result: r,
             },
         })?;
+        let instance_ms = lap();
         // From here on, a failure must destroy the instance: InstanceGuard does.
         let guard = InstanceGuard(Some(instance.clone()));
         let debug_instance = if debug_utils && opts.validation {
@@ -340,9 +365,10 @@ impl Context {
             }
         };
         std::mem::forget(guard);
+        let device_ms = lap();
         // SAFETY: queue 0 of the family was requested at device creation.
         let queue = unsafe { device.get_device_queue(family, 0) };
-        Self::finish(
+        let mut ctx = Self::finish(
             entry,
             instance,
             physical,
@@ -353,7 +379,14 @@ impl Context {
             debug_utils,
             true,
             sink,
-        )
+        )?;
+        ctx.startup = Some(Startup {
+            loader_ms,
+            instance_ms,
+            device_ms,
+            rest_ms: lap(),
+        });
+        Ok(ctx)
     }
 
     /// Adopts an engine's instance, device and queue. envlight creates its own allocator,
@@ -497,7 +530,14 @@ impl Context {
         shared.name(command_pool, "envlight command pool");
         Ok(Context {
             shared: Arc::new(shared),
+            startup: None,
         })
+    }
+
+    /// What creating this context cost, where envlight created it (None where it adopted
+    /// an engine's device).
+    pub fn startup(&self) -> Option<Startup> {
+        self.startup
     }
 
     /// Facts about the device.

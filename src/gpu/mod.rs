@@ -11,7 +11,9 @@ pub mod shaders;
 pub mod timing;
 
 pub use barrier::Usage;
-pub use context::{AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSelector, ValidationLog};
+pub use context::{
+    AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSelector, Startup, ValidationLog,
+};
 pub use pipeline::{Bind, Pipeline};
 pub use recorder::{InFlight, Recorded, Recorder};
 pub use resources::{Buffer, Image, ImageDesc, Sampler};

@@ -56,6 +56,21 @@ fn run(program: &Path, args: &[String], env: &[(&str, &str)]) -> Result<(f64, St
     Ok((secs, String::from_utf8_lossy(&out.stdout).into_owned()))
 }
 
+/// The medians of the start-up lines in `outs` (`envlight devices` runs), each of the five
+/// numbers alone; None where no run printed one.
+fn startup_medians(outs: &[String]) -> Option<[f64; 5]> {
+    let lines: Vec<[f64; 5]> = outs
+        .iter()
+        .filter_map(|o| crate::cli::info::parse_startup_line(o))
+        .collect();
+    if lines.is_empty() {
+        return None;
+    }
+    Some(std::array::from_fn(|k| {
+        median(&mut lines.iter().map(|l| l[k]).collect::<Vec<_>>())
+    }))
+}
+
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
     if v.is_empty() {
@@ -302,16 +317,20 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         .unwrap_or("?")
         .trim_start_matches("envlight uses: ")
         .to_string();
-    let floor = |args: &[String]| -> Result<f64> {
+    // Each run's output too: `devices` reports what its start-up and teardown cost.
+    let floor = |args: &[String]| -> Result<(f64, Vec<String>)> {
         run(&me, args, &[])?;
-        let mut v = Vec::new();
+        let (mut v, mut outs) = (Vec::new(), Vec::new());
         for _ in 0..opts.reps.max(1) {
-            v.push(run(&me, args, &[])?.0);
+            let (t, out) = run(&me, args, &[])?;
+            v.push(t);
+            outs.push(out);
         }
-        Ok(median(&mut v))
+        Ok((median(&mut v), outs))
     };
-    let floor_devices = floor(&strings(&["devices"]))?;
-    let floor_info = floor(&strings(&["info", &map]))?;
+    let (floor_devices, outs) = floor(&strings(&["devices"]))?;
+    let startup = startup_medians(&outs);
+    let (floor_info, _) = floor(&strings(&["info", &map]))?;
     // `info` also extracts the map's lights; the breakdown below has the load alone.
 
     let src = load_any(opts.map)?;
@@ -384,9 +403,17 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     ));
     md.push_str(&format!(
         "Floor of any envlight job here: process start + Vulkan instance and device \
-         (`envlight devices`) {floor_devices:.3} s; `envlight info` (loading the map, its \
+         (`envlight devices`) {floor_devices:.3} s{}; `envlight info` (loading the map, its \
          statistics and its lights) {floor_info:.3} s. The load itself runs beside device \
-         creation: see the breakdown below.\n\n"
+         creation: see the breakdown below.\n\n",
+        startup.map_or(
+            String::new(),
+            |[loader, instance, device, rest, teardown]| format!(
+                ", of which the driver's, timed inside the process (medians, ms): loading the \
+             Vulkan loader {loader:.1}, vkCreateInstance {instance:.1}, vkCreateDevice \
+             {device:.1}, the allocator and the rest {rest:.1}, destroying it all {teardown:.1}"
+            )
+        )
     ));
     md.push_str("| job | cmft s | envlight s | ratio | envlight cold s | envlight GPU ms | envlight error | cmft error | goal |\n|---|---|---|---|---|---|---|---|---|\n");
     for (job, te, tc, cold, gpu, ee, ce) in &rows {
@@ -541,6 +568,38 @@ fn tempdir() -> Result<PathBuf> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The floor's split reads back what `envlight devices` prints (`cli::info::startup_line`),
+    /// each number's median across runs alone; runs without the line are left out.
+    #[test]
+    fn startup_lines_are_read_back_as_medians() {
+        use envlight::gpu::Startup;
+        let line = |k: f64| {
+            let s = Startup {
+                loader_ms: 0.5 * k,
+                instance_ms: 20.0 + k,
+                device_ms: 3.0 * k,
+                rest_ms: 0.25,
+            };
+            format!(
+                "envlight uses: x\n{}\n",
+                crate::cli::info::startup_line(&s, 10.0 - k)
+            )
+        };
+        let outs = [
+            line(1.0),
+            line(3.0),
+            "envlight uses: x\n".to_string(),
+            line(2.0),
+        ];
+        let m = startup_medians(&outs).unwrap();
+        assert_eq!(m, [1.0, 22.0, 6.0, 0.2, 8.0]);
+        assert_eq!(startup_medians(&outs[2..3]), None);
+        assert_eq!(
+            crate::cli::info::parse_startup_line("start-up ms: loader 1.0"),
+            None
+        );
+    }
 
     /// The breakdown reads back exactly what the commands print (`cli::HostClock`).
     #[test]
