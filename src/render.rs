@@ -368,10 +368,10 @@ impl Renderer {
             }
             Ok(s)
         })?;
-        // The shade pipeline is the longest build (llvmpipe: ~100 ms, a compute pass's 2-30):
-        // it builds on a second thread while this one builds the other passes, extracts the
-        // lights and records and runs everything before the shading.
-        // So does the dual paraboloid's conversion (llvmpipe: 36 ms), on a third.
+        // The shade pipeline is the longest build (llvmpipe: 30-100 ms by variant, a compute
+        // pass's 2-30): it builds on a second thread while this one builds the other passes,
+        // extracts the lights and records and runs everything before the shading. So do the
+        // dual paraboloid's conversion pipelines (llvmpipe: 36 ms), on a third.
         let dp = match plan.kinds().contains(&PassKind::DualParaboloid) {
             true => Some((self.converter()?, dp_convert_options(scene, env))),
             false => None,
@@ -943,7 +943,7 @@ impl Renderer {
             lights: lights.as_ref(),
             footprint: footprint_of(scene, dp.is_some(), dp_lights),
         };
-        // The pipeline built beside the extraction is the one the draw takes.
+        // The pipeline built from the plan's code is the one the draw takes.
         debug_assert_eq!(
             crate::passes::shade::code_mask(&inputs, &gbuf),
             crate::passes::shade::code_bits(code)

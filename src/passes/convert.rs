@@ -104,17 +104,7 @@ impl Converter {
         if from == Mapping::LatLong && matches!(to, Mapping::Cube | Mapping::DualParaboloid) {
             // The area pipeline, which serves lat-long to cube and dual paraboloid at all but
             // extreme minification (and, for the paraboloid, orientations that tilt its axis).
-            Pipeline::compute_once(
-                &self.slopes,
-                &self.ctx,
-                ShaderId::ConvertSlopes,
-                &WORKGROUP_2D,
-            )?;
-            if to == Mapping::Cube {
-                self.area_split_pipelines()?;
-                return Ok(());
-            }
-            return self.area_pipeline(to).map(|_| ());
+            return self.prepare_area(to, to == Mapping::Cube);
         }
         self.pipeline(from, to).map(|_| ())
     }
@@ -125,16 +115,26 @@ impl Converter {
         if !self.uses_area(src, opts) {
             return self.pipeline(src.0, opts.to).map(|_| ());
         }
+        self.prepare_area(opts.to, split_area(opts)?)
+    }
+
+    /// The slopes pipeline and the area pipelines to `to`: the cube's fast path and list
+    /// where `split`, else the one walk.
+    fn prepare_area(&self, to: Mapping, split: bool) -> Result<()> {
+        self.slopes_pipeline()?;
+        match split {
+            true => self.area_split_pipelines().map(|_| ()),
+            false => self.area_pipeline(to).map(|_| ()),
+        }
+    }
+
+    fn slopes_pipeline(&self) -> Result<&Pipeline> {
         Pipeline::compute_once(
             &self.slopes,
             &self.ctx,
             ShaderId::ConvertSlopes,
             &WORKGROUP_2D,
-        )?;
-        match split_area(opts)? {
-            true => self.area_split_pipelines().map(|_| ()),
-            false => self.area_pipeline(opts.to).map(|_| ()),
-        }
+        )
     }
 
     fn area_pipeline(&self, to: Mapping) -> Result<&Pipeline> {
@@ -287,12 +287,7 @@ impl Converter {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::GpuOnly,
         )?;
-        let slopes_pipeline = Pipeline::compute_once(
-            &self.slopes,
-            &self.ctx,
-            ShaderId::ConvertSlopes,
-            &WORKGROUP_2D,
-        )?;
+        let slopes_pipeline = self.slopes_pipeline()?;
         let to = dst.mapping;
         let source = || {
             (
