@@ -662,24 +662,7 @@ impl PassKind {
             PassKind::SplitSum => &[Dfg, PrefilterGgx],
             PassKind::Prefilter => &[BrutePrepare, BruteTiles, Brute, BruteResolve],
             PassKind::MonteCarlo => &[Mc],
-            PassKind::Shade => &[
-                Shade,
-                ShadeVote,
-                ShadeLookup,
-                ShadeFis,
-                ShadeSh,
-                ShadePrefiltered,
-                ShadeMc,
-                ShadeShBrdf,
-                ShadeSplitSum,
-                ShadeVoteLookup,
-                ShadeVoteFis,
-                ShadeVoteSh,
-                ShadeVotePrefiltered,
-                ShadeVoteMc,
-                ShadeVoteShBrdf,
-                ShadeVoteSplitSum,
-            ],
+            PassKind::Shade => &crate::passes::shade::MODULES,
         }
     }
 }

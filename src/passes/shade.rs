@@ -164,6 +164,20 @@ const VARIANTS: [(u32, ShaderId, ShaderId); 7] = {
     ]
 };
 
+/// Every fragment module the shading pass may build: the whole shader and its variants,
+/// plain and with vote (what a render's plan allows it to create).
+pub const MODULES: [ShaderId; 2 + 2 * VARIANTS.len()] = {
+    let mut m = [ShaderId::Shade; 2 + 2 * VARIANTS.len()];
+    m[1] = ShaderId::ShadeVote;
+    let mut k = 0;
+    while k < VARIANTS.len() {
+        m[2 + 2 * k] = VARIANTS[k].1;
+        m[3 + 2 * k] = VARIANTS[k].2;
+        k += 1;
+    }
+    m
+};
+
 /// The fragment module a draw with code `mask` takes: where the mask keeps the techniques of
 /// a variant (besides the lookup, the background's), that variant, whose other techniques'
 /// code is gone before the driver compiles it (llvmpipe: 32 ms against the whole shader's
@@ -240,7 +254,6 @@ impl Shade {
         if let Some((_, p)) = built.iter().find(|(m, _)| *m == mask) {
             return Ok(p.clone());
         }
-
         let frag = match self.variants {
             true => module(self.vote, mask),
             false => module(self.vote, u32::MAX),
