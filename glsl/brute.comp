@@ -11,8 +11,9 @@
 //   parallelogram with the light's centroid and covariance (twin of moments::MomentLevel::new);
 // - otherwise: one invocation per output texel and part of the source sums L·∫K over the
 //   part's texels, choosing per texel the same rule as the CPU (skip, centre node, the tilted
-//   rule, or s×s cells of 3×3 Gauss points), with Kahan compensation so a sun 1e5 times the
-//   sky does not swamp the sum, into its partial sum; parts let a small output (a coarse Phong
+//   rule, or s×s cells of 3×3 Gauss points, those last in a second walk), with Kahan
+//   compensation so a sun 1e5 times the sky does not swamp the sum, into its partial sum;
+//   parts let a small output (a coarse Phong
 //   level) fill the device. The source is taken in chunks, one dispatch each, accumulating
 //   into the partial sums, so that no invocation runs more loop iterations than llvmpipe
 //   allows (DeviceInfo::loop_iteration_limit); the node loops are unrolled for the same reason;
@@ -357,7 +358,6 @@ void main() {
 // Mean of the kernel over texel t split into s×s cells of 3×3 Gauss points, or over the
 // clipped rule (pieces and chords split s ways, s ≤ 4) when a disc's rim cuts it.
 float texel_mean(vec3 axis, uint t, uint s) {
-    // (div_rem: llvmpipe runs this for every texel the loop visits, whatever its rule.)
     uvec2 lr = div_rem(t, fine_size().x * fine_size().y);
     uint layer = lr.x;
     uvec2 yx = div_rem(lr.y, fine_size().x);
@@ -450,10 +450,6 @@ float tilted_shape(vec3 axis, float n, float ln_scale, vec3 c, vec3 hu, vec3 hv)
     return exp(ln_scale + n * log1m(gap) + ln_sinhc - 0.5 * n * q);
 }
 
-float tilted_mean(vec3 axis, float n, float ln_scale, uint t) {
-    return tilted_shape(axis, n, ln_scale, shapes[3u * t].xyz, shapes[3u * t + 1u].xyz, shapes[3u * t + 2u].xyz);
-}
-
 // The cosine below which the lobe is under its cut-off, exp(FILTER_LOG_CUTOFF / n) (0 for
 // n ≤ 1, whose lobes have none): set once per invocation in main, so that the per-texel test
 // is a comparison rather than a logarithm.
@@ -496,25 +492,47 @@ int texel_rule(vec3 axis, float n, vec4 cone, bool regular, out uint cells) {
     return RULE_CELLS;
 }
 
-// ∫K over prepared texel t (0 where skipped).
-float texel_weight(vec3 axis, float n, float ln_scale, uint t) {
+// Whether this invocation met a texel whose rule asks for Gauss cells. The sum takes those in
+// a second walk (cells_pass): llvmpipe runs every branch of the texel loop's body at every
+// step, and a nested loop's first iteration even where no lane enters it, so with the cells'
+// nine nodes of trigonometry in the one walk every texel paid for the few that need them
+// (Phong n = 2049 from a 1k lat-long, where only the pole rows take cells: 9.3 -> 3.5 s into
+// a cube 64). BruteFilter::chunk_size counts both walks against llvmpipe's loop limit.
+bool cells_wanted = false;
+
+// ∫K over prepared texel t (0 where skipped): in the first walk by the rules other than
+// cells (a texel that asks for them sets cells_wanted and gives 0), in the second by cells
+// alone. cells_pass is a constant at each call, so each walk holds only its own rules.
+float texel_weight(vec3 axis, float n, float ln_scale, uint t, bool cells_pass) {
     if (rad[t].w == 0.0) return 0.0;
     vec4 cone = cones[t];
     uint cells;
     int r = texel_rule(axis, n, cone, shapes[3u * t].w > 0.5, cells);
+    if (cells_pass) {
+        if (r != RULE_CELLS) return 0.0;
+        float k = texel_mean(axis, t, cells);
+        return k < 0.0 ? kernel_eval(pc.exponent, axis, cone.xyz) : k;
+    }
     if (r == RULE_SKIP) return 0.0;
-    if (r == RULE_CENTRE) return kernel_eval(pc.exponent, axis, cone.xyz);
-    if (r == RULE_TILTED) return tilted_mean(axis, n, ln_scale, t);
-    float k = texel_mean(axis, t, cells);
-    return k < 0.0 ? kernel_eval(pc.exponent, axis, cone.xyz) : k;
+    if (r == RULE_CELLS) {
+        cells_wanted = true;
+        return 0.0;
+    }
+    // The centre node is the tilted rule's value for a point texel at the centre: one
+    // evaluation serves both rules (llvmpipe would take both at every texel).
+    bool centre = r == RULE_CENTRE;
+    vec3 c = centre ? cone.xyz : shapes[3u * t].xyz;
+    vec3 hu = centre ? vec3(0.0) : shapes[3u * t + 1u].xyz;
+    vec3 hv = centre ? vec3(0.0) : shapes[3u * t + 2u].xyz;
+    return tilted_shape(axis, n, ln_scale, c, hu, hv);
 }
 
 // Texel t's term L·∫K: a prepared texel, or with MOMENT_SOURCE a texel of the pyramid's level,
 // taken whole (each channel's parallelogram) where the rule takes it by centre or tilt, and
 // from its 2^s × 2^s prepared texels elsewhere (twin of MomentLevel::convolve).
-void add_texel(vec3 axis, float n, float ln_scale, uint t, inout vec3 sum, inout vec3 comp) {
+void add_texel(vec3 axis, float n, float ln_scale, uint t, bool cells_pass, inout vec3 sum, inout vec3 comp) {
     if (!MOMENT_SOURCE) {
-        float k = texel_weight(axis, n, ln_scale, t);
+        float k = texel_weight(axis, n, ln_scale, t, cells_pass);
         if (k > 0.0) kahan_add(sum, comp, rad[t].rgb * (rad[t].w * k));
         return;
     }
@@ -522,6 +540,7 @@ void add_texel(vec3 axis, float n, float ln_scale, uint t, inout vec3 sum, inout
     int r = texel_rule(axis, n, coarse_cones[t], true, cells);
     if (r == RULE_SKIP) return;
     if (r != RULE_CELLS) {
+        if (cells_pass) return;
         vec3 term = vec3(0.0);
         for (int ch = 0; ch < 3; ch++) {
             vec4 cp = light[9u * t + 3u * uint(ch)];
@@ -542,8 +561,26 @@ void add_texel(vec3 axis, float n, float ln_scale, uint t, inout vec3 sum, inout
     for (uint k = 0u; k < side * side; k++) {
         uvec2 q = base + uvec2(k % side, k / side);
         uint f = (layer * fine.y + q.y) * fine.x + q.x;
-        float kk = texel_weight(axis, n, ln_scale, f);
+        float kk = texel_weight(axis, n, ln_scale, f, cells_pass);
         if (kk > 0.0) kahan_add(sum, comp, rad[f].rgb * (rad[f].w * kk));
+    }
+}
+
+// Slots [begin, end) tile by tile, skipping the tiles whose cone the rule skips whole: the
+// first walk (cells_pass false) or the second (true; see cells_wanted).
+void walk(vec3 axis, float n, float ln_scale, uint begin, uint end, bool cells_pass, inout vec3 sum,
+          inout vec3 comp) {
+    const uint per_tile = BRUTE_TILE * BRUTE_TILE;
+    for (uint tile = begin / per_tile; tile * per_tile < end; tile++) {
+        if (cone_skipped(axis, n, tiles[tile])) continue;
+        uint first = max(begin, tile * per_tile) - tile * per_tile;
+        uint last = min(end, (tile + 1u) * per_tile) - tile * per_tile;
+        uvec3 origin = tile_origin(tile);
+        for (uint s = first; s < last; s++) {
+            int ti = slot_texel(origin, s);
+            if (ti < 0) continue;
+            add_texel(axis, n, ln_scale, uint(ti), cells_pass, sum, comp);
+        }
     }
 }
 
@@ -573,18 +610,8 @@ void main() {
         sum = partials[o].rgb;
         comp = partials[o + 1u].rgb;
     }
-    const uint per_tile = BRUTE_TILE * BRUTE_TILE;
-    for (uint tile = begin / per_tile; tile * per_tile < end; tile++) {
-        if (cone_skipped(axis, n, tiles[tile])) continue;
-        uint first = max(begin, tile * per_tile) - tile * per_tile;
-        uint last = min(end, (tile + 1u) * per_tile) - tile * per_tile;
-        uvec3 origin = tile_origin(tile);
-        for (uint s = first; s < last; s++) {
-            int ti = slot_texel(origin, s);
-            if (ti < 0) continue;
-            add_texel(axis, n, ln_scale, uint(ti), sum, comp);
-        }
-    }
+    walk(axis, n, ln_scale, begin, end, false, sum, comp);
+    if (cells_wanted) walk(axis, n, ln_scale, begin, end, true, sum, comp);
     partials[o] = vec4(sum, 0.0);
     partials[o + 1u] = vec4(comp, 0.0);
 }

@@ -175,6 +175,39 @@ fn large_sources_are_summed_whole() {
     common::finish(ctx);
 }
 
+/// The texels whose rule asks for Gauss cells (the lat-long rows next to the poles, which are
+/// not parallelograms, and texels near the lobe's cut-off where its log curves fast) are
+/// summed in a second walk over the same slots, so an invocation that meets one runs the
+/// texel loop twice: the chunks must leave llvmpipe's loop limit room for both walks, or those
+/// sums silently lose texels (they lost 4% at the poles of a Phong n = 2049 cube 64 from a 1k
+/// map when the chunks counted one walk; this test then erred by 5e-3). A 256 × 128 sky with a
+/// sun (32 768 slots, more than one chunk) and n = 10 (one cell a texel, so the chunks are
+/// long, and a lobe that covers most of them), one invocation per output texel, into a cube 8:
+/// every texel within 1e-4 of the float64 twin, the convolution test's bound.
+#[test]
+fn both_walks_fit_the_loop_limit() {
+    let ctx = common::ctx();
+    {
+        let mut pass = BruteFilter::new(&ctx).unwrap();
+        // One part per texel: each invocation walks whole chunks, as a large output's do.
+        pass.set_target_invocations(1);
+        let sky = Sky::default();
+        let map = EnvMap::from_fn(Mapping::LatLong, 256, 128, 1, |d| sky.radiance(d));
+        let kernel = Kernel::Phong { n: 10.0 };
+        let target = FilterTarget {
+            to: Mapping::Cube,
+            size: 8,
+        };
+        let out = brute_gpu(&ctx, &pass, &map, kernel, target);
+        let fine = filter::Prepared::new(&map, DMat3::IDENTITY);
+        let exact = at_centres(Mapping::Cube, 8, 8, |d| fine.convolve(kernel, d));
+        let worst = worst_relative(&out, &exact);
+        eprintln!("Phong 10, 256 x 128 to cube 8: worst {worst:.2e}");
+        assert!(worst < 1e-4, "{worst:e}");
+    }
+    common::finish(ctx);
+}
+
 /// Small outputs split the source among parts, each summed by its own invocation, then added
 /// per texel: the split may change float rounding only. A sky with a sun 5·10⁴ × the zenith,
 /// filtered into a 2² cube (24 texels: the default target of 65 536 invocations makes ~2 700

@@ -560,9 +560,11 @@ struct CoarseLevel {
 impl BruteFilter {
     /// Source slots (tile-major texels) per dispatch: all, or where the device cuts long loops short
     /// ([`crate::gpu::DeviceInfo::loop_iteration_limit`]), as many as keep every invocation's
-    /// loop iterations within 90% of the limit: one for the texel loop plus, per texel, at
-    /// most s² cell iterations (s from the rule for the source's widest texel) or ~130 for a
-    /// clipped rim texel of an angular or paraboloid source.
+    /// loop iterations within 90% of the limit: two for the texel loops (the cells rule's
+    /// texels are summed in a second walk over the same slots, glsl/brute.comp) plus, per
+    /// texel, at most s² cell iterations (s from the rule for the source's widest texel) or
+    /// ~130 for a clipped rim texel of an angular or paraboloid source. llvmpipe counts the
+    /// iterations of all loops together.
     fn chunk_size(&self, src: &PreparedSource, kernel: Kernel) -> u32 {
         let Some(limit) = self.ctx.info().loop_iteration_limit else {
             return u32::MAX;
@@ -597,7 +599,7 @@ impl BruteFilter {
         } else {
             0.0
         };
-        let per_texel = 1.0 + (s * s).max(rim);
+        let per_texel = 2.0 + (s * s).max(rim);
         ((0.9 * limit as f64 / per_texel) as u32).max(1)
     }
 }
