@@ -11,12 +11,12 @@
 //   parallelogram with the light's centroid and covariance (twin of moments::MomentLevel::new);
 // - otherwise: one invocation per output texel and part of the source sums L·∫K over the
 //   part's texels, choosing per texel the same rule as the CPU (skip, centre node, the tilted
-//   rule, or s×s cells of 3×3 Gauss points, those last in a second walk), with Kahan
-//   compensation so a sun 1e5 times the sky does not swamp the sum, into its partial sum;
-//   parts let a small output (a coarse Phong
-//   level) fill the device. The source is taken in chunks, one dispatch each, accumulating
-//   into the partial sums, so that no invocation runs more loop iterations than llvmpipe
-//   allows (DeviceInfo::loop_iteration_limit); the node loops are unrolled for the same reason;
+//   rule, or s×s cells of 3×3 Gauss points, on CPU devices those last in a second walk),
+//   with Kahan compensation so a sun 1e5 times the sky does not swamp the sum, into its
+//   partial sum; parts let a small output (a coarse Phong level) fill the device. The source
+//   is taken in chunks, one dispatch each, accumulating into the partial sums, so that no
+//   invocation runs more loop iterations than llvmpipe allows
+//   (DeviceInfo::loop_iteration_limit); the node loops are unrolled for the same reason;
 // - RESOLVE: one invocation per output texel adds its parts' sums into the map. Texels are
 //   walked tile by tile ("slots": tile-major, BRUTE_TILE² per tile, the chunks count slots),
 //   and a tile whose cone lies wholly where the rule skips texels is skipped whole: every
@@ -68,6 +68,10 @@ layout(constant_id = 3) const uint DST_MAPPING = 0u;
 // Whether the sum runs over a level of the moment pyramid (pc.src_size is then that level's
 // size, and the prepared texels are pc.src_level levels finer).
 layout(constant_id = 4) const bool MOMENT_SOURCE = false;
+// Whether texels that take Gauss cells wait for a second walk (CPU devices; see cells_wanted).
+// A GPU takes every rule in one walk: a branch no lane of a warp takes costs it nothing, and
+// the second walk's code cost the H100 registers (Phong n = 2049, cube 64: 41 -> 59 ms).
+layout(constant_id = 5) const bool CELLS_WALK = false;
 
 // The size of the prepared (finest) texels.
 uvec2 fine_size() {
@@ -492,31 +496,38 @@ int texel_rule(vec3 axis, float n, vec4 cone, bool regular, out uint cells) {
     return RULE_CELLS;
 }
 
-// Whether this invocation met a texel whose rule asks for Gauss cells. The sum takes those in
-// a second walk (cells_pass): llvmpipe runs every branch of the texel loop's body at every
-// step, and a nested loop's first iteration even where no lane enters it, so with the cells'
-// nine nodes of trigonometry in the one walk every texel paid for the few that need them
-// (Phong n = 2049 from a 1k lat-long, where only the pole rows take cells: 9.3 -> 3.5 s into
-// a cube 64). BruteFilter::chunk_size counts both walks against llvmpipe's loop limit.
+// Whether this invocation met a texel whose rule asks for Gauss cells. With CELLS_WALK the sum
+// takes those in a second walk (cells_pass): llvmpipe runs every branch of the texel loop's
+// body at every step, and a nested loop's first iteration even where no lane enters it, so
+// with the cells' nine nodes of trigonometry in the one walk every texel paid for the few
+// that need them (Phong n = 2049 from a 1k lat-long, where only the pole rows take cells:
+// 9.3 -> 3.5 s into a cube 64). BruteFilter::chunk_size counts both walks against llvmpipe's
+// loop limit.
 bool cells_wanted = false;
 
-// ∫K over prepared texel t (0 where skipped): in the first walk by the rules other than
-// cells (a texel that asks for them sets cells_wanted and gives 0), in the second by cells
-// alone. cells_pass is a constant at each call, so each walk holds only its own rules.
+// ∫K over prepared texel t (0 where skipped). With CELLS_WALK, the first walk takes the rules
+// other than cells (a texel that asks for them sets cells_wanted and gives 0) and the second
+// (cells_pass) cells alone; cells_pass is a constant at each call, so each walk holds only its
+// own rules. Without it, one walk takes them all.
 float texel_weight(vec3 axis, float n, float ln_scale, uint t, bool cells_pass) {
     if (rad[t].w == 0.0) return 0.0;
     vec4 cone = cones[t];
     uint cells;
     int r = texel_rule(axis, n, cone, shapes[3u * t].w > 0.5, cells);
-    if (cells_pass) {
-        if (r != RULE_CELLS) return 0.0;
+    if (r == RULE_SKIP) return 0.0;
+    if (r == RULE_CELLS) {
+        if (CELLS_WALK && !cells_pass) {
+            cells_wanted = true;
+            return 0.0;
+        }
         float k = texel_mean(axis, t, cells);
         return k < 0.0 ? kernel_eval(pc.exponent, axis, cone.xyz) : k;
     }
-    if (r == RULE_SKIP) return 0.0;
-    if (r == RULE_CELLS) {
-        cells_wanted = true;
-        return 0.0;
+    if (cells_pass) return 0.0;
+    if (!CELLS_WALK) {
+        if (r == RULE_CENTRE) return kernel_eval(pc.exponent, axis, cone.xyz);
+        return tilted_shape(axis, n, ln_scale, shapes[3u * t].xyz, shapes[3u * t + 1u].xyz,
+                            shapes[3u * t + 2u].xyz);
     }
     // The centre node is the tilted rule's value for a point texel at the centre: one
     // evaluation serves both rules (llvmpipe would take both at every texel).
@@ -611,7 +622,7 @@ void main() {
         comp = partials[o + 1u].rgb;
     }
     walk(axis, n, ln_scale, begin, end, false, sum, comp);
-    if (cells_wanted) walk(axis, n, ln_scale, begin, end, true, sum, comp);
+    if (CELLS_WALK && cells_wanted) walk(axis, n, ln_scale, begin, end, true, sum, comp);
     partials[o] = vec4(sum, 0.0);
     partials[o + 1u] = vec4(comp, 0.0);
 }

@@ -39,13 +39,16 @@ pub struct BruteFilter {
     tiles: Pipeline,
     /// Per source mapping, specialised on it.
     moments: [OnceLock<Pipeline>; 4],
-    /// Per (source, destination) mapping pair and source kind (texels or a moment level),
-    /// specialised on all three.
-    brute: [OnceLock<Pipeline>; 32],
+    /// Per (source, destination) mapping pair, source kind (texels or a moment level) and
+    /// walk structure ([`BruteFilter::set_cells_walk`]), specialised on all four.
+    brute: [OnceLock<Pipeline>; 64],
     /// Per destination mapping.
     resolve: [OnceLock<Pipeline>; 4],
     sampler: Sampler,
     target_invocations: u32,
+    /// Whether texels that take Gauss cells are summed in a second walk (glsl/brute.comp,
+    /// CELLS_WALK): on CPU devices.
+    cells_walk: bool,
 }
 
 /// Invocations a convolution keeps busy by default: outputs smaller than this (the coarse
@@ -62,11 +65,20 @@ impl BruteFilter {
             prepare: Default::default(),
             tiles: Pipeline::compute(ctx, ShaderId::BruteTiles, &[WORKGROUP_1D])?,
             moments: Default::default(),
-            brute: Default::default(),
+            brute: std::array::from_fn(|_| OnceLock::new()),
             resolve: Default::default(),
             sampler: Sampler::linear_clamp(ctx, "brute sampler")?,
             target_invocations: DEFAULT_TARGET_INVOCATIONS,
+            cells_walk: ctx.info().device_type == vk::PhysicalDeviceType::CPU,
         })
+    }
+
+    /// Sums the texels that take Gauss cells in a second walk over the source (`true`, the
+    /// default on CPU devices, which run every branch of a loop's body, so that the cells' nodes
+    /// leave the first walk's loop) or in the one walk (the default elsewhere). The sums differ
+    /// by float rounding only.
+    pub fn set_cells_walk(&mut self, on: bool) {
+        self.cells_walk = on;
     }
 
     /// Sets how many invocations a convolution aims to keep busy by splitting the source among
@@ -321,10 +333,17 @@ impl BruteFilter {
         let (from, to) = (prep.mapping.id(), dst.mapping.id());
         let moment = coarse.is_some() as usize;
         let brute = Pipeline::compute_once(
-            &self.brute[2 * (4 * from + to) as usize + moment],
+            &self.brute[4 * (4 * from + to) as usize + 2 * self.cells_walk as usize + moment],
             &self.ctx,
             ShaderId::Brute,
-            &[WORKGROUP_2D[0], WORKGROUP_2D[1], from, to, moment as u32],
+            &[
+                WORKGROUP_2D[0],
+                WORKGROUP_2D[1],
+                from,
+                to,
+                moment as u32,
+                self.cells_walk as u32,
+            ],
         )?;
         // The resolve reads only the destination mapping (constant 2 is unused there).
         let resolve = Pipeline::compute_once(
@@ -560,11 +579,11 @@ struct CoarseLevel {
 impl BruteFilter {
     /// Source slots (tile-major texels) per dispatch: all, or where the device cuts long loops short
     /// ([`crate::gpu::DeviceInfo::loop_iteration_limit`]), as many as keep every invocation's
-    /// loop iterations within 90% of the limit: two for the texel loops (the cells rule's
-    /// texels are summed in a second walk over the same slots, glsl/brute.comp) plus, per
-    /// texel, at most s² cell iterations (s from the rule for the source's widest texel) or
-    /// ~130 for a clipped rim texel of an angular or paraboloid source. llvmpipe counts the
-    /// iterations of all loops together.
+    /// loop iterations within 90% of the limit: one for the texel loop, two where the cells
+    /// rule's texels are summed in a second walk over the same slots ([`Self::set_cells_walk`]),
+    /// plus, per texel, at most s² cell iterations (s from the rule for the source's widest
+    /// texel) or ~130 for a clipped rim texel of an angular or paraboloid source. llvmpipe
+    /// counts the iterations of all loops together.
     fn chunk_size(&self, src: &PreparedSource, kernel: Kernel) -> u32 {
         let Some(limit) = self.ctx.info().loop_iteration_limit else {
             return u32::MAX;
@@ -599,7 +618,8 @@ impl BruteFilter {
         } else {
             0.0
         };
-        let per_texel = 2.0 + (s * s).max(rim);
+        let walks = if self.cells_walk { 2.0 } else { 1.0 };
+        let per_texel = walks + (s * s).max(rim);
         ((0.9 * limit as f64 / per_texel) as u32).max(1)
     }
 }
