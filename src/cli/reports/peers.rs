@@ -438,9 +438,9 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     md.push_str(
         "\nErrors: SH, worst coefficient against the float64 projection (relative to the largest); \
          irradiance, worst texel against float64 SH of the same order (cmft's E/π against order 4); \
-         conversion, total power against the source's; Phong, worst of 128 texels (levels: 32 per \
-         level) against the float64 brute force over every source texel with Gauss cells \
-         everywhere. cmft's irradiance and Phong cubes are not compared texel by texel: \
+         conversion, total power against the source's; Phong, worst of 128 texels spread over \
+         the cube and the 8 nearest the map's poles (levels: 32 and 8 per level) against the \
+         float64 brute force over every source texel with Gauss cells everywhere. cmft's irradiance and Phong cubes are not compared texel by texel: \
          their face frame is not yet matched to DESIGN.md's, so a difference would measure the \
          frames; ../shared/peers/README.md measured 1–16% lobe-tail error for its Phong.\n",
     );
@@ -515,13 +515,23 @@ fn errors(job: &str, src: &EnvMap, tmp: &Path, cmft: bool) -> Result<(String, St
     }
     // Phong: texels spread over the cube (128; 32 per level for the levels), against the
     // float64 brute force over every source texel with Gauss cells everywhere (not the tilted
-    // rule nor the moment pyramid the GPU takes), so the error includes both.
+    // rule nor the moment pyramid the GPU takes), so the error includes both. And the 4
+    // texels nearest each of the lat-long's poles, whose lobes reach the rows there that take
+    // Gauss cells (on CPU devices in a second walk): the stride samples none of them, and
+    // missed a 4% loss there (docs/BENCHMARKS.md, session 26).
     let prep = Prepared::new(src, DMat3::IDENTITY).without_tilt();
     let worst = |ours: &EnvMap, n: f64, count: usize| {
         let kernel = Kernel::Phong { n };
         let dirs = centres(ours);
         let step = (dirs.len() / count).max(1);
-        let picks: Vec<usize> = (0..dirs.len()).step_by(step).collect();
+        let mut picks: Vec<usize> = (0..dirs.len()).step_by(step).collect();
+        for pole in [DVec3::Y, DVec3::NEG_Y] {
+            let mut near: Vec<usize> = (0..dirs.len()).collect();
+            near.sort_by(|&a, &b| dirs[b].dot(pole).total_cmp(&dirs[a].dot(pole)));
+            picks.extend(near.into_iter().take(4));
+        }
+        picks.sort_unstable();
+        picks.dedup();
         let want: Vec<[f64; 3]> = picks
             .iter()
             .map(|&i| prep.convolve(kernel, dirs[i]))
