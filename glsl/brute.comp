@@ -538,9 +538,10 @@ float texel_weight(vec3 axis, float n, float ln_scale, uint t, bool cells_pass) 
     return tilted_shape(axis, n, ln_scale, c, hu, hv);
 }
 
-// Texel t's term L·∫K: a prepared texel, or with MOMENT_SOURCE a texel of the pyramid's level,
-// taken whole (each channel's parallelogram) where the rule takes it by centre or tilt, and
-// from its 2^s × 2^s prepared texels elsewhere (twin of MomentLevel::convolve).
+// Texel t's term L·∫K (with CELLS_WALK, the part of it the first walk or the second takes): a
+// prepared texel, or with MOMENT_SOURCE a texel of the pyramid's level, taken whole (each
+// channel's parallelogram, first walk) where the rule takes it by centre or tilt, and from its
+// 2^s × 2^s prepared texels elsewhere (twin of MomentLevel::convolve).
 void add_texel(vec3 axis, float n, float ln_scale, uint t, bool cells_pass, inout vec3 sum, inout vec3 comp) {
     if (!MOMENT_SOURCE) {
         float k = texel_weight(axis, n, ln_scale, t, cells_pass);

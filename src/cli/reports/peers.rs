@@ -440,7 +440,8 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
          irradiance, worst texel against float64 SH of the same order (cmft's E/π against order 4); \
          conversion, total power against the source's; Phong, worst of 128 texels spread over \
          the cube and the 8 nearest the map's poles (levels: 32 and 8 per level) against the \
-         float64 brute force over every source texel with Gauss cells everywhere. cmft's irradiance and Phong cubes are not compared texel by texel: \
+         float64 brute force over every source texel with Gauss cells everywhere. cmft's \
+         irradiance and Phong cubes are not compared texel by texel: \
          their face frame is not yet matched to DESIGN.md's, so a difference would measure the \
          frames; ../shared/peers/README.md measured 1–16% lobe-tail error for its Phong.\n",
     );
