@@ -151,7 +151,9 @@ void add_texel(uint i, inout vec3 acc[NC]) {
         }
     }
     float wsum = w[0] + w[1] + w[2] + w[3];
-    if (wsum <= 0.0) {
+    // (Never for lat-long, whose nodes all have sin θ > 0: the constant drops the branch,
+    // which llvmpipe would run at every texel.)
+    if (MAPPING != MAPPING_LATLONG && wsum <= 0.0) {
         // A sliver too thin for any node: its centre stands for it.
         Coord c;
         c.layer = layer;
