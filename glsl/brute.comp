@@ -72,6 +72,9 @@ layout(constant_id = 4) const bool MOMENT_SOURCE = false;
 // A GPU takes every rule in one walk: a branch no lane of a warp takes costs it nothing, and
 // the second walk's code cost the H100 registers (Phong n = 2049, cube 64: 41 -> 59 ms).
 layout(constant_id = 5) const bool CELLS_WALK = false;
+// Invocations per output texel (CPU devices: the SIMD width; 1 elsewhere). Each sums every
+// TEXEL_LANES-th slot of the tiles that output's lobe reaches (walk_lanes) into its own part.
+layout(constant_id = 6) const uint TEXEL_LANES = 1u;
 
 // The size of the prepared (finest) texels.
 uvec2 fine_size() {
@@ -596,11 +599,86 @@ void walk(vec3 axis, float n, float ln_scale, uint begin, uint end, bool cells_p
     }
 }
 
+// The tiles a lobe about `axis` can reach in a lat-long source: tile rows x … y and w tile
+// columns from z on, wrapping; every tile for other mappings. The reach is the cap where the
+// lobe is above its cut-off (x_cut; the horizon at most), widened by the widest texel cone
+// and one texel more for rounding: a texel the rule keeps has its centre in that cap, so
+// within its radius in colatitude and, where the cap holds no pole, within
+// asin(sin d / sin θ) in longitude.
+uvec4 lobe_window(vec3 axis, float n) {
+    uvec2 g = tile_grid();
+    uvec4 win = uvec4(0u, g.y * pc.src_layers - 1u, 0u, g.x);
+    if (SRC_MAPPING != MAPPING_LATLONG) return win;
+    ivec2 size = ivec2(pc.src_size);
+    vec2 step = vec2(TAU, PI) / vec2(size);
+    // 1 − x_cut without cancellation for large n.
+    float u = -FILTER_LOG_CUTOFF / n;
+    float below = n > 1.0 ? (u < 1e-3 ? u * (1.0 - 0.5 * u) : 1.0 - exp(-u)) : 1.0;
+    float d = 2.0 * asin(sqrt(0.5 * below)) + FILTER_CONE_MARGIN * 0.5 * (step.x + step.y)
+        + max(step.x, step.y);
+    vec3 f = pc.file_to_world[0].xyz * axis.x + pc.file_to_world[1].xyz * axis.y
+        + pc.file_to_world[2].xyz * axis.z;
+    vec2 uv = dir_to_coord(MAPPING_LATLONG, f).uv;
+    float theta = PI * uv.y;
+    int j0 = int(floor((theta - d) / step.y - 0.5)), j1 = int(ceil((theta + d) / step.y - 0.5));
+    win.x = uint(clamp(j0, 0, size.y - 1)) / BRUTE_TILE;
+    win.y = uint(clamp(j1, 0, size.y - 1)) / BRUTE_TILE;
+    if (theta - d <= 0.0 || theta + d >= PI) return win;
+    float dphi = asin(min(sin(d) / sin(theta), 1.0));
+    float phi = TAU * uv.x;
+    int i0 = int(floor((phi - dphi) / step.x - 0.5)), i1 = int(ceil((phi + dphi) / step.x - 0.5));
+    if (i1 - i0 + 1 >= size.x) return win;
+    // Texel columns i0 … i1 modulo the width, and their tiles (a > b where they wrap).
+    uint a = uint((i0 % size.x + size.x) % size.x), b = uint((i1 % size.x + size.x) % size.x);
+    uint ta = a / BRUTE_TILE, tb = b / BRUTE_TILE;
+    uint count = a <= b ? tb - ta + 1u : g.x - ta + tb + 1u;
+    if (count < g.x) win.zw = uvec2(ta, count);
+    return win;
+}
+
+// Slots [begin, end) of the tiles in window `win` (lobe_window), this lane (of TEXEL_LANES on
+// one output) taking every TEXEL_LANES-th slot of each tile: CPU devices, whose SIMD lanes
+// are neighbouring invocations. With one output a lane, a group walked every tile any of its
+// eight lobes reached (~1.6× one lobe's) and paid a masked texel body for each tile all its
+// lanes culled (llvmpipe runs a nested loop's first iteration regardless); here the group
+// walks one lobe's tiles, and the window leaves most culled tiles out of the loop.
+void walk_lanes(vec3 axis, float n, float ln_scale, uint begin, uint end, uint lane, uvec4 win,
+                bool cells_pass, inout vec3 sum, inout vec3 comp) {
+    if (begin >= end) return;
+    const uint per_tile = BRUTE_TILE * BRUTE_TILE;
+    uint gx = tile_grid().x;
+    uint tb = begin / per_tile, te = (end - 1u) / per_tile;
+    uint wrap = win.z + win.w;
+    for (uint ty = max(win.x, tb / gx); ty <= min(win.y, te / gx); ty++) {
+        // This chunk's columns of row ty, [ca, cb), met with the window's two unwrapped pieces.
+        uint ca = ty == tb / gx ? tb % gx : 0u;
+        uint cb = ty == te / gx ? te % gx + 1u : gx;
+        [[unroll]] for (uint piece = 0u; piece < 2u; piece++) {
+            uint lo = piece == 0u ? win.z : 0u;
+            uint hi = piece == 0u ? min(wrap, gx) : (wrap > gx ? wrap - gx : 0u);
+            for (uint tx = max(lo, ca); tx < min(hi, cb); tx++) {
+                uint tile = ty * gx + tx;
+                if (cone_skipped(axis, n, tiles[tile])) continue;
+                uint first = max(begin, tile * per_tile) - tile * per_tile;
+                uint last = min(end, (tile + 1u) * per_tile) - tile * per_tile;
+                uvec3 origin = tile_origin(tile);
+                for (uint s = first + lane; s < last; s += TEXEL_LANES) {
+                    int ti = slot_texel(origin, s);
+                    if (ti < 0) continue;
+                    add_texel(axis, n, ln_scale, uint(ti), cells_pass, sum, comp);
+                }
+            }
+        }
+    }
+}
+
 // One invocation per output texel and part of the source: the grid holds pc.parts blocks of
 // the output's size, block k summing slots [k·part_slots, (k + 1)·part_slots) of this
 // dispatch's chunk, so that small outputs (the coarse Phong levels) still fill the device.
 void main() {
     uvec3 gid = gl_GlobalInvocationID;
+    uint lane = gid.x % TEXEL_LANES;
+    gid.x /= TEXEL_LANES;
     uvec2 block = gid.xy / pc.dst_size;
     if (any(greaterThanEqual(block, pc.parts))) return;
     uvec3 id = uvec3(gid.xy - block * pc.dst_size, gid.z);
@@ -615,15 +693,21 @@ void main() {
     float n = pc.exponent == 0.0 ? 1.0 : pc.exponent;
     float ln_scale = pc.exponent == 0.0 ? 0.0 : log((n + 1.0) / TAU);
     x_cut = n > 1.0 ? exp(FILTER_LOG_CUTOFF / n) : 0.0;
-    uint o = 2u * (part * dst_texels() + (id.z * pc.dst_size.y + id.y) * pc.dst_size.x + id.x);
+    uint o = 2u * ((part * TEXEL_LANES + lane) * dst_texels() + (id.z * pc.dst_size.y + id.y) * pc.dst_size.x + id.x);
     precise vec3 sum = vec3(0.0);
     precise vec3 comp = vec3(0.0);
     if (pc.chunk_begin > 0u) {
         sum = partials[o].rgb;
         comp = partials[o + 1u].rgb;
     }
-    walk(axis, n, ln_scale, begin, end, false, sum, comp);
-    if (CELLS_WALK && cells_wanted) walk(axis, n, ln_scale, begin, end, true, sum, comp);
+    if (TEXEL_LANES == 1u) {
+        walk(axis, n, ln_scale, begin, end, false, sum, comp);
+        if (CELLS_WALK && cells_wanted) walk(axis, n, ln_scale, begin, end, true, sum, comp);
+    } else {
+        uvec4 win = lobe_window(axis, n);
+        walk_lanes(axis, n, ln_scale, begin, end, lane, win, false, sum, comp);
+        if (CELLS_WALK && cells_wanted) walk_lanes(axis, n, ln_scale, begin, end, lane, win, true, sum, comp);
+    }
     partials[o] = vec4(sum, 0.0);
     partials[o + 1u] = vec4(comp, 0.0);
 }

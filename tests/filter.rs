@@ -219,6 +219,64 @@ fn both_walks_fit_the_loop_limit() {
     common::finish(ctx);
 }
 
+/// On CPU devices several invocations (SIMD lanes) sum one output texel, each every L-th slot
+/// of the tiles its lobe's window reaches (in a lat-long source: the tile rows and columns of
+/// the cap above the cut-off, wrapping at the seam, every column where the cap holds a pole);
+/// elsewhere one invocation walks every tile. Both must sum the same terms. A 256 × 128 sky
+/// with a sun 5·10⁴ × the zenith, turned 200° about +Y and mirrored (the window is found in
+/// the file's frame), into a 32 × 16 lat-long (outputs next to both poles and on the seam)
+/// with Phong n = 2000 (a window of one to three tiles a side of the 16 × 8, except next to
+/// the poles) and n = 3, and the cosine; each with 1, 2, 8 and 32 lanes, one invocation group per output
+/// (the chunks then cut tile rows mid-row): every result within 1e-4 of the float64 twin
+/// (the convolution test's bound), and within 2e-6 of one lane's (the same compensated terms
+/// grouped otherwise, ~1e-7). A tile wrongly left out of a window would take the sun or a
+/// slice of sky with it: the sun alone is over 1e-3 of every output it reaches.
+#[test]
+fn lanes_and_windows_change_rounding_only() {
+    let ctx = common::ctx();
+    {
+        let sky = Sky::default();
+        let map = EnvMap::from_fn(Mapping::LatLong, 256, 128, 1, |d| sky.radiance(d));
+        let o = Orientation {
+            flip_u: true,
+            flip_v: false,
+            rotate_y_degrees: 200.0,
+        };
+        let g = GpuEnvMap::upload(&ctx, &map).unwrap();
+        let fine = filter::Prepared::new(&map, o.world_to_file().transpose());
+        let target = FilterTarget {
+            to: Mapping::LatLong,
+            size: 32,
+        };
+        let mut pass = BruteFilter::new(&ctx).unwrap();
+        pass.set_target_invocations(1);
+        for kernel in [
+            Kernel::Phong { n: 2000.0 },
+            Kernel::Phong { n: 3.0 },
+            Kernel::Cosine,
+        ] {
+            let exact = at_centres(Mapping::LatLong, 32, 16, |d| fine.convolve(kernel, d));
+            let mut outs = Vec::new();
+            for lanes in [1, 2, 8, 32] {
+                pass.set_texel_lanes(lanes);
+                let (out, _) = pass.run(&g, &o, kernel, target).unwrap();
+                let out = out.download(&ctx).unwrap();
+                let vs_twin = worst_relative(&out, &exact);
+                eprintln!("{kernel:?}, {lanes} lanes: twin {vs_twin:.2e}");
+                assert!(vs_twin < 1e-4, "{kernel:?}, {lanes} lanes: {vs_twin:e}");
+                outs.push(out);
+            }
+            let one: Vec<[f64; 3]> = outs[0].texels.iter().map(|t| t.map(f64::from)).collect();
+            for (other, lanes) in outs[1..].iter().zip([2, 8, 32]) {
+                let apart = worst_relative(other, &one);
+                eprintln!("{kernel:?}: {lanes} lanes against one {apart:.2e}");
+                assert!(apart < 2e-6, "{kernel:?}, {lanes} lanes: {apart:e}");
+            }
+        }
+    }
+    common::finish(ctx);
+}
+
 /// Small outputs split the source among parts, each summed by its own invocation, then added
 /// per texel: the split may change float rounding only. A sky with a sun 5·10⁴ × the zenith,
 /// filtered into a 2² cube (24 texels: the default target of 65 536 invocations makes ~2 700

@@ -39,9 +39,10 @@ pub struct BruteFilter {
     tiles: Pipeline,
     /// Per source mapping, specialised on it.
     moments: [OnceLock<Pipeline>; 4],
-    /// Per (source, destination) mapping pair, source kind (texels or a moment level) and
-    /// walk structure ([`BruteFilter::set_cells_walk`]), specialised on all four.
-    brute: [OnceLock<Pipeline>; 64],
+    /// Per (source, destination) mapping pair, source kind (texels or a moment level), walk
+    /// structure ([`BruteFilter::set_cells_walk`]) and lanes per output
+    /// ([`BruteFilter::set_texel_lanes`]), specialised on all five ([`pipeline_slot`]).
+    brute: [OnceLock<Pipeline>; PIPELINE_SLOTS],
     /// Per destination mapping.
     resolve: [OnceLock<Pipeline>; 4],
     sampler: Sampler,
@@ -49,6 +50,35 @@ pub struct BruteFilter {
     /// Whether texels that take Gauss cells are summed in a second walk (glsl/brute.comp,
     /// CELLS_WALK): on CPU devices.
     cells_walk: bool,
+    /// Invocations per output texel, each summing every `texel_lanes`-th slot of a tile
+    /// (glsl/brute.comp, TEXEL_LANES): the subgroup size on CPU devices, 1 elsewhere.
+    texel_lanes: u32,
+}
+
+/// Largest lane count per output texel ([`BruteFilter::set_texel_lanes`]).
+pub const MAX_TEXEL_LANES: u32 = 32;
+
+/// Lane counts (powers of two up to [`MAX_TEXEL_LANES`]) times the 64 other variants.
+const PIPELINE_SLOTS: usize = 64 * (MAX_TEXEL_LANES.trailing_zeros() as usize + 1);
+
+/// The brute pipeline's slot for source and destination mapping ids, source kind, walk
+/// structure and lanes per output (a power of two).
+fn pipeline_slot(from: u32, to: u32, moment: bool, cells_walk: bool, lanes: u32) -> usize {
+    64 * lanes.trailing_zeros() as usize
+        + 4 * (4 * from + to) as usize
+        + 2 * cells_walk as usize
+        + moment as usize
+}
+
+/// The lanes per output a device takes by default: its subgroup size (a power of two at
+/// most [`MAX_TEXEL_LANES`]) on CPU devices, whose subgroups are SIMD lanes of neighbouring
+/// invocations, so that one output's lanes run as one group; 1 elsewhere.
+fn default_texel_lanes(info: &crate::gpu::DeviceInfo) -> u32 {
+    if info.device_type != vk::PhysicalDeviceType::CPU || info.subgroup_size < 2 {
+        return 1;
+    }
+    let pow2 = 1 << (31 - info.subgroup_size.leading_zeros());
+    pow2.min(MAX_TEXEL_LANES)
 }
 
 /// Invocations a convolution keeps busy by default: outputs smaller than this (the coarse
@@ -70,6 +100,7 @@ impl BruteFilter {
             sampler: Sampler::linear_clamp(ctx, "brute sampler")?,
             target_invocations: DEFAULT_TARGET_INVOCATIONS,
             cells_walk: ctx.info().device_type == vk::PhysicalDeviceType::CPU,
+            texel_lanes: default_texel_lanes(ctx.info()),
         })
     }
 
@@ -79,6 +110,17 @@ impl BruteFilter {
     /// by float rounding only.
     pub fn set_cells_walk(&mut self, on: bool) {
         self.cells_walk = on;
+    }
+
+    /// Sets how many invocations sum each output texel, each taking every `lanes`-th source
+    /// slot of the tiles its lobe reaches (rounded down to a power of two, 1 to
+    /// [`MAX_TEXEL_LANES`]). On CPU devices the default is the SIMD width: one output per
+    /// SIMD group, so the group walks only that output's tiles. 1, the default elsewhere,
+    /// gives each invocation its own output and every tile. The sums differ by float
+    /// rounding only.
+    pub fn set_texel_lanes(&mut self, lanes: u32) {
+        let lanes = lanes.clamp(1, MAX_TEXEL_LANES);
+        self.texel_lanes = 1 << (31 - lanes.leading_zeros());
     }
 
     /// Sets how many invocations a convolution aims to keep busy by splitting the source among
@@ -305,22 +347,20 @@ impl BruteFilter {
         let (w, h) = (dst.width, dst.height);
         let base = coarse.map_or(prep.push, |c| c.push);
         let slots = tile_count(&base) * BRUTE_TILE * BRUTE_TILE;
-        let fine_chunk = self.chunk_size(prep, kernel);
         // A coarse texel may descend to all of its 4^s prepared texels.
-        let chunk = match coarse {
-            Some(c) => (fine_chunk >> (2 * c.push.src_level)).max(1),
-            None => fine_chunk,
-        };
+        let descent = coarse.map_or(1, |c| 1u32 << (2 * c.push.src_level));
+        let lanes = self.texel_lanes;
+        let chunk = self.chunk_size(prep, kernel, descent, lanes);
         let split = Split::new(
             w * h * dst.mapping.layers(),
             slots,
             chunk,
-            self.target_invocations,
+            self.target_invocations.div_ceil(lanes),
         );
         let partials = scratch(
             &ctx,
             "brute partial sums",
-            (w * h * dst.mapping.layers()) as u64 * split.parts() as u64 * 32,
+            (w * h * dst.mapping.layers()) as u64 * split.parts() as u64 * lanes as u64 * 32,
         )?;
         let push = BrutePush {
             dst_size: [w, h],
@@ -331,9 +371,9 @@ impl BruteFilter {
             ..base
         };
         let (from, to) = (prep.mapping.id(), dst.mapping.id());
-        let moment = coarse.is_some() as usize;
+        let moment = coarse.is_some();
         let brute = Pipeline::compute_once(
-            &self.brute[4 * (4 * from + to) as usize + 2 * self.cells_walk as usize + moment],
+            &self.brute[pipeline_slot(from, to, moment, self.cells_walk, lanes)],
             &self.ctx,
             ShaderId::Brute,
             &[
@@ -343,6 +383,7 @@ impl BruteFilter {
                 to,
                 moment as u32,
                 self.cells_walk as u32,
+                lanes,
             ],
         )?;
         // The resolve reads only the destination mapping (constant 2 is unused there).
@@ -384,20 +425,24 @@ impl BruteFilter {
                         ..push
                     },
                     [
-                        groups(w * split.grid[0], WORKGROUP_2D[0]),
+                        groups(w * split.grid[0] * lanes, WORKGROUP_2D[0]),
                         groups(h * split.grid[1], WORKGROUP_2D[1]),
                         dst.mapping.layers(),
                     ],
                 )?;
                 begin = end;
             }
+            // Each part's lanes are parts of their own to the resolve.
             rec.dispatch(
                 resolve,
                 &[
                     (binding::BRUTE_RESOLVE_PARTIALS, Bind::Buffer(&partials)),
                     (binding::BRUTE_RESOLVE_DST, Bind::Storage(&dst.image)),
                 ],
-                &push,
+                &BrutePush {
+                    parts: [split.grid[0] * lanes, split.grid[1]],
+                    ..push
+                },
                 [
                     groups(w, WORKGROUP_2D[0]),
                     groups(h, WORKGROUP_2D[1]),
@@ -582,9 +627,12 @@ impl BruteFilter {
     /// loop iterations within 90% of the limit: one for the texel loop, two where the cells
     /// rule's texels are summed in a second walk over the same slots ([`Self::set_cells_walk`]),
     /// plus, per texel, at most s² cell iterations (s from the rule for the source's widest
-    /// texel) or ~130 for a clipped rim texel of an angular or paraboloid source. llvmpipe
-    /// counts the iterations of all loops together.
-    fn chunk_size(&self, src: &PreparedSource, kernel: Kernel) -> u32 {
+    /// texel) or ~130 for a clipped rim texel of an angular or paraboloid source, `descent`
+    /// texels a slot (4^s for a coarse level's, which may descend to its prepared texels).
+    /// llvmpipe counts the iterations of all loops together. With `lanes` invocations an
+    /// output, each takes S/L of a chunk's S slots, one more per tile the chunk touches, and
+    /// the tile, row and piece loops of walk_lanes about three iterations per tile.
+    fn chunk_size(&self, src: &PreparedSource, kernel: Kernel, descent: u32, lanes: u32) -> u32 {
         let Some(limit) = self.ctx.info().loop_iteration_limit else {
             return u32::MAX;
         };
@@ -619,8 +667,17 @@ impl BruteFilter {
             0.0
         };
         let walks = if self.cells_walk { 2.0 } else { 1.0 };
-        let per_texel = walks + (s * s).max(rim);
-        ((0.9 * limit as f64 / per_texel) as u32).max(1)
+        let per_slot = descent as f64 * (walks + (s * s).max(rim));
+        let budget = 0.9 * limit as f64;
+        // Every slot on one lane: right for one lane, and a bound for few slots on many.
+        let whole = ((budget / per_slot) as u32).max(1);
+        if lanes == 1 {
+            return whole;
+        }
+        let tile = (BRUTE_TILE * BRUTE_TILE) as f64;
+        let shared = (budget - 2.0 * per_slot - 6.0 * walks)
+            / (per_slot / lanes as f64 + (per_slot + 3.0 * walks) / tile);
+        whole.max(shared as u32)
     }
 }
 
