@@ -51,12 +51,16 @@ pub mod binding {
         SH_REDUCE_OUT = 1;
         /// brute_prepare: the source map (sampler2DArray, read with texelFetch).
         BRUTE_PREP_SRC = 0;
-        /// brute_prepare: per-texel centre direction and cos of angular radius (vec4 buffer).
+        /// brute_prepare: per-texel centre direction and cos of angular radius (rgba32f
+        /// image2DArray of the source's size and layers; the brute pass's per-texel data are
+        /// images because llvmpipe loads a buffer element lane by lane, an image texel as one
+        /// gather).
         BRUTE_PREP_CONES = 1;
-        /// brute_prepare: per-texel radiance and solid angle (vec4 buffer).
+        /// brute_prepare: per-texel radiance and solid angle (rgba32f image2DArray).
         BRUTE_PREP_RADIANCE = 2;
-        /// brute_prepare: per-texel shape for the tilted rule (3 vec4: centroid and whether
-        /// the texel is regular, then the two half-edge vectors).
+        /// brute_prepare: per-texel shape for the tilted rule (rgba32f image2DArray, layers
+        /// 3·l, 3·l + 1, 3·l + 2 for source layer l: centroid and whether the texel is
+        /// regular, then the two half-edge vectors).
         BRUTE_PREP_SHAPES = 3;
         /// brute: the cones written by brute_prepare.
         BRUTE_CONES = 0;
@@ -71,8 +75,9 @@ pub mod binding {
         BRUTE_SHAPES = 5;
         /// brute: with a moment source, the pyramid level's cones written by brute_moments.
         BRUTE_COARSE_CONES = 6;
-        /// brute: with a moment source, the level's light: per texel and channel 3 vec4
-        /// (centroid and power, then the parallelogram's two half-edges).
+        /// brute: with a moment source, the level's light (rgba32f image2DArray, layers
+        /// 9·l + 3·c + 0, 1, 2 for layer l and channel c: centroid and power, then the
+        /// parallelogram's two half-edges).
         BRUTE_LIGHT = 7;
         /// brute_resolve: the partial sums written by brute.
         BRUTE_RESOLVE_PARTIALS = 0;
@@ -82,9 +87,9 @@ pub mod binding {
         BRUTE_MOM_RADIANCE = 0;
         /// brute_moments: the prepared texels' shapes.
         BRUTE_MOM_SHAPES = 1;
-        /// brute_moments: the level's cones (vec4 buffer).
+        /// brute_moments: the level's cones (rgba32f image2DArray).
         BRUTE_MOM_CONES = 2;
-        /// brute_moments: the level's light (9 vec4 per texel).
+        /// brute_moments: the level's light (rgba32f image2DArray, 9 layers a layer).
         BRUTE_MOM_LIGHT = 3;
         /// brute_tiles: the per-texel cones written by brute_prepare.
         BRUTE_TILE_CONES = 0;
@@ -1014,22 +1019,22 @@ macro_rules! shader_table {
                 [(SH_REDUCE_IN, StorageBuffer, Read), (SH_REDUCE_OUT, StorageBuffer, Write)];
             /// Brute-force convolution: per-texel cones, radiance and solid angles.
             BrutePrepare = "brute_prepare", "brute.comp", Compute, [("PREPARE", "1")], BrutePush,
-                [(BRUTE_PREP_SRC, Sampled, Read), (BRUTE_PREP_CONES, StorageBuffer, Write),
-                 (BRUTE_PREP_RADIANCE, StorageBuffer, Write),
-                 (BRUTE_PREP_SHAPES, StorageBuffer, Write)];
+                [(BRUTE_PREP_SRC, Sampled, Read), (BRUTE_PREP_CONES, StorageImage, Write),
+                 (BRUTE_PREP_RADIANCE, StorageImage, Write),
+                 (BRUTE_PREP_SHAPES, StorageImage, Write)];
             /// Brute-force convolution: one level of the power-moment pyramid.
             BruteMoments = "brute_moments", "brute.comp", Compute, [("MOMENTS", "1")], BrutePush,
-                [(BRUTE_MOM_RADIANCE, StorageBuffer, Read), (BRUTE_MOM_SHAPES, StorageBuffer, Read),
-                 (BRUTE_MOM_CONES, StorageBuffer, Write), (BRUTE_MOM_LIGHT, StorageBuffer, Write)];
+                [(BRUTE_MOM_RADIANCE, StorageImage, Read), (BRUTE_MOM_SHAPES, StorageImage, Read),
+                 (BRUTE_MOM_CONES, StorageImage, Write), (BRUTE_MOM_LIGHT, StorageImage, Write)];
             /// Brute-force convolution: a bounding cone per tile of BRUTE_TILE² texels.
             BruteTiles = "brute_tiles", "brute.comp", Compute, [("TILES", "1")], BrutePush,
-                [(BRUTE_TILE_CONES, StorageBuffer, Read), (BRUTE_TILE_OUT, StorageBuffer, Write)];
+                [(BRUTE_TILE_CONES, StorageImage, Read), (BRUTE_TILE_OUT, StorageBuffer, Write)];
             /// Brute-force convolution with the cosine or a Phong lobe.
             Brute = "brute", "brute.comp", Compute, [], BrutePush,
-                [(BRUTE_CONES, StorageBuffer, Read), (BRUTE_RADIANCE, StorageBuffer, Read),
+                [(BRUTE_CONES, StorageImage, Read), (BRUTE_RADIANCE, StorageImage, Read),
                  (BRUTE_PARTIALS, StorageBuffer, ReadWrite),
-                 (BRUTE_TILES, StorageBuffer, Read), (BRUTE_SHAPES, StorageBuffer, Read),
-                 (BRUTE_COARSE_CONES, StorageBuffer, Read), (BRUTE_LIGHT, StorageBuffer, Read)];
+                 (BRUTE_TILES, StorageBuffer, Read), (BRUTE_SHAPES, StorageImage, Read),
+                 (BRUTE_COARSE_CONES, StorageImage, Read), (BRUTE_LIGHT, StorageImage, Read)];
             /// Brute-force convolution: the parts' sums, added per output texel into the map.
             BruteResolve = "brute_resolve", "brute.comp", Compute, [("RESOLVE", "1")], BrutePush,
                 [(BRUTE_RESOLVE_PARTIALS, StorageBuffer, Read), (BRUTE_RESOLVE_DST, StorageImage, Write)];

@@ -7,7 +7,9 @@ use crate::abi::{
     binding, constants, push::BrutePush, ShaderId, BRUTE_TILE, WORKGROUP_1D, WORKGROUP_2D,
 };
 use crate::error::{Error, Result};
-use crate::gpu::{groups, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing};
+use crate::gpu::{
+    groups, mat3_rows, Bind, Buffer, Context, Image, ImageDesc, Pipeline, Recorder, Sampler, Timing,
+};
 use crate::math::filter::{self, Kernel};
 use crate::math::moments;
 use crate::math::{Mapping, Orientation};
@@ -210,11 +212,11 @@ impl BruteFilter {
             )));
         }
         let texels = src.width * src.height * src.mapping.layers();
-        let bytes = texels as u64 * 16;
         let ctx = rec.context().clone();
-        let cones = scratch(&ctx, "brute cones", bytes)?;
-        let rad = scratch(&ctx, "brute radiance", bytes)?;
-        let shapes = scratch(&ctx, "brute shapes", 3 * bytes)?;
+        let (w, h, layers) = (src.width, src.height, src.mapping.layers());
+        let cones = texel_image(&ctx, "brute cones", w, h, layers)?;
+        let rad = texel_image(&ctx, "brute radiance", w, h, layers)?;
+        let shapes = texel_image(&ctx, "brute shapes", w, h, 3 * layers)?;
         let push = BrutePush {
             file_to_world: mat3_rows(orientation.checked_world_to_file()?.transpose()),
             src_size: [src.width, src.height],
@@ -247,9 +249,9 @@ impl BruteFilter {
                         binding::BRUTE_PREP_SRC,
                         Bind::Sampled(&src.image, &self.sampler, false),
                     ),
-                    (binding::BRUTE_PREP_CONES, Bind::Buffer(&cones)),
-                    (binding::BRUTE_PREP_RADIANCE, Bind::Buffer(&rad)),
-                    (binding::BRUTE_PREP_SHAPES, Bind::Buffer(&shapes)),
+                    (binding::BRUTE_PREP_CONES, Bind::Storage(&cones)),
+                    (binding::BRUTE_PREP_RADIANCE, Bind::Storage(&rad)),
+                    (binding::BRUTE_PREP_SHAPES, Bind::Storage(&shapes)),
                 ],
                 &push,
                 grid_1d(&ctx, texels),
@@ -268,7 +270,7 @@ impl BruteFilter {
     }
 
     /// Records the tiles' bounding cones over `cones` (a map of `push.src_size`).
-    fn record_tiles(&self, rec: &mut Recorder, cones: &Buffer, push: &BrutePush) -> Result<Buffer> {
+    fn record_tiles(&self, rec: &mut Recorder, cones: &Image, push: &BrutePush) -> Result<Buffer> {
         let ctx = rec.context().clone();
         let tile_count = tile_count(push);
         let tiles = scratch(&ctx, "brute tiles", tile_count as u64 * 16)?;
@@ -276,7 +278,7 @@ impl BruteFilter {
             rec.dispatch(
                 &self.tiles,
                 &[
-                    (binding::BRUTE_TILE_CONES, Bind::Buffer(cones)),
+                    (binding::BRUTE_TILE_CONES, Bind::Storage(cones)),
                     (binding::BRUTE_TILE_OUT, Bind::Buffer(&tiles)),
                 ],
                 push,
@@ -296,8 +298,9 @@ impl BruteFilter {
         let ctx = rec.context().clone();
         let (w, h) = (prep.size.0 >> s, prep.size.1 >> s);
         let texels = w * h * prep.mapping.layers();
-        let cones = scratch(&ctx, "brute level cones", texels as u64 * 16)?;
-        let light = scratch(&ctx, "brute level light", texels as u64 * 9 * 16)?;
+        let layers = prep.mapping.layers();
+        let cones = texel_image(&ctx, "brute level cones", w, h, layers)?;
+        let light = texel_image(&ctx, "brute level light", w, h, 9 * layers)?;
         let push = BrutePush {
             src_size: [w, h],
             texels,
@@ -315,10 +318,10 @@ impl BruteFilter {
             rec.dispatch(
                 pipeline,
                 &[
-                    (binding::BRUTE_MOM_RADIANCE, Bind::Buffer(&prep.rad)),
-                    (binding::BRUTE_MOM_SHAPES, Bind::Buffer(&prep.shapes)),
-                    (binding::BRUTE_MOM_CONES, Bind::Buffer(&cones)),
-                    (binding::BRUTE_MOM_LIGHT, Bind::Buffer(&light)),
+                    (binding::BRUTE_MOM_RADIANCE, Bind::Storage(&prep.rad)),
+                    (binding::BRUTE_MOM_SHAPES, Bind::Storage(&prep.shapes)),
+                    (binding::BRUTE_MOM_CONES, Bind::Storage(&cones)),
+                    (binding::BRUTE_MOM_LIGHT, Bind::Storage(&light)),
                 ],
                 &push,
                 grid_1d(&ctx, texels),
@@ -349,18 +352,23 @@ impl BruteFilter {
         let slots = tile_count(&base) * BRUTE_TILE * BRUTE_TILE;
         // A coarse texel may descend to all of its 4^s prepared texels.
         let descent = coarse.map_or(1, |c| 1u32 << (2 * c.push.src_level));
-        let lanes = self.texel_lanes;
-        let chunk = self.chunk_size(prep, kernel, descent, lanes);
-        let split = Split::new(
-            w * h * dst.mapping.layers(),
-            slots,
-            chunk,
-            self.target_invocations.div_ceil(lanes),
-        );
+        let outputs = w * h * dst.mapping.layers();
+        let split_for = |lanes: u32| {
+            let chunk = self.chunk_size(prep, kernel, descent, lanes);
+            let target = self.target_invocations.div_ceil(lanes);
+            (lanes, Split::new(outputs, slots, chunk, target))
+        };
+        // Lanes share a part's slots: where the parts are shorter than the lanes (the
+        // coarsest Phong levels, a few outputs split into parts of a slot or two), most lanes
+        // would idle, and the parts alone fill the device (cube 1: 93 -> 258 ms with 8).
+        let (lanes, split) = match split_for(self.texel_lanes) {
+            (lanes, split) if split.part_slots < lanes => split_for(1),
+            chosen => chosen,
+        };
         let partials = scratch(
             &ctx,
             "brute partial sums",
-            (w * h * dst.mapping.layers()) as u64 * split.parts() as u64 * lanes as u64 * 32,
+            outputs as u64 * split.parts() as u64 * lanes as u64 * 32,
         )?;
         let push = BrutePush {
             dst_size: [w, h],
@@ -411,13 +419,13 @@ impl BruteFilter {
                 rec.dispatch(
                     brute,
                     &[
-                        (binding::BRUTE_CONES, Bind::Buffer(&prep.cones)),
-                        (binding::BRUTE_RADIANCE, Bind::Buffer(&prep.rad)),
+                        (binding::BRUTE_CONES, Bind::Storage(&prep.cones)),
+                        (binding::BRUTE_RADIANCE, Bind::Storage(&prep.rad)),
                         (binding::BRUTE_PARTIALS, Bind::Buffer(&partials)),
                         (binding::BRUTE_TILES, Bind::Buffer(tiles)),
-                        (binding::BRUTE_SHAPES, Bind::Buffer(&prep.shapes)),
-                        (binding::BRUTE_COARSE_CONES, Bind::Buffer(coarse_cones)),
-                        (binding::BRUTE_LIGHT, Bind::Buffer(light)),
+                        (binding::BRUTE_SHAPES, Bind::Storage(&prep.shapes)),
+                        (binding::BRUTE_COARSE_CONES, Bind::Storage(coarse_cones)),
+                        (binding::BRUTE_LIGHT, Bind::Storage(light)),
                     ],
                     &BrutePush {
                         chunk_begin: begin,
@@ -551,6 +559,23 @@ fn check_kernel(kernel: Kernel) -> Result<f32> {
     }
 }
 
+/// An rgba32f storage image of `layers` `w` × `h` layers for per-texel data.
+fn texel_image(ctx: &Context, name: &str, w: u32, h: u32, layers: u32) -> Result<Image> {
+    Image::new(
+        ctx,
+        name,
+        ImageDesc {
+            width: w,
+            height: h,
+            layers,
+            format: vk::Format::R32G32B32A32_SFLOAT,
+            usage: vk::ImageUsageFlags::STORAGE,
+            cube: false,
+            mips: 1,
+        },
+    )
+}
+
 fn scratch(ctx: &Context, name: &str, bytes: u64) -> Result<Buffer> {
     Buffer::new(
         ctx,
@@ -604,9 +629,9 @@ impl Split {
 
 /// The source prepared for the sums: per-texel cones, radiance and shapes, and the tiles.
 struct PreparedSource {
-    cones: Buffer,
-    rad: Buffer,
-    shapes: Buffer,
+    cones: Image,
+    rad: Image,
+    shapes: Image,
     tiles: Buffer,
     push: BrutePush,
     mapping: Mapping,
@@ -615,8 +640,8 @@ struct PreparedSource {
 
 /// One level of the moment pyramid: its cones, light and tiles, and its push block.
 struct CoarseLevel {
-    cones: Buffer,
-    light: Buffer,
+    cones: Image,
+    light: Image,
     tiles: Buffer,
     push: BrutePush,
 }
