@@ -76,8 +76,10 @@ layout(constant_id = 4) const bool MOMENT_SOURCE = false;
 // A GPU takes every rule in one walk: a branch no lane of a warp takes costs it nothing, and
 // the second walk's code cost the H100 registers (Phong n = 2049, cube 64: 41 -> 59 ms).
 layout(constant_id = 5) const bool CELLS_WALK = false;
-// Invocations per output texel (CPU devices: the SIMD width; 1 elsewhere). Each sums every
-// TEXEL_LANES-th slot of the tiles that output's lobe reaches (walk_lanes) into its own part.
+// Invocations per output texel (CPU devices: the SIMD width; 1 elsewhere), each summing every
+// TEXEL_LANES-th slot into its own part: of each tile (walk), or of each row's columns within
+// the lobe's reach in a lat-long source, whose slots are then its texels, row-major
+// (walk_rows).
 layout(constant_id = 6) const uint TEXEL_LANES = 1u;
 
 // The size of the prepared (finest) texels.
@@ -597,16 +599,17 @@ void add_texel(vec3 axis, float n, float ln_scale, ivec3 t, bool cells_pass, ino
 }
 
 // Slots [begin, end) tile by tile, skipping the tiles whose cone the rule skips whole: the
-// first walk (cells_pass false) or the second (true; see cells_wanted).
-void walk(vec3 axis, float n, float ln_scale, uint begin, uint end, bool cells_pass, inout vec3 sum,
-          inout vec3 comp) {
+// first walk (cells_pass false) or the second (true; see cells_wanted); with TEXEL_LANES lanes
+// an output, this lane takes every TEXEL_LANES-th slot of each tile.
+void walk(vec3 axis, float n, float ln_scale, uint begin, uint end, uint lane, bool cells_pass,
+          inout vec3 sum, inout vec3 comp) {
     const uint per_tile = BRUTE_TILE * BRUTE_TILE;
     for (uint tile = begin / per_tile; tile * per_tile < end; tile++) {
         if (cone_skipped(axis, n, tiles[tile])) continue;
         uint first = max(begin, tile * per_tile) - tile * per_tile;
         uint last = min(end, (tile + 1u) * per_tile) - tile * per_tile;
         uvec3 origin = tile_origin(tile);
-        for (uint s = first; s < last; s++) {
+        for (uint s = first + lane; s < last; s += TEXEL_LANES) {
             ivec3 ti = slot_texel(origin, s);
             if (ti.x < 0) continue;
             add_texel(axis, n, ln_scale, ti, cells_pass, sum, comp);
@@ -620,12 +623,12 @@ void walk(vec3 axis, float n, float ln_scale, uint begin, uint end, bool cells_p
 // and one texel more for rounding: a texel the rule keeps has its centre in that cap, so
 // within its radius in colatitude and, where the cap holds no pole, within
 // asin(sin d / sin θ) in longitude.
-uvec4 lobe_window(vec3 axis, float n) {
-    uvec2 g = tile_grid();
-    uvec4 win = uvec4(0u, g.y * pc.src_layers - 1u, 0u, g.x);
-    if (SRC_MAPPING != MAPPING_LATLONG) return win;
-    ivec2 size = ivec2(pc.src_size);
-    vec2 step = vec2(TAU, PI) / vec2(size);
+// The reach of a lobe about `axis` in a lat-long source: its axis's longitude and colatitude
+// in the file's frame (x, y) and the angle d (z) within which every texel centre lies whose
+// texel the rule keeps (the lobe's cap above its cut-off, x_cut, at most the horizon, widened
+// by the widest texel cone and one texel more for rounding).
+vec3 lobe_reach(vec3 axis, float n) {
+    vec2 step = vec2(TAU, PI) / vec2(pc.src_size);
     // 1 − x_cut without cancellation for large n.
     float u = -FILTER_LOG_CUTOFF / n;
     float below = n > 1.0 ? (u < 1e-3 ? u * (1.0 - 0.5 * u) : 1.0 - exp(-u)) : 1.0;
@@ -634,55 +637,54 @@ uvec4 lobe_window(vec3 axis, float n) {
     vec3 f = pc.file_to_world[0].xyz * axis.x + pc.file_to_world[1].xyz * axis.y
         + pc.file_to_world[2].xyz * axis.z;
     vec2 uv = dir_to_coord(MAPPING_LATLONG, f).uv;
-    float theta = PI * uv.y;
-    int j0 = int(floor((theta - d) / step.y - 0.5)), j1 = int(ceil((theta + d) / step.y - 0.5));
-    win.x = uint(clamp(j0, 0, size.y - 1)) / BRUTE_TILE;
-    win.y = uint(clamp(j1, 0, size.y - 1)) / BRUTE_TILE;
-    if (theta - d <= 0.0 || theta + d >= PI) return win;
-    float dphi = asin(min(sin(d) / sin(theta), 1.0));
-    float phi = TAU * uv.x;
-    int i0 = int(floor((phi - dphi) / step.x - 0.5)), i1 = int(ceil((phi + dphi) / step.x - 0.5));
-    if (i1 - i0 + 1 >= size.x) return win;
-    // Texel columns i0 … i1 modulo the width, and their tiles (a > b where they wrap).
-    uint a = uint((i0 % size.x + size.x) % size.x), b = uint((i1 % size.x + size.x) % size.x);
-    uint ta = a / BRUTE_TILE, tb = b / BRUTE_TILE;
-    uint count = a <= b ? tb - ta + 1u : g.x - ta + tb + 1u;
-    if (count < g.x) win.zw = uvec2(ta, count);
-    return win;
+    return vec3(TAU * uv.x, PI * uv.y, d);
 }
 
-// Slots [begin, end) of the tiles in window `win` (lobe_window), this lane (of TEXEL_LANES on
-// one output) taking every TEXEL_LANES-th slot of each tile: CPU devices, whose SIMD lanes
-// are neighbouring invocations. With one output a lane, a group walked every tile any of its
-// eight lobes reached (~1.6× one lobe's) and paid a masked texel body for each tile all its
-// lanes culled (llvmpipe runs a nested loop's first iteration regardless); here the group
-// walks one lobe's tiles, and the window leaves most culled tiles out of the loop.
-void walk_lanes(vec3 axis, float n, float ln_scale, uint begin, uint end, uint lane, uvec4 win,
-                bool cells_pass, inout vec3 sum, inout vec3 comp) {
+// Slots [begin, end) of a lat-long source, row-major texels (CPU devices, TEXEL_LANES lanes an
+// output): each row of the lobe's reach, only the columns whose centres lie within d of the
+// axis, this lane taking every TEXEL_LANES-th of them. By the haversine formula a centre at
+// colatitude θ is within d of the axis (φa, θa) where
+// sin²(Δφ/2) ≤ (sin²(d/2) − sin²((θ − θa)/2)) / (sin θ sin θa), stable for small angles; the
+// interval is widened by a column each side. Tiles overhang a lobe's cap (16² tiles: 1.9×
+// its texels); rows follow it to a column.
+void walk_rows(vec3 axis, float n, float ln_scale, uint begin, uint end, uint lane,
+               bool cells_pass, inout vec3 sum, inout vec3 comp) {
     if (begin >= end) return;
-    const uint per_tile = BRUTE_TILE * BRUTE_TILE;
-    uint gx = tile_grid().x;
-    uint tb = begin / per_tile, te = (end - 1u) / per_tile;
-    uint wrap = win.z + win.w;
-    for (uint ty = max(win.x, tb / gx); ty <= min(win.y, te / gx); ty++) {
-        // This chunk's columns of row ty, [ca, cb), met with the window's two unwrapped pieces.
-        uint ca = ty == tb / gx ? tb % gx : 0u;
-        uint cb = ty == te / gx ? te % gx + 1u : gx;
-        [[unroll]] for (uint piece = 0u; piece < 2u; piece++) {
-            uint lo = piece == 0u ? win.z : 0u;
-            uint hi = piece == 0u ? min(wrap, gx) : (wrap > gx ? wrap - gx : 0u);
-            for (uint tx = max(lo, ca); tx < min(hi, cb); tx++) {
-                uint tile = ty * gx + tx;
-                if (cone_skipped(axis, n, tiles[tile])) continue;
-                uint first = max(begin, tile * per_tile) - tile * per_tile;
-                uint last = min(end, (tile + 1u) * per_tile) - tile * per_tile;
-                uvec3 origin = tile_origin(tile);
-                for (uint s = first + lane; s < last; s += TEXEL_LANES) {
-                    ivec3 ti = slot_texel(origin, s);
-                    if (ti.x < 0) continue;
-                    add_texel(axis, n, ln_scale, ti, cells_pass, sum, comp);
-                }
-            }
+    int w = int(pc.src_size.x), h = int(pc.src_size.y);
+    vec2 step = vec2(TAU, PI) / vec2(pc.src_size);
+    vec3 reach = lobe_reach(axis, n);
+    float half_d = 0.5 * min(reach.z, PI);
+    float hav_d = sin(half_d) * sin(half_d);
+    float sin_a = sin(reach.y);
+    int first_row = int(begin / uint(w)), last_row = int((end - 1u) / uint(w));
+    int first_col = int(begin % uint(w)), last_col = int((end - 1u) % uint(w));
+    int j0 = max(int(floor((reach.y - reach.z) / step.y - 0.5)), first_row);
+    int j1 = min(int(ceil((reach.y + reach.z) / step.y - 0.5)), last_row);
+    for (int j = max(j0, 0); j <= min(j1, h - 1); j++) {
+        float theta = (float(j) + 0.5) * step.y;
+        float dt = sin(0.5 * (theta - reach.y));
+        float room = hav_d - dt * dt;
+        // Columns lo … lo + count − 1 (unwrapped), all of them where the reach holds a pole.
+        int lo = 0, count = w;
+        float den = sin_a * sin(theta);
+        if (room < 0.0) {
+            count = 0;
+        } else if (room < den) {
+            float dphi = 2.0 * asin(sqrt(room / den));
+            lo = int(floor((reach.x - dphi) / step.x - 0.5)) - 1;
+            count = min(int(ceil((reach.x + dphi) / step.x - 0.5)) + 2 - lo, w);
+            if (lo < 0) lo += w;
+        }
+        // This chunk's columns of row j: [ca, cb). One loop over the interval, wrapping by a
+        // subtraction: llvmpipe runs a loop's first iteration even where no lane enters it,
+        // and divides integers lane by lane.
+        int ca = j == first_row ? first_col : 0;
+        int cb = j == last_row ? last_col + 1 : w;
+        for (int k = int(lane); k < count; k += int(TEXEL_LANES)) {
+            int c = lo + k;
+            if (c >= w) c -= w;
+            if (c < ca || c >= cb) continue;
+            add_texel(axis, n, ln_scale, ivec3(c, j, 0), cells_pass, sum, comp);
         }
     }
 }
@@ -715,13 +717,12 @@ void main() {
         sum = partials[o].rgb;
         comp = partials[o + 1u].rgb;
     }
-    if (TEXEL_LANES == 1u) {
-        walk(axis, n, ln_scale, begin, end, false, sum, comp);
-        if (CELLS_WALK && cells_wanted) walk(axis, n, ln_scale, begin, end, true, sum, comp);
+    if (TEXEL_LANES > 1u && SRC_MAPPING == MAPPING_LATLONG) {
+        walk_rows(axis, n, ln_scale, begin, end, lane, false, sum, comp);
+        if (CELLS_WALK && cells_wanted) walk_rows(axis, n, ln_scale, begin, end, lane, true, sum, comp);
     } else {
-        uvec4 win = lobe_window(axis, n);
-        walk_lanes(axis, n, ln_scale, begin, end, lane, win, false, sum, comp);
-        if (CELLS_WALK && cells_wanted) walk_lanes(axis, n, ln_scale, begin, end, lane, win, true, sum, comp);
+        walk(axis, n, ln_scale, begin, end, lane, false, sum, comp);
+        if (CELLS_WALK && cells_wanted) walk(axis, n, ln_scale, begin, end, lane, true, sum, comp);
     }
     partials[o] = vec4(sum, 0.0);
     partials[o + 1u] = vec4(comp, 0.0);

@@ -219,20 +219,21 @@ fn both_walks_fit_the_loop_limit() {
     common::finish(ctx);
 }
 
-/// On CPU devices several invocations (SIMD lanes) sum one output texel, each every L-th slot
-/// of the tiles its lobe's window reaches (in a lat-long source: the tile rows and columns of
-/// the cap above the cut-off, wrapping at the seam, every column where the cap holds a pole);
-/// elsewhere one invocation walks every tile. Both must sum the same terms. A 256 × 128 sky
+/// On CPU devices several invocations (SIMD lanes) sum one output texel, each every L-th slot:
+/// in a lat-long source, of each row's columns within the lobe's reach (the cap above the
+/// cut-off, wrapping at the seam, every column where the cap holds a pole); elsewhere one
+/// invocation walks every tile. Both must sum the same terms. A 256 × 128 sky
 /// with a sun 5·10⁴ × the zenith, turned 200° about +Y and mirrored (the window is found in
 /// the file's frame), into a 32 × 16 lat-long (outputs next to both poles and on the seam)
-/// with Phong n = 2000 (a window of one to three tiles a side of the 16 × 8, except next to
-/// the poles) and n = 3, and the cosine; each with 1, 2, 8 and 32 lanes, one invocation group per output
-/// (the chunks then cut tile rows mid-row): every result within 1e-4 of the float64 twin
-/// (the convolution test's bound), and within 2e-6 of one lane's (the same compensated terms
-/// grouped otherwise, ~1e-7). A tile wrongly left out of a window would take the sun or a
-/// slice of sky with it: the sun alone is over 1e-3 of every output it reaches.
+/// with Phong n = 2000 (a reach of a few texels, except next to the poles) and n = 3, and
+/// the cosine; each with 1, 2, 8 and 32 lanes, one invocation group per output
+/// (the chunks then cut rows mid-row): every result within 1e-4 of the float64 twin (the
+/// convolution test's bound), and within 2e-6 of one lane's (the same compensated terms
+/// grouped otherwise, ~1e-7). A texel wrongly left out of a reach would take the sun or a
+/// slice of sky with it: a reach 20% short, one that does not wrap, or one that never takes a
+/// whole row at a pole each fails here.
 #[test]
-fn lanes_and_windows_change_rounding_only() {
+fn lanes_and_reaches_change_rounding_only() {
     let ctx = common::ctx();
     {
         let sky = Sky::default();

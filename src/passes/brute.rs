@@ -349,20 +349,36 @@ impl BruteFilter {
         let ctx = rec.context().clone();
         let (w, h) = (dst.width, dst.height);
         let base = coarse.map_or(prep.push, |c| c.push);
-        let slots = tile_count(&base) * BRUTE_TILE * BRUTE_TILE;
         // A coarse texel may descend to all of its 4^s prepared texels.
         let descent = coarse.map_or(1, |c| 1u32 << (2 * c.push.src_level));
         let outputs = w * h * dst.mapping.layers();
+        // Slots: the texels of tiles (walk), or with lanes on a lat-long source its texels,
+        // row-major (walk_rows).
         let split_for = |lanes: u32| {
-            let chunk = self.chunk_size(prep, kernel, descent, lanes);
+            let rows = lanes > 1 && prep.mapping == Mapping::LatLong;
+            let slots = if rows {
+                base.src_size[0] * base.src_size[1]
+            } else {
+                tile_count(&base) * BRUTE_TILE * BRUTE_TILE
+            };
+            let row = rows.then_some(base.src_size[0]);
+            let chunk = self.chunk_size(prep, kernel, descent, lanes, row);
             let target = self.target_invocations.div_ceil(lanes);
-            (lanes, Split::new(outputs, slots, chunk, target))
+            // A row's reach is walked whole in a chunk's first and last row: a chunk must
+            // hold a row, or the loop limit could cut it short.
+            let fits = row.is_none_or(|w| chunk >= w);
+            (
+                lanes,
+                slots,
+                Split::new(outputs, slots, chunk, target),
+                fits,
+            )
         };
         // Lanes share a part's slots: where the parts are shorter than the lanes (the
         // coarsest Phong levels, a few outputs split into parts of a slot or two), most lanes
         // would idle, and the parts alone fill the device (cube 1: 93 -> 258 ms with 8).
-        let (lanes, split) = match split_for(self.texel_lanes) {
-            (lanes, split) if split.part_slots < lanes => split_for(1),
+        let (lanes, slots, split, _) = match split_for(self.texel_lanes) {
+            (lanes, _, split, fits) if split.part_slots < lanes || !fits => split_for(1),
             chosen => chosen,
         };
         let partials = scratch(
@@ -647,7 +663,7 @@ struct CoarseLevel {
 }
 
 impl BruteFilter {
-    /// Source slots (tile-major texels) per dispatch: all, or where the device cuts long loops short
+    /// Source slots per dispatch: all, or where the device cuts long loops short
     /// ([`crate::gpu::DeviceInfo::loop_iteration_limit`]), as many as keep every invocation's
     /// loop iterations within 90% of the limit: one for the texel loop, two where the cells
     /// rule's texels are summed in a second walk over the same slots ([`Self::set_cells_walk`]),
@@ -655,9 +671,17 @@ impl BruteFilter {
     /// texel) or ~130 for a clipped rim texel of an angular or paraboloid source, `descent`
     /// texels a slot (4^s for a coarse level's, which may descend to its prepared texels).
     /// llvmpipe counts the iterations of all loops together. With `lanes` invocations an
-    /// output, each takes S/L of a chunk's S slots, one more per tile the chunk touches, and
-    /// the tile, row and piece loops of walk_lanes about three iterations per tile.
-    fn chunk_size(&self, src: &PreparedSource, kernel: Kernel, descent: u32, lanes: u32) -> u32 {
+    /// output, each takes S/L of a chunk's S slots plus, per group the chunk touches (a tile,
+    /// or with `row` a source row of that many texels, walk_rows), one more per piece and
+    /// the group loop's own iterations.
+    fn chunk_size(
+        &self,
+        src: &PreparedSource,
+        kernel: Kernel,
+        descent: u32,
+        lanes: u32,
+        row: Option<u32>,
+    ) -> u32 {
         let Some(limit) = self.ctx.info().loop_iteration_limit else {
             return u32::MAX;
         };
@@ -699,9 +723,18 @@ impl BruteFilter {
         if lanes == 1 {
             return whole;
         }
+        let lanes = lanes as f64;
+        if let Some(w) = row {
+            // Rows touched R ≤ S/w + 2, each ≤ w/L + 1 iterations (the first and last row's
+            // whole reach, not only the chunk's part): ≤ S/L + S/w + 2w/L + 2 in all.
+            let w = w as f64;
+            let shared = (budget - per_slot * (2.0 * w / lanes + 2.0) - 2.0 * walks)
+                / (per_slot / lanes + (per_slot + walks) / w);
+            return (shared.max(0.0) as u32).max(1);
+        }
         let tile = (BRUTE_TILE * BRUTE_TILE) as f64;
         let shared = (budget - 2.0 * per_slot - 6.0 * walks)
-            / (per_slot / lanes as f64 + (per_slot + 3.0 * walks) / tile);
+            / (per_slot / lanes + (per_slot + 3.0 * walks) / tile);
         whole.max(shared as u32)
     }
 }
