@@ -381,6 +381,9 @@ float texel_mean(vec3 axis, ivec3 t, uint s) {
     uint layer = uint(t.z);
     ivec2 p = t.xy;
     float acc = 0.0, wsum = 0.0;
+    // Only a disc's rim cuts texels: the rule's 8×8 nodes unrolled more than double the module
+    // and lavapipe's build time (ShaderId::BruteDisc).
+#if defined(DISC_SOURCE)
     if (rim_cut(p)) {
         uint split = min(s, 4u);
         vec2 lo = 2.0 * vec2(p) / vec2(fine_size()) - 1.0;
@@ -414,7 +417,9 @@ float texel_mean(vec3 axis, ivec3 t, uint s) {
                 }
             }
         }
-    } else {
+    } else
+#endif
+    {
         // s×s cells in one loop, 3-point Gauss-Legendre per cell side (twin of
         // filter::for_each_node), the nine nodes unrolled.
         for (uint cell = 0u; cell < s * s; cell++) {

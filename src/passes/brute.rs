@@ -399,7 +399,11 @@ impl BruteFilter {
         let brute = Pipeline::compute_once(
             &self.brute[pipeline_slot(from, to, moment, self.cells_walk, lanes)],
             &self.ctx,
-            ShaderId::Brute,
+            if matches!(prep.mapping, Mapping::Angular | Mapping::DualParaboloid) {
+                ShaderId::BruteDisc
+            } else {
+                ShaderId::Brute
+            },
             &[
                 WORKGROUP_2D[0],
                 WORKGROUP_2D[1],
