@@ -182,10 +182,11 @@ fn large_sources_are_summed_whole() {
 /// walks, or those sums silently lose texels (they lost 4% at the poles of a Phong n = 2049
 /// cube 64 from a 1k map when the chunks counted one walk; this test then erred by 5e-3). A
 /// 256 × 128 sky with a sun (32 768 slots, more than one chunk) and n = 10 (one cell a texel,
-/// so the chunks are long, and a lobe that covers most of them), one invocation per output
-/// texel, into a cube 8, with the second walk and with the one walk GPUs take: every texel
-/// within 1e-4 of the float64 twin (the convolution test's bound), and the two within 2e-6 of
-/// each other (the same compensated terms in another order, ~1e-7).
+/// so the chunks are long, and a lobe that covers most of them), one part per output texel,
+/// into a cube 8, with the CPU devices' structure (the second walk, the device's lanes an
+/// output walking rows) and the GPUs' (one walk, one lane an output walking tiles): every
+/// texel within 1e-4 of the float64 twin (the convolution test's bound), and the two within
+/// 2e-6 of each other (the same compensated terms in another order, ~1e-7).
 #[test]
 fn both_walks_fit_the_loop_limit() {
     let ctx = common::ctx();
@@ -205,6 +206,9 @@ fn both_walks_fit_the_loop_limit() {
             // One part per texel: each invocation walks whole chunks, as a large output's do.
             pass.set_target_invocations(1);
             pass.set_cells_walk(cells_walk);
+            if !cells_walk {
+                pass.set_texel_lanes(1);
+            }
             let out = brute_gpu(&ctx, &pass, &map, kernel, target);
             let worst = worst_relative(&out, &exact);
             eprintln!("Phong 10, 256 x 128 to cube 8, cells walk {cells_walk}: worst {worst:.2e}");
