@@ -631,16 +631,16 @@ void walk(vec3 axis, float n, float ln_scale, uint begin, uint end, uint lane, b
 // The reach of a lobe about `axis` in a lat-long source: its axis's longitude and colatitude
 // in the file's frame (x, y) and the angle d (z) within which every texel centre lies whose
 // texel the rule keeps: the lobe's cap above its cut-off (x_cut; the horizon at most) widened
-// by the widest texel cone, CONE_MARGIN times the half diagonal √(Δφ² + Δθ²)/2 (0.1% more
-// for the sphere's excess over the plane at the texel's scale), and 1e-4 rad for f32
-// rounding in x_cut and the texel's x_max (~1e-5 rad where n = 10⁶).
+// by the widest texel cone, CONE_MARGIN times the half diagonal √(Δφ² + Δθ²)/2 and
+// REACH_MARGIN_REL more (the sphere's excess over the plane), and REACH_MARGIN_ABS radians
+// for f32 rounding in x_cut and the texel's x_max.
 vec3 lobe_reach(vec3 axis, float n) {
     vec2 step = vec2(TAU, PI) / vec2(pc.src_size);
     // 1 − x_cut without cancellation for large n.
     float u = -FILTER_LOG_CUTOFF / n;
     float below = n > 1.0 ? (u < 1e-3 ? u * (1.0 - 0.5 * u) : 1.0 - exp(-u)) : 1.0;
-    float d = 2.0 * asin(sqrt(0.5 * below)) + 1.001 * FILTER_CONE_MARGIN * 0.5 * length(step)
-        + 1e-4;
+    float d = 2.0 * asin(sqrt(0.5 * below))
+        + (1.0 + FILTER_REACH_MARGIN_REL) * FILTER_CONE_MARGIN * 0.5 * length(step) + FILTER_REACH_MARGIN_ABS;
     vec3 f = pc.file_to_world[0].xyz * axis.x + pc.file_to_world[1].xyz * axis.y
         + pc.file_to_world[2].xyz * axis.z;
     vec2 uv = dir_to_coord(MAPPING_LATLONG, f).uv;

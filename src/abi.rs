@@ -253,6 +253,13 @@ pub mod filter_rule {
     /// A texel's angular radius is widened by this factor when bounding its cone, so the cone
     /// covers the texel's corners in every mapping.
     pub const CONE_MARGIN: f64 = 1.25;
+    /// A lobe's reach in a lat-long source (glsl/brute.comp, walk_rows) widens the texel
+    /// cone's bound, CONE_MARGIN times the flat half diagonal, by this fraction: the sphere's
+    /// distance exceeds the flat one by a relative O(texel²).
+    pub const REACH_MARGIN_REL: f64 = 1e-3;
+    /// And then by this many radians, for f32 rounding in x_cut and a texel's x_max (~1e-5
+    /// rad where n = 10⁶).
+    pub const REACH_MARGIN_ABS: f64 = 1e-4;
 }
 
 /// Numbers both the float64 twins and the shaders use.
@@ -1324,6 +1331,8 @@ pub fn generated_header() -> String {
         ("FILTER_TILT_SERIES_BELOW", filter_rule::TILT_SERIES_BELOW),
         ("FILTER_LOG_CUTOFF", filter_rule::LOG_CUTOFF),
         ("FILTER_CONE_MARGIN", filter_rule::CONE_MARGIN),
+        ("FILTER_REACH_MARGIN_REL", filter_rule::REACH_MARGIN_REL),
+        ("FILTER_REACH_MARGIN_ABS", filter_rule::REACH_MARGIN_ABS),
         ("FILTER_TILE_MARGIN_REL", filter_rule::TILE_MARGIN_REL),
         ("FILTER_TILE_MARGIN_ABS", filter_rule::TILE_MARGIN_ABS),
         ("DFG_MU_MIN", split_sum::MU_MIN),
