@@ -175,6 +175,44 @@ fn large_sources_are_summed_whole() {
     common::finish(ctx);
 }
 
+/// A 4096 × 2048 source: its shapes (3 vec4 a texel, 384 MB) exceeded lavapipe's 128 MiB
+/// storage-buffer range while the pass kept them in buffers, and it refused the job; they are
+/// images now. A map linear in the direction, L(ω) = c₀ + C·ω per channel, convolved with a
+/// normalised Phong lobe about a gives c₀ + (C·a)·(n+1)/(n+2) exactly (the lobe's mean cosine),
+/// so n = 10⁵ (resolved at 4k: n·ρ² ≈ 0.05) into a cube 2 is checked against that, within
+/// 1e-4: f32 directions carry ~6e-8 in x = a·ω, so ln K = n·ln x errs by up to n·θ·6e-8 ≈
+/// 1e-4 at the lobe's edge; summed, the error measured 2.0e-5 here (8.5e-7 at n = 10³ and
+/// 5.9e-6 at 10⁴ on the same map), besides the map's texels being constant (O(texel²)).
+#[test]
+fn sources_past_a_storage_buffer_filter() {
+    let ctx = common::ctx();
+    {
+        let pass = BruteFilter::new(&ctx).unwrap();
+        let c0 = [1.0, 1.0, 1.0];
+        let c = [
+            DVec3::new(0.0, 0.5, 0.0),
+            DVec3::new(-0.3, 0.0, 0.1),
+            DVec3::new(0.2, -0.2, 0.4),
+        ];
+        let map = EnvMap::from_fn(Mapping::LatLong, 4096, 2048, 1, |d| {
+            [0, 1, 2].map(|k| c0[k] + c[k].dot(d))
+        });
+        let n = 1e5;
+        let target = FilterTarget {
+            to: Mapping::Cube,
+            size: 2,
+        };
+        let exact = at_centres(Mapping::Cube, 2, 2, |a| {
+            [0, 1, 2].map(|k| c0[k] + c[k].dot(a) * (n + 1.0) / (n + 2.0))
+        });
+        let out = brute_gpu(&ctx, &pass, &map, Kernel::Phong { n }, target);
+        let worst = worst_relative(&out, &exact);
+        eprintln!("4096 x 2048, Phong 1e5 into a cube 2: worst {worst:.2e}");
+        assert!(worst < 1e-4, "{worst:e}");
+    }
+    common::finish(ctx);
+}
+
 /// On CPU devices the texels whose rule asks for Gauss cells (the lat-long rows next to the
 /// poles, which are not parallelograms, and texels near the lobe's cut-off where its log
 /// curves fast) are summed in a second walk over the same slots, so an invocation that meets
