@@ -64,6 +64,14 @@ layout(set = 0, binding = BINDING_BRUTE_LIGHT, rgba32f) uniform readonly image2D
 // The push block, generated from src/abi.rs.
 PUSH_BrutePush
 
+#if defined(MOMENTS) || !(defined(TILES) || defined(RESOLVE) || defined(PREPARE))
+// Vec4 k of prepared texel t's shape (0: centroid and regularity, 1 and 2: half-edges): three
+// layers a source layer.
+vec4 shape(ivec3 t, int k) {
+    return imageLoad(shapes, ivec3(t.xy, 3 * t.z + k));
+}
+#endif
+
 // Source and destination mappings are specialisation constants (they equal the push block's):
 // other mappings' branches, the disc rim's clipped rule above all, vanish from the texel loop,
 // which llvmpipe then runs several times faster.
@@ -230,7 +238,7 @@ void main() {
         ivec2 q = ivec2(base + uvec2(k % side, k / side));
         vec4 rt = imageLoad(rad, ivec3(q, layer));
         vec3 pw = rt.rgb * rt.w;
-        vec3 c = imageLoad(shapes, ivec3(q, 3u * layer)).xyz;
+        vec3 c = shape(ivec3(q, layer), 0).xyz;
         power += pw;
         m1[0] += pw.r * c;
         m1[1] += pw.g * c;
@@ -253,9 +261,8 @@ void main() {
             ivec2 q = ivec2(base + uvec2(k % side, k / side));
             vec4 rt = imageLoad(rad, ivec3(q, layer));
             float pw = rt[ch] * rt.w;
-            vec3 c = imageLoad(shapes, ivec3(q, 3u * layer)).xyz;
-            vec3 hu = imageLoad(shapes, ivec3(q, 3u * layer + 1u)).xyz;
-            vec3 hv = imageLoad(shapes, ivec3(q, 3u * layer + 2u)).xyz;
+            ivec3 f = ivec3(q, layer);
+            vec3 c = shape(f, 0).xyz, hu = shape(f, 1).xyz, hv = shape(f, 2).xyz;
             vec2 a = vec2(dot(e1, c), dot(e2, c));
             vec2 u = vec2(dot(e1, hu), dot(e2, hu));
             vec2 v = vec2(dot(e1, hv), dot(e2, hv));
@@ -524,12 +531,6 @@ int texel_rule(vec3 axis, float n, vec4 cone, bool regular, out uint cells) {
 // loop limit.
 bool cells_wanted = false;
 
-// Vec4 k of prepared texel t's shape (0: centroid and regularity, 1 and 2: half-edges): three
-// layers a source layer.
-vec4 shape(ivec3 t, int k) {
-    return imageLoad(shapes, ivec3(t.xy, 3 * t.z + k));
-}
-
 // ∫K over prepared texel t (0 where skipped), whose solid angle is omega. With CELLS_WALK, the
 // first walk takes the rules other than cells (a texel that asks for them sets cells_wanted
 // and gives 0) and the second (cells_pass) cells alone; cells_pass is a constant at each
@@ -622,12 +623,6 @@ void walk(vec3 axis, float n, float ln_scale, uint begin, uint end, uint lane, b
     }
 }
 
-// The tiles a lobe about `axis` can reach in a lat-long source: tile rows x … y and w tile
-// columns from z on, wrapping; every tile for other mappings. The reach is the cap where the
-// lobe is above its cut-off (x_cut; the horizon at most), widened by the widest texel cone
-// and one texel more for rounding: a texel the rule keeps has its centre in that cap, so
-// within its radius in colatitude and, where the cap holds no pole, within
-// asin(sin d / sin θ) in longitude.
 // The reach of a lobe about `axis` in a lat-long source: its axis's longitude and colatitude
 // in the file's frame (x, y) and the angle d (z) within which every texel centre lies whose
 // texel the rule keeps: the lobe's cap above its cut-off (x_cut; the horizon at most) widened
