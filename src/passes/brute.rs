@@ -79,8 +79,13 @@ fn default_texel_lanes(info: &crate::gpu::DeviceInfo) -> u32 {
     if info.device_type != vk::PhysicalDeviceType::CPU || info.subgroup_size < 2 {
         return 1;
     }
-    let pow2 = 1 << (31 - info.subgroup_size.leading_zeros());
-    pow2.min(MAX_TEXEL_LANES)
+    lane_count(info.subgroup_size)
+}
+
+/// `lanes` clamped to 1 … [`MAX_TEXEL_LANES`] and rounded down to a power of two (the
+/// pipelines are cached per power).
+fn lane_count(lanes: u32) -> u32 {
+    1 << (31 - lanes.clamp(1, MAX_TEXEL_LANES).leading_zeros())
 }
 
 /// Invocations a convolution keeps busy by default: outputs smaller than this (the coarse
@@ -115,14 +120,13 @@ impl BruteFilter {
     }
 
     /// Sets how many invocations sum each output texel, each taking every `lanes`-th source
-    /// slot of the tiles its lobe reaches (rounded down to a power of two, 1 to
-    /// [`MAX_TEXEL_LANES`]). On CPU devices the default is the SIMD width: one output per
-    /// SIMD group, so the group walks only that output's tiles. 1, the default elsewhere,
-    /// gives each invocation its own output and every tile. The sums differ by float
-    /// rounding only.
+    /// slot (rounded down to a power of two, 1 to [`MAX_TEXEL_LANES`]); with more than one,
+    /// a lat-long source is walked row by row over the lobe's reach only. On CPU devices the
+    /// default is the SIMD width: one output per SIMD group, so the group walks only that
+    /// output's texels. 1, the default elsewhere, gives each invocation its own output and
+    /// every tile. The sums differ by float rounding only.
     pub fn set_texel_lanes(&mut self, lanes: u32) {
-        let lanes = lanes.clamp(1, MAX_TEXEL_LANES);
-        self.texel_lanes = 1 << (31 - lanes.leading_zeros());
+        self.texel_lanes = lane_count(lanes);
     }
 
     /// Sets how many invocations a convolution aims to keep busy by splitting the source among
