@@ -27,9 +27,10 @@ layout(set = 0, binding = BINDING_CONVERT_SLOPES, std430) readonly buffer Slopes
 // The push block, generated from src/abi.rs.
 PUSH_ConvertPush
 
-// The destination mapping: cube or dual paraboloid (the push block's, as a constant so that the
-// other's branches vanish).
-layout(constant_id = 3) const uint DST_MAPPING = MAPPING_CUBE;
+// The destination mapping, cube or dual paraboloid: a module each (ShaderId::ConvertArea and
+// ConvertAreaParaboloid), since lavapipe's build time follows the module's size and a
+// specialisation constant would keep the other's code in it.
+const uint DST_MAPPING = DST;
 
 const uint MAXV = 2u * AREA_MAX_VERTICES;  // a clip at most doubles a polygon
 vec2 poly[MAXV];

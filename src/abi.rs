@@ -962,16 +962,23 @@ macro_rules! shader_table {
             /// Resampling between mappings from a cube source.
             ConvertCube = "convert_cube", "convert.comp", Compute, [("SRC_CUBE", "1")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write)];
-            /// Lat-long to cube by exact footprint areas (power-conserving).
-            ConvertArea = "convert_area", "convert_area.comp", Compute, [], ConvertPush,
+            /// Lat-long to cube by exact footprint areas (power-conserving): the general walk.
+            ConvertArea = "convert_area", "convert_area.comp", Compute, [("DST", "MAPPING_CUBE")], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
+                 (CONVERT_SLOPES, StorageBuffer, Read)];
+            /// Lat-long to dual paraboloid by exact footprint areas.
+            ConvertAreaParaboloid = "convert_area_paraboloid", "convert_area.comp", Compute,
+                [("DST", "MAPPING_DUAL_PARABOLOID")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
                  (CONVERT_SLOPES, StorageBuffer, Read)];
             /// ConvertArea's fast path for cube texels away from the poles.
-            ConvertAreaFast = "convert_area_fast", "convert_area.comp", Compute, [("FAST", "1")], ConvertPush,
+            ConvertAreaFast = "convert_area_fast", "convert_area.comp", Compute,
+                [("FAST", "1"), ("DST", "MAPPING_CUBE")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
                  (CONVERT_SLOPES, StorageBuffer, Read)];
             /// ConvertArea's general walk over a list of texels (those the fast path leaves).
-            ConvertAreaList = "convert_area_list", "convert_area.comp", Compute, [("LIST", "1")], ConvertPush,
+            ConvertAreaList = "convert_area_list", "convert_area.comp", Compute,
+                [("LIST", "1"), ("DST", "MAPPING_CUBE")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
                  (CONVERT_SLOPES, StorageBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
             /// The limited slopes of a lat-long source that ConvertArea integrates.

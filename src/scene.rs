@@ -645,7 +645,9 @@ impl PassKind {
         match self {
             PassKind::GBuffer => &[GBuffer],
             // A lat-long source takes exact footprint areas (slopes, then areas).
-            PassKind::DualParaboloid => &[Convert2d, ConvertCube, ConvertSlopes, ConvertArea],
+            PassKind::DualParaboloid => {
+                &[Convert2d, ConvertCube, ConvertSlopes, ConvertAreaParaboloid]
+            }
             PassKind::LatLong => &[Convert2d, ConvertCube],
             PassKind::MipChain => &[Mip],
             PassKind::ShProjection => &[

@@ -137,14 +137,13 @@ impl Converter {
         )
     }
 
+    /// The general walk to `to`, a cube or a dual paraboloid (a module each).
     fn area_pipeline(&self, to: Mapping) -> Result<&Pipeline> {
-        // Constant 3 is the destination mapping (constant 2, the source's, is unused there).
-        Pipeline::compute_once(
-            &self.area[to.id() as usize],
-            &self.ctx,
-            ShaderId::ConvertArea,
-            &[WORKGROUP_2D[0], WORKGROUP_2D[1], 0, to.id()],
-        )
+        let id = match to {
+            Mapping::DualParaboloid => ShaderId::ConvertAreaParaboloid,
+            _ => ShaderId::ConvertArea,
+        };
+        Pipeline::compute_once(&self.area[to.id() as usize], &self.ctx, id, &WORKGROUP_2D)
     }
 
     /// The cube's fast-path and list pipelines, built side by side (llvmpipe takes ~20 ms
@@ -154,21 +153,20 @@ impl Converter {
             // Built: no thread to start (a bake records one conversion per probe).
             return Ok((fast, list));
         }
-        let spec = [WORKGROUP_2D[0], WORKGROUP_2D[1], 0, Mapping::Cube.id()];
         let (fast, list) = std::thread::scope(|s| {
             let list = s.spawn(|| {
                 Pipeline::compute_once(
                     &self.area_list,
                     &self.ctx,
                     ShaderId::ConvertAreaList,
-                    &[LIST_GROUP, 1, 0, Mapping::Cube.id()],
+                    &[LIST_GROUP, 1],
                 )
             });
             let fast = Pipeline::compute_once(
                 &self.area_fast,
                 &self.ctx,
                 ShaderId::ConvertAreaFast,
-                &spec,
+                &WORKGROUP_2D,
             );
             (
                 fast,
