@@ -572,8 +572,13 @@ float texel_weight(vec3 axis, float n, float ln_scale, ivec3 t, float omega, boo
 void add_texel(vec3 axis, float n, float ln_scale, ivec3 t, bool cells_pass, inout vec3 sum, inout vec3 comp) {
     if (!MOMENT_SOURCE) {
         vec4 rt = imageLoad(rad, t);
+#if defined(VISITS)
+        // The visit floor (ShaderId::BruteVisits): the walk and one read a texel, no rule.
+        kahan_add(sum, comp, rt.rgb * rt.w);
+#else
         float k = texel_weight(axis, n, ln_scale, t, rt.w, cells_pass);
         if (k > 0.0) kahan_add(sum, comp, rt.rgb * (rt.w * k));
+#endif
         return;
     }
     uint cells;

@@ -1058,6 +1058,14 @@ macro_rules! shader_table {
                  (BRUTE_PARTIALS, StorageBuffer, ReadWrite),
                  (BRUTE_TILES, StorageBuffer, Read), (BRUTE_SHAPES, StorageImage, Read),
                  (BRUTE_COARSE_CONES, StorageImage, Read), (BRUTE_LIGHT, StorageImage, Read)];
+            /// Brute's visit floor, a benchmark instrument: Σ L·Ω over the source texels the
+            /// walk visits for each output (its one-level walk, no moment source), without the
+            /// rule, so that its time is what visiting the exact sum's texels costs.
+            BruteVisits = "brute_visits", "brute.comp", Compute, [("VISITS", "1")], BrutePush,
+                [(BRUTE_CONES, StorageImage, Read), (BRUTE_RADIANCE, StorageImage, Read),
+                 (BRUTE_PARTIALS, StorageBuffer, ReadWrite),
+                 (BRUTE_TILES, StorageBuffer, Read), (BRUTE_SHAPES, StorageImage, Read),
+                 (BRUTE_COARSE_CONES, StorageImage, Read), (BRUTE_LIGHT, StorageImage, Read)];
             /// Brute-force convolution: the parts' sums, added per output texel into the map.
             BruteResolve = "brute_resolve", "brute.comp", Compute, [("RESOLVE", "1")], BrutePush,
                 [(BRUTE_RESOLVE_PARTIALS, StorageBuffer, Read), (BRUTE_RESOLVE_DST, StorageImage, Write)];

@@ -835,3 +835,81 @@ fn phong_levels_match_float64() {
     }
     common::finish(ctx);
 }
+
+/// The visit floor (`BruteFilter::set_visit_floor`, what `bench peers` times as the floor of
+/// the exact sum) visits what the sum visits, read once each: per output texel Σ L·Ω over
+/// the walk's texels. It must hold every texel whose centre lies inside the lobe's cap above
+/// the cut-off (those the rule keeps) and nothing past the walk's stated reach: the rows'
+/// haversine reach d plus their one column each side (lanes, a lat-long source), or the
+/// cap plus a tile's diagonal (tiles). A sun map (5·10⁴ × the zenith), turned and mirrored,
+/// into a lat-long (poles, seam), Phong 2000 and 3. Bounds: the float64 sums over those two
+/// sets of centres, 1e-5 relative and 1e-4 rad of slack for f32 sums and angles.
+#[test]
+fn the_visit_floor_visits_the_lobes_reach() {
+    use envlight::abi::filter_rule::{CONE_MARGIN, LOG_CUTOFF, REACH_MARGIN_ABS, REACH_MARGIN_REL};
+    let ctx = common::ctx();
+    {
+        let sky = Sky::default();
+        let (w, h) = (256u32, 128u32);
+        let map = EnvMap::from_fn(Mapping::LatLong, w, h, 1, |d| sky.radiance(d));
+        let o = Orientation {
+            flip_u: true,
+            flip_v: false,
+            rotate_y_degrees: 200.0,
+        };
+        let file_to_world = o.world_to_file().transpose();
+        let mut texels = Vec::new();
+        map.for_each_texel(|layer, i, j, t, omega| {
+            let dir = file_to_world * map.texel_dir(layer, i, j);
+            texels.push((dir, t.map(|c| c as f64 * omega)));
+        });
+        let sum_within = |axis: DVec3, angle: f64| -> [f64; 3] {
+            let mut s = [0.0; 3];
+            for (dir, lw) in &texels {
+                if axis.dot(*dir).clamp(-1.0, 1.0).acos() <= angle {
+                    (0..3).for_each(|c| s[c] += lw[c]);
+                }
+            }
+            s
+        };
+        let g = GpuEnvMap::upload(&ctx, &map).unwrap();
+        let target = FilterTarget {
+            to: Mapping::LatLong,
+            size: 32,
+        };
+        let step = (2.0 * PI / w as f64, PI / h as f64);
+        let mut pass = BruteFilter::new(&ctx).unwrap();
+        pass.set_visit_floor(true);
+        for n in [2000.0, 3.0] {
+            // The cap where the lobe is above its cut-off, and the rows' reach (brute.comp).
+            let cap = 2.0 * (0.5 * (1.0 - (LOG_CUTOFF / n).exp())).sqrt().asin();
+            let d = cap
+                + (1.0 + REACH_MARGIN_REL) * CONE_MARGIN * 0.5 * step.0.hypot(step.1)
+                + REACH_MARGIN_ABS;
+            let tile = envlight::abi::BRUTE_TILE as f64 * std::f64::consts::SQRT_2 * step.0;
+            for (lanes, past) in [(8, d + 2.0 * step.0), (1, cap + tile)] {
+                pass.set_texel_lanes(lanes);
+                let (out, _) = pass.run(&g, &o, Kernel::Phong { n }, target).unwrap();
+                let out = out.download(&ctx).unwrap();
+                let inner = at_centres(Mapping::LatLong, 32, 16, |a| sum_within(a, cap - 1e-4));
+                let outer = at_centres(Mapping::LatLong, 32, 16, |a| sum_within(a, past + 1e-4));
+                let (mut low, mut high) = (f64::INFINITY, 0.0f64);
+                for ((got, lo), hi) in out.texels.iter().zip(&inner).zip(&outer) {
+                    for c in 0..3 {
+                        let g = got[c] as f64;
+                        assert!(
+                            g >= lo[c] * (1.0 - 1e-5) && g <= hi[c] * (1.0 + 1e-5),
+                            "n {n}, {lanes} lanes: {g} outside [{}, {}]",
+                            lo[c],
+                            hi[c]
+                        );
+                        low = low.min(g / lo[c]);
+                        high = high.max(g / lo[c]);
+                    }
+                }
+                eprintln!("n {n}, {lanes} lanes: floor / cap's sum from {low:.4} to {high:.4}");
+            }
+        }
+    }
+    common::finish(ctx);
+}

@@ -134,6 +134,11 @@ pub struct PrefilterArgs {
     /// cmft's glossBias for --phong-levels
     #[arg(long, value_parser = finite_f64, default_value_t = 1.0)]
     gloss_bias: f64,
+    /// Benchmark instrument (`envlight bench peers`), with --phong: write, per output texel,
+    /// the sum of L·Ω over the source texels the exact sum visits, read once each without the
+    /// lobe's rule, so that the time printed is the floor of visiting them; not a prefiltered map
+    #[arg(long, conflicts_with = "phong_levels")]
+    visit_floor: bool,
     #[command(flatten)]
     out: FilterOut,
 }
@@ -297,7 +302,8 @@ pub fn prefilter(g: &Global, a: &PrefilterArgs) -> Result<()> {
     let gm = GpuEnvMap::upload(&ctx, &map)?;
     clock.lap("upload");
     let pb = spinner("brute-force Phong prefiltering on the GPU");
-    let filter = BruteFilter::new(&ctx)?;
+    let mut filter = BruteFilter::new(&ctx)?;
+    filter.set_visit_floor(a.visit_floor);
     let o = a.orient.orientation();
     let Some(count) = a.phong_levels else {
         let n = a.phong.context("--phong or --phong-levels is required")?;

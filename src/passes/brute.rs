@@ -55,18 +55,29 @@ pub struct BruteFilter {
     /// Invocations per output texel, each summing every `texel_lanes`-th slot of a tile
     /// (glsl/brute.comp, TEXEL_LANES): the subgroup size on CPU devices, 1 elsewhere.
     texel_lanes: u32,
+    /// Whether one-level convolutions take the visit floor ([`BruteFilter::set_visit_floor`]).
+    visit_floor: bool,
 }
 
 /// Largest lane count per output texel ([`BruteFilter::set_texel_lanes`]).
 pub const MAX_TEXEL_LANES: u32 = 32;
 
-/// Lane counts (powers of two up to [`MAX_TEXEL_LANES`]) times the 64 other variants.
-const PIPELINE_SLOTS: usize = 64 * (MAX_TEXEL_LANES.trailing_zeros() as usize + 1);
+/// Lane counts (powers of two up to [`MAX_TEXEL_LANES`]) times the 64 other variants, with
+/// the rule or the visit floor.
+const PIPELINE_SLOTS: usize = 2 * 64 * (MAX_TEXEL_LANES.trailing_zeros() as usize + 1);
 
 /// The brute pipeline's slot for source and destination mapping ids, source kind, walk
-/// structure and lanes per output (a power of two).
-fn pipeline_slot(from: u32, to: u32, moment: bool, cells_walk: bool, lanes: u32) -> usize {
-    64 * lanes.trailing_zeros() as usize
+/// structure, lanes per output (a power of two) and the visit floor.
+fn pipeline_slot(
+    from: u32,
+    to: u32,
+    moment: bool,
+    cells_walk: bool,
+    lanes: u32,
+    visit_floor: bool,
+) -> usize {
+    (PIPELINE_SLOTS / 2) * visit_floor as usize
+        + 64 * lanes.trailing_zeros() as usize
         + 4 * (4 * from + to) as usize
         + 2 * cells_walk as usize
         + moment as usize
@@ -108,6 +119,7 @@ impl BruteFilter {
             target_invocations: DEFAULT_TARGET_INVOCATIONS,
             cells_walk: ctx.info().device_type == vk::PhysicalDeviceType::CPU,
             texel_lanes: default_texel_lanes(ctx.info()),
+            visit_floor: false,
         })
     }
 
@@ -127,6 +139,15 @@ impl BruteFilter {
     /// every tile. The sums differ by float rounding only.
     pub fn set_texel_lanes(&mut self, lanes: u32) {
         self.texel_lanes = lane_count(lanes);
+    }
+
+    /// Makes one-level convolutions ([`BruteFilter::record`], [`BruteFilter::run`]) a benchmark
+    /// instrument instead (`true`): each output texel gets Σ L·Ω over the source texels its
+    /// walk visits (the same rows or tiles, the same lanes and chunks), read once each,
+    /// without the rule, so that its time is what visiting the exact sum's texels costs
+    /// (`envlight bench peers`). Not a filtered map; [`BruteFilter::record_levels`] refuses it.
+    pub fn set_visit_floor(&mut self, on: bool) {
+        self.visit_floor = on;
     }
 
     /// Sets how many invocations a convolution aims to keep busy by splitting the source among
@@ -350,6 +371,12 @@ impl BruteFilter {
         dst: &GpuEnvMap,
     ) -> Result<()> {
         let exponent = check_kernel(kernel)?;
+        if self.visit_floor && coarse.is_some() {
+            return Err(Error::Invalid(
+                "the visit floor measures one-level convolutions, not levels from the moment pyramid"
+                    .into(),
+            ));
+        }
         let ctx = rec.context().clone();
         let (w, h) = (dst.width, dst.height);
         let base = coarse.map_or(prep.push, |c| c.push);
@@ -401,9 +428,11 @@ impl BruteFilter {
         let (from, to) = (prep.mapping.id(), dst.mapping.id());
         let moment = coarse.is_some();
         let brute = Pipeline::compute_once(
-            &self.brute[pipeline_slot(from, to, moment, self.cells_walk, lanes)],
+            &self.brute[pipeline_slot(from, to, moment, self.cells_walk, lanes, self.visit_floor)],
             &self.ctx,
-            if matches!(prep.mapping, Mapping::Angular | Mapping::DualParaboloid) {
+            if self.visit_floor {
+                ShaderId::BruteVisits
+            } else if matches!(prep.mapping, Mapping::Angular | Mapping::DualParaboloid) {
                 ShaderId::BruteDisc
             } else {
                 ShaderId::Brute
