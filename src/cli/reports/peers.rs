@@ -253,7 +253,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
             goal: "≤ 2×, power within 0.01%",
         },
         Job {
-            name: "Phong n = 2049, cube 64, one level",
+            name: PHONG_JOB,
             envlight: strings(&[
                 "prefilter",
                 &map,
@@ -269,6 +269,25 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
             cmft: Some(cmft_phong("cmft_phong", 1)),
             reps: opts.phong_reps,
             goal: "≤ 1.0×, error ≤ 1e-3",
+        },
+        Job {
+            name: PHONG_FLOOR_JOB,
+            envlight: strings(&[
+                "prefilter",
+                &map,
+                "--phong",
+                "2049",
+                "--to",
+                "cube",
+                "--size",
+                "64",
+                "--visit-floor",
+                "-o",
+                &t("phong_floor.exr"),
+            ]),
+            cmft: None,
+            reps: opts.phong_reps,
+            goal: "the row above's floor",
         },
         Job {
             name: "Phong levels, cube 64, 7 levels (n = 2049 … 3)",
@@ -435,6 +454,30 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
             job.goal
         ));
     }
+    // Phong's floor against its row: what visiting the exact sum's texels costs alone.
+    let row = |name: &str| rows.iter().find(|r| r.0.name == name);
+    if let (Some(p), Some(fl)) = (row(PHONG_JOB), row(PHONG_FLOOR_JOB)) {
+        let (whole, cmft, gpu, floor, floor_gpu) = (p.1, p.2, p.4, fl.1, fl.4);
+        md.push_str(&format!(
+            "\nPhong's floor (the row marked so): the one-level job with its walk over the same \
+             texels, each read once and summed without the lobe's rule (`prefilter \
+             --visit-floor`; the process, upload and preparation of the source's texels as the \
+             job has them), {floor:.3} s whole, {floor_gpu:.0} of the job's {gpu:.0} ms of \
+             GPU{}. The exact sum visits every texel whose cone reaches the lobe above \
+             e^({:.2}) of its peak, the bound on the energy it drops: where this ratio is above \
+             the goal, no sum over those texels meets it on this device, however cheap its \
+             rule. The other {:.0} ms of GPU ({:.0}% of the job's whole time) are the rule's \
+             per-texel integrals of the lobe.\n",
+            if opts.cmft.is_some() && cmft > 0.0 {
+                format!(": {:.2}× cmft's one-level time", floor / cmft)
+            } else {
+                String::new()
+            },
+            envlight::abi::filter_rule::LOG_CUTOFF,
+            gpu - floor_gpu,
+            100.0 * (whole - floor) / whole.max(1e-9),
+        ));
+    }
     md.push_str(
         "\nErrors: SH, worst coefficient against the float64 projection (relative to the largest); \
          irradiance, worst texel against float64 SH of the same order (cmft's E/π against order 4); \
@@ -500,6 +543,9 @@ fn errors(job: &str, src: &EnvMap, tmp: &Path, cmft: bool) -> Result<(String, St
         let c = if cmft { NOT_COMPARED.into() } else { dash() };
         return Ok((e, c));
     }
+    if job == PHONG_FLOOR_JOB {
+        return Ok(("– (Σ L·Ω visited, not a map)".into(), dash()));
+    }
     if job == FIS_JOB {
         // Its accuracy against converged Monte Carlo is docs/accuracy's table (FIS-64 with
         // lights within 2.42% on five probes).
@@ -563,6 +609,12 @@ const BENCH_LEVELS: PhongLevels = PhongLevels {
     scale: 10.0,
     bias: 1.0,
 };
+
+/// The Phong one-level row of the issue's table.
+const PHONG_JOB: &str = "Phong n = 2049, cube 64, one level";
+
+/// The Phong one-level job's floor: its walk, each texel read once, no rule.
+const PHONG_FLOOR_JOB: &str = "Phong n = 2049, cube 64, one level: its visits alone (floor)";
 
 /// The FIS render row of the issue's table (cmft has no such job).
 const FIS_JOB: &str = "FIS render, 128² GGX α 0.3 sphere, 64 samples, lights";
