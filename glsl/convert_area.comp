@@ -210,40 +210,53 @@ void general(uvec3 id) {
         uint nb;
         CUT(tmp, poly, npoly, zlo, true, nb);
         CUT(band, tmp, nb, zhi, false, nb);
-        for (uint k = 0u; k < nb; k++) {
-            vec2 a = band[k], b = band[k + 1u == nb ? 0u : k + 1u];
-            bool fwd = before(a, b);
-            vec2 p = fwd ? a : b, q = fwd ? b : a;
-            float sgn = fwd ? 1.0 : -1.0;
-            if (p.x == q.x) continue;
-            int c = int(floor(p.x));
-            for (;;) {
-                float u0 = max(p.x, float(c)), u1 = min(q.x, float(c + 1));
-                if (u1 > u0) {
-                    // ∫∫ 1, ∫∫ (U − Uc) and ∫∫ (z − zc) over this piece (Green's theorem;
-                    // Simpson's rule, exact for these quadratics), as area_mean's.
-                    float um = 0.5 * (u0 + u1);
-                    float z0 = p.y + (q.y - p.y) * ((u0 - p.x) / (q.x - p.x));
-                    float zm = p.y + (q.y - p.y) * ((um - p.x) / (q.x - p.x));
-                    float z1 = p.y + (q.y - p.y) * ((u1 - p.x) / (q.x - p.x));
-                    float d = sgn * (u1 - u0);
-                    float uc = float(c) + 0.5;
-                    float area = d * (0.5 * (z0 + z1) - zlo);
-                    float mu = d / 6.0 * ((u0 - uc) * (z0 - zlo) + 4.0 * (um - uc) * (zm - zlo) +
-                                          (u1 - uc) * (z1 - zlo));
-                    float mz = d / 6.0 * 0.5 *
-                               (((z0 - zc) * (z0 - zc) - base) + 4.0 * ((zm - zc) * (zm - zc) - base) +
-                                ((z1 - zc) * (z1 - zc) - base));
-                    int col = wrap_column(c, w);
-                    uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
-                    vec3 gu = slopes[o].xyz, gz = slopes[o + 1u].xyz;
-                    num += area * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + mu * gu +
-                           mz * gz;
-                    den += area;
-                }
-                c++;
-                if (float(c) >= q.x) break;
+        // The band's pieces, edge by edge and column by column, in one loop: llvmpipe runs a
+        // loop for as long as the SIMD group's longest lane, so a loop per edge would cost the
+        // longest lane's columns at every edge, one loop only the longest lane's total.
+        uint k = 0u;
+        int c = 0;
+        vec2 p = vec2(0.0), q = vec2(0.0);
+        float sgn = 0.0;
+        bool walking = false;
+        for (;;) {
+            if (!walking) {
+                if (k >= nb) break;
+                vec2 a = band[k], b = band[k + 1u == nb ? 0u : k + 1u];
+                k++;
+                bool fwd = before(a, b);
+                p = fwd ? a : b;
+                q = fwd ? b : a;
+                sgn = fwd ? 1.0 : -1.0;
+                // An upright edge bounds no area, and the band's lower edge only zeros.
+                if (p.x == q.x || (p.y == zlo && q.y == zlo)) continue;
+                c = int(floor(p.x));
+                walking = true;
             }
+            float u0 = max(p.x, float(c)), u1 = min(q.x, float(c + 1));
+            if (u1 > u0) {
+                // ∫∫ 1, ∫∫ (U − Uc) and ∫∫ (z − zc) over this piece (Green's theorem;
+                // Simpson's rule, exact for these quadratics), as area_mean's.
+                float um = 0.5 * (u0 + u1);
+                float z0 = p.y + (q.y - p.y) * ((u0 - p.x) / (q.x - p.x));
+                float zm = p.y + (q.y - p.y) * ((um - p.x) / (q.x - p.x));
+                float z1 = p.y + (q.y - p.y) * ((u1 - p.x) / (q.x - p.x));
+                float d = sgn * (u1 - u0);
+                float uc = float(c) + 0.5;
+                float area = d * (0.5 * (z0 + z1) - zlo);
+                float mu = d / 6.0 * ((u0 - uc) * (z0 - zlo) + 4.0 * (um - uc) * (zm - zlo) +
+                                      (u1 - uc) * (z1 - zlo));
+                float mz = d / 6.0 * 0.5 *
+                           (((z0 - zc) * (z0 - zc) - base) + 4.0 * ((zm - zc) * (zm - zc) - base) +
+                            ((z1 - zc) * (z1 - zc) - base));
+                int col = wrap_column(c, w);
+                uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
+                vec3 gu = slopes[o].xyz, gz = slopes[o + 1u].xyz;
+                num += area * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + mu * gu +
+                       mz * gz;
+                den += area;
+            }
+            c++;
+            if (float(c) >= q.x) walking = false;
         }
     }
     vec3 result = den != 0.0 ? l0 + num / den : l0;
@@ -344,10 +357,13 @@ void main() {
 
     vec3 num = vec3(0.0);
     float den = 0.0;
-    for (int row = rows.x; row <= rows.y; row++) {
-        float zhi = latlong_band_edge(row, h), zlo = latlong_band_edge(row + 1, h);
+    // The box's cells row by row in one loop (llvmpipe runs a loop as long as the SIMD group's
+    // longest lane: nested, the most rows times the most columns; one, the most cells).
+    int row = rows.x, c = c0;
+    float zhi = latlong_band_edge(row, h), zlo = latlong_band_edge(row + 1, h);
+    for (; row <= rows.y;) {
         float zc = 0.5 * (zhi + zlo);
-        for (int c = c0; c <= c1; c++) {
+        {
             float cf = float(c), uc = cf + 0.5;
             vec3 m = vec3(0.0);
             [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
@@ -358,6 +374,12 @@ void main() {
             num += m.x * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + m.y * slopes[o].xyz +
                    m.z * slopes[o + 1u].xyz;
             den += m.x;
+        }
+        if (++c > c1) {
+            c = c0;
+            row++;
+            zhi = zlo;
+            zlo = latlong_band_edge(row + 1, h);
         }
     }
     vec3 result = den != 0.0 ? l0 + num / den : l0;
