@@ -184,7 +184,7 @@ pub fn write_half_channels(path: &Path, w: u32, h: u32, channels: &[(&str, &[f32
         .map_err(|e| Error::bad_file(path, format!("cannot write OpenEXR: {e}")))
 }
 
-/// Writes a map as a float32 RGB EXR (ZIP compressed); cubes and dual paraboloids are stored
+/// Writes a map as a float32 RGB EXR (uncompressed); cubes and dual paraboloids are stored
 /// with their layers stacked vertically (see the module docs of [`crate::io`]).
 pub fn save_exr(map: &EnvMap, path: impl AsRef<Path>) -> Result<()> {
     let path = path.as_ref();

@@ -492,11 +492,20 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     }
     if let Some(f) = row(FIS_JOB) {
         let (whole, gpu) = (f.1, f.4);
+        let rest = whole - gpu / 1e3;
         md.push_str(&format!(
-            "\nThe FIS render less its GPU work: {:.3} s (the goal is 0.15 s whole); its GPU \
-             work, {gpu:.1} ms, is mostly the lobe-sized paraboloid's exact areas (`envlight \
-             render` prints each pass's time).\n",
-            whole - gpu / 1e3
+            "\nThe FIS render less its GPU work: {rest:.3} s, {} the 0.15 s goal{}.\n",
+            if rest > FIS_GOAL_S { "above" } else { "under" },
+            if rest > FIS_GOAL_S {
+                " before any GPU work: the process, device, load and pipeline builds of the \
+                 breakdown below"
+                    .to_string()
+            } else {
+                format!(
+                    "; its GPU work, {gpu:.1} ms, mostly the lobe-sized paraboloid's exact areas \
+                     (`envlight render` prints each pass's time), is what must shrink"
+                )
+            }
         ));
     }
     md.push_str(
@@ -639,6 +648,9 @@ const PHONG_JOB: &str = "Phong n = 2049, cube 64, one level";
 
 /// The Phong one-level job's floor: its walk, each texel read once, no rule.
 const PHONG_FLOOR_JOB: &str = "Phong n = 2049, cube 64, one level: its visits alone (floor)";
+
+/// The FIS render's goal: whole seconds.
+const FIS_GOAL_S: f64 = 0.15;
 
 /// The FIS render row of the issue's table (cmft has no such job).
 const FIS_JOB: &str = "FIS render, 128² GGX α 0.3 sphere, 64 samples, lights";
