@@ -20,9 +20,9 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 layout(set = 0, binding = BINDING_CONVERT_SRC) uniform sampler2DArray src;
 layout(set = 0, binding = BINDING_CONVERT_DST, rgba32f) uniform writeonly image2DArray dst;
 // Limited slopes of each source texel (convert_slopes.comp): (dL/dU rgb, 0), (dL/dz rgb, 0).
-layout(set = 0, binding = BINDING_CONVERT_SLOPES, std430) readonly buffer Slopes {
-    vec4 slopes[];
-};
+// Through the buffer's texel view: llvmpipe reads a storage buffer at a per-lane address lane
+// by lane, a texel buffer as one gather (cube 256's areas: 66 -> 49 ms without the reads).
+layout(set = 0, binding = BINDING_CONVERT_SLOPES) uniform samplerBuffer slopes;
 
 // The push block, generated from src/abi.rs.
 PUSH_ConvertPush
@@ -250,7 +250,7 @@ void general(uvec3 id) {
                             ((z1 - zc) * (z1 - zc) - base));
                 int col = wrap_column(c, w);
                 uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
-                vec3 gu = slopes[o].xyz, gz = slopes[o + 1u].xyz;
+                vec3 gu = texelFetch(slopes, int(o)).xyz, gz = texelFetch(slopes, int(o + 1u)).xyz;
                 num += area * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + mu * gu +
                        mz * gz;
                 den += area;
@@ -371,8 +371,8 @@ void main() {
             }
             int col = wrap_column(c, w);
             uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
-            num += m.x * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + m.y * slopes[o].xyz +
-                   m.z * slopes[o + 1u].xyz;
+            num += m.x * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + m.y * texelFetch(slopes, int(o)).xyz +
+                   m.z * texelFetch(slopes, int(o + 1u)).xyz;
             den += m.x;
         }
         if (++c > c1) {

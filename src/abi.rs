@@ -549,6 +549,9 @@ pub enum Kind {
     StorageImage,
     /// A storage buffer.
     StorageBuffer,
+    /// A uniform texel buffer: a buffer's rgba32f view, read with texelFetch (llvmpipe reads
+    /// it as one gather where it reads a storage buffer lane by lane).
+    TexelBuffer,
 }
 
 /// What a shader does to a binding; the recorder derives barriers from it.
@@ -965,22 +968,22 @@ macro_rules! shader_table {
             /// Lat-long to cube by exact footprint areas (power-conserving): the general walk.
             ConvertArea = "convert_area", "convert_area.comp", Compute, [("DST", "MAPPING_CUBE")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, StorageBuffer, Read)];
+                 (CONVERT_SLOPES, TexelBuffer, Read)];
             /// Lat-long to dual paraboloid by exact footprint areas.
             ConvertAreaParaboloid = "convert_area_paraboloid", "convert_area.comp", Compute,
                 [("DST", "MAPPING_DUAL_PARABOLOID")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, StorageBuffer, Read)];
+                 (CONVERT_SLOPES, TexelBuffer, Read)];
             /// ConvertArea's fast path for cube texels away from the poles.
             ConvertAreaFast = "convert_area_fast", "convert_area.comp", Compute,
                 [("FAST", "1"), ("DST", "MAPPING_CUBE")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, StorageBuffer, Read)];
+                 (CONVERT_SLOPES, TexelBuffer, Read)];
             /// ConvertArea's general walk over a list of texels (those the fast path leaves).
             ConvertAreaList = "convert_area_list", "convert_area.comp", Compute,
                 [("LIST", "1"), ("DST", "MAPPING_CUBE")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, StorageBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
+                 (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
             /// The limited slopes of a lat-long source that ConvertArea integrates.
             ConvertSlopes = "convert_slopes", "convert_slopes.comp", Compute, [], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_SLOPES, StorageBuffer, Write)];

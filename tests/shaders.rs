@@ -92,6 +92,7 @@ fn bindings_and_push_constants_match_the_spirv() {
                 Kind::Sampled => DescriptorType::COMBINED_IMAGE_SAMPLER,
                 Kind::StorageImage => DescriptorType::STORAGE_IMAGE,
                 Kind::StorageBuffer => DescriptorType::STORAGE_BUFFER,
+                Kind::TexelBuffer => DescriptorType::UNIFORM_TEXEL_BUFFER,
             };
             assert_eq!(info.ty, want, "{id:?}: binding {b} type");
         }

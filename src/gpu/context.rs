@@ -174,6 +174,8 @@ pub struct DeviceInfo {
     pub max_image_dimension_cube: u32,
     /// Largest storage buffer a descriptor may cover, bytes (128 MiB on lavapipe).
     pub max_storage_buffer_range: u64,
+    /// Most texels a texel buffer view may address.
+    pub max_texel_buffer_elements: u64,
     /// Driver name and version text.
     pub driver: String,
     /// Subgroup size of compute shaders.
@@ -458,6 +460,7 @@ impl Context {
             max_image_dimension_2d: props.limits.max_image_dimension2_d,
             max_image_dimension_cube: props.limits.max_image_dimension_cube,
             max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
+            max_texel_buffer_elements: props.limits.max_texel_buffer_elements as u64,
             subgroup_size: subgroup.subgroup_size,
             subgroup_arithmetic: subgroup
                 .supported_stages

@@ -306,6 +306,8 @@ pub enum Bind<'a> {
     StorageLevel(&'a Image, u32),
     /// A whole storage buffer.
     Buffer(&'a Buffer),
+    /// A buffer's rgba32f texel view (one made with UNIFORM_TEXEL_BUFFER usage).
+    Texels(&'a Buffer),
 }
 
 impl Bind<'_> {
@@ -313,14 +315,14 @@ impl Bind<'_> {
     pub(crate) fn image(&self) -> Option<&Image> {
         match self {
             Bind::Sampled(i, _, _) | Bind::Storage(i) | Bind::StorageLevel(i, _) => Some(i),
-            Bind::Buffer(_) => None,
+            Bind::Buffer(_) | Bind::Texels(_) => None,
         }
     }
 
     /// The buffer bound, if a buffer.
     pub(crate) fn buffer(&self) -> Option<&Buffer> {
         match self {
-            Bind::Buffer(b) => Some(b),
+            Bind::Buffer(b) | Bind::Texels(b) => Some(b),
             _ => None,
         }
     }
@@ -378,6 +380,7 @@ impl DescriptorSet {
             .vk("allocating a descriptor set")?[0];
         let mut image_infos = Vec::new();
         let mut buffer_infos = Vec::new();
+        let mut texel_views = Vec::new();
         for (b, bind) in binds {
             let kind = iface
                 .bindings
@@ -421,6 +424,14 @@ impl DescriptorSet {
                         range: vk::WHOLE_SIZE,
                     },
                 )),
+                (Bind::Texels(buf), Kind::TexelBuffer) => {
+                    assert!(
+                        buf.texel_view != vk::BufferView::null(),
+                        "{:?}: binding {b}'s buffer has no texel view",
+                        pipeline.shader
+                    );
+                    texel_views.push((*b, buf.texel_view));
+                }
                 _ => panic!("{:?}: binding {b} is a {kind:?}", pipeline.shader),
             }
         }
@@ -441,6 +452,15 @@ impl DescriptorSet {
                     .dst_binding(*b)
                     .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                     .buffer_info(std::slice::from_ref(info)),
+            );
+        }
+        for (b, view) in &texel_views {
+            writes.push(
+                vk::WriteDescriptorSet::default()
+                    .dst_set(ds.set)
+                    .dst_binding(*b)
+                    .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
+                    .texel_buffer_view(std::slice::from_ref(view)),
             );
         }
         // SAFETY: the set and every resource written are live.

@@ -36,6 +36,8 @@ fn allocate(
 pub struct Buffer {
     shared: Arc<Shared>,
     pub(crate) raw: vk::Buffer,
+    /// Its rgba32f view where it was made with UNIFORM_TEXEL_BUFFER usage (else null).
+    pub(crate) texel_view: vk::BufferView,
     allocation: Option<Allocation>,
     size: u64,
     /// How the last recorded command used it (see [`super::Recorder`]).
@@ -44,6 +46,8 @@ pub struct Buffer {
 
 impl Buffer {
     /// Creates a buffer of `size` bytes in `location` (CpuToGpu and GpuToCpu are mapped).
+    /// With UNIFORM_TEXEL_BUFFER usage it also gets a view of the whole buffer as rgba32f
+    /// texels (`size` a multiple of 16), which [`super::Bind::Texels`] binds.
     pub fn new(
         ctx: &Context,
         name: &str,
@@ -62,6 +66,14 @@ impl Buffer {
                  maxStorageBufferRange ({max} bytes); use a smaller map or output"
             )));
         }
+        let texels = usage.contains(vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER);
+        let max_texels = s.info.max_texel_buffer_elements;
+        if texels && (size % 16 != 0 || size / 16 > max_texels) {
+            return Err(Error::Invalid(format!(
+                "{name}: a texel buffer of {size} bytes is not whole rgba32f texels within the \
+                 device's maxTexelBufferElements ({max_texels})"
+            )));
+        }
         let info = vk::BufferCreateInfo::default()
             .size(size)
             .usage(usage)
@@ -72,6 +84,7 @@ impl Buffer {
         let mut buffer = Buffer {
             shared: s.clone(),
             raw,
+            texel_view: vk::BufferView::null(),
             allocation: None,
             size,
             state: Mutex::new(Usage::Undefined),
@@ -87,6 +100,19 @@ impl Buffer {
         }
         .vk("binding buffer memory")?;
         buffer.allocation = Some(allocation);
+        if texels {
+            let info = vk::BufferViewCreateInfo::default()
+                .buffer(raw)
+                .format(vk::Format::R32G32B32A32_SFLOAT)
+                .offset(0)
+                .range(vk::WHOLE_SIZE);
+            // SAFETY: raw is bound to memory and was made with UNIFORM_TEXEL_BUFFER usage;
+            // rgba32f texel buffers are a required format feature.
+            buffer.texel_view = unsafe { s.device.create_buffer_view(&info, None) }
+                .vk("creating a texel buffer view")?;
+            s.track();
+            s.name(buffer.texel_view, name);
+        }
         Ok(buffer)
     }
 
@@ -156,6 +182,15 @@ impl Buffer {
 
 impl Drop for Buffer {
     fn drop(&mut self) {
+        if self.texel_view != vk::BufferView::null() {
+            // SAFETY: every submission using the view was waited for; it goes before its buffer.
+            unsafe {
+                self.shared
+                    .device
+                    .destroy_buffer_view(self.texel_view, None)
+            };
+            self.shared.untrack();
+        }
         // SAFETY: every submission using this buffer was waited for before returning.
         unsafe { self.shared.device.destroy_buffer(self.raw, None) };
         if let Some(a) = self.allocation.take() {

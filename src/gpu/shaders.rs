@@ -25,6 +25,7 @@ pub fn descriptor_type(kind: Kind) -> vk::DescriptorType {
         Kind::Sampled => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
         Kind::StorageImage => vk::DescriptorType::STORAGE_IMAGE,
         Kind::StorageBuffer => vk::DescriptorType::STORAGE_BUFFER,
+        Kind::TexelBuffer => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
     }
 }
 

@@ -181,7 +181,8 @@ impl Converter {
     /// texel: lat-long to cube, or to dual paraboloid where the orientation keeps the
     /// paraboloid's axis on the lat-long's, with no sample count or nearest reads asked for,
     /// not so strongly minified that the walks at the poles grow long
-    /// (`math::convert::area_serves`), and a source whose slopes fit one storage buffer.
+    /// (`math::convert::area_serves`), and a source whose slopes fit one storage buffer and
+    /// one texel buffer view.
     pub fn uses_area(&self, src: (Mapping, u32, u32), opts: &ConvertOptions) -> bool {
         let Ok(world_to_file) = opts.orientation.checked_world_to_file() else {
             return false;
@@ -191,6 +192,7 @@ impl Converter {
             && !opts.nearest
             && crate::math::convert::area_serves(src.1, src.2, opts.to, opts.size, world_to_file)
             && slopes_bytes(src.1, src.2) <= self.ctx.info().max_storage_buffer_range
+            && slopes_bytes(src.1, src.2) / 16 <= self.ctx.info().max_texel_buffer_elements
     }
 
     /// Samples per axis for an output texel: about two per source texel spacing, so that
@@ -282,7 +284,8 @@ impl Converter {
             &self.ctx,
             "convert slopes",
             slopes_bytes(src.width, src.height),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
+            // Written as a storage buffer, read through its texel view.
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
             MemoryLocation::GpuOnly,
         )?;
         let slopes_pipeline = self.slopes_pipeline()?;
@@ -314,7 +317,7 @@ impl Converter {
                 &[
                     source(),
                     (binding::CONVERT_DST, Bind::Storage(&dst.image)),
-                    (binding::CONVERT_SLOPES, Bind::Buffer(&slopes)),
+                    (binding::CONVERT_SLOPES, Bind::Texels(&slopes)),
                 ],
                 push,
                 [
@@ -340,7 +343,7 @@ impl Converter {
                     &[
                         source(),
                         (binding::CONVERT_DST, Bind::Storage(&dst.image)),
-                        (binding::CONVERT_SLOPES, Bind::Buffer(&slopes)),
+                        (binding::CONVERT_SLOPES, Bind::Texels(&slopes)),
                         (binding::CONVERT_LIST, Bind::Buffer(&list)),
                     ],
                     push,
