@@ -189,6 +189,11 @@ impl BruteFilter {
         orientation: &Orientation,
         outputs: &[(Kernel, &GpuEnvMap)],
     ) -> Result<Vec<u32>> {
+        if self.visit_floor {
+            return Err(Error::Invalid(
+                "the visit floor measures one-level convolutions, not Phong levels".into(),
+            ));
+        }
         let Some(sharpest) = outputs
             .iter()
             .map(|o| o.0)
@@ -371,12 +376,6 @@ impl BruteFilter {
         dst: &GpuEnvMap,
     ) -> Result<()> {
         let exponent = check_kernel(kernel)?;
-        if self.visit_floor && coarse.is_some() {
-            return Err(Error::Invalid(
-                "the visit floor measures one-level convolutions, not levels from the moment pyramid"
-                    .into(),
-            ));
-        }
         let ctx = rec.context().clone();
         let (w, h) = (dst.width, dst.height);
         let base = coarse.map_or(prep.push, |c| c.push);
