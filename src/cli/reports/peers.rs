@@ -200,6 +200,16 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         ]));
         v
     };
+    // The one-level Phong job (BENCH_LEVELS' level 0), or its visit floor.
+    let phong_one = |out: &str, floor: bool| {
+        let mut v = strings(&["prefilter", &map, "--phong", "2049", "--to", "cube"]);
+        v.extend(strings(&["--size", "64"]));
+        if floor {
+            v.push("--visit-floor".into());
+        }
+        v.extend(strings(&["-o", &t(out)]));
+        v
+    };
     let jobs = vec![
         Job {
             name: "SH coefficients (envlight l = 2; cmft l = 4)",
@@ -254,37 +264,14 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         },
         Job {
             name: PHONG_JOB,
-            envlight: strings(&[
-                "prefilter",
-                &map,
-                "--phong",
-                "2049",
-                "--to",
-                "cube",
-                "--size",
-                "64",
-                "-o",
-                &t("phong.exr"),
-            ]),
+            envlight: phong_one("phong.exr", false),
             cmft: Some(cmft_phong("cmft_phong", 1)),
             reps: opts.phong_reps,
             goal: "≤ 1.0×, error ≤ 1e-3",
         },
         Job {
             name: PHONG_FLOOR_JOB,
-            envlight: strings(&[
-                "prefilter",
-                &map,
-                "--phong",
-                "2049",
-                "--to",
-                "cube",
-                "--size",
-                "64",
-                "--visit-floor",
-                "-o",
-                &t("phong_floor.exr"),
-            ]),
+            envlight: phong_one("phong_floor.exr", true),
             cmft: None,
             reps: opts.phong_reps,
             goal: "the row above's floor",
