@@ -361,20 +361,18 @@ void main() {
     // longest lane: nested, the most rows times the most columns; one, the most cells).
     int row = rows.x, c = c0;
     float zhi = latlong_band_edge(row, h), zlo = latlong_band_edge(row + 1, h);
-    for (; row <= rows.y;) {
+    while (row <= rows.y) {
         float zc = 0.5 * (zhi + zlo);
-        {
-            float cf = float(c), uc = cf + 0.5;
-            vec3 m = vec3(0.0);
-            [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
-                m += edge_cell(v[k], v[(k + 1u) % FAST_POINTS], cf, uc, zlo, zhi, zc);
-            }
-            int col = wrap_column(c, w);
-            uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
-            num += m.x * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + m.y * texelFetch(slopes, int(o)).xyz +
-                   m.z * texelFetch(slopes, int(o + 1u)).xyz;
-            den += m.x;
+        float cf = float(c), uc = cf + 0.5;
+        vec3 m = vec3(0.0);
+        [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
+            m += edge_cell(v[k], v[(k + 1u) % FAST_POINTS], cf, uc, zlo, zhi, zc);
         }
+        int col = wrap_column(c, w);
+        uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
+        num += m.x * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) +
+               m.y * texelFetch(slopes, int(o)).xyz + m.z * texelFetch(slopes, int(o + 1u)).xyz;
+        den += m.x;
         if (++c > c1) {
             c = c0;
             row++;

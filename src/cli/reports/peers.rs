@@ -481,7 +481,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         let (whole, gpu) = (f.1, f.4);
         let rest = whole - gpu / 1e3;
         md.push_str(&format!(
-            "\nThe FIS render less its GPU work: {rest:.3} s, {} the 0.15 s goal{}.\n",
+            "\nThe FIS render less its GPU work: {rest:.3} s, {} the {FIS_GOAL_S} s goal{}.\n",
             if rest > FIS_GOAL_S { "above" } else { "under" },
             if rest > FIS_GOAL_S {
                 " before any GPU work: the process, device, load and pipeline builds of the \
