@@ -6,6 +6,7 @@ use crate::abi::split_sum;
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, Recorder, Timing, Usage};
 use crate::math::brdf::Brdf;
+use crate::math::convert::{latlong_halved, paraboloid_source_halves};
 use crate::math::filter::Kernel;
 use crate::math::lights::{extract_each, light_sh, lobe_scale, resolves, ExtractOptions};
 use crate::math::sh::Window;
@@ -379,6 +380,7 @@ impl Renderer {
         std::thread::scope(|s| {
             let shade_build = s.spawn(|| shade.prepare_code(&code));
             let convert_build = s.spawn(|| match dp {
+                // The pipelines that serve the whole map serve its halves too.
                 Some((conv, opts)) => conv.prepare_for((env.mapping, env.width, env.height), &opts),
                 None => Ok(()),
             });
@@ -594,9 +596,30 @@ impl Renderer {
         let lights_ms =
             (!asked.is_empty()).then(|| [extract_ms, 1e3 * lights_started.elapsed().as_secs_f64()]);
         let residual_map = |name| GpuEnvMap::new(ctx, name, env.mapping, env.width, env.height);
+        // The paraboloid's source: the residual where the chain takes the lights, else the
+        // map. The residual is halved where that is still as fine as the paraboloid's finest
+        // texels: its brightest texels are the lights' threshold τ, whereas a sun left in the
+        // chain, moved within its 2 × 2 block, erred 6× the whole map's chain (tests/fis.rs).
+        let dp_source = match (&dp_opts, &chain_ex) {
+            (Some(opts), Some(ex)) if dp_lights && dp_source_halves(env, opts.size) => {
+                let map = latlong_halved(&ex.residual);
+                let gpu = GpuEnvMap::new(
+                    ctx,
+                    "fis paraboloid source",
+                    map.mapping,
+                    map.width,
+                    map.height,
+                )?;
+                Some((map, gpu))
+            }
+            _ => None,
+        };
+        // The whole residual where a Phong map or the paraboloid reads it.
         let chain_residual = match &chain_ex {
-            Some(ex) => Some((ex, residual_map("environment residual")?)),
-            None => None,
+            Some(ex) if phong_lit.contains(&true) || (dp_lights && dp_source.is_none()) => {
+                Some((ex, residual_map("environment residual")?))
+            }
+            _ => None,
         };
         // The diffuse residual's map, where prefiltered irradiance maps are filtered from it.
         // SH objects need no projection of it: the whole map's coefficients less the light
@@ -762,6 +785,9 @@ impl Renderer {
             if let Some((ex, map)) = &chain_residual {
                 map.record_upload(rec, &ex.residual)?;
             }
+            if let Some((map, gpu)) = &dp_source {
+                gpu.record_upload(rec, map)?;
+            }
             if let Some((ex, map)) = &diffuse_residual {
                 map.record_upload(rec, &ex.residual)?;
             }
@@ -775,8 +801,9 @@ impl Renderer {
             if let (Some((conv, mip)), Some((map, _)), Some(opts)) = (dp_passes, &dp, &dp_opts) {
                 // After the uploads' staging copies, which this thread makes meanwhile.
                 (builds.convert)()?;
-                let source = match &chain_residual {
-                    Some((_, res)) if dp_lights => res,
+                let source = match (&dp_source, &chain_residual) {
+                    (Some((_, gpu)), _) => gpu,
+                    (None, Some((_, res))) if dp_lights => res,
                     _ => &env_gpu,
                 };
                 marks.record(rec, PassKind::DualParaboloid, |rec| {
@@ -1007,6 +1034,12 @@ fn dp_convert_options(scene: &Scene, env: &EnvMap) -> ConvertOptions {
         supersample: None,
         nearest: chain_of_texel_means(scene),
     }
+}
+
+/// Whether the FIS paraboloid of side `size` is converted from `env`'s residual halved
+/// ([`paraboloid_source_halves`]; lat-long maps only).
+fn dp_source_halves(env: &EnvMap, size: u32) -> bool {
+    env.mapping == Mapping::LatLong && paraboloid_source_halves(env.width, env.height, size)
 }
 
 /// The shade code `scene`'s draw takes under `plan`: known before any input exists, so that
