@@ -1144,6 +1144,62 @@ macro_rules! shader_table {
             ShadeVoteSplitSum = "shade_vote_split_sum", "shade.frag", Fragment,
                 [("USE_VOTE", "1"), ("ONLY_TECHS", "(1u << TECH_FIS) | (1u << TECH_SPLIT_SUM)")],
                 ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeLookup`] less footprint and shadow code (LEAN).
+            ShadeLeanLookup = "shade_lean_lookup", "shade.frag", Fragment,
+                [("ONLY_TECHS", "0u"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeFis`] less footprint and shadow code (LEAN).
+            ShadeLeanFis = "shade_lean_fis", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_FIS"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeSh`] less footprint and shadow code (LEAN).
+            ShadeLeanSh = "shade_lean_sh", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_SH"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadePrefiltered`] less footprint and shadow code (LEAN).
+            ShadeLeanPrefiltered = "shade_lean_prefiltered", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_PREFILTERED"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeMc`] less footprint and shadow code (LEAN).
+            ShadeLeanMc = "shade_lean_mc", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_MC"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeShBrdf`] less footprint and shadow code (LEAN).
+            ShadeLeanShBrdf = "shade_lean_sh_brdf", "shade.frag", Fragment,
+                [("ONLY_TECHS", "(1u << TECH_SH) | (1u << TECH_SH_BRDF)"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeSplitSum`] less footprint and shadow code (LEAN).
+            ShadeLeanSplitSum = "shade_lean_split_sum", "shade.frag", Fragment,
+                [("ONLY_TECHS", "(1u << TECH_FIS) | (1u << TECH_SPLIT_SUM)"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVoteLookup`] less footprint and shadow code.
+            ShadeVoteLeanLookup = "shade_vote_lean_lookup", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "0u"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVoteFis`] less footprint and shadow code.
+            ShadeVoteLeanFis = "shade_vote_lean_fis", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_FIS"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVoteSh`] less footprint and shadow code.
+            ShadeVoteLeanSh = "shade_vote_lean_sh", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_SH"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVotePrefiltered`] less footprint and shadow code.
+            ShadeVoteLeanPrefiltered = "shade_vote_lean_prefiltered", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_PREFILTERED"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVoteMc`] less footprint and shadow code.
+            ShadeVoteLeanMc = "shade_vote_lean_mc", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_MC"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVoteShBrdf`] less footprint and shadow code.
+            ShadeVoteLeanShBrdf = "shade_vote_lean_sh_brdf", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "(1u << TECH_SH) | (1u << TECH_SH_BRDF)"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVoteSplitSum`] less footprint and shadow code.
+            ShadeVoteLeanSplitSum = "shade_vote_lean_split_sum", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "(1u << TECH_FIS) | (1u << TECH_SPLIT_SUM)"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
             /// The split-sum DFG table (A, B) per n·v and √α.
             Dfg = "dfg", "dfg.comp", Compute, [], DfgPush,
                 [(DFG_TABLE, StorageBuffer, ReadWrite)];

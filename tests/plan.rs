@@ -151,7 +151,8 @@ fn small(sc: &mut Scene) {
 /// with point lookups, render with their variant and with the whole shader on one context: the frames agree within 1e-6 of
 /// the frame's largest value (the same arithmetic once folded; the tolerance leaves the
 /// driver room to order it differently), and the variant built is one shade pipeline besides
-/// the whole shader's.
+/// the whole shader's. Each scene renders with shadows, which take a variant's whole module,
+/// and without shadows or footprint lookups, which take its LEAN one (their code removed).
 #[test]
 fn one_technique_scenes_take_their_shade_variant_and_match_the_whole_shader() {
     let sky = Sky::default();
@@ -190,8 +191,24 @@ fn one_technique_scenes_take_their_shade_variant_and_match_the_whole_shader() {
         }
     }
     assert_eq!(scenes.len(), 8, "every technique once, and point mirrors");
+    // Each with shadows (a variant's whole module) and without shadows or footprint lookups
+    // (its LEAN module).
+    let cases: Vec<(String, Scene)> = scenes
+        .iter()
+        .flat_map(|(what, sc)| {
+            let mut shadows = sc.clone();
+            shadows.shadows = true;
+            let mut lean = sc.clone();
+            lean.shadows = false;
+            lean.environment.filter = LookupFilter::Point;
+            [
+                (format!("{what}, shadows"), shadows),
+                (format!("{what}, no shadows, point lookups"), lean),
+            ]
+        })
+        .collect();
     let mut variants = Vec::new();
-    for (what, sc) in &scenes {
+    for (what, sc) in &cases {
         let ctx = common::ctx();
         {
             let variant = Renderer::new(&ctx).render(sc, &env).unwrap();
@@ -233,6 +250,11 @@ fn one_technique_scenes_take_their_shade_variant_and_match_the_whole_shader() {
                 built[0], worst
             );
             assert!(worst <= 1e-6 * peak, "{what}: {worst} of {peak}");
+            assert_eq!(
+                built[0].contains("_lean_"),
+                !sc.shadows,
+                "{what}: {built:?}"
+            );
             variants.push(built[0]);
         }
         common::finish(ctx);
@@ -240,7 +262,11 @@ fn one_technique_scenes_take_their_shade_variant_and_match_the_whole_shader() {
     // The mirrors with a chain take the FIS variant, which keeps the lookup's code too.
     variants.sort_unstable();
     variants.dedup();
-    assert_eq!(variants.len(), 7, "each variant once: {variants:?}");
+    assert_eq!(
+        variants.len(),
+        14,
+        "each variant's two modules: {variants:?}"
+    );
 }
 
 /// Monte Carlo alone: on a lat-long map it needs nothing but the G-buffer, its frames and the

@@ -143,36 +143,79 @@ const _: () = assert!(
     "a BRDF id past the mask"
 );
 
-/// shade.frag's variants for scenes of one technique, built with ONLY_TECHS: (the techniques
-/// kept besides the lookup, as mask bits; plain module; vote module). SH-BRDF keeps SH, whose
-/// projection it reads, and split-sum FIS, whose chain it reads: their masks hold both.
-const VARIANTS: [(u32, ShaderId, ShaderId); 7] = {
+/// One of shade.frag's variants for scenes of one technique, built with ONLY_TECHS.
+struct Variant {
+    /// The techniques kept besides the lookup, as mask bits.
+    techs: u32,
+    /// Its modules: plain and with vote, then both LEAN (no footprint or shadow code).
+    modules: [ShaderId; 4],
+}
+
+/// shade.frag's variants for scenes of one technique. SH-BRDF keeps SH, whose projection it
+/// reads, and split-sum FIS, whose chain it reads: their masks hold both.
+const VARIANTS: [Variant; 7] = {
     use crate::abi::brdf::technique as t;
     use ShaderId::*;
     [
-        (0, ShadeLookup, ShadeVoteLookup),
-        (1 << t::FIS, ShadeFis, ShadeVoteFis),
-        (1 << t::SH, ShadeSh, ShadeVoteSh),
-        (1 << t::PREFILTERED, ShadePrefiltered, ShadeVotePrefiltered),
-        (1 << t::MC, ShadeMc, ShadeVoteMc),
-        (1 << t::SH | 1 << t::SH_BRDF, ShadeShBrdf, ShadeVoteShBrdf),
-        (
-            1 << t::FIS | 1 << t::SPLIT_SUM,
-            ShadeSplitSum,
-            ShadeVoteSplitSum,
-        ),
+        Variant {
+            techs: 0,
+            modules: [
+                ShadeLookup,
+                ShadeVoteLookup,
+                ShadeLeanLookup,
+                ShadeVoteLeanLookup,
+            ],
+        },
+        Variant {
+            techs: 1 << t::FIS,
+            modules: [ShadeFis, ShadeVoteFis, ShadeLeanFis, ShadeVoteLeanFis],
+        },
+        Variant {
+            techs: 1 << t::SH,
+            modules: [ShadeSh, ShadeVoteSh, ShadeLeanSh, ShadeVoteLeanSh],
+        },
+        Variant {
+            techs: 1 << t::PREFILTERED,
+            modules: [
+                ShadePrefiltered,
+                ShadeVotePrefiltered,
+                ShadeLeanPrefiltered,
+                ShadeVoteLeanPrefiltered,
+            ],
+        },
+        Variant {
+            techs: 1 << t::MC,
+            modules: [ShadeMc, ShadeVoteMc, ShadeLeanMc, ShadeVoteLeanMc],
+        },
+        Variant {
+            techs: 1 << t::SH | 1 << t::SH_BRDF,
+            modules: [
+                ShadeShBrdf,
+                ShadeVoteShBrdf,
+                ShadeLeanShBrdf,
+                ShadeVoteLeanShBrdf,
+            ],
+        },
+        Variant {
+            techs: 1 << t::FIS | 1 << t::SPLIT_SUM,
+            modules: [
+                ShadeSplitSum,
+                ShadeVoteSplitSum,
+                ShadeLeanSplitSum,
+                ShadeVoteLeanSplitSum,
+            ],
+        },
     ]
 };
 
 /// Every fragment module the shading pass may build: the whole shader and its variants,
-/// plain and with vote (what a render's plan allows it to create).
-pub const MODULES: [ShaderId; 2 + 2 * VARIANTS.len()] = {
-    let mut m = [ShaderId::Shade; 2 + 2 * VARIANTS.len()];
+/// plain and with vote, whole and lean (what a render's plan allows it to create).
+pub const MODULES: [ShaderId; 2 + 4 * VARIANTS.len()] = {
+    let mut m = [ShaderId::Shade; 2 + 4 * VARIANTS.len()];
     m[1] = ShaderId::ShadeVote;
     let mut k = 0;
-    while k < VARIANTS.len() {
-        m[2 + 2 * k] = VARIANTS[k].1;
-        m[3 + 2 * k] = VARIANTS[k].2;
+    while k < 4 * VARIANTS.len() {
+        m[2 + k] = VARIANTS[k / 4].modules[k % 4];
         k += 1;
     }
     m
@@ -181,17 +224,18 @@ pub const MODULES: [ShaderId; 2 + 2 * VARIANTS.len()] = {
 /// The fragment module a draw with code `mask` takes: where the mask keeps the techniques of
 /// a variant (besides the lookup, the background's), that variant, whose other techniques'
 /// code is gone before the driver compiles it (llvmpipe: 32 ms against the whole shader's
-/// 100 ms for FIS); else the whole shader, which folds them by the constant. `vote`: walks
-/// end on a subgroup vote.
+/// 100 ms for FIS), and its LEAN module where the mask has no footprint or shadow bits (22
+/// ms); else the whole shader, which folds them by the constant. `vote`: walks end on a
+/// subgroup vote.
 pub fn module(vote: bool, mask: u32) -> ShaderId {
     use crate::abi::brdf::technique as t;
-    let techs = VARIANTS.iter().fold(1 << t::LOOKUP, |m, v| m | v.0);
+    let techs = VARIANTS.iter().fold(1 << t::LOOKUP, |m, v| m | v.techs);
     let kept = mask & techs & !(1 << t::LOOKUP);
-    match (VARIANTS.iter().find(|v| v.0 == kept), vote) {
-        (Some(v), false) => v.1,
-        (Some(v), true) => v.2,
-        (None, false) => ShaderId::Shade,
-        (None, true) => ShaderId::ShadeVote,
+    let lean = (mask & (crate::abi::footprint::CODE | crate::abi::shade_code::SHADOWS)) == 0;
+    match VARIANTS.iter().find(|v| v.techs == kept) {
+        Some(v) => v.modules[vote as usize + 2 * lean as usize],
+        None if vote => ShaderId::ShadeVote,
+        None => ShaderId::Shade,
     }
 }
 
@@ -468,9 +512,10 @@ mod tests {
     }
 
     /// Each variant's ONLY_TECHS define names exactly the techniques its VARIANTS entry
-    /// keeps (read through the generated header's TECH_ constants), in both modules; a mask
-    /// of those techniques takes it, with or without the lookup, footprint, shadow and BRDF
-    /// bits; a mask of two variants' techniques, and the whole mask, take the whole shader.
+    /// keeps (read through the generated header's TECH_ constants), in its four modules, which
+    /// define USE_VOTE and LEAN as their places say; a mask of those techniques takes it, its
+    /// LEAN modules unless the mask has footprint or shadow bits; a mask of two variants'
+    /// techniques, and the whole mask, take the whole shader.
     #[test]
     fn variants_keep_the_techniques_their_masks_name() {
         let header = crate::abi::generated_header();
@@ -486,8 +531,8 @@ mod tests {
                 .parse()
                 .unwrap()
         };
-        for &(bits, plain, vote) in &VARIANTS {
-            for id in [plain, vote] {
+        for v in &VARIANTS {
+            for (k, &id) in v.modules.iter().enumerate() {
                 let define = id
                     .source()
                     .defines
@@ -506,14 +551,23 @@ mod tests {
                         1u32 << value(&format!("TECH_{name}"))
                     })
                     .fold(0, |m, b| m | b);
-                assert_eq!(named, bits, "{id:?}: {define}");
-                let vote_define = id.source().defines.iter().any(|d| d.0 == "USE_VOTE");
-                assert_eq!(vote_define, id == vote, "{id:?}");
+                assert_eq!(named, v.techs, "{id:?}: {define}");
+                let defines = |name| id.source().defines.iter().any(|d| d.0 == name);
+                assert_eq!(defines("USE_VOTE"), k % 2 == 1, "{id:?}");
+                assert_eq!(defines("LEAN"), k >= 2, "{id:?}");
             }
-            let others = crate::abi::footprint::CODE | SHADOWS | 1 << (BRDF_SHIFT + ids::GGX);
-            for extra in [0, 1 << technique::LOOKUP, others] {
-                assert_eq!(module(false, bits | extra), plain);
-                assert_eq!(module(true, bits | extra), vote);
+            // Footprint or shadow code takes the whole variant; a BRDF or the lookup, either.
+            let ggx = 1 << (BRDF_SHIFT + ids::GGX);
+            for (extra, lean) in [
+                (0, true),
+                (1 << technique::LOOKUP | ggx, true),
+                (crate::abi::footprint::CODE, false),
+                (SHADOWS | ggx, false),
+            ] {
+                for vote in [false, true] {
+                    let want = v.modules[vote as usize + 2 * lean as usize];
+                    assert_eq!(module(vote, v.techs | extra), want);
+                }
             }
         }
         let fis_and_sh = 1 << technique::FIS | 1 << technique::SH;
