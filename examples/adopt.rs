@@ -44,6 +44,7 @@ pub fn run() -> Result<usize, Box<dyn std::error::Error>> {
             orientation: Default::default(),
             supersample: None,
             nearest: false,
+            edge_points: None,
         };
         let (cube, timings) = conv.run(&gpu, &opts)?;
         let back = cube.download(&ctx)?;

@@ -185,6 +185,7 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
             orientation,
             supersample: None,
             nearest: envlight::render::chain_of_texel_means(&scene),
+            edge_points: None,
         };
         converter.record(&mut rec, &env_gpu, &dp, &opts)?;
         mip.record(&mut rec, &dp)?;

@@ -129,7 +129,7 @@ void general(uvec3 id) {
         vec3 pa = point(face, e0.x, e0.y, 1u), pb = point(face, e1.x, e1.y, 1u);
         bool near = min(length(pa.xz), length(pb.xz)) < AREA_POLE_NEAR / float(n);
         uint m = near ? AREA_POLE_STEPS
-                      : (DST_MAPPING == MAPPING_DUAL_PARABOLOID ? AREA_PARABOLOID_EDGE_STEPS : AREA_EDGE_STEPS);
+                      : (DST_MAPPING == MAPPING_DUAL_PARABOLOID ? pc.edge_points : AREA_EDGE_STEPS);
         for (uint q = 0u; q < m; q++) {
             uvec2 ab = e0 * (m - q) + e1 * q;
             ds[count++] = point(face, ab.x, ab.y, m);

@@ -447,6 +447,7 @@ impl Baker {
                 orientation,
                 supersample: Some(supersample(env, dp_size)),
                 nearest: false,
+                edge_points: None,
             };
             self.convert.record(rec, &src, &dp, &c)?;
             self.mip.record(rec, &dp)?;

@@ -53,6 +53,7 @@
 //!         orientation: Orientation::default(),
 //!         supersample: None,
 //!         nearest: false,
+//!         edge_points: None,
 //!     };
 //!     converter.record(&mut rec, &source, &dp, &opts)?;
 //!     mip.record(&mut rec, &dp)?;

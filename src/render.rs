@@ -6,7 +6,7 @@ use crate::abi::split_sum;
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, Recorder, Timing, Usage};
 use crate::math::brdf::Brdf;
-use crate::math::convert::{latlong_halved, paraboloid_source_halves};
+use crate::math::convert::{latlong_halved, paraboloid_source_halves, residual_edge_points};
 use crate::math::filter::Kernel;
 use crate::math::lights::{extract_each, light_sh, lobe_scale, resolves, ExtractOptions};
 use crate::math::sh::Window;
@@ -806,8 +806,13 @@ impl Renderer {
                     (None, Some((_, res))) if dp_lights => res,
                     _ => &env_gpu,
                 };
+                // A residual holds no sun for the rim's chords to misplace: fewer points.
+                let opts = ConvertOptions {
+                    edge_points: dp_lights.then(|| residual_edge_points(opts.size)),
+                    ..*opts
+                };
                 marks.record(rec, PassKind::DualParaboloid, |rec| {
-                    conv.record(rec, source, map, opts)
+                    conv.record(rec, source, map, &opts)
                 })?;
                 marks.record(rec, PassKind::MipChain, |rec| mip.record(rec, map))?;
                 if let Some((p, chain, tables, forms)) = &split {
@@ -1033,6 +1038,7 @@ fn dp_convert_options(scene: &Scene, env: &EnvMap) -> ConvertOptions {
         orientation: scene.environment.orientation(),
         supersample: None,
         nearest: chain_of_texel_means(scene),
+        edge_points: None,
     }
 }
 

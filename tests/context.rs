@@ -90,6 +90,7 @@ fn live_objects_return_to_zero() {
             orientation: Default::default(),
             supersample: None,
             nearest: false,
+            edge_points: None,
         };
         let (out, _) = conv.run(&g, &opts).unwrap();
         drop(g);

@@ -52,6 +52,7 @@ fn convert(
                 orientation: o,
                 supersample: None,
                 nearest: false,
+                edge_points: None,
             },
         )
         .unwrap();
@@ -274,6 +275,7 @@ fn gpu_matches_the_float64_reference_conversion() {
                     orientation: o,
                     supersample: None,
                     nearest: false,
+                    edge_points: None,
                 };
                 let area = conv.uses_area((from, w, h), &opts);
                 let cpu = if area {
@@ -549,6 +551,7 @@ fn nearest_conversion_matches_its_float64_twin() {
                 orientation: Orientation::default(),
                 supersample: Some(ss),
                 nearest: true,
+                edge_points: None,
             };
             let (out, _) = conv.run(&g, &opts).unwrap();
             let out = out.download(&ctx).unwrap();
@@ -621,6 +624,7 @@ fn default_opts(to: Mapping, size: u32, o: Orientation) -> ConvertOptions {
         orientation: o,
         supersample: None,
         nearest: false,
+        edge_points: None,
     }
 }
 
@@ -691,6 +695,112 @@ fn area_conversion_matches_its_float64_twin() {
         // A paraboloid upside down (its axis against the lat-long's) is sampled.
         let opts = default_opts(Mapping::DualParaboloid, 8, turned(true));
         assert!(!conv.uses_area((Mapping::LatLong, 96, 48), &opts));
+    }
+    common::finish(ctx);
+}
+
+/// Fewer points per paraboloid texel edge (`ConvertOptions::edge_points`; a render's
+/// residual chain takes `area::RESIDUAL_EDGE_STEPS`) follow their float64 twin as the default
+/// does (5e-5 on the smooth map above; 1 point, the corners alone, included). Power, 1024 ×
+/// 512 with suns 10⁵ × the sky at both poles, on the seam and mid-sky, at 2 points against
+/// 8: the suns 8.7e-5, 1.3e-4, 1.3e-3 at 256, 128, 32 (8 points: 9.9e-6, 1.2e-5, 8.0e-5); its
+/// residual (lights extracted, as FIS's chain) 2.7e-6, 1.1e-5, 1.2e-4 (8 points: 1.7e-7,
+/// 6.9e-7, 1.0e-5): a render takes 2 for a residual from 128 up, where they keep power as 8
+/// do with suns. Bounds 1.3× the measurements. Points outside 1 ..= POLE_STEPS are refused.
+#[test]
+fn fewer_edge_points_follow_their_twin_and_keep_power() {
+    use envlight::abi::area;
+    use envlight::math::convert::residual_edge_points;
+    let ctx = common::ctx();
+    {
+        let conv = Converter::new(&ctx).unwrap();
+        let run = |src: &EnvMap, size: u32, points: u32| -> EnvMap {
+            let g = GpuEnvMap::upload(&ctx, src).unwrap();
+            let opts = ConvertOptions {
+                edge_points: Some(points),
+                ..default_opts(Mapping::DualParaboloid, size, Orientation::default())
+            };
+            conv.run(&g, &opts).unwrap().0.download(&ctx).unwrap()
+        };
+        let smooth = EnvMap::from_fn(Mapping::LatLong, 96, 48, 1, |d| {
+            let s = (13.0 * d.x + 7.0 * d.y).sin();
+            [
+                1.0 + 0.5 * s,
+                1.0 + 0.5 * (9.0 * d.z).cos(),
+                1.25 + 0.75 * d.y,
+            ]
+        });
+        let w2f = Orientation::default().world_to_file();
+        for (size, points) in [
+            (32, area::RESIDUAL_EDGE_STEPS),
+            (29, area::RESIDUAL_EDGE_STEPS),
+            (32, 1),
+        ] {
+            let gpu = run(&smooth, size, points);
+            let cpu = envlight::math::convert::latlong_area_points(
+                &smooth,
+                Mapping::DualParaboloid,
+                size,
+                w2f,
+                points,
+            );
+            let mut worst = 0.0f64;
+            for layer in 0..2 {
+                for j in 0..gpu.height {
+                    for i in 0..gpu.width {
+                        if !Mapping::DualParaboloid.texel_in_domain(gpu.width, gpu.height, i, j) {
+                            continue;
+                        }
+                        let (a, b) = (gpu.texel(layer, i, j), cpu.texel(layer, i, j));
+                        for k in 0..3 {
+                            worst = worst.max(((a[k] - b[k]) / b[k]).abs() as f64);
+                        }
+                    }
+                }
+            }
+            eprintln!("paraboloid {size}, {points} points: GPU vs f64 worst {worst:.2e}");
+            assert!(worst <= 5e-5, "{size}, {points} points: {worst:e}");
+        }
+        let suns = suns_at_poles_and_seam(1024);
+        let ex = envlight::math::lights::extract(
+            &suns,
+            &envlight::math::lights::ExtractOptions::chain(),
+        );
+        let power_error = |out: &EnvMap, src: &EnvMap| {
+            let (p, q) = (out.power(), src.power());
+            (0..3)
+                .map(|c| (p[c] / q[c] - 1.0).abs())
+                .fold(0.0, f64::max)
+        };
+        for (size, bound, residual_bound) in [
+            (256, 1.2e-4, 3.6e-6),
+            (128, 1.7e-4, 1.4e-5),
+            (32, 1.7e-3, 1.6e-4),
+        ] {
+            for (what, map, bound) in [
+                ("suns", &suns, bound),
+                ("residual", &ex.residual, residual_bound),
+            ] {
+                let e = [area::PARABOLOID_EDGE_STEPS, area::RESIDUAL_EDGE_STEPS]
+                    .map(|points| power_error(&run(map, size, points), map));
+                eprintln!(
+                    "{what}, paraboloid {size}: power error {:.2e} at 8 points, {:.2e} at 2",
+                    e[0], e[1]
+                );
+                assert!(e[1] <= bound, "{what} {size}: power off by {:e}", e[1]);
+            }
+        }
+        assert_eq!(residual_edge_points(128), area::RESIDUAL_EDGE_STEPS);
+        assert_eq!(residual_edge_points(64), area::PARABOLOID_EDGE_STEPS);
+        let g = GpuEnvMap::upload(&ctx, &smooth).unwrap();
+        for points in [0, area::POLE_STEPS + 1] {
+            let opts = ConvertOptions {
+                edge_points: Some(points),
+                ..default_opts(Mapping::DualParaboloid, 8, Orientation::default())
+            };
+            let e = conv.run(&g, &opts).err().expect("refused").to_string();
+            assert!(e.contains("points per paraboloid texel edge"), "{e}");
+        }
     }
     common::finish(ctx);
 }

@@ -452,7 +452,7 @@ fn fis_with_lights_matches_its_float64_twin() {
         let ex = extract(&env, &ExtractOptions::chain());
         assert!(!ex.lights.is_empty());
         let size = 32;
-        let chain = mip::chain(&common::dp_f64(&ex.residual, size));
+        let chain = mip::chain(&common::dp_f64_residual(&ex.residual, size));
         let cam = sphere_camera(20);
         for kind in [
             Brdf::Ggx {
@@ -543,7 +543,8 @@ fn halved_residual_costs_little_against_the_whole() {
         for (size, bound) in [(32u32, 4e-3), (16, 3.6e-3)] {
             assert!(paraboloid_source_halves(w, h, size));
             let half = latlong_halved(&ex.residual);
-            let chains = [&half, &ex.residual].map(|m| mip::chain(&common::dp_f64(m, size)));
+            let chains =
+                [&half, &ex.residual].map(|m| mip::chain(&common::dp_f64_residual(m, size)));
             for alpha in [0.3, 0.6] {
                 let kind = Brdf::Ggx {
                     alpha,

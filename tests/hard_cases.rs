@@ -174,6 +174,7 @@ fn conversion_of_every_hard_map() {
                         orientation: Orientation::default(),
                         supersample: None,
                         nearest: false,
+                        edge_points: None,
                     };
                     let out = conv.run(&g, &opts).unwrap().0.download(&ctx).unwrap();
                     let what = format!("{} -> {to:?} {size}", c.name);

@@ -124,6 +124,7 @@ fn conversion_preserves_power_of_every_real_probe() {
                                 orientation: Orientation::default(),
                                 supersample: None,
                                 nearest: false,
+                                edge_points: None,
                             },
                         )
                         .unwrap();
@@ -193,6 +194,7 @@ fn grace_probe_and_latlong_agree_after_flips() {
                         orientation: o,
                         supersample: None,
                         nearest: false,
+                        edge_points: None,
                     },
                 )
                 .unwrap();

@@ -300,7 +300,7 @@ fn render_with_lights_matches_its_float64_twin() {
         let ex = extract(&env, &ExtractOptions::chain());
         assert!(!ex.lights.is_empty());
         let dp_size = 32;
-        let dp = common::dp_f64(&ex.residual, dp_size);
+        let dp = common::dp_f64_residual(&ex.residual, dp_size);
         let settings = SplitSumSettings {
             size: Some(32),
             levels: 3,

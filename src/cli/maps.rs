@@ -167,6 +167,7 @@ pub fn convert(g: &Global, a: &ConvertArgs) -> Result<()> {
         orientation: a.orient.orientation(),
         supersample: a.supersample,
         nearest: false,
+        edge_points: None,
     };
     let (dst, timings) = conv.run(&src, &opts)?;
     clock.lap(RUN);

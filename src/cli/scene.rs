@@ -115,6 +115,7 @@ fn demo_maps(cli: &Global, input: &Path, out: &Path, size: u32) -> Result<()> {
             orientation: Orientation::default(),
             supersample: None,
             nearest: false,
+            edge_points: None,
         };
         let (dst, timings) = conv.run(&src, &opts)?;
         let result = dst.download(&ctx)?;

@@ -228,6 +228,16 @@ pub fn paraboloid_source_halves(width: u32, height: u32, size: u32) -> bool {
         && PI / f64::from(height / 2) <= finest
 }
 
+/// Points per edge of a paraboloid texel of side `size`'s polygon where the source is a
+/// residual, its lights taken out: [`area::RESIDUAL_EDGE_STEPS`] from
+/// [`area::RESIDUAL_EDGE_MIN_SIZE`] up, else [`area::PARABOLOID_EDGE_STEPS`].
+pub fn residual_edge_points(size: u32) -> u32 {
+    match size >= area::RESIDUAL_EDGE_MIN_SIZE {
+        true => area::RESIDUAL_EDGE_STEPS,
+        false => area::PARABOLOID_EDGE_STEPS,
+    }
+}
+
 /// Loop steps of the longest polygon walk of a `width` × `height` lat-long → `to` at `size`
 /// conversion (llvmpipe ends an invocation's loops after 65 535 steps in all): the texel with
 /// a corner on a pole, which meets the rows down to its far corner (2√2/size of a face's
@@ -301,6 +311,19 @@ pub fn area_general_texels(n: u32) -> Vec<[u32; 4]> {
 /// texel at their own half's rim nearest their centre, as the sampled conversion's do.
 /// Panics unless [`area_serves`] maps `to` with `world_to_file`.
 pub fn latlong_area(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3) -> EnvMap {
+    latlong_area_points(map, to, size, world_to_file, area::PARABOLOID_EDGE_STEPS)
+}
+
+/// [`latlong_area`] with `edge_points` points per edge of a paraboloid texel's polygon away
+/// from the poles (1 to [`area::POLE_STEPS`]; the converter's `ConvertOptions::edge_points`).
+pub fn latlong_area_points(
+    map: &EnvMap,
+    to: Mapping,
+    size: u32,
+    world_to_file: DMat3,
+    edge_points: u32,
+) -> EnvMap {
+    assert!((1..=area::POLE_STEPS).contains(&edge_points));
     assert_eq!(map.mapping, Mapping::LatLong);
     assert!(
         area_serves(1, 1, to, size.max(1), world_to_file),
@@ -323,7 +346,7 @@ pub fn latlong_area(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3) 
                     texels.push(sample_nearest(map, d).map(|x| x as f32));
                     continue;
                 }
-                let mut poly = area_polygon(to, layer, i, j, size, w, world_to_file);
+                let mut poly = area_polygon(to, layer, i, j, size, w, world_to_file, edge_points);
                 if to == Mapping::DualParaboloid {
                     poly = cut(&poly, 0.0, layer == 0);
                 }
@@ -412,6 +435,7 @@ pub fn area_slopes(map: &EnvMap) -> Vec<[[f64; 3]; 2]> {
 /// The footprint of texel (face, i, j) of a `to` map of side `n` (a cube or a dual
 /// paraboloid) in the (U, z) plane of a `w`-wide lat-long map: at most
 /// [`area::MAX_VERTICES`] vertices, U unwrapped continuously from the first point.
+#[allow(clippy::too_many_arguments)]
 fn area_polygon(
     to: Mapping,
     face: u32,
@@ -420,9 +444,10 @@ fn area_polygon(
     n: u32,
     w: i64,
     world_to_file: DMat3,
+    edge_points: u32,
 ) -> Vec<[f64; 2]> {
     let m = if to == Mapping::DualParaboloid {
-        area::PARABOLOID_EDGE_STEPS
+        edge_points
     } else {
         area::EDGE_STEPS
     };
@@ -950,7 +975,16 @@ mod tests {
                     let want = num / den;
                     let got = out.texel(face, i, j)[0] as f64;
                     worst = worst.max((got / want - 1.0).abs());
-                    let poly = area_polygon(Mapping::Cube, face, i, j, n, wi, DMat3::IDENTITY);
+                    let poly = area_polygon(
+                        Mapping::Cube,
+                        face,
+                        i,
+                        j,
+                        n,
+                        wi,
+                        DMat3::IDENTITY,
+                        area::EDGE_STEPS,
+                    );
                     let flat = area_mean(&poly, wi, hi, |row, col| Cell {
                         l: fetch(&map, 0, col, row),
                         slopes: [[0.0; 3]; 2],

@@ -65,6 +65,7 @@ impl McEnv {
                 orientation: *orientation,
                 supersample: None,
                 nearest: false,
+                edge_points: None,
             },
         )?;
         Ok((

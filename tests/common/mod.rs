@@ -97,6 +97,20 @@ pub fn dump_pair(name: &str, actual: &envlight::EnvMap, expected: &envlight::Env
 /// the level 0 the GPU's MIP chains are tested against.
 #[allow(dead_code)]
 pub fn dp_f64(env: &envlight::EnvMap, size: u32) -> envlight::EnvMap {
+    dp_f64_points(env, size, envlight::abi::area::PARABOLOID_EDGE_STEPS)
+}
+
+/// [`dp_f64`] of a residual, its lights taken out, as a render converts it for its chain
+/// (`math::convert::residual_edge_points` per texel edge).
+#[allow(dead_code)]
+pub fn dp_f64_residual(residual: &envlight::EnvMap, size: u32) -> envlight::EnvMap {
+    let points = envlight::math::convert::residual_edge_points(size);
+    dp_f64_points(residual, size, points)
+}
+
+/// [`dp_f64`] with `points` per paraboloid texel edge in the area conversion.
+#[allow(dead_code)]
+pub fn dp_f64_points(env: &envlight::EnvMap, size: u32, points: u32) -> envlight::EnvMap {
     use envlight::math::Mapping;
     let world_to_file = envlight::Orientation::default().world_to_file();
     // As the converter: exact footprint areas where they serve, else samples.
@@ -109,11 +123,12 @@ pub fn dp_f64(env: &envlight::EnvMap, size: u32) -> envlight::EnvMap {
             world_to_file,
         )
     {
-        return envlight::math::convert::latlong_area(
+        return envlight::math::convert::latlong_area_points(
             env,
             Mapping::DualParaboloid,
             size,
             world_to_file,
+            points,
         );
     }
     let (w, h) = Mapping::DualParaboloid.extent_for_size(size);

@@ -130,6 +130,7 @@ pub fn run(
                 orientation: Orientation::default(),
                 supersample: None,
                 nearest: false,
+                edge_points: None,
             },
         )?;
         mip.run(&dp)?;

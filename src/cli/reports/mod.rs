@@ -263,6 +263,7 @@ fn bench_convert(cli: &Global, sizes: &[u32], reps: usize) -> Result<()> {
                 orientation: Orientation::default(),
                 supersample,
                 nearest: false,
+                edge_points: None,
             };
             let (ow, oh) = to.extent_for_size(size);
             // Exact footprint areas take no samples.
