@@ -232,6 +232,55 @@ fn truncated_and_absurd_dds() {
     expect_error(&q, &LoadOptions::default(), &["unsupported"]);
 }
 
+/// Radiance .hdr and 8-bit PNG files load each texel in place: a 4 × 2 RGBE file (flat
+/// scanlines) of distinct texels against c·2^(e−136) (within 0.5%: decoders differ by half a
+/// mantissa step, and the mantissas here are ≥ 128), and a 2 × 2 PNG against the sRGB
+/// transfer function of its bytes (1e-6).
+#[test]
+fn hdr_and_png_load_each_texel_in_place() {
+    let (w, h) = (4u32, 2u32);
+    let mut bytes = format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {h} +X {w}\n").into_bytes();
+    let rgbe = |k: u32| [128 + 10 * k, 250 - 20 * k, 140 + 7 * k, 126 + k].map(|v| v as u8);
+    let mut want = Vec::new();
+    for k in 0..w * h {
+        let p = rgbe(k);
+        bytes.extend(p);
+        let scale = 2f32.powi(p[3] as i32 - 136);
+        want.push([0, 1, 2].map(|c| p[c] as f32 * scale));
+    }
+    let p = tmp("texels.hdr");
+    std::fs::write(&p, &bytes).unwrap();
+    let map = io::load(&p, &LoadOptions::default()).unwrap();
+    assert_eq!((map.width, map.height), (w, h));
+    for (k, (got, want)) in map.texels.iter().zip(&want).enumerate() {
+        for c in 0..3 {
+            assert!(
+                (got[c] / want[c] - 1.0).abs() < 5e-3,
+                "texel {k}: {got:?} vs {want:?}"
+            );
+        }
+    }
+    let px: Vec<u8> = (0..12).map(|k| (k * 21 + 3) as u8).collect();
+    let png = image::RgbImage::from_raw(2, 2, px.clone()).unwrap();
+    let q = tmp("texels.png");
+    png.save(&q).unwrap();
+    let map = io::load(&q, &LoadOptions::default()).unwrap();
+    let srgb = |v: u8| {
+        let c = v as f64 / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    for (k, got) in map.texels.iter().enumerate() {
+        for c in 0..3 {
+            let want = srgb(px[3 * k + c]);
+            assert!((got[c] as f64 - want).abs() < 1e-6, "texel {k}: {got:?}");
+        }
+    }
+}
+
 #[test]
 fn pfm_round_trip_and_truncation() {
     let map = good_map();

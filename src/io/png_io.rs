@@ -27,7 +27,8 @@ pub(crate) fn read_with_image_crate(
     // A decoder assertion on a corrupt file (the fuzzer found one in zune-jpeg's upsampler)
     // is a corrupt file, not a crash.
     let img = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| r.decode())) {
-        Ok(d) => d.map_err(bad)?.to_rgb32f(),
+        // into_: a Radiance file decodes to rgb32f already, which then moves rather than copies.
+        Ok(d) => d.map_err(bad)?.into_rgb32f(),
         Err(_) => {
             return Err(Error::bad_file(
                 path,
@@ -36,18 +37,23 @@ pub(crate) fn read_with_image_crate(
         }
     };
     let decode = |c: f32| {
-        if !srgb {
-            c
-        } else if c <= 0.04045 {
+        if c <= 0.04045 {
             c / 12.92
         } else {
             ((c + 0.055) / 1.055).powf(2.4)
         }
     };
-    let rgb = img
-        .pixels()
-        .map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2])])
-        .collect();
+    let raw = img.into_raw();
+    // Linear data is the texels as they are: the buffer is reinterpreted, not copied (a 1k
+    // map's 6 MB, and their pages to fault in), where its capacity is whole texels.
+    let rgb = match srgb {
+        true => raw
+            .chunks_exact(3)
+            .map(|c| [decode(c[0]), decode(c[1]), decode(c[2])])
+            .collect(),
+        false => bytemuck::allocation::try_cast_vec(raw)
+            .unwrap_or_else(|(_, raw)| raw.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()),
+    };
     Ok(Raster {
         width: w,
         height: h,
