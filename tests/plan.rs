@@ -298,11 +298,12 @@ fn monte_carlo_alone_plans_and_runs_its_passes() {
             let r = render(&ctx, &sc, &env).unwrap();
             assert_eq!(r.kinds(), kinds);
             assert_eq!(r.mc.map(|m| m.0), Some(8));
-            // The shade pass's Monte Carlo variant, with vote where fragment shaders have it.
+            // The shade pass's Monte Carlo variant, with vote where fragment shaders have it,
+            // LEAN (no shadows, no footprint lookups).
             let shade = if ctx.info().fragment_vote {
-                "shade_vote_mc"
+                "shade_vote_lean_mc"
             } else {
-                "shade_mc"
+                "shade_lean_mc"
             };
             let mut want: Vec<&str> = pipelines
                 .iter()
