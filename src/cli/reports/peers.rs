@@ -480,20 +480,24 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     if let Some(f) = row(FIS_JOB) {
         let (whole, gpu) = (f.1, f.4);
         let rest = whole - gpu / 1e3;
-        md.push_str(&format!(
-            "\nThe FIS render less its GPU work: {rest:.3} s, {} the {FIS_GOAL_S} s goal{}.\n",
-            if rest > FIS_GOAL_S { "above" } else { "under" },
-            if rest > FIS_GOAL_S {
-                " before any GPU work: the process, device, load and pipeline builds of the \
-                 breakdown below"
-                    .to_string()
-            } else {
-                format!(
-                    "; its GPU work, {gpu:.1} ms, mostly the lobe-sized paraboloid's exact areas \
-                     (`envlight render` prints each pass's time), is what must shrink"
-                )
-            }
-        ));
+        md.push_str(&if whole <= FIS_GOAL_S {
+            format!(
+                "\nThe FIS render meets its {FIS_GOAL_S} s goal: {whole:.3} s whole, of which \
+                 {gpu:.1} ms of GPU work (`envlight render` prints each pass's time).\n"
+            )
+        } else if rest > FIS_GOAL_S {
+            format!(
+                "\nThe FIS render less its GPU work: {rest:.3} s, above the {FIS_GOAL_S} s goal \
+                 before any GPU work: the process, device, load and pipeline builds of the \
+                 breakdown below.\n"
+            )
+        } else {
+            format!(
+                "\nThe FIS render less its GPU work: {rest:.3} s, under the {FIS_GOAL_S} s goal; \
+                 its GPU work, {gpu:.1} ms (`envlight render` prints each pass's time), is what \
+                 must shrink.\n"
+            )
+        });
     }
     md.push_str(
         "\nErrors: SH, worst coefficient against the float64 projection (relative to the largest); \
