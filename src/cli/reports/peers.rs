@@ -277,7 +277,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
             goal: "the row above's floor",
         },
         Job {
-            name: "Phong levels, cube 64, 7 levels (n = 2049 … 3)",
+            name: LEVELS_JOB,
             envlight: strings(&[
                 "prefilter",
                 &map,
@@ -464,6 +464,17 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
             gpu - floor_gpu,
             100.0 * (whole - floor) / whole.max(1e-9),
         ));
+        // The levels job filters its level 0 as the one-level job does, from the whole map.
+        if let Some(l) = row(LEVELS_JOB).filter(|l| opts.cmft.is_some() && l.2 > 0.0) {
+            md.push_str(&format!(
+                "\nThe levels job's level 0 is the one-level job (n = {}, from the whole map): \
+                 that level's floor alone is {:.2}× cmft's whole {}-level time ({:.3} s).\n",
+                BENCH_LEVELS.exponent(0),
+                floor / l.2,
+                BENCH_LEVELS.count,
+                l.2
+            ));
+        }
     }
     // The rows whose goal is a time: what is left of it without the GPU's work.
     if let Some(c) = row(CONVERT_JOB).filter(|_| opts.cmft.is_some()) {
@@ -639,6 +650,9 @@ const PHONG_JOB: &str = "Phong n = 2049, cube 64, one level";
 
 /// The Phong one-level job's floor: its walk, each texel read once, no rule.
 const PHONG_FLOOR_JOB: &str = "Phong n = 2049, cube 64, one level: its visits alone (floor)";
+
+/// The Phong levels row; its level 0 is [`PHONG_JOB`].
+const LEVELS_JOB: &str = "Phong levels, cube 64, 7 levels (n = 2049 … 3)";
 
 /// The FIS render's goal: whole seconds.
 const FIS_GOAL_S: f64 = 0.15;
