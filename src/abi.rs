@@ -703,9 +703,6 @@ pub mod push {
             ss: u32 = "uint",
             /// 1: each sample reads the source's nearest texel (box reconstruction).
             nearest: u32 = "uint",
-            /// Points per edge of a paraboloid texel's footprint polygon away from the poles
-            /// (the area conversion; 1 to `area::POLE_STEPS`).
-            edge_points: u32 = "uint",
         }
         /// `glsl/mapping_probe.comp`.
         ProbePush {
@@ -1389,6 +1386,11 @@ pub fn generated_header() -> String {
     let _ = writeln!(s, "#define AREA_POLE_STEPS {}u", area::POLE_STEPS);
     let _ = writeln!(s, "#define AREA_POLE_NEAR {:?}", area::POLE_NEAR as f32);
     let _ = writeln!(s, "#define AREA_MAX_VERTICES {}u", area::MAX_VERTICES);
+    let _ = writeln!(
+        s,
+        "#define AREA_PARABOLOID_EDGE_STEPS {}u",
+        area::PARABOLOID_EDGE_STEPS
+    );
     let _ = writeln!(s, "#define AREA_SLOPE_VEC4S {}u", area::SLOPE_VEC4S);
     let _ = writeln!(s, "#define AREA_FAST_WINDOW {}u", area::FAST_WINDOW);
     let _ = writeln!(s, "#define AREA_FAST_MIN_SIZE {}u", area::FAST_MIN_SIZE);

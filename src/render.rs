@@ -514,12 +514,7 @@ impl Renderer {
                 && matches!(o.material.kind, Brdf::Phong { .. })
         };
         let phong_lights = extracting && brute.is_some() && has(&phong_prefiltered);
-        // Footprint lookups read the chain too, and add the light texels they cover.
-        let footprint_reads = scene.environment.filter != LookupFilter::Point;
-        let dp_lights = extracting
-            && dp_passes.is_some()
-            && (has(&on_chain) || footprint_reads)
-            && !has(&|o| on_chain(o) && lobe_scale(&o.material.kind).is_none());
+        let dp_lights = dp_passes.is_some() && chain_takes_lights(scene);
         // The finest lobe on the chain the light texels' nodes must resolve.
         let finest_chain = scene
             .objects
@@ -559,6 +554,8 @@ impl Renderer {
             .then(|| each.next())
             .flatten()
             .filter(|e| !e.lights.is_empty());
+        // No texel above the lights' threshold: the whole map is as sunless as a residual.
+        let below_threshold = dp_lights && chain_ex.is_none();
         let dp_lights = dp_lights && chain_ex.as_ref().is_some_and(|e| resolves(e, finest_chain));
         // The prefiltered Phong objects that add the light texels: lobes the nodes resolve.
         let phong_lit: Vec<bool> = scene
@@ -806,9 +803,12 @@ impl Renderer {
                     (None, Some((_, res))) if dp_lights => res,
                     _ => &env_gpu,
                 };
-                // A residual holds no sun for the rim's chords to misplace: fewer points.
+                // A residual holds no sun for the rim's chords to misplace: fewer points (as
+                // predicted for the pipeline built meanwhile, unless the lobes were too narrow
+                // for the lights found, which leaves them in the chain).
                 let opts = ConvertOptions {
-                    edge_points: dp_lights.then(|| residual_edge_points(opts.size)),
+                    edge_points: (dp_lights || below_threshold)
+                        .then(|| residual_edge_points(opts.size)),
                     ..*opts
                 };
                 marks.record(rec, PassKind::DualParaboloid, |rec| {
@@ -1030,16 +1030,40 @@ struct Builds<'a> {
 }
 
 /// How `scene`'s FIS dual paraboloid is converted from `env`: [`fis_dp_size`], nearest reads
-/// where [`chain_of_texel_means`].
+/// where [`chain_of_texel_means`], the residual's points per texel edge where the chain is to
+/// take the lights ([`chain_takes_lights`]; the render converts the whole map with the
+/// default where the extraction then finds none its lobes resolve).
 fn dp_convert_options(scene: &Scene, env: &EnvMap) -> ConvertOptions {
+    let size = fis_dp_size(scene, env);
     ConvertOptions {
         to: Mapping::DualParaboloid,
-        size: fis_dp_size(scene, env),
+        size,
         orientation: scene.environment.orientation(),
         supersample: None,
         nearest: chain_of_texel_means(scene),
-        edge_points: None,
+        edge_points: chain_takes_lights(scene).then(|| residual_edge_points(size)),
     }
+}
+
+/// Whether `scene`'s dual-paraboloid chain is to hold the residual of extracted lights, the
+/// light texels added by the shader: lights extracted, the chain read by FIS, split-sum or
+/// footprint lookups, and every chain object's lobe of a known scale (the extraction may still
+/// find no light, or none its lobes' quadrature resolves).
+fn chain_takes_lights(scene: &Scene) -> bool {
+    let on_chain = |o: &SceneObject| {
+        matches!(
+            o.material.technique(),
+            Technique::Fis { .. } | Technique::SplitSum
+        )
+    };
+    // Footprint lookups read the chain too, and add the light texels they cover.
+    let footprint_reads = scene.environment.filter != LookupFilter::Point;
+    scene.environment.lights == LightsMode::Extract
+        && (scene.objects.iter().any(on_chain) || footprint_reads)
+        && !scene
+            .objects
+            .iter()
+            .any(|o| on_chain(o) && lobe_scale(&o.material.kind).is_none())
 }
 
 /// Whether the FIS paraboloid of side `size` is converted from `env`'s residual halved

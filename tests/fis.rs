@@ -590,6 +590,58 @@ fn halved_residual_costs_little_against_the_whole() {
     common::finish(ctx);
 }
 
+/// The render builds the paraboloid's conversion pipeline before the lights are extracted,
+/// specialised on the residual's points per texel edge where the chain is to take the lights;
+/// the record takes the same one, so one pipeline is built: GGX α 0.3 with 64 samples (a
+/// paraboloid of 128) on the sky with its sun (a residual), on a smooth map with no texel
+/// above the lights' threshold (the whole map, as sunless), and with the lights left in the
+/// map (the default's 8 points).
+#[test]
+fn the_paraboloid_pipeline_built_early_is_the_one_recorded() {
+    use envlight::scene::LightsMode;
+    let sky = envlight::math::synth::Sky::default();
+    let sunny = EnvMap::from_fn(Mapping::LatLong, 512, 256, 1, |d| sky.radiance(d));
+    let dull = EnvMap::from_fn(Mapping::LatLong, 512, 256, 1, |d| {
+        [1.0 + 0.2 * d.y, 1.0 + 0.1 * d.x, 1.0]
+    });
+    let ggx = Brdf::Ggx {
+        alpha: 0.3,
+        correlated: false,
+    };
+    for (what, env, lights) in [
+        ("sun, extracted", &sunny, LightsMode::Extract),
+        ("no light", &dull, LightsMode::Extract),
+        ("sun, left in", &sunny, LightsMode::None),
+    ] {
+        let ctx = common::ctx();
+        {
+            let mut sc = scene(
+                sphere_camera(16),
+                vec![object(unit_sphere(), ggx, [1.0; 3], fis(64))],
+                false,
+                0,
+            );
+            sc.fis.size = None;
+            sc.environment.lights = lights;
+            // A size the residual's 2 points serve.
+            let size = envlight::render::fis_dp_size(&sc, env);
+            assert!(
+                size >= envlight::abi::area::RESIDUAL_EDGE_MIN_SIZE,
+                "{size}"
+            );
+            let r = render(&ctx, &sc, env).unwrap();
+            assert!(r.frame.texels.iter().flatten().all(|v| v.is_finite()));
+            let built = ctx
+                .pipelines_created()
+                .into_iter()
+                .filter(|p| *p == "convert_area_paraboloid")
+                .count();
+            assert_eq!(built, 1, "{what}");
+        }
+        common::finish(ctx);
+    }
+}
+
 /// The shade pass's light tree walks end on a subgroup vote where the device has one (on
 /// llvmpipe a lane's own break does not end a loop: it runs on to its bound); without
 /// subgroups ([`Subgroups::Off`]) each lane ends alone. Both must give the same frame:

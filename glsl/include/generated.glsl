@@ -93,6 +93,7 @@
 #define AREA_POLE_STEPS 8u
 #define AREA_POLE_NEAR 8.0
 #define AREA_MAX_VERTICES 35u
+#define AREA_PARABOLOID_EDGE_STEPS 8u
 #define AREA_SLOPE_VEC4S 2u
 #define AREA_FAST_WINDOW 6u
 #define AREA_FAST_MIN_SIZE 32u
@@ -157,7 +158,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define MAPPING_ANGULAR 1u
 #define MAPPING_CUBE 2u
 #define MAPPING_DUAL_PARABOLOID 3u
-#define PUSH_ConvertPush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint ss; uint nearest; uint edge_points; } pc;
+#define PUSH_ConvertPush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint ss; uint nearest; } pc;
 #define PUSH_ProbePush layout(push_constant) uniform Push { uint mode; uint mapping; uint count; uint width; uint height; uint[3] pad; } pc;
 #define PUSH_CopyPush layout(push_constant) uniform Push { uvec2 size; uint[2] pad; } pc;
 #define PUSH_BusyPush layout(push_constant) uniform Push { uint iterations; uint count; uint[2] pad; } pc;

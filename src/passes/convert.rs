@@ -35,6 +35,18 @@ pub struct ConvertOptions {
     pub edge_points: Option<u32>,
 }
 
+/// `opts`' points per paraboloid texel edge, checked: 1 to [`area::POLE_STEPS`].
+fn edge_points(opts: &ConvertOptions) -> Result<u32> {
+    let points = opts.edge_points.unwrap_or(area::PARABOLOID_EDGE_STEPS);
+    match (1..=area::POLE_STEPS).contains(&points) {
+        true => Ok(points),
+        false => Err(Error::Invalid(format!(
+            "{points} points per paraboloid texel edge: the conversion takes 1 to {}",
+            area::POLE_STEPS
+        ))),
+    }
+}
+
 /// Invocations a workgroup of the general walk over a list of texels.
 const LIST_GROUP: u32 = 64;
 
@@ -67,9 +79,12 @@ pub struct Converter {
     ctx: Context,
     /// One pipeline per (source, destination) mapping pair, specialised on both.
     pipelines: [OnceLock<Pipeline>; 16],
-    /// Lat-long to cube and to dual paraboloid (indexed by mapping id) by exact footprint
-    /// areas, and the source slopes they integrate.
-    area: [OnceLock<Pipeline>; 4],
+    /// Lat-long to cube by exact footprint areas in one walk, and the source slopes they
+    /// integrate.
+    area_cube: OnceLock<Pipeline>,
+    /// Lat-long to dual paraboloid by exact footprint areas, one per count of points per
+    /// texel edge (`ConvertOptions::edge_points`, a specialisation constant; index count − 1).
+    area_paraboloid: [OnceLock<Pipeline>; area::POLE_STEPS as usize],
     /// Lat-long to cube by areas in two dispatches: the fast path, then the general walk over
     /// the texels it leaves (`math::convert::area_general_texels`).
     area_fast: OnceLock<Pipeline>,
@@ -84,7 +99,8 @@ impl Converter {
         Ok(Converter {
             ctx: ctx.clone(),
             pipelines: Default::default(),
-            area: Default::default(),
+            area_cube: OnceLock::new(),
+            area_paraboloid: Default::default(),
             area_fast: OnceLock::new(),
             area_list: OnceLock::new(),
             slopes: OnceLock::new(),
@@ -110,7 +126,7 @@ impl Converter {
         if from == Mapping::LatLong && matches!(to, Mapping::Cube | Mapping::DualParaboloid) {
             // The area pipeline, which serves lat-long to cube and dual paraboloid at all but
             // extreme minification (and, for the paraboloid, orientations that tilt its axis).
-            return self.prepare_area(to, to == Mapping::Cube);
+            return self.prepare_area(to, to == Mapping::Cube, area::PARABOLOID_EDGE_STEPS);
         }
         self.pipeline(from, to).map(|_| ())
     }
@@ -121,16 +137,16 @@ impl Converter {
         if !self.uses_area(src, opts) {
             return self.pipeline(src.0, opts.to).map(|_| ());
         }
-        self.prepare_area(opts.to, split_area(opts)?)
+        self.prepare_area(opts.to, split_area(opts)?, edge_points(opts)?)
     }
 
     /// The slopes pipeline and the area pipelines to `to`: the cube's fast path and list
-    /// where `split`, else the one walk.
-    fn prepare_area(&self, to: Mapping, split: bool) -> Result<()> {
+    /// where `split`, else the one walk (a paraboloid's with `points` per texel edge).
+    fn prepare_area(&self, to: Mapping, split: bool, points: u32) -> Result<()> {
         self.slopes_pipeline()?;
         match split {
             true => self.area_split_pipelines().map(|_| ()),
-            false => self.area_pipeline(to).map(|_| ()),
+            false => self.area_pipeline(to, points).map(|_| ()),
         }
     }
 
@@ -143,13 +159,23 @@ impl Converter {
         )
     }
 
-    /// The general walk to `to`, a cube or a dual paraboloid (a module each).
-    fn area_pipeline(&self, to: Mapping) -> Result<&Pipeline> {
-        let id = match to {
-            Mapping::DualParaboloid => ShaderId::ConvertAreaParaboloid,
-            _ => ShaderId::ConvertArea,
-        };
-        Pipeline::compute_once(&self.area[to.id() as usize], &self.ctx, id, &WORKGROUP_2D)
+    /// The general walk to `to`, a cube or a dual paraboloid (a module each; the
+    /// paraboloid's specialised on `points` per texel edge, 1 to [`area::POLE_STEPS`]).
+    fn area_pipeline(&self, to: Mapping, points: u32) -> Result<&Pipeline> {
+        match to {
+            Mapping::DualParaboloid => Pipeline::compute_once(
+                &self.area_paraboloid[points as usize - 1],
+                &self.ctx,
+                ShaderId::ConvertAreaParaboloid,
+                &[WORKGROUP_2D[0], WORKGROUP_2D[1], points],
+            ),
+            _ => Pipeline::compute_once(
+                &self.area_cube,
+                &self.ctx,
+                ShaderId::ConvertArea,
+                &WORKGROUP_2D,
+            ),
+        }
     }
 
     /// The cube's fast-path and list pipelines, built side by side (llvmpipe takes ~20 ms
@@ -242,19 +268,12 @@ impl Converter {
             dst_mapping: opts.to.id(),
             ss,
             nearest: opts.nearest as u32,
-            edge_points: opts.edge_points.unwrap_or(area::PARABOLOID_EDGE_STEPS),
         };
-        if !(1..=area::POLE_STEPS).contains(&push.edge_points) {
-            return Err(Error::Invalid(format!(
-                "{} points per paraboloid texel edge: the conversion takes 1 to {}",
-                push.edge_points,
-                area::POLE_STEPS
-            )));
-        }
+        let points = edge_points(opts)?;
         let cube = src.mapping == Mapping::Cube;
         if self.uses_area((src.mapping, src.width, src.height), opts) {
             let split = split_area(opts)?;
-            return self.record_area(rec, src, dst, &push, (w, h), split);
+            return self.record_area(rec, src, dst, &push, (w, h), (split, points));
         }
         let pipeline = self.pipeline(src.mapping, opts.to)?;
         let label = format!(
@@ -284,7 +303,8 @@ impl Converter {
     }
 
     /// The lat-long to cube or dual-paraboloid conversion by exact footprint areas: the
-    /// source's limited slopes, then the footprints' integrals.
+    /// source's limited slopes, then the footprints' integrals (`split`: the cube's fast path
+    /// and list; `points`: a paraboloid's per texel edge).
     fn record_area(
         &self,
         rec: &mut Recorder,
@@ -292,7 +312,7 @@ impl Converter {
         dst: &GpuEnvMap,
         push: &ConvertPush,
         (w, h): (u32, u32),
-        split: bool,
+        (split, points): (bool, u32),
     ) -> Result<()> {
         let slopes = Buffer::new(
             &self.ctx,
@@ -342,7 +362,7 @@ impl Converter {
             )
         };
         if !split {
-            let area = self.area_pipeline(to)?;
+            let area = self.area_pipeline(to, points)?;
             rec.span(&label, |rec| over_map(rec, area))?;
         } else {
             let (fast, general) = self.area_split_pipelines()?;
