@@ -1031,8 +1031,8 @@ struct Builds<'a> {
 
 /// How `scene`'s FIS dual paraboloid is converted from `env`: [`fis_dp_size`], nearest reads
 /// where [`chain_of_texel_means`], the residual's points per texel edge where the chain is to
-/// take the lights ([`chain_takes_lights`]; the render converts the whole map with the
-/// default where the extraction then finds none its lobes resolve).
+/// take the lights ([`chain_takes_lights`]; the record takes the default's where the lights
+/// found are too small for its lobes' quadrature and so stay in the chain).
 fn dp_convert_options(scene: &Scene, env: &EnvMap) -> ConvertOptions {
     let size = fis_dp_size(scene, env);
     ConvertOptions {
