@@ -93,7 +93,7 @@ impl Pipeline {
     }
 
     /// A compute pipeline; `spec` are the u32 specialization constants 0, 1, … (workgroup
-    /// sizes from [`super::layout`]).
+    /// sizes from [`crate::abi::WORKGROUP_2D`] and its kin).
     pub fn compute(ctx: &Context, shader: ShaderId, spec: &[u32]) -> Result<Pipeline> {
         let shared = &ctx.shared;
         let mut p = Pipeline::layouts(shared, shader, vk::ShaderStageFlags::COMPUTE)?;

@@ -59,7 +59,7 @@ fn read(level: &Level, d: DVec3) -> [f64; 4] {
 }
 
 /// Radiance read from `chain` along `d` at `lod`: trilinear in the premultiplied levels, both
-/// halves (see [`read`]), then rgb divided by the weight (0 where there is none), as
+/// halves (see `read`), then rgb divided by the weight (0 where there is none), as
 /// `glsl/include/fis.glsl`'s `dp_chain_lookup` does.
 pub fn lookup(chain: &[Level], d: DVec3, lod: f64) -> [f64; 3] {
     trilinear(chain, d, lod, &read)

@@ -9,8 +9,8 @@
 //! MIP chain by a grid of taps over the pixel ([`lookup`]), each a sub-pixel camera ray
 //! reflected off the object exactly ([`camera_tap`], so a pixel on a silhouette mixes the
 //! mirror and the background as its area does):
-//! [`MIN_TAPS`](crate::abi::footprint::MIN_TAPS) across the minor axis and as many at that
-//! spacing along the major one, up to [`MAX_TAPS`](crate::abi::footprint::MAX_TAPS), each
+//! [`crate::abi::footprint::MIN_TAPS`] across the minor axis and as many at that
+//! spacing along the major one, up to [`crate::abi::footprint::MAX_TAPS`], each
 //! trilinear at the lod whose texel is the taps' spacing.
 //!
 //! With light texels extracted the chain holds the residual, and each light texel adds its

@@ -35,7 +35,7 @@ pub struct TreeNode {
     pub rho: f64,
     /// Σ L·Ω over its texels, per channel.
     pub power: [f64; 3],
-    /// Sigma offsets (tangent to the sphere at `centre`): the points centre ± axes[k],
+    /// Sigma offsets (tangent to the sphere at `centre`): the points centre ± `axes[k]`,
     /// normalised, each with a quarter of the power, have the texels' mean and covariance.
     pub axes: [DVec3; 2],
     /// First texel (tree order) and count.

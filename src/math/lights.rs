@@ -15,7 +15,7 @@
 //! Filtered sampling wants no plateau in the residual, whose edge its few filtered samples
 //! alias: with [`ExtractOptions::fill`] the light set first grows by rings of texels around
 //! it (the glow at a softbox's rim, below τ), and the residual under it continues its
-//! surroundings ([`fill`]) instead of the clamp; lights plus residual still equal the map.
+//! surroundings (`fill`) instead of the clamp; lights plus residual still equal the map.
 
 use super::brdf::{local_view, Brdf, Frame};
 use super::mapping::Coord;
@@ -33,7 +33,7 @@ pub struct ExtractOptions {
     /// How the residual under the lights is shaped: `None` clamps each light texel's
     /// luminance at the threshold; `Some(d)` first grows the lights by the texels within `d`
     /// of them (where the cap leaves room) and fills the residual under them from the texels
-    /// around them ([`fill`]), so that no plateau edge is left for filtered lookups to alias.
+    /// around them (`fill`), so that no plateau edge is left for filtered lookups to alias.
     #[serde(default)]
     pub fill: Option<u32>,
 }

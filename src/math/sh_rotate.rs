@@ -157,8 +157,8 @@ pub fn ivanic(lmax: u32, r: &DMat3) -> ShRotation {
 /// (cos, sin) of the ZYZ Euler angles (α, β, γ) of R = Rz(α)·Ry(β)·Rz(γ), without
 /// trigonometry (the GPU's sin, cos and atan are too loose for 1e-5): α from the third column
 /// (α = 0 where it is ±ẑ), then β and γ from Q = Rz(α)ᵀ·R = Ry(β)·Rz(γ), whose entries
-/// Q[0][2] = sin β, Q[2][2] = cos β, Q[1][0] = sin γ, Q[1][1] = cos γ need no division by
-/// sin β. Stable at β = 0 and π: any α there is compensated exactly by γ.
+/// `Q[0][2]` = sin β, `Q[2][2]` = cos β, `Q[1][0]` = sin γ, `Q[1][1]` = cos γ need no
+/// division by sin β. Stable at β = 0 and π: any α there is compensated exactly by γ.
 pub fn zyz_cos_sin(r: &DMat3) -> [(f64, f64); 3] {
     let at = |i: usize, j: usize| r.col(j)[i];
     let h = at(0, 2).hypot(at(1, 2));
