@@ -68,7 +68,7 @@ impl Buffer {
         }
         let texels = usage.contains(vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER);
         let max_texels = s.info.max_texel_buffer_elements;
-        if texels && (size % 16 != 0 || size / 16 > max_texels) {
+        if texels && (!size.is_multiple_of(16) || size / 16 > max_texels) {
             return Err(Error::Invalid(format!(
                 "{name}: a texel buffer of {size} bytes is not whole rgba32f texels within the \
                  device's maxTexelBufferElements ({max_texels})"

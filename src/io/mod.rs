@@ -246,7 +246,9 @@ pub fn infer_mapping(path: &Path, w: u32, h: u32) -> Result<Mapping> {
 
 fn into_envmap(path: &Path, r: Raster, mapping: Mapping, sanitize: Sanitize) -> Result<EnvMap> {
     let layers = mapping.layers();
-    if r.height % layers != 0 || (mapping != Mapping::LatLong && r.width != r.height / layers) {
+    if !r.height.is_multiple_of(layers)
+        || (mapping != Mapping::LatLong && r.width != r.height / layers)
+    {
         return Err(Error::bad_file(
             path,
             format!(

@@ -193,7 +193,9 @@ pub fn area_serves(width: u32, height: u32, to: Mapping, size: u32, world_to_fil
 /// [`paraboloid_source_halves`]).
 pub fn latlong_halved(map: &EnvMap) -> EnvMap {
     assert!(
-        map.mapping == Mapping::LatLong && map.width % 2 == 0 && map.height % 2 == 0,
+        map.mapping == Mapping::LatLong
+            && map.width.is_multiple_of(2)
+            && map.height.is_multiple_of(2),
         "only a lat-long of even sides halves exactly"
     );
     let (w, h) = (map.width / 2, map.height / 2);
@@ -222,8 +224,8 @@ pub fn latlong_halved(map: &EnvMap) -> EnvMap {
 /// only: halving twice erred 8× more on a checker of 2 × 2-texel cells (tests/fis.rs).
 pub fn paraboloid_source_halves(width: u32, height: u32, size: u32) -> bool {
     let finest = 2.0 / f64::from(size.max(1));
-    width % 2 == 0
-        && height % 2 == 0
+    width.is_multiple_of(2)
+        && height.is_multiple_of(2)
         && 2.0 * PI / f64::from(width / 2) <= finest
         && PI / f64::from(height / 2) <= finest
 }

@@ -88,7 +88,7 @@ impl<'a> ExactFilter<'a> {
         // Sub-cell directions are found in the file frame.
         let r_file = self.file_to_world.transpose() * r;
         let g = 0.5 / 3f64.sqrt();
-        let node = |n: u32| (n / 2) as f64 + 0.5 + if n % 2 == 0 { -g } else { g };
+        let node = |n: u32| (n / 2) as f64 + 0.5 + if n.is_multiple_of(2) { -g } else { g };
         let mut num = [0.0f64; 3];
         let mut den = 0.0f64;
         for t in &self.texels {

@@ -418,7 +418,8 @@ fn fill(
 pub fn nodes(map: &EnvMap, t: &LightTexel, cells: u32) -> Vec<(DVec3, f64)> {
     let g = 0.5 / 3f64.sqrt();
     let side = 2 * cells;
-    let at = |n: u32| ((n / 2) as f64 + 0.5 + if n % 2 == 0 { -g } else { g }) / cells as f64;
+    let at =
+        |n: u32| ((n / 2) as f64 + 0.5 + if n.is_multiple_of(2) { -g } else { g }) / cells as f64;
     let mut v = Vec::with_capacity((side * side) as usize);
     for b in 0..side {
         for a in 0..side {

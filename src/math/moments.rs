@@ -30,8 +30,8 @@ pub use crate::abi::filter_rule::MAX_SOURCE_LEVEL as MAX_LEVEL;
 pub fn has_level(mapping: Mapping, w: u32, h: u32, s: u32) -> bool {
     matches!(mapping, Mapping::LatLong | Mapping::Cube)
         && s <= MAX_LEVEL
-        && w % (1 << s) == 0
-        && h % (1 << s) == 0
+        && w.is_multiple_of(1 << s)
+        && h.is_multiple_of(1 << s)
 }
 
 /// The source level a lobe of `kernel` is filtered from: the coarsest level whose every texel

@@ -191,7 +191,7 @@ pub fn cosine_lobe(l: u32) -> f64 {
         _ if l % 2 == 1 => 0.0,
         _ => {
             let h = l / 2;
-            let sign = if (h - 1) % 2 == 0 { 1.0 } else { -1.0 };
+            let sign = if (h - 1).is_multiple_of(2) { 1.0 } else { -1.0 };
             // l!/(2^l·((l/2)!)²) = Π_{k=1}^{l/2} (2k−1)/(2k): no overflow at any l.
             let central: f64 = (1..=h)
                 .map(|k| (2 * k - 1) as f64 / (2 * k) as f64)

@@ -58,7 +58,7 @@ impl SplitSum {
         out: &Buffer,
         offset: u32,
     ) -> Result<()> {
-        if !(2..=split_sum::MAX_DFG_SIZE).contains(&size) || offset % 2 != 0 {
+        if !(2..=split_sum::MAX_DFG_SIZE).contains(&size) || !offset.is_multiple_of(2) {
             return Err(Error::Invalid(format!(
                 "split-sum: DFG table size {size} outside 2 to {} (or odd offset {offset})",
                 split_sum::MAX_DFG_SIZE
