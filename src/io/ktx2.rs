@@ -1,33 +1,46 @@
 //! KTX 2.0 output (the Khronos container glTF-IBL-Sampler and engines load): 2D textures and
-//! cube maps with any number of MIP levels, RGBA16F, RGBA32F, or the packed unsigned floats
-//! B10G11R11 and E5B9G9R9 (RGB, no alpha), no supercompression.
+//! cube maps with any number of MIP levels, RGBA16F, RGBA32F, the packed unsigned floats
+//! B10G11R11 and E5B9G9R9 (RGB, no alpha), or BC6H unsigned-float blocks; each optionally
+//! supercompressed with Zstandard.
 //!
 //! Layout written (KTX 2.0 specification, §3): the 12-byte identifier; the header (vkFormat,
 //! typeSize, pixelWidth, pixelHeight, pixelDepth = 0, layerCount (0, or 2 for a paraboloid's
-//! halves), faceCount 1 or 6,
-//! levelCount, supercompressionScheme = 0); the index (DFD, key/value data, no supercompression
-//! global data); the level index, level 0 first; the Data Format Descriptor; the key/value data
-//! (`KTXwriter`); then the levels' data, the smallest level first, each aligned to 16 bytes
-//! (a multiple of both texel sizes and of 4). Within a level, cube faces follow Vulkan's order
-//! (+X, −X, +Y, −Y, +Z, −Z, as envlight's cube layers do), each face's rows top to bottom.
+//! halves), faceCount 1 or 6, levelCount, supercompressionScheme 0 or 2 = Zstandard); the index
+//! (DFD, key/value data, no supercompression global data); the level index, level 0 first; the
+//! Data Format Descriptor; the key/value data (`KTXwriter`); then the levels' data, the
+//! smallest level first. Without supercompression each level starts at the smallest padding to
+//! lcm(texel block bytes, 4) (§3.9.7: 8 bytes for RGBA16F, 16 for RGBA32F and BC6H, 4 for the
+//! packed formats), and `ktx validate` refuses any other; with Zstandard, levels follow one
+//! another unpadded, each one Zstandard frame of the level's whole data. Within a level, cube
+//! faces follow Vulkan's order (+X, −X, +Y, −Y, +Z, −Z, as envlight's cube layers do), each
+//! face's rows top to bottom (BC6H: rows of 4 × 4 blocks).
 //!
-//! The DFD is one basic descriptor block (KHR_DF_MODEL_RGBSDA, BT.709 primaries, linear
-//! transfer, straight alpha, 1 × 1 × 1 × 1 texel blocks), as the Khronos Data Format
-//! specification describes each format:
-//! - RGBA16F / RGBA32F: one sample per channel R, G, B, A at bit offsets 0, n, 2n, 3n of n =
-//!   16 or 32 bits, qualifiers float | signed, lower and upper −1.0 and 1.0 as float bits.
+//! The DFD is one basic descriptor block (BT.709 primaries, linear transfer, straight alpha),
+//! as the Khronos Data Format specification (and KTX-Software's `vk2dfd`) describes each format:
+//! - RGBA16F / RGBA32F (model RGBSDA, 1 × 1 texel blocks): one sample per channel R, G, B, A at
+//!   bit offsets 0, n, 2n, 3n of n = 16 or 32 bits, qualifiers float | signed, lower and upper
+//!   −1.0 and 1.0 as float bits.
 //! - B10G11R11: samples R (bits 0–10), G (11–21), B (22–31), qualifier float (unsigned),
 //!   lower and upper 0.0 and 1.0 as float bits; typeSize 4 (the packed word).
 //! - E5B9G9R9: six samples, each channel's 9-bit mantissa (R bits 0–8, G 9–17, B 18–26, no
 //!   qualifier, lower 0, upper 8448 = 1.0 at the bias) and the shared 5-bit exponent (bits
 //!   27–31, qualifier exponent, lower 15 = the bias, upper 31) once per channel; typeSize 4.
+//! - BC6H unsigned (model BC6H, 4 × 4 texel blocks of 16 bytes): one 128-bit colour sample,
+//!   qualifier float, lower 0.0 and upper 1.0; typeSize 1. Blocks are encoded by Intel's ISPC
+//!   texture compressor (`intel_tex_2`); a level smaller than a block repeats its edge texels.
 //!
 //! Packing rounds to nearest (even), as Vulkan's conversions to these formats do. Values a
-//! format cannot hold (above its largest finite value) are refused, naming the value, and so
-//! are negative ones for the unsigned formats.
+//! format cannot hold (above its largest finite value, [`Ktx2Format::largest`]) are refused,
+//! naming the value, and so are negative ones for the unsigned formats: a caller that wants
+//! them kept clamps first ([`clamp_levels`]) and says what it clamped.
 
 use crate::error::{Error, Result};
 use std::path::Path;
+
+// intel_tex_2's prebuilt static kernels carry C++ objects (its ASTC encoder, linked whole) that
+// reference the C++ runtime's exception personality; Rust does not link libstdc++ by itself.
+#[link(name = "stdc++")]
+extern "C" {}
 
 /// The identifier every KTX 2.0 file starts with: «KTX 20»\r\n\x1A\n.
 pub const IDENTIFIER: [u8; 12] = [
@@ -47,6 +60,29 @@ pub enum Ktx2Format {
     /// VK_FORMAT_E5B9G9R9_UFLOAT_PACK32 (123): 9-bit mantissas under one shared 5-bit
     /// exponent; largest value 65408.
     E5b9g9r9,
+    /// VK_FORMAT_BC6H_UFLOAT_BLOCK (143): 4 × 4 texels in 16 bytes, unsigned half floats;
+    /// largest value 65504.
+    Bc6h,
+}
+
+/// How the levels' bytes are stored.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Supercompression {
+    /// As they are (supercompressionScheme 0).
+    #[default]
+    None,
+    /// One Zstandard frame per level (supercompressionScheme 2), as Bevy ships its maps.
+    Zstd,
+}
+
+impl Supercompression {
+    /// The header's supercompressionScheme.
+    pub fn scheme(self) -> u32 {
+        match self {
+            Supercompression::None => 0,
+            Supercompression::Zstd => 2,
+        }
+    }
 }
 
 impl Ktx2Format {
@@ -57,36 +93,102 @@ impl Ktx2Format {
             Ktx2Format::Rgba32f => 109,
             Ktx2Format::B10g11r11 => 122,
             Ktx2Format::E5b9g9r9 => 123,
+            Ktx2Format::Bc6h => 143,
         }
     }
 
-    /// The header's typeSize: bytes per channel, or of the packed word.
+    /// The header's typeSize: bytes per channel, of the packed word, or 1 for blocks.
     pub fn type_size(self) -> u32 {
         match self {
             Ktx2Format::Rgba16f => 2,
             Ktx2Format::Rgba32f | Ktx2Format::B10g11r11 | Ktx2Format::E5b9g9r9 => 4,
+            Ktx2Format::Bc6h => 1,
         }
     }
 
-    /// Bytes per texel.
-    pub fn texel_bytes(self) -> u32 {
+    /// Bytes per texel block.
+    pub fn block_bytes(self) -> u32 {
         match self {
             Ktx2Format::Rgba16f => 8,
-            Ktx2Format::Rgba32f => 16,
+            Ktx2Format::Rgba32f | Ktx2Format::Bc6h => 16,
             Ktx2Format::B10g11r11 | Ktx2Format::E5b9g9r9 => 4,
         }
     }
 
-    /// Parses "rgba16f", "rgba32f", "b10g11r11" or "e5b9g9r9" (any case).
+    /// Texels per side of a block (4 for BC6H, else 1).
+    pub fn block_side(self) -> u32 {
+        match self {
+            Ktx2Format::Bc6h => 4,
+            _ => 1,
+        }
+    }
+
+    /// The largest value each of R, G and B can hold.
+    pub fn largest(self) -> [f32; 3] {
+        match self {
+            Ktx2Format::Rgba32f => [f32::MAX; 3],
+            Ktx2Format::Rgba16f | Ktx2Format::Bc6h => [65504.0; 3],
+            Ktx2Format::B10g11r11 => [65024.0, 65024.0, 64512.0],
+            Ktx2Format::E5b9g9r9 => [E5_MAX; 3],
+        }
+    }
+
+    /// Whether the format holds no negative values.
+    pub fn unsigned(self) -> bool {
+        !matches!(self, Ktx2Format::Rgba16f | Ktx2Format::Rgba32f)
+    }
+
+    /// The name [`Ktx2Format::parse`] takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Ktx2Format::Rgba16f => "rgba16f",
+            Ktx2Format::Rgba32f => "rgba32f",
+            Ktx2Format::B10g11r11 => "b10g11r11",
+            Ktx2Format::E5b9g9r9 => "e5b9g9r9",
+            Ktx2Format::Bc6h => "bc6h",
+        }
+    }
+
+    /// Parses "rgba16f", "rgba32f", "b10g11r11", "e5b9g9r9" or "bc6h" (any case).
     pub fn parse(s: &str) -> Option<Ktx2Format> {
         match s.to_ascii_lowercase().as_str() {
             "rgba16f" | "half" => Some(Ktx2Format::Rgba16f),
             "rgba32f" | "float" => Some(Ktx2Format::Rgba32f),
             "b10g11r11" | "r11g11b10" => Some(Ktx2Format::B10g11r11),
             "e5b9g9r9" | "rgb9e5" => Some(Ktx2Format::E5b9g9r9),
+            "bc6h" => Some(Ktx2Format::Bc6h),
             _ => None,
         }
     }
+}
+
+/// What [`clamp_levels`] changed.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Clamped {
+    /// Channels lowered to the format's largest value.
+    pub high: usize,
+    /// Channels raised from below 0 to 0 (unsigned formats only).
+    pub negative: usize,
+}
+
+/// Clamps every texel of `levels` into what `format` holds (non-finite channels are left for
+/// [`encode`] to refuse): channels above [`Ktx2Format::largest`] to it, and for unsigned
+/// formats negative channels to 0. Returns what it changed.
+pub fn clamp_levels(format: Ktx2Format, levels: &mut [Vec<[f32; 4]>]) -> Clamped {
+    let top = format.largest();
+    let mut c = Clamped::default();
+    for t in levels.iter_mut().flatten() {
+        for (k, v) in t.iter_mut().take(3).enumerate() {
+            if *v > top[k] {
+                *v = top[k];
+                c.high += 1;
+            } else if format.unsigned() && *v < 0.0 {
+                *v = 0.0;
+                c.negative += 1;
+            }
+        }
+    }
+    c
 }
 
 /// Bias of the 5-bit exponents of the packed formats.
@@ -166,14 +268,6 @@ pub struct Ktx2Image<'a> {
     pub levels: &'a [Vec<[f32; 4]>],
 }
 
-const ALIGN: usize = 16;
-
-fn align(v: &mut Vec<u8>) {
-    while v.len() % ALIGN != 0 {
-        v.push(0);
-    }
-}
-
 /// One DFD sample: bit offset, bit length, channel id with its qualifier bits, lower, upper.
 fn sample(d: &mut Vec<u8>, offset: u16, bits: u8, channel: u8, lower: u32, upper: u32) {
     d.extend(offset.to_le_bytes());
@@ -189,12 +283,17 @@ const FLOAT: u8 = 0x80;
 const SIGNED: u8 = 0x40;
 const EXPONENT: u8 = 0x20;
 
+/// Colour models of the basic descriptor block.
+const MODEL_RGBSDA: u8 = 1;
+const MODEL_BC6H: u8 = 133;
+
 /// The Data Format Descriptor of `format` (dfdTotalSize first).
 fn dfd(format: Ktx2Format) -> Vec<u8> {
     let samples: u16 = match format {
         Ktx2Format::Rgba16f | Ktx2Format::Rgba32f => 4,
         Ktx2Format::B10g11r11 => 3,
         Ktx2Format::E5b9g9r9 => 6,
+        Ktx2Format::Bc6h => 1,
     };
     let block_size: u16 = 24 + 16 * samples;
     let mut d = Vec::new();
@@ -202,10 +301,15 @@ fn dfd(format: Ktx2Format) -> Vec<u8> {
     d.extend(0u32.to_le_bytes()); // vendorId 0 (Khronos), descriptorType 0 (basic)
     d.extend(2u16.to_le_bytes()); // versionNumber (KDF 1.3)
     d.extend(block_size.to_le_bytes());
-    d.extend([1, 1, 1, 0]); // RGBSDA, BT.709, linear, straight alpha
-    d.extend([0, 0, 0, 0]); // texel block 1 × 1 × 1 × 1 (each dimension minus one)
+    let model = match format {
+        Ktx2Format::Bc6h => MODEL_BC6H,
+        _ => MODEL_RGBSDA,
+    };
+    d.extend([model, 1, 1, 0]); // model, BT.709, linear, straight alpha
+    let side = format.block_side() as u8 - 1;
+    d.extend([side, side, 0, 0]); // texel block dimensions, each minus one
     let mut planes = [0u8; 8];
-    planes[0] = format.texel_bytes() as u8;
+    planes[0] = format.block_bytes() as u8;
     d.extend(planes);
     let (one, minus_one) = (1.0f32.to_bits(), (-1.0f32).to_bits());
     match format {
@@ -235,6 +339,8 @@ fn dfd(format: Ktx2Format) -> Vec<u8> {
                 sample(&mut d, 27, 5, id | EXPONENT, 15, 31);
             }
         }
+        // One 128-bit colour sample (channel 0), unsigned float.
+        Ktx2Format::Bc6h => sample(&mut d, 0, 128, FLOAT, 0, one),
     }
     d
 }
@@ -250,9 +356,9 @@ fn key_values() -> Vec<u8> {
     kv
 }
 
-/// The bytes of a KTX 2.0 file holding `image` in `format` (texels converted to it; values a
-/// half cannot hold are refused for RGBA16F, naming the first).
-pub fn encode(image: &Ktx2Image<'_>, format: Ktx2Format) -> Result<Vec<u8>> {
+/// Checks that `image` is consistent: 1 or 6 faces, square cubes, at least one level, each
+/// holding as many texels as its size says.
+fn check_shape(image: &Ktx2Image<'_>) -> Result<()> {
     let n_levels = image.levels.len();
     if !(image.faces == 1 || image.faces == 6) || n_levels == 0 {
         return Err(Error::Invalid(format!(
@@ -264,10 +370,7 @@ pub fn encode(image: &Ktx2Image<'_>, format: Ktx2Format) -> Result<Vec<u8>> {
         return Err(Error::Invalid("KTX2: cube faces must be square".into()));
     }
     for (k, level) in image.levels.iter().enumerate() {
-        let (w, h) = (
-            (image.width >> k).max(1) as usize,
-            (image.height >> k).max(1) as usize,
-        );
+        let (w, h) = level_extent(image, k);
         let n = w * h * (image.faces * image.layers.max(1)) as usize;
         if level.len() != n {
             return Err(Error::Invalid(format!(
@@ -276,62 +379,149 @@ pub fn encode(image: &Ktx2Image<'_>, format: Ktx2Format) -> Result<Vec<u8>> {
             )));
         }
     }
-    let level_bytes = |level: &[[f32; 4]]| -> Result<Vec<u8>> {
-        let mut out = Vec::with_capacity(level.len() * format.texel_bytes() as usize);
-        let refuse = |c: f32, name: &str| {
-            Error::Invalid(format!(
-                "KTX2 {name}: {c} does not fit (negative, or above the format's largest value; \
-                 use rgba32f)"
-            ))
-        };
-        for t in level {
-            match format {
-                Ktx2Format::Rgba32f => t.iter().for_each(|c| out.extend(c.to_le_bytes())),
-                Ktx2Format::Rgba16f => {
-                    for &c in t {
-                        let h = half::f16::from_f32(c);
-                        if !h.is_finite() && c.is_finite() {
-                            return Err(Error::Invalid(format!(
-                                "KTX2 RGBA16F: {c} does not fit in a half float (use rgba32f)"
-                            )));
-                        }
-                        out.extend(h.to_bits().to_le_bytes());
-                    }
+    Ok(())
+}
+
+/// Width and height of level `k`.
+fn level_extent(image: &Ktx2Image<'_>, k: usize) -> (usize, usize) {
+    (
+        (image.width >> k).max(1) as usize,
+        (image.height >> k).max(1) as usize,
+    )
+}
+
+fn refuse(c: f32, name: &str) -> Error {
+    Error::Invalid(format!(
+        "KTX2 {name}: {c} does not fit (negative, or above the format's largest value; \
+         clamp first or use rgba32f)"
+    ))
+}
+
+/// One texel in one of the per-texel formats, appended to `out`.
+fn pack_texel(format: Ktx2Format, t: &[f32; 4], out: &mut Vec<u8>) -> Result<()> {
+    match format {
+        Ktx2Format::Rgba32f => t.iter().for_each(|c| out.extend(c.to_le_bytes())),
+        Ktx2Format::Rgba16f => {
+            for &c in t {
+                let h = half::f16::from_f32(c);
+                if !h.is_finite() && c.is_finite() {
+                    return Err(Error::Invalid(format!(
+                        "KTX2 RGBA16F: {c} does not fit in a half float (clamp first or use \
+                         rgba32f)"
+                    )));
                 }
-                Ktx2Format::B10g11r11 => {
-                    let mut word = 0u32;
-                    for (k, (shift, m)) in [(0, 6), (11, 6), (22, 5)].into_iter().enumerate() {
-                        let v = pack_ufloat(t[k], m).ok_or_else(|| refuse(t[k], "B10G11R11"))?;
-                        word |= v << shift;
-                    }
-                    out.extend(word.to_le_bytes());
-                }
-                Ktx2Format::E5b9g9r9 => {
-                    let rgb = [t[0], t[1], t[2]];
-                    let word = pack_e5b9g9r9(rgb).ok_or_else(|| {
-                        let bad = rgb.into_iter().find(|v| !(*v >= 0.0 && *v <= E5_MAX));
-                        refuse(bad.unwrap_or(rgb[0]), "E5B9G9R9")
-                    })?;
-                    out.extend(word.to_le_bytes());
-                }
+                out.extend(h.to_bits().to_le_bytes());
             }
         }
-        Ok(out)
+        Ktx2Format::B10g11r11 => {
+            let mut word = 0u32;
+            for (k, (shift, m)) in [(0, 6), (11, 6), (22, 5)].into_iter().enumerate() {
+                let v = pack_ufloat(t[k], m).ok_or_else(|| refuse(t[k], "B10G11R11"))?;
+                word |= v << shift;
+            }
+            out.extend(word.to_le_bytes());
+        }
+        Ktx2Format::E5b9g9r9 => {
+            let rgb = [t[0], t[1], t[2]];
+            let word = pack_e5b9g9r9(rgb).ok_or_else(|| {
+                let bad = rgb.into_iter().find(|v| !(*v >= 0.0 && *v <= E5_MAX));
+                refuse(bad.unwrap_or(rgb[0]), "E5B9G9R9")
+            })?;
+            out.extend(word.to_le_bytes());
+        }
+        Ktx2Format::Bc6h => unreachable!("BC6H is packed a face at a time"),
+    }
+    Ok(())
+}
+
+/// One face (`w` × `h` texels, rows top to bottom) as BC6H blocks, rows of blocks top to
+/// bottom. A face smaller than a block, or not a multiple of 4, repeats its last row and column
+/// into the block (the texels a sampler never reads there).
+fn bc6h_face(face: &[[f32; 4]], w: usize, h: usize) -> Result<Vec<u8>> {
+    let (bw, bh) = (w.div_ceil(4) * 4, h.div_ceil(4) * 4);
+    let mut halves = Vec::with_capacity(bw * bh * 8);
+    for y in 0..bh {
+        for x in 0..bw {
+            let t = &face[y.min(h - 1) * w + x.min(w - 1)];
+            for (k, &c) in t.iter().enumerate() {
+                let v = if k == 3 { 1.0 } else { c };
+                if !(0.0..=65504.0).contains(&v) {
+                    return Err(refuse(v, "BC6H"));
+                }
+                halves.extend(half::f16::from_f32(v).to_bits().to_le_bytes());
+            }
+        }
+    }
+    let surface = intel_tex_2::RgbaSurface {
+        data: &halves,
+        width: bw as u32,
+        height: bh as u32,
+        stride: bw as u32 * 8,
     };
+    Ok(intel_tex_2::bc6h::compress_blocks(
+        &intel_tex_2::bc6h::basic_settings(),
+        &surface,
+    ))
+}
+
+/// Level `k`'s bytes in `format`, before any supercompression.
+fn level_bytes(image: &Ktx2Image<'_>, k: usize, format: Ktx2Format) -> Result<Vec<u8>> {
+    let level = &image.levels[k];
+    if format == Ktx2Format::Bc6h {
+        let (w, h) = level_extent(image, k);
+        let mut out = Vec::new();
+        for face in level.chunks_exact(w * h) {
+            out.extend(bc6h_face(face, w, h)?);
+        }
+        return Ok(out);
+    }
+    let mut out = Vec::with_capacity(level.len() * format.block_bytes() as usize);
+    for t in level {
+        pack_texel(format, t, &mut out)?;
+    }
+    Ok(out)
+}
+
+/// The bytes of a KTX 2.0 file holding `image` in `format`, levels stored as they are (texels
+/// converted to the format; values it cannot hold are refused, naming the first).
+pub fn encode(image: &Ktx2Image<'_>, format: Ktx2Format) -> Result<Vec<u8>> {
+    encode_with(image, format, Supercompression::None)
+}
+
+/// [`encode`], each level supercompressed as `sc` says.
+pub fn encode_with(
+    image: &Ktx2Image<'_>,
+    format: Ktx2Format,
+    sc: Supercompression,
+) -> Result<Vec<u8>> {
+    check_shape(image)?;
+    let n_levels = image.levels.len();
     let dfd = dfd(format);
     let kv = key_values();
     let header_len = 12 + 36 + 32 + 24 * n_levels;
     let dfd_offset = header_len;
     let kv_offset = dfd_offset + dfd.len();
     let mut data = vec![0; kv_offset + kv.len()];
-    align(&mut data);
-    // Levels smallest first.
-    let mut index = vec![(0u64, 0u64); n_levels];
+    // §3.9.7: lcm(texel block bytes, 4) unsupercompressed (block bytes are 4, 8 or 16), else 1.
+    let alignment = match sc {
+        Supercompression::None => format.block_bytes().max(4) as usize,
+        Supercompression::Zstd => 1,
+    };
+    // Levels smallest first: (offset, stored bytes, uncompressed bytes).
+    let mut index = vec![(0u64, 0u64, 0u64); n_levels];
     for k in (0..n_levels).rev() {
-        align(&mut data);
-        let bytes = level_bytes(&image.levels[k])?;
-        index[k] = (data.len() as u64, bytes.len() as u64);
-        data.extend(bytes);
+        data.resize(data.len().next_multiple_of(alignment), 0);
+        let bytes = level_bytes(image, k, format)?;
+        let raw = bytes.len() as u64;
+        let stored = match sc {
+            Supercompression::None => bytes,
+            Supercompression::Zstd => ruzstd::encoding::compress_to_vec(
+                &bytes[..],
+                ruzstd::encoding::CompressionLevel::Fastest,
+            ),
+        };
+        index[k] = (data.len() as u64, stored.len() as u64, raw);
+        data.extend(stored);
     }
     let mut head = Vec::with_capacity(header_len);
     head.extend(IDENTIFIER);
@@ -344,7 +534,7 @@ pub fn encode(image: &Ktx2Image<'_>, format: Ktx2Format) -> Result<Vec<u8>> {
         image.layers,
         image.faces,
         n_levels as u32,
-        0,
+        sc.scheme(),
     ] {
         head.extend(v.to_le_bytes());
     }
@@ -354,10 +544,10 @@ pub fn encode(image: &Ktx2Image<'_>, format: Ktx2Format) -> Result<Vec<u8>> {
     head.extend((kv.len() as u32).to_le_bytes());
     head.extend(0u64.to_le_bytes());
     head.extend(0u64.to_le_bytes());
-    for (offset, len) in index {
+    for (offset, len, raw) in index {
         head.extend(offset.to_le_bytes());
         head.extend(len.to_le_bytes());
-        head.extend(len.to_le_bytes());
+        head.extend(raw.to_le_bytes());
     }
     data[..header_len].copy_from_slice(&head);
     data[dfd_offset..kv_offset].copy_from_slice(&dfd);
@@ -477,6 +667,99 @@ mod tests {
         assert_eq!(u32::from_le_bytes(exp_g[8..12].try_into().unwrap()), 15);
         let mant_b = &d[28 + 64..28 + 80];
         assert_eq!(u32::from_le_bytes(mant_b[12..16].try_into().unwrap()), 8448);
+    }
+
+    /// Reads a level index: (offset, stored bytes, uncompressed bytes) per level.
+    fn level_index(file: &[u8]) -> Vec<(u64, u64, u64)> {
+        let n = u32::from_le_bytes(file[40..44].try_into().unwrap()) as usize;
+        let word = |at: usize| u64::from_le_bytes(file[at..at + 8].try_into().unwrap());
+        (0..n)
+            .map(|k| (word(80 + 24 * k), word(88 + 24 * k), word(96 + 24 * k)))
+            .collect()
+    }
+
+    /// Levels start at the smallest padding to lcm(block bytes, 4) after the previous one ends
+    /// (the key/value data for the smallest level): `ktx validate` refuses any other offset
+    /// (its error 4004); supercompressed levels follow each other unpadded.
+    #[test]
+    fn levels_are_padded_minimally() {
+        let levels: Vec<Vec<[f32; 4]>> = (0..4)
+            .map(|k| {
+                let s = 8usize >> k;
+                (0..6 * s * s)
+                    .map(|i| [i as f32 * 0.25, 1.0, 2.0, 1.0])
+                    .collect()
+            })
+            .collect();
+        let img = Ktx2Image {
+            width: 8,
+            height: 8,
+            faces: 6,
+            layers: 0,
+            levels: &levels,
+        };
+        for format in [
+            Ktx2Format::Rgba16f,
+            Ktx2Format::Rgba32f,
+            Ktx2Format::B10g11r11,
+            Ktx2Format::E5b9g9r9,
+            Ktx2Format::Bc6h,
+        ] {
+            for sc in [Supercompression::None, Supercompression::Zstd] {
+                let file = encode_with(&img, format, sc).unwrap();
+                let index = level_index(&file);
+                let kv_end = u32::from_le_bytes(file[56..60].try_into().unwrap()) as u64
+                    + u32::from_le_bytes(file[60..64].try_into().unwrap()) as u64;
+                let align = match sc {
+                    Supercompression::None => format.block_bytes().max(4) as u64,
+                    Supercompression::Zstd => 1,
+                };
+                let mut end = kv_end;
+                for &(offset, len, raw) in index.iter().rev() {
+                    assert_eq!(offset, end.next_multiple_of(align), "{format:?} {sc:?}");
+                    end = offset + len;
+                    if sc == Supercompression::None {
+                        assert_eq!(len, raw);
+                    }
+                }
+                assert_eq!(end, file.len() as u64, "{format:?} {sc:?}: trailing bytes");
+                // Each level's stored bytes inflate to the uncompressed encoding's.
+                if sc == Supercompression::Zstd {
+                    let plain = encode_with(&img, format, Supercompression::None).unwrap();
+                    for (&(o, l, raw), &(po, pl, _)) in index.iter().zip(&level_index(&plain)) {
+                        let mut d = ruzstd::decoding::StreamingDecoder::new(
+                            &file[o as usize..(o + l) as usize],
+                        )
+                        .unwrap();
+                        let mut got = Vec::new();
+                        std::io::Read::read_to_end(&mut d, &mut got).unwrap();
+                        assert_eq!(got.len() as u64, raw);
+                        assert_eq!(got, plain[po as usize..(po + pl) as usize]);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn clamping_keeps_what_a_format_holds() {
+        let mut levels = vec![vec![[1e6f32, -2.0, 3.0, 1.0], [7e4, 6.5e4, 6.46e4, 1.0]]];
+        let c = clamp_levels(Ktx2Format::B10g11r11, &mut levels);
+        assert_eq!(levels[0][0], [65024.0, 0.0, 3.0, 1.0]);
+        assert_eq!(levels[0][1], [65024.0, 65000.0, 64512.0, 1.0]);
+        assert_eq!((c.high, c.negative), (3, 1));
+        let mut levels = vec![vec![[1e6f32, -2.0, 3.0, 1.0]]];
+        let c = clamp_levels(Ktx2Format::Rgba16f, &mut levels);
+        assert_eq!(levels[0][0], [65504.0, -2.0, 3.0, 1.0]);
+        assert_eq!((c.high, c.negative), (1, 0));
+        let img = Ktx2Image {
+            width: 1,
+            height: 1,
+            faces: 1,
+            layers: 0,
+            levels: &levels,
+        };
+        assert!(encode(&img, Ktx2Format::Rgba16f).is_ok());
     }
 
     #[test]

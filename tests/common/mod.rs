@@ -150,3 +150,60 @@ pub fn dp_f64_with(env: &envlight::EnvMap, size: u32, ss: u32) -> envlight::EnvM
         ss,
     )
 }
+
+/// Khronos' `ktx` tool (KTX-Software): `ENVLIGHT_KTX`, else `../shared/peers/ktx/ktx` beside
+/// the checkout. `None` (noted as a skip) where neither is there, except in CI (`CI` set),
+/// where a missing tool fails the test.
+pub fn ktx_tool() -> Option<PathBuf> {
+    let p = match std::env::var_os("ENVLIGHT_KTX") {
+        Some(p) => PathBuf::from(p),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/peers/ktx/ktx"),
+    };
+    if p.is_file() {
+        return Some(p);
+    }
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "CI is set but Khronos' ktx tool is not at {} (set ENVLIGHT_KTX)",
+        p.display()
+    );
+    skipped(&format!(
+        "no ktx tool at {}: ktx validate did not run",
+        p.display()
+    ));
+    None
+}
+
+/// Runs `ktx validate` on every .ktx2 file under `dir` (any depth) and fails on the first
+/// it refuses, with its report. Returns how many it validated (0 where the tool is absent
+/// outside CI).
+pub fn ktx_validate_all(dir: &std::path::Path) -> usize {
+    let Some(ktx) = ktx_tool() else {
+        return 0;
+    };
+    let mut stack = vec![dir.to_path_buf()];
+    let mut n = 0;
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "ktx2") {
+                let o = std::process::Command::new(&ktx)
+                    .arg("validate")
+                    .arg(&p)
+                    .output()
+                    .unwrap();
+                assert!(
+                    o.status.success(),
+                    "ktx validate {}:\n{}{}",
+                    p.display(),
+                    String::from_utf8_lossy(&o.stdout),
+                    String::from_utf8_lossy(&o.stderr)
+                );
+                n += 1;
+            }
+        }
+    }
+    n
+}
