@@ -7,6 +7,10 @@
 //! The specular cube's level k holds GGX α = (k/(levels − 1))² (level 0 the mirror), filtered
 //! as split-sum's chain is ([`crate::math::split_sum`]: n = v = r, filtered importance
 //! sampling from the dual-paraboloid MIP chain); an engine reads lod √α·(levels − 1).
+//!
+//! [`output`] says what the files hold for each engine: frames, presets, clamping, lights.
+
+pub mod output;
 
 use crate::envmap::luminance;
 use crate::error::{Error, Result};

@@ -5,9 +5,13 @@
 use super::{context, Global};
 use anyhow::{anyhow, bail, Context as _, Result};
 use clap::Args;
+use envlight::bake::output::{
+    clamp_cube, compose, separate_options, CubeClamp, Irradiance, Preset, SeparateLights,
+};
 use envlight::bake::{spot_check, BakeOptions, Baked, Baker, PendingBake, SpotCheck};
-use envlight::io::ktx2::{self, Ktx2Format, Ktx2Image};
+use envlight::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
 use envlight::io::{write_atomic, LoadOptions};
+use envlight::math::lights::extract;
 use envlight::{EnvMap, Mapping, Orientation};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
@@ -45,16 +49,15 @@ pub struct BakeArgs {
     /// Output container: ktx2 or exr [default: ktx2]
     #[arg(long)]
     format: Option<String>,
-    /// KTX2 texels: rgba32f, rgba16f, b10g11r11 or e5b9g9r9 (the last three refuse values
-    /// they cannot hold) [default: rgba32f]
+    /// KTX2 texels: rgba32f, rgba16f, b10g11r11, e5b9g9r9 or bc6h (texels beyond a format's
+    /// range are clamped into it and the power clamped away reported) [default: rgba32f]
     #[arg(long)]
     texels: Option<String>,
     /// Also write each probe's dual-paraboloid MIP chain (chain.ktx2, RGBA32F premultiplied:
     /// a lookup divides rgb by alpha after filtering), what FIS reads at run time
     #[arg(long)]
     chain: bool,
-    /// Filter the whole map by SH and FIS instead of extracting its lights and adding them
-    /// exactly (the default extracts)
+    /// The same as --lights off
     #[arg(long)]
     no_lights: bool,
     /// Also write the split-sum DFG table once (dfg.ktx2: A, B per n·v column and √α row)
@@ -73,6 +76,31 @@ pub struct BakeArgs {
     /// to the summary and the manifest [default: 2]
     #[arg(long)]
     check: Option<u32>,
+    /// Bake for an engine: bevy (cubes for its (x, y, −z) lookup, irradiance E/π, e5b9g9r9 +
+    /// zstd, skybox.ktx2) or khronos (glTF-IBL-Sampler's yaw, E/π, rgba16f, ⌊log2 size⌋
+    /// levels). Options given one by one still apply on top
+    #[arg(long)]
+    preset: Option<String>,
+    /// Turn the probe about +Y by this many degrees before baking
+    #[arg(long, allow_negative_numbers = true)]
+    rotate_y: Option<f64>,
+    /// Mirror the probe left–right
+    #[arg(long)]
+    flip_u: bool,
+    /// Turn the probe upside down
+    #[arg(long)]
+    flip_v: bool,
+    /// Irradiance cube normalisation: e (irradiance) or e-over-pi (a white Lambertian
+    /// surface's radiance, what engines multiply by albedo) [default: e]
+    #[arg(long)]
+    irradiance: Option<String>,
+    /// Lights: exact (extract them and add them exactly into the cubes), separate (write them
+    /// to lights.json and bake only the residual), or off (filter the whole map) [default: exact]
+    #[arg(long)]
+    lights: Option<String>,
+    /// Supercompress the KTX2 levels with Zstandard
+    #[arg(long)]
+    zstd: bool,
 }
 
 /// A bake file: every field optional, unknown keys refused.
@@ -88,8 +116,45 @@ struct BakeFile {
     texels: Option<String>,
     dfg: Option<bool>,
     chain: Option<bool>,
-    lights: Option<bool>,
+    lights: Option<LightsKey>,
     check: Option<u32>,
+    preset: Option<String>,
+    rotate_y: Option<f64>,
+    flip_u: Option<bool>,
+    flip_v: Option<bool>,
+    irradiance: Option<String>,
+    zstd: Option<bool>,
+}
+
+/// A bake file's `lights`: true (exact), false (off), or a mode's name.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+enum LightsKey {
+    On(bool),
+    Mode(String),
+}
+
+/// What a bake does with the map's lights.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+enum LightsMode {
+    /// Extracted and added exactly into the cubes.
+    Exact,
+    /// Written to lights.json; the cubes hold the residual.
+    Separate,
+    /// The whole map filtered by SH and FIS.
+    Off,
+}
+
+impl LightsMode {
+    fn parse(s: &str) -> Result<LightsMode> {
+        match s {
+            "exact" => Ok(LightsMode::Exact),
+            "separate" => Ok(LightsMode::Separate),
+            "off" => Ok(LightsMode::Off),
+            _ => bail!("--lights {s}: exact, separate or off"),
+        }
+    }
 }
 
 /// Everything that decides the outputs' bytes.
@@ -99,6 +164,11 @@ struct Settings {
     options: BakeOptions,
     format: String,
     texels: String,
+    preset: Option<Preset>,
+    orientation: Orientation,
+    irradiance: Irradiance,
+    lights: LightsMode,
+    zstd: bool,
 }
 
 /// One output file in the manifest.
@@ -143,6 +213,27 @@ struct Entry {
     /// Errors against exact filters at a few texels (absent when not checked).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     check: Option<SpotCheck>,
+    /// What clamping the cubes into the texel format took from them (absent when nothing
+    /// was clamped or the format holds every value).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    clamped: Option<Clamps>,
+    /// With `--lights separate`: the share of the map's power per channel the cubes leave to
+    /// lights.json.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    separated: Option<[f64; 3]>,
+}
+
+/// What clamping took from one probe's cubes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct Clamps {
+    irradiance: CubeClamp,
+    specular: CubeClamp,
+}
+
+impl Clamps {
+    fn worst(&self) -> f64 {
+        self.irradiance.worst().max(self.specular.worst())
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -163,6 +254,10 @@ struct InGpu {
     /// Seconds spent reading, hashing and decoding it.
     read_s: f64,
     pending: PendingBake,
+    /// With `--lights separate`: the lights the cubes leave out.
+    lights: Option<SeparateLights>,
+    /// The probe's lock, held until its files and record are written.
+    _lock: std::fs::File,
 }
 
 /// The manifest entry of a probe that failed, reported above the progress bar.
@@ -184,6 +279,8 @@ fn failed(
         read_seconds,
         gpu_ms: 0.0,
         check: None,
+        clamped: None,
+        separated: None,
     }
 }
 
@@ -271,83 +368,255 @@ fn cube_image(texels: &[[f32; 4]], size: u32) -> EnvMap {
     )
 }
 
-/// Writes one probe's files into `dir`; returns them (paths relative to `root`).
+/// Everything a run decided from its arguments, its bake file and its preset.
+struct Plan {
+    options: BakeOptions,
+    format: String,
+    texels: Ktx2Format,
+    sc: Supercompression,
+    preset: Option<Preset>,
+    /// World → file of the cube frame: the user's orientation after the preset's frame.
+    orientation: Orientation,
+    /// The preset's cube → world (identity without one).
+    cube_to_world: glam::DMat3,
+    irradiance: Irradiance,
+    lights: LightsMode,
+    check: u32,
+    dfg: bool,
+}
+
+impl Plan {
+    /// The options decided: the command line over the bake file over the preset over the
+    /// defaults.
+    fn new(a: &BakeArgs, file: BakeFile) -> Result<Plan> {
+        let preset = match a.preset.as_deref().or(file.preset.as_deref()) {
+            Some(p) => {
+                Some(Preset::parse(p).ok_or_else(|| anyhow!("--preset {p}: bevy or khronos"))?)
+            }
+            None => None,
+        };
+        let d = BakeOptions::default();
+        let specular_size = a
+            .specular_size
+            .or(file.specular_size)
+            .unwrap_or(d.specular_size);
+        let lights = match (&a.lights, a.no_lights, &file.lights) {
+            (Some(m), _, _) => LightsMode::parse(m)?,
+            (None, true, _) => LightsMode::Off,
+            (None, false, Some(LightsKey::On(on))) => match on {
+                true => LightsMode::Exact,
+                false => LightsMode::Off,
+            },
+            (None, false, Some(LightsKey::Mode(m))) => LightsMode::parse(m)?,
+            (None, false, None) => LightsMode::Exact,
+        };
+        let options = BakeOptions {
+            sh_order: a.sh_order.or(file.sh_order).unwrap_or(d.sh_order),
+            irradiance_size: a
+                .irradiance_size
+                .or(file.irradiance_size)
+                .unwrap_or(d.irradiance_size),
+            specular_size,
+            specular_levels: a
+                .specular_levels
+                .or(file.specular_levels)
+                .or(preset.and_then(|p| p.specular_levels(specular_size)))
+                .unwrap_or(d.specular_levels),
+            samples: a.samples.or(file.samples).unwrap_or(d.samples),
+            chain: a.chain || file.chain == Some(true),
+            lights: lights == LightsMode::Exact,
+            ..d
+        };
+        options.validate()?;
+        let format = a
+            .format
+            .clone()
+            .or(file.format)
+            .unwrap_or_else(|| "ktx2".into());
+        if format != "ktx2" && format != "exr" {
+            bail!("--format {format}: ktx2 or exr");
+        }
+        let texels = match a.texels.clone().or(file.texels) {
+            Some(t) => Ktx2Format::parse(&t).ok_or_else(|| {
+                anyhow!("--texels {t}: rgba32f, rgba16f, b10g11r11, e5b9g9r9 or bc6h")
+            })?,
+            None => preset.map_or(Ktx2Format::Rgba32f, |p| p.texels()),
+        };
+        let zstd = a.zstd
+            || file.zstd == Some(true)
+            || preset.is_some_and(|p| p.supercompression() == Supercompression::Zstd);
+        let irradiance = match a.irradiance.clone().or(file.irradiance) {
+            Some(i) => {
+                Irradiance::parse(&i).ok_or_else(|| anyhow!("--irradiance {i}: e or e-over-pi"))?
+            }
+            None => preset.map_or(Irradiance::E, |p| p.irradiance()),
+        };
+        let user = Orientation {
+            flip_u: a.flip_u || file.flip_u == Some(true),
+            flip_v: a.flip_v || file.flip_v == Some(true),
+            rotate_y_degrees: a.rotate_y.or(file.rotate_y).unwrap_or(0.0),
+        };
+        user.validate().map_err(|e| anyhow!("--rotate-y: {e}"))?;
+        let frame = preset.map(|p| p.cube_frame()).unwrap_or_default();
+        Ok(Plan {
+            options,
+            format,
+            texels,
+            sc: if zstd {
+                Supercompression::Zstd
+            } else {
+                Supercompression::None
+            },
+            preset,
+            orientation: compose(&user, &frame),
+            cube_to_world: frame.world_to_file(),
+            irradiance,
+            lights,
+            check: a.check.or(file.check).unwrap_or(2),
+            dfg: a.dfg || file.dfg == Some(true),
+        })
+    }
+
+    /// What decides the outputs' bytes.
+    fn settings(&self) -> Settings {
+        Settings {
+            envlight: env!("CARGO_PKG_VERSION").into(),
+            options: self.options,
+            format: self.format.clone(),
+            texels: self.texels.name().into(),
+            preset: self.preset,
+            orientation: self.orientation,
+            irradiance: self.irradiance,
+            lights: self.lights,
+            zstd: self.sc == Supercompression::Zstd,
+        }
+    }
+}
+
+/// One probe's files, with their bytes, and what clamping took.
+type Files = (Vec<(PathBuf, Vec<u8>)>, Option<Clamps>);
+
+/// A probe's KTX2 files: irradiance and specular cubes clamped into the texel format (the
+/// power clamped away reported), the skybox where the preset wants one, the chain.
+fn ktx2_files(dir: &Path, baked: &Baked, plan: &Plan) -> Result<Files> {
+    let o = &plan.options;
+    let scale = plan.irradiance.scale();
+    let mut irradiance = vec![baked
+        .irradiance
+        .iter()
+        .map(|t| [t[0] * scale, t[1] * scale, t[2] * scale, t[3]])
+        .collect::<Vec<_>>()];
+    let mut specular = baked.specular.clone();
+    let clamps = Clamps {
+        irradiance: clamp_cube(plan.texels, o.irradiance_size, &mut irradiance),
+        specular: clamp_cube(plan.texels, o.specular_size, &mut specular),
+    };
+    let clamped = clamps.irradiance.channels
+        + clamps.irradiance.negative
+        + clamps.specular.channels
+        + clamps.specular.negative
+        > 0;
+    let cube = |levels: &[Vec<[f32; 4]>], size| -> Result<Vec<u8>> {
+        let img = Ktx2Image {
+            width: size,
+            height: size,
+            faces: 6,
+            layers: 0,
+            levels,
+        };
+        Ok(ktx2::encode_with(&img, plan.texels, plan.sc)?)
+    };
+    let mut files = vec![
+        (
+            dir.join("irradiance.ktx2"),
+            cube(&irradiance, o.irradiance_size)?,
+        ),
+        (dir.join("specular.ktx2"), cube(&specular, o.specular_size)?),
+    ];
+    if plan.preset.is_some_and(|p| p.skybox()) {
+        files.push((
+            dir.join("skybox.ktx2"),
+            cube(&specular[..1], o.specular_size)?,
+        ));
+    }
+    if let Some(first) = baked.chain.first() {
+        // Premultiplied with a weight that reaches 4 at the poles: float32, so that
+        // neither a sun nor the weight is refused or rounded.
+        let side = ((first.len() / 2) as f64).sqrt() as u32;
+        let chain = Ktx2Image {
+            width: side,
+            height: side,
+            faces: 1,
+            layers: 2,
+            levels: &baked.chain,
+        };
+        files.push((
+            dir.join("chain.ktx2"),
+            ktx2::encode_with(&chain, Ktx2Format::Rgba32f, plan.sc)?,
+        ));
+    }
+    Ok((files, clamped.then_some(clamps)))
+}
+
+/// A probe's EXR files (float32: nothing is clamped).
+fn exr_files(dir: &Path, baked: &Baked, plan: &Plan) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    let o = &plan.options;
+    let mut files = Vec::new();
+    let tmp = dir.join(format!(".bake-{}.exr", std::process::id()));
+    let exr = |map: &EnvMap| -> Result<Vec<u8>> {
+        envlight::io::save_exr(map, &tmp)?;
+        let b = std::fs::read(&tmp)?;
+        let _ = std::fs::remove_file(&tmp);
+        Ok(b)
+    };
+    let scale = plan.irradiance.scale();
+    let irradiance: Vec<[f32; 4]> = baked
+        .irradiance
+        .iter()
+        .map(|t| [t[0] * scale, t[1] * scale, t[2] * scale, t[3]])
+        .collect();
+    let b = exr(&cube_image(&irradiance, o.irradiance_size))?;
+    files.push((dir.join("irradiance.exr"), b));
+    for (k, level) in baked.specular.iter().enumerate() {
+        let size = (o.specular_size >> k).max(1);
+        let b = exr(&cube_image(level, size))?;
+        files.push((dir.join(format!("specular.level{k}.exr")), b));
+    }
+    // The chain's radiance (rgb / weight), a dual-paraboloid map per level.
+    for (k, level) in baked.chain.iter().enumerate() {
+        let side = ((level.len() / 2) as f64).sqrt() as u32;
+        let texels = level
+            .iter()
+            .map(|t| {
+                let w = if t[3] > 0.0 { 1.0 / t[3] } else { 0.0 };
+                [t[0] * w, t[1] * w, t[2] * w]
+            })
+            .collect();
+        let map = EnvMap::new(Mapping::DualParaboloid, side, side, texels);
+        files.push((dir.join(format!("chain.level{k}.exr")), exr(&map)?));
+    }
+    Ok(files)
+}
+
+/// Writes one probe's files into `dir`; returns them (paths relative to `root`) and what
+/// clamping took.
 fn write_probe(
     root: &Path,
     dir: &Path,
     baked: &Baked,
-    o: &BakeOptions,
-    format: &str,
-    texels: Ktx2Format,
-) -> Result<Vec<Output>> {
+    plan: &Plan,
+    lights: Option<&SeparateLights>,
+) -> Result<(Vec<Output>, Option<Clamps>)> {
     std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
-    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
     let sh = serde_json::to_string_pretty(&baked.sh.to_json())?;
-    files.push((dir.join("sh.json"), sh.into_bytes()));
-    match format {
-        "ktx2" => {
-            let irr = std::slice::from_ref(&baked.irradiance);
-            let img = |levels, size| Ktx2Image {
-                width: size,
-                height: size,
-                faces: 6,
-                layers: 0,
-                levels,
-            };
-            files.push((
-                dir.join("irradiance.ktx2"),
-                ktx2::encode(&img(irr, o.irradiance_size), texels)?,
-            ));
-            files.push((
-                dir.join("specular.ktx2"),
-                ktx2::encode(&img(&baked.specular, o.specular_size), texels)?,
-            ));
-            if let Some(first) = baked.chain.first() {
-                // Premultiplied with a weight that reaches 4 at the poles: float32, so that
-                // neither a sun nor the weight is refused or rounded.
-                let side = ((first.len() / 2) as f64).sqrt() as u32;
-                let chain = Ktx2Image {
-                    width: side,
-                    height: side,
-                    faces: 1,
-                    layers: 2,
-                    levels: &baked.chain,
-                };
-                files.push((
-                    dir.join("chain.ktx2"),
-                    ktx2::encode(&chain, Ktx2Format::Rgba32f)?,
-                ));
-            }
-        }
-        _ => {
-            let tmp = dir.join(format!(".bake-{}.exr", std::process::id()));
-            let exr = |map: &EnvMap| -> Result<Vec<u8>> {
-                envlight::io::save_exr(map, &tmp)?;
-                let b = std::fs::read(&tmp)?;
-                let _ = std::fs::remove_file(&tmp);
-                Ok(b)
-            };
-            let b = exr(&cube_image(&baked.irradiance, o.irradiance_size))?;
-            files.push((dir.join("irradiance.exr"), b));
-            for (k, level) in baked.specular.iter().enumerate() {
-                let size = (o.specular_size >> k).max(1);
-                let b = exr(&cube_image(level, size))?;
-                files.push((dir.join(format!("specular.level{k}.exr")), b));
-            }
-            // The chain's radiance (rgb / weight), a dual-paraboloid map per level.
-            for (k, level) in baked.chain.iter().enumerate() {
-                let side = ((level.len() / 2) as f64).sqrt() as u32;
-                let texels = level
-                    .iter()
-                    .map(|t| {
-                        let w = if t[3] > 0.0 { 1.0 / t[3] } else { 0.0 };
-                        [t[0] * w, t[1] * w, t[2] * w]
-                    })
-                    .collect();
-                let map = EnvMap::new(Mapping::DualParaboloid, side, side, texels);
-                files.push((dir.join(format!("chain.level{k}.exr")), exr(&map)?));
-            }
-        }
+    let (mut files, clamps) = match plan.format.as_str() {
+        "ktx2" => ktx2_files(dir, baked, plan)?,
+        _ => (exr_files(dir, baked, plan)?, None),
+    };
+    files.insert(0, (dir.join("sh.json"), sh.into_bytes()));
+    if let Some(l) = lights {
+        let json = serde_json::to_string_pretty(&l.to_json())?;
+        files.push((dir.join("lights.json"), json.into_bytes()));
     }
     let mut outputs = Vec::new();
     for (path, bytes) in files {
@@ -362,7 +631,54 @@ fn write_probe(
             sha256: sha256(&bytes),
         });
     }
-    Ok(outputs)
+    Ok((outputs, clamps))
+}
+
+/// The record a probe's folder keeps of its bake (`probe.json`), so that another run into the
+/// same folder — a second shard, a retried job — finds it done.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Record {
+    settings_sha256: String,
+    entry: Entry,
+}
+
+const RECORD: &str = "probe.json";
+
+/// Takes probe `name`'s lock in `out` (a file lock, which the system drops with a killed
+/// process), waiting while another run holds it.
+fn lock_probe(out: &Path, name: &str, pb: &ProgressBar) -> Result<std::fs::File> {
+    let dir = out.join(name);
+    std::fs::create_dir_all(&dir).with_context(|| dir.display().to_string())?;
+    let path = dir.join(".lock");
+    let f = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .with_context(|| path.display().to_string())?;
+    match f.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            pb.suspend(|| eprintln!("waiting for another bake of {name} to finish"));
+            f.lock().with_context(|| path.display().to_string())?;
+        }
+        Err(std::fs::TryLockError::Error(e)) => {
+            return Err(anyhow::Error::from(e).context(path.display().to_string()))
+        }
+    }
+    Ok(f)
+}
+
+/// Probe `name`'s entry when its folder already holds a bake of `input_sha256` with these
+/// settings, its files intact.
+fn recorded(out: &Path, name: &str, settings_sha256: &str, input_sha256: &str) -> Option<Entry> {
+    let bytes = std::fs::read(out.join(name).join(RECORD)).ok()?;
+    let r: Record = serde_json::from_slice(&bytes).ok()?;
+    (r.settings_sha256 == settings_sha256
+        && r.entry.input_sha256 == input_sha256
+        && r.entry.status != "failed"
+        && outputs_intact(out, &r.entry))
+    .then_some(r.entry)
 }
 
 /// Whether every output of `e` under `root` is there with its recorded hash.
@@ -437,43 +753,7 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
         }
         None => BakeFile::default(),
     };
-    let d = BakeOptions::default();
-    let options = BakeOptions {
-        sh_order: a.sh_order.or(file.sh_order).unwrap_or(d.sh_order),
-        irradiance_size: a
-            .irradiance_size
-            .or(file.irradiance_size)
-            .unwrap_or(d.irradiance_size),
-        specular_size: a
-            .specular_size
-            .or(file.specular_size)
-            .unwrap_or(d.specular_size),
-        specular_levels: a
-            .specular_levels
-            .or(file.specular_levels)
-            .unwrap_or(d.specular_levels),
-        samples: a.samples.or(file.samples).unwrap_or(d.samples),
-        chain: a.chain || file.chain == Some(true),
-        lights: !a.no_lights && file.lights.unwrap_or(d.lights),
-        ..d
-    };
-    options.validate()?;
-    let format = a
-        .format
-        .clone()
-        .or(file.format)
-        .unwrap_or_else(|| "ktx2".into());
-    if format != "ktx2" && format != "exr" {
-        bail!("--format {format}: ktx2 or exr");
-    }
-    let texels_name = a
-        .texels
-        .clone()
-        .or(file.texels)
-        .unwrap_or_else(|| "rgba32f".into());
-    let texels = Ktx2Format::parse(&texels_name).ok_or_else(|| {
-        anyhow!("--texels {texels_name}: rgba32f, rgba16f, b10g11r11 or e5b9g9r9")
-    })?;
+    let plan = Plan::new(a, file)?;
     let shard = a.shard.as_deref().map(parse_shard).transpose()?;
     let inputs = collect(&a.inputs)?;
     if inputs.is_empty() {
@@ -498,12 +778,7 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
             .collect(),
         None => inputs.clone(),
     };
-    let settings = Settings {
-        envlight: env!("CARGO_PKG_VERSION").into(),
-        options,
-        format: format.clone(),
-        texels: texels_name.to_ascii_lowercase(),
-    };
+    let settings = plan.settings();
     let settings_sha256 = sha256(serde_json::to_string(&settings)?.as_bytes());
     let out = &a.out;
     std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
@@ -516,160 +791,26 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
 
     let ctx = context(g)?;
     let baker = Baker::new(&ctx)?;
-    if a.dfg || file.dfg == Some(true) {
-        let t = baker.dfg(options.dfg_size, true)?;
+    if plan.dfg {
+        let t = baker.dfg(plan.options.dfg_size, true)?;
         let level: Vec<[f32; 4]> = t.iter().map(|v| [v[0], v[1], 0.0, 1.0]).collect();
         let img = Ktx2Image {
-            width: options.dfg_size,
-            height: options.dfg_size,
+            width: plan.options.dfg_size,
+            height: plan.options.dfg_size,
             faces: 1,
             layers: 0,
             levels: std::slice::from_ref(&level),
         };
         ktx2::write(&out.join("dfg.ktx2"), &img, Ktx2Format::Rgba32f)?;
     }
-    let pb = ProgressBar::new(mine.len() as u64);
-    pb.set_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} probes, ETA {eta} {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    // A reader thread reads, hashes, checks and decodes the next probe while this one bakes
-    // and its files are written; the channel holds one probe, so memory stays bounded.
-    let (tx, rx) = std::sync::mpsc::sync_channel::<Prepared>(1);
-    let force = a.force;
-    let check = a.check.or(file.check).unwrap_or(2);
-    let entries = std::thread::scope(|scope| {
-        let previous = &previous;
-        let mine = &mine;
-        scope.spawn(move || {
-            for path in mine {
-                let t0 = Instant::now();
-                let input = path.to_string_lossy().replace('\\', "/");
-                let bytes = std::fs::read(path);
-                let input_sha256 = bytes.as_ref().map(|b| sha256(b)).unwrap_or_default();
-                let done = previous.iter().find(|e| {
-                    e.input == input && e.input_sha256 == input_sha256 && outputs_intact(out, e)
-                });
-                let job = match (done, force) {
-                    (Some(e), false) => Prepared::Skip(Entry {
-                        status: "skipped".into(),
-                        ..e.clone()
-                    }),
-                    _ => {
-                        let map = bytes.map_err(anyhow::Error::from).and_then(|b| {
-                            Ok(envlight::io::load_bytes(path, &b, &LoadOptions::default())?)
-                        });
-                        Prepared::Bake {
-                            path: path.clone(),
-                            input,
-                            input_sha256,
-                            map,
-                            read_s: t0.elapsed().as_secs_f64(),
-                        }
-                    }
-                };
-                if tx.send(job).is_err() {
-                    return;
-                }
-            }
-        });
-        // One probe on the GPU while the previous one is read back, written and checked:
-        // its upload and recording overlap that work, and the GPU does not idle between them.
-        let finish = |w: InGpu| -> Entry {
-            let result = w
-                .pending
-                .wait()
-                .map_err(anyhow::Error::from)
-                .and_then(|baked| {
-                    let outputs =
-                        write_probe(out, &out.join(&w.name), &baked, &options, &format, texels)?;
-                    let o = Orientation::default();
-                    let checked =
-                        (check > 0).then(|| spot_check(&w.map, &o, &options, &baked, check));
-                    let gpu_ms = baked.timings.iter().map(|t| t.ms).sum::<f64>();
-                    Ok((outputs, gpu_ms, checked))
-                })
-                .with_context(|| w.path.display().to_string());
-            match result {
-                Ok((outputs, gpu_ms, check)) => Entry {
-                    input: w.input,
-                    input_sha256: w.input_sha256,
-                    status: "baked".into(),
-                    error: None,
-                    outputs,
-                    seconds: 0.0,
-                    read_seconds: w.read_s,
-                    gpu_ms,
-                    check,
-                },
-                Err(e) => failed(&pb, w.input, w.input_sha256, e, w.read_s),
-            }
-        };
-        // Each probe's seconds: the run's wall time from the previous probe's end to its own,
-        // so that they add up to the run's (reading happens alongside, on the reader thread).
-        let mut entries = Vec::new();
-        let mut mark = Instant::now();
-        let mut push = |entries: &mut Vec<Entry>, mut e: Entry| {
-            e.seconds = mark.elapsed().as_secs_f64();
-            mark = Instant::now();
-            entries.push(e);
-            pb.inc(1);
-        };
-        let mut in_gpu: Option<InGpu> = None;
-        for job in rx {
-            match job {
-                Prepared::Skip(e) => {
-                    if let Some(w) = in_gpu.take() {
-                        push(&mut entries, finish(w));
-                    }
-                    push(&mut entries, e);
-                }
-                Prepared::Bake {
-                    path,
-                    input,
-                    input_sha256,
-                    map,
-                    read_s,
-                } => {
-                    let name = path
-                        .file_name()
-                        .map(|n| n.to_string_lossy().to_string())
-                        .unwrap_or_default();
-                    pb.set_message(name.clone());
-                    let submitted = map.and_then(|map| {
-                        let pending = baker.submit(&map, &Orientation::default(), &options)?;
-                        Ok((map, pending))
-                    });
-                    // The previous probe finishes while this one runs on the GPU.
-                    if let Some(w) = in_gpu.take() {
-                        push(&mut entries, finish(w));
-                    }
-                    match submitted {
-                        Ok((map, pending)) => {
-                            in_gpu = Some(InGpu {
-                                path,
-                                name,
-                                input,
-                                input_sha256,
-                                map,
-                                read_s,
-                                pending,
-                            })
-                        }
-                        Err(e) => {
-                            let e = e.context(path.display().to_string());
-                            push(&mut entries, failed(&pb, input, input_sha256, e, read_s));
-                        }
-                    }
-                }
-            }
-        }
-        if let Some(w) = in_gpu.take() {
-            push(&mut entries, finish(w));
-        }
-        entries
-    });
-    pb.finish_and_clear();
+    let run = Run {
+        plan: &plan,
+        baker: &baker,
+        out,
+        settings_sha256: &settings_sha256,
+        force: a.force,
+    };
+    let entries = run.probes(&mine, &previous);
     let manifest = Manifest {
         settings,
         settings_sha256,
@@ -678,37 +819,7 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
     };
     let mpath = out.join(manifest_name(shard));
     write_atomic(&mpath, serde_json::to_string_pretty(&manifest)?.as_bytes())?;
-    println!(
-        "| probe | status | seconds | GPU ms | irradiance error | specular error (worst level) |\n\
-         |---|---|---|---|---|---|"
-    );
-    for e in &manifest.probes {
-        let (irr, spec) = match &e.check {
-            Some(c) => (
-                format!("{:.2e}", c.irradiance),
-                format!("{:.2e}", c.specular_worst()),
-            ),
-            None => ("–".into(), "–".into()),
-        };
-        println!(
-            "| {} | {} | {:.3} | {:.1} | {irr} | {spec} |",
-            e.input,
-            e.error
-                .as_deref()
-                .map(|m| format!("failed: {m}"))
-                .unwrap_or_else(|| e.status.clone()),
-            e.seconds,
-            e.gpu_ms
-        );
-    }
-    if check > 0 {
-        println!(
-            "errors: worst relative luminance error at {check} texels a level (the brightest \
-             source texel's first) against float64 exact filters: the irradiance cube (SH to \
-             order {}) against the cosine integral, the specular levels against GGX at n = v = r",
-            options.sh_order
-        );
-    }
+    summary(&manifest, &plan);
     let failed = manifest
         .probes
         .iter()
@@ -722,4 +833,282 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Prints the run's table: per probe its status, times, errors and what clamping took.
+fn summary(manifest: &Manifest, plan: &Plan) {
+    println!(
+        "| probe | status | seconds | GPU ms | irradiance error | specular error (worst level) \
+         | power clamped (worst level) | power in lights.json |\n|---|---|---|---|---|---|---|---|"
+    );
+    for e in &manifest.probes {
+        let (irr, spec) = match &e.check {
+            Some(c) => (
+                format!("{:.2e}", c.irradiance),
+                format!("{:.2e}", c.specular_worst()),
+            ),
+            None => ("–".into(), "–".into()),
+        };
+        let clamped = e
+            .clamped
+            .as_ref()
+            .map_or("0".into(), |c| format!("{:.2e}", c.worst()));
+        let separated = e.separated.map_or("–".into(), |s| {
+            format!("{:.3}", envlight::envmap::luminance(s))
+        });
+        println!(
+            "| {} | {} | {:.3} | {:.1} | {irr} | {spec} | {clamped} | {separated} |",
+            e.input,
+            e.error
+                .as_deref()
+                .map(|m| format!("failed: {m}"))
+                .unwrap_or_else(|| e.status.clone()),
+            e.seconds,
+            e.gpu_ms
+        );
+    }
+    if plan.check > 0 {
+        println!(
+            "errors: worst relative luminance error at {} texels a level (the brightest \
+             source texel's first) against float64 exact filters: the irradiance cube (SH to \
+             order {}) against the cosine integral, the specular levels against GGX at n = v = r",
+            plan.check, plan.options.sh_order
+        );
+    }
+    println!(
+        "power clamped: the share of a cube level's luminance power (∑ Ω·Y) that clamping into \
+         {} removed (texels brighter than the format holds; --lights separate or rgba32f keep it)",
+        plan.texels.name()
+    );
+}
+
+/// A probe the main loop took up: on the GPU, or done (skipped or failed) with its entry.
+enum Started {
+    Gpu(Box<InGpu>),
+    Done(Box<Entry>),
+}
+
+/// One run's fixed parts, shared by its probes.
+struct Run<'a> {
+    plan: &'a Plan,
+    baker: &'a Baker,
+    out: &'a Path,
+    settings_sha256: &'a str,
+    force: bool,
+}
+
+impl Run<'_> {
+    /// Reads, bakes and writes `mine`, skipping what `previous` (or a probe's own record) holds
+    /// done; returns their manifest entries in order.
+    fn probes(&self, mine: &[PathBuf], previous: &[Entry]) -> Vec<Entry> {
+        let pb = ProgressBar::new(mine.len() as u64);
+        pb.set_style(
+            ProgressStyle::with_template("{bar:30} {pos}/{len} probes, ETA {eta} {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        // A reader thread reads, hashes, checks and decodes the next probe while this one
+        // bakes and its files are written; the channel holds one probe, so memory stays
+        // bounded.
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Prepared>(1);
+        let (out, force) = (self.out, self.force);
+        let entries = std::thread::scope(|scope| {
+            scope.spawn(move || read_probes(mine, previous, out, force, tx));
+            self.bake_all(rx, &pb)
+        });
+        pb.finish_and_clear();
+        entries
+    }
+
+    /// The main loop: one probe on the GPU while the previous one is read back, written and
+    /// checked, so its upload and recording overlap that work and the GPU does not idle.
+    fn bake_all(&self, rx: std::sync::mpsc::Receiver<Prepared>, pb: &ProgressBar) -> Vec<Entry> {
+        // Each probe's seconds: the run's wall time from the previous probe's end to its own,
+        // so that they add up to the run's (reading happens alongside, on the reader thread).
+        let mut entries = Vec::new();
+        let mut mark = Instant::now();
+        let mut push = |entries: &mut Vec<Entry>, mut e: Entry| {
+            e.seconds = mark.elapsed().as_secs_f64();
+            mark = Instant::now();
+            entries.push(e);
+            pb.inc(1);
+        };
+        let mut in_gpu: Option<Box<InGpu>> = None;
+        for job in rx {
+            let next = match job {
+                Prepared::Skip(e) => Started::Done(Box::new(e)),
+                Prepared::Bake {
+                    path,
+                    input,
+                    input_sha256,
+                    map,
+                    read_s,
+                } => self.start(path, input, input_sha256, map, read_s, pb),
+            };
+            // The previous probe finishes while this one runs on the GPU.
+            if let Some(w) = in_gpu.take() {
+                push(&mut entries, self.finish(w, pb));
+            }
+            match next {
+                Started::Gpu(w) => in_gpu = Some(w),
+                Started::Done(e) => push(&mut entries, *e),
+            }
+        }
+        if let Some(w) = in_gpu.take() {
+            push(&mut entries, self.finish(w, pb));
+        }
+        entries
+    }
+
+    /// Locks a probe and submits its bake; or its entry when it is done already (by another
+    /// run that held the lock) or could not be read or submitted.
+    fn start(
+        &self,
+        path: PathBuf,
+        input: String,
+        input_sha256: String,
+        map: Result<EnvMap>,
+        read_s: f64,
+        pb: &ProgressBar,
+    ) -> Started {
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default();
+        pb.set_message(name.clone());
+        let lock = match lock_probe(self.out, &name, pb) {
+            Ok(l) => l,
+            Err(e) => return Started::Done(Box::new(failed(pb, input, input_sha256, e, read_s))),
+        };
+        if !self.force {
+            if let Some(e) = recorded(self.out, &name, self.settings_sha256, &input_sha256) {
+                return Started::Done(Box::new(Entry {
+                    status: "skipped".into(),
+                    ..e
+                }));
+            }
+        }
+        let plan = self.plan;
+        let submitted = map.and_then(|map| {
+            // Separate lights: the cubes see the residual, lights.json the lights.
+            let (source, lights) = match plan.lights {
+                LightsMode::Separate => {
+                    let ex = extract(&map, &separate_options(&map, plan.texels));
+                    let l = SeparateLights::new(&map, &ex, &plan.orientation, plan.cube_to_world)?;
+                    (ex.residual, Some(l))
+                }
+                _ => (map, None),
+            };
+            let pending = self
+                .baker
+                .submit(&source, &plan.orientation, &plan.options)?;
+            Ok((source, pending, lights))
+        });
+        match submitted {
+            Ok((map, pending, lights)) => Started::Gpu(Box::new(InGpu {
+                path,
+                name,
+                input,
+                input_sha256,
+                map,
+                read_s,
+                pending,
+                lights,
+                _lock: lock,
+            })),
+            Err(e) => {
+                let e = e.context(path.display().to_string());
+                Started::Done(Box::new(failed(pb, input, input_sha256, e, read_s)))
+            }
+        }
+    }
+
+    /// Waits for a probe's bake, writes its files and record, checks it; its entry.
+    fn finish(&self, w: Box<InGpu>, pb: &ProgressBar) -> Entry {
+        let w = *w;
+        let plan = self.plan;
+        let result = w
+            .pending
+            .wait()
+            .map_err(anyhow::Error::from)
+            .and_then(|baked| {
+                let dir = self.out.join(&w.name);
+                let (outputs, clamped) =
+                    write_probe(self.out, &dir, &baked, plan, w.lights.as_ref())?;
+                let checked = (plan.check > 0).then(|| {
+                    spot_check(&w.map, &plan.orientation, &plan.options, &baked, plan.check)
+                });
+                let gpu_ms = baked.timings.iter().map(|t| t.ms).sum::<f64>();
+                Ok((outputs, gpu_ms, checked, clamped))
+            })
+            .with_context(|| w.path.display().to_string());
+        let entry = match result {
+            Ok((outputs, gpu_ms, check, clamped)) => Entry {
+                input: w.input,
+                input_sha256: w.input_sha256,
+                status: "baked".into(),
+                error: None,
+                outputs,
+                seconds: 0.0,
+                read_seconds: w.read_s,
+                gpu_ms,
+                check,
+                clamped,
+                separated: w.lights.as_ref().map(|l| l.share),
+            },
+            Err(e) => return failed(pb, w.input, w.input_sha256, e, w.read_s),
+        };
+        let record = Record {
+            settings_sha256: self.settings_sha256.into(),
+            entry: entry.clone(),
+        };
+        let path = self.out.join(&w.name).join(RECORD);
+        match serde_json::to_vec_pretty(&record)
+            .map_err(anyhow::Error::from)
+            .and_then(|b| Ok(write_atomic(&path, &b)?))
+        {
+            Ok(()) => entry,
+            Err(e) => failed(pb, entry.input, entry.input_sha256, e, w.read_s),
+        }
+    }
+}
+
+/// The reader thread: each probe of `mine` read, hashed and decoded, or marked skipped when a
+/// previous manifest with these settings holds it intact.
+fn read_probes(
+    mine: &[PathBuf],
+    previous: &[Entry],
+    out: &Path,
+    force: bool,
+    tx: std::sync::mpsc::SyncSender<Prepared>,
+) {
+    for path in mine {
+        let t0 = Instant::now();
+        let input = path.to_string_lossy().replace('\\', "/");
+        let bytes = std::fs::read(path);
+        let input_sha256 = bytes.as_ref().map(|b| sha256(b)).unwrap_or_default();
+        let done = previous
+            .iter()
+            .find(|e| e.input == input && e.input_sha256 == input_sha256 && outputs_intact(out, e));
+        let job = match (done, force) {
+            (Some(e), false) => Prepared::Skip(Entry {
+                status: "skipped".into(),
+                ..e.clone()
+            }),
+            _ => {
+                let map = bytes
+                    .map_err(anyhow::Error::from)
+                    .and_then(|b| Ok(envlight::io::load_bytes(path, &b, &LoadOptions::default())?));
+                Prepared::Bake {
+                    path: path.clone(),
+                    input,
+                    input_sha256,
+                    map,
+                    read_s: t0.elapsed().as_secs_f64(),
+                }
+            }
+        };
+        if tx.send(job).is_err() {
+            return;
+        }
+    }
 }

@@ -460,7 +460,7 @@ fn arc_inside_rect(x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
 /// it upside down (y → −y), and `rotate_y_degrees` turns the environment counter-clockwise about
 /// +Y as seen from above. The light stored at file direction f appears in the world at
 /// `R_y(θ) · S · f`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Orientation {
     /// Mirror left–right (reflect x).
     pub flip_u: bool,
