@@ -1,7 +1,8 @@
 #version 460
 // The split-sum DFG table (Karis 2013), twin of math::split_sum::dfg: entry (i, j) holds
-// (A, B) = ∫ f/F·cos·(1 − Fc, Fc) dωᵢ for GGX α = (j/(size − 1))² seen at n·v = i/(size − 1),
-// Fc = (1 − v·h)⁵, as a sum over the GGX sampler's unit square with the rule of sh_brdf.comp
+// (A, B) = ∫ f/F·cos·(1 − Fc, Fc) dωᵢ for GGX α = x(j)² seen at n·v = x(i), Fc = (1 − v·h)⁵,
+// with x(i) = i/(size − 1) (endpoints) or (i + ½)/size (texel centres, pc.centres; the twin's
+// DfgAxes), as a sum over the GGX sampler's unit square with the rule of sh_brdf.comp
 // (graded panels of the first uniform, SH_BRDF_PANELS uniform ones of the second, 4 × 4
 // Gauss–Legendre nodes a panel). One dispatch adds one panel of the first uniform (the first
 // writes): llvmpipe cuts a loop after 65535 iterations per invocation.
@@ -22,8 +23,10 @@ void main() {
     uint id = gl_GlobalInvocationID.x;
     if (id >= pc.size * pc.size) return;
     float last = float(max(pc.size, 2u) - 1u);
-    float mu = clamp(float(id % pc.size) / last, DFG_MU_MIN, 1.0);
-    float r = float(id / pc.size) / last;
+    vec2 ij = vec2(float(id % pc.size), float(id / pc.size));
+    vec2 x = pc.centres != 0u ? (ij + 0.5) / float(pc.size) : ij / last;
+    float mu = clamp(x.x, DFG_MU_MIN, 1.0);
+    float r = x.y;
     vec3 wo = vec3(sqrt(max(1.0 - mu * mu, 0.0)), 0.0, mu);
     Brdf b = Brdf(BRDF_GGX, r * r, float(pc.correlated));
     const float h = 1.0 / float(SH_BRDF_PANELS);

@@ -879,6 +879,8 @@ pub mod push {
             offset: u32 = "uint",
             /// The panel of the first uniform this dispatch adds (panel 0 writes).
             panel: u32 = "uint",
+            /// 1: entries at texel centres ((i + ½)/size), 0: at endpoints (i/(size − 1)).
+            centres: u32 = "uint",
         }
         /// `glsl/prefilter_ggx.comp`.
         PrefilterGgxPush {

@@ -66,21 +66,61 @@ fn fresnel_c(wo: DVec3, wi: DVec3) -> f64 {
     (1.0 - wo.dot(h).clamp(0.0, 1.0)).powi(5)
 }
 
-/// n·v and α of table entry (i, j) of a table `size` (≥ 2) a side: both axes include their
-/// ends (n·v = i/(size − 1), √α = j/(size − 1)), so the mirror, α = 1 and grazing views are
-/// read, not extrapolated by clamping.
-pub fn dfg_axes(size: u32, i: u32, j: u32) -> (f64, f64) {
-    let last = (size.max(2) - 1) as f64;
-    let r = j as f64 / last;
-    (i as f64 / last, r * r)
+/// Where a DFG table's entries sit on its axes (n·v across, √α down).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DfgAxes {
+    /// Entry i at i/(size − 1): both ends included, so the mirror, α = 1 and grazing views are
+    /// read, not extrapolated by clamping (envlight's own lookups).
+    #[default]
+    Endpoints,
+    /// Entry i at (i + ½)/size: a texture's texel centres, as glTF-IBL-Sampler's LUT is
+    /// computed and as glTF viewers read it with a plain texture lookup at (n·v, √α).
+    Centres,
 }
 
-/// The table the GPU builds: row j (√α) after row, (A, B) per entry.
+impl DfgAxes {
+    /// Parses "endpoints" or "centres".
+    pub fn parse(s: &str) -> Option<DfgAxes> {
+        match s {
+            "endpoints" => Some(DfgAxes::Endpoints),
+            "centres" | "centers" => Some(DfgAxes::Centres),
+            _ => None,
+        }
+    }
+
+    /// The abscissa of entry `i` of `size`.
+    pub fn at(self, size: u32, i: u32) -> f64 {
+        match self {
+            DfgAxes::Endpoints => i as f64 / (size.max(2) - 1) as f64,
+            DfgAxes::Centres => (i as f64 + 0.5) / size as f64,
+        }
+    }
+}
+
+/// n·v and α of table entry (i, j) of a table `size` (≥ 2) a side at endpoints
+/// ([`DfgAxes::Endpoints`]: n·v = i/(size − 1), √α = j/(size − 1)).
+pub fn dfg_axes(size: u32, i: u32, j: u32) -> (f64, f64) {
+    dfg_axes_at(size, i, j, DfgAxes::Endpoints)
+}
+
+/// n·v and α of table entry (i, j) with the axes `axes`.
+pub fn dfg_axes_at(size: u32, i: u32, j: u32, axes: DfgAxes) -> (f64, f64) {
+    let r = axes.at(size, j);
+    (axes.at(size, i), r * r)
+}
+
+/// The table the GPU builds: row j (√α) after row, (A, B) per entry, at endpoints.
 pub fn dfg_table(size: u32, correlated: bool) -> Vec<[f64; 2]> {
+    dfg_table_at(size, correlated, DfgAxes::Endpoints)
+}
+
+/// [`dfg_table`] with the axes `axes`.
+pub fn dfg_table_at(size: u32, correlated: bool, axes: DfgAxes) -> Vec<[f64; 2]> {
     let mut out = Vec::with_capacity((size * size) as usize);
     for j in 0..size {
         for i in 0..size {
-            let (mu, alpha) = dfg_axes(size, i, j);
+            let (mu, alpha) = dfg_axes_at(size, i, j, axes);
             out.push(dfg(alpha, correlated, mu));
         }
     }

@@ -8,7 +8,7 @@ use crate::abi::push::{DfgPush, PrefilterGgxPush};
 use crate::abi::{binding, sh_brdf, split_sum, ShaderId, WORKGROUP_1D, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
-use crate::math::split_sum::{level_alpha, level_size};
+use crate::math::split_sum::{level_alpha, level_size, DfgAxes};
 use crate::math::Mapping;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -49,12 +49,26 @@ impl SplitSum {
     }
 
     /// Records the DFG table of GGX with the given Smith form into `out` from float `offset`
-    /// (even) on: row j (√α) after row, (A, B) per entry. Span: "dfg table".
+    /// (even) on: row j (√α) after row, (A, B) per entry, entries at the axes' endpoints.
+    /// Span: "dfg table".
     pub fn record_dfg(
         &self,
         rec: &mut Recorder,
         size: u32,
         correlated: bool,
+        out: &Buffer,
+        offset: u32,
+    ) -> Result<()> {
+        self.record_dfg_at(rec, size, correlated, DfgAxes::Endpoints, out, offset)
+    }
+
+    /// [`SplitSum::record_dfg`] with the entries where `axes` puts them.
+    pub fn record_dfg_at(
+        &self,
+        rec: &mut Recorder,
+        size: u32,
+        correlated: bool,
+        axes: DfgAxes,
         out: &Buffer,
         offset: u32,
     ) -> Result<()> {
@@ -74,6 +88,7 @@ impl SplitSum {
                     correlated: correlated as u32,
                     offset,
                     panel,
+                    centres: (axes == DfgAxes::Centres) as u32,
                 };
                 rec.dispatch(
                     &self.dfg,
@@ -86,8 +101,18 @@ impl SplitSum {
         })
     }
 
-    /// Computes one DFG table and reads it back, with its GPU time.
+    /// Computes one DFG table (at endpoints) and reads it back, with its GPU time.
     pub fn run_dfg(&self, size: u32, correlated: bool) -> Result<(Vec<[f32; 2]>, Vec<Timing>)> {
+        self.run_dfg_at(size, correlated, DfgAxes::Endpoints)
+    }
+
+    /// [`SplitSum::run_dfg`] with the entries where `axes` puts them.
+    pub fn run_dfg_at(
+        &self,
+        size: u32,
+        correlated: bool,
+        axes: DfgAxes,
+    ) -> Result<(Vec<[f32; 2]>, Vec<Timing>)> {
         let n = Self::dfg_floats(size);
         let out = Buffer::new(
             &self.ctx,
@@ -97,7 +122,7 @@ impl SplitSum {
             MemoryLocation::GpuToCpu,
         )?;
         let ((), t) = self.ctx.run("computing a DFG table", |rec| {
-            self.record_dfg(rec, size, correlated, &out, 0)?;
+            self.record_dfg_at(rec, size, correlated, axes, &out, 0)?;
             rec.use_buffer(&out, Usage::HostRead);
             Ok(())
         })?;
