@@ -973,3 +973,45 @@ fn every_shared_probe_with_a_blinding_sun_bakes_in_every_format() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The Khronos preset writes the split-sum table as glTF-IBL-Sampler does: 256², entries at
+/// texel centres (n·v = (i + ½)/256 across, perceptual roughness (j + ½)/256 down, row 0 the
+/// smoothest), `dfg.ktx2` in float and `lut.png` in 8 bits (R = A, G = B). Every 997th entry
+/// of the float table against the float64 twin (2e-6 absolute, as the pass's own test), and
+/// every PNG byte within one step of the float table's.
+#[test]
+fn the_khronos_preset_writes_its_lut_at_texel_centres() {
+    let dir = temp("lut");
+    let p = dir.join("smooth.exr");
+    envlight::io::save_exr(&EnvMap::from_fn(Mapping::LatLong, W, H, 1, smooth_env), &p).unwrap();
+    let out = dir.join("out");
+    ok(&bake(&[&p], &out, &["--preset", "khronos", "--check", "0"]));
+    let table = read(&out.join("dfg.ktx2"));
+    assert_eq!((table.size, table.levels[0].len()), (256, 256 * 256));
+    let axes = envlight::math::split_sum::DfgAxes::Centres;
+    for k in (0..256 * 256).step_by(997) {
+        let (i, j) = (k % 256, k / 256);
+        let (mu, alpha) = envlight::math::split_sum::dfg_axes_at(256, i as u32, j as u32, axes);
+        let want = envlight::math::split_sum::dfg(alpha, true, mu);
+        let got = table.levels[0][k];
+        for c in 0..2 {
+            assert!(
+                (got[c] as f64 - want[c]).abs() < 2e-6,
+                "({i}, {j}): {got:?} {want:?}"
+            );
+        }
+    }
+    let png = image::open(out.join("lut.png")).unwrap().to_rgb8();
+    assert_eq!(png.dimensions(), (256, 256));
+    for (k, px) in png.pixels().enumerate() {
+        let t = table.levels[0][k];
+        for c in 0..2 {
+            assert!(
+                (px[c] as f32 - t[c] * 255.0).abs() <= 0.5 + 1e-3,
+                "{k}: {px:?} {t:?}"
+            );
+        }
+        assert_eq!(px[2], 0);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -20,7 +20,7 @@ use crate::math::lights::{
     diffuse_options, extract_each, light_sh, resolves, ExtractOptions, LightKernel, DIFFUSE_RATIO,
 };
 use crate::math::sh;
-use crate::math::split_sum::level_alpha;
+use crate::math::split_sum::{level_alpha, DfgAxes};
 use crate::math::Orientation;
 use crate::passes::map::Readback;
 use crate::passes::sh_project::{ShCoefficients, Subgroups};
@@ -532,6 +532,11 @@ impl Baker {
     /// The split-sum DFG table (height-correlated Smith unless `correlated` is false), row
     /// √α = j/(size − 1) after row, (A, B) per entry.
     pub fn dfg(&self, size: u32, correlated: bool) -> Result<Vec<[f32; 2]>> {
-        Ok(self.split.run_dfg(size, correlated)?.0)
+        self.dfg_at(size, correlated, DfgAxes::Endpoints)
+    }
+
+    /// [`Baker::dfg`] with its entries where `axes` puts them.
+    pub fn dfg_at(&self, size: u32, correlated: bool, axes: DfgAxes) -> Result<Vec<[f32; 2]>> {
+        Ok(self.split.run_dfg_at(size, correlated, axes)?.0)
     }
 }

@@ -5,9 +5,9 @@
 //!
 //! Frames. A bake's cubes, SH and lights are all in one *cube frame*: cube direction `c` (the
 //! Vulkan face table) holds the environment's radiance from world direction
-//! `cube_to_world · c`. [`Convention::orientation`] is the [`Orientation`] a bake passes to
-//! [`super::Baker`]: the user's orientation of the probe file (world → file) composed with the
-//! preset's cube → world.
+//! `cube_to_world · c`. The [`Orientation`] a bake passes to [`super::Baker`] is the user's
+//! orientation of the probe file (world → file) composed ([`compose`]) with the preset's
+//! cube → world ([`Preset::cube_frame`]).
 //! - envlight's own convention: the cube frame is the world frame.
 //! - Bevy (`bevy_pbr`'s `environment_map.wesl` samples the cube at `(x, y, −z)` of a world
 //!   direction): cube → world is `diag(1, 1, −1)`, so Bevy's lookup sees the world unmirrored.
@@ -19,6 +19,7 @@ use crate::envmap::luminance;
 use crate::error::{Error, Result};
 use crate::io::ktx2::{Ktx2Format, Supercompression};
 use crate::math::lights::{group, ExtractOptions, Extraction};
+use crate::math::split_sum::DfgAxes;
 use crate::math::Orientation;
 use crate::{EnvMap, Mapping};
 use glam::{DMat3, DVec3};
@@ -128,6 +129,28 @@ impl Preset {
     /// Whether the level-0 cube is also written as `skybox.ktx2`.
     pub fn skybox(self) -> bool {
         self == Preset::Bevy
+    }
+
+    /// Whether the split-sum table is written with every bake, with `lut.png` beside
+    /// `dfg.ktx2` (glTF-IBL-Sampler writes its LUT with every run).
+    pub fn lut(self) -> bool {
+        self == Preset::Khronos
+    }
+
+    /// Where the table's entries sit: glTF-IBL-Sampler's LUT at texel centres.
+    pub fn dfg_axes(self) -> DfgAxes {
+        match self {
+            Preset::Bevy => DfgAxes::Endpoints,
+            Preset::Khronos => DfgAxes::Centres,
+        }
+    }
+
+    /// The table's side where the consumer fixes it (glTF-IBL-Sampler's 256).
+    pub fn dfg_size(self) -> Option<u32> {
+        match self {
+            Preset::Bevy => None,
+            Preset::Khronos => Some(256),
+        }
     }
 }
 

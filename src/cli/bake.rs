@@ -12,6 +12,7 @@ use envlight::bake::{spot_check, BakeOptions, Baked, Baker, PendingBake, SpotChe
 use envlight::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
 use envlight::io::{write_atomic, LoadOptions};
 use envlight::math::lights::extract;
+use envlight::math::split_sum::DfgAxes;
 use envlight::{EnvMap, Mapping, Orientation};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
@@ -63,6 +64,11 @@ pub struct BakeArgs {
     /// Also write the split-sum DFG table once (dfg.ktx2: A, B per n·v column and √α row)
     #[arg(long)]
     dfg: bool,
+    /// Where the DFG table's entries sit: endpoints (n·v = i/(size − 1), envlight's lookups) or
+    /// centres (texel centres, (i + ½)/size, as a plain texture lookup reads them)
+    /// [default: endpoints; khronos: centres]
+    #[arg(long)]
+    dfg_samples: Option<String>,
     /// Bake only the i-th of n deterministic subsets (1-based), e.g. 2/8
     #[arg(long)]
     shard: Option<String>,
@@ -115,6 +121,7 @@ struct BakeFile {
     format: Option<String>,
     texels: Option<String>,
     dfg: Option<bool>,
+    dfg_samples: Option<String>,
     chain: Option<bool>,
     lights: Option<LightsKey>,
     check: Option<u32>,
@@ -383,6 +390,7 @@ struct Plan {
     lights: LightsMode,
     check: u32,
     dfg: bool,
+    dfg_axes: DfgAxes,
 }
 
 impl Plan {
@@ -425,6 +433,7 @@ impl Plan {
             samples: a.samples.or(file.samples).unwrap_or(d.samples),
             chain: a.chain || file.chain == Some(true),
             lights: lights == LightsMode::Exact,
+            dfg_size: preset.and_then(|p| p.dfg_size()).unwrap_or(d.dfg_size),
             ..d
         };
         options.validate()?;
@@ -451,6 +460,11 @@ impl Plan {
             }
             None => preset.map_or(Irradiance::E, |p| p.irradiance()),
         };
+        let dfg_axes = match a.dfg_samples.clone().or(file.dfg_samples) {
+            Some(s) => DfgAxes::parse(&s)
+                .ok_or_else(|| anyhow!("--dfg-samples {s}: endpoints or centres"))?,
+            None => preset.map_or(DfgAxes::Endpoints, |p| p.dfg_axes()),
+        };
         let user = Orientation {
             flip_u: a.flip_u || file.flip_u == Some(true),
             flip_v: a.flip_v || file.flip_v == Some(true),
@@ -473,7 +487,8 @@ impl Plan {
             irradiance,
             lights,
             check: a.check.or(file.check).unwrap_or(2),
-            dfg: a.dfg || file.dfg == Some(true),
+            dfg: a.dfg || file.dfg == Some(true) || preset.is_some_and(|p| p.lut()),
+            dfg_axes,
         })
     }
 
@@ -792,16 +807,7 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
     let ctx = context(g)?;
     let baker = Baker::new(&ctx)?;
     if plan.dfg {
-        let t = baker.dfg(plan.options.dfg_size, true)?;
-        let level: Vec<[f32; 4]> = t.iter().map(|v| [v[0], v[1], 0.0, 1.0]).collect();
-        let img = Ktx2Image {
-            width: plan.options.dfg_size,
-            height: plan.options.dfg_size,
-            faces: 1,
-            layers: 0,
-            levels: std::slice::from_ref(&level),
-        };
-        ktx2::write(&out.join("dfg.ktx2"), &img, Ktx2Format::Rgba32f)?;
+        write_dfg(&baker, &plan, out)?;
     }
     let run = Run {
         plan: &plan,
@@ -831,6 +837,36 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
             "{failed} of {} probes failed (see above and the manifest)",
             manifest.probes.len()
         );
+    }
+    Ok(())
+}
+
+/// Writes the split-sum table once: `dfg.ktx2` (RGBA32F, A and B in R and G, row √α after
+/// row), and for presets that want one `lut.png` (8-bit R = A, G = B, B = 0, row 0 at the
+/// smallest roughness: glTF-IBL-Sampler's `outputLUT.png`).
+fn write_dfg(baker: &Baker, plan: &Plan, out: &Path) -> Result<()> {
+    let size = plan.options.dfg_size;
+    let t = baker.dfg_at(size, true, plan.dfg_axes)?;
+    let level: Vec<[f32; 4]> = t.iter().map(|v| [v[0], v[1], 0.0, 1.0]).collect();
+    let img = Ktx2Image {
+        width: size,
+        height: size,
+        faces: 1,
+        layers: 0,
+        levels: std::slice::from_ref(&level),
+    };
+    ktx2::write(&out.join("dfg.ktx2"), &img, Ktx2Format::Rgba32f)?;
+    if plan.preset.is_some_and(|p| p.lut()) {
+        let byte = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+        let rgb: Vec<u8> = t.iter().flat_map(|v| [byte(v[0]), byte(v[1]), 0]).collect();
+        let png = image::RgbImage::from_raw(size, size, rgb)
+            .ok_or_else(|| anyhow!("the LUT's size does not match its texels"))?;
+        let mut bytes = Vec::new();
+        png.write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )?;
+        write_atomic(&out.join("lut.png"), &bytes)?;
     }
     Ok(())
 }
