@@ -36,11 +36,13 @@ fn quick_report_writes_its_three_files() {
         let e = rms(r);
         assert!(e.is_finite() && e >= 0.0, "{r:?}");
         assert!(r[col("gpu_ms")].parse::<f64>().unwrap() >= 0.0);
-        // The whole process includes the device's creation and the map's load.
-        assert!(
-            r[col("process_s")].parse::<f64>().unwrap()
-                > r[col("render_wall_s")].parse::<f64>().unwrap()
-        );
+        // Both times are measured (their order is not asserted: timing is for benchmarks,
+        // and a warm shader cache can make the separate process quicker than the first
+        // in-process render, as it did once in CI-like runs here).
+        for c in ["process_s", "render_wall_s"] {
+            let t = r[col(c)].parse::<f64>().unwrap();
+            assert!(t.is_finite() && t > 0.0, "{c}: {r:?}");
+        }
     }
     // Monte Carlo at 4x the samples halves its noise: at 256 it must beat 64 on each probe
     // and material (the reference's own noise, at 2 × 64 spp, is below either's).
