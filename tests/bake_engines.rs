@@ -1015,3 +1015,52 @@ fn the_khronos_preset_writes_its_lut_at_texel_centres() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `envlight bench formats` on a small probe: a section per format with the probe's row, sizes
+/// in the ratios the formats' texel sizes give (rgba16f one half of rgba32f, the packed formats
+/// and BC6H about a quarter and a sixteenth, headers aside), and rgba16f's errors within half
+/// an ulp (2⁻¹¹ relative).
+#[test]
+fn the_format_bench_reports_every_format() {
+    let dir = temp("bench-formats");
+    let p = dir.join("smooth.exr");
+    envlight::io::save_exr(&EnvMap::from_fn(Mapping::LatLong, W, H, 1, smooth_env), &p).unwrap();
+    let out = dir.join("formats.md");
+    let o = Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .args(["--validation", "--device", "cpu", "bench", "formats"])
+        .arg(&p)
+        .args([
+            "--specular-size",
+            "32",
+            "--specular-levels",
+            "4",
+            "--irradiance-size",
+            "8",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    ok(&o);
+    let md = std::fs::read_to_string(&out).unwrap();
+    for (format, ratio) in [
+        ("rgba16f", 0.5),
+        ("b10g11r11", 0.25),
+        ("e5b9g9r9", 0.25),
+        ("bc6h", 0.0625),
+    ] {
+        let section = md.split(&format!("## {format}\n")).nth(1).unwrap();
+        let row = section
+            .lines()
+            .find(|l| l.starts_with("| smooth.exr"))
+            .unwrap();
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        let of_full: f64 = cells[3].parse().unwrap();
+        assert!((of_full - ratio).abs() < 0.03, "{format}: {row}");
+        if format == "rgba16f" {
+            let worst: f64 = cells[5].split('/').nth(1).unwrap().trim().parse().unwrap();
+            assert!(worst <= 2f64.powi(-11) * 1.01, "{row}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -5,6 +5,7 @@
 pub mod accuracy;
 pub mod fis;
 pub mod fis_report;
+pub mod formats;
 pub mod peers;
 pub mod report;
 pub mod table;
@@ -109,6 +110,25 @@ pub enum Bench {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// What each KTX2 texel format and Zstandard cost and keep: per probe the bytes of its
+    /// cubes and each specular level's error against rgba32f (markdown)
+    Formats {
+        /// Probes, or folders whose .hdr/.exr/.dds/.pfm files are all taken
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// Specular cube face size at level 0
+        #[arg(long, default_value_t = 256)]
+        specular_size: u32,
+        /// Specular levels
+        #[arg(long, default_value_t = 8)]
+        specular_levels: u32,
+        /// Irradiance cube face size
+        #[arg(long, default_value_t = 32)]
+        irradiance_size: u32,
+        /// Also write the report here
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Conversion time at several source widths, against a plain copy of the same source
     Convert {
         /// Source lat-long widths
@@ -140,6 +160,22 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
             out,
         } => bench_fis(g, maps, sizes, fis, mc, *reference, biases, out),
         Bench::Convert { sizes, reps } => bench_convert(g, sizes, *reps),
+        Bench::Formats {
+            inputs,
+            specular_size,
+            specular_levels,
+            irradiance_size,
+            out,
+        } => {
+            let opts = envlight::bake::BakeOptions {
+                specular_size: *specular_size,
+                specular_levels: *specular_levels,
+                irradiance_size: *irradiance_size,
+                ..Default::default()
+            };
+            opts.validate()?;
+            formats::bench_formats(g, inputs, &opts, out.as_deref())
+        }
         Bench::Irradiance {
             sizes,
             source,

@@ -1,0 +1,211 @@
+//! `envlight bench formats`: what each KTX2 texel format and Zstandard cost and keep, per
+//! probe: the bytes of its irradiance and specular cubes, and each specular level's relative
+//! luminance error against the rgba32f cubes of the same bake (mean and worst texel), with the
+//! share of power clamped away where a format cannot hold a texel.
+
+use crate::cli::{context, probe_files, Global};
+use anyhow::{Context as _, Result};
+use envlight::bake::output::clamp_cube;
+use envlight::bake::{BakeOptions, Baker};
+use envlight::envmap::luminance;
+use envlight::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
+use envlight::io::LoadOptions;
+use envlight::Orientation;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The formats compared with rgba32f.
+const FORMATS: [Ktx2Format; 4] = [
+    Ktx2Format::Rgba16f,
+    Ktx2Format::B10g11r11,
+    Ktx2Format::E5b9g9r9,
+    Ktx2Format::Bc6h,
+];
+
+/// One probe in one format.
+struct Row {
+    probe: String,
+    format: Ktx2Format,
+    /// Bytes of irradiance.ktx2 + specular.ktx2, as they are and with Zstandard.
+    bytes: [usize; 2],
+    /// rgba32f's bytes, as they are.
+    full: usize,
+    /// Per specular level: mean and worst relative luminance error.
+    errors: Vec<(f64, f64)>,
+    /// The largest share of a level's power clamped away.
+    clamped: f64,
+}
+
+/// Relative luminance errors of `got` against `want` over texels whose luminance is above
+/// 1e-6 of the level's brightest: (mean, worst).
+fn errors(got: &[[f32; 4]], want: &[[f32; 4]]) -> (f64, f64) {
+    let y = |t: &[f32; 4]| luminance([t[0] as f64, t[1] as f64, t[2] as f64]);
+    let top = want.iter().map(y).fold(0.0, f64::max);
+    let (mut sum, mut worst, mut n) = (0.0, 0.0f64, 0usize);
+    for (g, w) in got.iter().zip(want) {
+        let yw = y(w);
+        if yw > 1e-6 * top {
+            let e = (y(g) - yw).abs() / yw;
+            sum += e;
+            worst = worst.max(e);
+            n += 1;
+        }
+    }
+    (sum / n.max(1) as f64, worst)
+}
+
+/// A cube written in one format: its bytes as they are and with Zstandard, its levels as
+/// decoded back, and the largest share of a level's power clamped away.
+struct Encoded {
+    bytes: [usize; 2],
+    levels: Vec<Vec<[f32; 4]>>,
+    clamped: f64,
+}
+
+/// One probe's cube (`size` at level 0) in `format`.
+fn encode_cube(levels: &[Vec<[f32; 4]>], size: u32, format: Ktx2Format) -> Result<Encoded> {
+    let mut clamped = levels.to_vec();
+    let c = clamp_cube(format, size, &mut clamped);
+    let img = Ktx2Image {
+        width: size,
+        height: size,
+        faces: 6,
+        layers: 0,
+        levels: &clamped,
+    };
+    let plain = ktx2::encode_with(&img, format, Supercompression::None)?;
+    let zstd = ktx2::encode_with(&img, format, Supercompression::Zstd)?;
+    let back = ktx2::decode(&plain)?;
+    Ok(Encoded {
+        bytes: [plain.len(), zstd.len()],
+        levels: back.levels,
+        clamped: c.worst(),
+    })
+}
+
+/// Runs `envlight bench formats`.
+pub fn bench_formats(
+    g: &Global,
+    inputs: &[PathBuf],
+    opts: &BakeOptions,
+    out: Option<&Path>,
+) -> Result<()> {
+    let mut files = Vec::new();
+    for p in inputs {
+        if p.is_dir() {
+            files.extend(probe_files(p)?);
+        } else {
+            files.push(p.clone());
+        }
+    }
+    files.sort();
+    let ctx = context(g)?;
+    let baker = Baker::new(&ctx)?;
+    let mut rows = Vec::new();
+    for path in &files {
+        let map = envlight::io::load(path, &LoadOptions::default())
+            .with_context(|| path.display().to_string())?;
+        let baked = baker.bake(&map, &Orientation::default(), opts)?;
+        let probe = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default();
+        let irr = std::slice::from_ref(&baked.irradiance);
+        let full = ktx2_bytes(irr, opts.irradiance_size, Ktx2Format::Rgba32f)?
+            + ktx2_bytes(&baked.specular, opts.specular_size, Ktx2Format::Rgba32f)?;
+        for format in FORMATS {
+            let i = encode_cube(irr, opts.irradiance_size, format)?;
+            let sp = encode_cube(&baked.specular, opts.specular_size, format)?;
+            let errors = sp
+                .levels
+                .iter()
+                .zip(&baked.specular)
+                .map(|(g, w)| errors(g, w))
+                .collect();
+            rows.push(Row {
+                probe: probe.clone(),
+                format,
+                bytes: [i.bytes[0] + sp.bytes[0], i.bytes[1] + sp.bytes[1]],
+                full,
+                errors,
+                clamped: i.clamped.max(sp.clamped),
+            });
+        }
+        eprintln!("{probe}: done");
+    }
+    let report = markdown(&rows, opts, &ctx.info().name);
+    print!("{report}");
+    if let Some(out) = out {
+        envlight::io::write_atomic(out, report.as_bytes())?;
+        eprintln!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+fn ktx2_bytes(levels: &[Vec<[f32; 4]>], size: u32, format: Ktx2Format) -> Result<usize> {
+    let img = Ktx2Image {
+        width: size,
+        height: size,
+        faces: 6,
+        layers: 0,
+        levels,
+    };
+    Ok(ktx2::encode(&img, format)?.len())
+}
+
+/// The report: per format, a row per probe with sizes and errors, and the totals.
+fn markdown(rows: &[Row], opts: &BakeOptions, device: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# KTX2 texel formats: size and error against rgba32f\n\n\
+         `envlight bench formats` on {device}: per probe, `irradiance.ktx2` ({0}²) + \
+         `specular.ktx2` ({1}², {2} levels) baked once (lights extracted, {3} samples), then \
+         written in each format. Bytes as written and with `--zstd`; error: relative luminance \
+         error of each specular texel against the rgba32f cube (texels above 1e-6 of the \
+         level's brightest), mean / worst, at level 0, the middle level and the last; clamped: \
+         the largest share of a level's power clamped away.\n",
+        opts.irradiance_size, opts.specular_size, opts.specular_levels, opts.samples
+    );
+    for format in FORMATS {
+        let _ = writeln!(
+            s,
+            "## {}\n\n| probe | bytes | of rgba32f | with zstd | level 0 mean / worst | level {} | level {} | clamped |\n|---|---|---|---|---|---|---|---|",
+            format.name(),
+            opts.specular_levels / 2,
+            opts.specular_levels - 1
+        );
+        let mut total = [0usize; 3];
+        for r in rows.iter().filter(|r| r.format == format) {
+            let e = |k: usize| {
+                let (m, w) = r.errors[k.min(r.errors.len() - 1)];
+                format!("{m:.1e} / {w:.1e}")
+            };
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.3} | {} ({:.2}) | {} | {} | {} | {:.2e} |",
+                r.probe,
+                r.bytes[0],
+                r.bytes[0] as f64 / r.full as f64,
+                r.bytes[1],
+                r.bytes[1] as f64 / r.bytes[0] as f64,
+                e(0),
+                e(r.errors.len() / 2),
+                e(r.errors.len() - 1),
+                r.clamped
+            );
+            total[0] += r.bytes[0];
+            total[1] += r.bytes[1];
+            total[2] += r.full;
+        }
+        let _ = writeln!(
+            s,
+            "| **all** | {} | {:.3} | {} ({:.2}) | | | | |\n",
+            total[0],
+            total[0] as f64 / total[2].max(1) as f64,
+            total[1],
+            total[1] as f64 / total[0].max(1) as f64
+        );
+    }
+    s
+}
