@@ -189,7 +189,14 @@ impl CubeClamp {
 /// `format` and reports the power it removed per level.
 pub fn clamp_cube(format: Ktx2Format, size: u32, levels: &mut [Vec<[f32; 4]>]) -> CubeClamp {
     let mut report = CubeClamp::default();
+    let top = format.largest();
+    let outside = |t: &[f32; 4]| (0..3).any(|c| t[c] > top[c] || (format.unsigned() && t[c] < 0.0));
     for (k, level) in levels.iter_mut().enumerate() {
+        // Most levels hold nothing to clamp: one scan, and no power sums.
+        if !level.iter().any(outside) {
+            report.power.push(0.0);
+            continue;
+        }
         let s = (size >> k).max(1);
         let before = cube_power(level, s);
         let c = crate::io::ktx2::clamp_levels(format, std::slice::from_mut(level));
