@@ -153,6 +153,46 @@ fn ktx2_bytes(levels: &[Vec<[f32; 4]>], size: u32, format: Ktx2Format) -> Result
     Ok(ktx2::encode(&img, format)?.len())
 }
 
+/// Totals per format: bytes against rgba32f and against e5b9g9r9, the range of Zstandard's
+/// ratio over the probes, and the worst mean error at level 0.
+fn summary(s: &mut String, rows: &[Row]) {
+    let total = |f: Ktx2Format, k: usize| -> usize {
+        rows.iter()
+            .filter(|r| r.format == f)
+            .map(|r| r.bytes[k])
+            .sum()
+    };
+    let full: usize = rows
+        .iter()
+        .filter(|r| r.format == Ktx2Format::Rgba16f)
+        .map(|r| r.full)
+        .sum();
+    let e5 = total(Ktx2Format::E5b9g9r9, 0) as f64;
+    let _ = writeln!(
+        s,
+        "## Summary ({} probes)\n\n| format | bytes of rgba32f | of e5b9g9r9 | zstd: kept, per probe (least – most) | level 0 mean error, worst probe |\n|---|---|---|---|---|",
+        rows.len() / FORMATS.len()
+    );
+    for f in FORMATS {
+        let mine: Vec<&Row> = rows.iter().filter(|r| r.format == f).collect();
+        let z = |r: &&Row| r.bytes[1] as f64 / r.bytes[0] as f64;
+        let zmin = mine.iter().map(z).fold(f64::INFINITY, f64::min);
+        let zmax = mine.iter().map(z).fold(0.0, f64::max);
+        let e0 = mine.iter().map(|r| r.errors[0].0).fold(0.0, f64::max);
+        let _ = writeln!(
+            s,
+            "| {} | {:.4} | {:.4} | {:.3} – {:.3} | {:.1e} |",
+            f.name(),
+            total(f, 0) as f64 / full.max(1) as f64,
+            total(f, 0) as f64 / e5,
+            zmin,
+            zmax,
+            e0
+        );
+    }
+    let _ = writeln!(s);
+}
+
 /// The report: per format, a row per probe with sizes and errors, and the totals.
 fn markdown(rows: &[Row], opts: &BakeOptions, device: &str) -> String {
     let mut s = String::new();
@@ -167,6 +207,7 @@ fn markdown(rows: &[Row], opts: &BakeOptions, device: &str) -> String {
          the largest share of a level's power clamped away.\n",
         opts.irradiance_size, opts.specular_size, opts.specular_levels, opts.samples
     );
+    summary(&mut s, rows);
     for format in FORMATS {
         let _ = writeln!(
             s,
