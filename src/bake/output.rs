@@ -179,10 +179,29 @@ pub struct CubeClamp {
 }
 
 impl CubeClamp {
+    /// Nothing clamped from `levels` levels.
+    pub fn none(levels: usize) -> CubeClamp {
+        CubeClamp {
+            power: vec![0.0; levels],
+            channels: 0,
+            negative: 0,
+        }
+    }
+
     /// The largest share over the levels.
     pub fn worst(&self) -> f64 {
         self.power.iter().copied().fold(0.0, f64::max)
     }
+}
+
+/// Whether a texel of `levels` lies outside what `format` holds (above its largest value, or
+/// negative in an unsigned format).
+pub fn needs_clamp(format: Ktx2Format, levels: &[Vec<[f32; 4]>]) -> bool {
+    let top = format.largest();
+    levels
+        .iter()
+        .flatten()
+        .any(|t| (0..3).any(|c| t[c] > top[c] || (format.unsigned() && t[c] < 0.0)))
 }
 
 /// Clamps every level of a cube (level k is `size >> k` a side, faces × rows × columns) into

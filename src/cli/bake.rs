@@ -6,7 +6,8 @@ use super::{context, Global};
 use anyhow::{anyhow, bail, Context as _, Result};
 use clap::Args;
 use envlight::bake::output::{
-    clamp_cube, compose, separate_options, CubeClamp, Irradiance, Preset, SeparateLights,
+    clamp_cube, compose, needs_clamp, separate_options, CubeClamp, Irradiance, Preset,
+    SeparateLights,
 };
 use envlight::bake::{spot_check, BakeOptions, Baked, Baker, PendingBake, SpotCheck};
 use envlight::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
@@ -17,6 +18,7 @@ use envlight::{EnvMap, Mapping, Orientation};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -516,15 +518,23 @@ type Files = (Vec<(PathBuf, Vec<u8>)>, Option<Clamps>);
 fn ktx2_files(dir: &Path, baked: &Baked, plan: &Plan) -> Result<Files> {
     let o = &plan.options;
     let scale = plan.irradiance.scale();
-    let mut irradiance = vec![baked
-        .irradiance
-        .iter()
-        .map(|t| [t[0] * scale, t[1] * scale, t[2] * scale, t[3]])
-        .collect::<Vec<_>>()];
-    let mut specular = baked.specular.clone();
+    // Copies only where the texels change (a copy of a 256² cube's fresh pages is a few ms).
+    let mut irradiance: Cow<[Vec<[f32; 4]>]> = match scale {
+        1.0 => Cow::Borrowed(std::slice::from_ref(&baked.irradiance)),
+        _ => Cow::Owned(vec![baked
+            .irradiance
+            .iter()
+            .map(|t| [t[0] * scale, t[1] * scale, t[2] * scale, t[3]])
+            .collect()]),
+    };
+    let mut specular = Cow::Borrowed(&baked.specular[..]);
+    let clamp = |levels: &mut Cow<[Vec<[f32; 4]>]>, size| match needs_clamp(plan.texels, levels) {
+        true => clamp_cube(plan.texels, size, levels.to_mut()),
+        false => CubeClamp::none(levels.len()),
+    };
     let clamps = Clamps {
-        irradiance: clamp_cube(plan.texels, o.irradiance_size, &mut irradiance),
-        specular: clamp_cube(plan.texels, o.specular_size, &mut specular),
+        irradiance: clamp(&mut irradiance, o.irradiance_size),
+        specular: clamp(&mut specular, o.specular_size),
     };
     let clamped = clamps.irradiance.channels
         + clamps.irradiance.negative
