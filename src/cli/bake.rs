@@ -43,7 +43,8 @@ pub struct BakeArgs {
     /// Specular cube face size at level 0 [default: 256]
     #[arg(long)]
     specular_size: Option<u32>,
-    /// Specular levels: level k holds GGX α = (k/(levels − 1))² [default: 8]
+    /// Specular levels: level k holds GGX α = (k/(levels − 1))² [default: 8, or as many as a
+    /// smaller cube has]
     #[arg(long)]
     specular_levels: Option<u32>,
     /// FIS samples per specular texel [default: 256]
@@ -431,7 +432,11 @@ impl Plan {
                 .specular_levels
                 .or(file.specular_levels)
                 .or(preset.and_then(|p| p.specular_levels(specular_size)))
-                .unwrap_or(d.specular_levels),
+                .unwrap_or_else(|| {
+                    // 8, or every level a smaller cube has.
+                    let most = envlight::passes::map::full_mips(specular_size, specular_size);
+                    d.specular_levels.min(most)
+                }),
             samples: a.samples.or(file.samples).unwrap_or(d.samples),
             chain: a.chain || file.chain == Some(true),
             lights: lights == LightsMode::Exact,
