@@ -547,14 +547,11 @@ fn ktx2_files(dir: &Path, baked: &Baked, plan: &Plan) -> Result<Files> {
         + clamps.specular.negative
         > 0;
     let cube = |levels: &[Vec<[f32; 4]>], size| -> Result<Vec<u8>> {
-        let img = Ktx2Image {
-            width: size,
-            height: size,
-            faces: 6,
-            layers: 0,
-            levels,
-        };
-        Ok(ktx2::encode_with(&img, plan.texels, plan.sc)?)
+        Ok(ktx2::encode_with(
+            &Ktx2Image::cube(size, levels),
+            plan.texels,
+            plan.sc,
+        )?)
     };
     let mut files = vec![
         (

@@ -268,6 +268,19 @@ pub struct Ktx2Image<'a> {
     pub levels: &'a [Vec<[f32; 4]>],
 }
 
+impl<'a> Ktx2Image<'a> {
+    /// A cube map `size` a side at level 0 holding `levels`.
+    pub fn cube(size: u32, levels: &'a [Vec<[f32; 4]>]) -> Ktx2Image<'a> {
+        Ktx2Image {
+            width: size,
+            height: size,
+            faces: 6,
+            layers: 0,
+            levels,
+        }
+    }
+}
+
 /// One DFD sample: bit offset, bit length, channel id with its qualifier bits, lower, upper.
 fn sample(d: &mut Vec<u8>, offset: u16, bits: u8, channel: u8, lower: u32, upper: u32) {
     d.extend(offset.to_le_bytes());

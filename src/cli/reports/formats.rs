@@ -66,13 +66,7 @@ struct Encoded {
 fn encode_cube(levels: &[Vec<[f32; 4]>], size: u32, format: Ktx2Format) -> Result<Encoded> {
     let mut clamped = levels.to_vec();
     let c = clamp_cube(format, size, &mut clamped);
-    let img = Ktx2Image {
-        width: size,
-        height: size,
-        faces: 6,
-        layers: 0,
-        levels: &clamped,
-    };
+    let img = Ktx2Image::cube(size, &clamped);
     let plain = ktx2::encode_with(&img, format, Supercompression::None)?;
     let zstd = ktx2::encode_with(&img, format, Supercompression::Zstd)?;
     let back = ktx2::decode(&plain)?;
@@ -143,14 +137,7 @@ pub fn bench_formats(
 }
 
 fn ktx2_bytes(levels: &[Vec<[f32; 4]>], size: u32, format: Ktx2Format) -> Result<usize> {
-    let img = Ktx2Image {
-        width: size,
-        height: size,
-        faces: 6,
-        layers: 0,
-        levels,
-    };
-    Ok(ktx2::encode(&img, format)?.len())
+    Ok(ktx2::encode(&Ktx2Image::cube(size, levels), format)?.len())
 }
 
 /// Totals per format: bytes against rgba32f and against e5b9g9r9, the range of Zstandard's
