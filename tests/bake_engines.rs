@@ -838,6 +838,7 @@ fn two_bakes_into_one_folder_bake_each_probe_once() {
     let single = dir.join("single");
     let o = spawn(&single).wait_with_output().unwrap();
     ok(&o);
+    common::ktx_validate_all(&single);
     for k in 0..4 {
         for f in ["sh.json", "irradiance.ktx2", "specular.ktx2"] {
             let p = format!("p{k}.exr/{f}");
