@@ -925,13 +925,7 @@ mod tests {
                     .collect()
             })
             .collect();
-        let img = Ktx2Image {
-            width: 8,
-            height: 8,
-            faces: 6,
-            layers: 0,
-            levels: &levels,
-        };
+        let img = Ktx2Image::cube(8, &levels);
         for format in [
             Ktx2Format::Rgba16f,
             Ktx2Format::Rgba32f,
@@ -988,13 +982,7 @@ mod tests {
                     .collect()
             })
             .collect();
-        let img = Ktx2Image {
-            width: 8,
-            height: 8,
-            faces: 6,
-            layers: 0,
-            levels: &levels,
-        };
+        let img = Ktx2Image::cube(8, &levels);
         for (format, rel) in [
             (Ktx2Format::Rgba32f, 0.0),
             (Ktx2Format::Rgba16f, 2f32.powi(-11)),
