@@ -498,16 +498,43 @@ vec3 sh_brdf(Object ob, vec3 n, vec3 v) {
     return max(sum, vec3(0.0));
 }
 
-// Twin of math::split_sum::shade: the prefiltered chain at lod √α·(levels − 1) along r, times
-// A + B (F = 1) read bilinearly at (n·v, √α). extra = (levels − 1, table offset in entries,
-// table size, 0); brdf.y = α.
+// The chain along d at GGX α: lod √α·(levels − 1), extra.x = levels − 1.
+vec3 split_chain_read(Object ob, vec3 d, float alpha) {
+    Coord c = dir_to_coord(MAPPING_DUAL_PARABOLOID, d);
+    return textureLod(split_chain, vec3(c.uv, float(c.layer)), sqrt(clamp(alpha, 0.0, 1.0)) * ob.extra.x).rgb;
+}
+
+// Twin of math::split_sum::taps_mean: the chain read by `taps` points of the real GGX lobe
+// for (n, v), Hammersley points through the visible-normal sampler, each at
+// math::split_sum::tap_alpha, weighted by f·cos/pdf; their weighted mean.
+vec3 split_taps(Object ob, vec3 wo, vec3 t, vec3 bt, vec3 n, uint taps) {
+    Brdf b = Brdf(uint(ob.brdf.x), ob.brdf.y, ob.brdf.z);
+    vec3 sum = vec3(0.0);
+    float total = 0.0;
+    for (uint i = 0u; i < taps; i++) {
+        vec3 wi = brdf_sample(b, wo, hammersley(i, taps));
+        if (wi.z <= 0.0) continue;
+        float w = brdf_weight(b, wo, wi);
+        float pdf = brdf_pdf(b, wo, wi);
+        if (!(pdf > 0.0)) continue;
+        float a = min(SPLIT_TAP_SCALE * sqrt(1.0 / (float(taps) * pdf * 4.0 * PI)), 1.0);
+        sum += w * split_chain_read(ob, normalize(t * wi.x + bt * wi.y + n * wi.z), a);
+        total += w;
+    }
+    return total > 0.0 ? sum / total : vec3(0.0);
+}
+
+// Twin of math::split_sum::shade (one tap) and shade_taps: the prefiltered chain at lod
+// √α·(levels − 1) along r, or by the lobe's taps (brdf.w = taps), times A + B (F = 1) read
+// bilinearly at (n·v, √α). extra = (levels − 1, table offset in entries, table size, 1/∫K
+// with lights extracted, else 0); brdf.y = α.
 vec3 split_sum(Object ob, vec3 n, vec3 v, vec3 r) {
     float ra = sqrt(clamp(ob.brdf.y, 0.0, 1.0));
-    Coord c = dir_to_coord(MAPPING_DUAL_PARABOLOID, r);
-    vec3 p = textureLod(split_chain, vec3(c.uv, float(c.layer)), ra * ob.extra.x).rgb;
     vec3 t, bt;
     shading_frame(n, t, bt);
-    float mu = clamp(local_view(v, t, bt, n).z, 0.0, 1.0);
+    vec3 wo = local_view(v, t, bt, n);
+    uint taps = uint(ob.brdf.w);
+    float mu = clamp(wo.z, 0.0, 1.0);
     uint off = uint(ob.extra.y), size = uint(ob.extra.z);
     vec2 q = vec2(mu, ra) * float(size - 1u);
     uvec2 i0 = min(uvec2(floor(q)), uvec2(max(size, 2u) - 2u));
@@ -515,8 +542,18 @@ vec3 split_sum(Object ob, vec3 n, vec3 v, vec3 r) {
     uvec2 i1 = min(i0 + 1u, uvec2(size - 1u));
     vec2 ab = mix(mix(dfg[off + i0.y * size + i0.x], dfg[off + i0.y * size + i1.x], f.x),
                   mix(dfg[off + i1.y * size + i0.x], dfg[off + i1.y * size + i1.x], f.x), f.y);
-    // With lights extracted the chain holds the residual; the light texels are added at this
-    // α exactly (extra.w = 1/∫K; math::lights::light_sum's rule).
+    if (taps >= 2u) {
+        vec3 e = split_taps(ob, wo, t, bt, n, taps) * (ab.x + ab.y);
+        // Extracted lights under the BRDF itself, as FIS adds them (its allowance rule).
+        if (ob.extra.w > 0.0) {
+            Brdf b = Brdf(uint(ob.brdf.x), ob.brdf.y, ob.brdf.z);
+            float scale = max(ob.brdf.y, GGX_ALPHA_MIN);
+            float allowance = LIGHT_TREE_BUDGET * dot(e, LUMINANCE) * max(wo.z, scale);
+            e += fis_lights(b, wo, t, bt, n, r, scale, vec3(0.0), allowance, false);
+        }
+        return e;
+    }
+    vec3 p = split_chain_read(ob, r, ob.brdf.y);
     if (ob.extra.w > 0.0) {
         float a = max(ob.brdf.y, GGX_ALPHA_MIN);
         float a2 = a * a;

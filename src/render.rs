@@ -220,9 +220,10 @@ pub fn object_record_with(o: &SceneObject, data_offset: u32, table_offset: u32) 
     g
 }
 
-/// Sets a split-sum object's record: the chain's `levels`, and its DFG table (`dfg_size` a
-/// side) at entry `dfg_offset` of the tables.
-pub fn split_record(g: &mut GpuObject, levels: u32, dfg_offset: u32, dfg_size: u32) {
+/// Sets a split-sum object's record: the chain's `levels`, its DFG table (`dfg_size` a side)
+/// at entry `dfg_offset` of the tables, and its `taps` per pixel (brdf.w).
+pub fn split_record(g: &mut GpuObject, levels: u32, dfg_offset: u32, dfg_size: u32, taps: u32) {
+    g.brdf[3] = taps as f32;
     g.extra = [
         levels.saturating_sub(1) as f32,
         dfg_offset as f32,
@@ -731,7 +732,7 @@ impl Renderer {
                 {
                     let form = forms.iter().position(|&c| c == correlated).unwrap_or(0);
                     let entries = (form * SplitSum::dfg_floats(ss.dfg_size) / 2) as u32;
-                    split_record(g, chain.mips(), entries, ss.dfg_size);
+                    split_record(g, chain.mips(), entries, ss.dfg_size, ss.taps);
                 }
             }
         }

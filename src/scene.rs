@@ -173,6 +173,18 @@ pub struct SplitSumSettings {
     /// Entries per side of the DFG table.
     #[serde(default = "dfg_size")]
     pub dfg_size: u32,
+    /// Reads of the chain per pixel. 1 is Karis' recipe: one read along the reflected
+    /// direction at the material's α (the lobe taken at n = v = r). From 2, the "lobe taps"
+    /// recipe: the taps follow the real GGX lobe for this normal and view (its stretch, its
+    /// shift towards the normal, its horizon), each reading the chain at a narrower α
+    /// ([`crate::math::split_sum::tap_alpha`]), and extracted lights are added under the BRDF
+    /// itself instead of the n = v = r kernel.
+    #[serde(default = "split_taps")]
+    pub taps: u32,
+}
+
+fn split_taps() -> u32 {
+    crate::abi::split_sum::DEFAULT_TAPS
 }
 
 fn split_levels() -> u32 {
@@ -193,6 +205,7 @@ impl Default for SplitSumSettings {
             samples: split_samples(),
             bias: None,
             dfg_size: dfg_size(),
+            taps: split_taps(),
         }
     }
 }
@@ -497,6 +510,13 @@ impl Scene {
             return Err(format!(
                 "split_sum dfg_size {} outside 2 to {max_dfg}",
                 ss.dfg_size
+            ));
+        }
+        let max_taps = crate::abi::split_sum::MAX_TAPS;
+        if !(1..=max_taps).contains(&ss.taps) {
+            return Err(format!(
+                "split_sum taps {} outside 1 to {max_taps}",
+                ss.taps
             ));
         }
         if self.mc.per_frame == 0 {
@@ -926,5 +946,14 @@ mod tests {
         assert!(e.contains("GGX alpha"), "{e}");
         let bad = GLOSSY.replace("width = 64", "width = 0");
         assert!(Scene::parse(&bad).is_err());
+        for (taps, ok) in [(0, false), (1, true), (16, true), (65, false)] {
+            let text = format!("{GLOSSY}\n[split_sum]\ntaps = {taps}\n");
+            let r = Scene::parse(&text);
+            assert_eq!(r.is_ok(), ok, "taps {taps}: {:?}", r.err());
+            if !ok {
+                let e = r.unwrap_err().to_string();
+                assert!(e.contains("taps"), "{e}");
+            }
+        }
     }
 }

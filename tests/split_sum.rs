@@ -149,6 +149,7 @@ fn render_matches_its_float64_twin() {
             samples: 16,
             bias: None,
             dfg_size: 16,
+            taps: 1,
         };
         let chain = prefiltered_chain(
             &mip::chain(&dp),
@@ -159,25 +160,36 @@ fn render_matches_its_float64_twin() {
         );
         let cam = sphere_camera(24);
         let renderer = Renderer::new(&ctx);
-        for b in [ggx(0.05, false), ggx(0.3, true), ggx(0.9, false)] {
+        for (b, taps) in [
+            (ggx(0.05, false), 1),
+            (ggx(0.3, true), 1),
+            (ggx(0.9, false), 1),
+            (ggx(0.05, true), 8),
+            (ggx(0.3, false), 4),
+            (ggx(0.6, true), 16),
+        ] {
             let Brdf::Ggx { alpha, correlated } = b else {
                 unreachable!()
             };
             let table = dfg_table(16, correlated);
             // The pass alone: the chain holds the whole map (a smooth map still has texels
             // above the default extraction's 2 × the mean).
-            let mut sc = split_scene(cam, b, dp_size, settings);
+            let mut sc = split_scene(cam, b, dp_size, SplitSumSettings { taps, ..settings });
             sc.environment.lights = envlight::scene::LightsMode::None;
             let r = renderer.render(&sc, &env).unwrap();
             let mut worst: f64 = 0.0;
             for (k, normal, d) in sphere_pixels(&cam) {
-                let want = split_sum::shade(&chain, &table, 16, alpha, normal, -d);
+                let want = if taps == 1 {
+                    split_sum::shade(&chain, &table, 16, alpha, normal, -d)
+                } else {
+                    split_sum::shade_taps(&chain, &table, 16, &b, normal, -d, taps)
+                };
                 for (g, w) in r.frame.texels[k].iter().zip(want) {
                     worst = worst.max((*g as f64 - w).abs() / w);
                 }
             }
-            eprintln!("{b:?}: worst {worst:.2e}");
-            assert!(worst < 1e-5, "{b:?}: {worst:e}");
+            eprintln!("{b:?} taps {taps}: worst {worst:.2e}");
+            assert!(worst < 1e-5, "{b:?} taps {taps}: {worst:e}");
         }
     }
     common::finish(ctx);
@@ -195,11 +207,14 @@ fn furnace_shows_the_albedo() {
         let cam = sphere_camera(20);
         let renderer = Renderer::new(&ctx);
         let mut bins = [0.0f64; 2];
-        for b in [
-            ggx(1e-4, false),
-            ggx(0.1, true),
-            ggx(0.5, false),
-            ggx(1.0, true),
+        // Lobe taps are a weighted mean of the chain, normalised by their weights: 1 here.
+        for (b, taps) in [
+            (ggx(1e-4, false), 1),
+            (ggx(0.1, true), 1),
+            (ggx(0.5, false), 1),
+            (ggx(1.0, true), 1),
+            (ggx(0.1, false), 8),
+            (ggx(0.5, true), 4),
         ] {
             let r = renderer
                 .render(
@@ -210,6 +225,7 @@ fn furnace_shows_the_albedo() {
                         SplitSumSettings {
                             size: Some(16),
                             levels: 2,
+                            taps,
                             ..SplitSumSettings::default()
                         },
                     ),
@@ -226,7 +242,7 @@ fn furnace_shows_the_albedo() {
                 worst[grazing as usize] = worst[grazing as usize].max(e);
             }
             eprintln!(
-                "{b:?}: {n} pixels, worst below 80° {:.1e}, beyond {:.1e}",
+                "{b:?} taps {taps}: {n} pixels, worst below 80° {:.1e}, beyond {:.1e}",
                 worst[0], worst[1]
             );
             assert!(n > 200);
@@ -321,6 +337,7 @@ fn render_with_lights_matches_its_float64_twin() {
             samples: 16,
             bias: None,
             dfg_size: 16,
+            taps: 1,
         };
         let chain = prefiltered_chain(
             &mip::chain(&dp),
@@ -367,6 +384,46 @@ fn render_with_lights_matches_its_float64_twin() {
             }
             eprintln!("{b:?}: worst {worst:.2e}, {lit} pixels lit mostly by the sun");
             assert!(worst < 1e-4, "{b:?}: {worst:e}");
+            assert!(lit > 5, "{lit}");
+        }
+        // The lobe taps recipe: its taps over the residual's chain, plus the light texels under
+        // the BRDF itself (`LightTree::sum_brdf`, FIS's twin, its estimate the residual's).
+        for b in [ggx(0.1, true), ggx(0.5, false)] {
+            let Brdf::Ggx { alpha, correlated } = b else {
+                unreachable!()
+            };
+            let tree = envlight::math::light_tree::LightTree::new(prepare(
+                &env,
+                &ex,
+                glam::DMat3::IDENTITY,
+                alpha,
+            ));
+            let table = dfg_table(16, correlated);
+            let taps = 8;
+            let r = renderer
+                .render(
+                    &split_scene(cam, b, dp_size, SplitSumSettings { taps, ..settings }),
+                    &env,
+                )
+                .unwrap();
+            let scale = alpha.max(envlight::math::brdf::GGX_ALPHA_MIN);
+            let (mut worst, mut lit): (f64, usize) = (0.0, 0);
+            for (k, normal, d) in sphere_pixels(&cam) {
+                let v = -d;
+                let base = split_sum::shade_taps(&chain, &table, 16, &b, normal, v, taps);
+                let est = envlight::envmap::luminance(base);
+                let l = tree.sum_brdf(&b, normal, v, scale, est);
+                for c in 0..3 {
+                    let want = base[c] + l[c];
+                    let g = r.frame.texels[k][c] as f64;
+                    worst = worst.max((g - want).abs() / want);
+                }
+                if l[1] > base[1] {
+                    lit += 1;
+                }
+            }
+            eprintln!("{b:?} taps {taps}: worst {worst:.2e}, {lit} pixels lit mostly by the sun");
+            assert!(worst < 1e-4, "{b:?} taps {taps}: {worst:e}");
             assert!(lit > 5, "{lit}");
         }
     }

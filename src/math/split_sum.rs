@@ -319,6 +319,67 @@ pub fn shade(
     p.map(|x| x * (ab[0] + ab[1]))
 }
 
+/// The α a lobe tap reads the chain at: [`crate::abi::split_sum::TAP_SCALE`]·√(Ωs/4π), Ωs =
+/// 1/(taps·pdf) the tap's share of the lobe, at most 1.
+pub fn tap_alpha(taps: u32, pdf: f64) -> f64 {
+    let omega = 1.0 / (taps as f64 * pdf);
+    (crate::abi::split_sum::TAP_SCALE * (omega / (4.0 * std::f64::consts::PI)).sqrt()).min(1.0)
+}
+
+/// The "lobe taps" recipe's radiance: `taps` Hammersley points of `brdf`'s sampler for the
+/// real normal `n` and view `v`, each read from the chain at [`tap_alpha`] along its
+/// direction, weighted by f·cos/pdf; their weighted mean (0 where every tap is below the
+/// horizon). Unlike P(r, α) it follows the lobe's stretch, its shift towards the normal and
+/// its horizon at grazing views.
+pub fn taps_mean(prefiltered: &[Level], brdf: &Brdf, n: DVec3, v: DVec3, taps: u32) -> [f64; 3] {
+    let frame = Frame::new(n);
+    let wo = local_view(&frame, v);
+    let levels = prefiltered.len() as u32;
+    let (mut sum, mut total) = ([0.0; 3], 0.0);
+    for i in 0..taps {
+        let wi = brdf.sample(wo, hammersley(i, taps));
+        if wi.z <= 0.0 {
+            continue;
+        }
+        let pdf = brdf.pdf(wo, wi);
+        if pdf <= 0.0 {
+            continue;
+        }
+        let w = brdf.weight(wo, wi);
+        let d = frame.to_world(wi).normalize();
+        let l = lookup_own_half(prefiltered, d, alpha_lod(tap_alpha(taps, pdf), levels));
+        for c in 0..3 {
+            sum[c] += w * l[c];
+        }
+        total += w;
+    }
+    if total > 0.0 {
+        sum.map(|x| x / total)
+    } else {
+        [0.0; 3]
+    }
+}
+
+/// Split-sum shading by the lobe taps recipe: [`taps_mean`] times A + B (F = 1) from the DFG
+/// table; the twin of `shade.frag`'s split_sum with taps ≥ 2 (lights aside).
+pub fn shade_taps(
+    prefiltered: &[Level],
+    table: &[[f64; 2]],
+    table_size: u32,
+    brdf: &Brdf,
+    n: DVec3,
+    v: DVec3,
+    taps: u32,
+) -> [f64; 3] {
+    let Brdf::Ggx { alpha, .. } = *brdf else {
+        return [0.0; 3];
+    };
+    let wo = local_view(&Frame::new(n), v);
+    let p = taps_mean(prefiltered, brdf, n, v, taps);
+    let ab = dfg_lookup(table, table_size, wo.z, alpha);
+    p.map(|x| x * (ab[0] + ab[1]))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

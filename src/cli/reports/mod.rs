@@ -7,6 +7,7 @@ pub mod fis;
 pub mod fis_report;
 pub mod formats;
 pub mod peers;
+mod recipes;
 pub mod report;
 pub mod table;
 

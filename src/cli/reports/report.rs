@@ -50,8 +50,9 @@ pub struct ReportArgs {
     /// With --table: only the probes whose file names contain one of these
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
-    /// Instead: split-sum's error against the reference on every probe of the folder at GGX
-    /// α 0.1, 0.2, 0.3, 0.45, 0.6 (split_sum.md, split_sum.csv)
+    /// Instead: the specular recipes (split-sum with and without extracted lights, lobe taps
+    /// 4, 8, 16), FIS and SH-BRDF against the reference on every probe of the folder at GGX
+    /// α 0.05 to 0.6, with their per-frame GPU time (split_sum.md, split_sum.csv)
     #[arg(long)]
     split_sum_every_probe: bool,
     /// Split-sum's roughness levels (default: the scene default)
@@ -263,7 +264,7 @@ pub(super) fn sphere_pixels(cam: &Camera) -> Vec<(usize, u32)> {
 
 /// (relative RMS, mean bias, worst tile) of `a` against `m` over `pixels`, all channels; tiles
 /// with fewer than 16 sphere pixels are left out of the worst.
-fn errors(a: &EnvMap, m: &EnvMap, pixels: &[(usize, u32)]) -> (f64, f64, f64) {
+pub(super) fn errors(a: &EnvMap, m: &EnvMap, pixels: &[(usize, u32)]) -> (f64, f64, f64) {
     let (mut se, mut sm2, mut sa, mut sm) = (0.0, 0.0, 0.0, 0.0);
     let mut tiles: std::collections::BTreeMap<u32, (f64, f64, u32)> = Default::default();
     for &(k, tile) in pixels {
@@ -332,7 +333,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         return super::table::table(&renderer, &dir, size, reference, &args.out, &device, &pick);
     }
     if args.split_sum_every_probe {
-        return split_sweep(&renderer, &dir, cam, reference, &args.out, &device, split);
+        return super::recipes::sweep(&renderer, &dir, cam, reference, &args.out, &device, split);
     }
     let mut rows = Vec::new();
     let started = Instant::now();
@@ -430,78 +431,6 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         out.display(),
         rows.len()
     );
-    Ok(())
-}
-
-/// Split-sum against the reference on every probe of `dir`, GGX (height-correlated) α 0.1 to
-/// 0.6, default settings: split_sum.md and split_sum.csv in `out`.
-fn split_sweep(
-    renderer: &Renderer,
-    dir: &Path,
-    cam: Camera,
-    reference: u32,
-    out: &Path,
-    device: &str,
-    split: SplitSumSettings,
-) -> Result<()> {
-    let pixels = sphere_pixels(&cam);
-    let files = super::super::probe_files(dir)?;
-    let alphas = [0.1, 0.2, 0.3, 0.45, 0.6];
-    let mut csv = String::from("probe,alpha,relative_rms,mean_bias,worst_tile,reference_noise\n");
-    let mut md = format!(
-        "# Split-sum against Monte Carlo on every probe\n\nDevice: {device}. GGX \
-         (height-correlated Smith), split-sum {split:?}; sphere {}² from normal to grazing \
-         incidence; reference 2 × {reference} spp MIS. Relative RMS over the sphere (all \
-         channels), mean bias in parentheses.\n\n| probe | {} | reference noise |\n|---|{}---|\n",
-        cam.width,
-        alphas.map(|a| format!("α {a}")).join(" | "),
-        "---|".repeat(alphas.len())
-    );
-    for path in &files {
-        let env = envlight::io::load(path, &envlight::io::LoadOptions::default())
-            .with_context(|| path.display().to_string())?;
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().to_string())
-            .unwrap_or_default();
-        let mut cells = Vec::new();
-        let mut worst_noise: f64 = 0.0;
-        for alpha in alphas {
-            let b = Brdf::Ggx {
-                alpha,
-                correlated: true,
-            };
-            let mc = |seed| {
-                let t = Technique::Mc {
-                    samples: reference,
-                    error: None,
-                };
-                renderer.render(&scene(cam, b, t, None, seed, split), &env)
-            };
-            let (r1, r2) = (mc(1)?, mc(2)?);
-            let noise = errors(&r1.frame, &r2.frame, &pixels).0 / 2.0;
-            let truth = average(&r1.frame, &r2.frame);
-            let r = renderer.render(&scene(cam, b, Technique::SplitSum, None, 7, split), &env)?;
-            let (rms, bias, tile) = errors(&r.frame, &truth, &pixels);
-            eprintln!("{name} α {alpha}: {rms:.3e} (bias {bias:+.2e}, noise {noise:.1e})");
-            let _ = writeln!(
-                csv,
-                "{name},{alpha},{rms:.5e},{bias:.5e},{tile:.5e},{noise:.3e}"
-            );
-            cells.push(format!("{:.1}% ({:+.1}%)", 100.0 * rms, 100.0 * bias));
-            worst_noise = worst_noise.max(noise);
-        }
-        let _ = writeln!(
-            md,
-            "| {name} | {} | {:.2}% |",
-            cells.join(" | "),
-            100.0 * worst_noise
-        );
-    }
-    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
-    std::fs::write(out.join("split_sum.csv"), csv).with_context(|| "split_sum.csv")?;
-    std::fs::write(out.join("split_sum.md"), md).with_context(|| "split_sum.md")?;
-    println!("wrote {}/split_sum.md, split_sum.csv", out.display());
     Ok(())
 }
 
