@@ -6,6 +6,7 @@ pub mod accuracy;
 pub mod fis;
 pub mod fis_report;
 pub mod formats;
+pub mod ibl;
 pub mod peers;
 mod recipes;
 pub mod report;
@@ -111,6 +112,36 @@ pub enum Bench {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// GGX cubes of `envlight bake --preset khronos` beside glTF-IBL-Sampler's on the same
+    /// probes: whole-process seconds and each level's error against the exact prefilter, at
+    /// several sample counts for each (markdown)
+    Ibl {
+        /// Probes, or folders whose .hdr/.exr/.dds/.pfm files are all taken
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// glTF-IBL-Sampler's wrapper (default: $ENVLIGHT_IBLSAMPLER); without it envlight runs
+        /// alone
+        #[arg(long)]
+        sampler: Option<PathBuf>,
+        /// Cube face size at level 0 (levels: log2 of it, as the sampler's default)
+        #[arg(long, default_value_t = 256)]
+        size: u32,
+        /// Interleaved runs of each configuration (the median is reported)
+        #[arg(long, default_value_t = 3)]
+        runs: u32,
+        /// envlight's FIS samples per texel, one configuration each
+        #[arg(long, value_delimiter = ',', default_value = "16,64,256")]
+        ours: Vec<u32>,
+        /// glTF-IBL-Sampler's sample counts, one configuration each
+        #[arg(long, value_delimiter = ',', default_value = "16,64,256,1024")]
+        theirs: Vec<u32>,
+        /// Texels checked per level against the exact prefilter
+        #[arg(long, default_value_t = 192)]
+        texels: u32,
+        /// Also write the page here
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// What each KTX2 texel format and Zstandard cost and keep: per probe the bytes of its
     /// cubes and each specular level's error against rgba32f (markdown)
     Formats {
@@ -161,6 +192,30 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
             out,
         } => bench_fis(g, maps, sizes, fis, mc, *reference, biases, out),
         Bench::Convert { sizes, reps } => bench_convert(g, sizes, *reps),
+        Bench::Ibl {
+            inputs,
+            sampler,
+            size,
+            runs,
+            ours,
+            theirs,
+            texels,
+            out,
+        } => ibl::bench_ibl(
+            g,
+            &ibl::IblOptions {
+                inputs: inputs.clone(),
+                sampler: sampler
+                    .clone()
+                    .or_else(|| std::env::var_os("ENVLIGHT_IBLSAMPLER").map(PathBuf::from)),
+                size: *size,
+                runs: (*runs).max(1),
+                ours: ours.clone(),
+                theirs: theirs.clone(),
+                texels: (*texels).max(1),
+                out: out.clone(),
+            },
+        ),
         Bench::Formats {
             inputs,
             specular_size,
