@@ -71,3 +71,98 @@ fn quick_report_writes_its_three_files() {
     assert_eq!((png.width(), png.height()), (2 * 620, 520 + 90));
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// `report --cube`: a cube baked with the Khronos preset, scored in its own convention and
+/// as if it were Bevy's (a wrong frame: the cube turned and mirrored), on a map whose one
+/// bright lobe sits off every axis. Read in the wrong frame the highlight lands elsewhere:
+/// right ≤ 0.5 × wrong at every α (measured 24-60% against 126-134%). Where the 16² cube's
+/// levels resolve the lobe (α 0.3, 0.6) split-sum from the file errs as envlight's own
+/// split-sum render does, within 0.1 (measured 33.5 / 60.1% against 34.7 / 64.6%: split-sum's
+/// n = v = r error on this map, which the render's lobe taps bring to 3-4%). A file that is
+/// not a cube is refused with its name.
+#[test]
+fn report_scores_a_cube_in_its_convention() {
+    use envlight::math::Mapping;
+    let dir = std::env::temp_dir().join(format!("envlight-report-cube-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let lobe = glam::DVec3::new(0.6, 0.45, -0.66).normalize();
+    let map = envlight::EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, move |d| {
+        let l = 0.2 + 0.1 * d.y + 30.0 * (-(1.0 - d.dot(lobe)) / 0.04).exp();
+        [l, 0.9 * l, 0.8 * l]
+    });
+    let hdr = dir.join("lobe.hdr");
+    let rgb: Vec<image::Rgb<f32>> = map.texels.iter().map(|t| image::Rgb(*t)).collect();
+    image::codecs::hdr::HdrEncoder::new(std::fs::File::create(&hdr).unwrap())
+        .encode(&rgb, 64, 32)
+        .unwrap();
+    let envlight = || {
+        let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"));
+        c.args(["--validation", "--device", "cpu"]);
+        c
+    };
+    let o = envlight()
+        .arg("bake")
+        .arg(&hdr)
+        .arg("--out")
+        .arg(dir.join("bake"))
+        .args([
+            "--preset",
+            "khronos",
+            "--specular-size",
+            "16",
+            "--check",
+            "0",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cube = dir.join("bake/lobe.hdr/specular.ktx2");
+    let report = |cubes: &[&std::path::Path], conventions: &[&str]| {
+        let mut c = envlight();
+        c.arg("report");
+        for (p, conv) in cubes.iter().zip(conventions) {
+            c.arg("--cube").arg(p).args(["--cube-convention", conv]);
+        }
+        c.arg("--cube-probe").arg(&hdr);
+        c.args(["--size", "16", "--reference", "256", "--out"])
+            .arg(dir.join("rep"));
+        c.output().unwrap()
+    };
+    let o = report(&[&cube, &cube], &["khronos", "bevy"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(dir.join("rep/cubes.csv")).unwrap();
+    // label,alpha,relative_rms,mean_bias, the label quoted: read from the right.
+    let rms = |tag: &str, alpha: &str| -> f64 {
+        csv.lines()
+            .filter(|l| l.contains(tag))
+            .map(|l| l.rsplitn(4, ',').collect::<Vec<_>>())
+            .find(|f| f.len() == 4 && f[2] == alpha)
+            .map(|f| f[1].parse().unwrap())
+            .unwrap_or_else(|| panic!("no {tag} row at α {alpha}: {csv}"))
+    };
+    for alpha in ["0.05", "0.1", "0.3", "0.6"] {
+        let right = rms("(Khronos): split-sum", alpha);
+        let wrong = rms("(Bevy): split-sum", alpha);
+        let render = rms("envlight render: split-sum", alpha);
+        eprintln!(
+            "α {alpha}: in its convention {right:.3e}, as Bevy's {wrong:.3e}, envlight's render {render:.3e}"
+        );
+        assert!(right.is_finite() && wrong.is_finite());
+        assert!(right <= 0.5 * wrong, "α {alpha}: {right} vs {wrong}");
+        if alpha == "0.3" || alpha == "0.6" {
+            assert!(
+                (right - render).abs() <= 0.1,
+                "α {alpha}: {right} vs {render}"
+            );
+        }
+    }
+    let not_cube = dir.join("bake/dfg.ktx2");
+    let o = report(&[&not_cube], &["khronos"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("dfg.ktx2") && err.contains("cube"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -3,6 +3,7 @@
 //! each time.
 
 pub mod accuracy;
+pub mod cubes;
 pub mod fis;
 pub mod fis_report;
 pub mod formats;

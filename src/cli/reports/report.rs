@@ -55,6 +55,18 @@ pub struct ReportArgs {
     /// α 0.05 to 0.6, with their per-frame GPU time (split_sum.md, split_sum.csv)
     #[arg(long)]
     split_sum_every_probe: bool,
+    /// Instead: score these prefiltered GGX cubes (KTX2, level k holding α = (k/(levels −
+    /// 1))²) as split-sum shading against Monte Carlo on --cube-probe, beside envlight's own
+    /// renders (cubes.md, cubes.csv)
+    #[arg(long)]
+    cube: Vec<PathBuf>,
+    /// Each --cube's conventions, in order (the last repeats): envlight, khronos
+    /// (glTF-IBL-Sampler) or bevy
+    #[arg(long, value_enum)]
+    cube_convention: Vec<super::cubes::CubeConvention>,
+    /// The probe the --cube files were made from
+    #[arg(long)]
+    cube_probe: Option<PathBuf>,
     /// Split-sum's roughness levels (default: the scene default)
     #[arg(long)]
     split_levels: Option<u32>,
@@ -331,6 +343,30 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
             probes: args.only.clone(),
         };
         return super::table::table(&renderer, &dir, size, reference, &args.out, &device, &pick);
+    }
+    if !args.cube.is_empty() {
+        let probe = args.cube_probe.as_deref().ok_or_else(|| {
+            anyhow!("--cube needs --cube-probe, the probe the cubes were made from")
+        })?;
+        let conv = |k: usize| {
+            args.cube_convention
+                .get(k)
+                .or(args.cube_convention.last())
+                .copied()
+                .unwrap_or(super::cubes::CubeConvention::Khronos)
+        };
+        let cubes = args
+            .cube
+            .iter()
+            .enumerate()
+            .map(|(k, p)| (p.clone(), conv(k)))
+            .collect();
+        let a = super::cubes::CubeArgs {
+            probe,
+            cubes,
+            out: &args.out,
+        };
+        return super::cubes::score(&renderer, cam, reference, &device, &a);
     }
     if args.split_sum_every_probe {
         return super::recipes::sweep(&renderer, &dir, cam, reference, &args.out, &device, split);
