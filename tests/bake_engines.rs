@@ -441,21 +441,9 @@ fn each_presets_irradiance_is_e_over_pi_in_its_consumers_world() {
 /// (ENVLIGHT_IBLSAMPLER, else ../shared/peers/iblsampler/iblsampler; in CI it must be there).
 #[test]
 fn the_khronos_presets_level_0_matches_gltf_ibl_samplers() {
-    let sampler = match std::env::var_os("ENVLIGHT_IBLSAMPLER") {
-        Some(p) => PathBuf::from(p),
-        None => {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/peers/iblsampler/iblsampler")
-        }
-    };
-    if !sampler.is_file() {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI is set but glTF-IBL-Sampler is not at {}",
-            sampler.display()
-        );
-        common::skipped("no glTF-IBL-Sampler: the Khronos comparison did not run");
+    let Some(sampler) = common::iblsampler() else {
         return;
-    }
+    };
     let dir = temp("khronos-peer");
     let map = EnvMap::from_fn(Mapping::LatLong, 128, 64, 2, smooth_env);
     let hdr = dir.join("smooth.hdr");

@@ -10,7 +10,12 @@ fn quick_report_writes_its_three_files() {
         return;
     };
     let out = std::env::temp_dir().join(format!("envlight-report-{}", std::process::id()));
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
+    let sampler = common::iblsampler();
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"));
+    if let Some(s) = &sampler {
+        cmd.env("ENVLIGHT_IBLSAMPLER", s);
+    }
+    let o = cmd
         .args(["--validation", "--device", "cpu", "report", "--quick"])
         .args(["--size", "12", "--reference", "64", "--probes"])
         .arg(&dir)
@@ -26,8 +31,16 @@ fn quick_report_writes_its_three_files() {
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     // Quick: 2 probes; diffuse has sh ×2, fis ×2, mc ×2, sh_brdf ×2; ggx 0.3 fis ×2, mc ×2,
-    // sh_brdf ×2 and split_sum.
-    assert_eq!(rows.len(), 2 * (8 + 7), "{csv}");
+    // sh_brdf ×2, split_sum ×2 (one read, 8 lobe taps) and, with glTF-IBL-Sampler, its
+    // cubes at 16 and 64 samples.
+    let peers = if sampler.is_some() { 2 } else { 0 };
+    assert_eq!(rows.len(), 2 * (8 + 8 + peers), "{csv}");
+    if sampler.is_some() {
+        assert!(
+            rows.iter().any(|r| r[0] == "gltf-ibl-sampler"),
+            "no sampler row"
+        );
+    }
     for t in ["sh", "fis", "mc", "sh_brdf", "split_sum"] {
         assert!(rows.iter().any(|r| r[0] == t), "no {t} row");
     }

@@ -174,6 +174,28 @@ pub fn ktx_tool() -> Option<PathBuf> {
     None
 }
 
+/// glTF-IBL-Sampler's wrapper: `ENVLIGHT_IBLSAMPLER`, else
+/// `../shared/peers/iblsampler/iblsampler` beside the checkout. `None` (noted as a skip) where
+/// neither is there, except in CI (`CI` set), where a missing sampler fails the test.
+pub fn iblsampler() -> Option<PathBuf> {
+    let p = match std::env::var_os("ENVLIGHT_IBLSAMPLER") {
+        Some(p) => PathBuf::from(p),
+        None => {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/peers/iblsampler/iblsampler")
+        }
+    };
+    if p.is_file() {
+        return Some(p);
+    }
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "CI is set but glTF-IBL-Sampler is not at {} (set ENVLIGHT_IBLSAMPLER)",
+        p.display()
+    );
+    skipped(&format!("no glTF-IBL-Sampler at {}", p.display()));
+    None
+}
+
 /// Runs `ktx validate` on every .ktx2 file under `dir` (any depth) and fails on the first
 /// it refuses, with its report. Returns how many it validated (0 where the tool is absent
 /// outside CI).

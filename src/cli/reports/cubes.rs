@@ -48,6 +48,9 @@ impl CubeConvention {
     }
 }
 
+/// The report's technique name for glTF-IBL-Sampler's cubes.
+pub const PEER: &str = "gltf-ibl-sampler";
+
 /// Taps of the lobe taps recipe the cubes are also shaded with.
 const TAPS: u32 = 8;
 
@@ -55,7 +58,7 @@ const TAPS: u32 = 8;
 const DFG_SIZE: u32 = 32;
 
 /// The cube at `path` as a chain of dual-paraboloid levels in the world.
-fn cube_chain(path: &Path, convention: CubeConvention) -> Result<Vec<Level>> {
+pub(super) fn cube_chain(path: &Path, convention: CubeConvention) -> Result<Vec<Level>> {
     let bytes = std::fs::read(path).with_context(|| path.display().to_string())?;
     let tex = ktx2::decode(&bytes).with_context(|| path.display().to_string())?;
     if tex.faces != 6 || tex.width != tex.height || tex.levels.len() < 2 {
@@ -119,7 +122,13 @@ fn pixel_frames(cam: &Camera) -> Vec<(usize, DVec3, DVec3)> {
 }
 
 /// The frame split-sum shading from `chain` gives at GGX α: one read along r, or `taps`.
-fn shade_frame(cam: &Camera, chain: &[Level], table: &[[f64; 2]], alpha: f64, taps: u32) -> EnvMap {
+pub(super) fn shade_frame(
+    cam: &Camera,
+    chain: &[Level],
+    table: &[[f64; 2]],
+    alpha: f64,
+    taps: u32,
+) -> EnvMap {
     let b = Brdf::Ggx {
         alpha,
         correlated: true,
@@ -267,4 +276,56 @@ fn write(
     std::fs::write(a.out.join("cubes.md"), md).context("cubes.md")?;
     println!("wrote {}/cubes.md, cubes.csv", a.out.display());
     Ok(())
+}
+
+/// A cube glTF-IBL-Sampler made of a probe, with its whole-process seconds.
+pub(super) struct PeerCube {
+    /// Its GGX samples.
+    pub samples: u32,
+    /// Wall seconds of its run.
+    pub seconds: f64,
+    /// The cube as a chain in the world.
+    pub chain: Vec<Level>,
+}
+
+/// Runs glTF-IBL-Sampler (`sampler`, its wrapper) on the lat-long `probe` once per sample
+/// count and a cube of `size` (its default, half the panorama's height, where `None`), with
+/// its defaults otherwise (log2 of the size levels, rgba16f), in `scratch`.
+pub(super) fn sampler_cubes(
+    sampler: &Path,
+    probe: &Path,
+    scratch: &Path,
+    counts: &[u32],
+    size: Option<u32>,
+) -> Result<Vec<PeerCube>> {
+    let mut out = Vec::new();
+    for &n in counts {
+        let cube = scratch.join(format!("iblsampler-{n}.ktx2"));
+        let mut c = std::process::Command::new(sampler);
+        c.arg("-inputPath").arg(probe).arg("-outCubeMap").arg(&cube);
+        c.arg("-outLUT").arg(scratch.join("iblsampler-lut.png"));
+        c.args(["-distribution", "GGX", "-sampleCount", &n.to_string()]);
+        if let Some(s) = size {
+            c.args(["-cubeMapResolution", &s.to_string()]);
+            c.args(["-mipLevelCount", &s.ilog2().to_string()]);
+        }
+        let t0 = std::time::Instant::now();
+        let o = c.output().with_context(|| sampler.display().to_string())?;
+        let seconds = t0.elapsed().as_secs_f64();
+        if !o.status.success() {
+            bail!(
+                "{} on {}: {}",
+                sampler.display(),
+                probe.display(),
+                String::from_utf8_lossy(&o.stderr)
+            );
+        }
+        let chain = cube_chain(&cube, CubeConvention::Khronos)?;
+        out.push(PeerCube {
+            samples: n,
+            seconds,
+            chain,
+        });
+    }
+    Ok(out)
 }

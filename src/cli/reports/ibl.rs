@@ -314,6 +314,19 @@ pub fn bench_ibl(g: &Global, o: &IblOptions) -> Result<()> {
     Ok(())
 }
 
+/// The CPU's model name (Linux), or "unknown".
+fn cpu_name() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|s| s.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown".into())
+}
+
 /// Levels whose α lies in the goal's range, 0.05 to 0.6.
 fn goal_levels(levels: u32) -> Vec<usize> {
     (1..levels)
@@ -343,7 +356,7 @@ fn markdown(g: &Global, o: &IblOptions, results: &[(String, Vec<Measured>)]) -> 
         .unwrap_or_else(|e| format!("unknown ({e})"));
     let mut md = format!(
         "## GGX cubes: envlight bake beside glTF-IBL-Sampler\n\n\
-         Device: {device}. Command: `envlight bench ibl` (cube {0}², {levels} levels, {1} \
+         Device: {device}; commit {4}; CPU {5}. Command: `envlight bench ibl` (cube {0}², {levels} levels, {1} \
          interleaved runs of each configuration, median whole-process seconds; envlight's \
          time is the whole `bake --preset khronos` (SH, irradiance, GGX cube, DFG table), \
          glTF-IBL-Sampler's one `-distribution GGX` run). Error: relative RMS of each level's \
@@ -354,7 +367,9 @@ fn markdown(g: &Global, o: &IblOptions, results: &[(String, Vec<Measured>)]) -> 
         o.size,
         o.runs,
         o.texels,
-        levels - 1
+        levels - 1,
+        super::commit(),
+        cpu_name()
     );
     let alphas: Vec<String> = (1..levels - 1)
         .map(|k| format!("α {:.3}", level_alpha(k, levels)))

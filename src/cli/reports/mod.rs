@@ -180,6 +180,23 @@ pub fn accuracy(g: &Global, what: &AccuracyWhat) -> Result<()> {
     }
 }
 
+/// The commit a page is made at: $ENVLIGHT_COMMIT, else `git rev-parse --short HEAD` in the
+/// working directory, else the package version.
+pub fn commit() -> String {
+    std::env::var("ENVLIGHT_COMMIT")
+        .ok()
+        .or_else(|| {
+            let o = std::process::Command::new("git")
+                .args(["rev-parse", "--short", "HEAD"])
+                .output()
+                .ok()?;
+            o.status
+                .success()
+                .then(|| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        })
+        .unwrap_or_else(|| format!("envlight {}", env!("CARGO_PKG_VERSION")))
+}
+
 /// `envlight bench`.
 pub fn bench(g: &Global, what: &Bench) -> Result<()> {
     match what {

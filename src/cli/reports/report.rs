@@ -149,8 +149,8 @@ fn materials(quick: bool) -> Vec<(&'static str, Brdf)> {
     ]
 }
 
-/// The techniques that apply to `brdf`, with their parameters and labels.
-fn cases(brdf: &Brdf, quick: bool) -> Vec<(Technique, String)> {
+/// The techniques that apply to `brdf`, with their labels and split-sum taps.
+fn cases(brdf: &Brdf, quick: bool) -> Vec<(Technique, String, u32)> {
     let (fis, mc, orders): (&[u32], &[u32], &[u32]) = if quick {
         (&[16, 64], &[64, 256], &[2, 8])
     } else {
@@ -158,8 +158,7 @@ fn cases(brdf: &Brdf, quick: bool) -> Vec<(Technique, String)> {
     };
     let mut v = Vec::new();
     if matches!(brdf, Brdf::Mirror) {
-        v.push((Technique::Lookup, String::new()));
-        return v;
+        return vec![(Technique::Lookup, String::new(), 1)];
     }
     if matches!(brdf, Brdf::Lambert) {
         for &order in orders {
@@ -197,8 +196,11 @@ fn cases(brdf: &Brdf, quick: bool) -> Vec<(Technique, String)> {
         };
         v.push((t, format!("l={order}")));
     }
+    let mut v: Vec<(Technique, String, u32)> = v.into_iter().map(|(t, l)| (t, l, 1)).collect();
     if matches!(brdf, Brdf::Ggx { .. }) {
-        v.push((Technique::SplitSum, String::new()));
+        v.push((Technique::SplitSum, String::new(), 1));
+        let taps = 8;
+        v.push((Technique::SplitSum, format!("taps={taps}"), taps));
     }
     v
 }
@@ -373,6 +375,14 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     }
     let mut rows = Vec::new();
     let started = Instant::now();
+    // glTF-IBL-Sampler's cubes join the GGX materials where it is present.
+    let sampler = std::env::var_os("ENVLIGHT_IBLSAMPLER")
+        .map(PathBuf::from)
+        .filter(|p| p.is_file());
+    if sampler.is_none() {
+        eprintln!("ENVLIGHT_IBLSAMPLER is not set to glTF-IBL-Sampler: its cubes are left out");
+    }
+    let sampler_counts: &[u32] = if quick { &[16, 64] } else { &[64, 1024] };
     let scratch = std::env::temp_dir().join(format!("envlight-report-{}", std::process::id()));
     std::fs::create_dir_all(&scratch).with_context(|| scratch.display().to_string())?;
     for (file, kind) in probes(quick) {
@@ -382,6 +392,16 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
             .with_context(|| format!("report: probe {} (set --probes)", path.display()))?;
         let env = envlight::io::load(&path, &envlight::io::LoadOptions::default())
             .with_context(|| format!("report: probe {} (set --probes)", path.display()))?;
+        let peers = match &sampler {
+            Some(exe) => super::cubes::sampler_cubes(
+                exe,
+                &path,
+                &scratch,
+                sampler_counts,
+                quick.then_some(64),
+            )?,
+            None => Vec::new(),
+        };
         for (name, brdf) in materials(quick) {
             // The reference: two independent MIS renders; their mean is the reference, half
             // their difference its noise.
@@ -395,8 +415,8 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
             let (r1, r2) = (mc(1)?, mc(2)?);
             let noise = errors(&r1.frame, &r2.frame, &pixels).0 / 2.0;
             let truth = average(&r1.frame, &r2.frame);
-            for (t, params) in cases(&brdf, quick) {
-                let sc = scene(cam, brdf, t, dp, 7, split);
+            for (t, params, taps) in cases(&brdf, quick) {
+                let sc = scene(cam, brdf, t, dp, 7, SplitSumSettings { taps, ..split });
                 // One untimed render first: pipelines are built on first use.
                 renderer.render(&sc, &env)?;
                 let t0 = Instant::now();
@@ -442,6 +462,29 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
                 );
                 rows.push(row);
             }
+            if let Brdf::Ggx { alpha, .. } = brdf {
+                let table = envlight::math::split_sum::dfg_table(32, true);
+                for p in &peers {
+                    let f = super::cubes::shade_frame(&cam, &p.chain, &table, alpha, 1);
+                    let (rms, bias, tile) = errors(&f, &truth, &pixels);
+                    // No timestamps in its process: its wall time bounds its GPU time.
+                    rows.push(Row {
+                        probe: file.trim_end_matches(".hdr").to_string(),
+                        kind,
+                        material: name.to_string(),
+                        technique: super::cubes::PEER,
+                        params: format!("N={}", p.samples),
+                        rms,
+                        bias,
+                        tile,
+                        gpu_ms: 1e3 * p.seconds,
+                        pre_ms: 1e3 * p.seconds,
+                        wall_s: p.seconds,
+                        process_s: p.seconds,
+                        noise,
+                    });
+                }
+            }
         }
     }
     let _ = std::fs::remove_dir_all(&scratch);
@@ -452,10 +495,11 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         "Device: {device}. Sphere {size}² (orthographic, normal to grazing incidence), \
          reference 2 × {reference} spp MIS Monte Carlo (their mean; its noise is half their \
          relative RMS difference). FIS paraboloid {}; split-sum {:?}; sh_brdf grid 32, no \
-         window. Run took {:.0} s{}.",
+         window; commit {}. Run took {:.0} s{}.",
         dp.map(|d| format!("{d}²"))
             .unwrap_or_else(|| "sized by the source (1024² for a 1k lat-long)".into()),
         split,
+        super::commit(),
         started.elapsed().as_secs_f64(),
         if quick { " (--quick)" } else { "" }
     );
@@ -612,8 +656,11 @@ fn markdown(rows: &[Row], settings: &str) -> String {
         let _ = writeln!(md, "- **{m}**: {}", front_line(&p));
     }
     md.push_str(
-        "\nLight extraction (issue #10) is not built yet; its on/off rows join the report \
-         when it lands.\n\n![Pareto chart](report.png)\n",
+        "\nEvery render extracts the probe's lights (the default); split_sum taps=8 is the lobe \
+         taps recipe. gltf-ibl-sampler rows are glTF-IBL-Sampler's GGX cube of the probe \
+         (its defaults, N samples) shaded by split-sum in float64; their time is its whole \
+         process (it has no timestamps), so they sit on the per-frame front at the \
+         split_sum row's cost.\n\n![Pareto chart](report.png)\n",
     );
     for m in &mats {
         let p = points(rows, m);
@@ -679,6 +726,7 @@ fn colour(technique: &str) -> plotters::style::RGBColor {
         "fis" => RGBColor(44, 160, 44),
         "mc" => RGBColor(214, 39, 40),
         "sh_brdf" => RGBColor(148, 103, 189),
+        super::cubes::PEER => RGBColor(127, 127, 127),
         _ => RGBColor(255, 127, 14),
     }
 }
@@ -717,6 +765,7 @@ fn plot(path: &Path, rows: &[Row], device: &str) -> Result<()> {
         "mc",
         "sh_brdf",
         "split_sum",
+        super::cubes::PEER,
     ];
     for (k, f) in families.iter().enumerate() {
         let x = 20 + k as i32 * 150;
