@@ -226,9 +226,9 @@ fn level_errors(path: &Path, exact: &[Vec<(usize, f64)>]) -> Result<Vec<f64>> {
         .collect())
 }
 
-/// The probe as a lat-long Radiance file both tools read: itself, or a conversion into
-/// `dir`.
-fn latlong_hdr(g: &Global, probe: &Path, dir: &Path) -> Result<PathBuf> {
+/// The probe as a lat-long Radiance file both tools read: itself, or its 1024 × 512
+/// resampling (bilinear, as the GPU reads a map) written into `dir`.
+fn latlong_hdr(probe: &Path, dir: &Path) -> Result<PathBuf> {
     let map = envlight::io::load(probe, &Default::default())
         .with_context(|| probe.display().to_string())?;
     let is_hdr = probe
@@ -237,17 +237,22 @@ fn latlong_hdr(g: &Global, probe: &Path, dir: &Path) -> Result<PathBuf> {
     if map.mapping == Mapping::LatLong && is_hdr {
         return Ok(probe.to_path_buf());
     }
+    let (w, h) = (1024u32, 512u32);
+    let mut texels = Vec::with_capacity((w * h) as usize);
+    for j in 0..h {
+        for i in 0..w {
+            let d = Mapping::LatLong.coord_to_dir(Mapping::texel_center(w, h, 0, i, j));
+            let v = envlight::math::convert::sample(&map, d);
+            texels.push(image::Rgb([v[0] as f32, v[1] as f32, v[2] as f32]));
+        }
+    }
+    std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
     let stem = probe.file_stem().unwrap_or_default().to_string_lossy();
     let out = dir.join(format!("{stem}.hdr"));
-    let mut c = Command::new(std::env::current_exe()?);
-    if let Some(d) = &g.device {
-        c.args(["--device", d]);
-    }
-    c.arg("convert")
-        .arg(probe)
-        .args(["--to", "latlong", "--size", "1024", "--output"]);
-    c.arg(&out);
-    timed(c, &dir.join("convert"))?;
+    let file = std::fs::File::create(&out).with_context(|| out.display().to_string())?;
+    image::codecs::hdr::HdrEncoder::new(std::io::BufWriter::new(file))
+        .encode(&texels, w as usize, h as usize)
+        .with_context(|| out.display().to_string())?;
     Ok(out)
 }
 
@@ -276,7 +281,7 @@ pub fn bench_ibl(g: &Global, o: &IblOptions) -> Result<()> {
     let scratch = std::env::temp_dir().join(format!("envlight-bench-ibl-{}", std::process::id()));
     let mut results = Vec::new();
     for probe in &files {
-        let hdr = latlong_hdr(g, probe, &scratch)?;
+        let hdr = latlong_hdr(probe, &scratch)?;
         let map = envlight::io::load(&hdr, &Default::default())
             .with_context(|| hdr.display().to_string())?;
         let exact = exact_texels(&map, o.size, o.texels);
