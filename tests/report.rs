@@ -86,13 +86,14 @@ fn quick_report_writes_its_three_files() {
 }
 
 /// `report --cube`: a cube baked with the Khronos preset, scored in its own convention and
-/// as if it were Bevy's (a wrong frame: the cube turned and mirrored), on a map whose one
+/// as if it were Bevy's (a wrong frame: the cube turned and mirrored), and cmft's radiance
+/// filter (DDS) in its convention and unmirrored, on a map whose one
 /// bright lobe sits off every axis. Read in the wrong frame the highlight lands elsewhere:
 /// right ≤ 0.5 × wrong at every α (measured 24-60% against 126-134%). Where the 16² cube's
 /// levels resolve the lobe (α 0.3, 0.6) split-sum from the file errs as envlight's own
 /// split-sum render does, within 0.1 (measured 33.5 / 60.1% against 34.7 / 64.6%: split-sum's
-/// n = v = r error on this map, which the render's lobe taps bring to 3-4%). A file that is
-/// not a cube is refused with its name.
+/// n = v = r error on this map, which the render's lobe taps bring to 3-4%). cmft: right ≤
+/// 0.5 × wrong at every α (printed). A file that is not a cube is refused with its name.
 #[test]
 fn report_scores_a_cube_in_its_convention() {
     use envlight::math::Mapping;
@@ -145,15 +146,7 @@ fn report_scores_a_cube_in_its_convention() {
     let o = report(&[&cube, &cube], &["khronos", "bevy"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let csv = std::fs::read_to_string(dir.join("rep/cubes.csv")).unwrap();
-    // label,alpha,relative_rms,mean_bias, the label quoted: read from the right.
-    let rms = |tag: &str, alpha: &str| -> f64 {
-        csv.lines()
-            .filter(|l| l.contains(tag))
-            .map(|l| l.rsplitn(4, ',').collect::<Vec<_>>())
-            .find(|f| f.len() == 4 && f[2] == alpha)
-            .map(|f| f[1].parse().unwrap())
-            .unwrap_or_else(|| panic!("no {tag} row at α {alpha}: {csv}"))
-    };
+    let rms = |tag: &str, alpha: &str| rms_in(&csv, tag, alpha);
     for alpha in ["0.05", "0.1", "0.3", "0.6"] {
         let right = rms("(Khronos): split-sum", alpha);
         let wrong = rms("(Bevy): split-sum", alpha);
@@ -170,6 +163,43 @@ fn report_scores_a_cube_in_its_convention() {
             );
         }
     }
+    // cmft's radiance filter of the same map (Phong lobes, DDS), read in its convention and
+    // unmirrored.
+    if let Some(cmft) = common::cmft() {
+        let o = std::process::Command::new(cmft)
+            .arg("--input")
+            .arg(&hdr)
+            .args([
+                "--filter",
+                "radiance",
+                "--srcFaceSize",
+                "16",
+                "--excludeBase",
+                "false",
+            ])
+            .args(["--mipCount", "4", "--glossScale", "10", "--glossBias", "1"])
+            .args(["--lightingModel", "phongbrdf", "--dstFaceSize", "16"])
+            .args(["--numCpuProcessingThreads", "2", "--useOpenCL", "false"])
+            .args(["--outputNum", "1", "--output0"])
+            .arg(dir.join("cmft"))
+            .args(["--output0params", "dds,rgba32f,cubemap"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
+        let dds = dir.join("cmft.dds");
+        let o = report(&[&dds, &dds], &["cmft", "envlight"]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let csv = std::fs::read_to_string(dir.join("rep/cubes.csv")).unwrap();
+        for alpha in ["0.05", "0.1", "0.3", "0.6"] {
+            let right = rms_in(&csv, "(Cmft): split-sum", alpha);
+            let wrong = rms_in(&csv, "(Envlight): split-sum", alpha);
+            eprintln!("cmft α {alpha}: in its convention {right:.3e}, unmirrored {wrong:.3e}");
+            assert!(
+                right.is_finite() && right <= 0.5 * wrong,
+                "α {alpha}: {right} vs {wrong}"
+            );
+        }
+    }
     let not_cube = dir.join("bake/dfg.ktx2");
     let o = report(&[&not_cube], &["khronos"]);
     let err = String::from_utf8_lossy(&o.stderr);
@@ -178,4 +208,15 @@ fn report_scores_a_cube_in_its_convention() {
         "{err}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The relative RMS of the cubes.csv row whose label holds `tag` at `alpha` (label, alpha,
+/// relative_rms, mean_bias; the label quoted, so read from the right).
+fn rms_in(csv: &str, tag: &str, alpha: &str) -> f64 {
+    csv.lines()
+        .filter(|l| l.contains(tag))
+        .map(|l| l.rsplitn(4, ',').collect::<Vec<_>>())
+        .find(|f| f.len() == 4 && f[2] == alpha)
+        .map(|f| f[1].parse().unwrap())
+        .unwrap_or_else(|| panic!("no {tag} row at α {alpha}: {csv}"))
 }

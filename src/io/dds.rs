@@ -1,5 +1,5 @@
 //! DirectDraw Surface: 2D images and cube maps in RGBA16F, RGBA32F or RGB32F, legacy or DX10
-//! header. Only mip level 0 is read.
+//! header. A map is its mip level 0; [`read_level`] reads any level (prefiltered cubes).
 
 use super::{check_size, Raster};
 use crate::error::{Error, Result};
@@ -33,6 +33,16 @@ fn u32_at(b: &[u8], off: usize) -> u32 {
 }
 
 pub(crate) fn read(path: &Path, bytes: &[u8], max_texels: u64) -> Result<Raster> {
+    read_level(path, bytes, max_texels, 0).map(|(r, _)| r)
+}
+
+/// Mip level `level` of the file (every face of it), and how many levels the file holds.
+pub(crate) fn read_level(
+    path: &Path,
+    bytes: &[u8],
+    max_texels: u64,
+    level: u32,
+) -> Result<(Raster, u32)> {
     if bytes.len() < HEADER {
         return Err(Error::bad_file(
             path,
@@ -101,16 +111,29 @@ pub(crate) fn read(path: &Path, bytes: &[u8], max_texels: u64) -> Result<Raster>
             format!("corrupt DDS: cube faces are {width} x {height}, not square"),
         ));
     }
-    // Each face holds its whole mip chain; skip all but level 0.
+    if level as u64 >= mips {
+        return Err(Error::bad_file(
+            path,
+            format!("DDS has {mips} mip levels, level {level} asked for"),
+        ));
+    }
+    // Each face holds its whole mip chain; skip to `level` within each.
     let texel = format.bytes() as u64;
-    let mut face_bytes = 0u64;
+    let (mut face_bytes, mut skip) = (0u64, 0u64);
     let (mut w, mut h) = (width, height);
-    for _ in 0..mips {
+    let (mut lw, mut lh) = (width, height);
+    for k in 0..mips {
+        if k < level as u64 {
+            skip += w * h * texel;
+        } else if k == level as u64 {
+            (lw, lh) = (w, h);
+        }
         face_bytes += w * h * texel;
         w = (w / 2).max(1);
         h = (h / 2).max(1);
     }
-    let need = face_bytes * (faces - 1) + width * height * texel;
+    let (width, height) = (lw, lh);
+    let need = face_bytes * (faces - 1) + skip + width * height * texel;
     let have = (bytes.len() - data_start) as u64;
     if have < need {
         return Err(Error::bad_file(
@@ -121,7 +144,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8], max_texels: u64) -> Result<Raster>
     let n = (width * height) as usize;
     let mut rgb = Vec::with_capacity(n * faces as usize);
     for f in 0..faces as usize {
-        let start = data_start + f * face_bytes as usize;
+        let start = data_start + f * face_bytes as usize + skip as usize;
         let face = &bytes[start..start + n * format.bytes()];
         match format {
             Format::Rgba16f => rgb.extend(face.chunks_exact(8).map(|c| {
@@ -136,12 +159,15 @@ pub(crate) fn read(path: &Path, bytes: &[u8], max_texels: u64) -> Result<Raster>
             }
         }
     }
-    Ok(Raster {
-        width: width as u32,
-        height: (height * faces) as u32,
-        rgb,
-        mapping_hint: cube.then_some(Mapping::Cube),
-    })
+    Ok((
+        Raster {
+            width: width as u32,
+            height: (height * faces) as u32,
+            rgb,
+            mapping_hint: cube.then_some(Mapping::Cube),
+        },
+        mips as u32,
+    ))
 }
 
 /// Writes an RGBA16F DDS cube map (faces in Vulkan order; used by tests to make inputs).
@@ -169,4 +195,51 @@ pub fn write_cube_rgba16f(path: &Path, n: u32, faces: &[[f32; 3]]) -> std::io::R
         }
     }
     std::fs::write(path, h)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4² RGBA16F cube of 3 levels, each face holding its chain (the DDS layout), every
+    /// texel distinct: each level reads back its own texels, in face order; a level past the
+    /// chain is refused.
+    #[test]
+    fn every_mip_level_of_a_cube_reads_back() {
+        let value = |f: usize, k: usize, t: usize| (f * 100 + k * 20 + t) as f32;
+        let dir = std::env::temp_dir().join(format!("envlight-dds-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let one = dir.join("one.dds");
+        write_cube_rgba16f(&one, 4, &vec![[0.0; 3]; 6 * 16]).unwrap();
+        let mut bytes = std::fs::read(&one).unwrap()[..HEADER].to_vec();
+        bytes[28..32].copy_from_slice(&3u32.to_le_bytes());
+        for f in 0..6 {
+            for (k, n) in [16usize, 4, 1].into_iter().enumerate() {
+                for t in 0..n {
+                    for c in [value(f, k, t), 0.5, 0.25, 1.0] {
+                        bytes.extend_from_slice(&half::f16::from_f32(c).to_le_bytes());
+                    }
+                }
+            }
+        }
+        let path = Path::new("cube.dds");
+        for (k, n) in [16usize, 4, 1].into_iter().enumerate() {
+            let (r, mips) = read_level(path, &bytes, 1 << 20, k as u32).unwrap();
+            assert_eq!(mips, 3);
+            assert_eq!((r.width as usize).pow(2), n);
+            for f in 0..6 {
+                for t in 0..n {
+                    assert_eq!(r.rgb[f * n + t], [value(f, k, t), 0.5, 0.25], "{k} {f} {t}");
+                }
+            }
+        }
+        let e = match read_level(path, &bytes, 1 << 20, 3) {
+            Ok(_) => panic!("level 3 of 3 read"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains("cube.dds") && e.contains("3 mip levels"), "{e}");
+        let short = &bytes[..bytes.len() - 8];
+        assert!(read_level(path, short, 1 << 20, 2).is_err());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

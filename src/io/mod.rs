@@ -222,6 +222,54 @@ fn raster_from_bytes(path: &Path, bytes: &[u8], opts: &LoadOptions) -> Result<Ra
     }
 }
 
+/// The mip levels of a prefiltered cube file, level 0 first, each a [`Mapping::Cube`] map in
+/// the file's own frame: a KTX2 cube (any format [`ktx2::decode`] reads) or a DDS cube
+/// (RGBA16F, RGBA32F or RGB32F, as cmft writes them). Anything else, or a file without six
+/// faces, is refused with its name.
+pub fn load_cube_levels(path: impl AsRef<Path>) -> Result<Vec<EnvMap>> {
+    let path = path.as_ref();
+    let bytes = read_file(path)?;
+    let max = LoadOptions::default().max_texels;
+    if bytes.starts_with(b"DDS ") {
+        let (first, mips) = dds::read_level(path, &bytes, max, 0)?;
+        if first.mapping_hint != Some(Mapping::Cube) {
+            return Err(Error::bad_file(path, "DDS is not a cube map"));
+        }
+        let mut levels = vec![first];
+        for k in 1..mips {
+            levels.push(dds::read_level(path, &bytes, max, k)?.0);
+        }
+        return Ok(levels
+            .into_iter()
+            .map(|r| EnvMap::new(Mapping::Cube, r.width, r.width, r.rgb))
+            .collect());
+    }
+    let tex = ktx2::decode(&bytes).map_err(|e| Error::bad_file(path, e.to_string()))?;
+    if tex.faces != 6 || tex.width != tex.height {
+        return Err(Error::bad_file(
+            path,
+            format!(
+                "not a cube: {} faces of {} x {}",
+                tex.faces, tex.width, tex.height
+            ),
+        ));
+    }
+    Ok(tex
+        .levels
+        .iter()
+        .enumerate()
+        .map(|(k, l)| {
+            let s = (tex.width >> k).max(1);
+            EnvMap::new(
+                Mapping::Cube,
+                s,
+                s,
+                l.iter().map(|t| [t[0], t[1], t[2]]).collect(),
+            )
+        })
+        .collect())
+}
+
 /// The aspect-ratio rule of the module docs.
 pub fn infer_mapping(path: &Path, w: u32, h: u32) -> Result<Mapping> {
     let m = if w == 2 * h {

@@ -174,26 +174,36 @@ pub fn ktx_tool() -> Option<PathBuf> {
     None
 }
 
-/// glTF-IBL-Sampler's wrapper: `ENVLIGHT_IBLSAMPLER`, else
-/// `../shared/peers/iblsampler/iblsampler` beside the checkout. `None` (noted as a skip) where
-/// neither is there, except in CI (`CI` set), where a missing sampler fails the test.
-pub fn iblsampler() -> Option<PathBuf> {
-    let p = match std::env::var_os("ENVLIGHT_IBLSAMPLER") {
+/// A peer program: `var` if set, else `../shared/peers/REL` beside the checkout. `None`
+/// (noted as a skip) where neither is there, except in CI (`CI` set), where a missing peer
+/// fails the test.
+fn peer(var: &str, rel: &str) -> Option<PathBuf> {
+    let p = match std::env::var_os(var) {
         Some(p) => PathBuf::from(p),
-        None => {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/peers/iblsampler/iblsampler")
-        }
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../shared/peers")
+            .join(rel),
     };
     if p.is_file() {
         return Some(p);
     }
     assert!(
         std::env::var_os("CI").is_none(),
-        "CI is set but glTF-IBL-Sampler is not at {} (set ENVLIGHT_IBLSAMPLER)",
+        "CI is set but {rel} is not at {} (set {var})",
         p.display()
     );
-    skipped(&format!("no glTF-IBL-Sampler at {}", p.display()));
+    skipped(&format!("no {rel} at {}", p.display()));
     None
+}
+
+/// glTF-IBL-Sampler's wrapper (`ENVLIGHT_IBLSAMPLER`, else the shared peers'; see [`peer`]).
+pub fn iblsampler() -> Option<PathBuf> {
+    peer("ENVLIGHT_IBLSAMPLER", "iblsampler/iblsampler")
+}
+
+/// cmft (`ENVLIGHT_CMFT`, else the shared peers'; see [`peer`]).
+pub fn cmft() -> Option<PathBuf> {
+    peer("ENVLIGHT_CMFT", "cmft/cmft")
 }
 
 /// Runs `ktx validate` on every .ktx2 file under `dir` (any depth) and fails on the first

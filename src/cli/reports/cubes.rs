@@ -1,24 +1,24 @@
-//! `envlight report --cube FILE …`: prefiltered GGX cubes a user already has (from envlight's
-//! bake, glTF-IBL-Sampler or any tool writing the same conventions) scored as split-sum
+//! `envlight report --cube FILE …`: prefiltered cubes a user already has (from envlight's
+//! bake, glTF-IBL-Sampler, cmft or any tool writing the same conventions) scored as split-sum
 //! shading against converged Monte Carlo, beside envlight's own split-sum and lobe-taps
 //! renders of the same probe: cubes.md and cubes.csv.
 //!
-//! A cube is read from its KTX2 file, turned into the world by its convention's frame and
-//! resampled level by level into the dual-paraboloid chain the float64 split-sum twins read
-//! ([`envlight::math::split_sum::shade`], [`envlight::math::split_sum::shade_taps`]): level
-//! k holds α = (k/(levels − 1))² in every convention named here (envlight's bake, glTF-IBL-
-//! Sampler's roughness = k/(levels − 1), Bevy's lod = perceptual roughness × (levels − 1)).
+//! A cube is read from its KTX2 or DDS file, turned into the world by its convention's frame
+//! and resampled level by level into the dual-paraboloid chain the float64 split-sum twins
+//! read ([`envlight::math::split_sum::shade`], [`envlight::math::split_sum::shade_taps`]):
+//! level k holds α = (k/(levels − 1))² in envlight's bake, glTF-IBL-Sampler (roughness =
+//! k/(levels − 1)) and Bevy (lod = perceptual roughness × (levels − 1)); cmft's Phong levels
+//! are read at the exponent that matches GGX α ([`CubeConvention::level_of`]).
 
 use super::report::{average, errors, scene, sphere_pixels};
 use anyhow::{bail, Context as _, Result};
 use clap::ValueEnum;
 use envlight::bake::output::Preset;
-use envlight::io::ktx2;
 use envlight::math::brdf::Brdf;
 use envlight::math::camera::{trace, Camera, Shape};
 use envlight::math::convert::sample;
 use envlight::math::mip::Level;
-use envlight::math::split_sum::{dfg_table, shade, shade_taps, texel_dir};
+use envlight::math::split_sum::{dfg_table, level_alpha, shade, shade_taps, texel_dir};
 use envlight::math::Mapping;
 use envlight::render::Renderer;
 use envlight::scene::{LightsMode, SplitSumSettings, Technique};
@@ -36,7 +36,13 @@ pub enum CubeConvention {
     Khronos,
     /// Bevy's (x, y, −z) lookup (`envlight bake --preset bevy`).
     Bevy,
+    /// cmft's radiance filter (`--lightingModel phongbrdf --glossScale 10 --glossBias 1`,
+    /// DDS output): its cube is envlight's mirrored in x, and its levels hold Phong lobes.
+    Cmft,
 }
+
+/// cmft's `--glossScale` and `--glossBias` the Cmft convention assumes (cmft's defaults).
+const CMFT_GLOSS: (f64, f64) = (10.0, 1.0);
 
 impl CubeConvention {
     fn frame(self) -> Orientation {
@@ -44,6 +50,30 @@ impl CubeConvention {
             CubeConvention::Envlight => Orientation::default(),
             CubeConvention::Khronos => Preset::Khronos.cube_frame(),
             CubeConvention::Bevy => Preset::Bevy.cube_frame(),
+            // Measured: a sun at envlight's (0.67, 0.61, −0.42) lands at (−0.66, 0.62, −0.42)
+            // in cmft's cube (`--filter none`).
+            CubeConvention::Cmft => Orientation {
+                flip_u: true,
+                flip_v: false,
+                rotate_y_degrees: 0.0,
+            },
+        }
+    }
+
+    /// The (fractional) level of a cube of `levels` that holds GGX α. envlight, glTF-IBL-
+    /// Sampler and Bevy: √α·(levels − 1). cmft: level k holds the Phong lobe of exponent
+    /// p = 2^(10·g + 1) + 1, g = 1 − k/(levels − 1); GGX α is read where p = 1/α², the Phong
+    /// lobe whose curvature at its peak is GGX's at n = v = r (GGX ∝ 1/(1 + θh²/α²)² ≈
+    /// exp(−θ²/2α²) with θh = θ/2; cos^p θ ≈ exp(−pθ²/2)).
+    fn level_of(self, alpha: f64, levels: u32) -> f64 {
+        let last = levels.saturating_sub(1) as f64;
+        match self {
+            CubeConvention::Cmft => {
+                let p = 1.0 / alpha.max(1e-3).powi(2);
+                let g = (((p - 1.0).max(1e-9)).log2() - CMFT_GLOSS.1) / CMFT_GLOSS.0;
+                (1.0 - g.clamp(0.0, 1.0)) * last
+            }
+            _ => alpha.clamp(0.0, 1.0).sqrt() * last,
         }
     }
 }
@@ -57,42 +87,36 @@ const TAPS: u32 = 8;
 /// Entries per side of the float64 DFG table.
 const DFG_SIZE: u32 = 32;
 
-/// The cube at `path` as a chain of dual-paraboloid levels in the world.
+/// The cube at `path` (KTX2 or DDS) as a chain of dual-paraboloid levels in the world, level
+/// k holding α = (k/(levels − 1))² read from the cube's level [`CubeConvention::level_of`]
+/// (lerped between two levels where that is fractional).
 pub(super) fn cube_chain(path: &Path, convention: CubeConvention) -> Result<Vec<Level>> {
-    let bytes = std::fs::read(path).with_context(|| path.display().to_string())?;
-    let tex = ktx2::decode(&bytes).with_context(|| path.display().to_string())?;
-    if tex.faces != 6 || tex.width != tex.height || tex.levels.len() < 2 {
+    let cube = envlight::io::load_cube_levels(path)?;
+    let levels = cube.len() as u32;
+    if levels < 2 {
         bail!(
-            "{}: not a prefiltered cube ({} faces, {}×{}, {} levels; a cube of 2 levels or \
-             more is needed)",
-            path.display(),
-            tex.faces,
-            tex.width,
-            tex.height,
-            tex.levels.len()
+            "{}: one level; a prefiltered cube needs 2 levels or more",
+            path.display()
         );
     }
     // world → cube: the frame's matrix maps cube directions into the world.
     let world_to_cube: DMat3 = convention.frame().world_to_file().transpose();
-    Ok(tex
-        .levels
-        .iter()
-        .enumerate()
-        .map(|(k, texels)| {
-            let s = (tex.width >> k).max(1);
-            let map = EnvMap::new(
-                Mapping::Cube,
-                s,
-                s,
-                texels.iter().map(|t| [t[0], t[1], t[2]]).collect(),
-            );
-            let size = (2 * s).max(2);
+    Ok((0..levels)
+        .map(|k| {
+            let f = convention
+                .level_of(level_alpha(k, levels), levels)
+                .clamp(0.0, (levels - 1) as f64);
+            let k0 = (f.floor() as usize).min(levels as usize - 1);
+            let k1 = (k0 + 1).min(levels as usize - 1);
+            let t = f - k0 as f64;
+            let size = (2 * (cube[0].width >> k)).max(2);
             let mut out = Vec::with_capacity((2 * size * size) as usize);
             for layer in 0..2 {
                 for j in 0..size {
                     for i in 0..size {
-                        let d = world_to_cube * texel_dir(size, layer, i, j);
-                        let v = sample(&map, d.normalize());
+                        let d = (world_to_cube * texel_dir(size, layer, i, j)).normalize();
+                        let (a, b) = (sample(&cube[k0], d), sample(&cube[k1], d));
+                        let v = [0, 1, 2].map(|c| a[c] + t * (b[c] - a[c]));
                         out.push([v[0], v[1], v[2], 1.0]);
                     }
                 }

@@ -55,13 +55,12 @@ pub struct ReportArgs {
     /// α 0.05 to 0.6, with their per-frame GPU time (split_sum.md, split_sum.csv)
     #[arg(long)]
     split_sum_every_probe: bool,
-    /// Instead: score these prefiltered GGX cubes (KTX2, level k holding α = (k/(levels −
-    /// 1))²) as split-sum shading against Monte Carlo on --cube-probe, beside envlight's own
-    /// renders (cubes.md, cubes.csv)
+    /// Instead: score these prefiltered cubes (KTX2 or DDS) as split-sum shading against
+    /// Monte Carlo on --cube-probe, beside envlight's own renders (cubes.md, cubes.csv)
     #[arg(long)]
     cube: Vec<PathBuf>,
     /// Each --cube's conventions, in order (the last repeats): envlight, khronos
-    /// (glTF-IBL-Sampler) or bevy
+    /// (glTF-IBL-Sampler), bevy or cmft (its radiance filter, phongbrdf, gloss scale 10, bias 1)
     #[arg(long, value_enum)]
     cube_convention: Vec<super::cubes::CubeConvention>,
     /// The probe the --cube files were made from
