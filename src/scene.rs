@@ -197,6 +197,44 @@ fn dfg_size() -> u32 {
     crate::abi::split_sum::DEFAULT_DFG_SIZE
 }
 
+impl SplitSumSettings {
+    /// Checks that every setting is within what the passes accept.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        if let Some(size) = self.size {
+            if !(1..=4096).contains(&size) {
+                return Err(format!("split_sum size {size} is outside 1 to 4096"));
+            }
+        }
+        if !(1..=16).contains(&self.levels) {
+            return Err(format!("split_sum levels {} outside 1 to 16", self.levels));
+        }
+        if !(1..=MAX_FIS_SAMPLES).contains(&self.samples) {
+            return Err(format!(
+                "split_sum samples {} outside 1 to {MAX_FIS_SAMPLES}",
+                self.samples
+            ));
+        }
+        if self.bias.is_some_and(|b| !b.is_finite() || b.abs() > 16.0) {
+            return Err("split_sum bias must be within ±16".into());
+        }
+        let max_dfg = crate::abi::split_sum::MAX_DFG_SIZE;
+        if !(2..=max_dfg).contains(&self.dfg_size) {
+            return Err(format!(
+                "split_sum dfg_size {} outside 2 to {max_dfg}",
+                self.dfg_size
+            ));
+        }
+        let max_taps = crate::abi::split_sum::MAX_TAPS;
+        if !(1..=max_taps).contains(&self.taps) {
+            return Err(format!(
+                "split_sum taps {} outside 1 to {max_taps}",
+                self.taps
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Default for SplitSumSettings {
     fn default() -> Self {
         SplitSumSettings {
@@ -487,38 +525,7 @@ impl Scene {
                 return Err(format!("fis size {s} is outside 1 to 4096"));
             }
         }
-        let ss = &self.split_sum;
-        if let Some(size) = ss.size {
-            if !(1..=4096).contains(&size) {
-                return Err(format!("split_sum size {size} is outside 1 to 4096"));
-            }
-        }
-        if !(1..=16).contains(&ss.levels) {
-            return Err(format!("split_sum levels {} outside 1 to 16", ss.levels));
-        }
-        if !(1..=MAX_FIS_SAMPLES).contains(&ss.samples) {
-            return Err(format!(
-                "split_sum samples {} outside 1 to {MAX_FIS_SAMPLES}",
-                ss.samples
-            ));
-        }
-        if ss.bias.is_some_and(|b| !b.is_finite() || b.abs() > 16.0) {
-            return Err("split_sum bias must be within ±16".into());
-        }
-        let max_dfg = crate::abi::split_sum::MAX_DFG_SIZE;
-        if !(2..=max_dfg).contains(&ss.dfg_size) {
-            return Err(format!(
-                "split_sum dfg_size {} outside 2 to {max_dfg}",
-                ss.dfg_size
-            ));
-        }
-        let max_taps = crate::abi::split_sum::MAX_TAPS;
-        if !(1..=max_taps).contains(&ss.taps) {
-            return Err(format!(
-                "split_sum taps {} outside 1 to {max_taps}",
-                ss.taps
-            ));
-        }
+        self.split_sum.validate()?;
         if self.mc.per_frame == 0 {
             return Err("mc per_frame must be at least 1".into());
         }

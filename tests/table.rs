@@ -1,4 +1,4 @@
-//! Issue #10 item 4: every case of the accuracy table bounded at 1.3× its measured error, so
+//! The accuracy table's every case bounded at 1.3× its measured error, so
 //! that a regression in any technique, with light extraction or without, fails.
 
 mod common;
@@ -97,10 +97,7 @@ fn every_case_of_the_accuracy_table_stays_within_1_3x_of_its_measured_error() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     for out in &outs {
         let md = std::fs::read_to_string(out.join("table.md")).unwrap();
-        assert!(
-            md.contains("## Issue #10's goals") && md.contains("rotate off"),
-            "{md}"
-        );
+        assert!(md.contains("## Goals") && md.contains("rotate off"), "{md}");
         let png = image::open(out.join("error_maps.png")).unwrap();
         assert!(png.width() > 8 * 96 && png.height() > 2 * 96);
         let _ = std::fs::remove_dir_all(out);

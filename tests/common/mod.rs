@@ -155,23 +155,7 @@ pub fn dp_f64_with(env: &envlight::EnvMap, size: u32, ss: u32) -> envlight::EnvM
 /// the checkout. `None` (noted as a skip) where neither is there, except in CI (`CI` set),
 /// where a missing tool fails the test.
 pub fn ktx_tool() -> Option<PathBuf> {
-    let p = match std::env::var_os("ENVLIGHT_KTX") {
-        Some(p) => PathBuf::from(p),
-        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/peers/ktx/ktx"),
-    };
-    if p.is_file() {
-        return Some(p);
-    }
-    assert!(
-        std::env::var_os("CI").is_none(),
-        "CI is set but Khronos' ktx tool is not at {} (set ENVLIGHT_KTX)",
-        p.display()
-    );
-    skipped(&format!(
-        "no ktx tool at {}: ktx validate did not run",
-        p.display()
-    ));
-    None
+    peer("ENVLIGHT_KTX", "ktx/ktx")
 }
 
 /// A peer program: `var` if set, else `../shared/peers/REL` beside the checkout. `None`

@@ -10,7 +10,7 @@
 //! k/(levels − 1)) and Bevy (lod = perceptual roughness × (levels − 1)); cmft's Phong levels
 //! are read at the exponent that matches GGX α ([`CubeConvention::level_of`]).
 
-use super::report::{average, errors, scene, sphere_pixels};
+use super::report::{errors, scene, sphere_pixels, truth};
 use anyhow::{bail, Context as _, Result};
 use clap::ValueEnum;
 use envlight::bake::output::Preset;
@@ -174,6 +174,22 @@ pub(super) fn shade_frame(
     frame
 }
 
+/// Each cube with its convention: the one given in the same place, else the last given,
+/// else Khronos'.
+pub fn with_conventions(
+    cubes: &[PathBuf],
+    conventions: &[CubeConvention],
+) -> Vec<(PathBuf, CubeConvention)> {
+    cubes
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let c = conventions.get(k).or(conventions.last());
+            (p.clone(), c.copied().unwrap_or(CubeConvention::Khronos))
+        })
+        .collect()
+}
+
 /// What to score.
 pub struct CubeArgs<'a> {
     /// The probe the cubes were made from.
@@ -208,16 +224,7 @@ pub fn score(
             correlated: true,
         };
         let split = SplitSumSettings::default();
-        let mc = |seed| {
-            let t = Technique::Mc {
-                samples: reference,
-                error: None,
-            };
-            renderer.render(&scene(cam, b, t, None, seed, split), &env)
-        };
-        let (r1, r2) = (mc(1)?, mc(2)?);
-        let noise = errors(&r1.frame, &r2.frame, &pixels).0 / 2.0;
-        let truth = average(&r1.frame, &r2.frame);
+        let (truth, noise) = truth(renderer, cam, b, None, split, reference, &env)?;
         let mut push = |label: String, frame: &EnvMap| {
             let (rms, bias, _) = errors(frame, &truth, &pixels);
             eprintln!("α {alpha} {label}: {rms:.3e} (bias {bias:+.2e})");

@@ -4,7 +4,7 @@
 //! every probe of a folder and GGX α 0.05 to 0.6, with each recipe's per-frame GPU time:
 //! split_sum.md and split_sum.csv.
 
-use super::report::{average, errors, scene, sphere_pixels};
+use super::report::{errors, scene, sphere_pixels, truth};
 use anyhow::{Context as _, Result};
 use envlight::math::brdf::Brdf;
 use envlight::math::camera::{sphere_camera, Camera};
@@ -153,16 +153,7 @@ pub(super) fn sweep(
                 alpha,
                 correlated: true,
             };
-            let mc = |seed| {
-                let t = Technique::Mc {
-                    samples: reference,
-                    error: None,
-                };
-                renderer.render(&scene(cam, b, t, None, seed, split), &env)
-            };
-            let (r1, r2) = (mc(1)?, mc(2)?);
-            let noise = errors(&r1.frame, &r2.frame, &pixels).0 / 2.0;
-            let truth = average(&r1.frame, &r2.frame);
+            let (truth, noise) = truth(renderer, cam, b, None, split, reference, &env)?;
             for (k, r) in list.iter().enumerate() {
                 let f = renderer.render(&recipe_scene(cam, b, r, split), &env)?;
                 let (rms, bias, _) = errors(&f.frame, &truth, &pixels);

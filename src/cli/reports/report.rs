@@ -301,6 +301,29 @@ pub(super) fn errors(a: &EnvMap, m: &EnvMap, pixels: &[(usize, u32)]) -> (f64, f
     ((se / sm2).sqrt(), (sa - sm) / sm, worst)
 }
 
+/// The reference frame of `brdf` on the sphere: two independent MIS renders of `samples`
+/// each; their mean is the reference, half their relative RMS difference its noise.
+pub(super) fn truth(
+    renderer: &Renderer,
+    cam: Camera,
+    brdf: Brdf,
+    dp: Option<u32>,
+    split: SplitSumSettings,
+    samples: u32,
+    env: &EnvMap,
+) -> Result<(EnvMap, f64)> {
+    let mc = |seed| {
+        let t = Technique::Mc {
+            samples,
+            error: None,
+        };
+        renderer.render(&scene(cam, brdf, t, dp, seed, split), env)
+    };
+    let (r1, r2) = (mc(1)?, mc(2)?);
+    let noise = errors(&r1.frame, &r2.frame, &sphere_pixels(&cam)).0 / 2.0;
+    Ok((average(&r1.frame, &r2.frame), noise))
+}
+
 pub(super) fn average(a: &EnvMap, b: &EnvMap) -> EnvMap {
     let mut out = a.clone();
     for (o, t) in out.texels.iter_mut().zip(&b.texels) {
@@ -309,6 +332,60 @@ pub(super) fn average(a: &EnvMap, b: &EnvMap) -> EnvMap {
         }
     }
     out
+}
+
+/// The rows of glTF-IBL-Sampler's cubes of `file` for a GGX `brdf`: each shaded by split-sum
+/// in float64 and scored against `truth`; their time is the sampler's whole process (it has
+/// no timestamps, so its wall time bounds its GPU time).
+#[allow(clippy::too_many_arguments)]
+fn peer_rows(
+    peers: &[super::cubes::PeerCube],
+    file: &str,
+    kind: &'static str,
+    material: &str,
+    brdf: Brdf,
+    cam: &Camera,
+    truth: &EnvMap,
+    noise: f64,
+) -> Vec<Row> {
+    let Brdf::Ggx { alpha, .. } = brdf else {
+        return Vec::new();
+    };
+    let table = envlight::math::split_sum::dfg_table(32, true);
+    let pixels = sphere_pixels(cam);
+    peers
+        .iter()
+        .map(|p| {
+            let f = super::cubes::shade_frame(cam, &p.chain, &table, alpha, 1);
+            let (rms, bias, tile) = errors(&f, truth, &pixels);
+            Row {
+                probe: file.trim_end_matches(".hdr").to_string(),
+                kind,
+                material: material.to_string(),
+                technique: super::cubes::PEER,
+                params: format!("N={}", p.samples),
+                rms,
+                bias,
+                tile,
+                gpu_ms: 1e3 * p.seconds,
+                pre_ms: 1e3 * p.seconds,
+                wall_s: p.seconds,
+                process_s: p.seconds,
+                noise,
+            }
+        })
+        .collect()
+}
+
+/// glTF-IBL-Sampler's wrapper from ENVLIGHT_IBLSAMPLER, if that names a file (said when not).
+fn sampler_from_env() -> Option<PathBuf> {
+    let s = std::env::var_os("ENVLIGHT_IBLSAMPLER")
+        .map(PathBuf::from)
+        .filter(|p| p.is_file());
+    if s.is_none() {
+        eprintln!("ENVLIGHT_IBLSAMPLER is not set to glTF-IBL-Sampler: its cubes are left out");
+    }
+    s
 }
 
 /// Runs the report.
@@ -346,25 +423,11 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         return super::table::table(&renderer, &dir, size, reference, &args.out, &device, &pick);
     }
     if !args.cube.is_empty() {
-        let probe = args.cube_probe.as_deref().ok_or_else(|| {
-            anyhow!("--cube needs --cube-probe, the probe the cubes were made from")
-        })?;
-        let conv = |k: usize| {
-            args.cube_convention
-                .get(k)
-                .or(args.cube_convention.last())
-                .copied()
-                .unwrap_or(super::cubes::CubeConvention::Khronos)
-        };
-        let cubes = args
-            .cube
-            .iter()
-            .enumerate()
-            .map(|(k, p)| (p.clone(), conv(k)))
-            .collect();
         let a = super::cubes::CubeArgs {
-            probe,
-            cubes,
+            probe: args.cube_probe.as_deref().ok_or_else(|| {
+                anyhow!("--cube needs --cube-probe, the probe the cubes were made from")
+            })?,
+            cubes: super::cubes::with_conventions(&args.cube, &args.cube_convention),
             out: &args.out,
         };
         return super::cubes::score(&renderer, cam, reference, &device, &a);
@@ -375,12 +438,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     let mut rows = Vec::new();
     let started = Instant::now();
     // glTF-IBL-Sampler's cubes join the GGX materials where it is present.
-    let sampler = std::env::var_os("ENVLIGHT_IBLSAMPLER")
-        .map(PathBuf::from)
-        .filter(|p| p.is_file());
-    if sampler.is_none() {
-        eprintln!("ENVLIGHT_IBLSAMPLER is not set to glTF-IBL-Sampler: its cubes are left out");
-    }
+    let sampler = sampler_from_env();
     let sampler_counts: &[u32] = if quick { &[16, 64] } else { &[64, 1024] };
     let scratch = std::env::temp_dir().join(format!("envlight-report-{}", std::process::id()));
     std::fs::create_dir_all(&scratch).with_context(|| scratch.display().to_string())?;
@@ -402,18 +460,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
             None => Vec::new(),
         };
         for (name, brdf) in materials(quick) {
-            // The reference: two independent MIS renders; their mean is the reference, half
-            // their difference its noise.
-            let mc = |seed| {
-                let t = Technique::Mc {
-                    samples: reference,
-                    error: None,
-                };
-                renderer.render(&scene(cam, brdf, t, dp, seed, split), &env)
-            };
-            let (r1, r2) = (mc(1)?, mc(2)?);
-            let noise = errors(&r1.frame, &r2.frame, &pixels).0 / 2.0;
-            let truth = average(&r1.frame, &r2.frame);
+            let (truth, noise) = truth(&renderer, cam, brdf, dp, split, reference, &env)?;
             for (t, params, taps) in cases(&brdf, quick) {
                 let sc = scene(cam, brdf, t, dp, 7, SplitSumSettings { taps, ..split });
                 // One untimed render first: pipelines are built on first use.
@@ -461,29 +508,9 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
                 );
                 rows.push(row);
             }
-            if let Brdf::Ggx { alpha, .. } = brdf {
-                let table = envlight::math::split_sum::dfg_table(32, true);
-                for p in &peers {
-                    let f = super::cubes::shade_frame(&cam, &p.chain, &table, alpha, 1);
-                    let (rms, bias, tile) = errors(&f, &truth, &pixels);
-                    // No timestamps in its process: its wall time bounds its GPU time.
-                    rows.push(Row {
-                        probe: file.trim_end_matches(".hdr").to_string(),
-                        kind,
-                        material: name.to_string(),
-                        technique: super::cubes::PEER,
-                        params: format!("N={}", p.samples),
-                        rms,
-                        bias,
-                        tile,
-                        gpu_ms: 1e3 * p.seconds,
-                        pre_ms: 1e3 * p.seconds,
-                        wall_s: p.seconds,
-                        process_s: p.seconds,
-                        noise,
-                    });
-                }
-            }
+            rows.extend(peer_rows(
+                &peers, file, kind, name, brdf, &cam, &truth, noise,
+            ));
         }
     }
     let _ = std::fs::remove_dir_all(&scratch);

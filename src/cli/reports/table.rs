@@ -1,4 +1,4 @@
-//! `envlight report --table`: issue #10's accuracy table. Every real-time technique on five
+//! `envlight report --table`: the accuracy table. Every real-time technique on five
 //! real probes, with light extraction and without, scored per pixel against a converged
 //! reference: table.md (the table, the goals checked, the rotate comparison), table.csv (one
 //! row per probe × material × technique × settings) and error_maps.png (signed per-pixel
@@ -434,7 +434,7 @@ fn markdown(rows: &[Row], settings: &str) -> String {
         .iter()
         .map(|p| p.0.trim_end_matches("_1k.hdr"))
         .collect();
-    md.push_str("## Issue #10's goals\n\n");
+    md.push_str("## Goals\n\n");
     let goal =
         |md: &mut String, name: &str, pick: &dyn Fn(&Case) -> bool, max: f64, bias: Option<f64>| {
             let v = by_probe(rows, pick);
