@@ -85,7 +85,7 @@ pub const PEER: &str = "gltf-ibl-sampler";
 const TAPS: u32 = 8;
 
 /// Entries per side of the float64 DFG table.
-const DFG_SIZE: u32 = 32;
+pub(super) const DFG_SIZE: u32 = 32;
 
 /// The cube at `path` (KTX2 or DDS) as a chain of dual-paraboloid levels in the world, level
 /// k holding α = (k/(levels − 1))² read from the cube's level [`CubeConvention::level_of`]

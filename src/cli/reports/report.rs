@@ -351,7 +351,7 @@ fn peer_rows(
     let Brdf::Ggx { alpha, .. } = brdf else {
         return Vec::new();
     };
-    let table = envlight::math::split_sum::dfg_table(32, true);
+    let table = envlight::math::split_sum::dfg_table(super::cubes::DFG_SIZE, true);
     let pixels = sphere_pixels(cam);
     peers
         .iter()
