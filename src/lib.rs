@@ -68,7 +68,6 @@
 
 pub mod abi;
 pub mod bake;
-pub mod envmap;
 pub mod error;
 pub mod gpu;
 pub mod io;
@@ -77,7 +76,7 @@ pub mod passes;
 pub mod render;
 pub mod scene;
 
-pub use envmap::EnvMap;
 pub use error::{Error, Result};
+pub use math::envmap::EnvMap;
 pub use math::{Mapping, Orientation};
 pub use passes::GpuEnvMap;

@@ -8,6 +8,7 @@ use crate::gpu::{Buffer, Context, Recorder, Timing, Usage};
 use crate::math::brdf::Brdf;
 use crate::math::convert::{latlong_halved, paraboloid_source_halves, residual_edge_points};
 use crate::math::filter::Kernel;
+use crate::math::fis::default_dp_size;
 use crate::math::lights::{extract_each, light_sh, lobe_scale, resolves, ExtractOptions};
 use crate::math::sh::Window;
 use crate::math::sh_brdf::ViewGrid;
@@ -105,14 +106,6 @@ pub fn load_environment(scene: &Scene, base: &Path) -> Result<EnvMap> {
         }
     }
     Ok(map)
-}
-
-/// Side of the dual paraboloid for `map`: about as many texels in the two discs as the map
-/// has on the sphere, as a power of two from 16 to 1024.
-pub fn default_dp_size(map: &EnvMap) -> u32 {
-    let n = (map.width as f64) * (map.height as f64) * map.layers() as f64;
-    let side = (2.0 * n / std::f64::consts::PI).sqrt();
-    (side.max(1.0) as u32).next_power_of_two().clamp(16, 1024)
 }
 
 /// Side of `scene`'s FIS dual paraboloid: the scene's `[fis] size`; else only as fine as its

@@ -173,7 +173,7 @@ fn decode(vk_format: u32, data: &[u8], w: usize, h: usize, faces: usize) -> Vec<
 }
 
 fn luminance(c: [f32; 3]) -> f64 {
-    envlight::envmap::luminance(c.map(|v| v as f64))
+    envlight::math::envmap::luminance(c.map(|v| v as f64))
 }
 
 /// The direction of a texel centre of a cube level `s` a side (Vulkan's face table).

@@ -490,7 +490,7 @@ fn fis_with_lights_matches_its_float64_twin() {
                     }
                     let bias = envlight::abi::defaults::FIS_BIAS_RESIDUAL;
                     let f = fis64::estimate(&chain, &kind, hit.normal, -d, 16, bias, [0.0; 2]);
-                    let lum = envlight::envmap::luminance(f);
+                    let lum = envlight::math::envmap::luminance(f);
                     let l = tree.sum_brdf(&kind, hit.normal, -d, scale, lum);
                     let px = r.frame.texels[(j * cam.width + i) as usize];
                     for c in 0..3 {
@@ -567,7 +567,7 @@ fn halved_residual_costs_little_against_the_whole() {
                     let px = r.frame.texels[k];
                     for (chain, worst) in chains.iter().zip(&mut worst) {
                         let f = fis64::estimate(chain, &kind, normal, -d, 16, bias, [0.0; 2]);
-                        let lum = envlight::envmap::luminance(f);
+                        let lum = envlight::math::envmap::luminance(f);
                         let l = tree.sum_brdf(&kind, normal, -d, scale, lum);
                         for c in 0..3 {
                             let want = f[c] + l[c];
@@ -727,7 +727,8 @@ fn walks_ending_by_vote_match_walks_ending_alone() {
 fn lobe_sized_paraboloid_reads_as_the_source_sized_one() {
     use common::scenes::{rel_rms, sphere_pixels};
     use envlight::math::camera::Projection;
-    use envlight::render::{default_dp_size, fis_dp_size};
+    use envlight::math::fis::default_dp_size;
+    use envlight::render::fis_dp_size;
     use envlight::scene::LightsMode;
     let ctx = common::ctx();
     {

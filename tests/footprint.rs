@@ -29,8 +29,8 @@ fn errors(frame: &EnvMap, reference: &EnvMap, cam: &Camera) -> (f64, f64, f64) {
                 se += (a[c] as f64 - b[c] as f64).powi(2);
                 sw += (b[c] as f64).powi(2);
             }
-            let ya = envlight::envmap::luminance(a.map(f64::from));
-            let yb = envlight::envmap::luminance(b.map(f64::from));
+            let ya = envlight::math::envmap::luminance(a.map(f64::from));
+            let yb = envlight::math::envmap::luminance(b.map(f64::from));
             sp += ((ya - yb) / yb.max(1e-12)).powi(2);
             sa += ya;
             sb += yb;
@@ -189,7 +189,7 @@ fn footprint_mirror_matches_its_supersampled_render() {
         let reference = footprint::supersampled(&env, &cam, &[unit_sphere()], 16);
         let mut errs = Vec::new();
         for filter in [LookupFilter::Point, LookupFilter::Auto] {
-            let size = envlight::render::default_dp_size(&env);
+            let size = envlight::math::fis::default_dp_size(&env);
             let f = render(&ctx, &mirror_scene(cam, filter, size), &env)
                 .unwrap()
                 .frame;
@@ -237,7 +237,7 @@ fn mirror_footprint_on_real_probes() {
         ];
         for (name, m256, m16) in cases {
             let env = envlight::io::load(dir.join(name), &Default::default()).unwrap();
-            let size = envlight::render::default_dp_size(&env);
+            let size = envlight::math::fis::default_dp_size(&env);
             let r16 = footprint::supersampled(&env, &cam, &[unit_sphere()], 4);
             let r256 = footprint::supersampled(&env, &cam, &[unit_sphere()], 16);
             let own = errors(&r16, &r256, &cam);

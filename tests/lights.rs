@@ -684,7 +684,13 @@ fn prefiltered_phong_with_lights_matches_its_float64_twin() {
                 let v = -d;
                 let r = 2.0 * normal.dot(v) * normal - v;
                 let m = prefiltered_lookup(&pre, w, h, r);
-                let l = tree.sum_brdf(&brdf, normal, v, scale, envlight::envmap::luminance(m));
+                let l = tree.sum_brdf(
+                    &brdf,
+                    normal,
+                    v,
+                    scale,
+                    envlight::math::envmap::luminance(m),
+                );
                 for ch in 0..3 {
                     let want = m[ch] + l[ch];
                     worst = worst.max((with.texels[k][ch] as f64 - want).abs() / want);

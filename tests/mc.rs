@@ -4,9 +4,9 @@
 mod common;
 
 use common::scenes::{fis, object, scene, sphere_camera, unit_sphere};
-use envlight::envmap::luminance;
 use envlight::math::brdf::Brdf;
 use envlight::math::camera::{trace, Camera, Projection, Shape};
+use envlight::math::envmap::luminance;
 use envlight::math::mc::{estimate, McPoint, McSetup};
 use envlight::math::{Mapping, Orientation};
 use envlight::passes::gbuffer::GBufferPass;

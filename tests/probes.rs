@@ -211,7 +211,7 @@ fn grace_probe_and_latlong_agree_after_flips() {
         let lum = |m: &EnvMap| -> Vec<f64> {
             m.texels
                 .iter()
-                .map(|t| envlight::envmap::luminance(t.map(f64::from)))
+                .map(|t| envlight::math::envmap::luminance(t.map(f64::from)))
                 .collect()
         };
         let (a, b, c) = (lum(&probe), lum(&latlong), lum(&unflipped));

@@ -371,7 +371,7 @@ fn render_with_lights_matches_its_float64_twin() {
                 let mu = local_view(&Frame::new(normal), v).z.clamp(0.0, 1.0);
                 let ab = split_sum::dfg_lookup(&table, 16, mu, alpha);
                 // The chain's own radiance, in the light sum's units.
-                let chain_lum = envlight::envmap::luminance(base) / (ab[0] + ab[1]) * norm;
+                let chain_lum = envlight::math::envmap::luminance(base) / (ab[0] + ab[1]) * norm;
                 let l = tree.sum(rdir, LightKernel::Ggx { alpha }, chain_lum);
                 for c in 0..3 {
                     let want = base[c] + l[c] / norm * (ab[0] + ab[1]);
@@ -411,7 +411,7 @@ fn render_with_lights_matches_its_float64_twin() {
             for (k, normal, d) in sphere_pixels(&cam) {
                 let v = -d;
                 let base = split_sum::shade_taps(&chain, &table, 16, &b, normal, v, taps);
-                let est = envlight::envmap::luminance(base);
+                let est = envlight::math::envmap::luminance(base);
                 let l = tree.sum_brdf(&b, normal, v, scale, est);
                 for c in 0..3 {
                     let want = base[c] + l[c];

@@ -12,10 +12,11 @@
 
 pub mod output;
 
-use crate::envmap::luminance;
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, InFlight, Timing, Usage};
+use crate::math::envmap::luminance;
 use crate::math::exact::ExactFilter;
+use crate::math::fis::default_dp_size;
 use crate::math::lights::{
     diffuse_options, extract_each, light_sh, resolves, ExtractOptions, LightKernel, DIFFUSE_RATIO,
 };
@@ -28,7 +29,6 @@ use crate::passes::{
     ConvertOptions, Converter, GpuEnvMap, GpuLights, LightsPass, MipChain, PrefilterOptions,
     ShEvaluator, ShProjector, SplitSum,
 };
-use crate::render::default_dp_size;
 use crate::{EnvMap, Mapping};
 use ash::vk;
 use gpu_allocator::MemoryLocation;

@@ -15,9 +15,9 @@
 //!   cube frame is the world turned 90° about +Y, so a panorama's centre column lands on the
 //!   cube's +X as in its files, where envlight's world has it at +Z.
 
-use crate::envmap::luminance;
 use crate::error::{Error, Result};
 use crate::io::ktx2::{Ktx2Format, Supercompression};
+use crate::math::envmap::luminance;
 use crate::math::lights::{group, ExtractOptions, Extraction};
 use crate::math::split_sum::DfgAxes;
 use crate::math::Orientation;

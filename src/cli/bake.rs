@@ -902,7 +902,7 @@ fn summary(manifest: &Manifest, plan: &Plan) {
             .as_ref()
             .map_or("0".into(), |c| format!("{:.2e}", c.worst()));
         let separated = e.separated.map_or("–".into(), |s| {
-            format!("{:.3}", envlight::envmap::luminance(s))
+            format!("{:.3}", envlight::math::envmap::luminance(s))
         });
         println!(
             "| {} | {} | {:.3} | {:.1} | {irr} | {spec} | {clamped} | {separated} |",

@@ -45,7 +45,7 @@ fn print_lights(map: &EnvMap, opts: &ExtractOptions) {
     let ex = extract(map, opts);
     let lights = group(map, &ex, GROUP_RADIUS);
     let share: f64 = lights.iter().map(|l| l.share).sum();
-    let mean = envlight::envmap::luminance(map.stats().power) / (4.0 * std::f64::consts::PI);
+    let mean = envlight::math::envmap::luminance(map.stats().power) / (4.0 * std::f64::consts::PI);
     println!(
         "lights:    {} ({} texels above {:.4e} = {:.1} x the mean luminance{}{}; {:.1}% of the power)",
         lights.len(),

@@ -3,8 +3,8 @@
 //! the mapping in an attribute.
 
 use super::{check_size, strip_extent, Raster};
-use crate::envmap::EnvMap;
 use crate::error::{Error, Result};
+use crate::math::envmap::EnvMap;
 use crate::math::Mapping;
 use exr::prelude::*;
 use std::path::Path;

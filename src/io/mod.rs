@@ -22,8 +22,8 @@ pub mod ktx2;
 mod pfm;
 mod png_io;
 
-use crate::envmap::EnvMap;
 use crate::error::{Error, Result};
+use crate::math::envmap::EnvMap;
 use crate::math::Mapping;
 use std::path::{Path, PathBuf};
 

@@ -1,8 +1,8 @@
 //! Radiance `.hdr`, PNG and JPEG through the `image` crate, and tone-mapped PNG output.
 
 use super::{check_size, strip_extent, Raster};
-use crate::envmap::EnvMap;
 use crate::error::{Error, Result};
+use crate::math::envmap::EnvMap;
 use std::io::Cursor;
 use std::path::Path;
 

@@ -4,7 +4,7 @@
 
 use super::mapping::{Coord, Mapping};
 use crate::abi::area;
-use crate::envmap::EnvMap;
+use crate::math::envmap::EnvMap;
 use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
 

@@ -8,8 +8,8 @@
 //! estimator L/pdf of a constant-BRDF integrand has no variance at all.
 
 use super::mapping::{Mapping, Orientation};
-use crate::envmap::{luminance, EnvMap};
 use crate::error::{Error, Result};
+use crate::math::envmap::{luminance, EnvMap};
 use glam::{DMat3, DVec3};
 use std::f64::consts::{PI, TAU};
 

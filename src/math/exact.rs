@@ -62,8 +62,8 @@ impl<'a> ExactFilter<'a> {
         self.texels
             .iter()
             .max_by(|a, b| {
-                crate::envmap::luminance(a.radiance)
-                    .total_cmp(&crate::envmap::luminance(b.radiance))
+                crate::math::envmap::luminance(a.radiance)
+                    .total_cmp(&crate::math::envmap::luminance(b.radiance))
             })
             .map_or(DVec3::Z, |t| t.dir)
     }

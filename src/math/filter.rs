@@ -24,7 +24,7 @@
 //! for Phong lobes up to n = 10⁴).
 
 use super::mapping::{Coord, Mapping};
-use crate::envmap::EnvMap;
+use crate::math::envmap::EnvMap;
 use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
 

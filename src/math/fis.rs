@@ -180,10 +180,18 @@ pub fn dp_size_for(brdf: &Brdf, samples: u32, bias: f64) -> u32 {
         .clamp(16, 4096)
 }
 
+/// Side of the dual paraboloid for `map`: about as many texels in the two discs as the map
+/// has on the sphere, as a power of two from 16 to 1024.
+pub fn default_dp_size(map: &super::envmap::EnvMap) -> u32 {
+    let n = (map.width as f64) * (map.height as f64) * map.layers() as f64;
+    let side = (2.0 * n / std::f64::consts::PI).sqrt();
+    (side.max(1.0) as u32).next_power_of_two().clamp(16, 1024)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::envmap::{luminance, EnvMap};
+    use crate::math::envmap::{luminance, EnvMap};
 
     /// A sunset-like sky: a bright band along the horizon (the paraboloid's rim), brighter on
     /// one side, over a dim sky and a dimmer ground.

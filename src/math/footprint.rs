@@ -277,7 +277,8 @@ impl OverlapShape {
         }
     }
 
-    /// Whether no texel of `node` can cover any of the pixel: every texel centre lies within
+    /// Whether no texel of a light-tree node (texel centres within chord `reach` of its unit
+    /// `centre`, texels `rho` wide) can cover any of the pixel: every texel centre lies within
     /// chord `reach` of the node's centre, so on the arc between them the dot with r is at
     /// least c − reach, the gnomonic map stretches by at most 1/(c − reach)², and the arc is
     /// at most π/2 times the chord: the texel's gnomonic point lies within G = π/2·reach/(c −
@@ -286,33 +287,33 @@ impl OverlapShape {
     /// Also, a texel it covers has its gnomonic point e within the pixel's box grown by the
     /// texel's, so |e| = tan θ ≤ E (½ρ·√2 for a point footprint, else |J|·|(½ + k·ρ·n0, ½ +
     /// k·ρ·n1)|), and its centre lies within chord 2·sin(θ/2) ≤ tan θ ≤ E of r: a node whose
-    /// centre lies further than reach + E from r misses (a bound in chords: in cosines it
-    /// was √(2·reach) wide, and a point footprint on studio_small_08 walked 71 nodes).
-    pub fn misses(&self, node: &super::light_tree::TreeNode) -> bool {
-        let c = node.centre.dot(self.r);
+    /// centre lies further than reach + E from r misses (a bound in chords, since one in
+    /// cosines is √(2·reach) wide and lets far more nodes through).
+    pub fn misses(&self, centre: DVec3, rho: f64, reach: f64) -> bool {
+        let c = centre.dot(self.r);
         let e_max = if self.point {
-            std::f64::consts::FRAC_1_SQRT_2 * node.rho
+            std::f64::consts::FRAC_1_SQRT_2 * rho
         } else {
-            let h = self.k * node.rho;
+            let h = self.k * rho;
             self.jn * (0.5 + h * self.n[0]).hypot(0.5 + h * self.n[1])
         };
-        if (node.centre - self.r).length() > node.reach + e_max {
+        if (centre - self.r).length() > reach + e_max {
             return true;
         }
-        let low = c - node.reach;
+        let low = c - reach;
         if low <= 0.0 {
             return false;
         }
-        let g = std::f64::consts::FRAC_PI_2 * node.reach / (low * low);
-        let e = node.centre / c - self.r;
+        let g = std::f64::consts::FRAC_PI_2 * reach / (low * low);
+        let e = centre / c - self.r;
         let (ex, ey) = (e.dot(self.f.t), e.dot(self.f.b));
         if self.point {
-            let h = 0.5 * node.rho;
+            let h = 0.5 * rho;
             return ex.abs() - g > h || ey.abs() - g > h;
         }
         let [i00, i01, i10, i11] = self.inv;
         let [n0, n1] = self.n;
-        let h = self.k * node.rho;
+        let h = self.k * rho;
         let (s, q) = (i00 * ex + i01 * ey, i10 * ex + i11 * ey);
         s.abs() - n0 * g >= 0.5 + h * n0 || q.abs() - n1 * g >= 0.5 + h * n1
     }

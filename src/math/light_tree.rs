@@ -16,7 +16,7 @@
 
 use super::brdf::{local_view, Brdf, Frame};
 use super::lights::{kernel_of, texel_integral, LightKernel, PreparedLight};
-use crate::envmap::luminance;
+use crate::math::envmap::luminance;
 use glam::DVec3;
 
 pub use crate::abi::lights::{
@@ -178,7 +178,7 @@ impl LightTree {
         let mut i = 0;
         while i < self.nodes.len() {
             let n = &self.nodes[i];
-            if shape.misses(n) {
+            if shape.misses(n.centre, n.rho, n.reach) {
                 i = n.skip as usize;
             } else if n.count <= LEAF_TEXELS {
                 let at = n.first as usize;

@@ -19,7 +19,7 @@
 
 use super::brdf::{local_view, Brdf, Frame};
 use super::mapping::Coord;
-use crate::envmap::luminance;
+use crate::math::envmap::luminance;
 use crate::EnvMap;
 use glam::DVec3;
 

@@ -6,7 +6,7 @@ use super::brdf::{local_view, Brdf, Frame};
 use super::camera::Shape;
 use super::envsample::EnvSampler;
 use super::sequence::Rng;
-use crate::envmap::luminance;
+use crate::math::envmap::luminance;
 use glam::DVec3;
 
 /// What every pixel's estimate shares.

@@ -19,7 +19,7 @@
 //! 4/W² at the rim ([`texel_solid_angle`]).
 
 use super::mapping::Mapping;
-use crate::envmap::EnvMap;
+use crate::math::envmap::EnvMap;
 use glam::DVec3;
 
 /// One level: `size` × `size` texels per half, layer after layer, row after row, each

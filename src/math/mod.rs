@@ -6,6 +6,7 @@
 pub mod brdf;
 pub mod camera;
 pub mod convert;
+pub mod envmap;
 pub mod envsample;
 pub mod exact;
 pub mod filter;

@@ -212,7 +212,7 @@ impl MomentLevel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::envmap::EnvMap;
+    use crate::math::envmap::EnvMap;
     use crate::math::synth::Sky;
     use glam::DMat3;
 

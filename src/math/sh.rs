@@ -6,7 +6,7 @@
 //! Condon–Shortley phase: for l ≤ 2 these are R&H's eq. 3 on world (x, y, z).
 
 use super::mapping::Mapping;
-use crate::envmap::EnvMap;
+use crate::math::envmap::EnvMap;
 use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
 

@@ -2,9 +2,9 @@
 //! cubes), envlight's or the caller's, and the recorded copies that move them to and from
 //! the host.
 
-use crate::envmap::EnvMap;
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, Image, ImageDesc, Recorder, Usage};
+use crate::math::envmap::EnvMap;
 use crate::math::Mapping;
 use ash::vk;
 use gpu_allocator::MemoryLocation;

@@ -9,10 +9,10 @@
 
 use crate::cli::{context, Global};
 use anyhow::Context as _;
-use envlight::envmap::{luminance, EnvMap};
 use envlight::error::Result;
 use envlight::gpu::Context;
 use envlight::io::{self, LoadOptions};
+use envlight::math::envmap::{luminance, EnvMap};
 use envlight::math::filter::Kernel;
 use envlight::math::sh::{self, Window};
 use envlight::math::synth::fibonacci_sphere;

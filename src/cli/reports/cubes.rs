@@ -10,7 +10,7 @@
 //! k/(levels − 1)) and Bevy (lod = perceptual roughness × (levels − 1)); cmft's Phong levels
 //! are read at the exponent that matches GGX α ([`CubeConvention::level_of`]).
 
-use super::report::{errors, scene, sphere_pixels, truth};
+use super::scoring::{errors, scene, sphere_pixels, truth};
 use anyhow::{bail, Context as _, Result};
 use clap::ValueEnum;
 use envlight::bake::output::Preset;

@@ -2,19 +2,20 @@
 //! Carlo at growing sample counts, each timed on the GPU and scored against a converged
 //! Monte Carlo reference (MIS), on a sphere seen from normal incidence to grazing.
 
-use envlight::envmap::luminance;
 use envlight::error::Result;
 use envlight::gpu::Context;
 use envlight::math::brdf::Brdf;
 use envlight::math::camera::sphere_camera;
 use envlight::math::camera::Shape;
+use envlight::math::envmap::luminance;
+use envlight::math::fis::default_dp_size;
 use envlight::math::{Mapping, Orientation};
 use envlight::passes::gbuffer::{GBuffer, GBufferPass};
 use envlight::passes::mc::{pixel_stats, McEnv, McOptions, MonteCarlo};
 use envlight::passes::mip::MipChain;
 use envlight::passes::shade::{Shade, ShadeInputs};
 use envlight::passes::{ConvertOptions, Converter};
-use envlight::render::{default_dp_size, object_record};
+use envlight::render::object_record;
 use envlight::scene::{Material, SceneObject, Technique};
 use envlight::EnvMap;
 use envlight::GpuEnvMap;

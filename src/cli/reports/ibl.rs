@@ -11,8 +11,8 @@
 use crate::cli::{probe_files, Global};
 use anyhow::{anyhow, bail, Context as _, Result};
 use envlight::bake::output::Preset;
-use envlight::envmap::luminance;
 use envlight::io::ktx2;
+use envlight::math::envmap::luminance;
 use envlight::math::exact::ExactFilter;
 use envlight::math::split_sum::level_alpha;
 use envlight::math::Mapping;

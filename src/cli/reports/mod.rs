@@ -11,6 +11,7 @@ pub mod ibl;
 pub mod peers;
 mod recipes;
 pub mod report;
+mod scoring;
 pub mod table;
 
 use super::{context, Global};

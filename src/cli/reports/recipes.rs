@@ -4,7 +4,7 @@
 //! every probe of a folder and GGX α 0.05 to 0.6, with each recipe's per-frame GPU time:
 //! split_sum.md and split_sum.csv.
 
-use super::report::{errors, scene, sphere_pixels, truth};
+use super::scoring::{errors, scene, sphere_pixels, truth};
 use anyhow::{Context as _, Result};
 use envlight::math::brdf::Brdf;
 use envlight::math::camera::{sphere_camera, Camera};

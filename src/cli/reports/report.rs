@@ -4,12 +4,13 @@
 //! material) and report.png (error against time, one panel per material).
 
 use super::super::{context, Global};
+use super::scoring::{errors, scene, sphere_pixels, truth};
 use anyhow::{anyhow, bail, Context as _, Result};
 use clap::Args;
 use envlight::math::brdf::Brdf;
-use envlight::math::camera::{sphere_camera, trace, Camera, Shape};
+use envlight::math::camera::{sphere_camera, Camera};
 use envlight::render::Renderer;
-use envlight::scene::{Material, PassKind, Scene, SceneObject, SplitSumSettings, Technique};
+use envlight::scene::{PassKind, Scene, SplitSumSettings, Technique};
 use envlight::EnvMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -204,32 +205,6 @@ fn cases(brdf: &Brdf, quick: bool) -> Vec<(Technique, String, u32)> {
     v
 }
 
-pub(super) fn scene(
-    cam: Camera,
-    brdf: Brdf,
-    t: Technique,
-    dp: Option<u32>,
-    seed: u32,
-    split: SplitSumSettings,
-) -> Scene {
-    let object = SceneObject {
-        shape: Shape::Sphere {
-            center: [0.0; 3],
-            radius: 1.0,
-        },
-        material: Material {
-            kind: brdf,
-            albedo: [1.0; 3],
-            technique: Some(t),
-        },
-    };
-    let mut sc = Scene::new(cam, vec![object]);
-    sc.fis.size = dp;
-    sc.split_sum = split;
-    sc.mc.seed = seed;
-    sc
-}
-
 /// Whole-process seconds of `envlight render` on `sc` (its environment a file): the load, the
 /// precomputation, the shading and the EXR written, as a user runs it.
 fn process_seconds(g: &Global, sc: &Scene, dir: &Path) -> Result<f64> {
@@ -254,84 +229,6 @@ fn process_seconds(g: &Global, sc: &Scene, dir: &Path) -> Result<f64> {
         );
     }
     Ok(s)
-}
-
-/// Pixels that see the sphere away from its silhouette, with their tile (8 × 8 pixels).
-pub(super) fn sphere_pixels(cam: &Camera) -> Vec<(usize, u32)> {
-    let tiles_x = cam.width.div_ceil(8);
-    let sphere = [Shape::Sphere {
-        center: [0.0; 3],
-        radius: 1.0,
-    }];
-    let mut v = Vec::new();
-    for j in 0..cam.height {
-        for i in 0..cam.width {
-            let (o, d) = cam.ray(i, j);
-            if trace(&sphere, o, d).is_some_and(|h| h.margin >= 1e-3) {
-                v.push(((j * cam.width + i) as usize, (j / 8) * tiles_x + i / 8));
-            }
-        }
-    }
-    v
-}
-
-/// (relative RMS, mean bias, worst tile) of `a` against `m` over `pixels`, all channels; tiles
-/// with fewer than 16 sphere pixels are left out of the worst.
-pub(super) fn errors(a: &EnvMap, m: &EnvMap, pixels: &[(usize, u32)]) -> (f64, f64, f64) {
-    let (mut se, mut sm2, mut sa, mut sm) = (0.0, 0.0, 0.0, 0.0);
-    let mut tiles: std::collections::BTreeMap<u32, (f64, f64, u32)> = Default::default();
-    for &(k, tile) in pixels {
-        let t = tiles.entry(tile).or_default();
-        for ch in 0..3 {
-            let (x, y) = (a.texels[k][ch] as f64, m.texels[k][ch] as f64);
-            se += (x - y).powi(2);
-            sm2 += y * y;
-            sa += x;
-            sm += y;
-            t.0 += x;
-            t.1 += y;
-        }
-        t.2 += 1;
-    }
-    let worst = tiles
-        .values()
-        .filter(|t| t.2 >= 16 && t.1 > 0.0)
-        .map(|t| (t.0 - t.1).abs() / t.1)
-        .fold(0.0, f64::max);
-    ((se / sm2).sqrt(), (sa - sm) / sm, worst)
-}
-
-/// The reference frame of `brdf` on the sphere: two independent MIS renders of `samples`
-/// each; their mean is the reference, half their relative RMS difference its noise.
-pub(super) fn truth(
-    renderer: &Renderer,
-    cam: Camera,
-    brdf: Brdf,
-    dp: Option<u32>,
-    split: SplitSumSettings,
-    samples: u32,
-    env: &EnvMap,
-) -> Result<(EnvMap, f64)> {
-    let mc = |seed| {
-        let t = Technique::Mc {
-            samples,
-            error: None,
-        };
-        renderer.render(&scene(cam, brdf, t, dp, seed, split), env)
-    };
-    let (r1, r2) = (mc(1)?, mc(2)?);
-    let noise = errors(&r1.frame, &r2.frame, &sphere_pixels(&cam)).0 / 2.0;
-    Ok((average(&r1.frame, &r2.frame), noise))
-}
-
-pub(super) fn average(a: &EnvMap, b: &EnvMap) -> EnvMap {
-    let mut out = a.clone();
-    for (o, t) in out.texels.iter_mut().zip(&b.texels) {
-        for ch in 0..3 {
-            o[ch] = 0.5 * (o[ch] + t[ch]);
-        }
-    }
-    out
 }
 
 /// The rows of glTF-IBL-Sampler's cubes of `file` for a GGX `brdf`: each shaded by split-sum

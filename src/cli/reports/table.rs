@@ -4,11 +4,11 @@
 //! row per probe × material × technique × settings) and error_maps.png (signed per-pixel
 //! error of a selection of rows, one row of maps per probe).
 
-use super::report::{average, scene, sphere_pixels};
+use super::scoring::{average, scene, sphere_pixels};
 use anyhow::{anyhow, Context as _, Result};
-use envlight::envmap::luminance;
 use envlight::math::brdf::Brdf;
 use envlight::math::camera::{Camera, Shape};
+use envlight::math::envmap::luminance;
 use envlight::render::Renderer;
 use envlight::scene::{LightsMode, LookupFilter, Scene, SplitSumSettings, Technique};
 use envlight::EnvMap;

@@ -1,6 +1,6 @@
 //! An environment map in memory: linear float RGB texels in one of the four mappings.
 
-use crate::math::{Coord, Mapping};
+use crate::math::mapping::{Coord, Mapping};
 use glam::DVec3;
 
 /// An environment map: `layers × height × width` linear RGB texels (layer-major, then rows
