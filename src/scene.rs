@@ -2,13 +2,28 @@
 //! technique each material is shaded by, and whether shadows are wanted; and the plan of the
 //! GPU passes a render of it runs, each with the reason it is needed.
 
-use crate::abi::{defaults, ShaderId};
 use crate::error::{Error, Result};
 use crate::math::brdf::Brdf;
 use crate::math::camera::{Camera, Shape};
 use crate::math::Orientation;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+
+/// Defaults of a scene's settings and of the command line's options, each where it lives.
+pub mod defaults {
+    pub use crate::math::fis::{
+        DEFAULT_BIAS as FIS_BIAS, DEFAULT_BIAS_RESIDUAL as FIS_BIAS_RESIDUAL,
+    };
+    pub use crate::passes::mc::{
+        DEFAULT_PER_FRAME as MC_PER_FRAME, DEFAULT_SAMPLES as MC_SAMPLES, DEFAULT_SEED as MC_SEED,
+    };
+    /// SH order of diffuse materials.
+    pub const SH_ORDER: u32 = 2;
+    /// FIS samples per pixel.
+    pub const FIS_SAMPLES: u32 = 64;
+    /// Side of prefiltered lat-long maps.
+    pub const PREFILTERED_SIZE: u32 = 64;
+}
 
 /// A scene file.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -622,276 +637,6 @@ impl Scene {
     }
 }
 
-/// A GPU pass a render may run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum PassKind {
-    /// Ray casting the objects.
-    GBuffer,
-    /// Converting the environment to a dual paraboloid.
-    DualParaboloid,
-    /// Its MIP chain.
-    MipChain,
-    /// SH projection.
-    ShProjection,
-    /// SH projection of BRDFs per view (SH-BRDF tables).
-    ShBrdfTable,
-    /// Split-sum: the prefiltered GGX chain and the DFG tables.
-    SplitSum,
-    /// Brute-force prefiltering of one map.
-    Prefilter,
-    /// Converting the environment to lat-long for Monte Carlo sampling.
-    LatLong,
-    /// Monte Carlo frames.
-    MonteCarlo,
-    /// Shading and compositing.
-    Shade,
-}
-
-impl PassKind {
-    /// A short name.
-    pub fn name(self) -> &'static str {
-        match self {
-            PassKind::GBuffer => "gbuffer",
-            PassKind::DualParaboloid => "dual paraboloid",
-            PassKind::MipChain => "mip chain",
-            PassKind::ShProjection => "sh projection",
-            PassKind::ShBrdfTable => "sh brdf table",
-            PassKind::SplitSum => "split-sum",
-            PassKind::Prefilter => "prefilter",
-            PassKind::LatLong => "lat-long",
-            PassKind::MonteCarlo => "monte carlo",
-            PassKind::Shade => "shade",
-        }
-    }
-
-    /// The shader modules whose pipelines the pass creates (either of a pair where the
-    /// device decides: cube or 2D sources, subgroups or shared memory, shade with or
-    /// without vote, whole or for the scene's one technique).
-    pub fn pipelines(self) -> &'static [ShaderId] {
-        use ShaderId::*;
-        match self {
-            PassKind::GBuffer => &[GBuffer],
-            // A lat-long source takes exact footprint areas (slopes, then areas).
-            PassKind::DualParaboloid => {
-                &[Convert2d, ConvertCube, ConvertSlopes, ConvertAreaParaboloid]
-            }
-            PassKind::LatLong => &[Convert2d, ConvertCube],
-            PassKind::MipChain => &[Mip],
-            PassKind::ShProjection => &[
-                ShProjectSubgroup,
-                ShProjectGridSubgroup,
-                ShProjectLatLong2Subgroup,
-                ShReduceSubgroup,
-                ShProjectShared,
-                ShProjectGridShared,
-                ShProjectLatLong2Shared,
-                ShReduceShared,
-            ],
-            PassKind::ShBrdfTable => &[ShBrdf],
-            PassKind::SplitSum => &[Dfg, PrefilterGgx],
-            PassKind::Prefilter => &[BrutePrepare, BruteTiles, Brute, BruteResolve],
-            PassKind::MonteCarlo => &[Mc],
-            PassKind::Shade => &crate::passes::shade::MODULES,
-        }
-    }
-}
-
-/// One planned pass and why.
-#[derive(Clone, Debug)]
-pub struct PlannedPass {
-    /// Which.
-    pub kind: PassKind,
-    /// Why the scene needs it.
-    pub why: String,
-}
-
-/// What a render will run.
-#[derive(Clone, Debug)]
-pub struct Plan {
-    /// GPU passes, in order (a pass appears once however many times it runs).
-    pub passes: Vec<PlannedPass>,
-    /// Remarks: CPU work, and effects a technique leaves out.
-    pub notes: Vec<String>,
-}
-
-impl Plan {
-    /// The pass kinds, in order.
-    pub fn kinds(&self) -> Vec<PassKind> {
-        self.passes.iter().map(|p| p.kind).collect()
-    }
-}
-
-/// Plans a render of `scene` whose environment file holds a `source` map (the mapping
-/// decides whether Monte Carlo needs a lat-long conversion).
-pub fn plan(scene: &Scene, source: crate::math::Mapping) -> Plan {
-    let users = |f: &dyn Fn(&Technique) -> bool| -> Vec<String> {
-        scene
-            .objects
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| f(&o.material.technique()))
-            .map(|(k, o)| format!("{k} ({})", kind_name(&o.material.kind)))
-            .collect()
-    };
-    let fis = users(&|t| matches!(t, Technique::Fis { .. }));
-    let sh = users(&|t| matches!(t, Technique::Sh { .. }));
-    let pre = users(&|t| matches!(t, Technique::Prefiltered { .. }));
-    let mc = users(&|t| matches!(t, Technique::Mc { .. }));
-    let lookup = users(&|t| matches!(t, Technique::Lookup));
-    let sh_brdf = users(&|t| matches!(t, Technique::ShBrdf { .. }));
-    let split = users(&|t| matches!(t, Technique::SplitSum));
-    let mut passes = Vec::new();
-    let list = |v: &[String]| v.join(", ");
-    if !sh.is_empty() || !sh_brdf.is_empty() {
-        let mut why = Vec::new();
-        if !sh.is_empty() {
-            why.push(format!("objects {} use SH irradiance", list(&sh)));
-        }
-        if !sh_brdf.is_empty() {
-            why.push(format!("objects {} use SH-BRDF shading", list(&sh_brdf)));
-        }
-        passes.push(PlannedPass {
-            kind: PassKind::ShProjection,
-            why: why.join("; "),
-        });
-    }
-    if !sh_brdf.is_empty() {
-        passes.push(PlannedPass {
-            kind: PassKind::ShBrdfTable,
-            why: format!(
-                "objects {} need their BRDF's SH vector per view direction",
-                list(&sh_brdf)
-            ),
-        });
-    }
-    let filter = scene.environment.filter;
-    let footprint_mirrors = filter != LookupFilter::Point && !lookup.is_empty();
-    if !fis.is_empty()
-        || !split.is_empty()
-        || footprint_mirrors
-        || filter == LookupFilter::Footprint
-    {
-        let mut why = Vec::new();
-        if footprint_mirrors {
-            why.push(format!(
-                "objects {} are mirrors filtered over each pixel's footprint",
-                list(&lookup)
-            ));
-        }
-        if filter == LookupFilter::Footprint {
-            why.push("the background is filtered over each pixel's footprint".into());
-        }
-        if !fis.is_empty() {
-            why.push(format!(
-                "objects {} use filtered importance sampling",
-                list(&fis)
-            ));
-        }
-        if !split.is_empty() {
-            why.push(format!(
-                "objects {} use split-sum, whose chain is prefiltered by FIS",
-                list(&split)
-            ));
-        }
-        passes.push(PlannedPass {
-            kind: PassKind::DualParaboloid,
-            why: why.join("; "),
-        });
-        passes.push(PlannedPass {
-            kind: PassKind::MipChain,
-            why: if fis.is_empty() && split.is_empty() {
-                "footprint lookups read the MIP level of their taps' spacing".into()
-            } else {
-                "FIS reads each sample at the MIP level its pdf calls for".into()
-            },
-        });
-    }
-    if !split.is_empty() {
-        passes.push(PlannedPass {
-            kind: PassKind::SplitSum,
-            why: format!(
-                "objects {} read a GGX chain prefiltered per roughness (n = v = r) and a DFG table",
-                list(&split)
-            ),
-        });
-    }
-    if !pre.is_empty() {
-        passes.push(PlannedPass {
-            kind: PassKind::Prefilter,
-            why: format!(
-                "objects {} use prefiltered maps (brute force, once per distinct map)",
-                list(&pre)
-            ),
-        });
-    }
-    passes.push(PlannedPass {
-        kind: PassKind::GBuffer,
-        why: "every render casts its camera rays".into(),
-    });
-    let mut notes = Vec::new();
-    if !mc.is_empty() {
-        if source != crate::math::Mapping::LatLong {
-            passes.push(PlannedPass {
-                kind: PassKind::LatLong,
-                why: "Monte Carlo samples a lat-long map by its luminance".into(),
-            });
-        }
-        passes.push(PlannedPass {
-            kind: PassKind::MonteCarlo,
-            why: format!("objects {} use the Monte Carlo reference", list(&mc)),
-        });
-        notes.push("CPU: the luminance CDF of the lat-long map, for environment sampling".into());
-    }
-    passes.push(PlannedPass {
-        kind: PassKind::Shade,
-        why: "shades every pixel and shows the environment behind".into(),
-    });
-    if scene.shadows {
-        let mut traced = Vec::new();
-        if !lookup.is_empty() {
-            traced.push("mirror lookups");
-        }
-        if !fis.is_empty() {
-            traced.push("FIS samples");
-        }
-        if !mc.is_empty() {
-            traced.push("Monte Carlo samples");
-        }
-        notes.push(format!(
-            "shadows: {} trace visibility against the scene's objects{}",
-            if traced.is_empty() {
-                "nothing".to_string()
-            } else {
-                traced.join(", ")
-            },
-            if sh.is_empty() && pre.is_empty() && sh_brdf.is_empty() && split.is_empty() {
-                String::new()
-            } else {
-                "; SH, split-sum and prefiltered maps integrate the whole environment and stay unshadowed"
-                    .into()
-            }
-        ));
-    }
-    if !passes.iter().any(|p| p.kind == PassKind::MipChain) {
-        notes.push(
-            "no dual paraboloid or MIP chain: no material uses FIS, split-sum or footprint lookups"
-                .into(),
-        );
-    }
-    Plan { passes, notes }
-}
-
-fn kind_name(k: &Brdf) -> &'static str {
-    match k {
-        Brdf::Mirror => "mirror",
-        Brdf::Lambert => "diffuse",
-        Brdf::Phong { .. } => "phong",
-        Brdf::Blinn { .. } => "blinn",
-        Brdf::Ggx { .. } => "ggx",
-        Brdf::Ward { .. } => "ward",
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -919,7 +664,7 @@ mod tests {
     "#;
 
     #[test]
-    fn parses_and_plans() {
+    fn parses() {
         let s = Scene::parse(GLOSSY).unwrap();
         assert_eq!(s.objects.len(), 2);
         assert_eq!(
@@ -929,17 +674,6 @@ mod tests {
                 bias: None,
                 rotate: false
             }
-        );
-        let p = plan(&s, crate::math::Mapping::LatLong);
-        assert_eq!(
-            p.kinds(),
-            vec![
-                PassKind::ShProjection,
-                PassKind::DualParaboloid,
-                PassKind::MipChain,
-                PassKind::GBuffer,
-                PassKind::Shade
-            ]
         );
     }
 

@@ -731,7 +731,8 @@ fn sh_projects_the_map_once_with_or_without_lights() {
     use envlight::math::brdf::Brdf;
     use envlight::math::camera::Shape;
     use envlight::render::render;
-    use envlight::scene::{LightsMode, PassKind, Technique};
+    use envlight::render::PassKind;
+    use envlight::scene::{LightsMode, Technique};
     let ctx = common::ctx();
     {
         let map = sky(Mapping::LatLong, 64);

@@ -4,8 +4,8 @@ mod common;
 
 use envlight::math::synth::Sky;
 use envlight::math::Mapping;
-use envlight::render::{render, Renderer};
-use envlight::scene::{plan, LookupFilter, PassKind, Scene, Technique};
+use envlight::render::{plan, render, PassKind, Renderer};
+use envlight::scene::{LookupFilter, Scene, Technique};
 use envlight::EnvMap;
 use std::path::Path;
 
@@ -87,15 +87,13 @@ fn renders_run_exactly_the_planned_passes() {
     let mut mirror = Scene::load(&dir.join("mirror.toml")).unwrap();
     mirror.environment.filter = LookupFilter::Point;
     let point = [PassKind::GBuffer, PassKind::Shade];
-    assert_eq!(plan(&mirror, Mapping::LatLong).kinds(), point);
+    assert_eq!(plan(&mirror, &env).kinds(), point);
     let mut diffuse = Scene::load(&dir.join("diffuse.toml")).unwrap();
     diffuse.environment.filter = LookupFilter::Footprint;
-    assert!(plan(&diffuse, Mapping::LatLong)
-        .kinds()
-        .contains(&PassKind::MipChain));
+    assert!(plan(&diffuse, &env).kinds().contains(&PassKind::MipChain));
     for (file, kinds) in expect {
         let mut sc = Scene::load(&dir.join(file)).unwrap();
-        let p = plan(&sc, Mapping::LatLong);
+        let p = plan(&sc, &env);
         assert_eq!(p.kinds(), kinds, "{file}: plan");
         small(&mut sc);
         let ctx = common::ctx();
@@ -292,7 +290,7 @@ fn monte_carlo_alone_plans_and_runs_its_passes() {
             kinds.insert(1, PassKind::LatLong);
             pipelines.insert(1, "convert_cube");
         }
-        assert_eq!(plan(&sc, mapping).kinds(), kinds);
+        assert_eq!(plan(&sc, &env).kinds(), kinds);
         let ctx = common::ctx();
         {
             let r = render(&ctx, &sc, &env).unwrap();

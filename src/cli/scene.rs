@@ -52,23 +52,24 @@ pub fn plan(a: &PlanArgs) -> Result<()> {
     let sc = envlight::scene::Scene::load(scene)?;
     let base = scene.parent().unwrap_or(Path::new("."));
     let path = base.join(&sc.environment.file);
-    let mapping = match &sc.environment.mapping {
-        Some(m) => Mapping::parse(m)
-            .with_context(|| format!("{}: unknown mapping '{m}'", scene.display()))?,
-        None => envlight::render::load_environment(&sc, base)?.mapping,
-    };
-    let plan = envlight::scene::plan(&sc, mapping);
+    let env = envlight::render::load_environment(&sc, base)?;
+    let plan = envlight::render::plan(&sc, &env);
     println!(
-        "{} ({}, {})",
+        "{} ({}, {} {}×{})",
         scene.display(),
         path.display(),
-        mapping.name()
+        env.mapping.name(),
+        env.width,
+        env.height
     );
     for (k, p) in plan.passes.iter().enumerate() {
         println!("{:>2}. {:<16} {}", k + 1, p.kind.name(), p.why);
     }
     for n in &plan.notes {
         println!("    note: {n}");
+    }
+    for line in plan.settings() {
+        println!("    {line}");
     }
     Ok(())
 }

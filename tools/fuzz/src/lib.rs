@@ -2,8 +2,9 @@
 //! the committed corpora through the same library calls, so a crash found here stays fixed.
 
 use envlight::io::{self, LoadOptions};
-use envlight::scene::{plan, Scene};
-use envlight::Mapping;
+use envlight::render::plan;
+use envlight::scene::Scene;
+use envlight::{EnvMap, Mapping};
 
 /// The targets: one per loader, and the scene parser.
 pub const TARGETS: &[&str] = &["exr", "hdr", "pfm", "dds", "png", "jpeg", "scene"];
@@ -27,7 +28,8 @@ pub fn run(name: &str, data: &[u8]) {
                 for v in [f.forward, f.right, f.up] {
                     assert!(v.is_finite(), "accepted scene has camera frame {f:?}");
                 }
-                let _ = plan(&scene, Mapping::LatLong);
+                let env = EnvMap::new(Mapping::LatLong, 8, 4, vec![[1.0; 3]; 32]);
+                let _ = plan(&scene, &env);
             }
         }
         ext => {

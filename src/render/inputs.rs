@@ -1,0 +1,285 @@
+//! The inputs stage: the GPU resources a plan's passes write, and the one submission that
+//! records every pass before the shading (uploads, SH projection, SH-BRDF tables, the
+//! paraboloid and its chain, split-sum, prefiltered maps, the G-buffer).
+
+use super::lights::Lit;
+use super::plan::{PassKind, Plan};
+use super::records::Marks;
+use super::Job;
+use crate::error::Result;
+use crate::gpu::{Buffer, Context, Recorder, Usage};
+use crate::math::brdf::Brdf;
+use crate::math::convert::residual_edge_points;
+use crate::math::filter::Kernel;
+use crate::math::Mapping;
+use crate::passes::gbuffer::GBuffer;
+use crate::passes::{
+    BruteFilter, ConvertOptions, Converter, GBufferPass, GpuEnvMap, MipChain, PrefilterOptions,
+    ShBrdfProjector, ShProjector, SplitSum,
+};
+use crate::scene::{Technique, DEFAULT_FIS_BIAS};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+/// The passes a plan runs, built once per renderer.
+pub(super) struct Passes<'r> {
+    pub sh: Option<&'r ShProjector>,
+    pub dp: Option<(&'r Converter, &'r MipChain)>,
+    pub brute: Option<&'r BruteFilter>,
+    pub gbuffer: &'r GBufferPass,
+    pub sh_brdf: Option<&'r ShBrdfProjector>,
+    pub split: Option<&'r SplitSum>,
+}
+
+/// A prefiltered map: its kernel, its image, its offset in the concatenated maps (texels),
+/// and whether it is of a residual (the lights added per pixel).
+pub(super) struct PrefilteredMap {
+    kernel: Kernel,
+    map: GpuEnvMap,
+    offset: u32,
+    lit: bool,
+}
+
+/// The GPU resources the passes write and the shading reads.
+pub(super) struct Inputs {
+    /// The environment.
+    pub env: GpuEnvMap,
+    /// SH coefficients, read back.
+    pub sh_out: Option<Buffer>,
+    /// The SH-BRDF tables.
+    pub tables: Option<Buffer>,
+    /// The FIS dual paraboloid with its MIP chain.
+    pub dp: Option<GpuEnvMap>,
+    /// Prefiltered maps, one per distinct (kernel, size, of a residual or not).
+    pub pre: Vec<PrefilteredMap>,
+    /// Each object's prefiltered map's offset (texels; 0 for others).
+    pub pre_offsets: Vec<u32>,
+    /// The prefiltered maps concatenated, as the shader reads them.
+    pub pre_buffer: Option<Buffer>,
+    /// The split-sum chain and its DFG tables.
+    pub split: Option<(GpuEnvMap, Buffer)>,
+}
+
+impl Inputs {
+    /// The resources of `job`'s plan, given what the lights stage found.
+    pub fn new(job: &Job<'_>, lit: &Lit) -> Result<Inputs> {
+        let (ctx, plan, env) = (job.ctx, job.plan, job.env);
+        let storage =
+            |name, bytes: u64, usage| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
+        let tables = match plan.runs(PassKind::ShBrdfTable) {
+            true => Some(storage(
+                "sh brdf tables",
+                plan.table_floats().max(4) as u64 * 4,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            )?),
+            false => None,
+        };
+        let sh_out = match plan.runs(PassKind::ShProjection) {
+            true => Some(Buffer::new(
+                ctx,
+                "sh coefficients",
+                ShProjector::output_bytes(plan.lmax),
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )?),
+            false => None,
+        };
+        let dp = match &plan.dp {
+            Some(opts) => {
+                let (w, h) = Mapping::DualParaboloid.extent_for_size(opts.size);
+                let m = Mapping::DualParaboloid;
+                Some(GpuEnvMap::with_mips(ctx, "fis paraboloid", m, w, h)?)
+            }
+            None => None,
+        };
+        let (pre, pre_offsets, pre_texels) = prefiltered_maps(ctx, plan, lit)?;
+        let pre_buffer = match plan.runs(PassKind::Prefilter) {
+            true => Some(storage(
+                "prefiltered maps",
+                (pre_texels.max(1) as u64) * 16,
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            )?),
+            false => None,
+        };
+        let split = match &plan.split {
+            Some(sp) => {
+                let ss = &job.scene.split_sum;
+                let chain = SplitSum::chain(ctx, sp.size, ss.levels)?;
+                let floats = sp.forms.len() * SplitSum::dfg_floats(ss.dfg_size);
+                let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+                Some((chain, storage("dfg tables", floats as u64 * 4, usage)?))
+            }
+            None => None,
+        };
+        let env = GpuEnvMap::new(ctx, "environment", env.mapping, env.width, env.height)?;
+        Ok(Inputs {
+            env,
+            sh_out,
+            tables,
+            dp,
+            pre,
+            pre_offsets,
+            pre_buffer,
+            split,
+        })
+    }
+}
+
+/// The prefiltered maps of `plan`, one per distinct (kernel, size, of a residual or not),
+/// each object's offset, and the texels in all.
+fn prefiltered_maps(
+    ctx: &Context,
+    plan: &Plan,
+    lit: &Lit,
+) -> Result<(Vec<PrefilteredMap>, Vec<u32>, u32)> {
+    let mut offsets = vec![0u32; plan.objects.len()];
+    let mut maps: Vec<PrefilteredMap> = Vec::new();
+    let mut texels = 0u32;
+    if !plan.runs(PassKind::Prefilter) {
+        return Ok((maps, offsets, texels));
+    }
+    let mut made: Vec<(u64, u32, bool, u32)> = Vec::new();
+    for (k, o) in plan.objects.iter().enumerate() {
+        let Technique::Prefiltered { size } = o.technique else {
+            continue;
+        };
+        let kernel = match o.brdf {
+            Brdf::Phong { n } => Kernel::Phong { n },
+            _ => Kernel::Cosine,
+        };
+        let key = match kernel {
+            Kernel::Phong { n } => n.to_bits(),
+            Kernel::Cosine => u64::MAX,
+        };
+        // Maps of the residual where the lights are added per pixel.
+        let of_residual = (lit.prefiltered && o.diffuse_prefiltered()) || lit.phong[k];
+        if let Some(&(.., off)) = made
+            .iter()
+            .find(|m| m.0 == key && m.1 == size && m.2 == of_residual)
+        {
+            offsets[k] = off;
+            continue;
+        }
+        let (w, h) = Mapping::LatLong.extent_for_size(size);
+        let map = GpuEnvMap::new(ctx, "prefiltered", Mapping::LatLong, w, h)?;
+        made.push((key, size, of_residual, texels));
+        offsets[k] = texels;
+        maps.push(PrefilteredMap {
+            kernel,
+            map,
+            offset: texels,
+            lit: of_residual,
+        });
+        texels += w * h;
+    }
+    Ok((maps, offsets, texels))
+}
+
+/// Records everything before the shading into `rec`: the uploads, then each pass the plan
+/// runs, its GPU time marked in `marks`. `convert_built` waits for the paraboloid's
+/// conversion pipelines, built on another thread meanwhile.
+pub(super) fn record(
+    rec: &mut Recorder,
+    marks: &mut Marks,
+    job: &Job<'_>,
+    passes: &Passes<'_>,
+    (inputs, lit, gbuf): (&Inputs, &Lit, &GBuffer),
+    convert_built: impl FnOnce() -> Result<()>,
+) -> Result<()> {
+    let (plan, orientation) = (job.plan, &job.orientation);
+    inputs.env.record_upload(rec, job.env)?;
+    if let (Some(p), Some(out)) = (passes.sh, &inputs.sh_out) {
+        marks.record(rec, PassKind::ShProjection, |rec| {
+            p.record(rec, &inputs.env, plan.lmax, orientation, out)
+        })?;
+        rec.use_buffer(out, Usage::HostRead);
+    }
+    if let (Some(ex), Some(map)) = (&lit.chain, &lit.chain_residual) {
+        map.record_upload(rec, &ex.residual)?;
+    }
+    if let Some((map, gpu)) = &lit.dp_source {
+        gpu.record_upload(rec, map)?;
+    }
+    if let (Some(ex), Some(map)) = (&lit.diffuse, &lit.diffuse_residual) {
+        map.record_upload(rec, &ex.residual)?;
+    }
+    if let (Some(p), Some(buf)) = (passes.sh_brdf, &inputs.tables) {
+        for t in &plan.tables {
+            marks.record(rec, PassKind::ShBrdfTable, |rec| {
+                p.record(rec, &t.brdf, t.order, t.grid, buf, t.offset)
+            })?;
+        }
+    }
+    if passes.dp.is_some() && inputs.dp.is_some() && plan.dp.is_some() {
+        // After the uploads' staging copies, which this thread makes meanwhile.
+        convert_built()?;
+        record_chain(rec, marks, job, passes, inputs, lit)?;
+    }
+    if let (Some(b), Some(buf)) = (passes.brute, &inputs.pre_buffer) {
+        for m in &inputs.pre {
+            let residual = match m.kernel {
+                Kernel::Cosine => &lit.diffuse_residual,
+                Kernel::Phong { .. } => &lit.chain_residual,
+            };
+            let source = match residual {
+                Some(res) if m.lit => res,
+                _ => &inputs.env,
+            };
+            marks.record(rec, PassKind::Prefilter, |rec| {
+                b.record(rec, source, orientation, m.kernel, &m.map)
+            })?;
+            rec.copy_image_to_buffer(&m.map.image, 0, buf, m.offset as u64 * 16);
+        }
+    }
+    marks.record(rec, PassKind::GBuffer, |rec| {
+        passes.gbuffer.record(rec, &job.scene.camera, gbuf)
+    })
+}
+
+/// Records the paraboloid's conversion, its MIP chain and the split-sum chain filtered from
+/// it.
+fn record_chain(
+    rec: &mut Recorder,
+    marks: &mut Marks,
+    job: &Job<'_>,
+    passes: &Passes<'_>,
+    inputs: &Inputs,
+    lit: &Lit,
+) -> Result<()> {
+    let (Some((conv, mip)), Some(map), Some(opts)) = (passes.dp, &inputs.dp, &job.plan.dp) else {
+        return Ok(());
+    };
+    let source = match (&lit.dp_source, &lit.chain_residual) {
+        (Some((_, gpu)), _) => gpu,
+        (None, Some(res)) if lit.dp => res,
+        _ => &inputs.env,
+    };
+    // A residual holds no sun for the rim's chords to misplace: fewer points (as predicted
+    // for the pipeline built meanwhile, unless the lobes were too narrow for the lights
+    // found, which leaves them in the chain).
+    let opts = ConvertOptions {
+        edge_points: (lit.dp || lit.below_threshold).then(|| residual_edge_points(opts.size)),
+        ..*opts
+    };
+    marks.record(rec, PassKind::DualParaboloid, |rec| {
+        conv.record(rec, source, map, &opts)
+    })?;
+    marks.record(rec, PassKind::MipChain, |rec| mip.record(rec, map))?;
+    let (Some(p), Some((chain, tables)), Some(sp)) = (passes.split, &inputs.split, &job.plan.split)
+    else {
+        return Ok(());
+    };
+    let ss = &job.scene.split_sum;
+    marks.record(rec, PassKind::SplitSum, |rec| {
+        for (i, &correlated) in sp.forms.iter().enumerate() {
+            let off = (i * SplitSum::dfg_floats(ss.dfg_size)) as u32;
+            p.record_dfg(rec, ss.dfg_size, correlated, tables, off)?;
+        }
+        let opts = PrefilterOptions {
+            levels: ss.levels,
+            samples: ss.samples,
+            bias: ss.bias.unwrap_or(DEFAULT_FIS_BIAS),
+        };
+        p.record_prefilter(rec, map, chain, &opts)
+    })
+}

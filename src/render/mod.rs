@@ -1,0 +1,331 @@
+//! Rendering a [`Scene`]: [`plan()`] resolves what the scene asks of the GPU once; the stages
+//! then run it in order (lights, the inputs' resources and their one submission, SH
+//! coefficients, Monte Carlo, shading) and record what each pass cost.
+
+mod inputs;
+mod lights;
+pub mod plan;
+mod records;
+mod shading;
+
+pub use plan::{
+    chain_of_texel_means, fis_dp_size, footprint_of, plan, split_size, LightsPlan, ObjectPlan,
+    PassKind, Plan, PlannedPass, SplitPlan, TablePlan,
+};
+pub use records::{object_record, object_record_with, split_record};
+
+use crate::error::{Error, Result};
+use crate::gpu::{Context, Timing};
+use crate::math::envmap::EnvMap;
+use crate::math::{Mapping, Orientation};
+use crate::passes::gbuffer::GBuffer;
+use crate::passes::sh_project::Subgroups;
+use crate::passes::shade::Rotation;
+use crate::passes::{
+    BruteFilter, Converter, GBufferPass, MipChain, MonteCarlo, ShBrdfProjector, ShProjector, Shade,
+    SplitSum,
+};
+use crate::scene::Scene;
+use inputs::{Inputs, Passes};
+use records::{gpu_objects, Marks};
+use shading::Shading;
+use std::cell::OnceCell;
+use std::path::Path;
+
+/// The GPU time of one pass of a render.
+#[derive(Clone, Debug)]
+pub struct PassRecord {
+    /// Which pass.
+    pub kind: PassKind,
+    /// Its timestamp spans (empty where the device has no timestamps).
+    pub timings: Vec<Timing>,
+}
+
+impl PassRecord {
+    /// Total milliseconds.
+    pub fn ms(&self) -> f64 {
+        self.timings.iter().map(|t| t.ms).sum()
+    }
+}
+
+/// What a render produced.
+pub struct Rendered {
+    /// The frame, linear RGB (a one-layer map of the camera's size).
+    pub frame: EnvMap,
+    /// One record per pass run, in order.
+    pub records: Vec<PassRecord>,
+    /// The plan it followed.
+    pub plan: Plan,
+    /// Monte Carlo samples per pixel and the final relative error estimate, if MC ran.
+    pub mc: Option<(u32, Option<f64>)>,
+    /// Host milliseconds spent extracting lights, then preparing them for the GPU (texel
+    /// quadratures, the light tree, clusters, the upload's list), where the scene extracted
+    /// any.
+    pub lights_ms: Option<[f64; 2]>,
+}
+
+impl Rendered {
+    /// The distinct passes that ran, in order of first run.
+    pub fn kinds(&self) -> Vec<PassKind> {
+        let mut v: Vec<PassKind> = Vec::new();
+        for r in &self.records {
+            if !v.contains(&r.kind) {
+                v.push(r.kind);
+            }
+        }
+        v
+    }
+}
+
+/// Loads the scene's environment (relative to `base`), with its intensity applied.
+pub fn load_environment(scene: &Scene, base: &Path) -> Result<EnvMap> {
+    let env = &scene.environment;
+    let mapping = match &env.mapping {
+        Some(m) => Some(Mapping::parse(m).ok_or_else(|| {
+            Error::Invalid(format!(
+                "environment mapping '{m}' is not one of latlong, angular, cube, dual-paraboloid"
+            ))
+        })?),
+        None => None,
+    };
+    let path = base.join(&env.file);
+    let mut map = crate::io::load(
+        &path,
+        &crate::io::LoadOptions {
+            mapping,
+            ..Default::default()
+        },
+    )?;
+    if env.intensity != 1.0 {
+        let k = env.intensity as f32;
+        for t in &mut map.texels {
+            *t = t.map(|c| c * k);
+        }
+    }
+    Ok(map)
+}
+
+/// Renders scenes: holds each pass, built the first time a scene needs it and reused by
+/// every later render on the same context.
+pub struct Renderer {
+    ctx: Context,
+    converter: OnceCell<Converter>,
+    mip: OnceCell<MipChain>,
+    sh: OnceCell<ShProjector>,
+    brute: OnceCell<BruteFilter>,
+    gbuffer: OnceCell<GBufferPass>,
+    mc: OnceCell<MonteCarlo>,
+    shade: OnceCell<Shade>,
+    sh_brdf: OnceCell<ShBrdfProjector>,
+    split: OnceCell<SplitSum>,
+    sh_rotation: Rotation,
+    subgroups: Subgroups,
+    whole_shade: bool,
+}
+
+/// The pass in `cell`, built by `make` on first use.
+fn pass<T>(cell: &OnceCell<T>, make: impl FnOnce() -> Result<T>) -> Result<&T> {
+    if cell.get().is_none() {
+        let _ = cell.set(make()?);
+    }
+    Ok(cell.get().unwrap_or_else(|| unreachable!("set above")))
+}
+
+impl Renderer {
+    /// A renderer on `ctx` (no pass is built yet).
+    pub fn new(ctx: &Context) -> Renderer {
+        Renderer {
+            ctx: ctx.clone(),
+            converter: OnceCell::new(),
+            mip: OnceCell::new(),
+            sh: OnceCell::new(),
+            brute: OnceCell::new(),
+            gbuffer: OnceCell::new(),
+            mc: OnceCell::new(),
+            shade: OnceCell::new(),
+            sh_brdf: OnceCell::new(),
+            split: OnceCell::new(),
+            sh_rotation: Rotation::Zxzxz,
+            subgroups: Subgroups::Auto,
+            whole_shade: false,
+        }
+    }
+
+    /// Whether passes built from now on may use subgroup operations (the default: where the
+    /// device has them); [`Subgroups::Off`] tests the fallbacks. Passes already built keep
+    /// theirs.
+    pub fn set_subgroups(&mut self, subgroups: Subgroups) {
+        self.subgroups = subgroups;
+    }
+
+    /// Shades every scene with the whole shade shader, where a scene of one technique would
+    /// take the variant built for it ([`crate::passes::shade::module`]); for tests, which
+    /// compare the two. Takes effect if the shade pass is not built yet.
+    pub fn set_whole_shade(&mut self) {
+        self.whole_shade = true;
+    }
+
+    /// Rotates SH-BRDF vectors with `rotation` from now on (the default is zxzxz).
+    pub fn set_sh_rotation(&mut self, rotation: Rotation) {
+        self.sh_rotation = rotation;
+    }
+
+    fn converter(&self) -> Result<&Converter> {
+        pass(&self.converter, || Converter::new(&self.ctx))
+    }
+
+    /// Renders `scene` with `env` (from [`load_environment`]). Everything up to the shading
+    /// is recorded into one submission and stays on the GPU; only SH coefficients (a few
+    /// hundred bytes) and, for Monte Carlo on a map that is not lat-long, the converted map
+    /// (its sampling tables are built on the CPU) come back to the host before shading.
+    pub fn render(&self, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
+        scene.validate().map_err(Error::Invalid)?;
+        let plan = plan(scene, env);
+        let shade = pass(&self.shade, || {
+            let mut s = Shade::with_subgroups(&self.ctx, self.subgroups)?;
+            if self.whole_shade {
+                s.whole_shader_only();
+            }
+            Ok(s)
+        })?;
+        // The shade pipeline is the longest build: it builds on a second thread while this
+        // one builds the other passes, extracts the lights and records and runs everything
+        // before the shading. So do the dual paraboloid's conversion pipelines, on a third.
+        let converter = match plan.dp {
+            Some(_) => Some(self.converter()?),
+            None => None,
+        };
+        std::thread::scope(|s| {
+            let shade_build = s.spawn(|| shade.prepare_code(&plan.code));
+            let convert_build = s.spawn(|| match (converter, &plan.dp) {
+                // The pipelines that serve the whole map serve its halves too.
+                (Some(conv), Some(opts)) => {
+                    conv.prepare_for((env.mapping, env.width, env.height), opts)
+                }
+                _ => Ok(()),
+            });
+            let joined = |what: &'static str| {
+                move |r: std::thread::Result<Result<()>>| -> Result<()> {
+                    r.map_err(|_| Error::Invalid(format!("building the {what} panicked")))?
+                }
+            };
+            let builds = Builds {
+                shade: Box::new(move || joined("shade pipeline")(shade_build.join())),
+                convert: Box::new(move || joined("conversion pipelines")(convert_build.join())),
+            };
+            let job = Job {
+                ctx: &self.ctx,
+                scene,
+                env,
+                plan: &plan,
+                orientation: scene.environment.orientation(),
+            };
+            self.render_planned(&job, shade, builds)
+        })
+    }
+
+    /// The passes `plan` runs, built on first use.
+    fn passes(&self, plan: &Plan) -> Result<Passes<'_>> {
+        let ctx = &self.ctx;
+        let runs = |k| plan.runs(k);
+        Ok(Passes {
+            sh: match runs(PassKind::ShProjection) {
+                true => Some(pass(&self.sh, || ShProjector::new(ctx, self.subgroups))?),
+                false => None,
+            },
+            dp: match runs(PassKind::DualParaboloid) {
+                true => Some((self.converter()?, pass(&self.mip, || MipChain::new(ctx))?)),
+                false => None,
+            },
+            brute: match runs(PassKind::Prefilter) {
+                true => Some(pass(&self.brute, || BruteFilter::new(ctx))?),
+                false => None,
+            },
+            gbuffer: pass(&self.gbuffer, || GBufferPass::new(ctx))?,
+            sh_brdf: match runs(PassKind::ShBrdfTable) {
+                true => Some(pass(&self.sh_brdf, || Ok(ShBrdfProjector::new(ctx)))?),
+                false => None,
+            },
+            split: match runs(PassKind::SplitSum) {
+                true => Some(pass(&self.split, || SplitSum::new(ctx))?),
+                false => None,
+            },
+        })
+    }
+
+    /// [`Renderer::render`] once the shade pipeline, and the conversion to the dual
+    /// paraboloid where there is one, are being built: the plan's stages in order.
+    fn render_planned(&self, job: &Job<'_>, shade: &Shade, builds: Builds<'_>) -> Result<Rendered> {
+        // Pipeline creation first: it is not GPU work.
+        let passes = self.passes(job.plan)?;
+        let lit = lights::extract(job.ctx, job.plan, job.env, &job.orientation)?;
+        let inputs = Inputs::new(job, &lit)?;
+        let levels = inputs.split.as_ref().map(|(chain, _)| chain.mips());
+        let objects = gpu_objects(job.scene, job.plan, &lit, &inputs.pre_offsets, levels);
+        let camera = &job.scene.camera;
+        let mut gbuf = GBuffer::new(job.ctx, camera.width, camera.height, &objects)?;
+        gbuf.camera = Some(*camera);
+
+        let mut records = Vec::new();
+        let mut marks = Marks(Vec::new());
+        let ((), t) = job.ctx.run("rendering: inputs", |rec| {
+            let ins = (&inputs, &lit, &gbuf);
+            inputs::record(rec, &mut marks, job, &passes, ins, builds.convert)
+        })?;
+        marks.split(&t, &mut records);
+
+        let (sh, ringing) = shading::sh_coefficients(job, &inputs, &lit, &objects, &mut gbuf);
+        let mc = match job.plan.mc {
+            Some(_) => {
+                let mc_pass = pass(&self.mc, || MonteCarlo::new(job.ctx))?;
+                let with = (self.converter()?, mc_pass);
+                shading::monte_carlo(job, with, &inputs, &gbuf, &mut records)?
+            }
+            None => None,
+        };
+        let with = Shading {
+            sh: &sh,
+            mc: mc.as_ref(),
+            sh_rotation: self.sh_rotation,
+        };
+        let frame = shading::shade(
+            job,
+            shade,
+            (&inputs, &lit, &gbuf),
+            with,
+            builds.shade,
+            &mut records,
+        )?;
+        let mut plan = job.plan.clone();
+        plan.notes.extend(ringing);
+        Ok(Rendered {
+            frame,
+            records,
+            plan,
+            mc: mc.map(|m| (m.samples, m.error)),
+            lights_ms: lit.ms,
+        })
+    }
+}
+
+/// What every stage of one render reads.
+pub(crate) struct Job<'a> {
+    ctx: &'a Context,
+    scene: &'a Scene,
+    env: &'a EnvMap,
+    plan: &'a Plan,
+    /// The environment's orientation (world to file).
+    orientation: Orientation,
+}
+
+/// The pipeline builds a render starts on other threads; each call waits for its build.
+struct Builds<'a> {
+    shade: Box<dyn FnOnce() -> Result<()> + 'a>,
+    convert: Box<dyn FnOnce() -> Result<()> + 'a>,
+}
+
+/// Renders `scene` with `env` (from [`load_environment`]) on `ctx`, with a renderer of its
+/// own (see [`Renderer`] to reuse the passes across renders).
+pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
+    Renderer::new(ctx).render(scene, env)
+}
