@@ -416,7 +416,7 @@ fn fis_pass_matches_its_float64_twin() {
                     } else {
                         [0.0; 2]
                     };
-                    let bias = envlight::abi::defaults::FIS_BIAS;
+                    let bias = envlight::scene::defaults::FIS_BIAS;
                     let want = fis64::estimate(&chain, &kind, hit.normal, -d, 16, bias, offset);
                     let px = r.frame.texels[(j * cam.width + i) as usize];
                     for c in 0..3 {
@@ -488,7 +488,7 @@ fn fis_with_lights_matches_its_float64_twin() {
                     if hit.margin < 1e-3 {
                         continue;
                     }
-                    let bias = envlight::abi::defaults::FIS_BIAS_RESIDUAL;
+                    let bias = envlight::scene::defaults::FIS_BIAS_RESIDUAL;
                     let f = fis64::estimate(&chain, &kind, hit.normal, -d, 16, bias, [0.0; 2]);
                     let lum = envlight::math::envmap::luminance(f);
                     let l = tree.sum_brdf(&kind, hit.normal, -d, scale, lum);
@@ -563,7 +563,7 @@ fn halved_residual_costs_little_against_the_whole() {
                 let mut worst = [0.0f64; 2];
                 let mut n = 0;
                 for (k, normal, d) in common::scenes::sphere_pixels(&cam) {
-                    let bias = envlight::abi::defaults::FIS_BIAS_RESIDUAL;
+                    let bias = envlight::scene::defaults::FIS_BIAS_RESIDUAL;
                     let px = r.frame.texels[k];
                     for (chain, worst) in chains.iter().zip(&mut worst) {
                         let f = fis64::estimate(chain, &kind, normal, -d, 16, bias, [0.0; 2]);

@@ -156,7 +156,7 @@ fn render_matches_its_float64_twin() {
             32,
             3,
             16,
-            envlight::abi::defaults::FIS_BIAS,
+            envlight::scene::defaults::FIS_BIAS,
         );
         let cam = sphere_camera(24);
         let renderer = Renderer::new(&ctx);
@@ -344,7 +344,7 @@ fn render_with_lights_matches_its_float64_twin() {
             32,
             3,
             16,
-            envlight::abi::defaults::FIS_BIAS,
+            envlight::scene::defaults::FIS_BIAS,
         );
         let cam = sphere_camera(24);
         let renderer = Renderer::new(&ctx);

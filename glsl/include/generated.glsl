@@ -1,4 +1,4 @@
-// Generated from src/abi.rs by `cargo xtask shaders`; do not edit.
+// Generated from src/abi by `cargo xtask shaders`; do not edit.
 #ifndef ENVLIGHT_GENERATED_GLSL
 #define ENVLIGHT_GENERATED_GLSL
 #define BINDING_CONVERT_SRC 0

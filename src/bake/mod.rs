@@ -68,7 +68,7 @@ impl Default for BakeOptions {
             specular_size: 256,
             specular_levels: 8,
             samples: crate::abi::split_sum::DEFAULT_SAMPLES,
-            bias: crate::abi::defaults::FIS_BIAS,
+            bias: crate::math::fis::DEFAULT_BIAS,
             dfg_size: crate::abi::split_sum::DEFAULT_DFG_SIZE,
             chain: false,
             lights: true,

@@ -6,7 +6,6 @@ use super::{
 };
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, ValueEnum};
-use envlight::abi::defaults;
 use envlight::io::ToneMap;
 use envlight::math::filter::Kernel;
 use envlight::math::sh::{self, Window};
@@ -14,6 +13,7 @@ use envlight::math::Mapping;
 use envlight::passes::brute::PhongLevels;
 use envlight::passes::sh_project::Subgroups;
 use envlight::passes::{BruteFilter, ConvertOptions, Converter, ShEvaluator, ShProjector};
+use envlight::scene::defaults;
 use envlight::GpuEnvMap;
 use std::path::PathBuf;
 

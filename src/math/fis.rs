@@ -10,6 +10,12 @@ use super::mip::{texel_solid_angle, Level};
 use super::sequence::{hammersley, rotate};
 use glam::DVec3;
 
+/// The default FIS lod bias: 0 reads the level whose texel matches each sample's solid angle.
+pub const DEFAULT_BIAS: f64 = 0.0;
+/// The FIS lod bias where the samples read the residual of extracted lights, which is smooth,
+/// so finer levels alias less than they blur (`envlight report` scores both).
+pub const DEFAULT_BIAS_RESIDUAL: f64 = -0.5;
+
 /// A bilinear read of layer `layer` of a premultiplied level at (s, t) ∈ [−1, 1]²: (Σ w·rgb,
 /// Σ w), zero beyond the square (a transparent black border) or, where `clamp` is set, the
 /// edge texels repeated (a clamp-to-edge sampler).
@@ -233,7 +239,7 @@ mod tests {
                     let n = DVec3::new(px, py, (1.0 - r2).sqrt());
                     let frame = Frame::new(n);
                     let wo = local_view(&frame, v);
-                    let bias = crate::abi::defaults::FIS_BIAS;
+                    let bias = DEFAULT_BIAS;
                     est += luminance(estimate(&chain, &brdf, n, v, 64, bias, [0.0; 2]));
                     for (d, l) in &texels {
                         let wi = frame.to_local(*d);

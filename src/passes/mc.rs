@@ -5,7 +5,7 @@
 use super::gbuffer::GBuffer;
 use super::map::GpuEnvMap;
 use super::{ConvertOptions, Converter};
-use crate::abi::{binding, defaults, push::McPush, ShaderId, WORKGROUP_2D};
+use crate::abi::{binding, push::McPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing};
 use crate::math::envmap::luminance;
@@ -92,15 +92,22 @@ pub struct McOptions {
     pub per_frame: u32,
 }
 
+/// Monte Carlo samples per pixel by default.
+pub const DEFAULT_SAMPLES: u32 = 1024;
+/// Monte Carlo samples per pixel per dispatch by default.
+pub const DEFAULT_PER_FRAME: u32 = 64;
+/// The default Monte Carlo seed.
+pub const DEFAULT_SEED: u32 = 1;
+
 impl Default for McOptions {
     fn default() -> Self {
         McOptions {
-            samples: defaults::MC_SAMPLES,
+            samples: DEFAULT_SAMPLES,
             target_error: None,
             mis: true,
-            seed: defaults::MC_SEED,
+            seed: DEFAULT_SEED,
             shadows: false,
-            per_frame: defaults::MC_PER_FRAME,
+            per_frame: DEFAULT_PER_FRAME,
         }
     }
 }

@@ -7,8 +7,9 @@
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 
-#[path = "../../../src/abi.rs"]
-#[allow(dead_code)]
+#[path = "../../../src/abi/mod.rs"]
+// The library's re-exports and items this tool does not use.
+#[allow(dead_code, unused_imports)]
 mod layout;
 
 fn main() -> Result<()> {

@@ -1,0 +1,160 @@
+//! Descriptor binding numbers, per pass (all in set 0).
+
+macro_rules! bindings {
+    ($( $(#[$m:meta])* $name:ident = $v:literal; )*) => {
+        $( $(#[$m])* pub const $name: u32 = $v; )*
+        /// Every binding: (name, number), for the generated header.
+        pub const ALL: &[(&str, u32)] = &[$( (stringify!($name), $name) ),*];
+    };
+}
+
+bindings! {
+    /// convert: the source map (sampler2DArray, or samplerCube for cube sources).
+    CONVERT_SRC = 0;
+    /// convert: the destination map (rgba32f image2DArray).
+    CONVERT_DST = 1;
+    /// convert_slopes, convert_area: per lat-long texel its limited slopes dL/dU, dL/dz
+    /// (two vec4, rgb used; storage buffer).
+    CONVERT_SLOPES = 2;
+    /// convert_area (LIST): the texels the general walk takes, (i, j, layer, 0) each
+    /// (uvec4 storage buffer).
+    CONVERT_LIST = 3;
+    /// mapping_probe: input directions (vec4 storage buffer).
+    PROBE_IN = 0;
+    /// mapping_probe: results (vec4 storage buffer).
+    PROBE_OUT = 1;
+    /// copy: the source image (sampler2DArray, read with texelFetch).
+    COPY_SRC = 0;
+    /// copy: the destination image (rgba32f image2DArray).
+    COPY_DST = 1;
+    /// busy: the buffer the costly loop writes to.
+    BUSY_OUT = 0;
+    /// sh_project: the map (sampler2DArray, read with texelFetch).
+    SH_SRC = 0;
+    /// sh_project: per-workgroup partial sums (storage buffer).
+    SH_PARTIALS = 1;
+    /// sh_reduce: partial sums in.
+    SH_REDUCE_IN = 0;
+    /// sh_reduce: partial sums out.
+    SH_REDUCE_OUT = 1;
+    /// brute_prepare: the source map (sampler2DArray, read with texelFetch).
+    BRUTE_PREP_SRC = 0;
+    /// brute_prepare: per-texel centre direction and cos of angular radius (rgba32f
+    /// image2DArray of the source's size and layers; the brute pass's per-texel data are
+    /// images because llvmpipe loads a buffer element lane by lane, an image texel as one
+    /// gather).
+    BRUTE_PREP_CONES = 1;
+    /// brute_prepare: per-texel radiance and solid angle (rgba32f image2DArray).
+    BRUTE_PREP_RADIANCE = 2;
+    /// brute_prepare: per-texel shape for the tilted rule (rgba32f image2DArray, layers
+    /// 3·l, 3·l + 1, 3·l + 2 for source layer l: centroid and whether the texel is
+    /// regular, then the two half-edge vectors).
+    BRUTE_PREP_SHAPES = 3;
+    /// brute: the cones written by brute_prepare.
+    BRUTE_CONES = 0;
+    /// brute: the radiance and solid angles written by brute_prepare.
+    BRUTE_RADIANCE = 1;
+    /// brute: per part of the source and output texel, the Kahan sum and its compensation
+    /// (2 vec4, part-major), carried between rounds of chunks.
+    BRUTE_PARTIALS = 3;
+    /// brute: per-tile bounding cones written by brute_tiles (vec4 buffer).
+    BRUTE_TILES = 4;
+    /// brute: the texel shapes written by brute_prepare.
+    BRUTE_SHAPES = 5;
+    /// brute: with a moment source, the pyramid level's cones written by brute_moments.
+    BRUTE_COARSE_CONES = 6;
+    /// brute: with a moment source, the level's light (rgba32f image2DArray, layers
+    /// 9·l + 3·c + 0, 1, 2 for layer l and channel c: centroid and power, then the
+    /// parallelogram's two half-edges).
+    BRUTE_LIGHT = 7;
+    /// brute_resolve: the partial sums written by brute.
+    BRUTE_RESOLVE_PARTIALS = 0;
+    /// brute_resolve: the output map (rgba32f image2DArray).
+    BRUTE_RESOLVE_DST = 1;
+    /// brute_moments: the prepared texels' radiance and solid angles.
+    BRUTE_MOM_RADIANCE = 0;
+    /// brute_moments: the prepared texels' shapes.
+    BRUTE_MOM_SHAPES = 1;
+    /// brute_moments: the level's cones (rgba32f image2DArray).
+    BRUTE_MOM_CONES = 2;
+    /// brute_moments: the level's light (rgba32f image2DArray, 9 layers a layer).
+    BRUTE_MOM_LIGHT = 3;
+    /// brute_tiles: the per-texel cones written by brute_prepare.
+    BRUTE_TILE_CONES = 0;
+    /// brute_tiles: the per-tile bounding cones (axis, cos of radius; w = 2 when empty).
+    BRUTE_TILE_OUT = 1;
+    /// sh_eval: the coefficients, Â_l and window folded in (vec4 buffer).
+    SH_EVAL_COEFFS = 0;
+    /// sh_eval: the output map (rgba32f image2DArray).
+    SH_EVAL_DST = 1;
+    /// gbuffer: the scene's objects (storage buffer of `Object`).
+    GBUF_OBJECTS = 0;
+    /// shade_sh: G-buffer normals and object indices.
+    SHADE_NORMAL = 0;
+    /// shade_sh: G-buffer directions to the eye.
+    SHADE_VIEW = 1;
+    /// shade_sh: the scene's objects (albedo).
+    SHADE_OBJECTS = 2;
+    /// shade_sh: SH irradiance coefficients (vec4 buffer).
+    SHADE_COEFFS = 3;
+    /// shade: the environment map in its own mapping (background, mirror lookups).
+    SHADE_ENV = 4;
+    /// shade: G-buffer hit positions (shadow rays).
+    SHADE_POSITION = 5;
+    /// shade: the dual-paraboloid MIP chain (FIS).
+    SHADE_DP = 6;
+    /// shade: prefiltered lat-long maps, texel after texel (vec4 buffer).
+    SHADE_PREFILTERED = 7;
+    /// shade: the Monte Carlo accumulation (rgb sum, luminance² sum), read for MC pixels.
+    SHADE_MC = 8;
+    /// mip: the finer level (storage image, read).
+    MIP_SRC = 0;
+    /// mip: the coarser level (storage image, written).
+    MIP_DST = 1;
+    /// mc: G-buffer normals and object indices.
+    MC_NORMAL = 0;
+    /// mc: G-buffer directions to the eye.
+    MC_VIEW = 1;
+    /// mc: G-buffer hit positions.
+    MC_POSITION = 2;
+    /// mc: the scene's objects and materials.
+    MC_OBJECTS = 3;
+    /// mc: the full-resolution lat-long map (texelFetch).
+    MC_ENV = 4;
+    /// mc: the environment sampling tables (float buffer, see `math::envsample`).
+    MC_TABLES = 5;
+    /// mc: the accumulation image (rgba32f storage: rgb sum, luminance² sum).
+    MC_ACCUM = 6;
+    /// sh_brdf: the BRDF's coefficient vectors, view after view (float buffer), summed
+    /// over one dispatch per panel.
+    SH_BRDF_TABLE = 0;
+    /// sh_rotate: rotations and coefficient vectors in (float buffer).
+    SH_ROT_IN = 0;
+    /// sh_rotate: rotated vectors out (float buffer).
+    SH_ROT_OUT = 1;
+    /// sh_rotate: the fixed M(Rx(90°)) blocks (float buffer).
+    SH_ROT_X90 = 2;
+    /// shade: SH-BRDF coefficient tables, concatenated (float buffer).
+    SHADE_BRDF_SH = 9;
+    /// shade: the fixed M(Rx(90°)) blocks of the zxzxz rotation (float buffer).
+    SHADE_X90 = 10;
+    /// shade: the split-sum prefiltered GGX chain (dual paraboloid, one roughness a level).
+    SHADE_SPLIT = 11;
+    /// shade: the split-sum DFG tables (float buffer, (A, B) pairs).
+    SHADE_DFG = 12;
+    /// shade: extracted light texels (float buffer, as `lights` takes them).
+    SHADE_LIGHTS = 13;
+    /// shade: the camera (vec4 buffer, [`crate::passes::gbuffer::camera_record`]), for
+    /// footprint lookups' sub-pixel rays.
+    SHADE_CAMERA = 14;
+    /// dfg: the tables, (A, B) per entry (float buffer), summed over one dispatch per panel.
+    DFG_TABLE = 0;
+    /// prefilter_ggx: the source dual-paraboloid MIP chain (sampler2DArray, trilinear).
+    PREFILTER_GGX_SRC = 0;
+    /// prefilter_ggx: the level written (rgba32f storage image).
+    PREFILTER_GGX_DST = 1;
+    /// lights: the light texels (float buffer, LIGHT_STRIDE vec4 each).
+    LIGHTS_TEXELS = 0;
+    /// lights: the level their light is added to (rgba32f storage image).
+    LIGHTS_DST = 1;
+}

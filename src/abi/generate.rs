@@ -1,0 +1,276 @@
+//! The GLSL header generated from the shared numbers, and the manifest of the sources each
+//! SPIR-V module was built from.
+
+use super::parameters::*;
+use super::shaders::{ShaderSource, OPTIMIZATION, SHADER_SOURCES, TARGET_ENV};
+use super::{binding, push};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The GLSL header carrying the shared numbers: bindings, sizes, the lights' and the area
+/// conversion's parameters, the filter rule and other floats, SH constants, ids, and the push
+/// blocks.
+pub fn generated_header() -> String {
+    let mut s = String::from(
+        "// Generated from src/abi by `cargo xtask shaders`; do not edit.\n\
+         #ifndef ENVLIGHT_GENERATED_GLSL\n#define ENVLIGHT_GENERATED_GLSL\n",
+    );
+    define_sizes_and_lights(&mut s);
+    define_area_footprint_and_floats(&mut s);
+    define_sh_and_ids(&mut s);
+    define_push_blocks(&mut s);
+    s.push_str("#endif\n");
+    s
+}
+
+/// Bindings, SH and tile sizes, the light walk's parameters.
+fn define_sizes_and_lights(s: &mut String) {
+    for (name, v) in binding::ALL {
+        let _ = writeln!(s, "#define BINDING_{name} {v}");
+    }
+    let _ = writeln!(s, "#define SH_MAX_LMAX {SH_MAX_LMAX}");
+    let n = (SH_MAX_LMAX + 1) * (SH_MAX_LMAX + 1);
+    let _ = writeln!(s, "#define SH_MAX_COEFFS {n}");
+    let _ = writeln!(s, "#define SH_WORKGROUP {SH_WORKGROUP}");
+    let _ = writeln!(s, "#define BRUTE_TILE {BRUTE_TILE}u");
+    let _ = writeln!(s, "#define LIGHT_HEADER_VEC4S {}u", lights::HEADER_VEC4S);
+    let _ = writeln!(s, "#define LIGHT_STEP_NODES {}u", lights::STEP_NODES);
+    let _ = writeln!(s, "#define LIGHT_CLUSTER_VEC4S {}u", lights::CLUSTER_VEC4S);
+    let _ = writeln!(s, "#define LIGHTS_KERNEL_COSINE {}u", lights::KERNEL_COSINE);
+    let _ = writeln!(s, "#define LIGHTS_KERNEL_GGX {}u", lights::KERNEL_GGX);
+    let _ = writeln!(
+        s,
+        "#define LIGHTS_KERNEL_CLUSTERS {}u",
+        lights::KERNEL_CLUSTERS
+    );
+    let _ = writeln!(s, "#define LIGHT_PER_WIDTH {:?}", lights::PER_WIDTH as f32);
+    let _ = writeln!(
+        s,
+        "#define LIGHT_CENTRE_BELOW {:?}",
+        lights::CENTRE_BELOW as f32
+    );
+    let _ = writeln!(
+        s,
+        "#define LIGHT_TAIL_FRACTION {:?}",
+        lights::TAIL_FRACTION as f32
+    );
+    let _ = writeln!(
+        s,
+        "#define LIGHT_TREE_BELOW {:?}",
+        lights::TREE_BELOW as f32
+    );
+    let _ = writeln!(
+        s,
+        "#define LIGHT_TREE_BUDGET {:?}",
+        lights::TREE_BUDGET as f32
+    );
+    let _ = writeln!(
+        s,
+        "#define LIGHT_TREE_BUDGET_REACH {:?}",
+        lights::TREE_BUDGET_REACH as f32
+    );
+    let _ = writeln!(
+        s,
+        "#define LIGHT_KERNEL_FADE {:?}",
+        lights::KERNEL_FADE as f32
+    );
+    let _ = writeln!(s, "#define LIGHT_LEAF_TEXELS {}u", lights::LEAF_TEXELS);
+    let _ = writeln!(s, "#define LIGHT_TREE_TAIL {:?}", lights::TREE_TAIL as f32);
+    let _ = writeln!(s, "#define LIGHT_TREE_VEC4S {}u", lights::TREE_VEC4S);
+}
+
+/// The area conversion's and the footprint's parameters, and every shared float.
+fn define_area_footprint_and_floats(s: &mut String) {
+    let _ = writeln!(s, "#define AREA_EDGE_STEPS {}u", area::EDGE_STEPS);
+    let _ = writeln!(s, "#define AREA_POLE_STEPS {}u", area::POLE_STEPS);
+    let _ = writeln!(s, "#define AREA_POLE_NEAR {:?}", area::POLE_NEAR as f32);
+    let _ = writeln!(s, "#define AREA_MAX_VERTICES {}u", area::MAX_VERTICES);
+    let _ = writeln!(
+        s,
+        "#define AREA_PARABOLOID_EDGE_STEPS {}u",
+        area::PARABOLOID_EDGE_STEPS
+    );
+    let _ = writeln!(s, "#define AREA_SLOPE_VEC4S {}u", area::SLOPE_VEC4S);
+    let _ = writeln!(s, "#define AREA_FAST_WINDOW {}u", area::FAST_WINDOW);
+    let _ = writeln!(s, "#define AREA_FAST_MIN_SIZE {}u", area::FAST_MIN_SIZE);
+    for (k, face) in area::POLE_FACES.iter().enumerate() {
+        let _ = writeln!(s, "#define AREA_POLE_FACE_{k} {face}u");
+    }
+    let _ = writeln!(s, "#define FOOTPRINT_MIN_TAPS {}u", footprint::MIN_TAPS);
+    let _ = writeln!(s, "#define FOOTPRINT_MAX_TAPS {}u", footprint::MAX_TAPS);
+    let _ = writeln!(s, "#define FOOTPRINT_MIRROR {}u", footprint::MIRROR);
+    let _ = writeln!(s, "#define FOOTPRINT_BACKGROUND {}u", footprint::BACKGROUND);
+    let _ = writeln!(s, "#define FOOTPRINT_LIGHTS {}u", footprint::LIGHTS);
+    let _ = writeln!(s, "#define FOOTPRINT_CODE {}u", footprint::CODE);
+    let _ = writeln!(s, "#define SHADOWS_CODE {}u", shade_code::SHADOWS);
+    let _ = writeln!(s, "#define BRDF_CODE_SHIFT {}u", shade_code::BRDF_SHIFT);
+    let _ = writeln!(s, "#define FILTER_EDGE_CELLS {}u", filter_rule::EDGE_CELLS);
+    let _ = writeln!(s, "#define FILTER_MAX_CELLS {}u", filter_rule::MAX_CELLS);
+    let f = |x: f64| format!("{:?}", x as f32);
+    let floats = [
+        ("FILTER_CELLS_PER_WIDTH", filter_rule::CELLS_PER_WIDTH),
+        ("FILTER_CENTRE_LIMIT", filter_rule::CENTRE_LIMIT),
+        ("FILTER_TILT_LIMIT", filter_rule::TILT_LIMIT),
+        ("FILTER_TILT_DENSITY_RATIO", filter_rule::TILT_DENSITY_RATIO),
+        ("FILTER_TILT_SERIES_BELOW", filter_rule::TILT_SERIES_BELOW),
+        ("FILTER_LOG_CUTOFF", filter_rule::LOG_CUTOFF),
+        ("FILTER_CONE_MARGIN", filter_rule::CONE_MARGIN),
+        ("FILTER_REACH_MARGIN_REL", filter_rule::REACH_MARGIN_REL),
+        ("FILTER_REACH_MARGIN_ABS", filter_rule::REACH_MARGIN_ABS),
+        ("FILTER_TILE_MARGIN_REL", filter_rule::TILE_MARGIN_REL),
+        ("FILTER_TILE_MARGIN_ABS", filter_rule::TILE_MARGIN_ABS),
+        ("DFG_MU_MIN", split_sum::MU_MIN),
+        ("SPLIT_TAP_SCALE", split_sum::TAP_SCALE),
+        ("POLE_THRESHOLD", constants::POLE_THRESHOLD),
+        ("VIEW_LIFT", constants::VIEW_LIFT),
+        ("SHADOW_OFFSET", constants::SHADOW_OFFSET),
+        ("RIM_PULL_IN", constants::RIM_PULL_IN),
+        ("GAUSS2_OFFSET", constants::GAUSS2_OFFSET),
+        ("GGX_ALPHA_MIN", brdf::GGX_ALPHA_MIN),
+        ("FOOTPRINT_LOD_BIAS", footprint::LOD_BIAS),
+        ("FOOTPRINT_MIN_SPREAD", footprint::MIN_SPREAD),
+        ("FOOTPRINT_TAP_SLACK", footprint::TAP_SLACK),
+    ];
+    for (name, v) in floats {
+        let _ = writeln!(s, "#define {name} {}", f(v));
+    }
+    let l = constants::LUMINANCE;
+    let _ = writeln!(
+        s,
+        "#define LUMINANCE vec3({}, {}, {})",
+        f(l[0]),
+        f(l[1]),
+        f(l[2])
+    );
+}
+
+/// SH normalisation constants, BRDF, technique and rotation ids, Gauss–Legendre nodes,
+/// the horizon fade and mapping ids.
+fn define_sh_and_ids(s: &mut String) {
+    let f = |x: f64| format!("{:?}", x as f32);
+    // K_lm for m ≥ 0, l ≤ SH_MAX_LMAX, at index l(l+1)/2 + m (see src/math/sh.rs).
+    let mut k = Vec::new();
+    for l in 0..=SH_MAX_LMAX {
+        for m in 0..=l {
+            let f = |a: u32| (1..=a).map(|x| x as f64).product::<f64>();
+            let v =
+                ((2 * l + 1) as f64 / (4.0 * std::f64::consts::PI) * f(l - m) / f(l + m)).sqrt();
+            k.push(format!("{v:.9e}"));
+        }
+    }
+    let _ = writeln!(
+        s,
+        "const float SH_K[{}] = float[{}]({});",
+        k.len(),
+        k.len(),
+        k.join(", ")
+    );
+    let ids = [
+        ("BRDF_LAMBERT", brdf::ids::LAMBERT),
+        ("BRDF_MIRROR", brdf::ids::MIRROR),
+        ("BRDF_PHONG", brdf::ids::PHONG),
+        ("BRDF_BLINN", brdf::ids::BLINN),
+        ("BRDF_GGX", brdf::ids::GGX),
+        ("BRDF_WARD", brdf::ids::WARD),
+        ("TECH_LOOKUP", brdf::technique::LOOKUP),
+        ("TECH_FIS", brdf::technique::FIS),
+        ("TECH_SH", brdf::technique::SH),
+        ("TECH_PREFILTERED", brdf::technique::PREFILTERED),
+        ("TECH_MC", brdf::technique::MC),
+        ("TECH_SH_BRDF", brdf::technique::SH_BRDF),
+        ("TECH_SPLIT_SUM", brdf::technique::SPLIT_SUM),
+        ("SH_ROTATION_ZXZXZ", sh_brdf::ROTATION_ZXZXZ),
+        ("SH_ROTATION_IVANIC", sh_brdf::ROTATION_IVANIC),
+        ("SH_ROTATE_HEADER", sh_brdf::ROTATE_HEADER),
+        ("SH_BRDF_PANELS", sh_brdf::PANELS),
+        ("SH_BRDF_GL_NODES", sh_brdf::GL_NODES),
+        ("SH_BRDF_GRADED_LEVELS", sh_brdf::GRADED_LEVELS),
+    ];
+    for (name, v) in ids {
+        let _ = writeln!(s, "#define {name} {v}u");
+    }
+    let (x, w) = sh_brdf::gauss4();
+    let list = |v: [f64; 4]| v.map(|a| format!("{a:.9e}")).join(", ");
+    let _ = writeln!(s, "const float SH_BRDF_GL_X[4] = float[4]({});", list(x));
+    let fades: Vec<String> = brdf::HORIZON_FADE.iter().map(|&x| f(x)).collect();
+    let _ = writeln!(
+        s,
+        "const float BRDF_HORIZON_FADE[{}] = float[{}]({});",
+        fades.len(),
+        fades.len(),
+        fades.join(", ")
+    );
+    let _ = writeln!(s, "const float SH_BRDF_GL_W[4] = float[4]({});", list(w));
+    for (i, name) in MAPPING_NAMES.iter().enumerate() {
+        let _ = writeln!(s, "#define MAPPING_{name} {i}u");
+    }
+}
+
+/// The push blocks, generated from the Rust structs' field lists (std430, so the offsets of
+/// 4-byte scalars, uvec2/vec4 and scalar arrays match repr(C) without padding).
+fn define_push_blocks(s: &mut String) {
+    for (name, fields) in push::PUSH_BLOCKS {
+        let decl: Vec<String> = fields
+            .iter()
+            .map(|(field, ty, _)| format!("{ty} {field};"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "#define PUSH_{name} layout(push_constant) uniform Push {{ {} }} pc;",
+            decl.join(" ")
+        );
+    }
+}
+
+/// Reads a GLSL file with its `#include "…"` lines expanded from `glsl/include/`.
+pub fn expand_includes(glsl_dir: &Path, file: &str, depth: u32) -> std::io::Result<String> {
+    if depth > 16 {
+        return Err(std::io::Error::other(format!(
+            "{file}: includes nest too deep"
+        )));
+    }
+    let path = if depth == 0 {
+        glsl_dir.join(file)
+    } else {
+        glsl_dir.join("include").join(file)
+    };
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
+    let mut out = String::new();
+    for line in text.lines() {
+        let t = line.trim();
+        if let Some(rest) = t.strip_prefix("#include") {
+            let name = rest.trim().trim_matches('"');
+            out.push_str(&expand_includes(glsl_dir, name, depth + 1)?);
+        } else {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    Ok(out)
+}
+
+/// FNV-1a hash of everything a SPIR-V module is built from: target, optimisation, defines and
+/// the include-expanded source. `spirv/manifest.txt` records it; a test recomputes it.
+pub fn source_hash(glsl_dir: &Path, src: &ShaderSource) -> std::io::Result<u64> {
+    let mut text = format!("{TARGET_ENV} {OPTIMIZATION} {:?}\n", src.stage);
+    for (k, v) in src.defines {
+        let _ = writeln!(text, "#define {k} {v}");
+    }
+    text.push_str(&expand_includes(glsl_dir, src.file, 0)?);
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.bytes() {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    Ok(h)
+}
+
+/// The manifest's text for the current sources.
+pub fn manifest(glsl_dir: &Path) -> std::io::Result<String> {
+    let mut s = String::new();
+    for src in SHADER_SOURCES {
+        let _ = writeln!(s, "{}.spv {:016x}", src.name, source_hash(glsl_dir, src)?);
+    }
+    Ok(s)
+}

@@ -1,0 +1,379 @@
+//! The numbers GLSL and Rust share: ids, tuning parameters of each pass and workgroup sizes,
+//! each once; GLSL reads them through the generated header.
+
+/// Ids of BRDFs and shading techniques, and the constants their twins share.
+pub mod brdf {
+    /// BRDF ids (`Object.brdf.x`).
+    pub mod ids {
+        /// Lambertian diffuse.
+        pub const LAMBERT: u32 = 0;
+        /// Perfect mirror.
+        pub const MIRROR: u32 = 1;
+        /// Normalised Phong lobe about the reflected direction.
+        pub const PHONG: u32 = 2;
+        /// Blinn-Phong.
+        pub const BLINN: u32 = 3;
+        /// GGX.
+        pub const GGX: u32 = 4;
+        /// Ward anisotropic.
+        pub const WARD: u32 = 5;
+    }
+    /// Technique ids (`Object.albedo.w`).
+    pub mod technique {
+        /// One lookup of the reflected direction (mirrors).
+        pub const LOOKUP: u32 = 0;
+        /// Filtered importance sampling.
+        pub const FIS: u32 = 1;
+        /// SH irradiance (diffuse).
+        pub const SH: u32 = 2;
+        /// A prefiltered map (irradiance by the normal, Phong by the reflected direction).
+        pub const PREFILTERED: u32 = 3;
+        /// The Monte Carlo reference.
+        pub const MC: u32 = 4;
+        /// SH shading of the BRDF (Kautz et al. 2002).
+        pub const SH_BRDF: u32 = 5;
+        /// Split-sum: one prefiltered lookup times the DFG table (Karis 2013).
+        pub const SPLIT_SUM: u32 = 6;
+    }
+    /// How each BRDF's f·cos fades towards the surface's horizon, by id: f·cos ≤ C·cos^fade
+    /// there, with C about its lobe's size (what a light tree node the horizon crosses may
+    /// be taken whole by, [`crate::math::light_tree::horizon_share`]). Lambert and Blinn
+    /// carry the cosine, GGX its masking (G ≤ 2 cos θ/α); Ward's 1/√cos leaves √cos; the
+    /// normalised Phong lobe and mirrors do not fade.
+    pub const HORIZON_FADE: [f64; 6] = [1.0, 0.0, 0.0, 1.0, 1.0, 0.5];
+    /// GGX roughness below this is taken as this (the mirror limit with finite numbers).
+    pub const GGX_ALPHA_MIN: f64 = 1e-4;
+    /// Smallest Ward roughness accepted.
+    pub const WARD_ALPHA_MIN: f64 = 1e-3;
+}
+
+/// The per-texel quadrature rule of the brute-force convolution, shared by
+/// `src/math/filter.rs` and `glsl/brute.comp` (see the former for what each does).
+pub mod filter_rule {
+    /// Fewest cells per side for a texel the kernel's horizon cuts (the kink of max(0, cos)).
+    pub const EDGE_CELLS: u32 = 4;
+    /// Most cells per side of one texel.
+    pub const MAX_CELLS: u32 = 16;
+    /// Cells per side per unit of ρ·√n.
+    pub const CELLS_PER_WIDTH: f64 = 2.0;
+    /// Below this n·ρ² a texel away from the horizon takes one node.
+    pub const CENTRE_LIMIT: f64 = 1e-5;
+    /// A regular texel takes the tilted rule (one closed-form term) while n·ρ² is at most
+    /// this times x_min², x_min the smallest axis·ω over its cone: the kernel's log-curvature
+    /// across it is then small (measured per-texel error under 1e-3, docs/BENCHMARKS.md).
+    pub const TILT_LIMIT: f64 = 0.1;
+    /// Coarsest level of the power-moment pyramid a lobe is filtered from (4096 fine texels
+    /// per coarse one, within llvmpipe's loop limit when the sum descends).
+    pub const MAX_SOURCE_LEVEL: u32 = 6;
+    /// A texel is regular (close enough to a parallelogram for the tilted rule) when the
+    /// mapping's solid-angle density over it varies by at most this ratio and no disc rim
+    /// cuts it: lat-long rows next to a pole are triangles, not parallelograms.
+    pub const TILT_DENSITY_RATIO: f64 = 1.4;
+    /// Below this |z| the tilted rule's sinh z / z, coth z − 1/z and their kin take series:
+    /// the closed forms cancel there in f32.
+    pub const TILT_SERIES_BELOW: f64 = 0.5;
+    /// A tile's bounding radius is widened by this fraction, and then by TILE_MARGIN_ABS
+    /// radians, so that f32 rounding in its angles never makes it tighter than its texels'.
+    pub const TILE_MARGIN_REL: f64 = 1e-4;
+    /// See TILE_MARGIN_REL.
+    pub const TILE_MARGIN_ABS: f64 = 1e-5;
+    /// Lobe values below this fraction of the peak are dropped (ln 1e-10).
+    pub const LOG_CUTOFF: f64 = -23.025_850_929_940_457;
+    /// A texel's angular radius is widened by this factor when bounding its cone, so the cone
+    /// covers the texel's corners in every mapping.
+    pub const CONE_MARGIN: f64 = 1.25;
+    /// A lobe's reach in a lat-long source (glsl/brute.comp, walk_rows) widens the texel
+    /// cone's bound, CONE_MARGIN times the flat half diagonal, by this fraction: the sphere's
+    /// distance exceeds the flat one by a relative O(texel²).
+    pub const REACH_MARGIN_REL: f64 = 1e-3;
+    /// And then by this many radians, for f32 rounding in x_cut and a texel's x_max (~1e-5
+    /// rad where n = 10⁶).
+    pub const REACH_MARGIN_ABS: f64 = 1e-4;
+}
+
+/// Numbers both the float64 twins and the shaders use.
+pub mod constants {
+    /// Rec. 709 luminance weights of linear RGB.
+    pub const LUMINANCE: [f64; 3] = [0.2126, 0.7152, 0.0722];
+    /// Above this |n.y| a tangent frame is built from x̂ instead of ŷ (near the poles).
+    pub const POLE_THRESHOLD: f64 = 0.999;
+    /// A view direction closer than this to the surface is lifted to it (f32 grazing views).
+    pub const VIEW_LIFT: f64 = 1e-4;
+    /// Shadow rays start this far (times 1 + |p|) off the surface along the normal.
+    pub const SHADOW_OFFSET: f64 = 1e-4;
+    /// Paraboloid samples outside the unit disc are pulled in to radius 1 − this.
+    pub const RIM_PULL_IN: f64 = 1e-4;
+    /// Offset of the 2×2 Gauss–Legendre nodes from a texel's centre, in texels: 1/(2√3).
+    pub const GAUSS2_OFFSET: f64 = 0.288_675_134_594_812_9;
+    /// Phong and Blinn-Phong exponents accepted, materials and prefilters alike.
+    pub const PHONG_EXPONENT_RANGE: (f64, f64) = (1.0, 1e7);
+}
+
+/// Side of the square tiles of source texels that the brute-force pass culls as a whole: a
+/// tile whose bounding cone lies where the kernel is below the per-texel cutoff holds only
+/// texels the per-texel rule would skip, so skipping it changes nothing.
+pub const BRUTE_TILE: u32 = 16;
+
+/// Highest SH band the GPU projection supports.
+pub const SH_MAX_LMAX: u32 = 8;
+
+/// SH shading of arbitrary BRDFs (Kautz et al. 2002), shared by `src/math/sh_brdf.rs` and
+/// `glsl/sh_brdf.comp`, `glsl/shade.frag`.
+pub mod sh_brdf {
+    /// Uniform panels in the second (azimuthal) uniform of the BRDF projection's quadrature
+    /// over the sampler's unit square; each panel takes GL_NODES × GL_NODES nodes.
+    pub const PANELS: u32 = 16;
+    /// Geometric levels toward each end of the first uniform (2·GRADED_LEVELS panels).
+    pub const GRADED_LEVELS: u32 = 8;
+    /// Gauss–Legendre nodes per panel axis (the rule of [`gauss4`]).
+    pub const GL_NODES: u32 = 4;
+    /// Views per side of the paraboloid-mapped view grid, by default (the furnace's
+    /// interpolation error is 4× smaller than at 16: tests/sh_brdf.rs).
+    pub const DEFAULT_GRID: u32 = 32;
+    /// Largest view grid accepted.
+    pub const MAX_GRID: u32 = 64;
+    /// Rotation by Kautz et al.'s zxzxz decomposition (the default, by measurement).
+    pub const ROTATION_ZXZXZ: u32 = 0;
+    /// Rotation by the Ivanic–Ruedenberg recurrence.
+    pub const ROTATION_IVANIC: u32 = 1;
+    /// Floats before the coefficients in a `sh_rotate.comp` input record (three vec4 rows).
+    pub const ROTATE_HEADER: u32 = 12;
+
+    /// The 4-point Gauss–Legendre rule on [−1, 1] in closed form: nodes ±√(3/7 ∓ 2/7·√(6/5)),
+    /// weights (18 ± √30)/36.
+    pub fn gauss4() -> ([f64; 4], [f64; 4]) {
+        let a = (3.0 / 7.0 - 2.0 / 7.0 * (6.0f64 / 5.0).sqrt()).sqrt();
+        let b = (3.0 / 7.0 + 2.0 / 7.0 * (6.0f64 / 5.0).sqrt()).sqrt();
+        let wa = (18.0 + 30.0f64.sqrt()) / 36.0;
+        let wb = (18.0 - 30.0f64.sqrt()) / 36.0;
+        ([-b, -a, a, b], [wb, wa, wa, wb])
+    }
+}
+/// Split-sum shading (Karis 2013), shared by `src/math/split_sum.rs`, `glsl/dfg.comp`,
+/// `glsl/prefilter_ggx.comp` and `glsl/shade.frag`.
+pub mod split_sum {
+    /// Roughness levels of the prefiltered chain by default: level k holds GGX
+    /// α = (k/(levels − 1))², level 0 the mirror.
+    pub const DEFAULT_LEVELS: u32 = 7;
+    /// FIS samples per prefiltered texel by default (measured against MC on spiaggia, GGX
+    /// α 0.16: 64 samples 16.7% relative RMS, 256 8.0%, 1024 5.5%, FIS's own 5.2%).
+    pub const DEFAULT_SAMPLES: u32 = 256;
+    /// Side of the prefiltered chain's level 0 by default (capped by the FIS paraboloid's).
+    pub const DEFAULT_SIZE: u32 = 512;
+    /// The coarsest level keeps at least this many texels a side.
+    pub const MIN_LEVEL_SIZE: u32 = 8;
+    /// Entries per side of the DFG table (n·v by √α) by default.
+    pub const DEFAULT_DFG_SIZE: u32 = 32;
+    /// Largest DFG table accepted.
+    pub const MAX_DFG_SIZE: u32 = 256;
+    /// The DFG table's grazing column (n·v = 0) is integrated at this n·v.
+    pub const MU_MIN: f64 = 1e-4;
+    /// Taps of the chain per pixel by default: 1 reads it once along r (Karis' n = v = r).
+    pub const DEFAULT_TAPS: u32 = 1;
+    /// Most taps a material may ask for.
+    pub const MAX_TAPS: u32 = 64;
+    /// With taps ≥ 2 each tap reads the chain at α = TAP_SCALE·√(Ωs/4π), Ωs = 1/(taps·pdf)
+    /// its share of the lobe: the α whose n = v = r lobe has that solid angle (its peak
+    /// density is 1/(4πα²)), narrowed so that neighbouring taps overlap less than they
+    /// touch. 0.7 was the best of 0.5, 0.7 and 1 at 4, 8 and 16 taps on the sun and
+    /// studio probes (float64, converged truth).
+    pub const TAP_SCALE: f64 = 0.7;
+}
+
+/// Light extraction ([`crate::math::lights`]).
+pub mod lights {
+    /// A texel is a light texel above this many times the map's mean luminance by default
+    /// in bakes and reports (renders extract deeper: [`CHAIN_RATIO`]).
+    pub const DEFAULT_RATIO: f64 = 32.0;
+    /// Most light texels kept (the threshold rises to keep to it): what the per-texel light
+    /// sums of the bake cost.
+    pub const MAX_TEXELS: u32 = 256;
+    /// Diffuse techniques (SH irradiance, prefiltered irradiance) extract above this many
+    /// times the mean luminance, uncapped, and sum the light texels by clusters: on five real
+    /// probes it took SH 2's error (float64, 600 normals) on studio_small_08 from 3.8% at
+    /// the default extraction to 0.55% (4: 0.84%, 8: 1.4%), on the others to 0.3–0.45%.
+    pub const DIFFUSE_RATIO: f64 = 2.0;
+    /// Columns of the lat-long grid whose cells gather light texels into clusters for the
+    /// cosine (rows: half as many): 5.6° cells changed no probe's SH 2 error by more than 2%
+    /// of itself against the texels one by one, at most 2048 clusters.
+    pub const CLUSTER_GRID: u32 = 64;
+    /// vec4s per cluster in the GPU's list: (Σ L·Ω·ω, 0) for red, green and blue.
+    pub const CLUSTER_VEC4S: u32 = 3;
+    /// `LightsPush::kernel`: the clamped cosine over light texels (irradiance).
+    pub const KERNEL_COSINE: u32 = 0;
+    /// `LightsPush::kernel`: split-sum's GGX at n = v = r over light texels.
+    pub const KERNEL_GGX: u32 = 1;
+    /// `LightsPush::kernel`: the light clusters' irradiance.
+    pub const KERNEL_CLUSTERS: u32 = 2;
+    /// FIS, split-sum and footprint lookups extract above this many times the mean
+    /// luminance by default (the renderer's chain, summed through the light tree): at 32 ×
+    /// the mean with 256 texels FIS-64 erred by 19.8% (α 0.05) to 7.3% on studio_small_08
+    /// (float64 study, 150 normals, against every texel), at 2 uncapped by 5.2% to 0.9%.
+    pub const CHAIN_RATIO: f64 = 2.0;
+    /// Most light texels of the chain's extraction by default, and the most a scene may ask
+    /// for: llvmpipe ends a loop after 65 535 iterations, and a pixel's walk may visit every
+    /// texel's four quadrature nodes.
+    pub const CHAIN_MAX_TEXELS: u32 = 16384;
+    /// The chain's lights grow by this many rings of texels around them (where
+    /// [`CHAIN_MAX_TEXELS`] leaves room) and the residual under them is filled from around
+    /// them ([`crate::math::lights::ExtractOptions::fill`]): a residual clamped at the
+    /// threshold keeps each softbox as a plateau whose edge FIS's few filtered samples alias.
+    /// FIS-64 on studio_small_08 at α 0.05 (128², 4096-spp reference): clamped 5.13%, filled
+    /// without growing 4.33%, one ring 3.28%, two 3.22% (a third did not fit the cap). A
+    /// scene whose chain serves footprint lookups alone keeps the clamp: they take light
+    /// texels by shares linearised over the pixel, and a mirror on studio_small_08 erred by
+    /// 3.52% filled against 2.57% clamped.
+    pub const CHAIN_FILL: u32 = 2;
+    /// vec4s per light texel in the GPU's list: (world centre, Ω), (excess rgb, ρ = √Ω),
+    /// then its quadrature nodes' (world direction, weight).
+    pub const HEADER_VEC4S: u32 = 2;
+    /// Directions a light walk step hands its kernel (shade.frag's walk_step: a node's sigma
+    /// points, or this many of a texel's quadrature nodes, whose count is a multiple of it).
+    pub const STEP_NODES: u32 = 4;
+    /// A light texel takes its centre alone where PER_WIDTH·ρ < CENTRE_BELOW·w (w the
+    /// kernel's scale there), its nodes elsewhere.
+    pub const PER_WIDTH: f64 = 4.0;
+    /// See [`PER_WIDTH`]: the centre's error is then about (ρ/w)²/24 of the texel's term.
+    pub const CENTRE_BELOW: f64 = 0.2;
+    /// A lobe's scale at chord c from its axis is at least this times c: K ∝ θ⁻⁴ in GGX's tail
+    /// varies on a scale of θ/4, taken with a margin.
+    pub const TAIL_FRACTION: f64 = 0.125;
+    /// A light tree's node is taken whole where its reach is below this times the kernel's
+    /// scale there: on five 1k probes (ratio 2, uncapped) the tree's light sums under GGX
+    /// α 0.05–0.6 erred by 1e-5 to 1e-3 RMS against the texels one by one, at 200–3000
+    /// kernel evaluations a pixel instead of 3 000–22 000.
+    pub const TREE_BELOW: f64 = 0.35;
+    /// A light tree node's kernel scale in the lobe's tail is at least this times the chord
+    /// from the axis to the node's nearest point. Its four sigma points err at fourth order,
+    /// so it can be twice [`TAIL_FRACTION`]: 0.125, 0.25 and 0.5 gave the same error on
+    /// studio_small_08 (GGX α 0.05: 1.2e-3 RMS) at 2073, 1092 and 756 evaluations a pixel.
+    pub const TREE_TAIL: f64 = 0.25;
+    /// A node of reach up to [`TREE_BUDGET_REACH`] × the kernel's scale is also taken whole
+    /// where its power times a bound on the kernel there (times (reach/scale)⁴ where no cut
+    /// crosses it, the sigma points' order) is below this fraction of the pixel's estimate
+    /// without the lights (FIS's, or the chain's): most nodes far out in the tail or across
+    /// the horizon of a dim lobe. On five 1k probes under GGX α 0.05–0.6 it cut the walk's
+    /// steps 2–25× (studio_small_08: 582 → 204 at α 0.05) and moved the worst light-sum
+    /// error, relative to the pixel, from 2.65e-3 to 2.69e-3 (3e-2: 3.2e-3).
+    pub const TREE_BUDGET: f64 = 1e-2;
+    /// See [`TREE_BUDGET`]: beyond the kernel's scale the sigma points stop being a rule.
+    pub const TREE_BUDGET_REACH: f64 = 1.0;
+    /// How the light sums' own kernels fade towards their cut (`math::light_tree::
+    /// horizon_share`): the cosine and split-sum's GGX (D·G/4, its masking) both linearly.
+    pub const KERNEL_FADE: f64 = 1.0;
+    /// A light tree's leaves hold at most this many texels.
+    pub const LEAF_TEXELS: u32 = 4;
+    /// vec4s per light tree node in the GPU's list (math::light_tree::LightTree::gpu_nodes).
+    pub const TREE_VEC4S: u32 = 5;
+}
+
+/// Bits of shade.frag's code mask (its specialisation constant 0) beside the techniques' and
+/// [`footprint::CODE`]: llvmpipe runs every branch of a loop's body whether or not a lane
+/// takes it, so a light tree walk that could meet all six BRDFs and shadow rays pays for all
+/// of them at every step; a pipeline keeps only the code its scene can reach.
+pub mod shade_code {
+    /// Keeps the shadow rays' code (scenes with `shadows`).
+    pub const SHADOWS: u32 = 1 << 17;
+    /// Bit `BRDF_SHIFT + id` keeps BRDF `id`'s code ([`super::brdf::ids`]).
+    pub const BRDF_SHIFT: u32 = 20;
+}
+
+/// Footprint-filtered lookups (mirrors and the background, issue #10): the pixel's footprint
+/// in direction space, from G-buffer differences, read from the dual-paraboloid chain by a
+/// row of taps along its major axis ([`crate::math::footprint`]).
+pub mod footprint {
+    /// Taps across a footprint's minor axis: a tap's trilinear read spreads over about two
+    /// texels of its level, so finer taps keep a bright texel beside the footprint out of it.
+    pub const MIN_TAPS: u32 = 8;
+    /// Most taps along a footprint's major axis; beyond that ratio the taps blur more.
+    pub const MAX_TAPS: u32 = 16;
+    /// Lod bias of each tap (log2 of the texel side over the tap's spacing): half a level
+    /// finer offsets the tent a trilinear read adds to the box (measured in
+    /// docs/BENCHMARKS.md: studio_small 4.7% -> 3.9% before the other refinements).
+    pub const LOD_BIAS: f64 = -0.5;
+    /// Taken off a footprint's length over the tap spacing before rounding up, so that a
+    /// ratio of exactly k gives k taps in float32 as in float64, not k + 1.
+    pub const TAP_SLACK: f64 = 1e-3;
+    /// Shortest differential kept (radians per pixel): a footprint no wider is a point.
+    pub const MIN_SPREAD: f64 = 1e-6;
+    /// Push flag: mirror lookups are footprint-filtered.
+    pub const MIRROR: u32 = 1;
+    /// Push flag: the background is footprint-filtered.
+    pub const BACKGROUND: u32 = 2;
+    /// Push flag: the chain holds the residual; footprint lookups add the light texels.
+    pub const LIGHTS: u32 = 4;
+    /// Bit of shade.frag's specialisation constant 0 (its code mask: bit t for technique t)
+    /// that keeps the footprint lookups' code.
+    pub const CODE: u32 = 1 << 16;
+}
+
+/// Workgroup size of the SH passes: one texel (or partial sum) per invocation.
+pub const SH_WORKGROUP: u32 = 64;
+/// Texels each SH projection invocation sums in registers before the workgroup sums, on
+/// lat-long and cube maps: fewer workgroup reductions (each a barrier per coefficient), at an
+/// f32 sum SH_RUN long. Disc mappings take one (their rim rule is long; see sh_project.comp).
+pub const SH_RUN: u32 = 16;
+
+/// Workgroup size of 2D compute passes (specialization constants 0 and 1).
+pub const WORKGROUP_2D: [u32; 2] = [8, 8];
+/// Workgroup size of 1D compute passes (specialization constant 0).
+pub const WORKGROUP_1D: u32 = 64;
+/// Mapping ids, in [`crate::math::Mapping`]'s order.
+pub const MAPPING_NAMES: [&str; 4] = ["LATLONG", "ANGULAR", "CUBE", "DUAL_PARABOLOID"];
+
+/// The lat-long → cube and dual-paraboloid conversion by exact footprint areas
+/// (`math::convert::area_*`, `glsl/convert_area.comp`).
+pub mod area {
+    /// Points per edge of a cube texel's footprint polygon in the (U, z) plane: the chords
+    /// err by about 1e-4 of a texel's area away from the poles (measured 5e-6 of the power of
+    /// a map with suns at the poles and the seam, 1024 x 512 to cube 256).
+    pub const EDGE_STEPS: u32 = 2;
+    /// Points per edge of a dual-paraboloid texel's polygon: z = cos θ bends across its
+    /// texels as much at the rim as anywhere, and a sun there lands whole in one rim texel, so
+    /// that its power errs by that texel's chord error: 3.8e-5 of a map with a sun on the
+    /// equator at 2 points, 9.5e-6 at 4 and 2.4e-6 at 8 (1024 x 512 to paraboloid 256,
+    /// float64), the cube's 5e-6 at 2.
+    pub const PARABOLOID_EDGE_STEPS: u32 = 8;
+    /// Points per edge of a dual-paraboloid texel's polygon where the source is a residual,
+    /// its lights taken out (FIS's chain), from [`RESIDUAL_EDGE_MIN_SIZE`] up: no sun lands
+    /// in a rim texel, and the chords keep power as 8 points do with suns (1024 × 512 with
+    /// suns at the poles and seam, to paraboloid 128: the residual 1.1e-5, the suns 1.2e-5 at
+    /// 8 points, 1.3e-4 at 2). The FIS paraboloid of spiaggia 1k: 38 → 24 ms on llvmpipe.
+    pub const RESIDUAL_EDGE_STEPS: u32 = 2;
+    /// See [`RESIDUAL_EDGE_STEPS`]: the chords' error grows about as 1/size² (the residual
+    /// above: 2.7e-6 at 256, 1.2e-4 at 32), and smaller paraboloids cost little anyway.
+    pub const RESIDUAL_EDGE_MIN_SIZE: u32 = 128;
+    /// Points per edge whose nearer end is within [`POLE_NEAR`] / size of the pole's axis,
+    /// where great circles curve strongly in (U, z).
+    pub const POLE_STEPS: u32 = 8;
+    /// See [`POLE_STEPS`].
+    pub const POLE_NEAR: f64 = 8.0;
+    /// Most polygon vertices: four edges of [`POLE_STEPS`] (or [`PARABOLOID_EDGE_STEPS`])
+    /// points, and three closing the polygon along a pole's line.
+    pub const MAX_VERTICES: u32 = 4 * POLE_STEPS + 3;
+    const _: () = assert!(
+        PARABOLOID_EDGE_STEPS <= POLE_STEPS
+            && EDGE_STEPS <= POLE_STEPS
+            && RESIDUAL_EDGE_STEPS >= 1
+            && RESIDUAL_EDGE_STEPS <= POLE_STEPS
+    );
+    /// vec4s of limited slopes per source texel (dL/dU rgb, then dL/dz rgb), the layout of
+    /// the buffer convert_slopes.comp writes and convert_area.comp reads.
+    pub const SLOPE_VEC4S: u32 = 2;
+    /// Cube outputs at least this large take the fast path (glsl/convert_area.comp, FAST)
+    /// away from the poles; smaller ones take the general walk everywhere.
+    pub const FAST_MIN_SIZE: u32 = 32;
+    /// On the cube faces that hold the poles, the texels within this many texels of the
+    /// centre (Chebyshev, from the texel's centre) take the general walk: at size ≥
+    /// [`FAST_MIN_SIZE`] every texel with a corner nearer the pole's axis than
+    /// [`POLE_NEAR`] / size lies within 4.13 + 0.5 texels of it.
+    pub const FAST_WINDOW: u32 = 6;
+    /// The cube faces (Vulkan order) whose centres are +Y and −Y, the poles of a lat-long
+    /// source under every `Orientation` (turns about Y, flips of Y).
+    pub const POLE_FACES: [u32; 2] = [2, 3];
+    const _: () = assert!(POLE_NEAR <= 8.0 && FAST_MIN_SIZE >= 32 && FAST_WINDOW >= 5);
+    /// The conversion serves sizes whose longest polygon walk
+    /// (`math::convert::area_walk_steps`) takes at most this many loop steps (host only), under
+    /// llvmpipe's limit of 65 535 per invocation with room for the estimate's error.
+    pub const WALK_STEPS: f64 = 40_000.0;
+}

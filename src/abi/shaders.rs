@@ -1,0 +1,435 @@
+//! The shader table: every SPIR-V module once, with its source, stage, defines, push block
+//! and bindings, and the build settings of all of them.
+
+use super::binding;
+
+/// SPIR-V target environment: Vulkan 1.2 (Vulkan 1.3 output uses LocalSizeId, which
+/// validation rejects without maintenance4).
+pub const TARGET_ENV: &str = "vulkan1.2";
+/// Optimisation level handed to shaderc.
+pub const OPTIMIZATION: &str = "performance";
+
+/// Where `generated_header` is written.
+pub const GENERATED_HEADER: &str = "glsl/include/generated.glsl";
+/// Where the hashes of the sources each SPIR-V file was built from are written.
+pub const MANIFEST: &str = "spirv/manifest.txt";
+
+/// A shader stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Compute shader.
+    Compute,
+    /// Vertex shader.
+    Vertex,
+    /// Fragment shader.
+    Fragment,
+}
+
+/// One SPIR-V module: which GLSL file, with which defines.
+#[derive(Clone, Copy, Debug)]
+pub struct ShaderSource {
+    /// File stem of the SPIR-V output in `spirv/` (`NAME.spv`).
+    pub name: &'static str,
+    /// GLSL source file in `glsl/`.
+    pub file: &'static str,
+    /// Stage.
+    pub stage: Stage,
+    /// Preprocessor defines (name, value).
+    pub defines: &'static [(&'static str, &'static str)],
+}
+
+/// What a descriptor binding is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// A combined image sampler.
+    Sampled,
+    /// A storage image.
+    StorageImage,
+    /// A storage buffer.
+    StorageBuffer,
+    /// A uniform texel buffer: a buffer's rgba32f view, read with texelFetch (llvmpipe reads
+    /// it as one gather where it reads a storage buffer lane by lane).
+    TexelBuffer,
+}
+
+/// What a shader does to a binding; the recorder derives barriers from it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    /// Only reads.
+    Read,
+    /// Only writes (earlier contents may be discarded only where the caller says so).
+    Write,
+    /// Reads and writes (an accumulation, or a level read while another is written).
+    ReadWrite,
+}
+
+/// Descriptor bindings (set 0) and push-constant size a module expects.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interface {
+    /// (binding, kind, access) triples.
+    pub bindings: &'static [(u32, Kind, Access)],
+    /// Size in bytes of the push-constant block (0 for none).
+    pub push_size: u32,
+    /// The push block's fields: (name, GLSL type, byte offset).
+    pub push_fields: &'static [(&'static str, &'static str, usize)],
+}
+
+/// The shader table: each module once, with its name, source, stage, defines, push block and
+/// bindings. `shader_table!(callback)` hands the whole table to `callback!`, so that the
+/// library can embed each module's SPIR-V by name while this file stays std-only.
+macro_rules! shader_table {
+    ($callback:ident) => {
+        $callback! {
+            /// Resampling between mappings from a 2D-array source.
+            Convert2d = "convert_2d", "convert.comp", Compute, [], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write)];
+            /// Resampling between mappings from a cube source.
+            ConvertCube = "convert_cube", "convert.comp", Compute, [("SRC_CUBE", "1")], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write)];
+            /// Lat-long to cube by exact footprint areas (power-conserving): the general walk.
+            ConvertArea = "convert_area", "convert_area.comp", Compute, [("DST", "MAPPING_CUBE")], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
+                 (CONVERT_SLOPES, TexelBuffer, Read)];
+            /// Lat-long to dual paraboloid by exact footprint areas.
+            ConvertAreaParaboloid = "convert_area_paraboloid", "convert_area.comp", Compute,
+                [("DST", "MAPPING_DUAL_PARABOLOID")], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
+                 (CONVERT_SLOPES, TexelBuffer, Read)];
+            /// ConvertArea's fast path for cube texels away from the poles.
+            ConvertAreaFast = "convert_area_fast", "convert_area_fast.comp", Compute,
+                [("DST", "MAPPING_CUBE")], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
+                 (CONVERT_SLOPES, TexelBuffer, Read)];
+            /// ConvertArea's general walk over a list of texels (those the fast path leaves).
+            ConvertAreaList = "convert_area_list", "convert_area_list.comp", Compute,
+                [("DST", "MAPPING_CUBE")], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
+                 (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
+            /// The limited slopes of a lat-long source that ConvertArea integrates.
+            ConvertSlopes = "convert_slopes", "convert_slopes.comp", Compute, [], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_SLOPES, StorageBuffer, Write)];
+            /// Mapping functions exposed for tests.
+            MappingProbe = "mapping_probe", "mapping_probe.comp", Compute, [], ProbePush,
+                [(PROBE_IN, StorageBuffer, Read), (PROBE_OUT, StorageBuffer, Write)];
+            /// A plain texel copy (the benchmark floor).
+            Copy = "copy", "copy.comp", Compute, [], CopyPush,
+                [(COPY_SRC, Sampled, Read), (COPY_DST, StorageImage, Write)];
+            /// A deliberately costly dispatch (timestamp test).
+            Busy = "busy", "busy.comp", Compute, [], BusyPush,
+                [(BUSY_OUT, StorageBuffer, Write)];
+            /// Fullscreen triangle vertex shader.
+            FullscreenVert = "fullscreen_vert", "fullscreen.vert", Vertex, [], (), [];
+            /// Flat colour fragment shader.
+            FlatFrag = "flat_frag", "flat.frag", Fragment, [], (), [];
+            /// SH projection, first level, with subgroup arithmetic.
+            ShProjectSubgroup = "sh_project_subgroup", "sh_project.comp", Compute,
+                [("USE_SUBGROUPS", "1")], ShProjectPush,
+                [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
+            /// SH projection, first level, shared-memory tree.
+            ShProjectShared = "sh_project_shared", "sh_project.comp", Compute, [], ShProjectPush,
+                [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
+            /// SH projection of lat-long and cube maps (no disc rim rule in the module, which
+            /// lavapipe compiles at every run: 38 → 24 ms), with subgroup arithmetic.
+            ShProjectGridSubgroup = "sh_project_grid_subgroup", "sh_project.comp", Compute,
+                [("USE_SUBGROUPS", "1"), ("GRID_ONLY", "1")], ShProjectPush,
+                [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
+            /// SH projection of lat-long and cube maps, shared-memory tree.
+            ShProjectGridShared = "sh_project_grid_shared", "sh_project.comp", Compute,
+                [("GRID_ONLY", "1")], ShProjectPush,
+                [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
+            /// SH projection of lat-long maps to l = 2, band and mapping compile-time
+            /// constants (a third of the module: 24 → 15 ms to build on lavapipe), subgroups.
+            ShProjectLatLong2Subgroup = "sh_project_latlong2_subgroup", "sh_project.comp", Compute,
+                [("USE_SUBGROUPS", "1"), ("GRID_ONLY", "1"), ("FIXED_LMAX", "2u"),
+                 ("FIXED_MAPPING", "MAPPING_LATLONG")], ShProjectPush,
+                [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
+            /// The same, shared-memory tree.
+            ShProjectLatLong2Shared = "sh_project_latlong2_shared", "sh_project.comp", Compute,
+                [("GRID_ONLY", "1"), ("FIXED_LMAX", "2u"), ("FIXED_MAPPING", "MAPPING_LATLONG")],
+                ShProjectPush,
+                [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
+            /// SH partial-sum reduction with subgroup arithmetic.
+            ShReduceSubgroup = "sh_reduce_subgroup", "sh_reduce.comp", Compute,
+                [("USE_SUBGROUPS", "1")], ShReducePush,
+                [(SH_REDUCE_IN, StorageBuffer, Read), (SH_REDUCE_OUT, StorageBuffer, Write)];
+            /// SH partial-sum reduction, shared-memory tree.
+            ShReduceShared = "sh_reduce_shared", "sh_reduce.comp", Compute, [], ShReducePush,
+                [(SH_REDUCE_IN, StorageBuffer, Read), (SH_REDUCE_OUT, StorageBuffer, Write)];
+            /// Brute-force convolution: per-texel cones, radiance and solid angles.
+            BrutePrepare = "brute_prepare", "brute_prepare.comp", Compute, [], BrutePush,
+                [(BRUTE_PREP_SRC, Sampled, Read), (BRUTE_PREP_CONES, StorageImage, Write),
+                 (BRUTE_PREP_RADIANCE, StorageImage, Write),
+                 (BRUTE_PREP_SHAPES, StorageImage, Write)];
+            /// Brute-force convolution: one level of the power-moment pyramid.
+            BruteMoments = "brute_moments", "brute_moments.comp", Compute, [], BrutePush,
+                [(BRUTE_MOM_RADIANCE, StorageImage, Read), (BRUTE_MOM_SHAPES, StorageImage, Read),
+                 (BRUTE_MOM_CONES, StorageImage, Write), (BRUTE_MOM_LIGHT, StorageImage, Write)];
+            /// Brute-force convolution: a bounding cone per tile of BRUTE_TILE² texels.
+            BruteTiles = "brute_tiles", "brute_tiles.comp", Compute, [], BrutePush,
+                [(BRUTE_TILE_CONES, StorageImage, Read), (BRUTE_TILE_OUT, StorageBuffer, Write)];
+            /// Brute-force convolution with the cosine or a Phong lobe, from a lat-long or cube
+            /// source.
+            Brute = "brute", "brute.comp", Compute, [], BrutePush,
+                [(BRUTE_CONES, StorageImage, Read), (BRUTE_RADIANCE, StorageImage, Read),
+                 (BRUTE_PARTIALS, StorageBuffer, ReadWrite),
+                 (BRUTE_TILES, StorageBuffer, Read), (BRUTE_SHAPES, StorageImage, Read),
+                 (BRUTE_COARSE_CONES, StorageImage, Read), (BRUTE_LIGHT, StorageImage, Read)];
+            /// Brute, from an angular or dual-paraboloid source: with the clipped rule for the
+            /// texels the disc's rim cuts, whose unrolled nodes more than double the module
+            /// (lavapipe built Brute in 123 ms with them, 52 without, every run).
+            BruteDisc = "brute_disc", "brute.comp", Compute, [("DISC_SOURCE", "1")], BrutePush,
+                [(BRUTE_CONES, StorageImage, Read), (BRUTE_RADIANCE, StorageImage, Read),
+                 (BRUTE_PARTIALS, StorageBuffer, ReadWrite),
+                 (BRUTE_TILES, StorageBuffer, Read), (BRUTE_SHAPES, StorageImage, Read),
+                 (BRUTE_COARSE_CONES, StorageImage, Read), (BRUTE_LIGHT, StorageImage, Read)];
+            /// Brute's visit floor, a benchmark instrument: Σ L·Ω over the source texels the
+            /// walk visits for each output (its one-level walk, no moment source), without the
+            /// rule, so that its time is what visiting the exact sum's texels costs.
+            BruteVisits = "brute_visits", "brute.comp", Compute, [("VISITS", "1")], BrutePush,
+                [(BRUTE_CONES, StorageImage, Read), (BRUTE_RADIANCE, StorageImage, Read),
+                 (BRUTE_PARTIALS, StorageBuffer, ReadWrite),
+                 (BRUTE_TILES, StorageBuffer, Read), (BRUTE_SHAPES, StorageImage, Read),
+                 (BRUTE_COARSE_CONES, StorageImage, Read), (BRUTE_LIGHT, StorageImage, Read)];
+            /// Brute-force convolution: the parts' sums, added per output texel into the map.
+            BruteResolve = "brute_resolve", "brute_resolve.comp", Compute, [], BrutePush,
+                [(BRUTE_RESOLVE_PARTIALS, StorageBuffer, Read), (BRUTE_RESOLVE_DST, StorageImage, Write)];
+            /// Irradiance from SH coefficients into a map.
+            ShEval = "sh_eval", "sh_eval.comp", Compute, [], ShEvalPush,
+                [(SH_EVAL_COEFFS, StorageBuffer, Read), (SH_EVAL_DST, StorageImage, Write)];
+            /// G-buffer of analytic spheres and planes.
+            GBuffer = "gbuffer", "gbuffer.frag", Fragment, [], GBufferPush,
+                [(GBUF_OBJECTS, StorageBuffer, Read)];
+            /// Shading of every material, and the frame's composite.
+            Shade = "shade", "shade.frag", Fragment, [], ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] whose light tree walks end on a subgroup vote (see
+            /// shade.frag's walk_done), where fragment shaders have vote operations.
+            ShadeVote = "shade_vote", "shade.frag", Fragment, [("USE_VOTE", "1")], ShadePush,
+                SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of mirrors and the background
+            /// alone (shade.frag's ONLY_TECHS).
+            ShadeLookup = "shade_lookup", "shade.frag", Fragment,
+                [("ONLY_TECHS", "0u")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of filtered importance
+            /// sampling alone (shade.frag's ONLY_TECHS).
+            ShadeFis = "shade_fis", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_FIS")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of SH irradiance alone (shade.frag's ONLY_TECHS).
+            ShadeSh = "shade_sh", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_SH")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of prefiltered maps alone (shade.frag's ONLY_TECHS).
+            ShadePrefiltered = "shade_prefiltered", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_PREFILTERED")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of Monte Carlo alone (shade.frag's ONLY_TECHS).
+            ShadeMc = "shade_mc", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_MC")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of SH-BRDF (with SH, whose
+            /// projection it reads) alone (shade.frag's ONLY_TECHS).
+            ShadeShBrdf = "shade_sh_brdf", "shade.frag", Fragment,
+                [("ONLY_TECHS", "(1u << TECH_SH) | (1u << TECH_SH_BRDF)")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::Shade`] for scenes of split-sum (with FIS, whose
+            /// chain it reads) alone (shade.frag's ONLY_TECHS).
+            ShadeSplitSum = "shade_split_sum", "shade.frag", Fragment,
+                [("ONLY_TECHS", "(1u << TECH_FIS) | (1u << TECH_SPLIT_SUM)")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of mirrors and the background alone.
+            ShadeVoteLookup = "shade_vote_lookup", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "0u")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of filtered importance sampling alone.
+            ShadeVoteFis = "shade_vote_fis", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_FIS")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of SH irradiance alone.
+            ShadeVoteSh = "shade_vote_sh", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_SH")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of prefiltered maps alone.
+            ShadeVotePrefiltered = "shade_vote_prefiltered", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_PREFILTERED")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of Monte Carlo alone.
+            ShadeVoteMc = "shade_vote_mc", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_MC")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of SH-BRDF (with SH) alone.
+            ShadeVoteShBrdf = "shade_vote_sh_brdf", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "(1u << TECH_SH) | (1u << TECH_SH_BRDF)")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVote`] for scenes of split-sum (with FIS) alone.
+            ShadeVoteSplitSum = "shade_vote_split_sum", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "(1u << TECH_FIS) | (1u << TECH_SPLIT_SUM)")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeLookup`] less footprint and shadow code (LEAN).
+            ShadeLeanLookup = "shade_lean_lookup", "shade.frag", Fragment,
+                [("ONLY_TECHS", "0u"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeFis`] less footprint and shadow code (LEAN).
+            ShadeLeanFis = "shade_lean_fis", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_FIS"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeSh`] less footprint and shadow code (LEAN).
+            ShadeLeanSh = "shade_lean_sh", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_SH"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadePrefiltered`] less footprint and shadow code (LEAN).
+            ShadeLeanPrefiltered = "shade_lean_prefiltered", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_PREFILTERED"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeMc`] less footprint and shadow code (LEAN).
+            ShadeLeanMc = "shade_lean_mc", "shade.frag", Fragment,
+                [("ONLY_TECHS", "1u << TECH_MC"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeShBrdf`] less footprint and shadow code (LEAN).
+            ShadeLeanShBrdf = "shade_lean_sh_brdf", "shade.frag", Fragment,
+                [("ONLY_TECHS", "(1u << TECH_SH) | (1u << TECH_SH_BRDF)"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeSplitSum`] less footprint and shadow code (LEAN).
+            ShadeLeanSplitSum = "shade_lean_split_sum", "shade.frag", Fragment,
+                [("ONLY_TECHS", "(1u << TECH_FIS) | (1u << TECH_SPLIT_SUM)"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVoteLookup`] less footprint and shadow code.
+            ShadeVoteLeanLookup = "shade_vote_lean_lookup", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "0u"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVoteFis`] less footprint and shadow code.
+            ShadeVoteLeanFis = "shade_vote_lean_fis", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_FIS"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVoteSh`] less footprint and shadow code.
+            ShadeVoteLeanSh = "shade_vote_lean_sh", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_SH"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVotePrefiltered`] less footprint and shadow code.
+            ShadeVoteLeanPrefiltered = "shade_vote_lean_prefiltered", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_PREFILTERED"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVoteMc`] less footprint and shadow code.
+            ShadeVoteLeanMc = "shade_vote_lean_mc", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_MC"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVoteShBrdf`] less footprint and shadow code.
+            ShadeVoteLeanShBrdf = "shade_vote_lean_sh_brdf", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "(1u << TECH_SH) | (1u << TECH_SH_BRDF)"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// [`ShaderId::ShadeVoteSplitSum`] less footprint and shadow code.
+            ShadeVoteLeanSplitSum = "shade_vote_lean_split_sum", "shade.frag", Fragment,
+                [("USE_VOTE", "1"), ("ONLY_TECHS", "(1u << TECH_FIS) | (1u << TECH_SPLIT_SUM)"), ("LEAN", "1")],
+                ShadePush, SHADE_BINDINGS;
+            /// The split-sum DFG table (A, B) per n·v and √α.
+            Dfg = "dfg", "dfg.comp", Compute, [], DfgPush,
+                [(DFG_TABLE, StorageBuffer, ReadWrite)];
+            /// One roughness level of the split-sum prefiltered GGX chain.
+            PrefilterGgx = "prefilter_ggx", "prefilter_ggx.comp", Compute, [], PrefilterGgxPush,
+                [(PREFILTER_GGX_SRC, Sampled, Read), (PREFILTER_GGX_DST, StorageImage, Write)];
+            /// Light texels (extracted from a map) added exactly to a cube level.
+            Lights = "lights", "lights.comp", Compute, [], LightsPush,
+                [(LIGHTS_TEXELS, StorageBuffer, Read), (LIGHTS_DST, StorageImage, ReadWrite)];
+            /// SH projection of a BRDF per view of a grid (SH-BRDF shading's table).
+            ShBrdf = "sh_brdf", "sh_brdf.comp", Compute, [], ShBrdfPush,
+                [(SH_BRDF_TABLE, StorageBuffer, ReadWrite)];
+            /// Rotation of SH vectors by either construction (tests, benchmark).
+            ShRotate = "sh_rotate", "sh_rotate.comp", Compute, [], ShRotatePush,
+                [(SH_ROT_IN, StorageBuffer, Read), (SH_ROT_OUT, StorageBuffer, Write),
+                 (SH_ROT_X90, StorageBuffer, Read)];
+            /// One level of the dual-paraboloid MIP chain.
+            Mip = "mip", "mip.comp", Compute, [], MipPush,
+                [(MIP_SRC, StorageImage, ReadWrite), (MIP_DST, StorageImage, ReadWrite)];
+            /// One progressive frame of the Monte Carlo reference.
+            Mc = "mc", "mc.comp", Compute, [], McPush,
+                [(MC_NORMAL, Sampled, Read), (MC_VIEW, Sampled, Read),
+                 (MC_POSITION, Sampled, Read), (MC_OBJECTS, StorageBuffer, Read),
+                 (MC_ENV, Sampled, Read), (MC_TABLES, StorageBuffer, Read),
+                 (MC_ACCUM, StorageImage, ReadWrite)];
+        }
+    };
+}
+// The library's gpu::shaders embeds the SPIR-V through it; tools/shaderc does not use it.
+#[allow(unused_imports)]
+pub(crate) use shader_table;
+
+/// A shader's bindings: a list of (binding, kind, access), or the name of a shared one.
+macro_rules! binding_list {
+    ([$(($b:ident, $kind:ident, $acc:ident)),*]) => {
+        &[$((binding::$b, Kind::$kind, Access::$acc)),*]
+    };
+    ($shared:ident) => {
+        $shared
+    };
+}
+
+/// The bindings of shade.frag, whichever of its variants.
+const SHADE_BINDINGS: &[(u32, Kind, Access)] = binding_list!([
+    (SHADE_NORMAL, Sampled, Read),
+    (SHADE_VIEW, Sampled, Read),
+    (SHADE_OBJECTS, StorageBuffer, Read),
+    (SHADE_COEFFS, StorageBuffer, Read),
+    (SHADE_ENV, Sampled, Read),
+    (SHADE_POSITION, Sampled, Read),
+    (SHADE_DP, Sampled, Read),
+    (SHADE_PREFILTERED, StorageBuffer, Read),
+    (SHADE_MC, Sampled, Read),
+    (SHADE_BRDF_SH, StorageBuffer, Read),
+    (SHADE_X90, StorageBuffer, Read),
+    (SHADE_SPLIT, Sampled, Read),
+    (SHADE_DFG, StorageBuffer, Read),
+    (SHADE_LIGHTS, StorageBuffer, Read),
+    (SHADE_CAMERA, StorageBuffer, Read)
+]);
+
+macro_rules! define_shaders {
+    ($( $(#[$m:meta])* $id:ident = $name:literal, $file:literal, $stage:ident,
+        [$(($k:literal, $v:literal)),*], $push:ty, $binds:tt; )*) => {
+        /// A shader module envlight uses.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum ShaderId { $( $(#[$m])* $id, )* }
+
+        /// Every module's build recipe, in table order.
+        pub const SHADER_SOURCES: &[ShaderSource] = &[$(
+            ShaderSource { name: $name, file: $file, stage: Stage::$stage, defines: &[$(($k, $v)),*] },
+        )*];
+
+        impl ShaderId {
+            /// Every module, in table order.
+            pub const ALL: &'static [ShaderId] = &[$(ShaderId::$id),*];
+
+            /// The build recipe of this module.
+            pub fn source(self) -> &'static ShaderSource {
+                &SHADER_SOURCES[self as usize]
+            }
+
+            /// Its name (the file stem of `spirv/NAME.spv`).
+            pub fn name(self) -> &'static str {
+                self.source().name
+            }
+
+            /// What the pipeline built on this module binds and pushes.
+            pub fn interface(self) -> Interface {
+                match self {$(
+                    ShaderId::$id => Interface {
+                        bindings: binding_list!($binds),
+                        push_size: std::mem::size_of::<$push>() as u32,
+                        push_fields: <$push as PushBlock>::FIELDS,
+                    },
+                )*}
+            }
+
+            /// The push block's name in the generated header (`PUSH_<name>`), if any.
+            pub fn push_block(self) -> Option<&'static str> {
+                match self {$(
+                    ShaderId::$id => {
+                        let n = stringify!($push);
+                        (n != "()").then_some(n)
+                    }
+                )*}
+            }
+        }
+    };
+}
+use super::push::*;
+shader_table!(define_shaders);
