@@ -335,12 +335,13 @@ fn a_cycle_or_an_upward_import_is_a_fault() {
 
 #[test]
 fn the_library_keeps_to_std_and_its_own_crates() {
-    let abi =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/abi.rs")).unwrap();
-    assert!(
-        code(&abi).all(|l| !l.contains("crate::") && !l.contains("ash::")),
-        "src/abi.rs must stay std-only"
-    );
+    for (path, text) in sources("src/abi", "rs") {
+        assert!(
+            code(&text).all(|l| !l.contains("crate::") && !l.contains("ash::")),
+            "{}: abi must stay std-only (tools/shaderc includes it by path)",
+            path.display()
+        );
+    }
     for (path, text) in sources("src", "rs") {
         let cli = path.components().any(|c| c.as_os_str() == "cli") || path.ends_with("main.rs");
         if !cli {
@@ -392,5 +393,24 @@ fn shared_numbers_are_not_literal_in_glsl() {
                 );
             }
         }
+    }
+}
+
+#[test]
+fn each_shader_file_has_one_main() {
+    let shaders: Vec<_> = ["comp", "frag", "vert"]
+        .iter()
+        .flat_map(|ext| sources("glsl", ext))
+        .collect();
+    for (path, text) in shaders {
+        let mains = code(&text)
+            .filter(|l| l.trim_start().starts_with("void main("))
+            .count();
+        assert_eq!(
+            mains,
+            1,
+            "{}: {mains} main()s (one kernel a file)",
+            path.display()
+        );
     }
 }

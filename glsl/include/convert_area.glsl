@@ -1,0 +1,273 @@
+// What the exact-area conversions share (convert_area.comp, convert_area_fast.comp,
+// convert_area_list.comp): their bindings and push block, the source's reconstruction, the
+// texels' polygons and the general walk, `general(id)`.
+#ifndef ENVLIGHT_CONVERT_AREA_GLSL
+#define ENVLIGHT_CONVERT_AREA_GLSL
+#include "mappings.glsl"
+
+layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
+
+layout(set = 0, binding = BINDING_CONVERT_SRC) uniform sampler2DArray src;
+layout(set = 0, binding = BINDING_CONVERT_DST, rgba32f) uniform writeonly image2DArray dst;
+// Limited slopes of each source texel (convert_slopes.comp): (dL/dU rgb, 0), (dL/dz rgb, 0).
+// Through the buffer's texel view: llvmpipe reads a storage buffer at a per-lane address lane
+// by lane, a texel buffer as one gather (cube 256's areas: 66 -> 49 ms without the reads).
+layout(set = 0, binding = BINDING_CONVERT_SLOPES) uniform samplerBuffer slopes;
+
+// The push block, generated from src/abi.rs.
+PUSH_ConvertPush
+
+// The destination mapping, cube or dual paraboloid: a module each (ShaderId::ConvertArea and
+// ConvertAreaParaboloid), since lavapipe's build time follows the module's size and a
+// specialisation constant would keep the other's code in it.
+const uint DST_MAPPING = DST;
+
+// Points per edge of a paraboloid texel's polygon away from the poles (ConvertOptions::
+// edge_points; 1 to AREA_POLE_STEPS): a specialisation constant, so that the default's loop
+// keeps a constant bound (as a push constant it cost the default conversion 6%).
+layout(constant_id = 2) const uint EDGE_POINTS = AREA_PARABOLOID_EDGE_STEPS;
+
+const uint MAXV = 2u * AREA_MAX_VERTICES;  // a clip at most doubles a polygon
+vec2 poly[MAXV];
+vec2 tmp[MAXV];
+vec2 band[MAXV];
+uint npoly;
+
+vec3 point(uint face, uint a, uint b, uint m) {
+    Coord c;
+    c.layer = face;
+    c.uv = vec2(float(a), float(b)) / float(pc.dst_size.x * m);
+    vec3 d = coord_to_dir(DST_MAPPING, c);
+    return vec3(dot(pc.world_to_file[0].xyz, d), dot(pc.world_to_file[1].xyz, d),
+                dot(pc.world_to_file[2].xyz, d));
+}
+
+// Column c (U unwrapped) in [0, w), by a float quotient and a fix-up rather than integer
+// remainders, which llvmpipe takes lane by lane.
+int wrap_column(int c, int w) {
+    c -= w * int(floor(float(c) / float(w)));
+    c += c < 0 ? w : 0;
+    return c >= w ? c - w : c;
+}
+
+bool on_pole(vec3 d) { return d.x == 0.0 && d.z == 0.0; }
+
+bool before(vec2 a, vec2 b) { return a.x < b.x || (a.x == b.x && a.y <= b.y); }
+
+// src clipped to z >= bound (above) or z <= bound, into dst; returns the vertex count. A
+// macro, so that the arrays stay globals instead of copies.
+#define CUT(dst, src, n, bound, above, out) { \
+    uint k_ = 0u; \
+    for (uint i_ = 0u; i_ < (n); i_++) { \
+        vec2 a_ = src[i_], b_ = src[i_ + 1u == (n) ? 0u : i_ + 1u]; \
+        bool ia_ = (above) ? a_.y >= (bound) : a_.y <= (bound); \
+        bool ib_ = (above) ? b_.y >= (bound) : b_.y <= (bound); \
+        if (ia_) dst[k_++] = a_; \
+        if (ia_ != ib_) { \
+            bool f_ = before(a_, b_); \
+            vec2 p_ = f_ ? a_ : b_, q_ = f_ ? b_ : a_; \
+            float t_ = ((bound) - p_.y) / (q_.y - p_.y); \
+            dst[k_++] = vec2(p_.x + (q_.x - p_.x) * t_, (bound)); \
+        } \
+    } \
+    out = k_; \
+}
+
+// The rows a polygon spanning z in [zmin, zmax] meets, by the same band edges as the clip.
+ivec2 rows_met(float zmin, float zmax, int h) {
+    int r0 = clamp(int(floor(acos(clamp(zmax, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
+    int r1 = clamp(int(floor(acos(clamp(zmin, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
+    while (r0 > 0 && latlong_band_edge(r0, h) < zmax) r0--;
+    while (r0 < r1 && latlong_band_edge(r0 + 1, h) >= zmax) r0++;
+    while (r1 < h - 1 && latlong_band_edge(r1 + 1, h) > zmin) r1++;
+    while (r1 > r0 && latlong_band_edge(r1, h) <= zmin) r1--;
+    return ivec2(r0, r1);
+}
+
+// The source texel under point v of the (U, z) plane.
+vec3 texel_under(vec2 v, int w, int h) {
+    int row = clamp(int(floor(acos(clamp(v.y, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
+    return texelFetch(src, ivec3(wrap_column(int(floor(v.x)), w), row, 0), 0).rgb;
+}
+
+// A paraboloid texel outside its disc: the source texel at its own half's rim nearest its
+// centre (as the sampled conversion; twin rim_nearest and sample_nearest).
+void store_rim(uvec3 id) {
+    Coord c;
+    c.layer = id.z;
+    c.uv = 0.5 * (rim_pulled(2.0 * ((vec2(id.xy) + 0.5) / vec2(pc.dst_size)) - 1.0) + 1.0);
+    vec3 d = coord_to_dir(DST_MAPPING, c);
+    d = vec3(dot(pc.world_to_file[0].xyz, d), dot(pc.world_to_file[1].xyz, d),
+             dot(pc.world_to_file[2].xyz, d));
+    Coord s = dir_to_coord(MAPPING_LATLONG, d);
+    ivec2 p = clamp(ivec2(floor(s.uv * vec2(pc.src_size))), ivec2(0), ivec2(pc.src_size) - 1);
+    imageStore(dst, ivec3(id), vec4(texelFetch(src, ivec3(p, 0), 0).rgb, 1.0));
+}
+
+// The texel's footprint walked band by band (any texel: a pole on its boundary or inside it,
+// a paraboloid's rim).
+void general(uvec3 id) {
+    if (DST_MAPPING == MAPPING_DUAL_PARABOLOID && !texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy))) {
+        store_rim(id);
+        return;
+    }
+    uint face = id.z, i = id.x, j = id.y, n = pc.dst_size.x;
+    int w = int(pc.src_size.x), h = int(pc.src_size.y);
+    float wf = float(w), scale = wf / (2.0 * PI);
+
+    // The boundary points and their unwrapped U (as area_polygon in math/convert.rs).
+    const uvec2 steps[4] = uvec2[4](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 1));
+    vec3 ds[4u * AREA_POLE_STEPS];
+    uint count = 0u;
+    for (uint k = 0u; k < 4u; k++) {
+        uvec2 e0 = uvec2(i, j) + steps[k], e1 = uvec2(i, j) + steps[(k + 1u) % 4u];
+        vec3 pa = point(face, e0.x, e0.y, 1u), pb = point(face, e1.x, e1.y, 1u);
+        bool near = min(length(pa.xz), length(pb.xz)) < AREA_POLE_NEAR / float(n);
+        uint m = near ? AREA_POLE_STEPS
+                      : (DST_MAPPING == MAPPING_DUAL_PARABOLOID ? EDGE_POINTS : AREA_EDGE_STEPS);
+        for (uint q = 0u; q < m; q++) {
+            uvec2 ab = e0 * (m - q) + e1 * q;
+            ds[count++] = point(face, ab.x, ab.y, m);
+        }
+    }
+    float us[4u * AREA_POLE_STEPS];
+    bool have_prev = false, pole = false;
+    float prev = 0.0;
+    for (uint k = 0u; k < count; k++) {
+        us[k] = 0.0;
+        if (on_pole(ds[k])) continue;
+        float u = atan(ds[k].x, -ds[k].z) * scale;
+        if (have_prev) {
+            float d = u - prev;
+            u = prev + (d - wf * round(d / wf));
+        }
+        us[k] = u;
+        prev = u;
+        have_prev = true;
+    }
+    npoly = 0u;
+    for (uint k = 0u; k < count; k++) {
+        if (on_pole(ds[k])) {
+            pole = true;
+            float zp = sign(ds[k].y);
+            poly[npoly++] = vec2(us[(k + count - 1u) % count], zp);
+            poly[npoly++] = vec2(us[(k + 1u) % count], zp);
+        } else {
+            poly[npoly++] = vec2(us[k], ds[k].y);
+        }
+    }
+    if (!pole) {
+        float first = us[0], last = us[count - 1u];
+        float d = first - last;
+        float closed = last + (d - wf * round(d / wf));
+        if (abs(closed - first) > 0.5 * wf) {
+            // A paraboloid texel can hold only its own half's pole (the other is at infinity
+            // in (s, t)), and its boundary may lie past the rim, in the other hemisphere.
+            float zp = DST_MAPPING == MAPPING_DUAL_PARABOLOID ? (face == 0u ? 1.0 : -1.0) : sign(ds[0].y);
+            poly[npoly++] = vec2(closed, ds[0].y);
+            poly[npoly++] = vec2(closed, zp);
+            poly[npoly++] = vec2(first, zp);
+        }
+    }
+
+    if (DST_MAPPING == MAPPING_DUAL_PARABOLOID) {
+        // The half's rim is the equator: keep z >= 0 (layer 0) or z <= 0.
+        uint nc;
+        CUT(tmp, poly, npoly, 0.0, face == 0u, nc);
+        for (uint k = 0u; k < nc; k++) poly[k] = tmp[k];
+        npoly = nc;
+        if (npoly < 3u) {
+            // Inside the disc by less than the chords' error.
+            store_rim(id);
+            return;
+        }
+    }
+
+    float zmin = 2.0, zmax = -2.0;
+    for (uint k = 0u; k < npoly; k++) {
+        zmin = min(zmin, poly[k].y);
+        zmax = max(zmax, poly[k].y);
+    }
+    ivec2 rows = rows_met(zmin, zmax, h);
+    int r0 = rows.x, r1 = rows.y;
+
+    // Sums of (L − L0) rather than L: a constant map comes out exact, whatever the pieces'
+    // rounding. L0 is the least, per channel, of the texels under the polygon's points: one
+    // that merely touches the footprint may be a sun 1e5 × the mean, whose cancellation would
+    // cost float32 its digits; the least is at most the mean.
+    vec3 l0 = vec3(3.4e38);
+    for (uint k = 0u; k < npoly; k++) l0 = min(l0, texel_under(poly[k], w, h));
+    vec3 num = vec3(0.0);
+    float den = 0.0;
+    for (int row = r0; row <= r1; row++) {
+        float zhi = latlong_band_edge(row, h), zlo = latlong_band_edge(row + 1, h);
+        float zc = 0.5 * (zhi + zlo), base = (zlo - zc) * (zlo - zc);
+        uint nb;
+        CUT(tmp, poly, npoly, zlo, true, nb);
+        CUT(band, tmp, nb, zhi, false, nb);
+        // The band's pieces, edge by edge and column by column, in one loop: llvmpipe runs a
+        // loop for as long as the SIMD group's longest lane, so a loop per edge would cost the
+        // longest lane's columns at every edge, one loop only the longest lane's total.
+        uint k = 0u;
+        int c = 0;
+        vec2 p = vec2(0.0), q = vec2(0.0);
+        float sgn = 0.0;
+        bool walking = false;
+        for (;;) {
+            if (!walking) {
+                if (k >= nb) break;
+                vec2 a = band[k], b = band[k + 1u == nb ? 0u : k + 1u];
+                k++;
+                bool fwd = before(a, b);
+                p = fwd ? a : b;
+                q = fwd ? b : a;
+                sgn = fwd ? 1.0 : -1.0;
+                // An upright edge bounds no area, and the band's lower edge only zeros.
+                if (p.x == q.x || (p.y == zlo && q.y == zlo)) continue;
+                c = int(floor(p.x));
+                walking = true;
+            }
+            float u0 = max(p.x, float(c)), u1 = min(q.x, float(c + 1));
+            if (u1 > u0) {
+                // ∫∫ 1, ∫∫ (U − Uc) and ∫∫ (z − zc) over this piece (Green's theorem;
+                // Simpson's rule, exact for these quadratics), as area_mean's.
+                float um = 0.5 * (u0 + u1);
+                float z0 = p.y + (q.y - p.y) * ((u0 - p.x) / (q.x - p.x));
+                float zm = p.y + (q.y - p.y) * ((um - p.x) / (q.x - p.x));
+                float z1 = p.y + (q.y - p.y) * ((u1 - p.x) / (q.x - p.x));
+                float d = sgn * (u1 - u0);
+                float uc = float(c) + 0.5;
+                float area = d * (0.5 * (z0 + z1) - zlo);
+                float mu = d / 6.0 * ((u0 - uc) * (z0 - zlo) + 4.0 * (um - uc) * (zm - zlo) +
+                                      (u1 - uc) * (z1 - zlo));
+                float mz = d / 6.0 * 0.5 *
+                           (((z0 - zc) * (z0 - zc) - base) + 4.0 * ((zm - zc) * (zm - zc) - base) +
+                            ((z1 - zc) * (z1 - zc) - base));
+                int col = wrap_column(c, w);
+                uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
+                vec3 gu = texelFetch(slopes, int(o)).xyz, gz = texelFetch(slopes, int(o + 1u)).xyz;
+                num += area * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + mu * gu +
+                       mz * gz;
+                den += area;
+            }
+            c++;
+            if (float(c) >= q.x) walking = false;
+        }
+    }
+    vec3 result = den != 0.0 ? l0 + num / den : l0;
+    imageStore(dst, ivec3(id), vec4(max(result, vec3(0.0)), 1.0));
+}
+
+// Whether texel (i, j) of layer `face` is left to the general walk (general()): every texel of
+// a small output, and on the faces that hold the poles (+Y and −Y: the orientations turn about
+// Y and may flip it) a window of AREA_FAST_WINDOW texels either side of the centre, which holds
+// every texel with a corner near the pole's axis (AREA_POLE_NEAR). Integers, so that
+// the fast and the general dispatch split the texels exactly (twin:
+// math::convert::area_general_texel).
+bool general_texel(uint face, uint i, uint j, uint n) {
+    if (n < AREA_FAST_MIN_SIZE) return true;
+    if (face != AREA_POLE_FACE_0 && face != AREA_POLE_FACE_1) return false;
+    int lim = 2 * int(AREA_FAST_WINDOW);
+    return abs(int(2u * i + 1u) - int(n)) <= lim && abs(int(2u * j + 1u) - int(n)) <= lim;
+}
+#endif
