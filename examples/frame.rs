@@ -72,6 +72,26 @@ pub struct Frame {
     pub timings: Vec<envlight::gpu::Timing>,
 }
 
+/// Ends `cmd`, submits it once and waits on the engine's own fence.
+///
+/// # Safety
+/// `cmd` is recording, on `engine`'s device, for its queue family.
+unsafe fn submit_and_wait(engine: &engine::Engine, cmd: vk::CommandBuffer) -> Result<(), Error> {
+    // SAFETY: as the caller promises; the fence is made and destroyed here.
+    unsafe {
+        engine.device.end_command_buffer(cmd)?;
+        let fence = engine
+            .device
+            .create_fence(&vk::FenceCreateInfo::default(), None)?;
+        let cmds = [cmd];
+        let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+        engine.device.queue_submit(engine.queue, &[submit], fence)?;
+        engine.device.wait_for_fences(&[fence], true, u64::MAX)?;
+        engine.device.destroy_fence(fence, None);
+    }
+    Ok(())
+}
+
 /// Renders `scene` (lookup and FIS materials only) in one command buffer of the engine's.
 pub fn run(scene_path: &Path) -> Result<Frame, Error> {
     let scene = Scene::load(scene_path)?;
@@ -207,18 +227,8 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
         shade.record(&mut rec, &gbuf, &inputs, &target)?;
         let readback = target.record_download(&mut rec, 0)?;
         let recorded = rec.finish();
-        // SAFETY: cmd is recording; the engine submits once and waits on its own fence.
-        unsafe {
-            engine.device.end_command_buffer(cmd)?;
-            let fence = engine
-                .device
-                .create_fence(&vk::FenceCreateInfo::default(), None)?;
-            let cmds = [cmd];
-            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
-            engine.device.queue_submit(engine.queue, &[submit], fence)?;
-            engine.device.wait_for_fences(&[fence], true, u64::MAX)?;
-            engine.device.destroy_fence(fence, None);
-        }
+        // SAFETY: cmd is recording on the engine's device.
+        unsafe { submit_and_wait(&engine, cmd)? };
         let timings = recorded.timings()?;
         let frame = EnvMap::new(
             Mapping::LatLong,

@@ -164,8 +164,22 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
             opts.map.display()
         );
     }
-    let map = opts.map.display().to_string();
     let tmp = tempdir()?;
+    let jobs = peer_jobs(opts, &tmp)?;
+    let measured = measure(&me, opts, &jobs, &tmp)?;
+    let md = peers_markdown(opts, &measured);
+    println!("{md}");
+    if let Some(out) = opts.out {
+        std::fs::write(out, &md).with_context(|| out.display().to_string())?;
+        eprintln!("wrote {}", out.display());
+    }
+    let _ = std::fs::remove_dir_all(&tmp);
+    Ok(())
+}
+
+/// The table's jobs on `opts.map`, their outputs in `tmp` (the FIS job's scene written there).
+fn peer_jobs(opts: &PeersOptions, tmp: &Path) -> Result<Vec<Job>> {
+    let map = opts.map.display().to_string();
     let t = |name: &str| tmp.join(name).display().to_string();
     let cmft_common = |filter: &str, out: &str| {
         let mut v = strings(&["--input", &map, "--filter", filter]);
@@ -316,7 +330,35 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         ),
     )?;
 
-    let (_, devices) = run(&me, &strings(&["devices"]), &[])?;
+    Ok(jobs)
+}
+
+/// One job's medians: (job, envlight s, cmft s, envlight cold s, GPU ms, envlight error,
+/// cmft error).
+type Row<'j> = (&'j Job, f64, f64, f64, f64, String, String);
+/// One job's whole time and its host spans (label, median ms).
+type Spans = (&'static str, f64, Vec<(String, f64)>);
+
+/// What the timed runs measured: the device, the floors of `devices` and `info`, the driver's
+/// start-up medians, the rows and the breakdowns.
+struct Measured<'j> {
+    device: String,
+    floor_devices: f64,
+    floor_info: f64,
+    startup: Option<[f64; 5]>,
+    rows: Vec<Row<'j>>,
+    breakdown: Vec<Spans>,
+}
+
+/// Runs every job in paired alternating runs (envlight, then cmft where it has the job).
+fn measure<'j>(
+    me: &Path,
+    opts: &PeersOptions,
+    jobs: &'j [Job],
+    tmp: &Path,
+) -> Result<Measured<'j>> {
+    let map = opts.map.display().to_string();
+    let (_, devices) = run(me, &strings(&["devices"]), &[])?;
     let device = devices
         .lines()
         .next()
@@ -325,10 +367,10 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         .to_string();
     // Each run's output too: `devices` reports what its start-up and teardown cost.
     let floor = |args: &[String]| -> Result<(f64, Vec<String>)> {
-        run(&me, args, &[])?;
+        run(me, args, &[])?;
         let (mut v, mut outs) = (Vec::new(), Vec::new());
         for _ in 0..opts.reps.max(1) {
-            let (t, out) = run(&me, args, &[])?;
+            let (t, out) = run(me, args, &[])?;
             v.push(t);
             outs.push(out);
         }
@@ -342,10 +384,10 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     let src = load_any(opts.map)?;
     let mut rows = Vec::new();
     let mut breakdown = Vec::new();
-    for job in &jobs {
+    for job in jobs {
         eprintln!("{} …", job.name);
         // One untimed run of each warms the file cache and Mesa's shader cache.
-        run(&me, &job.envlight, &[])?;
+        run(me, &job.envlight, &[])?;
         let cmft = opts.cmft.zip(job.cmft.as_ref());
         if let Some((c, args)) = cmft {
             run(c, args, &[])?;
@@ -354,7 +396,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         let mut gpu = Vec::new();
         let mut spans: Vec<(String, Vec<f64>)> = Vec::new();
         for _ in 0..job.reps.max(1) {
-            let (s, out) = run(&me, &job.envlight, &[])?;
+            let (s, out) = run(me, &job.envlight, &[])?;
             te.push(s);
             gpu.push(gpu_ms(&out));
             for (k, (label, ms)) in host_spans(&out).into_iter().enumerate() {
@@ -368,8 +410,8 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
             }
         }
         // A first run as a new user has it: no shader cache, so llvmpipe compiles every shader.
-        let (cold, _) = run(&me, &job.envlight, &[("MESA_SHADER_CACHE_DISABLE", "true")])?;
-        let (e_err, c_err) = errors(job.name, &src, &tmp, cmft.is_some())?;
+        let (cold, _) = run(me, &job.envlight, &[("MESA_SHADER_CACHE_DISABLE", "true")])?;
+        let (e_err, c_err) = errors(job.name, &src, tmp, cmft.is_some())?;
         let spans: Vec<(String, f64)> = spans
             .into_iter()
             .map(|(label, mut v)| (label, median(&mut v)))
@@ -386,6 +428,27 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         ));
     }
 
+    Ok(Measured {
+        device,
+        floor_devices,
+        floor_info,
+        startup,
+        rows,
+        breakdown,
+    })
+}
+
+/// The report's markdown.
+fn peers_markdown(opts: &PeersOptions, m: &Measured<'_>) -> String {
+    let map = opts.map.display().to_string();
+    let Measured {
+        device,
+        floor_devices,
+        floor_info,
+        startup,
+        rows,
+        breakdown,
+    } = m;
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|s| {
@@ -422,7 +485,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
         )
     ));
     md.push_str("| job | cmft s | envlight s | ratio | envlight cold s | envlight GPU ms | envlight error | cmft error | goal |\n|---|---|---|---|---|---|---|---|---|\n");
-    for (job, te, tc, cold, gpu, ee, ce) in &rows {
+    for (job, te, tc, cold, gpu, ee, ce) in rows.iter() {
         let have_c = opts.cmft.is_some() && job.cmft.is_some();
         md.push_str(&format!(
             "| {} | {} | {te:.3} | {} | {cold:.3} | {gpu:.1} | {ee} | {} | {} |\n",
@@ -510,6 +573,12 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
             )
         });
     }
+    notes_and_breakdown(&mut md, breakdown);
+    md
+}
+
+/// The errors' definitions, and where envlight's whole-process time goes.
+fn notes_and_breakdown(md: &mut String, breakdown: &[Spans]) {
     md.push_str(
         "\nErrors: SH, worst coefficient against the float64 projection (relative to the largest); \
          irradiance, worst texel against float64 SH of the same order (cmft's E/π against order 4); \
@@ -526,7 +595,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
          'rest' is the whole process less their sum (process start, argument parsing, exit and \
          teardown).\n\n| job | whole s | host spans, ms | rest, ms |\n|---|---|---|---|\n",
     );
-    for (name, whole, spans) in &breakdown {
+    for (name, whole, spans) in breakdown.iter() {
         let sum: f64 = spans.iter().map(|(_, ms)| ms).sum();
         let list: Vec<String> = spans
             .iter()
@@ -538,13 +607,6 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
             whole * 1e3 - sum
         ));
     }
-    println!("{md}");
-    if let Some(out) = opts.out {
-        std::fs::write(out, &md).with_context(|| out.display().to_string())?;
-        eprintln!("wrote {}", out.display());
-    }
-    let _ = std::fs::remove_dir_all(&tmp);
-    Ok(())
 }
 
 /// The errors of each program's output for a job (see the report's note).

@@ -430,10 +430,14 @@ fn short(probe: &str) -> &str {
 fn markdown(rows: &[Row], settings: &str) -> String {
     let mut md = String::from("# Accuracy on real probes, with and without light extraction\n\n");
     let _ = writeln!(md, "{settings}\n");
-    let probes: Vec<&str> = PROBES
-        .iter()
-        .map(|p| p.0.trim_end_matches("_1k.hdr"))
-        .collect();
+    goals(&mut md, rows);
+    materials(&mut md, rows);
+    rotation(&mut md, rows);
+    md
+}
+
+/// The goals, each met or not, with its per-probe figures.
+fn goals(md: &mut String, rows: &[Row]) {
     md.push_str("## Goals\n\n");
     let goal =
         |md: &mut String, name: &str, pick: &dyn Fn(&Case) -> bool, max: f64, bias: Option<f64>| {
@@ -460,7 +464,7 @@ fn markdown(rows: &[Row], settings: &str) -> String {
             );
         };
     goal(
-        &mut md,
+        md,
         "Diffuse by SH order 2 plus lights ≤ 1.5%",
         &|c| c.label == "sh 2" && c.lights == LightsMode::Extract,
         0.015,
@@ -469,7 +473,7 @@ fn markdown(rows: &[Row], settings: &str) -> String {
     for alpha in ALPHAS {
         let m = format!("ggx {alpha}");
         goal(
-            &mut md,
+            md,
             &format!("GGX α {alpha} by FIS-64 plus lights ≤ 3%, |bias| ≤ 1%"),
             &|c| {
                 c.material == m
@@ -482,7 +486,7 @@ fn markdown(rows: &[Row], settings: &str) -> String {
         );
     }
     goal(
-        &mut md,
+        md,
         "Mirror, footprint-filtered, ≤ 3% against the pixel-area mean",
         &|c| {
             c.material == "mirror"
@@ -492,6 +496,14 @@ fn markdown(rows: &[Row], settings: &str) -> String {
         0.03,
         None,
     );
+}
+
+/// Per material, each technique's cells per probe and mean GPU time, and the references' noise.
+fn materials(md: &mut String, rows: &[Row]) {
+    let probes: Vec<&str> = PROBES
+        .iter()
+        .map(|p| p.0.trim_end_matches("_1k.hdr"))
+        .collect();
     md.push_str(
         "\nIn parentheses: the mean ratio − 1 (bias). Each cell below: per-pixel relative RMS \
          · mean ratio · worst 8×8 tile.\n\n![error maps](error_maps.png)\n",
@@ -512,7 +524,7 @@ fn markdown(rows: &[Row], settings: &str) -> String {
     }
     for m in materials {
         let _ = writeln!(md, "\n## {m}");
-        header(&mut md, "technique");
+        header(md, "technique");
         let mut keys: Vec<(String, LightsMode, LookupFilter)> = Vec::new();
         for r in rows
             .iter()
@@ -569,6 +581,10 @@ fn markdown(rows: &[Row], settings: &str) -> String {
             let _ = writeln!(md, "\nReference noise (per pixel): {}.", noise.join(", "));
         }
     }
+}
+
+/// FIS with the sequence rotated per pixel against the same set everywhere.
+fn rotation(md: &mut String, rows: &[Row]) {
     md.push_str(
         "\n## Per-pixel sequence rotation (item 5)\n\nFIS with the Hammersley set shifted per \
          pixel (`rotate = true`) against the same set everywhere (`false`): per-pixel relative \
@@ -622,7 +638,6 @@ fn markdown(rows: &[Row], settings: &str) -> String {
         md,
         "\nRotation off is at least as accurate in {off_wins} of these {pairs} rows."
     );
-    md
 }
 
 /// The error maps drawn: (column title, material, label, lights, filter), rotate off.
