@@ -175,10 +175,9 @@ int texel_rule(vec3 axis, float n, vec4 cone, bool regular, out uint cells) {
 // Whether this invocation met a texel whose rule asks for Gauss cells. With CELLS_WALK the sum
 // takes those in a second walk (cells_pass): llvmpipe runs every branch of the texel loop's
 // body at every step, and a nested loop's first iteration even where no lane enters it, so
-// with the cells' nine nodes of trigonometry in the one walk every texel paid for the few
-// that need them (Phong n = 2049 from a 1k lat-long, where only the pole rows take cells:
-// 9.3 -> 3.5 s into a cube 64). BruteFilter::chunk_size counts both walks against llvmpipe's
-// loop limit.
+// with the cells' nine nodes of trigonometry in the one walk every texel would pay for the
+// few that need them (a narrow Phong lobe from a lat-long, where only the pole rows take
+// cells). BruteFilter::chunk_size counts both walks against llvmpipe's loop limit.
 bool cells_wanted = false;
 
 // ∫K over prepared texel t (0 where skipped), whose solid angle is omega. With CELLS_WALK, the

@@ -3,7 +3,7 @@
 // - LOOKUP: the mirror: the mean over the pixel's footprint from the dual-paraboloid chain
 //   (plus the light texels it covers), or one nearest-texel lookup of the reflected direction;
 // - SH: albedo·E(n)/π from SH irradiance coefficients (R&H 2001), clamped at 0;
-// - PREFILTERED: a prefiltered lat-long map (#3), irradiance by n or Phong by r, bilinear
+// - PREFILTERED: a prefiltered lat-long map, irradiance by n or Phong by r, bilinear
 //   (with lights extracted: of the residual, plus the light clusters' irradiance or the light
 //   texels under the Phong BRDF);
 // - FIS: filtered importance sampling (Colbert & Křivánek 2007): N Hammersley samples of the
@@ -29,8 +29,7 @@ layout(constant_id = 0) const uint CODE = 0xffffffffu;
 bool has(uint bit) {
 #ifdef LEAN
     // A variant for draws with neither footprint lookups nor shadow rays: their code is gone
-    // before the driver sees it (the FIS variant's SPIR-V 101 -> 59 KB; the peers' FIS render
-    // ~10 ms faster on llvmpipe).
+    // before the driver sees it (a smaller module, which llvmpipe compiles and runs faster).
     bit &= ~(FOOTPRINT_CODE | SHADOWS_CODE);
 #endif
     return (CODE & bit) != 0u;
@@ -58,8 +57,8 @@ bool has_tech(uint t) {
 
 // Whether every active lane of the subgroup has ended its light tree walk. llvmpipe leaves a
 // loop early only on a subgroup-uniform break: lanes that break alone are masked, and the
-// loop runs on to its bound (the tree's nodes plus texels, 20 000 on studio_small_08: 90 ms a
-// walk per frame at 128², whatever the walk's length). Without vote ops, the lane alone.
+// loop runs on to its bound (the tree's nodes plus texels, tens of thousands on a studio
+// probe), whatever the walk's length. Without vote ops, the lane alone.
 bool walk_done(bool done) {
 #ifdef USE_VOTE
     return subgroupAll(done);

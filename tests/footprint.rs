@@ -1,4 +1,4 @@
-//! Footprint-filtered mirror lookups and background (issue #10, item 3): against their float64
+//! Footprint-filtered mirror lookups and background: against their float64
 //! twin, and against supersampled renders of the mirror itself.
 
 mod common;
@@ -229,7 +229,7 @@ fn mirror_footprint_on_real_probes() {
         let cases = [
             ("spiaggia_di_mondello_1k.hdr", 0.0082, 0.0338),
             ("quarry_01_1k.hdr", 0.0064, 0.0406),
-            // Session 17's deep extraction (2 × the mean) moves its softboxes from the chain
+            // The deep extraction (2 × the mean) moves its softboxes from the chain
             // to the light texels' linearised shares: 1.39% → 2.57% (FIS there: 19% → 5%).
             ("studio_small_08_1k.hdr", 0.0257, 0.0621),
             ("photo_studio_01_1k.hdr", 0.0073, 0.0370),

@@ -15,7 +15,7 @@ layout(constant_id = 3) const uint DST_MAPPING = 0u;
 layout(constant_id = 4) const bool MOMENT_SOURCE = false;
 // Whether texels that take Gauss cells wait for a second walk (CPU devices; see cells_wanted).
 // A GPU takes every rule in one walk: a branch no lane of a warp takes costs it nothing, and
-// the second walk's code cost the H100 registers (Phong n = 2049, cube 64: 41 -> 59 ms).
+// the second walk's code would cost it registers.
 layout(constant_id = 5) const bool CELLS_WALK = false;
 // Invocations per output texel (CPU devices: the SIMD width; 1 elsewhere), each summing every
 // TEXEL_LANES-th slot into its own part: of each tile (walk), or of each row's columns within

@@ -11,7 +11,7 @@ layout(set = 0, binding = BINDING_CONVERT_SRC) uniform sampler2DArray src;
 layout(set = 0, binding = BINDING_CONVERT_DST, rgba32f) uniform writeonly image2DArray dst;
 // Limited slopes of each source texel (convert_slopes.comp): (dL/dU rgb, 0), (dL/dz rgb, 0).
 // Through the buffer's texel view: llvmpipe reads a storage buffer at a per-lane address lane
-// by lane, a texel buffer as one gather (cube 256's areas: 66 -> 49 ms without the reads).
+// by lane, a texel buffer as one gather.
 layout(set = 0, binding = BINDING_CONVERT_SLOPES) uniform samplerBuffer slopes;
 
 // The push block, generated from src/abi.rs.

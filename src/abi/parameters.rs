@@ -60,7 +60,8 @@ pub mod filter_rule {
     pub const CENTRE_LIMIT: f64 = 1e-5;
     /// A regular texel takes the tilted rule (one closed-form term) while n·ρ² is at most
     /// this times x_min², x_min the smallest axis·ω over its cone: the kernel's log-curvature
-    /// across it is then small (measured per-texel error under 1e-3, docs/BENCHMARKS.md).
+    /// across it is then small (per-texel error under 1e-3, the bound math::filter's
+    /// `tilted_rule_matches_gauss_cells_texel_by_texel` holds it to).
     pub const TILT_LIMIT: f64 = 0.1;
     /// Coarsest level of the power-moment pyramid a lobe is filtered from (4096 fine texels
     /// per coarse one, within llvmpipe's loop limit when the sum descends).
@@ -155,8 +156,9 @@ pub mod split_sum {
     /// Roughness levels of the prefiltered chain by default: level k holds GGX
     /// α = (k/(levels − 1))², level 0 the mirror.
     pub const DEFAULT_LEVELS: u32 = 7;
-    /// FIS samples per prefiltered texel by default (measured against MC on spiaggia, GGX
-    /// α 0.16: 64 samples 16.7% relative RMS, 256 8.0%, 1024 5.5%, FIS's own 5.2%).
+    /// FIS samples per prefiltered texel by default: where more samples stop paying (on a
+    /// sun probe at GGX α 0.16, 256 samples' chain errs 8% against converged MC, FIS's own
+    /// render 5%; `envlight report --split-sum-every-probe` scores the chain).
     pub const DEFAULT_SAMPLES: u32 = 256;
     /// Side of the prefiltered chain's level 0 by default (capped by the FIS paraboloid's).
     pub const DEFAULT_SIZE: u32 = 512;
@@ -189,9 +191,10 @@ pub mod lights {
     /// sums of the bake cost.
     pub const MAX_TEXELS: u32 = 256;
     /// Diffuse techniques (SH irradiance, prefiltered irradiance) extract above this many
-    /// times the mean luminance, uncapped, and sum the light texels by clusters: on five real
-    /// probes it took SH 2's error (float64, 600 normals) on studio_small_08 from 3.8% at
-    /// the default extraction to 0.55% (4: 0.84%, 8: 1.4%), on the others to 0.3–0.45%.
+    /// times the mean luminance, uncapped, and sum the light texels by clusters: a deep
+    /// extraction leaves SH 2 only the smooth residual, so the sharp softboxes of a studio
+    /// probe stop ringing into it (`envlight report --table` scores SH 2 with lights on the
+    /// five table probes).
     pub const DIFFUSE_RATIO: f64 = 2.0;
     /// Columns of the lat-long grid whose cells gather light texels into clusters for the
     /// cosine (rows: half as many): 5.6° cells changed no probe's SH 2 error by more than 2%
@@ -206,9 +209,9 @@ pub mod lights {
     /// `LightsPush::kernel`: the light clusters' irradiance.
     pub const KERNEL_CLUSTERS: u32 = 2;
     /// FIS, split-sum and footprint lookups extract above this many times the mean
-    /// luminance by default (the renderer's chain, summed through the light tree): at 32 ×
-    /// the mean with 256 texels FIS-64 erred by 19.8% (α 0.05) to 7.3% on studio_small_08
-    /// (float64 study, 150 normals, against every texel), at 2 uncapped by 5.2% to 0.9%.
+    /// luminance by default (the renderer's chain, summed through the light tree): a shallow
+    /// extraction leaves a studio's softboxes in the chain, whose few filtered samples alias
+    /// them (`envlight report --table` scores FIS with lights).
     pub const CHAIN_RATIO: f64 = 2.0;
     /// Most light texels of the chain's extraction by default, and the most a scene may ask
     /// for: llvmpipe ends a loop after 65 535 iterations, and a pixel's walk may visit every
@@ -217,12 +220,10 @@ pub mod lights {
     /// The chain's lights grow by this many rings of texels around them (where
     /// [`CHAIN_MAX_TEXELS`] leaves room) and the residual under them is filled from around
     /// them ([`crate::math::lights::ExtractOptions::fill`]): a residual clamped at the
-    /// threshold keeps each softbox as a plateau whose edge FIS's few filtered samples alias.
-    /// FIS-64 on studio_small_08 at α 0.05 (128², 4096-spp reference): clamped 5.13%, filled
-    /// without growing 4.33%, one ring 3.28%, two 3.22% (a third did not fit the cap). A
-    /// scene whose chain serves footprint lookups alone keeps the clamp: they take light
-    /// texels by shares linearised over the pixel, and a mirror on studio_small_08 erred by
-    /// 3.52% filled against 2.57% clamped.
+    /// threshold keeps each softbox as a plateau whose edge FIS's few filtered samples alias;
+    /// two rings take the plateau's edge into the lights, and a third rarely fits the cap.
+    /// A scene whose chain serves footprint lookups alone keeps the clamp: they take light
+    /// texels by shares linearised over the pixel, which a fill would count twice.
     pub const CHAIN_FILL: u32 = 2;
     /// vec4s per light texel in the GPU's list: (world centre, Ω), (excess rgb, ρ = √Ω),
     /// then its quadrature nodes' (world direction, weight).
@@ -252,9 +253,9 @@ pub mod lights {
     /// where its power times a bound on the kernel there (times (reach/scale)⁴ where no cut
     /// crosses it, the sigma points' order) is below this fraction of the pixel's estimate
     /// without the lights (FIS's, or the chain's): most nodes far out in the tail or across
-    /// the horizon of a dim lobe. On five 1k probes under GGX α 0.05–0.6 it cut the walk's
-    /// steps 2–25× (studio_small_08: 582 → 204 at α 0.05) and moved the worst light-sum
-    /// error, relative to the pixel, from 2.65e-3 to 2.69e-3 (3e-2: 3.2e-3).
+    /// the horizon of a dim lobe. On five 1k probes under GGX α 0.05–0.6 it takes 2–25× fewer
+    /// steps than no budget for a worst light-sum error, relative to the pixel, of 2.7e-3
+    /// (2.65e-3 without; 3.2e-3 at 3e-2).
     pub const TREE_BUDGET: f64 = 1e-2;
     /// See [`TREE_BUDGET`]: beyond the kernel's scale the sigma points stop being a rule.
     pub const TREE_BUDGET_REACH: f64 = 1.0;
@@ -278,7 +279,7 @@ pub mod shade_code {
     pub const BRDF_SHIFT: u32 = 20;
 }
 
-/// Footprint-filtered lookups (mirrors and the background, issue #10): the pixel's footprint
+/// Footprint-filtered lookups (mirrors and the background): the pixel's footprint
 /// in direction space, from G-buffer differences, read from the dual-paraboloid chain by a
 /// row of taps along its major axis ([`crate::math::footprint`]).
 pub mod footprint {
@@ -288,8 +289,8 @@ pub mod footprint {
     /// Most taps along a footprint's major axis; beyond that ratio the taps blur more.
     pub const MAX_TAPS: u32 = 16;
     /// Lod bias of each tap (log2 of the texel side over the tap's spacing): half a level
-    /// finer offsets the tent a trilinear read adds to the box (measured in
-    /// docs/BENCHMARKS.md: studio_small 4.7% -> 3.9% before the other refinements).
+    /// finer offsets the tent a trilinear read adds to the box (`envlight report --table`
+    /// scores the mirror against the pixel-area mean).
     pub const LOD_BIAS: f64 = -0.5;
     /// Taken off a footprint's length over the tap spacing before rounding up, so that a
     /// ratio of exactly k gives k taps in float32 as in float64, not k + 1.
@@ -338,7 +339,7 @@ pub mod area {
     /// its lights taken out (FIS's chain), from [`RESIDUAL_EDGE_MIN_SIZE`] up: no sun lands
     /// in a rim texel, and the chords keep power as 8 points do with suns (1024 × 512 with
     /// suns at the poles and seam, to paraboloid 128: the residual 1.1e-5, the suns 1.2e-5 at
-    /// 8 points, 1.3e-4 at 2). The FIS paraboloid of spiaggia 1k: 38 → 24 ms on llvmpipe.
+    /// 8 points, 1.3e-4 at 2); fewer points, a faster conversion.
     pub const RESIDUAL_EDGE_STEPS: u32 = 2;
     /// See [`RESIDUAL_EDGE_STEPS`]: the chords' error grows about as 1/size² (the residual
     /// above: 2.7e-6 at 256, 1.2e-4 at 32), and smaller paraboloids cost little anyway.

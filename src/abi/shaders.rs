@@ -129,7 +129,7 @@ macro_rules! shader_table {
             ShProjectShared = "sh_project_shared", "sh_project.comp", Compute, [], ShProjectPush,
                 [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
             /// SH projection of lat-long and cube maps (no disc rim rule in the module, which
-            /// lavapipe compiles at every run: 38 → 24 ms), with subgroup arithmetic.
+            /// lavapipe compiles at every run, so it builds faster), with subgroup arithmetic.
             ShProjectGridSubgroup = "sh_project_grid_subgroup", "sh_project.comp", Compute,
                 [("USE_SUBGROUPS", "1"), ("GRID_ONLY", "1")], ShProjectPush,
                 [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
@@ -138,7 +138,7 @@ macro_rules! shader_table {
                 [("GRID_ONLY", "1")], ShProjectPush,
                 [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
             /// SH projection of lat-long maps to l = 2, band and mapping compile-time
-            /// constants (a third of the module: 24 → 15 ms to build on lavapipe), subgroups.
+            /// constants (a smaller module, faster to build on lavapipe), subgroups.
             ShProjectLatLong2Subgroup = "sh_project_latlong2_subgroup", "sh_project.comp", Compute,
                 [("USE_SUBGROUPS", "1"), ("GRID_ONLY", "1"), ("FIXED_LMAX", "2u"),
                  ("FIXED_MAPPING", "MAPPING_LATLONG")], ShProjectPush,
@@ -176,7 +176,7 @@ macro_rules! shader_table {
                  (BRUTE_COARSE_CONES, StorageImage, Read), (BRUTE_LIGHT, StorageImage, Read)];
             /// Brute, from an angular or dual-paraboloid source: with the clipped rule for the
             /// texels the disc's rim cuts, whose unrolled nodes more than double the module
-            /// (lavapipe built Brute in 123 ms with them, 52 without, every run).
+            /// and the time lavapipe takes to build it at every run.
             BruteDisc = "brute_disc", "brute.comp", Compute, [("DISC_SOURCE", "1")], BrutePush,
                 [(BRUTE_CONES, StorageImage, Read), (BRUTE_RADIANCE, StorageImage, Read),
                  (BRUTE_PARTIALS, StorageBuffer, ReadWrite),

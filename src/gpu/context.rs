@@ -495,9 +495,9 @@ impl Context {
             physical_device: physical,
             debug_settings: Default::default(),
             buffer_device_address: false,
-            // Host-visible blocks start small and grow to the default 64 MB: NVIDIA's driver
-            // takes ~13 ms to allocate and map a 64 MB block of host memory, which a job
-            // reading back a few hundred bytes paid whole (H100, session 25).
+            // Host-visible blocks start small and grow to the default 64 MB: allocating and
+            // mapping a 64 MB block of host memory takes NVIDIA's driver milliseconds, which a
+            // job reading back a few hundred bytes would pay whole.
             allocation_sizes: AllocationSizes::new(DEVICE_BLOCK, HOST_BLOCK_MIN)
                 .with_max_host_memblock_size(HOST_BLOCK_MAX),
         })

@@ -210,8 +210,8 @@ mod tests {
     /// FIS's mean over a sphere of normals (seen along +z) against the exact integral (a
     /// 1024 × 512 lat-long's texels, 0.35°, far below the band's 11°), at α 0.3 and 0.6,
     /// N = 64, where wide lobes read coarse levels across the rim. Measured +0.12% and
-    /// −0.69%; a chain averaged by solid angle and read one half at a time (the design before
-    /// this test) erred by −12.6% and −18.9%. Bound 1%.
+    /// −0.69%; a chain averaged by solid angle and read one half at a time errs by −12.6% and
+    /// −18.9%. Bound 1%.
     #[test]
     fn wide_lobes_read_the_rim_without_bias() {
         let dp = EnvMap::from_fn(Mapping::DualParaboloid, 128, 128, 2, horizon_band);

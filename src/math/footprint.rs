@@ -1,4 +1,4 @@
-//! Footprint-filtered lookups (issue #10, item 3), the float64 twin of `glsl/shade.frag`'s
+//! Footprint-filtered lookups, the float64 twin of `glsl/shade.frag`'s
 //! `footprint_lookup` and `footprint_lights`.
 //!
 //! A pixel of a mirror (or of the background) sees not one direction but the set its area

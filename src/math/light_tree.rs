@@ -1,4 +1,4 @@
-//! A binary tree over the light texels (issue #10): what lets FIS, split-sum and footprint
+//! A binary tree over the light texels: what lets FIS, split-sum and footprint
 //! lookups extract deeply (thousands of texels: a studio's softboxes) at a per-pixel cost
 //! that grows with the lobe's reach, not with the texel count.
 //!
@@ -235,8 +235,8 @@ pub fn takes_whole(
 /// node the cut crosses, whose points lie at most `height` (a cosine) above the cut:
 /// min(1, 2·height/s)^fade. GGX's masking is at most 2 cos θ/α there and the other fading
 /// kernels' factors (the cosine, √cos for Ward) lie below it for their scales (at most 2);
-/// a kernel that does not fade (`fade` 0) keeps its whole size. The straddling nodes were 80
-/// of the 180 nodes a pixel visited at GGX α 0.3 on studio_small_08.
+/// a kernel that does not fade (`fade` 0) keeps its whole size. Nodes the horizon crosses are
+/// a large share of a walk's visits, so they are not all descended.
 pub fn horizon_share(height: f64, s: f64, fade: f64) -> f64 {
     (2.0 * height / s).min(1.0).powf(fade)
 }
@@ -328,9 +328,9 @@ fn build(lights: &[PreparedLight], order: &mut [usize], first: u32, nodes: &mut 
         } else {
             2
         };
-        // A median split needs the halves, not their order: selection is O(n) where a sort
-        // made the build O(n log² n) (studio_small_08's 15 158 texels: 7.5 ms). The order is
-        // total, so the halves are those a sort gives.
+        // A median split needs the halves, not their order: selection keeps the build at
+        // O(n log n) where a sort would make it O(n log² n). The order is total, so the halves
+        // are those a sort gives.
         let m = order.len() / 2;
         order.select_nth_unstable_by(m, |&a, &b| {
             lights[a].dir[axis]

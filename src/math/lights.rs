@@ -1,4 +1,4 @@
-//! Light extraction (issue #10): the compact bright sources of a map (a sun, lamps, the
+//! Light extraction: the compact bright sources of a map (a sun, lamps, the
 //! hot cores of softboxes) taken out as a list of texels, each evaluated exactly where a
 //! technique integrates them, leaving a residual map whose dynamic range band-limited and
 //! filtered techniques handle well.

@@ -10,9 +10,9 @@
 //! paraboloid is conformal, but its solid angle per unit area grows fourfold from the rim to
 //! the pole, so a solid-angle-weighted box leans towards the pole: a footprint of angular
 //! radius σ has its mean displaced by about 2.5·g'·σ² (g the angle per unit of s), against
-//! 0.5·g'·σ² for the even average. FIS reads coarse levels for wide lobes, and on
-//! venice_sunset, whose bright horizon is the rim, the leaning cost GGX α 0.6 a mean bias of
-//! −2.7% at N = 64 (float64, docs/BENCHMARKS.md "Centred MIP chain"); the even average, −0.8%.
+//! 0.5·g'·σ² for the even average. FIS reads coarse levels for wide lobes, so the leaning
+//! biases a map whose bright horizon lies on the rim (venice_sunset, GGX α 0.6, N = 64: −2.7%
+//! leaning against −0.8% even, in float64; `fis::tests` bounds the bias on a synthetic band).
 //!
 //! The solid angle of a level-0 texel at direction d is Ωp = 4/(1+s²+t²)²·(2/W)², and
 //! 1+s²+t² = 2/(1+|d.y|) on either half, so Ωp = (1+|d.y|)²·(2/W)²: 16/W² at the poles,

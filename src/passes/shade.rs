@@ -70,10 +70,10 @@ impl Footprint {
 /// Which of shade.frag's code a draw of `gbuf` with `inputs` runs (its specialisation
 /// constant 0): a bit per technique whose inputs are bound (`dp` stands for FIS), mirrors'
 /// lookups always, the footprint lookups and shadow rays where asked, and the BRDFs of
-/// `gbuf`'s objects. The rest folds away, so that llvmpipe builds, say, a FIS shade in
-/// 85–90 ms rather than the whole one's 260–280 ms (an object whose technique's inputs are
-/// missing would draw black), and runs a light tree walk's steps without the code of BRDFs
-/// and shadows the scene lacks (llvmpipe runs a loop's whole body at every step).
+/// `gbuf`'s objects. The rest folds away, so that llvmpipe builds a one-technique shade in
+/// about a third of the whole one's time (an object whose technique's inputs are missing
+/// would draw black), and runs a light tree walk's steps without the code of BRDFs and
+/// shadows the scene lacks (llvmpipe runs a loop's whole body at every step).
 pub fn code_mask(inputs: &ShadeInputs<'_>, gbuf: &GBuffer) -> u32 {
     code_bits(&ShadeCode {
         fis: inputs.dp.is_some(),
@@ -223,9 +223,9 @@ pub const MODULES: [ShaderId; 2 + 4 * VARIANTS.len()] = {
 
 /// The fragment module a draw with code `mask` takes: where the mask keeps the techniques of
 /// a variant (besides the lookup, the background's), that variant, whose other techniques'
-/// code is gone before the driver compiles it (llvmpipe: 32 ms against the whole shader's
-/// 100 ms for FIS), and its LEAN module where the mask has no footprint or shadow bits (the
-/// FIS render ~10 ms faster); else the whole shader, which folds them by the constant.
+/// code is gone before the driver compiles it (so it compiles faster), and its LEAN module
+/// where the mask has no footprint or shadow bits; else the whole shader, which folds them
+/// by the constant (`envlight render` prints each pipeline's build time).
 /// `vote`: walks end on a subgroup vote.
 pub fn module(vote: bool, mask: u32) -> ShaderId {
     use crate::abi::brdf::technique as t;

@@ -658,8 +658,8 @@ fn errors(job: &str, src: &EnvMap, tmp: &Path, cmft: bool) -> Result<(String, St
     // float64 brute force over every source texel with Gauss cells everywhere (not the tilted
     // rule nor the moment pyramid the GPU takes), so the error includes both. And the 4
     // texels nearest each of the lat-long's poles, whose lobes reach the rows there that take
-    // Gauss cells (on CPU devices in a second walk): the stride samples none of them, and
-    // missed a 4% loss there (docs/BENCHMARKS.md, session 26).
+    // Gauss cells (on CPU devices in a second walk): the stride samples none of them, so a
+    // loss there would go unseen.
     let prep = Prepared::new(src, DMat3::IDENTITY).without_tilt();
     let worst = |ours: &EnvMap, n: f64, count: usize| {
         let kernel = Kernel::Phong { n };

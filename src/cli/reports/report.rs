@@ -38,7 +38,7 @@ pub struct ReportArgs {
     /// quick 1024, table 4096)
     #[arg(long)]
     reference: Option<u32>,
-    /// Instead: issue #10's accuracy table (table.md, table.csv, error_maps.png): five
+    /// Instead: the accuracy table (table.md, table.csv, error_maps.png): five
     /// probes, diffuse by SH 2 and 8 and prefiltered, GGX α 0.05 to 0.6 by FIS 16/64/256
     /// (sequence rotation off and on), Phong 64 prefiltered and the mirror, with light
     /// extraction and without, per-pixel errors against the reference (default size 128,
