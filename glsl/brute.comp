@@ -26,7 +26,7 @@ layout(set = 0, binding = BINDING_BRUTE_SHAPES, rgba32f) uniform readonly image2
 layout(set = 0, binding = BINDING_BRUTE_COARSE_CONES, rgba32f) uniform readonly image2DArray coarse_cones;
 layout(set = 0, binding = BINDING_BRUTE_LIGHT, rgba32f) uniform readonly image2DArray light;
 
-// The push block, generated from src/abi.
+// The push block, generated from src/abi/push.rs.
 PUSH_BrutePush
 
 #include "brute_shape.glsl"

@@ -14,7 +14,7 @@ layout(set = 0, binding = BINDING_BRUTE_MOM_SHAPES, rgba32f) uniform readonly im
 layout(set = 0, binding = BINDING_BRUTE_MOM_CONES, rgba32f) uniform writeonly image2DArray cones;
 layout(set = 0, binding = BINDING_BRUTE_MOM_LIGHT, rgba32f) uniform writeonly image2DArray light;
 
-// The push block, generated from src/abi.
+// The push block, generated from src/abi/push.rs.
 PUSH_BrutePush
 
 #include "brute_shape.glsl"

@@ -16,7 +16,7 @@ layout(set = 0, binding = BINDING_BRUTE_PREP_CONES, rgba32f) uniform writeonly i
 layout(set = 0, binding = BINDING_BRUTE_PREP_RADIANCE, rgba32f) uniform writeonly image2DArray rad;
 layout(set = 0, binding = BINDING_BRUTE_PREP_SHAPES, rgba32f) uniform writeonly image2DArray shapes;
 
-// The push block, generated from src/abi.
+// The push block, generated from src/abi/push.rs.
 PUSH_BrutePush
 
 #include "brute.glsl"

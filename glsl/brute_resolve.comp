@@ -10,7 +10,7 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_BRUTE_RESOLVE_PARTIALS) readonly buffer Partials { vec4 partials[]; };
 layout(set = 0, binding = BINDING_BRUTE_RESOLVE_DST, rgba32f) uniform writeonly image2DArray dst;
 
-// The push block, generated from src/abi.
+// The push block, generated from src/abi/push.rs.
 PUSH_BrutePush
 
 #include "brute.glsl"

@@ -12,7 +12,7 @@ layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(set = 0, binding = BINDING_BRUTE_TILE_CONES, rgba32f) uniform readonly image2DArray cones;
 layout(std430, set = 0, binding = BINDING_BRUTE_TILE_OUT) writeonly buffer Tiles { vec4 tiles[]; };
 
-// The push block, generated from src/abi.
+// The push block, generated from src/abi/push.rs.
 PUSH_BrutePush
 
 #include "brute.glsl"

@@ -5,7 +5,7 @@
 
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_BUSY_OUT) writeonly buffer Out { float values[]; };
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_BusyPush
 
 void main() {

@@ -21,7 +21,7 @@ layout(set = 0, binding = BINDING_CONVERT_SRC) uniform sampler2DArray src;
 #endif
 layout(set = 0, binding = BINDING_CONVERT_DST, rgba32f) uniform writeonly image2DArray dst;
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_ConvertPush
 
 // Polar angle of the solid-angle centroid of lat-long row j (rows of height h; rows -1 and H

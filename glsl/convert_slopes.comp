@@ -15,7 +15,7 @@ layout(set = 0, binding = BINDING_CONVERT_SLOPES, std430) writeonly buffer Slope
     vec4 slopes[];  // per texel: (dL/dU rgb, 0), (dL/dz rgb, 0)
 };
 
-// The push block, generated from src/abi.rs (src_size only).
+// The push block, generated from src/abi/push.rs (src_size only).
 PUSH_ConvertPush
 
 float zc(int r, int h) { return 0.5 * (latlong_band_edge(r, h) + latlong_band_edge(r + 1, h)); }

@@ -6,7 +6,7 @@
 layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 layout(set = 0, binding = BINDING_COPY_SRC) uniform sampler2DArray src;
 layout(set = 0, binding = BINDING_COPY_DST, rgba32f) uniform writeonly image2DArray dst;
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_CopyPush
 
 void main() {

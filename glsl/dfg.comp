@@ -16,7 +16,7 @@ layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 
 layout(std430, set = 0, binding = BINDING_DFG_TABLE) buffer Table { vec2 table[]; };
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_DfgPush
 
 void main() {

@@ -8,7 +8,7 @@
 
 layout(std430, set = 0, binding = BINDING_GBUF_OBJECTS) readonly buffer Objects { Object objects[]; };
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_GBufferPush
 
 layout(location = 0) out vec4 out_normal;    // normal, object index (-1: miss)

@@ -14,7 +14,7 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_LIGHTS_TEXELS) readonly buffer Texels { vec4 lt[]; };
 layout(set = 0, binding = BINDING_LIGHTS_DST, rgba32f) uniform image2DArray dst;
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_LightsPush
 
 float kern(float a2, vec3 r, vec3 w) {

@@ -9,7 +9,7 @@ layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_PROBE_IN) readonly buffer In { vec4 dirs[]; };
 layout(std430, set = 0, binding = BINDING_PROBE_OUT) writeonly buffer Out { vec4 results[]; };
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_ProbePush
 
 void main() {

@@ -21,7 +21,7 @@ layout(set = 0, binding = BINDING_MC_ENV) uniform sampler2DArray env;
 layout(std430, set = 0, binding = BINDING_MC_TABLES) readonly buffer Tables { float tables[]; };
 layout(set = 0, binding = BINDING_MC_ACCUM, rgba32f) uniform image2DArray accum;
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_McPush
 
 vec3 to_file(vec3 d) {

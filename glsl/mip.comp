@@ -14,7 +14,7 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 layout(set = 0, binding = BINDING_MIP_SRC, rgba32f) uniform readonly image2DArray src;
 layout(set = 0, binding = BINDING_MIP_DST, rgba32f) uniform writeonly image2DArray dst;
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_MipPush
 
 void main() {

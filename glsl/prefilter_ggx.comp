@@ -16,7 +16,7 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 layout(set = 0, binding = BINDING_PREFILTER_GGX_SRC) uniform sampler2DArray src;
 layout(rgba32f, set = 0, binding = BINDING_PREFILTER_GGX_DST) uniform writeonly image2DArray dst;
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_PrefilterGgxPush
 
 vec3 src_lookup(vec3 d, float lod) {

@@ -23,7 +23,7 @@ layout(constant_id = 2) const uint BRDF = 0u;
 
 layout(std430, set = 0, binding = BINDING_SH_BRDF_TABLE) buffer Table { float table[]; };
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_ShBrdfPush
 
 // The view at grid texel (i, j): upper paraboloid (s, t) = (x, y)/(1 + z), centres outside the

@@ -41,7 +41,7 @@ layout(constant_id = 3) const uint RUN = 1u;
 layout(set = 0, binding = BINDING_SH_SRC) uniform sampler2DArray src;
 layout(std430, set = 0, binding = BINDING_SH_PARTIALS) writeonly buffer Partials { float partials[]; };
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_ShProjectPush
 
 vec3 to_world(vec3 f) {

@@ -14,7 +14,7 @@ layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_SH_REDUCE_IN) readonly buffer In { float rows_in[]; };
 layout(std430, set = 0, binding = BINDING_SH_REDUCE_OUT) writeonly buffer Out { float rows_out[]; };
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_ShReducePush
 
 #ifdef USE_SUBGROUPS

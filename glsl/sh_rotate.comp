@@ -12,7 +12,7 @@ layout(std430, set = 0, binding = BINDING_SH_ROT_X90) readonly buffer X90 { floa
 #define SH_X90(i) x90[i]
 #include "sh_rotate.glsl"
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_ShRotatePush
 
 void main() {

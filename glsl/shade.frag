@@ -85,7 +85,7 @@ layout(std430, set = 0, binding = BINDING_SHADE_CAMERA) readonly buffer Cam { ve
 #define SH_X90(i) x90[i]
 #include "sh_rotate.glsl"
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_ShadePush
 
 layout(location = 0) out vec4 out_color;

@@ -1,10 +1,12 @@
 //! envlight: environment-map lighting on explicit Vulkan passes.
 //!
 //! # Layers
-//! Imports go one way: [`abi`] ← [`math`] ← [`gpu`] ← [`passes`] ← [`scene`]/[`render`] ← the
-//! `envlight` binary (feature `cli`, the only user of clap, indicatif and anyhow).
+//! Imports go one way: [`abi`]/[`error`] ← [`math`] ← [`io`] ← [`gpu`] ← [`passes`] ←
+//! [`scene`] ← [`render`]/[`bake`] ← the `envlight` binary (feature `cli`, the only user of
+//! clap, indicatif and anyhow), with no cycle among modules (`tests/layering.rs` derives the
+//! graph from the paths the sources name).
 //! - [`abi`] (std only) holds everything GLSL and Rust share: binding numbers and access,
-//!   workgroup sizes, ids, constants, defaults, push blocks, and the shader table. The GLSL
+//!   workgroup sizes, ids, tuning parameters, push blocks, and the shader table. The GLSL
 //!   header `glsl/include/generated.glsl` is written from it.
 //! - [`math`] is pure float64 (mappings, solid angles, SH, BRDFs, sequences, the twins of every
 //!   pass) and knows nothing of Vulkan.
@@ -13,6 +15,8 @@
 //! - [`passes`] holds one file per GPU pass. A pass is built once and *records* into a command
 //!   buffer its caller owns; it never submits. [`gpu::Context::run`] is the one place that
 //!   submits and waits, for the CLI, tests and one-off jobs.
+//! - [`scene`] is the scene file's model and its validation; [`render`] resolves a scene into
+//!   a [`render::Plan`] once and runs it stage by stage.
 //!
 //! # Embedding
 //! An engine adopts its device ([`gpu::Context::adopt`]), builds the passes it needs once, and

@@ -374,7 +374,7 @@ fn only_the_runner_submits() {
 
 #[test]
 fn shared_numbers_are_not_literal_in_glsl() {
-    // Each of these lives in src/abi.rs and reaches GLSL through the generated header.
+    // Each of these lives in src/abi/ and reaches GLSL through the generated header.
     let literals = ["0.2126", "0.7152", "1.25", "0.999", "1e-4", "0.2886"];
     for (path, text) in sources("glsl", "glsl")
         .into_iter()

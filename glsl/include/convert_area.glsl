@@ -14,7 +14,7 @@ layout(set = 0, binding = BINDING_CONVERT_DST, rgba32f) uniform writeonly image2
 // by lane, a texel buffer as one gather.
 layout(set = 0, binding = BINDING_CONVERT_SLOPES) uniform samplerBuffer slopes;
 
-// The push block, generated from src/abi.rs.
+// The push block, generated from src/abi/push.rs.
 PUSH_ConvertPush
 
 // The destination mapping, cube or dual paraboloid: a module each (ShaderId::ConvertArea and

@@ -1,5 +1,5 @@
 // Scene objects, their materials, and ray casting (twin of src/math/camera.rs and
-// src/scene.rs's GPU records).
+// src/render/records.rs's GPU records).
 #ifndef ENVLIGHT_SCENE_GLSL
 #define ENVLIGHT_SCENE_GLSL
 

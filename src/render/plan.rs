@@ -110,7 +110,8 @@ pub struct LightsPlan {
     /// The diffuse extraction: deeper, its texels summed by clusters for SH and irradiance
     /// maps.
     pub diffuse: Option<ExtractOptions>,
-    /// The paraboloid may hold the residual ([`chain_takes_lights`]).
+    /// The paraboloid may hold the residual: lights are extracted, the chain is read (FIS,
+    /// split-sum, footprint lookups) and every lobe on it has a known scale.
     pub dp: bool,
     /// SH irradiance objects add the clusters' irradiance.
     pub sh: bool,
