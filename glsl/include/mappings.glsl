@@ -1,5 +1,5 @@
 // Direction <-> texture coordinate for the four mappings, texel solid angles and solid-angle
-// densities. The float64 twins are in src/math/mapping.rs; DESIGN.md §1 states the conventions.
+// densities. The float64 twins are in src/math/mapping.rs; docs/design.md §1 states the conventions.
 #ifndef ENVLIGHT_MAPPINGS_GLSL
 #define ENVLIGHT_MAPPINGS_GLSL
 #include "generated.glsl"
@@ -162,7 +162,7 @@ vec2 rim_pulled(vec2 st) {
     return st * ((1.0 - RIM_PULL_IN) / max(length(st), 1.0 - RIM_PULL_IN));
 }
 
-// Whether texel (i, j) of a w x h layer is ever read (DESIGN.md: angular texels whose centre is
+// Whether texel (i, j) of a w x h layer is ever read (docs/design.md §1: angular texels whose centre is
 // outside the disc hold captions; paraboloid texels that overlap the disc hold its mean).
 bool texel_in_domain(uint m, uvec2 size, ivec2 p) {
     if (m == MAPPING_ANGULAR) {

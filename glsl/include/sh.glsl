@@ -1,4 +1,4 @@
-// Real SH basis up to SH_MAX_LMAX in the convention of DESIGN.md (twin of src/math/sh.rs):
+// Real SH basis up to SH_MAX_LMAX in the convention of docs/design.md §2 (twin of src/math/sh.rs):
 // associated Legendre functions divided by sin^m (polynomials in z) times Re/Im((x+iy)^m).
 #ifndef ENVLIGHT_SH_GLSL
 #define ENVLIGHT_SH_GLSL

@@ -1,6 +1,6 @@
 //! The four parameterisations of the sphere of directions, in float64.
 //!
-//! Conventions are those of `DESIGN.md` §1: right-handed world, +Y up, a direction points from
+//! Conventions are those of docs/design.md §1: right-handed world, +Y up, a direction points from
 //! the scene to the environment. Texture coordinates `(u, v)` are in [0, 1] with v growing
 //! downwards in the image (row 0 is the top row); texel (i, j) has its centre at
 //! `((i + ½)/W, (j + ½)/H)`.

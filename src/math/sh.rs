@@ -1,4 +1,4 @@
-//! Real spherical harmonics in the convention of `DESIGN.md` §1, and what Ramamoorthi &
+//! Real spherical harmonics in the convention of docs/design.md §2, and what Ramamoorthi &
 //! Hanrahan (2001) build on them: projection, the clamped-cosine convolution, and the 4×4
 //! irradiance matrix.
 //!

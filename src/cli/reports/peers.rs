@@ -586,7 +586,7 @@ fn notes_and_breakdown(md: &mut String, breakdown: &[Spans]) {
          the cube and the 8 nearest the map's poles (levels: 32 and 8 per level) against the \
          float64 brute force over every source texel with Gauss cells everywhere. cmft's \
          irradiance and Phong cubes are not compared texel by texel: \
-         their face frame is not yet matched to DESIGN.md's, so a difference would measure the \
+         their face frame is not yet matched to docs/design.md's, so a difference would measure the \
          frames; ../shared/peers/README.md measured 1–16% lobe-tail error for its Phong.\n",
     );
     md.push_str(
@@ -631,7 +631,7 @@ fn errors(job: &str, src: &EnvMap, tmp: &Path, cmft: bool) -> Result<(String, St
         let ours = load_any(&tmp.join("irr.exr"))?;
         let want = sh_irradiance_at(&sh::project(src, 2), &ours, 1.0);
         let e = f(worst_relative(&texels_f64(&ours), &want));
-        // cmft's output cube has not been matched to DESIGN.md's frame (a texel-by-texel
+        // cmft's output cube has not been matched to docs/design.md's frame (a texel-by-texel
         // comparison gave relative errors of 5 to 11, far beyond any filter's error), so it
         // would measure the frames, not the filter: its error column stays empty here.
         let c = if cmft { NOT_COMPARED.into() } else { dash() };
