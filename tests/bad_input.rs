@@ -197,7 +197,7 @@ fn truncated_and_absurd_dds() {
     expect_error(&q, &LoadOptions::default(), &["zero size"]);
     // Half-float overflow: a sun of 1e5 stored as RGBA16F becomes infinite; it is refused
     // (or zeroed on request), never passed on.
-    // The writer refuses to make such a file (README "Hard cases": half-float overflow on
+    // The writer refuses to make such a file (docs/CONTRIBUTING.md "Hard cases": half-float overflow on
     // write is refused, naming the count and the largest value) ...
     let mut hot = faces.clone();
     hot[10] = [1e5, 9e4, 8e4];

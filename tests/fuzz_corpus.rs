@@ -1,6 +1,6 @@
 //! Replays every committed fuzz input (tools/fuzz/corpus: afl's coverage queue after ≥ 10⁶
 //! executions per target; tools/fuzz/regressions: inputs that once crashed) through the very
-//! harness the fuzzer ran, so a fixed crash stays fixed. README "Fuzzing".
+//! harness the fuzzer ran, so a fixed crash stays fixed. docs/CONTRIBUTING.md "Fuzzing".
 
 #[path = "../tools/fuzz/src/lib.rs"]
 mod harness;

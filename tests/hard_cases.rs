@@ -1,4 +1,4 @@
-//! The hard-case matrix (README "Hard cases"): every pass and technique on maps that break
+//! The hard-case matrix (docs/CONTRIBUTING.md "Hard cases"): every pass and technique on maps that break
 //! naive code — a sun 10⁶ × the mean, a single bright texel, a black map, 1×1 maps in every
 //! mapping, prime sizes — with GGX α = 1e-7 and 1, Phong n = 10⁶ and 10⁷, and the grazing
 //! rim of a sphere. Every output is finite and non-negative, and each case has the bound that
@@ -156,8 +156,8 @@ fn sh_projection_matches_float64_on_every_hard_map() {
 /// map stays exactly black, a 1×1 map (constant) is reproduced to f32 rounding, and power is
 /// kept within 1.3 × the worst measured at size 5: 2.65 % for a one-texel sun into a 5 × 3
 /// lat-long, 5.8 % for the 96² cube's sun (the supersampled bilinear rule point-samples a
-/// texel far smaller than the target's, so it does not conserve its power; issue #9's open
-/// power-conserving conversion would).
+/// texel far smaller than the target's, so it does not conserve its power; the exact-area
+/// conversion, which lat-long sources take to cubes and paraboloids, would).
 #[test]
 fn conversion_of_every_hard_map() {
     let ctx = common::ctx();

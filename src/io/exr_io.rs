@@ -160,7 +160,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8], max_texels: u64) -> Result<Raster>
 
 /// Writes named channels as half floats (for tests of "any channel layout", such as B, G, R
 /// half like pbrt's grace_latlong.exr, or Y alone).
-/// Values a half cannot hold are refused (see the README's hard cases), not written as Inf.
+/// Values a half cannot hold are refused (see docs/CONTRIBUTING.md's hard cases), not written as Inf.
 pub fn write_half_channels(path: &Path, w: u32, h: u32, channels: &[(&str, &[f32])]) -> Result<()> {
     super::check_half(path, channels.iter().flat_map(|(_, v)| v.iter().copied()))?;
     let list: Vec<_> = channels

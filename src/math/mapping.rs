@@ -641,7 +641,7 @@ mod tests {
             assert!((f - DVec3::new(-d.x, -d.y, d.z)).length() < 1e-15);
         }
         // uffizi.hdr (SOURCES.md) stores at (θ, φ = 2πu) the direction
-        // (sinθ cosφ, cosθ, −sinθ sinφ): the README's --flip-u --rotate-y -90 maps onto it.
+        // (sinθ cosφ, cosθ, −sinθ sinφ): docs/formats.md's --flip-u --rotate-y -90 maps onto it.
         let uffizi = Orientation {
             flip_u: true,
             flip_v: false,

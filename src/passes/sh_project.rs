@@ -24,7 +24,7 @@ pub struct ShCoefficients {
     pub coeffs: Vec<[f64; 3]>,
 }
 
-/// What `envlight sh` writes (documented in the README): the order, the RGB coefficients in
+/// What `envlight sh` writes (documented in docs/formats.md): the order, the RGB coefficients in
 /// flat index k = l(l+1)+m, and R&H's 4×4 irradiance matrix per channel (needs order ≥ 2).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ShJson {

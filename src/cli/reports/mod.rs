@@ -99,7 +99,7 @@ pub enum Bench {
     /// each with its error (markdown; see docs/BENCHMARKS.md)
     Peers {
         /// The map every job reads (.hdr, which cmft reads too)
-        #[arg(long, default_value = "../shared/probes/spiaggia_di_mondello_1k.hdr")]
+        #[arg(long)]
         map: PathBuf,
         /// cmft's executable (default: $ENVLIGHT_CMFT); without it cmft's columns stay empty
         #[arg(long)]

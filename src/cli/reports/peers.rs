@@ -160,7 +160,7 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     let me = std::env::current_exe()?;
     if !opts.map.exists() {
         bail!(
-            "{}: no such map (give one with --map; the issue's table uses ../shared/probes/spiaggia_di_mondello_1k.hdr)",
+            "{}: no such map (give an existing .hdr with --map)",
             opts.map.display()
         );
     }

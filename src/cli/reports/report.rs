@@ -21,7 +21,7 @@ use std::time::Instant;
 /// Pareto chart (report.md, report.csv, report.png)
 #[derive(Args)]
 pub struct ReportArgs {
-    /// Folder of the probes (default: $ENVLIGHT_PROBES, else ../shared/probes)
+    /// Folder of the probes (default: $ENVLIGHT_PROBES; one of the two is needed)
     #[arg(long)]
     probes: Option<PathBuf>,
     /// Output folder
@@ -292,7 +292,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         .probes
         .clone()
         .or_else(|| std::env::var_os("ENVLIGHT_PROBES").map(PathBuf::from))
-        .unwrap_or_else(|| PathBuf::from("../shared/probes"));
+        .ok_or_else(|| anyhow!("report: which probes? Give --probes DIR or set ENVLIGHT_PROBES"))?;
     let quick = args.quick;
     let size = args.size.unwrap_or(match (args.table, quick) {
         (true, _) => 128,

@@ -1,5 +1,5 @@
 //! `cargo afl build --release && cargo afl fuzz -i seeds/T -o out/T target/release/fuzz T`
-//! (README "Fuzzing"): the target is the first argument.
+//! (docs/CONTRIBUTING.md "Fuzzing"): the target is the first argument.
 
 fn main() {
     let target = std::env::args().nth(1).unwrap_or_default();
