@@ -286,13 +286,16 @@ fn sampler_from_env() -> Option<PathBuf> {
     s
 }
 
-/// Runs the report.
-pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
-    let dir = args
-        .probes
+/// The probes' folder: `--probes`, else `ENVLIGHT_PROBES` (no default: the user says which).
+fn probes_dir(args: &ReportArgs) -> Result<PathBuf> {
+    args.probes
         .clone()
         .or_else(|| std::env::var_os("ENVLIGHT_PROBES").map(PathBuf::from))
-        .ok_or_else(|| anyhow!("report: which probes? Give --probes DIR or set ENVLIGHT_PROBES"))?;
+        .ok_or_else(|| anyhow!("report: which probes? Give --probes DIR or set ENVLIGHT_PROBES"))
+}
+
+/// Runs the report.
+pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     let quick = args.quick;
     let size = args.size.unwrap_or(match (args.table, quick) {
         (true, _) => 128,
@@ -318,6 +321,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
             materials: args.materials.clone(),
             probes: args.only.clone(),
         };
+        let dir = probes_dir(args)?;
         return super::table::table(&renderer, &dir, size, reference, &args.out, &device, &pick);
     }
     if !args.cube.is_empty() {
@@ -331,8 +335,10 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         return super::cubes::score(&renderer, cam, reference, &device, &a);
     }
     if args.split_sum_every_probe {
+        let dir = probes_dir(args)?;
         return super::recipes::sweep(&renderer, &dir, cam, reference, &args.out, &device, split);
     }
+    let dir = probes_dir(args)?;
     let mut rows = Vec::new();
     let started = Instant::now();
     // glTF-IBL-Sampler's cubes join the GGX materials where it is present.
