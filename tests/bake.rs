@@ -620,10 +620,9 @@ fn walk(d: &Path) -> Vec<PathBuf> {
 /// residual: 6.1e-3, 5.3e-3, 5.6e-3, 6.0e-3, 1.1e-2, 5.4e-3, 6.7e-3; irradiance 1.3e-2 (its
 /// texels above 2 × the mean summed by clusters; 2.0e-2 with the 63 texels alone). (With the
 /// chain averaged by solid angle, read one half at a time, at lod bias ¼: 6.2e-3, 1.5e-2,
-/// 5.1e-3, 1.0e-2, 2.9e-2, 1.1e-2, 1.8e-2 with lights; docs/BENCHMARKS.md "Centred MIP
-/// chain".)
-/// Bounds at 1.3× those. Issue #12's goal, every level exact to 1e-3, is still 5–11× away:
-/// what is left is FIS's and SH's error on the residual.
+/// 5.1e-3, 1.0e-2, 2.9e-2, 1.1e-2, 1.8e-2 with lights: the centred chain is the better.)
+/// Bounds at 1.3× those. No level is yet exact to 1e-3 (5–11× away): what is left is FIS's
+/// and SH's error on the residual.
 #[test]
 fn specular_cube_error_against_the_exact_lobe_on_a_sun_probe() {
     use envlight::bake::spot_check;
