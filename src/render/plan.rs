@@ -212,7 +212,8 @@ impl Plan {
 /// Plans a render of `scene` lit by `env` (its mapping and size; the texels are not read).
 pub fn plan(scene: &Scene, env: &EnvMap) -> Plan {
     let objects = object_plans(scene);
-    let passes = passes(scene, env.mapping);
+    let users = Users::of(scene);
+    let passes = passes(scene, &users, env.mapping);
     let runs = |k: PassKind| passes.iter().any(|p| p.kind == k);
     let lmax = objects
         .iter()
@@ -251,7 +252,7 @@ pub fn plan(scene: &Scene, env: &EnvMap) -> Plan {
         })
         .collect();
     let mut p = Plan {
-        notes: notes(scene, &passes),
+        notes: notes(scene, &users, &passes),
         lights: lights_plan(scene, &objects, &passes),
         passes,
         lmax,
@@ -380,7 +381,7 @@ impl Users {
 
 /// The GPU passes a render of `scene` runs, in order, each with its reason; `source` is the
 /// environment file's mapping (Monte Carlo samples a lat-long map).
-fn passes(scene: &Scene, source: Mapping) -> Vec<PlannedPass> {
+fn passes(scene: &Scene, users: &Users, source: Mapping) -> Vec<PlannedPass> {
     let Users {
         fis,
         sh,
@@ -389,16 +390,16 @@ fn passes(scene: &Scene, source: Mapping) -> Vec<PlannedPass> {
         lookup,
         sh_brdf,
         split,
-    } = Users::of(scene);
+    } = users;
     let mut passes = Vec::new();
     let list = |v: &[String]| v.join(", ");
     if !sh.is_empty() || !sh_brdf.is_empty() {
         let mut why = Vec::new();
         if !sh.is_empty() {
-            why.push(format!("objects {} use SH irradiance", list(&sh)));
+            why.push(format!("objects {} use SH irradiance", list(sh)));
         }
         if !sh_brdf.is_empty() {
-            why.push(format!("objects {} use SH-BRDF shading", list(&sh_brdf)));
+            why.push(format!("objects {} use SH-BRDF shading", list(sh_brdf)));
         }
         passes.push(PlannedPass {
             kind: PassKind::ShProjection,
@@ -410,7 +411,7 @@ fn passes(scene: &Scene, source: Mapping) -> Vec<PlannedPass> {
             kind: PassKind::ShBrdfTable,
             why: format!(
                 "objects {} need their BRDF's SH vector per view direction",
-                list(&sh_brdf)
+                list(sh_brdf)
             ),
         });
     }
@@ -425,7 +426,7 @@ fn passes(scene: &Scene, source: Mapping) -> Vec<PlannedPass> {
         if footprint_mirrors {
             why.push(format!(
                 "objects {} are mirrors filtered over each pixel's footprint",
-                list(&lookup)
+                list(lookup)
             ));
         }
         if filter == LookupFilter::Footprint {
@@ -434,13 +435,13 @@ fn passes(scene: &Scene, source: Mapping) -> Vec<PlannedPass> {
         if !fis.is_empty() {
             why.push(format!(
                 "objects {} use filtered importance sampling",
-                list(&fis)
+                list(fis)
             ));
         }
         if !split.is_empty() {
             why.push(format!(
                 "objects {} use split-sum, whose chain is prefiltered by FIS",
-                list(&split)
+                list(split)
             ));
         }
         passes.push(PlannedPass {
@@ -461,7 +462,7 @@ fn passes(scene: &Scene, source: Mapping) -> Vec<PlannedPass> {
             kind: PassKind::SplitSum,
             why: format!(
                 "objects {} read a GGX chain prefiltered per roughness (n = v = r) and a DFG table",
-                list(&split)
+                list(split)
             ),
         });
     }
@@ -470,7 +471,7 @@ fn passes(scene: &Scene, source: Mapping) -> Vec<PlannedPass> {
             kind: PassKind::Prefilter,
             why: format!(
                 "objects {} use prefiltered maps (brute force, once per distinct map)",
-                list(&pre)
+                list(pre)
             ),
         });
     }
@@ -487,7 +488,7 @@ fn passes(scene: &Scene, source: Mapping) -> Vec<PlannedPass> {
         }
         passes.push(PlannedPass {
             kind: PassKind::MonteCarlo,
-            why: format!("objects {} use the Monte Carlo reference", list(&mc)),
+            why: format!("objects {} use the Monte Carlo reference", list(mc)),
         });
     }
     passes.push(PlannedPass {
@@ -498,7 +499,7 @@ fn passes(scene: &Scene, source: Mapping) -> Vec<PlannedPass> {
 }
 
 /// Remarks on a render of `scene` running `passes`: CPU work, and what shadows leave out.
-fn notes(scene: &Scene, passes: &[PlannedPass]) -> Vec<String> {
+fn notes(scene: &Scene, users: &Users, passes: &[PlannedPass]) -> Vec<String> {
     let Users {
         fis,
         sh,
@@ -507,7 +508,7 @@ fn notes(scene: &Scene, passes: &[PlannedPass]) -> Vec<String> {
         lookup,
         sh_brdf,
         split,
-    } = Users::of(scene);
+    } = users;
     let mut notes = Vec::new();
     if !mc.is_empty() {
         notes.push("CPU: the luminance CDF of the lat-long map, for environment sampling".into());
@@ -797,31 +798,9 @@ pub fn footprint_of(scene: &Scene, chain: bool, residual: bool) -> Footprint {
 mod tests {
     use super::*;
 
-    const GLOSSY: &str = r#"
-        [environment]
-        file = "sky.exr"
-        [camera]
-        projection = { kind = "perspective", fov_y = 40.0 }
-        eye = [0, 1, 5]
-        target = [0, 0, 0]
-        width = 64
-        height = 48
-        [[objects]]
-        shape = "sphere"
-        center = [0, 0, 0]
-        radius = 1
-        material = { type = "ggx", alpha = 0.3, technique = { kind = "fis", samples = 32 } }
-        [[objects]]
-        shape = "plane"
-        normal = [0, 1, 0]
-        offset = -1
-        extent = 5
-        material = { type = "diffuse", albedo = [0.5, 0.5, 0.5] }
-    "#;
-
     #[test]
     fn plans_passes_and_resolves_each_object() {
-        let s = Scene::parse(GLOSSY).unwrap();
+        let s = Scene::parse(crate::scene::GLOSSY_TEST_SCENE).unwrap();
         let env = EnvMap::new(Mapping::LatLong, 64, 32, vec![[1.0; 3]; 64 * 32]);
         let p = plan(&s, &env);
         assert_eq!(

@@ -462,35 +462,38 @@ impl Scene {
     }
 }
 
+/// A glossy sphere (FIS 32) over a diffuse plane (SH by default): the scene the unit tests of
+/// the model and the plan parse.
+#[cfg(test)]
+pub(crate) const GLOSSY_TEST_SCENE: &str = r#"
+    [environment]
+    file = "sky.exr"
+    [camera]
+    projection = { kind = "perspective", fov_y = 40.0 }
+    eye = [0, 1, 5]
+    target = [0, 0, 0]
+    width = 64
+    height = 48
+    [[objects]]
+    shape = "sphere"
+    center = [0, 0, 0]
+    radius = 1
+    material = { type = "ggx", alpha = 0.3, technique = { kind = "fis", samples = 32 } }
+    [[objects]]
+    shape = "plane"
+    normal = [0, 1, 0]
+    offset = -1
+    extent = 5
+    material = { type = "diffuse", albedo = [0.5, 0.5, 0.5] }
+"#;
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    const GLOSSY: &str = r#"
-        [environment]
-        file = "sky.exr"
-        [camera]
-        projection = { kind = "perspective", fov_y = 40.0 }
-        eye = [0, 1, 5]
-        target = [0, 0, 0]
-        width = 64
-        height = 48
-        [[objects]]
-        shape = "sphere"
-        center = [0, 0, 0]
-        radius = 1
-        material = { type = "ggx", alpha = 0.3, technique = { kind = "fis", samples = 32 } }
-        [[objects]]
-        shape = "plane"
-        normal = [0, 1, 0]
-        offset = -1
-        extent = 5
-        material = { type = "diffuse", albedo = [0.5, 0.5, 0.5] }
-    "#;
-
     #[test]
     fn parses() {
-        let s = Scene::parse(GLOSSY).unwrap();
+        let s = Scene::parse(GLOSSY_TEST_SCENE).unwrap();
         assert_eq!(s.objects.len(), 2);
         assert_eq!(
             s.objects[0].material.technique(),
@@ -504,16 +507,16 @@ mod tests {
 
     #[test]
     fn rejects_what_does_not_apply() {
-        let bad = GLOSSY.replace("kind = \"fis\", samples = 32", "kind = \"sh\"");
+        let bad = GLOSSY_TEST_SCENE.replace("kind = \"fis\", samples = 32", "kind = \"sh\"");
         let e = Scene::parse(&bad).unwrap_err().to_string();
         assert!(e.contains("object 0") && e.contains("sh"), "{e}");
-        let bad = GLOSSY.replace("alpha = 0.3", "alpha = 1.5");
+        let bad = GLOSSY_TEST_SCENE.replace("alpha = 0.3", "alpha = 1.5");
         let e = Scene::parse(&bad).unwrap_err().to_string();
         assert!(e.contains("GGX alpha"), "{e}");
-        let bad = GLOSSY.replace("width = 64", "width = 0");
+        let bad = GLOSSY_TEST_SCENE.replace("width = 64", "width = 0");
         assert!(Scene::parse(&bad).is_err());
         for (taps, ok) in [(0, false), (1, true), (16, true), (65, false)] {
-            let text = format!("{GLOSSY}\n[split_sum]\ntaps = {taps}\n");
+            let text = format!("{GLOSSY_TEST_SCENE}\n[split_sum]\ntaps = {taps}\n");
             let r = Scene::parse(&text);
             assert_eq!(r.is_ok(), ok, "taps {taps}: {:?}", r.err());
             if !ok {
