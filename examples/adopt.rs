@@ -10,7 +10,6 @@ mod engine;
 
 use ash::vk;
 use envlight::gpu::{AdoptInfo, Context};
-use envlight::math::synth::smooth_env;
 use envlight::passes::{ConvertOptions, Converter};
 use envlight::GpuEnvMap;
 use envlight::{EnvMap, Mapping};
@@ -35,17 +34,19 @@ pub fn run() -> Result<usize, Box<dyn std::error::Error>> {
                 debug_utils: true,
             })?
         };
-        let map = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, smooth_env);
+        // A sky brighter towards +Y with a warm lobe (any function of the direction will do).
+        let map = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, |d| {
+            let lobe = (4.0 * (d.dot(glam::DVec3::new(0.3, 0.5, -0.8).normalize()) - 1.0)).exp();
+            let base = 1.0 + 0.4 * d.y;
+            [
+                base + 0.8 * lobe,
+                0.7 * base + 1.2 * lobe,
+                0.5 * base + 0.4 * lobe + 0.3,
+            ]
+        });
         let gpu = GpuEnvMap::upload(&ctx, &map)?;
         let conv = Converter::new(&ctx)?;
-        let opts = ConvertOptions {
-            to: Mapping::Cube,
-            size: 16,
-            orientation: Default::default(),
-            supersample: None,
-            nearest: false,
-            edge_points: None,
-        };
+        let opts = ConvertOptions::new(Mapping::Cube, 16);
         let (cube, timings) = conv.run(&gpu, &opts)?;
         let back = cube.download(&ctx)?;
         println!(

@@ -199,14 +199,9 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
         // `recorded` and every resource live until the fence below has signalled.
         let mut rec = unsafe { Recorder::begin(&ctx, cmd, true) };
         env_gpu.record_upload(&mut rec, &env)?;
-        let opts = ConvertOptions {
-            to: Mapping::DualParaboloid,
-            size: dp_size,
-            orientation,
-            supersample: None,
-            nearest: envlight::render::chain_of_texel_means(&scene),
-            edge_points: None,
-        };
+        let opts = ConvertOptions::new(Mapping::DualParaboloid, dp_size)
+            .with_orientation(orientation)
+            .with_nearest(envlight::render::chain_of_texel_means(&scene));
         converter.record(&mut rec, &env_gpu, &dp, &opts)?;
         mip.record(&mut rec, &dp)?;
         gbuffer.record(&mut rec, &scene.camera, &gbuf)?;

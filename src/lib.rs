@@ -1,36 +1,39 @@
 //! envlight: environment-map lighting on explicit Vulkan passes.
 //!
-//! # Layers
-//! Imports go one way: [`abi`]/[`error`] ← [`math`] ← [`io`] ← [`gpu`] ← [`passes`] ←
-//! [`scene`] ← [`render`]/[`bake`] ← the `envlight` binary (feature `cli`, the only user of
-//! clap, indicatif and anyhow), with no cycle among modules (`tests/layering.rs` derives the
-//! graph from the paths the sources name).
-//! - [`abi`] (std only) holds everything GLSL and Rust share: binding numbers and access,
-//!   workgroup sizes, ids, tuning parameters, push blocks, and the shader table. The GLSL
-//!   header `glsl/include/generated.glsl` is written from it.
-//! - [`math`] is pure float64 (mappings, solid angles, SH, BRDFs, sequences, the twins of every
-//!   pass) and knows nothing of Vulkan.
-//! - [`gpu`] is thin Vulkan plumbing: a [`gpu::Context`] that creates or adopts a device, RAII
-//!   resources, barriers from declared usages, pipelines, the [`gpu::Recorder`] and timestamps.
-//! - [`passes`] holds one file per GPU pass. A pass is built once and *records* into a command
-//!   buffer its caller owns; it never submits. [`gpu::Context::run`] is the one place that
-//!   submits and waits, for the CLI, tests and one-off jobs.
-//! - [`scene`] is the scene file's model and its validation; [`render`] resolves a scene into
-//!   a [`render::Plan`] once and runs it stage by stage.
+//! # What is where
+//! The crate root re-exports what an embedder names most: [`Context`] (create or adopt a
+//! device), [`EnvMap`] and [`load`] (maps in memory and from files), [`GpuEnvMap`], the
+//! passes ([`Converter`], [`MipChain`], [`ShProjector`], [`ShEvaluator`], [`BruteFilter`],
+//! [`SplitSum`], [`LightsPass`], [`MonteCarlo`]) and their options, [`Recorder`] and
+//! [`Recorded`], [`Error`].
+//! - [`gpu`]: the context, RAII resources, usages (barriers come from what each command
+//!   declares), the recorder and GPU timings.
+//! - [`passes`]: one module per GPU pass. A pass is built once and *records* into a command
+//!   buffer its caller owns; it never submits. [`Context::run`] is the one place that submits
+//!   and waits, for the command line, tests and one-off jobs.
+//! - [`io`]: EXR, HDR, PFM, PNG and KTX2 in and out. [`bake`]: SH, irradiance and GGX cubes
+//!   for an engine. [`scene`] and [`render`]: the reference renderer (a scene resolves into a
+//!   [`render::Plan`] once and runs stage by stage).
+//!
+//! Features: `cli` (default) builds the `envlight` binary and is the only user of clap,
+//! indicatif and anyhow; `reference` makes `math` public, the float64 reference
+//! implementations every pass is tested against; `test-hooks` exposes
+//! `passes::testing`, what only the tests call. The layout GLSL and Rust share (`src/abi`) is
+//! private. Modules import one way (abi and error ← math ← io ← gpu ← passes ← scene ←
+//! render and bake ← cli; `tests/layering.rs` checks it); `docs/design.md` has the rest.
 //!
 //! # Embedding
-//! An engine adopts its device ([`gpu::Context::adopt`]), builds the passes it needs once, and
+//! An engine adopts its device ([`Context::adopt`]), builds the passes it needs once, and
 //! each frame records them into its own command buffer, on images it may own
-//! ([`gpu::Image::from_raw`]). Barriers between passes come from what each command declares;
-//! the engine keeps the [`gpu::Recorded`] until its fence signals. `examples/frame.rs` is the
+//! ([`Image::from_raw`]). Barriers between passes come from what each command declares;
+//! the engine keeps the [`Recorded`] until its fence signals. `examples/frame.rs` is the
 //! whole program, run by `tests/frame.rs`.
 //!
 //! ```no_run
 //! use ash::vk;
-//! use envlight::gpu::{Context, Image, Recorder, Usage};
 //! use envlight::passes::map::{full_mips, map_desc};
-//! use envlight::passes::{ConvertOptions, Converter, GpuEnvMap, MipChain};
-//! use envlight::{EnvMap, Mapping, Orientation};
+//! use envlight::{ConvertOptions, Context, Converter, EnvMap, GpuEnvMap, Image, Mapping};
+//! use envlight::{MipChain, Recorded, Recorder, Usage};
 //!
 //! /// Records a dual-paraboloid MIP chain of `env` into the engine's image `raw` (created as
 //! /// `map_desc(DualParaboloid, 256, 256, full_mips(256, 256))` says) inside `cmd`.
@@ -39,7 +42,7 @@
 //!     cmd: vk::CommandBuffer,
 //!     raw: vk::Image,
 //!     env: &EnvMap,
-//! ) -> envlight::Result<envlight::gpu::Recorded> {
+//! ) -> envlight::Result<Recorded> {
 //!     let desc = map_desc(Mapping::DualParaboloid, 256, 256, full_mips(256, 256));
 //!     // SAFETY: `raw` was created from `desc` on ctx's device and outlives the frame.
 //!     let image = unsafe { Image::from_raw(ctx, "probe", raw, desc, Usage::Undefined)? };
@@ -51,14 +54,7 @@
 //!     // returned Recorded (and `source`, `dp`) are kept until the engine's fence signals.
 //!     let mut rec = unsafe { Recorder::begin(ctx, cmd, true) };
 //!     source.record_upload(&mut rec, env)?;
-//!     let opts = ConvertOptions {
-//!         to: Mapping::DualParaboloid,
-//!         size: 256,
-//!         orientation: Orientation::default(),
-//!         supersample: None,
-//!         nearest: false,
-//!         edge_points: None,
-//!     };
+//!     let opts = ConvertOptions::new(Mapping::DualParaboloid, 256);
 //!     converter.record(&mut rec, &source, &dp, &opts)?;
 //!     mip.record(&mut rec, &dp)?;
 //!     // Hand the image back in the layout the engine samples it in.
@@ -69,18 +65,39 @@
 //! ```
 
 #![warn(missing_docs)]
+#![warn(unnameable_types)]
 
-pub mod abi;
+// The layout GLSL and Rust share; tools/shaderc and tests/shaders.rs include it by path and
+// use its generators, which the library itself does not call.
+#[allow(dead_code, unused_imports)]
+mod abi;
 pub mod bake;
+#[cfg(feature = "cli")]
+#[doc(hidden)]
+pub mod cli;
 pub mod error;
 pub mod gpu;
 pub mod io;
+/// The float64 reference implementations (feature `reference`): mappings, solid angles, SH,
+/// BRDFs, sequences and the twin of every pass, which the tests hold the GPU passes to.
+#[cfg(feature = "reference")]
 pub mod math;
+#[cfg(not(feature = "reference"))]
+#[allow(dead_code, unused_imports)]
+mod math;
 pub mod passes;
 pub mod render;
 pub mod scene;
 
+// The crate root: what an embedder names most.
 pub use error::{Error, Result};
-pub use math::envmap::EnvMap;
+pub use gpu::{Context, ContextOptions, Image, Recorded, Recorder, Usage};
+pub use io::{load, LoadOptions};
+pub use math::brdf::Brdf;
+pub use math::envmap::{EnvMap, Stats};
+pub use math::mapping::Coord;
 pub use math::{Mapping, Orientation};
-pub use passes::GpuEnvMap;
+pub use passes::{
+    BruteFilter, ConvertOptions, Converter, FilterTarget, GpuEnvMap, LightsPass, MipChain,
+    MonteCarlo, PrefilterOptions, ShCoefficients, ShEvaluator, ShProjector, SplitSum,
+};

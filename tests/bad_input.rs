@@ -76,9 +76,10 @@ fn truncated_and_corrupt_exr() {
             // with it while the file does not).
             let k = at(&b, b"dataWindow\0box2i\0") + 17 + 4;
             b[k + 12..k + 16].copy_from_slice(&(1i32 << 28).to_le_bytes());
-            let opts = LoadOptions {
-                max_texels: u64::MAX,
-                ..Default::default()
+            let opts = {
+                let mut o = LoadOptions::default();
+                o.max_texels = u64::MAX;
+                o
             };
             let q = tmp(&format!("{name}.exr"));
             std::fs::write(&q, &b).unwrap();
@@ -214,14 +215,7 @@ fn truncated_and_absurd_dds() {
     inf[at..at + 2].copy_from_slice(&0x7c00u16.to_le_bytes());
     std::fs::write(&q, &inf).unwrap();
     expect_error(&q, &LoadOptions::default(), &["1 infinite", "--sanitize"]);
-    let fixed = io::load(
-        &q,
-        &LoadOptions {
-            sanitize: Sanitize::Zero,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let fixed = io::load(&q, &zeroing()).unwrap();
     // Only the infinite channel is replaced.
     assert_eq!(fixed.texels[10][0], 0.0);
     assert!(fixed.texels[10].iter().all(|c| c.is_finite()));
@@ -314,10 +308,7 @@ fn nan_inf_and_negative_texels_are_refused_or_sanitised() {
         &LoadOptions::default(),
         &["1 NaN", "2 infinite", "2 negative", "--sanitize"],
     );
-    let opts = LoadOptions {
-        sanitize: Sanitize::Zero,
-        ..Default::default()
-    };
+    let opts = zeroing();
     let clean = io::load(&p, &opts).unwrap();
     let s = clean.stats();
     assert_eq!(s.nan + s.inf + s.negative, 0);
@@ -333,21 +324,9 @@ fn unknown_format_and_shape_and_missing_file() {
     let q = tmp("odd.pfm");
     io::write_pfm(&q, 5, 3, &[[1.0; 3]; 15]).unwrap();
     expect_error(&q, &LoadOptions::default(), &["--mapping"]);
-    let ok = io::load(
-        &q,
-        &LoadOptions {
-            mapping: Some(Mapping::LatLong),
-            ..Default::default()
-        },
-    );
+    let ok = io::load(&q, &LoadOptions::new(Some(Mapping::LatLong)));
     assert!(ok.is_ok());
-    let bad = io::load(
-        &q,
-        &LoadOptions {
-            mapping: Some(Mapping::Cube),
-            ..Default::default()
-        },
-    );
+    let bad = io::load(&q, &LoadOptions::new(Some(Mapping::Cube)));
     assert!(bad.unwrap_err().to_string().contains("cannot hold a cube"));
     expect_error(&tmp("does_not_exist.exr"), &LoadOptions::default(), &[]);
 }
@@ -604,4 +583,11 @@ fn probes_and_peers_come_from_the_user() {
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("--map"), "{err}");
+}
+
+/// Load options that replace NaN, infinite and negative texels by zero.
+fn zeroing() -> LoadOptions {
+    let mut o = LoadOptions::default();
+    o.sanitize = Sanitize::Zero;
+    o
 }

@@ -90,14 +90,21 @@ fn statuses(out: &Path, manifest: &str) -> Vec<(String, String)> {
         .collect()
 }
 
+/// `opts` with the paraboloid chain written too.
+fn with_chain(mut opts: BakeOptions) -> BakeOptions {
+    opts.chain = true;
+    opts
+}
+
 fn small_options() -> BakeOptions {
-    BakeOptions {
-        specular_size: 16,
-        specular_levels: 4,
-        irradiance_size: 8,
-        samples: 16,
-        ..BakeOptions::default()
-    }
+    let mut o = BakeOptions::default();
+    (
+        o.specular_size,
+        o.specular_levels,
+        o.irradiance_size,
+        o.samples,
+    ) = (16, 4, 8, 16);
+    o
 }
 
 /// Each KTX2 file loads in the `ktx2` crate with R32G32B32A32_SFLOAT (or R16G16B16A16_SFLOAT),
@@ -129,14 +136,7 @@ fn ktx2_files_load_in_an_independent_reader_with_the_gpu_images() {
             // The paraboloid chain: a 2-layer array, every level, premultiplied RGBA32F as
             // the GPU holds it.
             let chained = baker
-                .bake(
-                    map,
-                    &Orientation::default(),
-                    &BakeOptions {
-                        chain: true,
-                        ..opts
-                    },
-                )
+                .bake(map, &Orientation::default(), &with_chain(opts))
                 .unwrap();
             let side = envlight::bake::dp_size(map, &opts);
             let bytes = std::fs::read(out.join(format!("p{k}.exr/chain.ktx2"))).unwrap();
@@ -361,10 +361,8 @@ fn specular_cube_matches_its_float64_twin() {
         let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, move |d| sky.radiance(d));
         let baker = Baker::new(&ctx).unwrap();
         for lights in [false, true] {
-            let opts = BakeOptions {
-                lights,
-                ..small_options()
-            };
+            let mut opts = small_options();
+            opts.lights = lights;
             let baked = baker.bake(&env, &Orientation::default(), &opts).unwrap();
             let ex = extract(&env, &ExtractOptions::default());
             assert!(!ex.lights.is_empty());
@@ -656,10 +654,8 @@ fn specular_cube_error_against_the_exact_lobe_on_a_sun_probe() {
         ),
     ];
     for (lights, bounds, irr_bound) in cases {
-        let opts = BakeOptions {
-            lights,
-            ..BakeOptions::default()
-        };
+        let mut opts = BakeOptions::default();
+        opts.lights = lights;
         let baked = baker.bake(&env, &o, &opts).unwrap();
         let check = spot_check(&env, &o, &opts, &baked, 8);
         eprintln!("lights {lights}: {check:?}");

@@ -39,21 +39,11 @@ fn costly_dispatch_after_graphics_work_measures_nonzero_time() {
 
 #[test]
 fn cpu_device_can_be_forced() {
-    let ctx = Context::new(&ContextOptions {
-        validation: true,
-        device: DeviceSelector::Cpu,
-    })
-    .unwrap();
+    let ctx = Context::new(&validated(DeviceSelector::Cpu)).unwrap();
     assert_eq!(ctx.info().device_type, ash::vk::PhysicalDeviceType::CPU);
-    let by_name = Context::new(&ContextOptions {
-        validation: true,
-        device: DeviceSelector::Name("llvmpipe".into()),
-    });
+    let by_name = Context::new(&validated(DeviceSelector::Name("llvmpipe".into())));
     assert!(by_name.is_ok());
-    let missing = Context::new(&ContextOptions {
-        validation: true,
-        device: DeviceSelector::Name("no such gpu".into()),
-    });
+    let missing = Context::new(&validated(DeviceSelector::Name("no such gpu".into())));
     let e = missing.err().unwrap().to_string();
     assert!(e.contains("no such gpu") && e.contains("devices:"), "{e}");
     common::finish(ctx);
@@ -84,14 +74,7 @@ fn live_objects_return_to_zero() {
         );
         let g = envlight::GpuEnvMap::upload(&ctx, &map).unwrap();
         assert!(ctx.live_objects() > 0);
-        let opts = envlight::passes::ConvertOptions {
-            to: envlight::Mapping::LatLong,
-            size: 8,
-            orientation: Default::default(),
-            supersample: None,
-            nearest: false,
-            edge_points: None,
-        };
+        let opts = envlight::passes::ConvertOptions::new(envlight::Mapping::LatLong, 8);
         let (out, _) = conv.run(&g, &opts).unwrap();
         drop(g);
         let back = out.download(&ctx).unwrap();
@@ -160,4 +143,11 @@ fn an_owned_context_reports_its_start_up() {
     }
     assert!(s.instance_ms + s.device_ms > 0.0, "{s:?}");
     common::finish(ctx);
+}
+
+/// Options for `device` with validation on.
+fn validated(device: DeviceSelector) -> ContextOptions {
+    let mut o = ContextOptions::new(device);
+    o.validation = true;
+    o
 }

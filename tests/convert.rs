@@ -44,17 +44,7 @@ fn convert(
 ) -> EnvMap {
     let g = GpuEnvMap::upload(ctx, src).unwrap();
     let (out, t) = conv
-        .run(
-            &g,
-            &ConvertOptions {
-                to,
-                size,
-                orientation: o,
-                supersample: None,
-                nearest: false,
-                edge_points: None,
-            },
-        )
+        .run(&g, &ConvertOptions::new(to, size).with_orientation(o))
         .unwrap();
     assert!(t.iter().all(|t| t.ms >= 0.0 && t.ms.is_finite()));
     out.download(ctx).unwrap()
@@ -269,14 +259,7 @@ fn gpu_matches_the_float64_reference_conversion() {
                 let (ow, oh) = to.extent_for_size(size);
                 let ss = Converter::supersampling((from, w, h), (to, ow, oh));
                 let gpu = convert(&ctx, &conv, &src, to, size, o);
-                let opts = ConvertOptions {
-                    to,
-                    size,
-                    orientation: o,
-                    supersample: None,
-                    nearest: false,
-                    edge_points: None,
-                };
+                let opts = ConvertOptions::new(to, size).with_orientation(o);
                 let area = conv.uses_area((from, w, h), &opts);
                 let cpu = if area {
                     envlight::math::convert::latlong_area(&src, to, size, o.world_to_file())
@@ -545,14 +528,9 @@ fn nearest_conversion_matches_its_float64_twin() {
                 .collect();
             let src = EnvMap::new(mapping, w, h, texels);
             let g = GpuEnvMap::upload(&ctx, &src).unwrap();
-            let opts = ConvertOptions {
-                to: Mapping::DualParaboloid,
-                size,
-                orientation: Orientation::default(),
-                supersample: Some(ss),
-                nearest: true,
-                edge_points: None,
-            };
+            let opts = ConvertOptions::new(Mapping::DualParaboloid, size)
+                .with_supersample(Some(ss))
+                .with_nearest(true);
             let (out, _) = conv.run(&g, &opts).unwrap();
             let out = out.download(&ctx).unwrap();
             let want = envlight::math::convert::convert_with(
@@ -618,14 +596,7 @@ fn suns_at_poles_and_seam(w: u32) -> EnvMap {
 
 /// The options of a conversion to `to` at `size` with orientation `o` and the defaults else.
 fn default_opts(to: Mapping, size: u32, o: Orientation) -> ConvertOptions {
-    ConvertOptions {
-        to,
-        size,
-        orientation: o,
-        supersample: None,
-        nearest: false,
-        edge_points: None,
-    }
+    ConvertOptions::new(to, size).with_orientation(o)
 }
 
 /// Lat-long to cube and dual paraboloid by exact footprint areas, on the GPU against its
@@ -709,17 +680,15 @@ fn area_conversion_matches_its_float64_twin() {
 /// do with suns. Bounds 1.3× the measurements. Points outside 1 ..= POLE_STEPS are refused.
 #[test]
 fn fewer_edge_points_follow_their_twin_and_keep_power() {
-    use envlight::abi::area;
+    use common::abi::area;
     use envlight::math::convert::residual_edge_points;
     let ctx = common::ctx();
     {
         let conv = Converter::new(&ctx).unwrap();
         let run = |src: &EnvMap, size: u32, points: u32| -> EnvMap {
             let g = GpuEnvMap::upload(&ctx, src).unwrap();
-            let opts = ConvertOptions {
-                edge_points: Some(points),
-                ..default_opts(Mapping::DualParaboloid, size, Orientation::default())
-            };
+            let opts =
+                ConvertOptions::new(Mapping::DualParaboloid, size).with_edge_points(Some(points));
             conv.run(&g, &opts).unwrap().0.download(&ctx).unwrap()
         };
         let smooth = EnvMap::from_fn(Mapping::LatLong, 96, 48, 1, |d| {
@@ -794,10 +763,8 @@ fn fewer_edge_points_follow_their_twin_and_keep_power() {
         assert_eq!(residual_edge_points(64), area::PARABOLOID_EDGE_STEPS);
         let g = GpuEnvMap::upload(&ctx, &smooth).unwrap();
         for points in [0, area::POLE_STEPS + 1] {
-            let opts = ConvertOptions {
-                edge_points: Some(points),
-                ..default_opts(Mapping::DualParaboloid, 8, Orientation::default())
-            };
+            let opts =
+                ConvertOptions::new(Mapping::DualParaboloid, 8).with_edge_points(Some(points));
             let e = conv.run(&g, &opts).err().expect("refused").to_string();
             assert!(e.contains("points per paraboloid texel edge"), "{e}");
         }

@@ -846,7 +846,7 @@ fn phong_levels_match_float64() {
 /// sets of centres, 1e-5 relative and 1e-4 rad of slack for f32 sums and angles.
 #[test]
 fn the_visit_floor_visits_the_lobes_reach() {
-    use envlight::abi::filter_rule::{CONE_MARGIN, LOG_CUTOFF, REACH_MARGIN_ABS, REACH_MARGIN_REL};
+    use common::abi::filter_rule::{CONE_MARGIN, LOG_CUTOFF, REACH_MARGIN_ABS, REACH_MARGIN_REL};
     let ctx = common::ctx();
     {
         let sky = Sky::default();
@@ -879,14 +879,14 @@ fn the_visit_floor_visits_the_lobes_reach() {
         };
         let step = (2.0 * PI / w as f64, PI / h as f64);
         let mut pass = BruteFilter::new(&ctx).unwrap();
-        pass.set_visit_floor(true);
+        envlight::passes::testing::set_visit_floor(&mut pass, true);
         for n in [2000.0, 3.0] {
             // The cap where the lobe is above its cut-off, and the rows' reach (brute.comp).
             let cap = 2.0 * (0.5 * (1.0 - (LOG_CUTOFF / n).exp())).sqrt().asin();
             let d = cap
                 + (1.0 + REACH_MARGIN_REL) * CONE_MARGIN * 0.5 * step.0.hypot(step.1)
                 + REACH_MARGIN_ABS;
-            let tile = envlight::abi::BRUTE_TILE as f64 * std::f64::consts::SQRT_2 * step.0;
+            let tile = common::abi::BRUTE_TILE as f64 * std::f64::consts::SQRT_2 * step.0;
             for (lanes, past) in [(8, d + 2.0 * step.0), (1, cap + tile)] {
                 pass.set_texel_lanes(lanes);
                 let (out, _) = pass.run(&g, &o, Kernel::Phong { n }, target).unwrap();

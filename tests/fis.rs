@@ -625,14 +625,10 @@ fn the_paraboloid_pipeline_built_early_is_the_one_recorded() {
             sc.environment.lights = lights;
             // A size the residual's 2 points serve.
             let size = envlight::render::fis_dp_size(&sc, env);
-            assert!(
-                size >= envlight::abi::area::RESIDUAL_EDGE_MIN_SIZE,
-                "{size}"
-            );
+            assert!(size >= common::abi::area::RESIDUAL_EDGE_MIN_SIZE, "{size}");
             let r = render(&ctx, &sc, env).unwrap();
             assert!(r.frame.texels.iter().flatten().all(|v| v.is_finite()));
-            let built = ctx
-                .pipelines_created()
+            let built = envlight::passes::testing::pipelines_created(&ctx)
                 .into_iter()
                 .filter(|p| *p == "convert_area_paraboloid")
                 .count();

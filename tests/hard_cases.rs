@@ -168,14 +168,7 @@ fn conversion_of_every_hard_map() {
             let p0 = c.map.power();
             for to in Mapping::ALL {
                 for size in [1u32, 5] {
-                    let opts = ConvertOptions {
-                        to,
-                        size,
-                        orientation: Orientation::default(),
-                        supersample: None,
-                        nearest: false,
-                        edge_points: None,
-                    };
+                    let opts = ConvertOptions::new(to, size);
                     let out = conv.run(&g, &opts).unwrap().0.download(&ctx).unwrap();
                     let what = format!("{} -> {to:?} {size}", c.name);
                     finite_nonnegative(&what, &out.texels);

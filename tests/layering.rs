@@ -30,7 +30,7 @@ fn code(text: &str) -> impl Iterator<Item = &str> {
 }
 
 /// A module's path from the crate root: `src/math/footprint.rs` is `math::footprint`,
-/// `src/passes/mod.rs` is `passes`; the binary's `src/cli/…` keep their `cli::…` paths.
+/// `src/passes/mod.rs` is `passes`.
 fn module_of(path: &Path) -> Vec<String> {
     let rel = path
         .strip_prefix(Path::new(env!("CARGO_MANIFEST_DIR")).join("src"))
@@ -97,12 +97,11 @@ fn expand(tree: &str) -> Vec<String> {
         .collect()
 }
 
-/// Every path a module names, absolute from its crate's root: `use` trees (with `self::`,
-/// `super::` and, in the binary, `envlight::` resolved) and `crate::…` paths in code.
+/// Every path a module names, absolute from the crate's root: `use` trees (with `self::`,
+/// `super::` and `envlight::` resolved) and `crate::…` paths in code.
 /// `pub use child::…` re-exports are a module's facade, not its dependencies: left out.
 fn named_paths(module: &[String], text: &str) -> Vec<Vec<String>> {
     let code = import_code(text);
-    let cli = module.first().is_some_and(|m| m == "cli");
     let mut trees = Vec::new();
     for stmt in code.split(';') {
         let s = stmt.trim();
@@ -137,7 +136,6 @@ fn named_paths(module: &[String], text: &str) -> Vec<Vec<String>> {
     for t in trees {
         let segs: Vec<&str> = t.split("::").collect();
         let mut abs: Vec<String> = match segs[0] {
-            "crate" if cli => vec![],
             "crate" => vec!["lib".into()],
             "envlight" => vec!["lib".into()],
             "self" => std::iter::once("lib".to_string())
@@ -159,12 +157,6 @@ fn named_paths(module: &[String], text: &str) -> Vec<Vec<String>> {
             _ => continue,
         };
         abs.extend(segs[1..].iter().map(|s| s.to_string()));
-        if cli {
-            // The binary's own modules: `crate::cli::…`.
-            if abs.first().is_some_and(|s| s != "lib") {
-                abs.insert(0, "bin".into());
-            }
-        }
         out.push(abs);
     }
     out
@@ -218,10 +210,10 @@ fn module_graph() -> std::collections::BTreeMap<String, std::collections::BTreeS
         }
         let from = key(&m);
         for abs in named_paths(&m, text) {
-            if abs.first().map(String::as_str) != Some("lib") && m[0] != "cli" {
+            if abs.first().map(String::as_str) != Some("lib") {
                 continue;
             }
-            // `lib::…` or the binary's `bin::…`: the rest is a module path.
+            // `lib::…`: the rest is a module path.
             let segs = &abs[1..];
             let mut to = None;
             for n in (1..=segs.len()).rev() {

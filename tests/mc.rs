@@ -89,17 +89,11 @@ fn gpu_monte_carlo_matches_the_float64_estimator() {
         let mc_env = McEnv::new(&ctx, &env, &orientation).unwrap();
         let (res, t) = MonteCarlo::new(&ctx)
             .unwrap()
-            .run(
-                &gbuf,
-                &mc_env,
-                &McOptions {
-                    samples: 512,
-                    shadows: true,
-                    seed: 11,
-                    per_frame: 128,
-                    ..Default::default()
-                },
-            )
+            .run(&gbuf, &mc_env, &{
+                let mut o = McOptions::new(512);
+                (o.shadows, o.seed, o.per_frame) = (true, 11, 128);
+                o
+            })
             .unwrap();
         assert_eq!(res.samples, 512);
         assert!(t.iter().all(|t| t.label.starts_with("mc frame")));

@@ -115,19 +115,7 @@ fn conversion_preserves_power_of_every_real_probe() {
                     },
                     32,
                 ] {
-                    let (out, _) = conv
-                        .run(
-                            &g,
-                            &ConvertOptions {
-                                to,
-                                size,
-                                orientation: Orientation::default(),
-                                supersample: None,
-                                nearest: false,
-                                edge_points: None,
-                            },
-                        )
-                        .unwrap();
+                    let (out, _) = conv.run(&g, &ConvertOptions::new(to, size)).unwrap();
                     let out = out.download(&ctx).unwrap();
                     let pout = out.power();
                     let worst = (0..3).map(|k| pout[k] / pin[k] - 1.0).fold(0.0f64, |a, b| {
@@ -188,14 +176,7 @@ fn grace_probe_and_latlong_agree_after_flips() {
             let (out, _) = conv
                 .run(
                     &g,
-                    &ConvertOptions {
-                        to: Mapping::LatLong,
-                        size: 256,
-                        orientation: o,
-                        supersample: None,
-                        nearest: false,
-                        edge_points: None,
-                    },
+                    &ConvertOptions::new(Mapping::LatLong, 256).with_orientation(o),
                 )
                 .unwrap();
             out.download(&ctx).unwrap()

@@ -1,13 +1,23 @@
 //! spirv/ is in step with glsl/, and every pipeline's bindings and push-constant size agree
 //! with what the SPIR-V declares.
 
-use envlight::abi::{self as layout, Kind, ShaderId, SHADER_SOURCES};
-use envlight::gpu::shaders::spirv;
+// The layout is private to the library; read by path, as tools/shaderc reads it.
+#[path = "../src/abi/mod.rs"]
+#[allow(dead_code, unused_imports)]
+mod layout;
+
+use layout::{Kind, ShaderId, SHADER_SOURCES};
 use rspirv_reflect::{DescriptorType, Reflection};
 use std::path::Path;
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The committed SPIR-V of `id`: the file the library embeds (`src/gpu/shaders.rs`
+/// includes `spirv/<name>.spv`).
+fn spirv(id: ShaderId) -> Vec<u8> {
+    std::fs::read(root().join("spirv").join(format!("{}.spv", id.name()))).unwrap()
 }
 
 #[test]
@@ -53,7 +63,7 @@ fn every_shader_is_registered_once() {
 #[test]
 fn bindings_and_push_constants_match_the_spirv() {
     for &id in ShaderId::ALL {
-        let refl = Reflection::new_from_spirv(spirv(id)).unwrap();
+        let refl = Reflection::new_from_spirv(&spirv(id)).unwrap();
         let sets = refl.get_descriptor_sets().unwrap();
         let iface = id.interface();
         let set0 = sets.get(&0).cloned().unwrap_or_default();
@@ -71,7 +81,7 @@ fn bindings_and_push_constants_match_the_spirv() {
             .collect();
         let mut used = std::collections::BTreeSet::new();
         for &o in &same_layout {
-            let r = Reflection::new_from_spirv(spirv(o)).unwrap();
+            let r = Reflection::new_from_spirv(&spirv(o)).unwrap();
             let sets = r.get_descriptor_sets().unwrap();
             used.extend(
                 sets.get(&0)

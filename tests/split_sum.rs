@@ -104,11 +104,8 @@ fn prefiltered_levels_match_their_float64_twin() {
             let level0 = src.download(&ctx).unwrap();
             mips.run(&src).unwrap();
             let chain = SplitSum::chain(&ctx, size, levels).unwrap();
-            let opts = PrefilterOptions {
-                levels,
-                samples,
-                bias,
-            };
+            let mut opts = PrefilterOptions::new(levels);
+            (opts.samples, opts.bias) = (samples, bias);
             ctx.run("split-sum test", |rec| {
                 pass.record_prefilter(rec, &src, &chain, &opts)
             })

@@ -5,7 +5,7 @@
 //! so memory stays bounded.
 //!
 //! The specular cube's level k holds GGX α = (k/(levels − 1))² (level 0 the mirror), filtered
-//! as split-sum's chain is ([`crate::math::split_sum`]: n = v = r, filtered importance
+//! as split-sum's chain is (`crate::math::split_sum`: n = v = r, filtered importance
 //! sampling from the dual-paraboloid MIP chain); an engine reads lod √α·(levels − 1).
 //!
 //! [`output`] says what the files hold for each engine: frames, presets, clamping, lights.
@@ -33,9 +33,11 @@ use crate::{EnvMap, Mapping};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-/// What a bake computes.
+/// What a bake computes: [`Default`] (what `envlight bake` writes without flags), then the
+/// fields that differ.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
+#[non_exhaustive]
 pub struct BakeOptions {
     /// Highest SH band of the coefficients written (the irradiance cube uses them all).
     pub sh_order: u32,
@@ -54,7 +56,7 @@ pub struct BakeOptions {
     /// Also return the dual-paraboloid MIP chain the specular cube is filtered from (what
     /// filtered importance sampling reads at run time).
     pub chain: bool,
-    /// Extract the map's lights ([`crate::math::lights`]) and add them exactly to the
+    /// Extract the map's lights (`crate::math::lights`) and add them exactly to the
     /// irradiance cube and the specular levels ≥ 1, which then see only the residual
     /// through SH and FIS.
     pub lights: bool,
@@ -138,7 +140,7 @@ pub struct SpotCheck {
     pub texels: u32,
     /// The irradiance cube (SH to `sh_order`) against ∫ L·max(0, n·ω) dω.
     pub irradiance: f64,
-    /// The specular cube per level against [`ExactFilter::ggx`]; level 0 (the mirror, a
+    /// The specular cube per level against `ExactFilter::ggx`; level 0 (the mirror, a
     /// resampling) is not checked and holds 0.
     pub specular: Vec<f64>,
 }
@@ -266,14 +268,7 @@ impl PendingBake {
     pub fn wait(self) -> Result<Baked> {
         let (d, timings) = self.inflight.wait()?;
         let flat: Vec<f32> = d.sh.read(sh::count(self.lmax) * 3);
-        let coeffs = flat
-            .chunks_exact(3)
-            .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
-            .collect();
-        let sh = ShCoefficients {
-            lmax: self.lmax,
-            coeffs,
-        };
+        let sh = ShCoefficients::from_f32(self.lmax, &flat);
         let irradiance = d.irradiance.read();
         let specular: Vec<Vec<[f32; 4]>> = d.specular.iter().map(|r| r.read()).collect();
         let chain: Vec<Vec<[f32; 4]>> = d.chain.iter().map(|r| r.read()).collect();
@@ -301,7 +296,7 @@ impl PendingBake {
 }
 
 /// Side of the dual paraboloid the specular cube is filtered from: the source's own
-/// resolution ([`default_dp_size`]), but no finer than twice the cube's face, which already
+/// resolution (`default_dp_size`), but no finer than twice the cube's face, which already
 /// samples the mirror level as finely as the cube holds it (a paraboloid half spans the
 /// hemisphere a cube spans with about two faces' widths of texels at its equator).
 pub fn dp_size(env: &EnvMap, opts: &BakeOptions) -> u32 {
@@ -444,15 +439,11 @@ impl Baker {
         let opts = *opts;
         let inflight = ctx.submit("baking a probe", move |rec| {
             src.record_upload(rec, env)?;
-            self.sh.record(rec, &src, lmax, &orientation, &sh_out)?;
-            let c = ConvertOptions {
-                to: Mapping::DualParaboloid,
-                size: dp_size,
-                orientation,
-                supersample: Some(supersample(env, dp_size)),
-                nearest: false,
-                edge_points: None,
-            };
+            self.sh
+                .record_into(rec, &src, lmax, &orientation, &sh_out)?;
+            let c = ConvertOptions::new(Mapping::DualParaboloid, dp_size)
+                .with_orientation(orientation)
+                .with_supersample(Some(supersample(env, dp_size)));
             self.convert.record(rec, &src, &dp, &c)?;
             self.mip.record(rec, &dp)?;
             let p = PrefilterOptions {

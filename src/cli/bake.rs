@@ -3,18 +3,18 @@
 //! re-runs skip what is done, deterministic shards, and a merge of the shards' manifests.
 
 use super::{context, Global};
-use anyhow::{anyhow, bail, Context as _, Result};
-use clap::Args;
-use envlight::bake::output::{
+use crate::bake::output::{
     clamp_cube, compose, needs_clamp, separate_options, CubeClamp, Irradiance, Preset,
     SeparateLights,
 };
-use envlight::bake::{spot_check, BakeOptions, Baked, Baker, PendingBake, SpotCheck};
-use envlight::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
-use envlight::io::{write_atomic, LoadOptions};
-use envlight::math::lights::extract;
-use envlight::math::split_sum::DfgAxes;
-use envlight::{EnvMap, Mapping, Orientation};
+use crate::bake::{spot_check, BakeOptions, Baked, Baker, PendingBake, SpotCheck};
+use crate::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
+use crate::io::{write_atomic, LoadOptions};
+use crate::math::lights::extract;
+use crate::math::split_sum::DfgAxes;
+use crate::{EnvMap, Mapping, Orientation};
+use anyhow::{anyhow, bail, Context as _, Result};
+use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
@@ -434,7 +434,7 @@ impl Plan {
                 .or(preset.and_then(|p| p.specular_levels(specular_size)))
                 .unwrap_or_else(|| {
                     // 8, or every level a smaller cube has.
-                    let most = envlight::passes::map::full_mips(specular_size, specular_size);
+                    let most = crate::passes::map::full_mips(specular_size, specular_size);
                     d.specular_levels.min(most)
                 }),
             samples: a.samples.or(file.samples).unwrap_or(d.samples),
@@ -591,7 +591,7 @@ fn exr_files(dir: &Path, baked: &Baked, plan: &Plan) -> Result<Vec<(PathBuf, Vec
     let mut files = Vec::new();
     let tmp = dir.join(format!(".bake-{}.exr", std::process::id()));
     let exr = |map: &EnvMap| -> Result<Vec<u8>> {
-        envlight::io::save_exr(map, &tmp)?;
+        crate::io::save_exr(map, &tmp)?;
         let b = std::fs::read(&tmp)?;
         let _ = std::fs::remove_file(&tmp);
         Ok(b)
@@ -902,7 +902,7 @@ fn summary(manifest: &Manifest, plan: &Plan) {
             .as_ref()
             .map_or("0".into(), |c| format!("{:.2e}", c.worst()));
         let separated = e.separated.map_or("–".into(), |s| {
-            format!("{:.3}", envlight::math::envmap::luminance(s))
+            format!("{:.3}", crate::math::envmap::luminance(s))
         });
         println!(
             "| {} | {} | {:.3} | {:.1} | {irr} | {spec} | {clamped} | {separated} |",
@@ -1145,7 +1145,7 @@ fn read_probes(
             _ => {
                 let map = bytes
                     .map_err(anyhow::Error::from)
-                    .and_then(|b| Ok(envlight::io::load_bytes(path, &b, &LoadOptions::default())?));
+                    .and_then(|b| Ok(crate::io::load_bytes(path, &b, &LoadOptions::default())?));
                 Prepared::Bake {
                     path: path.clone(),
                     input,

@@ -1,12 +1,12 @@
 //! `envlight info`, `lights`, `devices` and `synth-sky`.
 
 use super::{context, load_input, Global, Input};
+use crate::io;
+use crate::math::lights::{extract, group, ExtractOptions};
+use crate::math::synth::Sky;
+use crate::{EnvMap, Mapping};
 use anyhow::Result;
 use clap::Args;
-use envlight::io;
-use envlight::math::lights::{extract, group, ExtractOptions};
-use envlight::math::synth::Sky;
-use envlight::{EnvMap, Mapping};
 use std::path::PathBuf;
 
 /// Print a map's mapping, size, radiance statistics and total power
@@ -23,10 +23,10 @@ pub struct LightsArgs {
     #[command(flatten)]
     input: Input,
     /// A texel is a light texel above this many times the map's mean luminance
-    #[arg(long, default_value_t = envlight::abi::lights::DEFAULT_RATIO)]
+    #[arg(long, default_value_t = crate::abi::lights::DEFAULT_RATIO)]
     ratio: f64,
     /// Most light texels kept (the threshold rises to keep to it)
-    #[arg(long, default_value_t = envlight::abi::lights::MAX_TEXELS as usize)]
+    #[arg(long, default_value_t = crate::abi::lights::MAX_TEXELS as usize)]
     max_texels: usize,
     /// Grow the lights by this many rings of texels and fill the residual under them from
     /// around them, as the renderer's chain does (default: clamp the residual at the
@@ -45,7 +45,7 @@ fn print_lights(map: &EnvMap, opts: &ExtractOptions) {
     let ex = extract(map, opts);
     let lights = group(map, &ex, GROUP_RADIUS);
     let share: f64 = lights.iter().map(|l| l.share).sum();
-    let mean = envlight::math::envmap::luminance(map.stats().power) / (4.0 * std::f64::consts::PI);
+    let mean = crate::math::envmap::luminance(map.stats().power) / (4.0 * std::f64::consts::PI);
     println!(
         "lights:    {} ({} texels above {:.4e} = {:.1} x the mean luminance{}{}; {:.1}% of the power)",
         lights.len(),
@@ -180,7 +180,7 @@ pub fn devices(g: &Global) -> Result<()> {
 
 /// The line `envlight devices` reports its context's start-up and teardown with (read back by
 /// `bench peers`, [`parse_startup_line`]).
-pub fn startup_line(s: &envlight::gpu::Startup, teardown_ms: f64) -> String {
+pub fn startup_line(s: &crate::gpu::Startup, teardown_ms: f64) -> String {
     format!(
         "start-up ms: loader {:.1}, instance {:.1}, device {:.1}, rest {:.1}; teardown ms {:.1}",
         s.loader_ms, s.instance_ms, s.device_ms, s.rest_ms, teardown_ms

@@ -4,17 +4,17 @@ use super::{
     finite_f32, finite_f64, load_with_context, print_timings, save, spinner, upload_while,
     write_map, FilterOut, Global, HostClock, Input, MappingArg, Orient,
 };
+use crate::io::ToneMap;
+use crate::math::filter::Kernel;
+use crate::math::sh::{self, Window};
+use crate::math::Mapping;
+use crate::passes::brute::PhongLevels;
+use crate::passes::sh_project::Subgroups;
+use crate::passes::{BruteFilter, ConvertOptions, Converter, ShEvaluator, ShProjector};
+use crate::scene::defaults;
+use crate::GpuEnvMap;
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, ValueEnum};
-use envlight::io::ToneMap;
-use envlight::math::filter::Kernel;
-use envlight::math::sh::{self, Window};
-use envlight::math::Mapping;
-use envlight::passes::brute::PhongLevels;
-use envlight::passes::sh_project::Subgroups;
-use envlight::passes::{BruteFilter, ConvertOptions, Converter, ShEvaluator, ShProjector};
-use envlight::scene::defaults;
-use envlight::GpuEnvMap;
 use std::path::PathBuf;
 
 /// Convert a map to another mapping and resolution on the GPU
@@ -119,12 +119,12 @@ pub struct PrefilterArgs {
     input: Input,
     #[command(flatten)]
     orient: Orient,
-    /// Phong exponent n (envlight::abi::constants::PHONG_EXPONENT_RANGE: 1 to 1e7)
+    /// Phong exponent n (1 to 1e7)
     #[arg(long, value_parser = finite_f64, required_unless_present = "phong_levels", conflicts_with = "phong_levels")]
     phong: Option<f64>,
     /// Write K levels instead, like cmft's radiance filter: level k is --size halved k times,
     /// filtered with n = 2^(scale·(1 − k/(K−1)) + bias) + 1, each from the coarsest level of
-    /// the source's moment pyramid its lobe allows; files OUT's stem + ".level<k>.exr" and
+    /// the source's moment pyramid its lobe allows; files OUT's stem + `.level<k>.exr` and
     /// a JSON list of the levels at OUT's stem + ".levels.json"
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16))]
     phong_levels: Option<u32>,
@@ -161,14 +161,9 @@ pub fn convert(g: &Global, a: &ConvertArgs) -> Result<()> {
     let conv = Converter::new(&ctx)?;
     let (src, ()) = upload_while(&ctx, &map, || conv.prepare(map.mapping, a.to.into()))?;
     clock.lap(UPLOAD);
-    let opts = ConvertOptions {
-        to: a.to.into(),
-        size: a.size,
-        orientation: a.orient.orientation(),
-        supersample: a.supersample,
-        nearest: false,
-        edge_points: None,
-    };
+    let opts = ConvertOptions::new(a.to.into(), a.size)
+        .with_orientation(a.orient.orientation())
+        .with_supersample(a.supersample);
     let (dst, timings) = conv.run(&src, &opts)?;
     clock.lap(RUN);
     let out = dst.download(&ctx)?;
@@ -219,7 +214,7 @@ pub fn irradiance(g: &Global, a: &IrradianceArgs) -> Result<()> {
     // The projector's pipelines build on a second thread while this one uploads the map and
     // then builds the evaluator's.
     let (gm, projector, evaluator) = std::thread::scope(|s| {
-        let building = s.spawn(|| -> envlight::Result<Option<ShProjector>> {
+        let building = s.spawn(|| -> crate::Result<Option<ShProjector>> {
             if !sh {
                 return Ok(None);
             }
@@ -247,7 +242,7 @@ pub fn irradiance(g: &Global, a: &IrradianceArgs) -> Result<()> {
         Method::Sh => {
             let projector = projector.context("the SH projector is built for --method sh")?;
             let (c, mut timings) = projector.run_oriented(&gm, order, &o)?;
-            let dirs = envlight::math::synth::fibonacci_sphere(20_000);
+            let dirs = crate::math::synth::fibonacci_sphere(20_000);
             let raw = sh::negativity(&sh::irradiance_coeffs(&c.coeffs), &dirs);
             if raw.fraction > 0.0 {
                 println!(

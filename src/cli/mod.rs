@@ -1,6 +1,8 @@
 //! The command line: one file per subcommand family, sharing the arguments and helpers here.
-//! Only the binary uses it; the library knows nothing of clap, indicatif or anyhow.
+//! Only the `envlight` binary calls it (feature `cli`, [`main`]); the rest of the library
+//! knows nothing of clap, indicatif or anyhow. Hidden from the documentation: not an API.
 
+mod app;
 pub mod bake;
 pub mod info;
 pub mod maps;
@@ -8,12 +10,14 @@ pub mod preview;
 pub mod reports;
 pub mod scene;
 
+pub use app::main;
+
+use crate::gpu::{Context, ContextOptions, DeviceSelector, Timing};
+use crate::io::{self, LoadOptions, Sanitize, ToneMap};
+use crate::passes::FilterTarget;
+use crate::{EnvMap, GpuEnvMap, Mapping, Orientation};
 use anyhow::{Context as _, Result};
 use clap::{Args, ValueEnum};
-use envlight::gpu::{Context, ContextOptions, DeviceSelector, Timing};
-use envlight::io::{self, LoadOptions, Sanitize, ToneMap};
-use envlight::passes::FilterTarget;
-use envlight::{EnvMap, GpuEnvMap, Mapping, Orientation};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -183,7 +187,7 @@ pub fn context(g: &Global) -> Result<Context> {
 }
 
 /// The validation logs of every context this process made with validation on.
-static VALIDATION_LOGS: std::sync::Mutex<Vec<envlight::gpu::ValidationLog>> =
+static VALIDATION_LOGS: std::sync::Mutex<Vec<crate::gpu::ValidationLog>> =
     std::sync::Mutex::new(Vec::new());
 
 /// Messages the validation layer reported on this process's contexts, teardown included:
@@ -256,7 +260,7 @@ pub fn context_while<T: Send>(
 pub fn upload_while<T: Send>(
     ctx: &Context,
     map: &EnvMap,
-    prepare: impl FnOnce() -> envlight::Result<T> + Send,
+    prepare: impl FnOnce() -> crate::Result<T> + Send,
 ) -> Result<(GpuEnvMap, T)> {
     std::thread::scope(|s| {
         let building = s.spawn(prepare);

@@ -1,9 +1,9 @@
 //! Human-friendly previews: a cube as a horizontal cross, a dual paraboloid as two discs side
 //! by side, lat-long and angular maps as they are; and a contact sheet of several maps.
 
-use envlight::io::{tone_map, ToneMap};
-use envlight::EnvMap;
-use envlight::Mapping;
+use crate::io::{tone_map, ToneMap};
+use crate::EnvMap;
+use crate::Mapping;
 use image::RgbImage;
 
 /// Tone-mapped preview of a map in its natural layout.

@@ -1,11 +1,11 @@
 //! `envlight render`, `plan` and `demo`.
 
 use super::{context, context_while, preview, Global, HostClock};
+use crate::io::{self, LoadOptions, ToneMap};
+use crate::passes::{ConvertOptions, Converter};
+use crate::{GpuEnvMap, Mapping};
 use anyhow::{Context as _, Result};
 use clap::Args;
-use envlight::io::{self, LoadOptions, ToneMap};
-use envlight::passes::{ConvertOptions, Converter};
-use envlight::{GpuEnvMap, Mapping, Orientation};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 
@@ -49,11 +49,11 @@ pub fn render(g: &Global, a: &RenderArgs) -> Result<()> {
 /// `envlight plan`.
 pub fn plan(a: &PlanArgs) -> Result<()> {
     let scene = &a.scene;
-    let sc = envlight::scene::Scene::load(scene)?;
+    let sc = crate::scene::Scene::load(scene)?;
     let base = scene.parent().unwrap_or(Path::new("."));
     let path = base.join(&sc.environment.file);
-    let env = envlight::render::load_environment(&sc, base)?;
-    let plan = envlight::render::plan(&sc, &env);
+    let env = crate::render::load_environment(&sc, base)?;
+    let plan = crate::render::plan(&sc, &env);
     println!(
         "{} ({}, {} {}×{})",
         scene.display(),
@@ -110,14 +110,7 @@ fn demo_maps(cli: &Global, input: &Path, out: &Path, size: u32) -> Result<()> {
         } else {
             size / 2
         };
-        let opts = ConvertOptions {
-            to,
-            size: n.max(1),
-            orientation: Orientation::default(),
-            supersample: None,
-            nearest: false,
-            edge_points: None,
-        };
+        let opts = ConvertOptions::new(to, n.max(1));
         let (dst, timings) = conv.run(&src, &opts)?;
         let result = dst.download(&ctx)?;
         let exr = out.join(format!("sky_{}.exr", to.name()));
@@ -164,20 +157,20 @@ fn demo_scene(cli: &Global, out: &Path) -> Result<()> {
 
 fn render_scene(cli: &Global, scene: &Path, output: &Path) -> Result<()> {
     let mut clock = HostClock::start();
-    let sc = envlight::scene::Scene::load(scene)?;
+    let sc = crate::scene::Scene::load(scene)?;
     let base = scene.parent().unwrap_or(Path::new("."));
     // The environment loads on a second thread while the device is created (as the map
     // commands do); a bad file is reported before a missing driver.
-    let (env, ctx) = context_while(cli, || Ok(envlight::render::load_environment(&sc, base)?))?;
+    let (env, ctx) = context_while(cli, || Ok(crate::render::load_environment(&sc, base)?))?;
     clock.lap("load scene and map ∥ create device");
     let t0 = std::time::Instant::now();
-    let r = envlight::render::render(&ctx, &sc, &env)?;
+    let r = crate::render::render(&ctx, &sc, &env)?;
     let wall = t0.elapsed().as_secs_f64();
     clock.lap("render (pipelines, passes, waits)");
     if let Some(dir) = output.parent() {
         std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
     }
-    envlight::io::save_exr(&r.frame, output)?;
+    crate::io::save_exr(&r.frame, output)?;
     let png = output.with_extension("png");
     let tm = ToneMap::default();
     preview::preview(&r.frame, tm)

@@ -169,25 +169,6 @@ pub fn full_barrier() -> vk::MemoryBarrier2<'static> {
         .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
 }
 
-/// Records image barriers.
-pub fn cmd_image_barriers(
-    device: &ash::Device,
-    cmd: vk::CommandBuffer,
-    barriers: &[vk::ImageMemoryBarrier2<'_>],
-) {
-    let dep = vk::DependencyInfo::default().image_memory_barriers(barriers);
-    // SAFETY: cmd is recording; the barriers reference live images of this device.
-    unsafe { device.cmd_pipeline_barrier2(cmd, &dep) };
-}
-
-/// Records a global memory barrier.
-pub fn cmd_memory_barrier(device: &ash::Device, cmd: vk::CommandBuffer, b: vk::MemoryBarrier2<'_>) {
-    let bs = [b];
-    let dep = vk::DependencyInfo::default().memory_barriers(&bs);
-    // SAFETY: cmd is recording.
-    unsafe { device.cmd_pipeline_barrier2(cmd, &dep) };
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -58,14 +58,26 @@ impl DeviceSelector {
     }
 }
 
-/// Options for [`Context::new`].
+/// Options for [`Context::new`]: [`ContextOptions::new`] or [`Default`].
 #[derive(Clone, Debug)]
+#[non_exhaustive]
 pub struct ContextOptions {
     /// Enable the Khronos validation layer and record its messages (on in debug builds and
     /// whenever `ENVLIGHT_VALIDATION=1`).
     pub validation: bool,
     /// Which device.
     pub device: DeviceSelector,
+}
+
+impl ContextOptions {
+    /// The device `device` picks, with validation as [`Default`] sets it (debug builds and
+    /// `ENVLIGHT_VALIDATION=1`).
+    pub fn new(device: DeviceSelector) -> Self {
+        ContextOptions {
+            device,
+            ..Default::default()
+        }
+    }
 }
 
 impl Default for ContextOptions {
@@ -565,7 +577,7 @@ impl Context {
     }
 
     /// The shader module name of every pipeline created on this context so far, in order.
-    pub fn pipelines_created(&self) -> Vec<&'static str> {
+    pub(crate) fn pipelines_created(&self) -> Vec<&'static str> {
         self.shared
             .pipelines
             .lock()

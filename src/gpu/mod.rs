@@ -1,31 +1,31 @@
 //! Thin Vulkan plumbing: context, RAII resources, barriers from declared usages, pipelines,
-//! the recorder and timing. It knows the shader table ([`crate::abi`]) and nothing of passes
+//! the recorder and timing. It knows the shader table (`crate::abi`) and nothing of passes
 //! or maths.
 
-pub mod barrier;
-pub mod context;
-pub mod pipeline;
-pub mod recorder;
-pub mod resources;
-pub mod shaders;
-pub mod timing;
+pub(crate) mod barrier;
+pub(crate) mod context;
+pub(crate) mod pipeline;
+pub(crate) mod recorder;
+pub(crate) mod resources;
+pub(crate) mod shaders;
+pub(crate) mod timing;
 
 pub use barrier::Usage;
 pub use context::{
     AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSelector, Startup, ValidationLog,
 };
-pub use pipeline::{Bind, Pipeline};
+pub(crate) use pipeline::{Bind, Pipeline};
 pub use recorder::{InFlight, Recorded, Recorder};
 pub use resources::{Buffer, Image, ImageDesc, Sampler};
 pub use timing::Timing;
 
 /// Number of workgroups of `size` needed to cover `n` items.
-pub fn groups(n: u32, size: u32) -> u32 {
+pub(crate) fn groups(n: u32, size: u32) -> u32 {
     n.div_ceil(size)
 }
 
 /// A 3×3 matrix as the three rows of `vec4 m[3]` in a push-constant block (w unused).
-pub fn mat3_rows(m: glam::DMat3) -> [[f32; 4]; 3] {
+pub(crate) fn mat3_rows(m: glam::DMat3) -> [[f32; 4]; 3] {
     [0, 1, 2].map(|r| {
         let v = m.row(r);
         [v.x as f32, v.y as f32, v.z as f32, 0.0]

@@ -191,7 +191,7 @@ impl Recorder {
 
     /// Records a dispatch of the compute `pipeline` with `binds` and `push`, over `groups`
     /// workgroups, after the barriers its bindings need.
-    pub fn dispatch<P: PushBlock>(
+    pub(crate) fn dispatch<P: PushBlock>(
         &mut self,
         pipeline: &Pipeline,
         binds: &[(u32, Bind<'_>)],
@@ -215,7 +215,7 @@ impl Recorder {
 
     /// Records a fullscreen draw of the graphics `pipeline` into `targets` (one-layer images
     /// of equal size, contents discarded), after the barriers its bindings need.
-    pub fn draw_fullscreen<P: PushBlock>(
+    pub(crate) fn draw_fullscreen<P: PushBlock>(
         &mut self,
         pipeline: &Pipeline,
         binds: &[(u32, Bind<'_>)],

@@ -47,7 +47,7 @@ pub struct Buffer {
 impl Buffer {
     /// Creates a buffer of `size` bytes in `location` (CpuToGpu and GpuToCpu are mapped).
     /// With UNIFORM_TEXEL_BUFFER usage it also gets a view of the whole buffer as rgba32f
-    /// texels (`size` a multiple of 16), which [`super::Bind::Texels`] binds.
+    /// texels (`size` a multiple of 16), which `super::Bind::Texels` binds.
     pub fn new(
         ctx: &Context,
         name: &str,

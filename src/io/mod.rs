@@ -61,8 +61,9 @@ pub enum Sanitize {
     Zero,
 }
 
-/// Options for [`load`].
+/// Options for [`load`]: [`LoadOptions::new`] or [`Default`], then the fields that differ.
 #[derive(Clone, Debug)]
+#[non_exhaustive]
 pub struct LoadOptions {
     /// The mapping, if the caller knows it; otherwise it is inferred (see the module docs).
     pub mapping: Option<Mapping>,
@@ -70,6 +71,17 @@ pub struct LoadOptions {
     pub sanitize: Sanitize,
     /// Largest number of texels (all layers) accepted, a guard against absurd headers.
     pub max_texels: u64,
+}
+
+impl LoadOptions {
+    /// A file of `mapping` (`None`: inferred), rejecting NaN, infinite and negative texels,
+    /// with the default size guard.
+    pub fn new(mapping: Option<Mapping>) -> Self {
+        LoadOptions {
+            mapping,
+            ..Default::default()
+        }
+    }
 }
 
 impl Default for LoadOptions {

@@ -196,7 +196,7 @@ impl Brdf {
         }
     }
 
-    /// How its f·cos fades towards the horizon ([`crate::abi::brdf::HORIZON_FADE`]).
+    /// How its f·cos fades towards the horizon (`crate::abi::brdf::HORIZON_FADE`).
     pub fn horizon_fade(&self) -> f64 {
         crate::abi::brdf::HORIZON_FADE[self.id() as usize]
     }

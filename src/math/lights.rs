@@ -50,10 +50,10 @@ impl Default for ExtractOptions {
 
 impl ExtractOptions {
     /// The renderer's default for the chain that FIS, split-sum and footprint lookups read
-    /// ([`crate::abi::lights::CHAIN_RATIO`], [`crate::abi::lights::CHAIN_MAX_TEXELS`], the
-    /// residual filled under lights grown by [`crate::abi::lights::CHAIN_FILL`]):
+    /// (`crate::abi::lights::CHAIN_RATIO`, `crate::abi::lights::CHAIN_MAX_TEXELS`, the
+    /// residual filled under lights grown by `crate::abi::lights::CHAIN_FILL`):
     /// deeper than [`Default`] (the bake's, whose per-texel sums have no tree), the texels
-    /// summed through a [`super::light_tree::LightTree`].
+    /// summed through a `super::light_tree::LightTree`.
     pub fn chain() -> ExtractOptions {
         ExtractOptions {
             ratio: crate::abi::lights::CHAIN_RATIO,
@@ -482,7 +482,7 @@ fn centre_only(t: &PreparedLight, width: f64) -> bool {
 pub enum LightKernel {
     /// max(0, r·ω): irradiance.
     Cosine,
-    /// [`super::split_sum::chain_kernel`] at α.
+    /// `super::split_sum::chain_kernel` at α.
     Ggx {
         /// GGX α.
         alpha: f64,
@@ -501,7 +501,7 @@ pub struct PreparedLight {
     pub radiance: [f64; 3],
     /// √Ω.
     pub rho: f64,
-    /// [`nodes`], turned to the world.
+    /// `nodes`, turned to the world.
     pub nodes: Vec<(DVec3, f64)>,
 }
 
@@ -634,13 +634,13 @@ pub fn gpu_list(lights: &[PreparedLight]) -> Vec<[f32; 4]> {
 }
 
 /// Light texels gathered for the cosine kernel (diffuse irradiance): the texels of one cell
-/// of a [`CLUSTER_GRID`] × [`CLUSTER_GRID`]/2 lat-long grid over the file frame, kept as
+/// of a `CLUSTER_GRID` × `CLUSTER_GRID`/2 lat-long grid over the file frame, kept as
 /// per-channel vector sums V = Σ L·Ω·ω. Their irradiance max(0, n·V) equals the texels'
 /// Σ L·Ω·max(0, n·ω) exactly wherever n's horizon misses the cell (the cosine is linear on
 /// either side of it); where it cuts the cell the error is at most the power of the cell's
-/// texels times the sine of its angular diameter ([`cluster_irradiance`]). A handful of
+/// texels times the sine of its angular diameter (`cluster_irradiance`). A handful of
 /// clusters thus carries thousands of light texels, so diffuse techniques can extract deeply
-/// ([`DIFFUSE_RATIO`]) at a cost bounded by the grid.
+/// (`DIFFUSE_RATIO`) at a cost bounded by the grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cluster {
     /// Σ L·Ω·ω per channel (world).

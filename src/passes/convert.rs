@@ -1,5 +1,5 @@
 //! Conversion of an environment map from any mapping to any other, at any resolution
-//! (`glsl/convert.comp`, float64 twin [`crate::math::convert`]).
+//! (`glsl/convert.comp`, float64 twin `crate::math::convert`).
 
 use super::map::GpuEnvMap;
 use crate::abi::{area, binding, push::ConvertPush, ShaderId, WORKGROUP_2D};
@@ -10,8 +10,11 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 use std::sync::OnceLock;
 
-/// Per-call options of [`Converter::run`].
-#[derive(Clone, Copy, Debug)]
+/// Per-call options of [`Converter::run`] and [`Converter::record`]: start from
+/// [`ConvertOptions::new`] (or [`Default`]) and change what differs with the `with_*` methods
+/// or the fields; new options arrive with defaults that keep today's output.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct ConvertOptions {
     /// Output mapping.
     pub to: Mapping,
@@ -28,11 +31,64 @@ pub struct ConvertOptions {
     /// reconstruction), and a bright texel stays within its own footprint.
     pub nearest: bool,
     /// Points per edge of a dual-paraboloid texel's footprint polygon in the area conversion,
-    /// away from the poles (which take [`area::POLE_STEPS`]); 1 to that. `None`:
-    /// [`area::PARABOLOID_EDGE_STEPS`]. Fewer are faster and keep power less well where suns
+    /// away from the poles (which take `area::POLE_STEPS`); 1 to that. `None`:
+    /// `area::PARABOLOID_EDGE_STEPS`. Fewer are faster and keep power less well where suns
     /// lie in rim texels (1024 × 512 with suns at the poles and seam to 256: 9.9e-6 at 8, 8.7e-5
     /// at 2; tests/convert.rs). Other conversions ignore it.
     pub edge_points: Option<u32>,
+}
+
+impl ConvertOptions {
+    /// To `to` at `size`, the source taken as loaded ([`Orientation::default`]), samples per
+    /// texel picked from the resolutions, bilinear reads, and the default points per
+    /// paraboloid texel edge.
+    pub fn new(to: Mapping, size: u32) -> Self {
+        ConvertOptions {
+            to,
+            size,
+            orientation: Orientation::default(),
+            supersample: None,
+            nearest: false,
+            edge_points: None,
+        }
+    }
+
+    /// The same, with the source oriented as `orientation`.
+    pub fn with_orientation(self, orientation: Orientation) -> Self {
+        ConvertOptions {
+            orientation,
+            ..self
+        }
+    }
+
+    /// The same, with `supersample` samples per axis per output texel (`None`: picked from
+    /// the resolutions).
+    pub fn with_supersample(self, supersample: Option<u32>) -> Self {
+        ConvertOptions {
+            supersample,
+            ..self
+        }
+    }
+
+    /// The same, reading the source's nearest texel at each sample where `nearest` is true.
+    pub fn with_nearest(self, nearest: bool) -> Self {
+        ConvertOptions { nearest, ..self }
+    }
+
+    /// The same, with `edge_points` points per paraboloid texel edge (`None`: the default).
+    pub fn with_edge_points(self, edge_points: Option<u32>) -> Self {
+        ConvertOptions {
+            edge_points,
+            ..self
+        }
+    }
+}
+
+impl Default for ConvertOptions {
+    /// A 256² cube, with [`ConvertOptions::new`]'s defaults.
+    fn default() -> Self {
+        ConvertOptions::new(Mapping::Cube, 256)
+    }
 }
 
 /// `opts`' points per paraboloid texel edge, checked: 1 to [`area::POLE_STEPS`].

@@ -1,5 +1,5 @@
 //! The G-buffer: analytic spheres and planes ray cast per pixel by a fullscreen fragment pass
-//! (`glsl/gbuffer.frag`, float64 twin [`crate::math::camera`]). Shading passes read it: SH
+//! (`glsl/gbuffer.frag`, float64 twin `crate::math::camera`). Shading passes read it: SH
 //! diffuse shading here, glossy techniques later, all from the same three images.
 
 use super::map::GpuEnvMap;
@@ -91,7 +91,7 @@ pub fn shape_record(shape: &Shape) -> GpuObject {
     }
 }
 
-/// Bit `id` for each BRDF id among `ids` ([`crate::abi::brdf::ids`]).
+/// Bit `id` for each BRDF id among `ids` (`crate::abi::brdf::ids`).
 pub fn brdf_bits(ids: impl IntoIterator<Item = u32>) -> u32 {
     ids.into_iter()
         .fold(0, |bits, id| bits | 1u32.checked_shl(id).unwrap_or(0))

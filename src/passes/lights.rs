@@ -1,5 +1,5 @@
 //! Extracted light texels added exactly to a cube level (`glsl/lights.comp`, float64 twin
-//! [`crate::math::lights::light_sum`]): the bake's irradiance (cosine) and specular (GGX at
+//! `crate::math::lights::light_sum`): the bake's irradiance (cosine) and specular (GGX at
 //! n = v = r) cubes get their lights this way, on top of what the residual map gives.
 
 use super::map::GpuEnvMap;
@@ -8,9 +8,9 @@ use crate::abi::{binding, push::LightsPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder};
 use crate::math::light_tree::LightTree;
-use crate::math::lights::{
-    cluster_list, clusters, gpu_list, prepare, Cluster, Extraction, LightKernel, PreparedLight,
-    CLUSTER_GRID,
+use crate::math::lights::{cluster_list, clusters, gpu_list, prepare, CLUSTER_GRID};
+pub use crate::math::lights::{
+    Cluster, ExtractOptions, Extraction, LightKernel, LightTexel, PreparedLight,
 };
 use crate::math::split_sum::chain_norm;
 use crate::EnvMap;
@@ -33,7 +33,7 @@ impl GpuLights {
     }
 
     /// Uploads `lights` (all with the same number of nodes) in the order of their tree
-    /// ([`LightTree`]), then `clusters`, then the tree's nodes.
+    /// (`LightTree`), then `clusters`, then the tree's nodes.
     pub fn upload_with_clusters(
         ctx: &Context,
         lights: &[PreparedLight],
@@ -86,8 +86,8 @@ impl GpuLights {
     }
 
     /// The lights of `map` on the GPU, or `None` where neither extraction is given: the
-    /// light texels of `texels` ([`prepare`]d for lobes down to `finest`) and the clusters
-    /// of `diffuse` ([`clusters`] on [`CLUSTER_GRID`]), file directions turned to the world
+    /// light texels of `texels` (`prepare`d for lobes down to `finest`) and the clusters
+    /// of `diffuse` (`clusters` on `CLUSTER_GRID`), file directions turned to the world
     /// by `file_to_world`.
     pub fn of_extractions(
         ctx: &Context,
@@ -125,7 +125,7 @@ impl GpuLights {
         crate::abi::lights::HEADER_VEC4S + self.nodes
     }
 
-    /// The buffer ([`crate::math::lights::gpu_list`]'s layout for the texels, in tree order).
+    /// The buffer (`crate::math::lights::gpu_list`'s layout for the texels, in tree order).
     pub fn buffer(&self) -> &Buffer {
         &self.buffer
     }
@@ -148,7 +148,7 @@ impl LightsPass {
     }
 
     /// Records the addition of `lights` filtered by `kernel` — divided by ∫K dω for GGX
-    /// ([`chain_norm`]), as is for the cosine (irradiance) — to level `level` of the cube
+    /// (`chain_norm`), as is for the cosine (irradiance) — to level `level` of the cube
     /// `dst`. Span: "lights".
     pub fn record(
         &self,
@@ -176,7 +176,7 @@ impl LightsPass {
     }
 
     /// Records the addition of `lights`' clusters' irradiance
-    /// ([`crate::math::lights::cluster_irradiance`]) to level `level` of the cube `dst`.
+    /// (`crate::math::lights::cluster_irradiance`) to level `level` of the cube `dst`.
     /// Span: "light clusters".
     pub fn record_clusters(
         &self,

@@ -1,4 +1,4 @@
-//! The Monte Carlo reference (`glsl/mc.comp`, float64 twin [`crate::math::mc`]): progressive
+//! The Monte Carlo reference (`glsl/mc.comp`, float64 twin `crate::math::mc`): progressive
 //! frames of BRDF × environment samples combined by MIS, accumulated per pixel with the
 //! luminance's second moment, so that every frame can say how far it still is from converged.
 
@@ -9,7 +9,7 @@ use crate::abi::{binding, push::McPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing};
 use crate::math::envmap::luminance;
-use crate::math::envsample::EnvSampler;
+pub use crate::math::envsample::EnvSampler;
 use crate::math::{Mapping, Orientation};
 use crate::EnvMap;
 
@@ -59,14 +59,7 @@ impl McEnv {
         let width = (((2.0 * n).sqrt() as u32).max(8) / 2 * 2).min(8192);
         let (ll, t) = converter.run(
             gpu,
-            &ConvertOptions {
-                to: Mapping::LatLong,
-                size: width,
-                orientation: *orientation,
-                supersample: None,
-                nearest: false,
-                edge_points: None,
-            },
+            &ConvertOptions::new(Mapping::LatLong, width).with_orientation(*orientation),
         )?;
         Ok((
             McEnv::new(ctx, &ll.download(ctx)?, &Orientation::default())?,
@@ -75,8 +68,9 @@ impl McEnv {
     }
 }
 
-/// Per-run options.
+/// Per-run options: [`McOptions::new`] or [`Default`], then the fields that differ.
 #[derive(Clone, Copy, Debug)]
+#[non_exhaustive]
 pub struct McOptions {
     /// Most samples per pixel.
     pub samples: u32,
@@ -98,6 +92,17 @@ pub const DEFAULT_SAMPLES: u32 = 1024;
 pub const DEFAULT_PER_FRAME: u32 = 64;
 /// The default Monte Carlo seed.
 pub const DEFAULT_SEED: u32 = 1;
+
+impl McOptions {
+    /// At most `samples` samples per pixel, the other options at their defaults (MIS on, no
+    /// shadows, the default seed and samples per frame, no early stop).
+    pub fn new(samples: u32) -> Self {
+        McOptions {
+            samples,
+            ..Default::default()
+        }
+    }
+}
 
 impl Default for McOptions {
     fn default() -> Self {

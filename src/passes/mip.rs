@@ -1,4 +1,4 @@
-//! The dual-paraboloid MIP chain (`glsl/mip.comp`, float64 twin [`crate::math::mip`]):
+//! The dual-paraboloid MIP chain (`glsl/mip.comp`, float64 twin `crate::math::mip`):
 //! premultiplies level 0 by each texel's solid-angle weight, then box-filters level after
 //! level down to 1 × 1. Lookups divide rgb by alpha.
 

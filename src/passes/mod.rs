@@ -17,8 +17,11 @@ pub mod sh_eval;
 pub mod sh_project;
 pub mod shade;
 pub mod split_sum;
-#[doc(hidden)]
+#[cfg(feature = "test-hooks")]
 pub mod testing;
+#[cfg(not(feature = "test-hooks"))]
+#[allow(dead_code)]
+pub(crate) mod testing;
 
 pub use brute::{BruteFilter, FilterTarget};
 pub use convert::{ConvertOptions, Converter};
@@ -29,6 +32,6 @@ pub use mc::MonteCarlo;
 pub use mip::MipChain;
 pub use sh_brdf::{ShBrdfProjector, ShRotator};
 pub use sh_eval::ShEvaluator;
-pub use sh_project::ShProjector;
+pub use sh_project::{ShCoefficients, ShProjector, ShReadback};
 pub use shade::Shade;
 pub use split_sum::{PrefilterOptions, SplitSum};

@@ -1,7 +1,7 @@
 //! SH shading of arbitrary BRDFs (Kautz, Sloan & Snyder 2002): the projection of a BRDF onto
-//! SH per view of a grid (`glsl/sh_brdf.comp`, float64 twin [`crate::math::sh_brdf`]), and the
+//! SH per view of a grid (`glsl/sh_brdf.comp`, float64 twin `crate::math::sh_brdf`), and the
 //! rotation of SH vectors by either construction (`glsl/sh_rotate.comp`, twin
-//! [`crate::math::sh_rotate`]) that the shading pass uses per pixel and tests check alone.
+//! `crate::math::sh_rotate`) that the shading pass uses per pixel and tests check alone.
 
 use crate::abi::{binding, push::ShBrdfPush, push::ShRotatePush, sh_brdf, ShaderId};
 use crate::abi::{SH_MAX_LMAX, WORKGROUP_1D};
@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Timing, Usage};
 use crate::math::brdf::Brdf;
 use crate::math::sh::count;
-use crate::math::sh_brdf::ViewGrid;
+pub use crate::math::sh_brdf::ViewGrid;
 use crate::math::sh_rotate::x90;
 use ash::vk;
 use glam::DMat3;
@@ -81,7 +81,7 @@ impl ShBrdfProjector {
     }
 
     /// Records the table of `brdf` to band `lmax` over `grid` into `out` from float `offset`
-    /// on (view after view, row-major, [`count`]`(lmax)` floats each). Span: "sh brdf table".
+    /// on (view after view, row-major, `count``(lmax)` floats each). Span: "sh brdf table".
     pub fn record(
         &self,
         rec: &mut Recorder,

@@ -1,5 +1,5 @@
 //! Irradiance evaluated from SH coefficients at every texel centre of a map (Ramamoorthi &
-//! Hanrahan 2001, `glsl/sh_eval.comp`, float64 twin [`crate::math::sh::eval`]).
+//! Hanrahan 2001, `glsl/sh_eval.comp`, float64 twin `crate::math::sh::eval`).
 
 use super::brute::FilterTarget;
 use super::map::GpuEnvMap;
@@ -27,7 +27,7 @@ impl ShEvaluator {
     }
 
     /// Records Σ c_lm·Y_lm(d) (clamped at 0) at every texel centre d of `dst`. For
-    /// irradiance, pass [`sh::irradiance_coeffs`] of the radiance, windowed or not.
+    /// irradiance, pass `sh::irradiance_coeffs` of the radiance, windowed or not.
     pub fn record(&self, rec: &mut Recorder, coeffs: &[[f64; 3]], dst: &GpuEnvMap) -> Result<()> {
         let lmax = (coeffs.len() as f64).sqrt() as u32 - 1;
         if sh::count(lmax) != coeffs.len() || lmax > SH_MAX_LMAX {
@@ -49,7 +49,7 @@ impl ShEvaluator {
     /// Records irradiance at every texel centre of `dst` from radiance coefficients the GPU
     /// holds: bands up to `lmax` at the start of `radiance` as [`ShProjector::record`] writes
     /// them (RGB f32 triples). They are copied into the evaluator's coefficients, whose alpha
-    /// holds Â_l ([`sh::cosine_lobe`]), so no readback stands between projection and
+    /// holds Â_l (`sh::cosine_lobe`), so no readback stands between projection and
     /// evaluation.
     ///
     /// [`ShProjector::record`]: super::ShProjector::record
@@ -66,7 +66,7 @@ impl ShEvaluator {
     /// [`ShEvaluator::record_irradiance`] less the irradiance coefficients `minus` (bands up
     /// to `lmax`, Â_l folded in; empty for none) before the clamp: the residual's irradiance
     /// from the whole map's coefficients and the SH of its extracted lights
-    /// ([`crate::math::lights::light_sh`]).
+    /// (`crate::math::lights::light_sh`).
     pub fn record_irradiance_minus(
         &self,
         rec: &mut Recorder,

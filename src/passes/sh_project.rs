@@ -1,5 +1,5 @@
 //! SH projection of an environment map on the GPU (Ramamoorthi & Hanrahan 2001): coefficients
-//! to any band up to [`SH_MAX_LMAX`], and R&H's 4×4 irradiance matrices.
+//! to any band up to `SH_MAX_LMAX`, and R&H's 4×4 irradiance matrices.
 
 use super::map::GpuEnvMap;
 use crate::abi::{
@@ -49,6 +49,17 @@ pub struct IrradianceMatrices {
 }
 
 impl ShCoefficients {
+    /// Coefficients of bands up to `lmax` from flat RGB f32 triples (what the projection
+    /// writes).
+    pub fn from_f32(lmax: u32, flat: &[f32]) -> ShCoefficients {
+        let coeffs = flat
+            .chunks_exact(3)
+            .take(sh::count(lmax))
+            .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
+            .collect();
+        ShCoefficients { lmax, coeffs }
+    }
+
     /// The JSON document of `envlight sh`.
     pub fn to_json(&self) -> ShJson {
         ShJson {
@@ -187,10 +198,32 @@ impl ShProjector {
     }
 
     /// Records the projection of `map`, whose file is oriented by `orientation`, up to band
-    /// `lmax` in the world frame; the coefficients land at the start of `out` (a buffer with
-    /// TRANSFER_DST usage of at least [`ShProjector::output_bytes`]), flat index
-    /// k = l(l+1)+m, RGB f32. Spans: "sh project", "sh reduce".
+    /// `lmax` in the world frame, into a host-visible buffer; read the coefficients from the
+    /// returned [`ShReadback`] once the command buffer has completed (keep it until then).
+    /// Spans: "sh project", "sh reduce".
     pub fn record(
+        &self,
+        rec: &mut Recorder,
+        map: &GpuEnvMap,
+        lmax: u32,
+        orientation: &Orientation,
+    ) -> Result<ShReadback> {
+        let buffer = Buffer::new(
+            &self.ctx,
+            "sh readback",
+            ShProjector::output_bytes(lmax.min(SH_MAX_LMAX)),
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        self.record_into(rec, map, lmax, orientation, &buffer)?;
+        rec.use_buffer(&buffer, Usage::HostRead);
+        Ok(ShReadback { buffer, lmax })
+    }
+
+    /// [`ShProjector::record`] into a buffer of the caller's, for GPU work that reads the
+    /// coefficients next: they land at the start of `out` (TRANSFER_DST usage, at least
+    /// [`ShProjector::output_bytes`]), flat index k = l(l+1)+m, RGB f32.
+    pub fn record_into(
         &self,
         rec: &mut Recorder,
         map: &GpuEnvMap,
@@ -302,23 +335,22 @@ impl ShProjector {
         lmax: u32,
         orientation: &Orientation,
     ) -> Result<(ShCoefficients, Vec<Timing>)> {
-        let readback = Buffer::new(
-            &self.ctx,
-            "sh readback",
-            ShProjector::output_bytes(lmax.min(SH_MAX_LMAX)),
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let ((), timings) = self.ctx.run("projecting onto SH", |rec| {
-            self.record(rec, map, lmax, orientation, &readback)?;
-            rec.use_buffer(&readback, Usage::HostRead);
-            Ok(())
+        let (readback, timings) = self.ctx.run("projecting onto SH", |rec| {
+            self.record(rec, map, lmax, orientation)
         })?;
-        let flat: Vec<f32> = readback.read(sh::count(lmax) * 3);
-        let coeffs = flat
-            .chunks_exact(3)
-            .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
-            .collect();
-        Ok((ShCoefficients { lmax, coeffs }, timings))
+        Ok((readback.read(), timings))
+    }
+}
+
+/// The coefficients [`ShProjector::record`] writes, in a host-visible buffer.
+pub struct ShReadback {
+    buffer: Buffer,
+    lmax: u32,
+}
+
+impl ShReadback {
+    /// The coefficients; valid once the recorded work has completed.
+    pub fn read(&self) -> ShCoefficients {
+        ShCoefficients::from_f32(self.lmax, &self.buffer.read(sh::count(self.lmax) * 3))
     }
 }

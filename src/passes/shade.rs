@@ -1,5 +1,5 @@
 //! The shading pass (`glsl/shade.frag`; its FIS estimator's float64 twin is
-//! [`crate::math::fis`]): one fullscreen draw that shades each G-buffer pixel by its
+//! `crate::math::fis`): one fullscreen draw that shades each G-buffer pixel by its
 //! material's technique (mirror lookup, SH irradiance, prefiltered maps, filtered importance
 //! sampling, or the Monte Carlo accumulation) and shows the environment behind.
 
@@ -37,7 +37,7 @@ pub struct ShadeInputs<'a> {
     pub split: Option<(&'a GpuEnvMap, &'a Buffer)>,
     /// Trace shadow rays.
     pub shadows: bool,
-    /// Extracted lights ([`crate::math::lights`]): texels that FIS, split-sum and footprint
+    /// Extracted lights (`crate::math::lights`): texels that FIS, split-sum and footprint
     /// lookups add, clusters whose irradiance SH and prefiltered irradiance objects marked for
     /// them add to their residual's.
     pub lights: Option<&'a GpuLights>,
@@ -46,7 +46,7 @@ pub struct ShadeInputs<'a> {
 }
 
 /// Which lookups read the dual-paraboloid chain over the pixel's footprint
-/// ([`crate::math::footprint`]) instead of one texel of the environment.
+/// (`crate::math::footprint`) instead of one texel of the environment.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Footprint {
     /// Mirror (`lookup`) materials.
@@ -210,7 +210,7 @@ const VARIANTS: [Variant; 7] = {
 
 /// Every fragment module the shading pass may build: the whole shader and its variants,
 /// plain and with vote, whole and lean (what a render's plan allows it to create).
-pub const MODULES: [ShaderId; 2 + 4 * VARIANTS.len()] = {
+pub(crate) const MODULES: [ShaderId; 2 + 4 * VARIANTS.len()] = {
     let mut m = [ShaderId::Shade; 2 + 4 * VARIANTS.len()];
     m[1] = ShaderId::ShadeVote;
     let mut k = 0;
@@ -227,7 +227,7 @@ pub const MODULES: [ShaderId; 2 + 4 * VARIANTS.len()] = {
 /// where the mask has no footprint or shadow bits; else the whole shader, which folds them
 /// by the constant (`envlight render` prints each pipeline's build time).
 /// `vote`: walks end on a subgroup vote.
-pub fn module(vote: bool, mask: u32) -> ShaderId {
+pub(crate) fn module(vote: bool, mask: u32) -> ShaderId {
     use crate::abi::brdf::technique as t;
     let techs = VARIANTS.iter().fold(1 << t::LOOKUP, |m, v| m | v.techs);
     let kept = mask & techs & !(1 << t::LOOKUP);

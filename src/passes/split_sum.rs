@@ -1,20 +1,23 @@
 //! Split-sum shading's precomputation (Karis 2013): the DFG table (`glsl/dfg.comp`) and the
 //! prefiltered GGX chain, one roughness a level, built by filtered importance sampling from
 //! the dual-paraboloid MIP chain (`glsl/prefilter_ggx.comp`). Float64 twins in
-//! [`crate::math::split_sum`], which states the approximation (n = v = r) and the level rule.
+//! `crate::math::split_sum`, which states the approximation (n = v = r) and the level rule.
 
 use super::map::{map_desc, GpuEnvMap};
 use crate::abi::push::{DfgPush, PrefilterGgxPush};
 use crate::abi::{binding, sh_brdf, split_sum, ShaderId, WORKGROUP_1D, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
-use crate::math::split_sum::{level_alpha, level_size, DfgAxes};
+pub use crate::math::split_sum::DfgAxes;
+use crate::math::split_sum::{level_alpha, level_size};
 use crate::math::Mapping;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-/// How the prefiltered chain is built.
+/// How the prefiltered chain is built: [`PrefilterOptions::new`] or [`Default`] (8 levels),
+/// then the fields that differ.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct PrefilterOptions {
     /// Roughness levels (level k holds α = (k/(levels − 1))²).
     pub levels: u32,
@@ -22,6 +25,25 @@ pub struct PrefilterOptions {
     pub samples: u32,
     /// Lod bias of the FIS reads.
     pub bias: f64,
+}
+
+impl PrefilterOptions {
+    /// `levels` roughness levels, with the default samples per texel and lod bias (what
+    /// `envlight bake` uses).
+    pub fn new(levels: u32) -> Self {
+        PrefilterOptions {
+            levels,
+            samples: split_sum::DEFAULT_SAMPLES,
+            bias: crate::math::fis::DEFAULT_BIAS,
+        }
+    }
+}
+
+impl Default for PrefilterOptions {
+    /// Eight levels, as [`PrefilterOptions::new`].
+    fn default() -> Self {
+        PrefilterOptions::new(8)
+    }
 }
 
 /// The split-sum passes.

@@ -14,8 +14,8 @@ use crate::math::filter::Kernel;
 use crate::math::Mapping;
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::{
-    BruteFilter, ConvertOptions, Converter, GBufferPass, GpuEnvMap, MipChain, PrefilterOptions,
-    ShBrdfProjector, ShProjector, SplitSum,
+    BruteFilter, Converter, GBufferPass, GpuEnvMap, MipChain, PrefilterOptions, ShBrdfProjector,
+    ShProjector, SplitSum,
 };
 use crate::scene::{Technique, DEFAULT_FIS_BIAS};
 use ash::vk;
@@ -190,7 +190,7 @@ pub(super) fn record(
     inputs.env.record_upload(rec, job.env)?;
     if let (Some(p), Some(out)) = (passes.sh, &inputs.sh_out) {
         marks.record(rec, PassKind::ShProjection, |rec| {
-            p.record(rec, &inputs.env, plan.lmax, orientation, out)
+            p.record_into(rec, &inputs.env, plan.lmax, orientation, out)
         })?;
         rec.use_buffer(out, Usage::HostRead);
     }
@@ -257,10 +257,8 @@ fn record_chain(
     // A residual holds no sun for the rim's chords to misplace: fewer points (as predicted
     // for the pipeline built meanwhile, unless the lobes were too narrow for the lights
     // found, which leaves them in the chain).
-    let opts = ConvertOptions {
-        edge_points: (lit.dp || lit.below_threshold).then(|| residual_edge_points(opts.size)),
-        ..*opts
-    };
+    let opts = opts
+        .with_edge_points((lit.dp || lit.below_threshold).then(|| residual_edge_points(opts.size)));
     marks.record(rec, PassKind::DualParaboloid, |rec| {
         conv.record(rec, source, map, &opts)
     })?;

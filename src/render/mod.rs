@@ -159,7 +159,7 @@ impl Renderer {
     }
 
     /// Shades every scene with the whole shade shader, where a scene of one technique would
-    /// take the variant built for it ([`crate::passes::shade::module`]); for tests, which
+    /// take the variant built for it (`crate::passes::shade::module`); for tests, which
     /// compare the two. Takes effect if the shade pass is not built yet.
     pub fn set_whole_shade(&mut self) {
         self.whole_shade = true;

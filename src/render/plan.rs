@@ -65,7 +65,7 @@ pub struct ObjectPlan {
     pub brdf: Brdf,
     /// Whether it reads the dual-paraboloid chain (FIS, split-sum).
     pub on_chain: bool,
-    /// Its lobe's angular scale, where the BRDF has one ([`lobe_scale`]).
+    /// Its lobe's angular scale, where the BRDF has one (`lobe_scale`).
     pub lobe: Option<f64>,
     /// Offset of its SH-BRDF table in the concatenated tables, in floats (0 for others).
     pub table_offset: u32,
@@ -593,7 +593,12 @@ impl PassKind {
     /// The shader modules whose pipelines the pass creates (either of a pair where the
     /// device decides: cube or 2D sources, subgroups or shared memory, shade with or
     /// without vote, whole or for the scene's one technique).
-    pub fn pipelines(self) -> &'static [ShaderId] {
+    pub fn pipelines(self) -> Vec<&'static str> {
+        self.shader_ids().iter().map(|id| id.name()).collect()
+    }
+
+    /// [`PassKind::pipelines`] as the shader table's ids.
+    pub(crate) fn shader_ids(self) -> &'static [ShaderId] {
         use ShaderId::*;
         match self {
             PassKind::GBuffer => &[GBuffer],
@@ -634,11 +639,11 @@ fn kind_name(k: &Brdf) -> &'static str {
 }
 
 /// Side of `scene`'s FIS dual paraboloid: the scene's `[fis] size`; else only as fine as its
-/// lobes read ([`crate::math::fis::dp_size_for`], at most [`default_dp_size`]) where nothing
+/// lobes read (`crate::math::fis::dp_size_for`, at most `default_dp_size`) where nothing
 /// else reads the chain's fine levels (no split-sum, no footprint-filtered mirror, no
 /// background filtered by request or seen through a perspective camera) and the lat-long
 /// source converts to that size by exact footprint areas, so that its power is kept; else
-/// [`default_dp_size`].
+/// `default_dp_size`.
 pub fn fis_dp_size(scene: &Scene, env: &EnvMap) -> u32 {
     if let Some(s) = scene.fis.size {
         return s;
@@ -690,8 +695,8 @@ pub fn fis_dp_size(scene: &Scene, env: &EnvMap) -> u32 {
 }
 
 /// Side of the split-sum chain: the scene's, or the FIS paraboloid's up to
-/// [`split_sum::DEFAULT_SIZE`], but at least enough that the coarsest of `levels` keeps
-/// [`split_sum::MIN_LEVEL_SIZE`] texels a side.
+/// `split_sum::DEFAULT_SIZE`, but at least enough that the coarsest of `levels` keeps
+/// `split_sum::MIN_LEVEL_SIZE` texels a side.
 pub fn split_size(settings: &SplitSumSettings, dp_size: u32) -> u32 {
     settings.size.unwrap_or_else(|| {
         dp_size
@@ -706,14 +711,10 @@ pub fn split_size(settings: &SplitSumSettings, dp_size: u32) -> u32 {
 /// found are too small for its lobes' quadrature and so stay in the chain).
 fn dp_convert_options(scene: &Scene, env: &EnvMap) -> ConvertOptions {
     let size = fis_dp_size(scene, env);
-    ConvertOptions {
-        to: Mapping::DualParaboloid,
-        size,
-        orientation: scene.environment.orientation(),
-        supersample: None,
-        nearest: chain_of_texel_means(scene),
-        edge_points: chain_takes_lights(scene).then(|| residual_edge_points(size)),
-    }
+    ConvertOptions::new(Mapping::DualParaboloid, size)
+        .with_orientation(scene.environment.orientation())
+        .with_nearest(chain_of_texel_means(scene))
+        .with_edge_points(chain_takes_lights(scene).then(|| residual_edge_points(size)))
 }
 
 /// Whether `scene`'s dual-paraboloid chain is to hold the residual of extracted lights, the

@@ -7,14 +7,14 @@ use super::plan::PassKind;
 use super::records::{sh_record, Marks};
 use super::{Job, PassRecord};
 use crate::error::{Error, Result};
-use crate::gpu::Buffer;
+
 use crate::math::envmap::EnvMap;
 use crate::math::sh::Window;
 use crate::math::{sh, Mapping};
 use crate::passes::gbuffer::{target, GBuffer, GpuObject};
 use crate::passes::mc::{McEnv, McOptions, McResult};
 use crate::passes::shade::{Rotation, ShadeInputs};
-use crate::passes::{Converter, MonteCarlo, Shade};
+use crate::passes::{Converter, MonteCarlo, ShCoefficients, Shade};
 use crate::scene::Technique;
 
 /// Each SH object's coefficients, concatenated (with Â_l folded in for SH irradiance), and
@@ -32,13 +32,8 @@ pub(super) fn sh_coefficients(
     let Some(out) = &inputs.sh_out else {
         return (sh_coeffs, ringing);
     };
-    let read = |out: &Buffer| -> Vec<[f64; 3]> {
-        let flat: Vec<f32> = out.read(sh::count(job.plan.lmax) * 3);
-        flat.chunks_exact(3)
-            .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
-            .collect()
-    };
-    let c = read(out);
+    let flat: Vec<f32> = out.read(sh::count(job.plan.lmax) * 3);
+    let c = ShCoefficients::from_f32(job.plan.lmax, &flat).coeffs;
     // The residual's: the whole map's less the light texels'.
     let c_res: Option<Vec<[f64; 3]>> = lit.sh_coeffs.as_ref().map(|l| {
         c.iter()

@@ -3,8 +3,8 @@
 //! ([`Scene::validate`]). What a render runs for it is [`crate::render::plan()`]'s.
 
 use crate::error::{Error, Result};
-use crate::math::brdf::Brdf;
-use crate::math::camera::{Camera, Shape};
+pub use crate::math::brdf::Brdf;
+pub use crate::math::camera::{Camera, Frame, Projection, Shape};
 use crate::math::Orientation;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -72,7 +72,7 @@ pub struct Environment {
     /// A scale on its radiance.
     #[serde(default = "one")]
     pub intensity: f64,
-    /// Light extraction ([`crate::math::lights`]): with `extract`, SH irradiance and
+    /// Light extraction (`crate::math::lights`): with `extract`, SH irradiance and
     /// prefiltered diffuse materials shade by the residual's SH or irradiance map plus the
     /// light clusters' exact irradiance (a deeper extraction of their own,
     /// `diffuse_light_ratio`), FIS, split-sum and footprint lookups read the residual's
@@ -82,16 +82,16 @@ pub struct Environment {
     #[serde(default)]
     pub lights: LightsMode,
     /// FIS, split-sum and footprint lookups: a texel is a light texel above this many times
-    /// the map's mean luminance (default 2, [`crate::abi::lights::CHAIN_RATIO`]).
+    /// the map's mean luminance (default 2, `crate::abi::lights::CHAIN_RATIO`).
     #[serde(default)]
     pub light_ratio: Option<f64>,
     /// Most light texels for FIS, split-sum and footprint lookups (default and most 16384,
-    /// [`crate::abi::lights::CHAIN_MAX_TEXELS`]).
+    /// `crate::abi::lights::CHAIN_MAX_TEXELS`).
     #[serde(default)]
     pub light_texels: Option<u32>,
     /// Diffuse techniques (SH and prefiltered irradiance) extract texels above this many
     /// times the map's mean luminance, uncapped, and sum them by clusters (default 2,
-    /// [`crate::math::lights::DIFFUSE_RATIO`]).
+    /// `crate::math::lights::DIFFUSE_RATIO`).
     #[serde(default)]
     pub diffuse_light_ratio: Option<f64>,
     /// How mirror lookups and the background read the map (see [`LookupFilter`]).
@@ -175,7 +175,7 @@ pub struct FisSettings {
 #[serde(deny_unknown_fields)]
 pub struct SplitSumSettings {
     /// Side of the prefiltered chain's level 0; by default the FIS paraboloid's, at most
-    /// [`crate::abi::split_sum::DEFAULT_SIZE`].
+    /// `crate::abi::split_sum::DEFAULT_SIZE`.
     #[serde(default)]
     pub size: Option<u32>,
     /// Roughness levels: level k holds α = (k/(levels − 1))².
@@ -194,7 +194,7 @@ pub struct SplitSumSettings {
     /// direction at the material's α (the lobe taken at n = v = r). From 2, the "lobe taps"
     /// recipe: the taps follow the real GGX lobe for this normal and view (its stretch, its
     /// shift towards the normal, its horizon), each reading the chain at a narrower α
-    /// ([`crate::math::split_sum::tap_alpha`]), and extracted lights are added under the BRDF
+    /// (`crate::math::split_sum::tap_alpha`), and extracted lights are added under the BRDF
     /// itself instead of the n = v = r kernel.
     #[serde(default = "split_taps")]
     pub taps: u32,
@@ -345,7 +345,7 @@ pub enum Technique {
         window: Option<f64>,
     },
     /// Split-sum (Karis 2013): one read of a prefiltered GGX chain times the DFG table
-    /// (GGX only; see [`crate::math::split_sum`] for the n = v = r approximation).
+    /// (GGX only; see `crate::math::split_sum` for the n = v = r approximation).
     #[serde(rename = "split_sum")]
     SplitSum,
     /// The Monte Carlo reference.

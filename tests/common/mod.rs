@@ -3,15 +3,20 @@
 
 pub mod scenes;
 
+/// The GLSL/Rust layout (`src/abi`, private to the library), read by path as tools/shaderc
+/// reads it: the tests check the library against the same constants its shaders compile with.
+#[path = "../../src/abi/mod.rs"]
+#[allow(unused_imports)]
+pub mod abi;
+
 use envlight::gpu::{Context, ContextOptions, DeviceSelector};
 use std::path::PathBuf;
 
 /// A context with validation on (any message at warning or above fails the test in `finish`).
 pub fn ctx() -> Context {
-    match Context::new(&ContextOptions {
-        validation: true,
-        device: DeviceSelector::from_env(),
-    }) {
+    let mut opts = ContextOptions::new(DeviceSelector::from_env());
+    opts.validation = true;
+    match Context::new(&opts) {
         Ok(c) => c,
         Err(e) => panic!("no Vulkan context ({e}); run `cargo xtask setup`"),
     }
@@ -97,7 +102,7 @@ pub fn dump_pair(name: &str, actual: &envlight::EnvMap, expected: &envlight::Env
 /// the level 0 the GPU's MIP chains are tested against.
 #[allow(dead_code)]
 pub fn dp_f64(env: &envlight::EnvMap, size: u32) -> envlight::EnvMap {
-    dp_f64_points(env, size, envlight::abi::area::PARABOLOID_EDGE_STEPS)
+    dp_f64_points(env, size, abi::area::PARABOLOID_EDGE_STEPS)
 }
 
 /// [`dp_f64`] of a residual, its lights taken out, as a render converts it for its chain

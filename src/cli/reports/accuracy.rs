@@ -8,18 +8,18 @@
 //! luminance, against the brute-force irradiance at the same normal.
 
 use crate::cli::{context, Global};
+use crate::error::Result;
+use crate::gpu::Context;
+use crate::io::{self, LoadOptions};
+use crate::math::envmap::{luminance, EnvMap};
+use crate::math::filter::Kernel;
+use crate::math::sh::{self, Window};
+use crate::math::synth::fibonacci_sphere;
+use crate::math::{Mapping, Orientation};
+use crate::passes::sh_project::{ShProjector, Subgroups};
+use crate::passes::{BruteFilter, FilterTarget, ShEvaluator};
+use crate::GpuEnvMap;
 use anyhow::Context as _;
-use envlight::error::Result;
-use envlight::gpu::Context;
-use envlight::io::{self, LoadOptions};
-use envlight::math::envmap::{luminance, EnvMap};
-use envlight::math::filter::Kernel;
-use envlight::math::sh::{self, Window};
-use envlight::math::synth::fibonacci_sphere;
-use envlight::math::{Mapping, Orientation};
-use envlight::passes::sh_project::{ShProjector, Subgroups};
-use envlight::passes::{BruteFilter, FilterTarget, ShEvaluator};
-use envlight::GpuEnvMap;
 use indicatif::ProgressBar;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

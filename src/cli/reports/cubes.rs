@@ -5,24 +5,24 @@
 //!
 //! A cube is read from its KTX2 or DDS file, turned into the world by its convention's frame
 //! and resampled level by level into the dual-paraboloid chain the float64 split-sum twins
-//! read ([`envlight::math::split_sum::shade`], [`envlight::math::split_sum::shade_taps`]):
+//! read (`crate::math::split_sum::shade`, `crate::math::split_sum::shade_taps`):
 //! level k holds α = (k/(levels − 1))² in envlight's bake, glTF-IBL-Sampler (roughness =
 //! k/(levels − 1)) and Bevy (lod = perceptual roughness × (levels − 1)); cmft's Phong levels
-//! are read at the exponent that matches GGX α ([`CubeConvention::level_of`]).
+//! are read at the exponent that matches GGX α (`CubeConvention::level_of`).
 
 use super::scoring::{errors, scene, sphere_pixels, truth};
+use crate::bake::output::Preset;
+use crate::math::brdf::Brdf;
+use crate::math::camera::{trace, Camera, Shape};
+use crate::math::convert::sample;
+use crate::math::mip::Level;
+use crate::math::split_sum::{dfg_table, level_alpha, shade, shade_taps, texel_dir};
+use crate::math::Mapping;
+use crate::render::Renderer;
+use crate::scene::{LightsMode, SplitSumSettings, Technique};
+use crate::{EnvMap, Orientation};
 use anyhow::{bail, Context as _, Result};
 use clap::ValueEnum;
-use envlight::bake::output::Preset;
-use envlight::math::brdf::Brdf;
-use envlight::math::camera::{trace, Camera, Shape};
-use envlight::math::convert::sample;
-use envlight::math::mip::Level;
-use envlight::math::split_sum::{dfg_table, level_alpha, shade, shade_taps, texel_dir};
-use envlight::math::Mapping;
-use envlight::render::Renderer;
-use envlight::scene::{LightsMode, SplitSumSettings, Technique};
-use envlight::{EnvMap, Orientation};
 use glam::{DMat3, DVec3};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -91,7 +91,7 @@ pub(super) const DFG_SIZE: u32 = 32;
 /// k holding α = (k/(levels − 1))² read from the cube's level [`CubeConvention::level_of`]
 /// (lerped between two levels where that is fractional).
 pub(super) fn cube_chain(path: &Path, convention: CubeConvention) -> Result<Vec<Level>> {
-    let cube = envlight::io::load_cube_levels(path)?;
+    let cube = crate::io::load_cube_levels(path)?;
     let levels = cube.len() as u32;
     if levels < 2 {
         bail!(
@@ -208,7 +208,7 @@ pub fn score(
     device: &str,
     a: &CubeArgs,
 ) -> Result<()> {
-    let env = envlight::io::load(a.probe, &Default::default())
+    let env = crate::io::load(a.probe, &Default::default())
         .with_context(|| a.probe.display().to_string())?;
     let chains = a
         .cubes

@@ -2,23 +2,23 @@
 //! Carlo at growing sample counts, each timed on the GPU and scored against a converged
 //! Monte Carlo reference (MIS), on a sphere seen from normal incidence to grazing.
 
-use envlight::error::Result;
-use envlight::gpu::Context;
-use envlight::math::brdf::Brdf;
-use envlight::math::camera::sphere_camera;
-use envlight::math::camera::Shape;
-use envlight::math::envmap::luminance;
-use envlight::math::fis::default_dp_size;
-use envlight::math::{Mapping, Orientation};
-use envlight::passes::gbuffer::{GBuffer, GBufferPass};
-use envlight::passes::mc::{pixel_stats, McEnv, McOptions, MonteCarlo};
-use envlight::passes::mip::MipChain;
-use envlight::passes::shade::{Shade, ShadeInputs};
-use envlight::passes::{ConvertOptions, Converter};
-use envlight::render::object_record;
-use envlight::scene::{Material, SceneObject, Technique};
-use envlight::EnvMap;
-use envlight::GpuEnvMap;
+use crate::error::Result;
+use crate::gpu::Context;
+use crate::math::brdf::Brdf;
+use crate::math::camera::sphere_camera;
+use crate::math::camera::Shape;
+use crate::math::envmap::luminance;
+use crate::math::fis::default_dp_size;
+use crate::math::{Mapping, Orientation};
+use crate::passes::gbuffer::{GBuffer, GBufferPass};
+use crate::passes::mc::{pixel_stats, McEnv, McOptions, MonteCarlo};
+use crate::passes::mip::MipChain;
+use crate::passes::shade::{Shade, ShadeInputs};
+use crate::passes::{ConvertOptions, Converter};
+use crate::render::object_record;
+use crate::scene::{Material, SceneObject, Technique};
+use crate::EnvMap;
+use crate::GpuEnvMap;
 
 /// What to measure.
 #[derive(Clone, Debug)]
@@ -125,14 +125,7 @@ pub fn run(
         let env_gpu = GpuEnvMap::upload(ctx, map)?;
         let (dp, _) = conv.run_mipped(
             &env_gpu,
-            &ConvertOptions {
-                to: Mapping::DualParaboloid,
-                size: default_dp_size(map),
-                orientation: Orientation::default(),
-                supersample: None,
-                nearest: false,
-                edge_points: None,
-            },
+            &ConvertOptions::new(Mapping::DualParaboloid, default_dp_size(map)),
         )?;
         mip.run(&dp)?;
         let (mc_env, _) = McEnv::for_map(ctx, &conv, map, &env_gpu, &Orientation::default())?;
@@ -189,7 +182,7 @@ pub fn run(
                             prefiltered: None,
                             mc: None,
                             brdf_sh: None,
-                            sh_rotation: envlight::passes::shade::Rotation::Zxzxz,
+                            sh_rotation: crate::passes::shade::Rotation::Zxzxz,
                             split: None,
                             shadows: false,
                             lights: None,

@@ -3,14 +3,14 @@
 //! luminance error against the rgba32f cubes of the same bake (mean and worst texel), with the
 //! share of power clamped away where a format cannot hold a texel.
 
+use crate::bake::output::clamp_cube;
+use crate::bake::{BakeOptions, Baker};
 use crate::cli::{context, probe_files, Global};
+use crate::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
+use crate::io::LoadOptions;
+use crate::math::envmap::luminance;
+use crate::Orientation;
 use anyhow::{Context as _, Result};
-use envlight::bake::output::clamp_cube;
-use envlight::bake::{BakeOptions, Baker};
-use envlight::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
-use envlight::io::LoadOptions;
-use envlight::math::envmap::luminance;
-use envlight::Orientation;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -97,7 +97,7 @@ pub fn bench_formats(
     let baker = Baker::new(&ctx)?;
     let mut rows = Vec::new();
     for path in &files {
-        let map = envlight::io::load(path, &LoadOptions::default())
+        let map = crate::io::load(path, &LoadOptions::default())
             .with_context(|| path.display().to_string())?;
         let baked = baker.bake(&map, &Orientation::default(), opts)?;
         let probe = path
@@ -130,7 +130,7 @@ pub fn bench_formats(
     let report = markdown(&rows, opts, &ctx.info().name);
     print!("{report}");
     if let Some(out) = out {
-        envlight::io::write_atomic(out, report.as_bytes())?;
+        crate::io::write_atomic(out, report.as_bytes())?;
         eprintln!("wrote {}", out.display());
     }
     Ok(())

@@ -8,14 +8,14 @@
 //! conventions (its frame, roughness = level/(levels − 1), α = roughness², rgba16f), which
 //! the Khronos preset shares, so one exact filter in that frame scores both.
 
+use crate::bake::output::Preset;
 use crate::cli::{probe_files, Global};
+use crate::io::ktx2;
+use crate::math::envmap::luminance;
+use crate::math::exact::ExactFilter;
+use crate::math::split_sum::level_alpha;
+use crate::math::Mapping;
 use anyhow::{anyhow, bail, Context as _, Result};
-use envlight::bake::output::Preset;
-use envlight::io::ktx2;
-use envlight::math::envmap::luminance;
-use envlight::math::exact::ExactFilter;
-use envlight::math::split_sum::level_alpha;
-use envlight::math::Mapping;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -147,7 +147,7 @@ fn timed(mut c: Command, dir: &Path) -> Result<f64> {
 
 /// The checked texels of each level ≥ 1 (index into the level, exact luminance): the texel
 /// holding the probe's brightest direction, then `texels` − 1 spread over the faces.
-fn exact_texels(map: &envlight::EnvMap, size: u32, texels: u32) -> Vec<Vec<(usize, f64)>> {
+fn exact_texels(map: &crate::EnvMap, size: u32, texels: u32) -> Vec<Vec<(usize, f64)>> {
     let frame = Preset::Khronos.cube_frame().world_to_file().transpose();
     let exact = ExactFilter::new(map, frame);
     let levels = size.ilog2();
@@ -229,8 +229,8 @@ fn level_errors(path: &Path, exact: &[Vec<(usize, f64)>]) -> Result<Vec<f64>> {
 /// The probe as a lat-long Radiance file both tools read: itself, or its 1024 × 512
 /// resampling (bilinear, as the GPU reads a map) written into `dir`.
 fn latlong_hdr(probe: &Path, dir: &Path) -> Result<PathBuf> {
-    let map = envlight::io::load(probe, &Default::default())
-        .with_context(|| probe.display().to_string())?;
+    let map =
+        crate::io::load(probe, &Default::default()).with_context(|| probe.display().to_string())?;
     let is_hdr = probe
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("hdr"));
@@ -242,7 +242,7 @@ fn latlong_hdr(probe: &Path, dir: &Path) -> Result<PathBuf> {
     for j in 0..h {
         for i in 0..w {
             let d = Mapping::LatLong.coord_to_dir(Mapping::texel_center(w, h, 0, i, j));
-            let v = envlight::math::convert::sample(&map, d);
+            let v = crate::math::convert::sample(&map, d);
             texels.push(image::Rgb([v[0] as f32, v[1] as f32, v[2] as f32]));
         }
     }
@@ -282,7 +282,7 @@ pub fn bench_ibl(g: &Global, o: &IblOptions) -> Result<()> {
     let mut results = Vec::new();
     for probe in &files {
         let hdr = latlong_hdr(probe, &scratch)?;
-        let map = envlight::io::load(&hdr, &Default::default())
+        let map = crate::io::load(&hdr, &Default::default())
             .with_context(|| hdr.display().to_string())?;
         let exact = exact_texels(&map, o.size, o.texels);
         let mut rows: Vec<Measured> = tools

@@ -15,18 +15,18 @@ mod scoring;
 pub mod table;
 
 use super::{context, Global};
-use anyhow::{Context as _, Result};
-use clap::Subcommand;
-use envlight::gpu::Timing;
-use envlight::math::filter::Kernel;
-use envlight::math::sh;
-use envlight::math::synth::Sky;
-use envlight::passes::sh_project::Subgroups;
-use envlight::passes::testing::copy::CopyPass;
-use envlight::passes::{
+use crate::gpu::Timing;
+use crate::math::filter::Kernel;
+use crate::math::sh;
+use crate::math::synth::Sky;
+use crate::passes::sh_project::Subgroups;
+use crate::passes::testing::copy::CopyPass;
+use crate::passes::{
     BruteFilter, ConvertOptions, Converter, FilterTarget, ShEvaluator, ShProjector,
 };
-use envlight::{EnvMap, GpuEnvMap, Mapping, Orientation};
+use crate::{EnvMap, GpuEnvMap, Mapping, Orientation};
+use anyhow::{Context as _, Result};
+use clap::Subcommand;
 use std::path::{Path, PathBuf};
 
 /// What accuracy costs: SH irradiance of orders 0–8 against brute force, with GPU times
@@ -242,7 +242,7 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
             irradiance_size,
             out,
         } => {
-            let opts = envlight::bake::BakeOptions {
+            let opts = crate::bake::BakeOptions {
                 specular_size: *specular_size,
                 specular_levels: *specular_levels,
                 irradiance_size: *irradiance_size,
@@ -297,7 +297,7 @@ fn bench_fis(
     let paths = if maps.is_empty() { &default[..] } else { maps };
     let mut loaded = Vec::new();
     for p in paths {
-        let m = envlight::io::load(p, &Default::default())?;
+        let m = crate::io::load(p, &Default::default())?;
         let name = p
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -311,7 +311,7 @@ fn bench_fis(
         reference,
         biases: biases.to_vec(),
         bias_at: vec![16, 64],
-        bias: envlight::scene::DEFAULT_FIS_BIAS,
+        bias: crate::scene::DEFAULT_FIS_BIAS,
     };
     let bar = indicatif::ProgressBar::new_spinner();
     let rows = fis::run(&ctx, &loaded, &cfg, |m| bar.set_message(m.to_string()))?;
@@ -368,14 +368,7 @@ fn bench_convert(cli: &Global, sizes: &[u32], reps: usize) -> Result<()> {
             (Mapping::DualParaboloid, w / 2, None),
         ];
         for (to, size, supersample) in cases {
-            let opts = ConvertOptions {
-                to,
-                size,
-                orientation: Orientation::default(),
-                supersample,
-                nearest: false,
-                edge_points: None,
-            };
+            let opts = ConvertOptions::new(to, size).with_supersample(supersample);
             let (ow, oh) = to.extent_for_size(size);
             // Exact footprint areas take no samples.
             let ss = if conv.uses_area((Mapping::LatLong, w, w / 2), &opts) {

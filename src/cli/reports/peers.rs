@@ -1,12 +1,12 @@
 //! `envlight bench peers`: the jobs a user would otherwise give cmft, timed as whole processes
 //! in paired, alternating runs on the same machine, with each result's error beside its time.
 
+use crate::io::{load, LoadOptions};
+use crate::math::filter::{Kernel, Prepared};
+use crate::math::sh;
+use crate::passes::brute::PhongLevels;
+use crate::EnvMap;
 use anyhow::{bail, Context as _, Result};
-use envlight::io::{load, LoadOptions};
-use envlight::math::filter::{Kernel, Prepared};
-use envlight::math::sh;
-use envlight::passes::brute::PhongLevels;
-use envlight::EnvMap;
 use glam::{DMat3, DVec3};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -523,7 +523,7 @@ fn peers_markdown(opts: &PeersOptions, m: &Measured<'_>) -> String {
             } else {
                 String::new()
             },
-            envlight::abi::filter_rule::LOG_CUTOFF,
+            crate::abi::filter_rule::LOG_CUTOFF,
             gpu - floor_gpu,
             100.0 * (whole - floor) / whole.max(1e-9),
         ));
@@ -615,7 +615,7 @@ fn errors(job: &str, src: &EnvMap, tmp: &Path, cmft: bool) -> Result<(String, St
     let dash = || "–".to_string();
     if job.starts_with("SH") {
         let text = std::fs::read_to_string(tmp.join("sh.json"))?;
-        let json: envlight::passes::sh_project::ShJson = serde_json::from_str(&text)?;
+        let json: crate::passes::sh_project::ShJson = serde_json::from_str(&text)?;
         let cpu = sh::project(src, 2);
         let top = cpu.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
         let worst = json
@@ -739,7 +739,7 @@ mod tests {
     /// each number's median across runs alone; runs without the line are left out.
     #[test]
     fn startup_lines_are_read_back_as_medians() {
-        use envlight::gpu::Startup;
+        use crate::gpu::Startup;
         let line = |k: f64| {
             let s = Startup {
                 loader_ms: 0.5 * k,

@@ -5,13 +5,13 @@
 //! split_sum.md and split_sum.csv.
 
 use super::scoring::{errors, scene, sphere_pixels, truth};
+use crate::math::brdf::Brdf;
+use crate::math::camera::{sphere_camera, Camera};
+use crate::render::PassKind;
+use crate::render::Renderer;
+use crate::scene::{LightsMode, Scene, SplitSumSettings, Technique};
+use crate::EnvMap;
 use anyhow::{Context as _, Result};
-use envlight::math::brdf::Brdf;
-use envlight::math::camera::{sphere_camera, Camera};
-use envlight::render::PassKind;
-use envlight::render::Renderer;
-use envlight::scene::{LightsMode, Scene, SplitSumSettings, Technique};
-use envlight::EnvMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -63,7 +63,7 @@ fn recipes() -> Vec<Recipe> {
             label: "sh_brdf l=8",
             technique: Technique::ShBrdf {
                 order: 8,
-                grid: envlight::math::sh_brdf::DEFAULT_GRID,
+                grid: crate::math::sh_brdf::DEFAULT_GRID,
                 window: None,
             },
             taps: 1,
@@ -140,7 +140,7 @@ pub(super) fn sweep(
     let mut cells: Vec<Cell> = Vec::new();
     let mut times = None;
     for path in &files {
-        let env = envlight::io::load(path, &envlight::io::LoadOptions::default())
+        let env = crate::io::load(path, &crate::io::LoadOptions::default())
             .with_context(|| path.display().to_string())?;
         let name = path
             .file_stem()

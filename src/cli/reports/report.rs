@@ -5,14 +5,14 @@
 
 use super::super::{context, Global};
 use super::scoring::{errors, scene, sphere_pixels, truth};
+use crate::math::brdf::Brdf;
+use crate::math::camera::{sphere_camera, Camera};
+use crate::render::PassKind;
+use crate::render::Renderer;
+use crate::scene::{Scene, SplitSumSettings, Technique};
+use crate::EnvMap;
 use anyhow::{anyhow, bail, Context as _, Result};
 use clap::Args;
-use envlight::math::brdf::Brdf;
-use envlight::math::camera::{sphere_camera, Camera};
-use envlight::render::PassKind;
-use envlight::render::Renderer;
-use envlight::scene::{Scene, SplitSumSettings, Technique};
-use envlight::EnvMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -192,7 +192,7 @@ fn cases(brdf: &Brdf, quick: bool) -> Vec<(Technique, String, u32)> {
     for &order in orders {
         let t = Technique::ShBrdf {
             order,
-            grid: envlight::math::sh_brdf::DEFAULT_GRID,
+            grid: crate::math::sh_brdf::DEFAULT_GRID,
             window: None,
         };
         v.push((t, format!("l={order}")));
@@ -249,7 +249,7 @@ fn peer_rows(
     let Brdf::Ggx { alpha, .. } = brdf else {
         return Vec::new();
     };
-    let table = envlight::math::split_sum::dfg_table(super::cubes::DFG_SIZE, true);
+    let table = crate::math::split_sum::dfg_table(super::cubes::DFG_SIZE, true);
     let pixels = sphere_pixels(cam);
     peers
         .iter()
@@ -351,7 +351,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         let absolute = path
             .canonicalize()
             .with_context(|| format!("report: probe {} (set --probes)", path.display()))?;
-        let env = envlight::io::load(&path, &envlight::io::LoadOptions::default())
+        let env = crate::io::load(&path, &crate::io::LoadOptions::default())
             .with_context(|| format!("report: probe {} (set --probes)", path.display()))?;
         let peers = match &sampler {
             Some(exe) => super::cubes::sampler_cubes(
@@ -788,7 +788,7 @@ mod tests {
 
     #[test]
     fn errors_measure_rms_bias_and_tiles() {
-        let m = EnvMap::new(envlight::Mapping::LatLong, 8, 8, vec![[1.0; 3]; 64]);
+        let m = EnvMap::new(crate::Mapping::LatLong, 8, 8, vec![[1.0; 3]; 64]);
         let mut a = m.clone();
         for t in &mut a.texels[..32] {
             *t = [1.5; 3];

@@ -1,12 +1,12 @@
 //! How the reports score a technique: the sphere scene they render, the pixels they score, the
 //! errors they report, and the two-seed Monte Carlo reference they score against.
 
+use crate::math::brdf::Brdf;
+use crate::math::camera::{trace, Camera, Shape};
+use crate::render::Renderer;
+use crate::scene::{Material, Scene, SceneObject, SplitSumSettings, Technique};
+use crate::EnvMap;
 use anyhow::Result;
-use envlight::math::brdf::Brdf;
-use envlight::math::camera::{trace, Camera, Shape};
-use envlight::render::Renderer;
-use envlight::scene::{Material, Scene, SceneObject, SplitSumSettings, Technique};
-use envlight::EnvMap;
 
 /// The report's scene: `brdf` on a unit sphere at the origin under technique `t`, seen by
 /// `cam`, with the FIS paraboloid size `dp`, the MC seed and split-sum settings given.

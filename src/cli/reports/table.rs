@@ -5,13 +5,13 @@
 //! error of a selection of rows, one row of maps per probe).
 
 use super::scoring::{average, scene, sphere_pixels};
+use crate::math::brdf::Brdf;
+use crate::math::camera::{Camera, Shape};
+use crate::math::envmap::luminance;
+use crate::render::Renderer;
+use crate::scene::{LightsMode, LookupFilter, Scene, SplitSumSettings, Technique};
+use crate::EnvMap;
 use anyhow::{anyhow, Context as _, Result};
-use envlight::math::brdf::Brdf;
-use envlight::math::camera::{Camera, Shape};
-use envlight::math::envmap::luminance;
-use envlight::render::Renderer;
-use envlight::scene::{LightsMode, LookupFilter, Scene, SplitSumSettings, Technique};
-use envlight::EnvMap;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -244,7 +244,7 @@ pub fn table(
     device: &str,
     pick: &Pick,
 ) -> Result<()> {
-    let cam = envlight::math::camera::sphere_camera(size);
+    let cam = crate::math::camera::sphere_camera(size);
     let pixels = sphere_pixels(&cam);
     let split = SplitSumSettings::default();
     let started = Instant::now();
@@ -264,7 +264,7 @@ pub fn table(
         .filter(|p| pick.probes.is_empty() || pick.probes.iter().any(|q| p.0.contains(q.as_str())));
     for (n, (file, _)) in probes.enumerate() {
         let path = dir.join(file);
-        let env = envlight::io::load(&path, &envlight::io::LoadOptions::default())
+        let env = crate::io::load(&path, &crate::io::LoadOptions::default())
             .with_context(|| format!("report --table: probe {} (set --probes)", path.display()))?;
         let probe = file.trim_end_matches(".hdr").to_string();
         if n == 0 {
@@ -319,12 +319,12 @@ pub fn table(
          extract above {} × the mean luminance, up to {} light texels (grown by {} rings, the \
          residual filled under them, where FIS, split-sum or a prefiltered Phong map reads \
          it); diffuse techniques above {} ×. Run took {:.0} s.",
-        envlight::scene::DEFAULT_FIS_BIAS,
-        envlight::scene::DEFAULT_FIS_BIAS_RESIDUAL,
-        envlight::abi::lights::CHAIN_RATIO,
-        envlight::abi::lights::CHAIN_MAX_TEXELS,
-        envlight::abi::lights::CHAIN_FILL,
-        envlight::math::lights::DIFFUSE_RATIO,
+        crate::scene::DEFAULT_FIS_BIAS,
+        crate::scene::DEFAULT_FIS_BIAS_RESIDUAL,
+        crate::abi::lights::CHAIN_RATIO,
+        crate::abi::lights::CHAIN_MAX_TEXELS,
+        crate::abi::lights::CHAIN_FILL,
+        crate::math::lights::DIFFUSE_RATIO,
         started.elapsed().as_secs_f64()
     );
     std::fs::write(out.join("table.md"), markdown(&rows, &settings)).with_context(|| "table.md")?;
@@ -340,7 +340,7 @@ pub fn table(
 /// Pipelines are built, and lavapipe compiles shaders, on first use: one small render of
 /// each kind of case in `all` keeps that out of the GPU times measured after it.
 fn warm_up(renderer: &Renderer, env: &EnvMap, all: &[Case], split: SplitSumSettings) -> Result<()> {
-    let small = envlight::math::camera::sphere_camera(8);
+    let small = crate::math::camera::sphere_camera(8);
     let mut seen: Vec<(&'static str, LightsMode, LookupFilter, &'static str)> = Vec::new();
     for c in all {
         let key = (c.technique.name(), c.lights, c.filter, c.rotate());
@@ -372,7 +372,7 @@ fn reference_of(
             radius: 1.0,
         }];
         return Ok((
-            envlight::math::footprint::supersampled(env, &cam, &sphere, 16),
+            crate::math::footprint::supersampled(env, &cam, &sphere, 16),
             0.0,
         ));
     }

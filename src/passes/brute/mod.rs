@@ -1,12 +1,12 @@
 //! Irradiance and Phong-prefiltered environment maps by brute-force convolution of every
 //! source texel (Miller & Hoffman 1984, `glsl/brute.comp`, float64 twin
-//! [`crate::math::filter`]).
+//! `crate::math::filter`).
 
 use super::map::GpuEnvMap;
 use crate::abi::{constants, ShaderId, WORKGROUP_1D};
 use crate::error::{Error, Result};
 use crate::gpu::{Context, Pipeline, Recorder, Sampler, Timing};
-use crate::math::filter::Kernel;
+pub use crate::math::filter::Kernel;
 use crate::math::moments;
 use crate::math::{Mapping, Orientation};
 use ash::vk;
@@ -111,7 +111,7 @@ impl BruteFilter {
     /// walk visits (the same rows or tiles, the same lanes and chunks), read once each,
     /// without the rule, so that its time is what visiting the exact sum's texels costs
     /// (`envlight bench peers`). Not a filtered map; [`BruteFilter::record_levels`] refuses it.
-    pub fn set_visit_floor(&mut self, on: bool) {
+    pub(crate) fn set_visit_floor(&mut self, on: bool) {
         self.visit_floor = on;
     }
 
@@ -142,7 +142,7 @@ impl BruteFilter {
     }
 
     /// Records one convolution per `(kernel, dst)` pair, each from the source level of the
-    /// power-moment pyramid that [`moments::level_for`] picks for its lobe (level 0, every
+    /// power-moment pyramid that `moments::level_for` picks for its lobe (level 0, every
     /// source texel, for the sharpest lobes; coarse levels for wide ones, descending to the
     /// source texels wherever the rule cannot take a coarse texel whole). Returns the levels.
     /// Spans: "brute prepare", "brute tiles", "brute moments" per level built, then one

@@ -33,10 +33,8 @@ pub fn run(name: &str, data: &[u8]) {
             }
         }
         ext => {
-            let opts = LoadOptions {
-                max_texels: FUZZ_MAX_TEXELS,
-                ..Default::default()
-            };
+            let mut opts = LoadOptions::default();
+            opts.max_texels = FUZZ_MAX_TEXELS;
             if let Ok(map) = io::load_bytes(format!("fuzz.{ext}"), data, &opts) {
                 assert_eq!(
                     map.texels.len() as u64,
