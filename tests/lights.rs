@@ -131,58 +131,6 @@ fn extraction_keeps_the_exact_filter() {
     }
 }
 
-/// `envlight lights --json` on a written sky names one light in the sun's direction with its
-/// share (with `--fill 2`, more texels and a larger share); a missing file is an error naming
-/// it, not a panic.
-#[test]
-fn lights_command_reports_the_sun() {
-    let dir = std::env::temp_dir().join(format!("envlight-lights-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("sky.exr");
-    envlight::io::save_exr(&sky(Mapping::LatLong, 256), &path).unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
-        .args(["lights", path.to_str().unwrap(), "--json"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let lights = v["lights"].as_array().unwrap();
-    assert_eq!(lights.len(), 1, "{v}");
-    let d: Vec<f64> = lights[0]["direction"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect();
-    let sun = Sky::default().sun_dir;
-    assert!(DVec3::new(d[0], d[1], d[2]).dot(sun) > 0.999, "{d:?}");
-    let share = lights[0]["share"].as_f64().unwrap();
-    assert!(share > 0.5 && share < 1.0, "{share}");
-    // --fill grows the light set around the sun and gives it more of the power.
-    let filled = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
-        .args(["lights", path.to_str().unwrap(), "--json", "--fill", "2"])
-        .output()
-        .unwrap();
-    assert!(filled.status.success());
-    let f: serde_json::Value = serde_json::from_slice(&filled.stdout).unwrap();
-    assert_eq!(f["options"]["fill"].as_u64(), Some(2), "{f}");
-    let count = |v: &serde_json::Value| v["light_texels"].as_u64().unwrap();
-    assert!(count(&f) > count(&v), "{} {}", count(&f), count(&v));
-    let fshare = f["lights"][0]["share"].as_f64().unwrap();
-    assert!(fshare > share && fshare <= 1.0, "{fshare} {share}");
-    let missing = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
-        .args(["lights", dir.join("none.hdr").to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(!missing.status.success());
-    assert!(String::from_utf8_lossy(&missing.stderr).contains("none.hdr"));
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
 /// What extraction buys SH irradiance: a white diffuse sphere (32², orthographic) by SH
 /// order 2 with lights extracted (the default: diffuse techniques extract above 2 × the mean
 /// luminance and sum the texels by clusters) and without, against the Monte Carlo reference
@@ -521,7 +469,7 @@ fn lobes_too_narrow_for_the_light_texels_read_the_whole_map() {
 /// texel's centre of a 32 × 16 lat-long), read bilinearly as `shade.frag` reads it, plus the
 /// light clusters' irradiance (`cluster_irradiance`), over π; on the sky whose sun is
 /// 5·10⁴ × the zenith. Bound 1e-4 relative: the brute pass agrees with its twin to 1e-4
-/// (tests/filter.rs); measured 1.3e-5 before clusters. Without extraction
+/// (tests/brute.rs); measured 1.3e-5 before clusters. Without extraction
 /// the sunlit side must differ (the map then blurs the sun over its texels), so the lights
 /// are really added.
 #[test]

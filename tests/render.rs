@@ -51,7 +51,7 @@ fn scene() -> Vec<Object> {
 /// Every pixel that hits an object equals albedo·E(n)/π computed in float64 (rays,
 /// intersection, the f64 projection of the same map, the f64 basis) within 1e-4 relative,
 /// for a perspective and an orthographic camera and SH orders 2 and 8. The GPU's f32 error
-/// budget: coefficients within 1e-5·|L00| of f64 (tests/sh.rs), normals from f32
+/// budget: coefficients within 1e-5·|L00| of f64 (tests/sh_project.rs), normals from f32
 /// intersections (~1e-6), the basis in f32. Pixels whose hit float32 cannot decide (margin
 /// under 1e-3: silhouettes, the plane's rim, near-ties) are left out and counted; the rest
 /// must be most of the objects' pixels.

@@ -221,7 +221,7 @@ pub fn latlong_halved(map: &EnvMap) -> EnvMap {
 /// rim; 2π/W' along the equator, π/H' down a column). The conversion integrates the source
 /// over each output texel at any resolution, so power is kept; halving only moves each
 /// texel's power within its 2 × 2 block, no wider than the paraboloid's finest texel. Once
-/// only: halving twice moves power across blocks wider than a texel (tests/fis.rs measures
+/// only: halving twice moves power across blocks wider than a texel (tests/shade.rs measures
 /// the error on a checker of 2 × 2-texel cells).
 pub fn paraboloid_source_halves(width: u32, height: u32, size: u32) -> bool {
     let finest = 2.0 / f64::from(size.max(1));

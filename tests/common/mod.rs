@@ -1,12 +1,13 @@
 //! Shared test helpers: a validated context, the clean-teardown check, the probes folder.
 #![allow(dead_code)]
 
+pub mod bake;
 pub mod scenes;
 
-/// The GLSL/Rust layout (`src/abi`, private to the library), read by path as tools/shaderc
-/// reads it: the tests check the library against the same constants its shaders compile with.
-#[path = "../../src/abi/mod.rs"]
-#[allow(unused_imports)]
+/// The tuning constants GLSL and Rust share (`src/abi/parameters.rs`; the layout is private to
+/// the library), read by path as tools/shaderc reads the layout: the tests check the library
+/// against the same numbers its shaders compile with.
+#[path = "../../src/abi/parameters.rs"]
 pub mod abi;
 
 use envlight::gpu::{Context, ContextOptions, DeviceSelector};
@@ -227,4 +228,14 @@ pub fn ktx_validate_all(dir: &std::path::Path) -> usize {
         }
     }
     n
+}
+
+/// Largest |GPU − f64| over all coefficients and channels, relative to |L00|.
+pub fn worst_vs_cpu(gpu: &[[f64; 3]], cpu: &[[f64; 3]]) -> f64 {
+    let l00 = cpu[0].iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    gpu.iter()
+        .zip(cpu)
+        .flat_map(|(g, c)| (0..3).map(move |k| (g[k] - c[k]).abs()))
+        .fold(0.0, f64::max)
+        / l00
 }

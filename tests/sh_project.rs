@@ -1,6 +1,9 @@
-//! GPU SH projection against the float64 projection and analytic truths.
+//! The SH projection pass (`passes::sh_project`) against the float64 projection and analytic
+//! truths, both reductions, turned maps and real probes.
 
 mod common;
+
+use common::worst_vs_cpu;
 
 use envlight::gpu::Context;
 use envlight::math::sh;
@@ -16,16 +19,6 @@ fn gpu_project(ctx: &Context, p: &ShProjector, map: &EnvMap, lmax: u32) -> Vec<[
     let (c, t) = p.run(&g, lmax).unwrap();
     assert_eq!(t.len(), 2);
     c.coeffs
-}
-
-/// Largest |GPU − f64| over all coefficients and channels, relative to |L00|.
-fn worst_vs_cpu(gpu: &[[f64; 3]], cpu: &[[f64; 3]]) -> f64 {
-    let l00 = cpu[0].iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-    gpu.iter()
-        .zip(cpu)
-        .flat_map(|(g, c)| (0..3).map(move |k| (g[k] - c[k]).abs()))
-        .fold(0.0, f64::max)
-        / l00
 }
 
 /// A constant environment L projects to L00 = 2√π·L and nothing else, in every mapping and
@@ -258,56 +251,6 @@ fn oriented_projection_matches_and_flips_parity() {
         }
     }
     common::finish(ctx);
-}
-
-/// `envlight sh` writes the documented JSON, and its matrices reproduce its coefficients.
-#[test]
-fn sh_command_writes_the_documented_json() {
-    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sh_cli");
-    std::fs::create_dir_all(&dir).unwrap();
-    let input = dir.join("smooth.exr");
-    let map = EnvMap::from_fn(
-        Mapping::LatLong,
-        64,
-        32,
-        2,
-        envlight::math::synth::smooth_env,
-    );
-    envlight::io::save_exr(&map, &input).unwrap();
-    let out = dir.join("smooth_sh.json");
-    let status = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
-        .args([
-            "--validation",
-            "sh",
-            input.to_str().unwrap(),
-            "--order",
-            "3",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
-    assert_eq!(json["order"], 3);
-    let coeffs: Vec<[f64; 3]> = serde_json::from_value(json["coefficients"].clone()).unwrap();
-    assert_eq!(coeffs.len(), 16);
-    let cpu = sh::project(&map, 3);
-    assert!(worst_vs_cpu(&coeffs, &cpu) < 1e-5);
-    let r: [[f64; 4]; 4] =
-        serde_json::from_value(json["irradiance_matrices"]["r"].clone()).unwrap();
-    let red: Vec<f64> = coeffs[..9].iter().map(|c| c[0]).collect();
-    let want = sh::irradiance_matrix(&red);
-    for i in 0..4 {
-        for j in 0..4 {
-            // JSON parsers may round the last bit differently.
-            assert!(
-                (r[i][j] - want[i][j]).abs() <= 1e-14 * want[i][j].abs().max(1.0),
-                "M[{i}][{j}]"
-            );
-        }
-    }
 }
 
 /// Both reductions (subgroup arithmetic and the shared-memory tree) on a map that is not

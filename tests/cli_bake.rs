@@ -1,0 +1,408 @@
+//! `envlight bake` end to end: its KTX2 files read back by an independent reader, packed formats
+//! to their precision, shards byte-identical to one run, reruns that resume and fail alone.
+
+mod common;
+
+use common::bake::{probes, small_options, temp, walk};
+
+use envlight::bake::{BakeOptions, Baker};
+use envlight::math::Orientation;
+use std::path::Path;
+use std::process::{Command, Output};
+
+const SMALL: [&str; 8] = [
+    "--specular-size",
+    "16",
+    "--specular-levels",
+    "4",
+    "--irradiance-size",
+    "8",
+    "--samples",
+    "16",
+];
+
+/// Runs `envlight bake` with [`SMALL`] sizes; when it succeeds, every KTX2 file in its output
+/// folder must pass Khronos' `ktx validate`.
+fn bake(args: &[&str]) -> Output {
+    let o = Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .args(["--validation", "--device", "cpu", "bake"])
+        .args(SMALL)
+        .args(args)
+        .output()
+        .unwrap();
+    if o.status.success() {
+        if let Some(k) = args.iter().position(|a| *a == "-o" || *a == "--out") {
+            common::ktx_validate_all(Path::new(args[k + 1]));
+        }
+    }
+    o
+}
+
+fn ok(o: &Output) {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+fn statuses(out: &Path, manifest: &str) -> Vec<(String, String)> {
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join(manifest)).unwrap()).unwrap();
+    m["probes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| {
+            (
+                e["input"]
+                    .as_str()
+                    .unwrap()
+                    .rsplit('/')
+                    .next()
+                    .unwrap()
+                    .to_string(),
+                e["status"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect()
+}
+
+/// Each KTX2 file loads in the `ktx2` crate with R32G32B32A32_SFLOAT (or R16G16B16A16_SFLOAT),
+/// six faces, the levels asked, a linear BT.709 RGBSDA descriptor, and level data bit for bit
+/// equal to what `Baker` returns for the same map (half floats: their rounding of it); with
+/// `--chain`, the paraboloid MIP chain as a two-layer array with every level.
+#[test]
+fn ktx2_files_load_in_an_independent_reader_with_the_gpu_images() {
+    let dir = temp("ktx2-in");
+    let out = temp("ktx2-out");
+    let maps = probes(&dir);
+    ok(&bake(&[
+        dir.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--dfg",
+        "--chain",
+    ]));
+    let ctx = common::ctx();
+    {
+        let baker = Baker::new(&ctx).unwrap();
+        let opts = small_options();
+        for (k, map) in maps.iter().enumerate() {
+            let baked = baker.bake(map, &Orientation::default(), &opts).unwrap();
+            assert!(
+                baked.chain.is_empty(),
+                "a chain nobody asked for was read back"
+            );
+            // The paraboloid chain: a 2-layer array, every level, premultiplied RGBA32F as
+            // the GPU holds it.
+            let chained = baker
+                .bake(map, &Orientation::default(), &with_chain(opts))
+                .unwrap();
+            let side = envlight::bake::dp_size(map, &opts);
+            let bytes = std::fs::read(out.join(format!("p{k}.exr/chain.ktx2"))).unwrap();
+            let r = ktx2::Reader::new(&bytes[..]).unwrap();
+            let h = r.header();
+            assert_eq!(h.format, Some(ktx2::Format::R32G32B32A32_SFLOAT));
+            assert_eq!(
+                (h.pixel_width, h.pixel_height, h.layer_count, h.face_count),
+                (side, side, 2, 1)
+            );
+            assert_eq!(h.level_count, side.ilog2() + 1);
+            assert_eq!(chained.chain.len(), h.level_count as usize);
+            for (level, want) in r.levels().zip(&chained.chain) {
+                let got: Vec<u32> = level
+                    .data
+                    .chunks_exact(4)
+                    .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+                    .collect();
+                let want: Vec<u32> = want.iter().flatten().map(|v| v.to_bits()).collect();
+                assert_eq!(got, want);
+            }
+            assert_eq!(chained.specular, baked.specular);
+            for (file, levels, size) in [
+                ("specular.ktx2", baked.specular.clone(), 16u32),
+                ("irradiance.ktx2", vec![baked.irradiance.clone()], 8),
+            ] {
+                let bytes = std::fs::read(out.join(format!("p{k}.exr")).join(file)).unwrap();
+                let r = ktx2::Reader::new(&bytes[..]).unwrap();
+                let h = r.header();
+                assert_eq!(h.format, Some(ktx2::Format::R32G32B32A32_SFLOAT));
+                assert_eq!(
+                    (h.pixel_width, h.pixel_height, h.face_count),
+                    (size, size, 6)
+                );
+                assert_eq!((h.layer_count, h.pixel_depth), (0, 0));
+                assert_eq!(h.level_count as usize, levels.len());
+                let (dfd, type_size) =
+                    ktx2::dfd::Basic::from_format(ktx2::Format::R32G32B32A32_SFLOAT).unwrap();
+                assert_eq!((r.basic_dfd(), h.type_size), (Some(&dfd), type_size));
+                assert_eq!(r.color_model(), Some(ktx2::ColorModel::RGBSDA));
+                assert_eq!(r.transfer_function(), Some(ktx2::TransferFunction::Linear));
+                for (level, want) in r.levels().zip(&levels) {
+                    let got: Vec<f32> = level
+                        .data
+                        .chunks_exact(4)
+                        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+                        .collect();
+                    let want: Vec<f32> = want.iter().flatten().copied().collect();
+                    assert_eq!(got.len(), want.len());
+                    assert!(got
+                        .iter()
+                        .zip(&want)
+                        .all(|(a, b)| a.to_bits() == b.to_bits()));
+                }
+            }
+        }
+        // The DFG table: 2D, one level, A + B in (0, 1].
+        let bytes = std::fs::read(out.join("dfg.ktx2")).unwrap();
+        let r = ktx2::Reader::new(&bytes[..]).unwrap();
+        assert_eq!(r.header().face_count, 1);
+        let t: Vec<f32> = r
+            .levels()
+            .next()
+            .unwrap()
+            .data
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        assert!(t
+            .chunks_exact(4)
+            .all(|v| v[0] + v[1] > 0.0 && v[0] + v[1] <= 1.0 + 1e-5));
+        // Half floats: the same images rounded to half.
+        let out16 = temp("ktx2-out16");
+        ok(&bake(&[
+            dir.to_str().unwrap(),
+            "-o",
+            out16.to_str().unwrap(),
+            "--texels",
+            "rgba16f",
+        ]));
+        let baked = baker
+            .bake(&maps[0], &Orientation::default(), &opts)
+            .unwrap();
+        let bytes = std::fs::read(out16.join("p0.exr/specular.ktx2")).unwrap();
+        let r = ktx2::Reader::new(&bytes[..]).unwrap();
+        assert_eq!(r.header().format, Some(ktx2::Format::R16G16B16A16_SFLOAT));
+        let (dfd, type_size) =
+            ktx2::dfd::Basic::from_format(ktx2::Format::R16G16B16A16_SFLOAT).unwrap();
+        assert_eq!(
+            (r.basic_dfd(), r.header().type_size),
+            (Some(&dfd), type_size)
+        );
+        let level0: Vec<u16> = r
+            .levels()
+            .next()
+            .unwrap()
+            .data
+            .chunks_exact(2)
+            .map(|c| u16::from_le_bytes([c[0], c[1]]))
+            .collect();
+        let want: Vec<u16> = baked.specular[0]
+            .iter()
+            .flatten()
+            .map(|&v| half::f16::from_f32(v).to_bits())
+            .collect();
+        assert_eq!(level0, want);
+        let _ = std::fs::remove_dir_all(&out16);
+    }
+    common::finish(ctx);
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// B10G11R11 and E5B9G9R9 files: the `ktx2` crate reads them with that format, six faces and
+/// the levels asked; their header's typeSize and their whole descriptor equal what the crate
+/// itself generates for the format (its own tables, written from the Khronos Data Format
+/// specification); and each texel, decoded here from the formats' definitions, is the GPU's
+/// image to the format's precision: half an ulp of the channel (2⁻⁷ of it for R and G's 6
+/// mantissa bits, 2⁻⁶ for B's 5), or half a step of the shared exponent (the largest channel
+/// / 511) for E5B9G9R9, with 2⁻²⁴ absolute where the 10- and 11-bit floats are subnormal.
+#[test]
+fn packed_ktx2_files_hold_the_gpu_images_to_their_precision() {
+    let dir = temp("packed-in");
+    let maps = probes(&dir);
+    let ctx = common::ctx();
+    {
+        let baker = Baker::new(&ctx).unwrap();
+        let baked = baker
+            .bake(&maps[1], &Orientation::default(), &small_options())
+            .unwrap();
+        for (name, format) in [
+            ("b10g11r11", ktx2::Format::B10G11R11_UFLOAT_PACK32),
+            ("e5b9g9r9", ktx2::Format::E5B9G9R9_UFLOAT_PACK32),
+        ] {
+            let out = temp(&format!("packed-{name}"));
+            ok(&bake(&[
+                dir.join("p1.exr").to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "--texels",
+                name,
+            ]));
+            let bytes = std::fs::read(out.join("p1.exr/specular.ktx2")).unwrap();
+            let r = ktx2::Reader::new(&bytes[..]).unwrap();
+            let h = r.header();
+            assert_eq!(h.format, Some(format));
+            assert_eq!((h.pixel_width, h.face_count, h.level_count), (16, 6, 4));
+            let (want_dfd, type_size) = ktx2::dfd::Basic::from_format(format).unwrap();
+            assert_eq!(h.type_size, type_size);
+            assert_eq!(r.basic_dfd(), Some(&want_dfd));
+            let unfloat = |bits: u32, m: u32| -> f64 {
+                let (e, q) = ((bits >> m) as i32, (bits & ((1 << m) - 1)) as f64);
+                let one = (1u32 << m) as f64;
+                if e == 0 {
+                    2f64.powi(-14) * q / one
+                } else {
+                    2f64.powi(e - 15) * (1.0 + q / one)
+                }
+            };
+            let mut worst: f64 = 0.0;
+            for (level, want) in r.levels().zip(&baked.specular) {
+                assert_eq!(level.data.len(), 4 * want.len());
+                for (w, t) in level.data.chunks_exact(4).zip(want) {
+                    let w = u32::from_le_bytes(w.try_into().unwrap());
+                    let (got, tol) = if name == "b10g11r11" {
+                        let got = [
+                            unfloat(w & 0x7ff, 6),
+                            unfloat((w >> 11) & 0x7ff, 6),
+                            unfloat(w >> 22, 5),
+                        ];
+                        let tol = [0, 1, 2].map(|c| {
+                            t[c] as f64 * if c == 2 { 2f64.powi(-6) } else { 2f64.powi(-7) }
+                                + 2f64.powi(-24)
+                        });
+                        (got, tol)
+                    } else {
+                        let scale = 2f64.powi((w >> 27) as i32 - 15 - 9);
+                        let got =
+                            [w & 511, (w >> 9) & 511, (w >> 18) & 511].map(|q| q as f64 * scale);
+                        let top = t[0].max(t[1]).max(t[2]) as f64;
+                        (got, [top / 511.0 + 1e-30; 3])
+                    };
+                    for c in 0..3 {
+                        let e = (got[c] - t[c] as f64).abs();
+                        assert!(e <= tol[c], "{name}: {got:?} vs {t:?}");
+                        worst = worst.max(e / (t[c] as f64).max(1e-30));
+                    }
+                }
+            }
+            eprintln!("{name}: worst relative error {worst:.2e}");
+            let _ = std::fs::remove_dir_all(&out);
+        }
+    }
+    common::finish(ctx);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Shards 1/2 and 2/2 write every probe file byte for byte as one unsharded run does, and
+/// `--merge` joins their manifests.
+#[test]
+fn shards_are_byte_identical_to_one_run_and_merge() {
+    let dir = temp("shard-in");
+    probes(&dir);
+    let one = temp("shard-one");
+    let two = temp("shard-two");
+    let d = dir.to_str().unwrap();
+    ok(&bake(&[d, "-o", one.to_str().unwrap()]));
+    ok(&bake(&[d, "-o", two.to_str().unwrap(), "--shard", "1/2"]));
+    ok(&bake(&[d, "-o", two.to_str().unwrap(), "--shard", "2/2"]));
+    for k in 0..3 {
+        for f in ["sh.json", "irradiance.ktx2", "specular.ktx2"] {
+            let a = std::fs::read(one.join(format!("p{k}.exr")).join(f)).unwrap();
+            let b = std::fs::read(two.join(format!("p{k}.exr")).join(f)).unwrap();
+            assert!(
+                a == b,
+                "p{k}.exr/{f} differs between the sharded and the single run"
+            );
+        }
+    }
+    assert_eq!(statuses(&two, "manifest-shard-1-of-2.json").len(), 2);
+    assert_eq!(statuses(&two, "manifest-shard-2-of-2.json").len(), 1);
+    let o = Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .args(["bake", "--merge", "-o", two.to_str().unwrap()])
+        .output()
+        .unwrap();
+    ok(&o);
+    let merged = statuses(&two, "manifest.json");
+    assert_eq!(
+        merged.iter().map(|m| m.0.as_str()).collect::<Vec<_>>(),
+        ["p0.exr", "p1.exr", "p2.exr"]
+    );
+    for p in [&dir, &one, &two] {
+        let _ = std::fs::remove_dir_all(p);
+    }
+}
+
+/// An interrupted bake (here: one that only reached p0) resumes without redoing p0; a re-run
+/// skips everything; a corrupt probe fails alone, named, with a failing exit status; --force
+/// bakes again; no temporary file is left behind.
+#[test]
+fn reruns_resume_skip_and_fail_alone() {
+    let dir = temp("rerun-in");
+    probes(&dir);
+    let out = temp("rerun-out");
+    let o = out.to_str().unwrap();
+    let first = dir.join("p0.exr");
+    ok(&bake(&[first.to_str().unwrap(), "-o", o]));
+    let when = std::fs::metadata(out.join("p0.exr/specular.ktx2"))
+        .unwrap()
+        .modified()
+        .unwrap();
+    ok(&bake(&[dir.to_str().unwrap(), "-o", o]));
+    let s = statuses(&out, "manifest.json");
+    assert_eq!(s[0], ("p0.exr".into(), "skipped".into()));
+    assert!(s[1..].iter().all(|e| e.1 == "baked"), "{s:?}");
+    assert_eq!(
+        std::fs::metadata(out.join("p0.exr/specular.ktx2"))
+            .unwrap()
+            .modified()
+            .unwrap(),
+        when
+    );
+    // A truncated Radiance file among them.
+    std::fs::write(
+        dir.join("broken.hdr"),
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 8 +X 16\n\x02\x02",
+    )
+    .unwrap();
+    let r = bake(&[dir.to_str().unwrap(), "-o", o]);
+    assert!(!r.status.success());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("broken.hdr") && err.contains("1 of 4 probes failed"),
+        "{err}"
+    );
+    let s = statuses(&out, "manifest.json");
+    assert_eq!(s.iter().filter(|e| e.1 == "skipped").count(), 3, "{s:?}");
+    assert_eq!(s.iter().find(|e| e.0 == "broken.hdr").unwrap().1, "failed");
+    std::fs::remove_file(dir.join("broken.hdr")).unwrap();
+    let forced = bake(&[dir.to_str().unwrap(), "-o", o, "--force", "--check", "2"]);
+    ok(&forced);
+    assert!(statuses(&out, "manifest.json")
+        .iter()
+        .all(|e| e.1 == "baked"));
+    // The summary and the manifest carry each probe's spot-checked errors.
+    let summary = String::from_utf8_lossy(&forced.stdout);
+    assert!(summary.contains("irradiance error"), "{summary}");
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("manifest.json")).unwrap()).unwrap();
+    for e in m["probes"].as_array().unwrap() {
+        let c = &e["check"];
+        assert_eq!(c["texels"], 2, "{e}");
+        let irr = c["irradiance"].as_f64().unwrap();
+        let spec = c["specular"].as_array().unwrap();
+        assert_eq!(spec.len(), 4);
+        assert!(irr.is_finite() && spec.iter().all(|v| v.as_f64().unwrap().is_finite()));
+    }
+    let leftovers: Vec<_> = walk(&out)
+        .into_iter()
+        .filter(|p| p.to_string_lossy().contains(".tmp-"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+    for p in [&dir, &out] {
+        let _ = std::fs::remove_dir_all(p);
+    }
+}
+
+/// `opts` with the paraboloid chain written too.
+fn with_chain(mut opts: BakeOptions) -> BakeOptions {
+    opts.chain = true;
+    opts
+}
