@@ -35,7 +35,6 @@ enum Command {
     Plan(super::scene::PlanArgs),
     /// List the Vulkan devices and the one envlight would pick
     Devices,
-    SynthSky(super::info::SynthSkyArgs),
     Report(super::reports::report::ReportArgs),
     Bake(super::bake::BakeArgs),
     /// Benchmarks (GPU time from timestamp queries)
@@ -69,7 +68,6 @@ pub fn main() {
         Command::Render(a) => super::scene::render(g, a),
         Command::Plan(a) => super::scene::plan(a),
         Command::Devices => super::info::devices(g),
-        Command::SynthSky(a) => super::info::synth_sky(a),
         Command::Report(a) => super::reports::report::report(g, a),
         Command::Bake(a) => super::bake::bake(g, a),
         Command::Bench { what } => super::reports::bench(g, what),

@@ -1,13 +1,10 @@
-//! `envlight info`, `lights`, `devices` and `synth-sky`.
+//! `envlight info`, `lights` and `devices`.
 
 use super::{context, load_input, Global, Input};
-use crate::io;
 use crate::math::lights::{extract, group, ExtractOptions};
-use crate::math::synth::Sky;
-use crate::{EnvMap, Mapping};
+use crate::EnvMap;
 use anyhow::Result;
 use clap::Args;
-use std::path::PathBuf;
 
 /// Print a map's mapping, size, radiance statistics and total power
 #[derive(Args)]
@@ -111,17 +108,6 @@ pub fn lights(a: &LightsArgs) -> Result<()> {
     Ok(())
 }
 
-/// Write the analytic sky (gradient, sun 5·10⁴ × the zenith, ground) as a lat-long EXR
-#[derive(Args)]
-pub struct SynthSkyArgs {
-    /// Output EXR
-    #[arg(short, long)]
-    output: PathBuf,
-    /// Width (height is half)
-    #[arg(long, default_value_t = 256)]
-    width: u32,
-}
-
 /// `envlight info`.
 pub fn info(a: &InfoArgs) -> Result<()> {
     let map = load_input(&a.input)?;
@@ -196,22 +182,4 @@ pub fn parse_startup_line(text: &str) -> Option<[f64; 5]> {
         .filter_map(|w| w.parse::<f64>().ok());
     let out = [v.next()?, v.next()?, v.next()?, v.next()?, v.next()?];
     v.next().is_none().then_some(out)
-}
-
-/// `envlight synth-sky`.
-pub fn synth_sky(a: &SynthSkyArgs) -> Result<()> {
-    let w = a.width.max(2);
-    let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 8, |d| {
-        Sky::default().radiance(d)
-    });
-    io::save_exr(&map, &a.output)?;
-    let s = map.stats();
-    println!(
-        "wrote {} ({} x {}, max luminance {:.3e})",
-        a.output.display(),
-        w,
-        w / 2,
-        s.max_luminance
-    );
-    Ok(())
 }

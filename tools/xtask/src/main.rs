@@ -171,18 +171,7 @@ fn run(task: &str, rest: &[String]) -> Result<(), String> {
             setup()?;
             cargo(&["run", "--release", "-p", "envlight-shaderc"])
         }
-        "gen-assets" => cargo(&[
-            "run",
-            "--release",
-            "--bin",
-            "envlight",
-            "--",
-            "synth-sky",
-            "-o",
-            "assets/sky_latlong.exr",
-            "--width",
-            "512",
-        ]),
+        "gen-assets" => cargo(&["run", "--release", "-p", "envlight-assets"]),
         "lint" => {
             cargo(&["fmt", "--all", "--", "--check"])?;
             cargo(&["clippy", "--all-targets", "--", "-D", "warnings"])
