@@ -1026,13 +1026,26 @@ fn the_format_bench_reports_every_format() {
         .unwrap();
     ok(&o);
     let md = std::fs::read_to_string(&out).unwrap();
+    // A performance page: the device and CPU, then the job's section with what measured it.
+    assert!(
+        md.starts_with("# envlight on ") && md.contains("\nDevice: "),
+        "{md}"
+    );
+    assert!(
+        md.contains("<!-- bench:formats -->\n## KTX2 texel formats"),
+        "{md}"
+    );
+    assert!(
+        md.contains("\nCommit ") && md.contains("bench formats"),
+        "{md}"
+    );
     for (format, ratio) in [
         ("rgba16f", 0.5),
         ("b10g11r11", 0.25),
         ("e5b9g9r9", 0.25),
         ("bc6h", 0.0625),
     ] {
-        let section = md.split(&format!("## {format}\n")).nth(1).unwrap();
+        let section = md.split(&format!("### {format}\n")).nth(1).unwrap();
         let row = section
             .lines()
             .find(|l| l.starts_with("| smooth.exr"))

@@ -220,9 +220,6 @@ fn sh_irradiance_with_lights_against_mc_on_real_probes() {
 /// samples per pixel, on spiaggia_di_mondello and quarry_01 (suns). Measured relative RMS
 /// over the sphere, lights / none: spiaggia 0.72% / 21.2%, 0.76% / 13.9%, 0.88% / 15.4%;
 /// quarry 0.82% / 24.7%, 0.95% / 17.5%, 1.40% / 22.9% (α 0.1, 0.3, 0.6). Bounds at 1.3×.
-/// (Before the chain was averaged evenly and read across the rim at lod bias 0: with lights
-/// 0.74–1.08% and 1.10–3.93%; without, 15–18% and 15%, the sun's power then kept by the
-/// solid-angle average; docs/BENCHMARKS.md "Centred MIP chain".)
 #[test]
 fn fis_with_lights_against_mc_on_real_probes() {
     use common::scenes::{object, scene, sphere_camera, sphere_pixels, unit_sphere};

@@ -255,11 +255,12 @@ fn furnace_shows_the_albedo() {
 /// per pixel) on a soft probe (venice_sunset) and a sun probe (spiaggia_di_mondello, sun
 /// ≈ 10⁴ × the sky), GGX α 0.1, 0.3, 0.6, default settings (7 levels, 512² chain), 256²
 /// paraboloid, lights extracted (the default). Bounds at 1.3× the measured relative RMS:
-/// venice 4.2%, 9.1%, 15.7%; spiaggia 5.0%, 10.8%, 29.3% (10.2%, 12.7%, 29.6% before light
-/// extraction, which adds the sun at the material's α instead of lerping two levels). Most of it is the n = v = r lobe at grazing views
+/// venice 4.2%, 9.1%, 15.7%; spiaggia 5.0%, 10.8%, 29.3% (10.2%, 12.7%, 29.6% without light
+/// extraction, which adds the sun at the material's α instead of lerping two levels). Most of
+/// it is the n = v = r lobe at grazing views
 /// (venice, pixels within 37° of the view axis: 1.8%, 3.6%, 6.8%); on the sun map α between
 /// two levels also lerps two highlights of very different peaks (6 levels: 34% at α 0.1).
-/// docs/BENCHMARKS.md has every probe.
+/// `envlight report --split-sum-every-probe` scores every probe.
 #[test]
 fn split_sum_error_against_mc_on_real_probes() {
     let Some(dir) = common::probes() else {

@@ -106,7 +106,7 @@ pub fn extract_each(map: &EnvMap, opts: &[ExtractOptions]) -> Vec<Extraction> {
     }
     // The luminance of the value standing for each texel position that holds part of the
     // sphere (NaN elsewhere), by index: one array instead of a list of every texel, which on
-    // a 1k map was 17 MB to fault in; solid angles are found again for the few candidates.
+    // a 1k map would be 17 MB to fault in; solid angles are found again for the few candidates.
     let mut power = 0.0;
     let mut y_at = vec![f64::NAN; map.texels.len()];
     map.for_each_texel(|layer, i, j, t, omega| {

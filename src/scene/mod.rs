@@ -290,8 +290,9 @@ fn white() -> [f64; 3] {
     [1.0; 3]
 }
 
-/// The default lod bias of filtered importance sampling (see docs/BENCHMARKS.md for the
-/// measurement that chose it).
+/// The default lod bias of filtered importance sampling: 0 reads the level whose texel
+/// matches each sample's solid angle (`envlight bench fis` sweeps the bias against Monte
+/// Carlo; docs/fis/).
 pub const DEFAULT_FIS_BIAS: f64 = defaults::FIS_BIAS;
 
 /// The default lod bias of filtered importance sampling where it reads the residual of

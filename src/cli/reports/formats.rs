@@ -127,11 +127,16 @@ pub fn bench_formats(
         }
         eprintln!("{probe}: done");
     }
-    let report = markdown(&rows, opts, &ctx.info().name);
-    print!("{report}");
+    let (method, report) = markdown(&rows, opts);
+    print!("{method}\n\n{report}");
     if let Some(out) = out {
-        crate::io::write_atomic(out, report.as_bytes())?;
-        eprintln!("wrote {}", out.display());
+        let section = super::page::Section {
+            job: "formats",
+            title: "KTX2 texel formats: size and error against rgba32f",
+            method: &method,
+            body: &report,
+        };
+        super::page::write_section(out, &section, &super::page::Provenance::of(ctx.info()))?;
     }
     Ok(())
 }
@@ -157,7 +162,7 @@ fn summary(s: &mut String, rows: &[Row]) {
     let e5 = total(Ktx2Format::E5b9g9r9, 0) as f64;
     let _ = writeln!(
         s,
-        "## Summary ({} probes)\n\n| format | bytes of rgba32f | of e5b9g9r9 | zstd: kept, per probe (least – most) | level 0 mean error, worst probe |\n|---|---|---|---|---|",
+        "### Summary ({} probes)\n\n| format | bytes of rgba32f | of e5b9g9r9 | zstd: kept, per probe (least – most) | level 0 mean error, worst probe |\n|---|---|---|---|---|",
         rows.len() / FORMATS.len()
     );
     for f in FORMATS {
@@ -181,24 +186,23 @@ fn summary(s: &mut String, rows: &[Row]) {
 }
 
 /// The report: per format, a row per probe with sizes and errors, and the totals.
-fn markdown(rows: &[Row], opts: &BakeOptions, device: &str) -> String {
+/// The method and the tables.
+fn markdown(rows: &[Row], opts: &BakeOptions) -> (String, String) {
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# KTX2 texel formats: size and error against rgba32f\n\n\
-         `envlight bench formats` on {device}: per probe, `irradiance.ktx2` ({0}²) + \
+    let method = format!(
+        "per probe, `irradiance.ktx2` ({0}²) + \
          `specular.ktx2` ({1}², {2} levels) baked once (lights extracted, {3} samples), then \
          written in each format. Bytes as written and with `--zstd`; error: relative luminance \
          error of each specular texel against the rgba32f cube (texels above 1e-6 of the \
          level's brightest), mean / worst, at level 0, the middle level and the last; clamped: \
-         the largest share of a level's power clamped away.\n",
+         the largest share of a level's power clamped away.",
         opts.irradiance_size, opts.specular_size, opts.specular_levels, opts.samples
     );
     summary(&mut s, rows);
     for format in FORMATS {
         let _ = writeln!(
             s,
-            "## {}\n\n| probe | bytes | of rgba32f | with zstd | level 0 mean / worst | level {} | level {} | clamped |\n|---|---|---|---|---|---|---|---|",
+            "### {}\n\n| probe | bytes | of rgba32f | with zstd | level 0 mean / worst | level {} | level {} | clamped |\n|---|---|---|---|---|---|---|---|",
             format.name(),
             opts.specular_levels / 2,
             opts.specular_levels - 1
@@ -235,5 +239,5 @@ fn markdown(rows: &[Row], opts: &BakeOptions, device: &str) -> String {
             total[1] as f64 / total[0].max(1) as f64
         );
     }
-    s
+    (method, s)
 }

@@ -310,26 +310,19 @@ pub fn bench_ibl(g: &Global, o: &IblOptions) -> Result<()> {
         results.push((name.to_string(), rows));
     }
     let _ = std::fs::remove_dir_all(&scratch);
-    let md = markdown(g, o, &results)?;
-    print!("{md}");
+    let (method, md) = markdown(o, &results);
+    print!("{method}\n\n{md}");
     if let Some(out) = &o.out {
-        std::fs::write(out, &md).with_context(|| out.display().to_string())?;
-        eprintln!("wrote {}", out.display());
+        let ctx = super::super::context(g)?;
+        let section = super::page::Section {
+            job: "ibl",
+            title: "GGX cubes: envlight bake beside glTF-IBL-Sampler",
+            method: &method,
+            body: &md,
+        };
+        super::page::write_section(out, &section, &super::page::Provenance::of(ctx.info()))?;
     }
     Ok(())
-}
-
-/// The CPU's model name (Linux), or "unknown".
-fn cpu_name() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|s| s.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into())
 }
 
 /// Levels whose α lies in the goal's range, 0.05 to 0.6.
@@ -353,29 +346,25 @@ fn dominated(rows: &[Measured], theirs: &Measured, levels: &[usize]) -> bool {
         })
 }
 
-fn markdown(g: &Global, o: &IblOptions, results: &[(String, Vec<Measured>)]) -> Result<String> {
+/// The method and the tables.
+fn markdown(o: &IblOptions, results: &[(String, Vec<Measured>)]) -> (String, String) {
     let levels = o.size.ilog2();
     let goal = goal_levels(levels);
-    let device = super::super::context(g)
-        .map(|c| format!("{} ({})", c.info().name, c.info().driver.trim()))
-        .unwrap_or_else(|e| format!("unknown ({e})"));
-    let mut md = format!(
-        "## GGX cubes: envlight bake beside glTF-IBL-Sampler\n\n\
-         Device: {device}; commit {4}; CPU {5}. Command: `envlight bench ibl` (cube {0}², {levels} levels, {1} \
-         interleaved runs of each configuration, median whole-process seconds; envlight's \
-         time is the whole `bake --preset khronos` (SH, irradiance, GGX cube, DFG table), \
-         glTF-IBL-Sampler's one `-distribution GGX` run). Error: relative RMS of each level's \
-         luminance at {2} texels (the brightest direction's first) against the float64 exact \
-         n = v = r prefilter at the level's α = (k/{3})². A sampler row is dominated when an \
-         envlight row takes no longer and errs at most half as much at every level of α 0.05 \
-         to 0.6.\n\n",
+    let method = format!(
+        "cube {0}², {levels} levels, {1} \
+         interleaved runs of each configuration (the order turned each run), median \
+         whole-process seconds; envlight's time is the whole `bake --preset khronos` (SH, \
+         irradiance, GGX cube, DFG table), glTF-IBL-Sampler's one `-distribution GGX` run. \
+         Error: relative RMS of each level's luminance at {2} texels (the brightest \
+         direction's first) against the float64 exact n = v = r prefilter at the level's \
+         α = (k/{3})². A sampler row is dominated when an envlight row takes no longer and \
+         errs at most half as much at every level of α 0.05 to 0.6.",
         o.size,
         o.runs,
         o.texels,
         levels - 1,
-        super::commit(),
-        cpu_name()
     );
+    let mut md = String::new();
     let alphas: Vec<String> = (1..levels - 1)
         .map(|k| format!("α {:.3}", level_alpha(k, levels)))
         .collect();
@@ -416,5 +405,5 @@ fn markdown(g: &Global, o: &IblOptions, results: &[(String, Vec<Measured>)]) -> 
         md,
         "glTF-IBL-Sampler configurations dominated by an envlight one: {beaten} of {total}.\n"
     );
-    Ok(md)
+    (method, md)
 }

@@ -8,6 +8,7 @@ pub mod fis;
 pub mod fis_report;
 pub mod formats;
 pub mod ibl;
+pub mod page;
 pub mod peers;
 mod recipes;
 pub mod report;
@@ -96,7 +97,7 @@ pub enum Bench {
         out: PathBuf,
     },
     /// Whole-process times of the jobs users give cmft, paired with cmft on the same machine,
-    /// each with its error (markdown; see docs/BENCHMARKS.md)
+    /// each with its error (markdown; --out writes its section of a performance page)
     Peers {
         /// The map every job reads (.hdr, which cmft reads too)
         #[arg(long)]
@@ -110,7 +111,7 @@ pub enum Bench {
         /// Timed pairs for the Phong job
         #[arg(long, default_value_t = 1)]
         phong_reps: usize,
-        /// Also write the report here
+        /// The performance page (docs/performance/<device>.md) to write this job's section into
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -140,7 +141,7 @@ pub enum Bench {
         /// Texels checked per level against the exact prefilter
         #[arg(long, default_value_t = 192)]
         texels: u32,
-        /// Also write the page here
+        /// The performance page (docs/performance/<device>.md) to write this job's section into
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -159,7 +160,7 @@ pub enum Bench {
         /// Irradiance cube face size
         #[arg(long, default_value_t = 32)]
         irradiance_size: u32,
-        /// Also write the report here
+        /// The performance page (docs/performance/<device>.md) to write this job's section into
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -276,6 +277,8 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
                 reps: *reps,
                 phong_reps: *phong_reps,
                 out: out.as_deref(),
+                // The parent's context only names the device; it is gone before any timing.
+                provenance: page::Provenance::of(context(g)?.info()),
             })
         }
     }

@@ -22,9 +22,18 @@ pub struct PeersOptions<'a> {
     pub reps: usize,
     /// Timed pairs for the Phong job (each envlight run takes many seconds on lavapipe).
     pub phong_reps: usize,
-    /// Where to write the markdown report (also printed).
+    /// The performance page to write the job's section into (also printed).
     pub out: Option<&'a Path>,
+    /// The device, CPU, commit, date and command the page names.
+    pub provenance: super::page::Provenance,
 }
+
+/// How `bench peers` measures, as its page section states it.
+const METHOD: &str = "whole-process wall time, median of paired alternating runs (envlight, \
+     cmft) after one untimed run of each (Mesa's shader cache warm); 'cold' is one envlight \
+     run with the shader cache disabled, as a first run has it. GPU is the sum of envlight's \
+     timestamp spans (warm). Each output's error is against its float64 reference, beside \
+     its time.";
 
 /// One job, as both programs run it.
 struct Job {
@@ -170,8 +179,13 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     let md = peers_markdown(opts, &measured);
     println!("{md}");
     if let Some(out) = opts.out {
-        std::fs::write(out, &md).with_context(|| out.display().to_string())?;
-        eprintln!("wrote {}", out.display());
+        let section = super::page::Section {
+            job: "peers",
+            title: "The jobs users give cmft, paired with cmft",
+            method: METHOD,
+            body: &md,
+        };
+        super::page::write_section(out, &section, &opts.provenance)?;
     }
     let _ = std::fs::remove_dir_all(&tmp);
     Ok(())
@@ -449,22 +463,9 @@ fn peers_markdown(opts: &PeersOptions, m: &Measured<'_>) -> String {
         rows,
         breakdown,
     } = m;
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
-        })
-        .unwrap_or_else(|| "?".into());
-    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
     let mut md = String::new();
     md.push_str(&format!(
-        "Machine: {cpu}, {cores} cores; envlight on {device}. Map: `{map}`.\n\
-         cmft: {}.\n\
-         Whole-process wall time, median of paired alternating runs after one untimed run of each \
-         (Mesa's shader cache warm); 'cold' is one envlight run with the shader cache disabled, as \
-         a first run has it. GPU is the sum of envlight's timestamp spans (warm).\n\n",
+        "envlight on {device}. Map: `{map}`. cmft: {}.\n\n",
         opts.cmft.map_or(
             "absent (set ENVLIGHT_CMFT): its columns are empty".into(),
             |c| { format!("`{}`, 2 worker threads", c.display()) }

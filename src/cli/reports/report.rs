@@ -9,7 +9,7 @@ use crate::math::brdf::Brdf;
 use crate::math::camera::{sphere_camera, Camera};
 use crate::render::PassKind;
 use crate::render::Renderer;
-use crate::scene::{Scene, SplitSumSettings, Technique};
+use crate::scene::{LightsMode, Scene, SplitSumSettings, Technique};
 use crate::EnvMap;
 use anyhow::{anyhow, bail, Context as _, Result};
 use clap::Args;
@@ -150,8 +150,40 @@ fn materials(quick: bool) -> Vec<(&'static str, Brdf)> {
     ]
 }
 
+/// A technique to score: its label, split-sum taps, and whether the probe's lights are
+/// extracted (the default) or left in the map.
+type Case = (Technique, String, u32, bool);
+
+/// The techniques that apply to `brdf`, each with light extraction and, where a technique
+/// reads it (not the Monte Carlo reference, not the mirror lookup), without; quick runs take
+/// the second row for SH order 2, FIS 64 and split-sum only.
+fn cases(brdf: &Brdf, quick: bool) -> Vec<Case> {
+    let with: Vec<(Technique, String, u32)> = techniques(brdf, quick);
+    let mut v = Vec::new();
+    for (t, label, taps) in with {
+        let both = match t {
+            Technique::Mc { .. } | Technique::Lookup => false,
+            _ if !quick => true,
+            Technique::Sh { order } => order == 2,
+            Technique::Fis { samples, .. } => samples == 64,
+            Technique::SplitSum => taps == 1,
+            _ => false,
+        };
+        if both {
+            // No comma: the label is a CSV field.
+            let off = match label.is_empty() {
+                true => "(no lights)".to_string(),
+                false => format!("{label} (no lights)"),
+            };
+            v.push((t, off, taps, false));
+        }
+        v.push((t, label, taps, true));
+    }
+    v
+}
+
 /// The techniques that apply to `brdf`, with their labels and split-sum taps.
-fn cases(brdf: &Brdf, quick: bool) -> Vec<(Technique, String, u32)> {
+fn techniques(brdf: &Brdf, quick: bool) -> Vec<(Technique, String, u32)> {
     let (fis, mc, orders): (&[u32], &[u32], &[u32]) = if quick {
         (&[16, 64], &[64, 256], &[2, 8])
     } else {
@@ -365,8 +397,11 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         };
         for (name, brdf) in materials(quick) {
             let (truth, noise) = truth(&renderer, cam, brdf, dp, split, reference, &env)?;
-            for (t, params, taps) in cases(&brdf, quick) {
-                let sc = scene(cam, brdf, t, dp, 7, SplitSumSettings { taps, ..split });
+            for (t, params, taps, extract) in cases(&brdf, quick) {
+                let mut sc = scene(cam, brdf, t, dp, 7, SplitSumSettings { taps, ..split });
+                if !extract {
+                    sc.environment.lights = LightsMode::None;
+                }
                 // One untimed render first: pipelines are built on first use.
                 renderer.render(&sc, &env)?;
                 let t0 = Instant::now();
@@ -586,8 +621,9 @@ fn markdown(rows: &[Row], settings: &str) -> String {
         let _ = writeln!(md, "- **{m}**: {}", front_line(&p));
     }
     md.push_str(
-        "\nEvery render extracts the probe's lights (the default); split_sum taps=8 is the lobe \
-         taps recipe. gltf-ibl-sampler rows are glTF-IBL-Sampler's GGX cube of the probe \
+        "\nRows marked \"(no lights)\" leave the probe's lights in the map; the others extract \
+         them (the default) and add them exactly where the technique can. split_sum taps=8 is \
+         the lobe taps recipe. gltf-ibl-sampler rows are glTF-IBL-Sampler's GGX cube of the probe \
          (its defaults, N samples) shaded by split-sum in float64; their time is its whole \
          process (it has no timestamps), so they sit on the per-frame front at the \
          split_sum row's cost.\n\n![Pareto chart](report.png)\n",
