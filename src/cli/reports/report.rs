@@ -697,6 +697,73 @@ fn colour(technique: &str) -> plotters::style::RGBColor {
     }
 }
 
+/// The chart's point labels: their font size, and their height and width in pixels (DejaVu
+/// Sans averages under 0.6 em a character; the estimate errs wide).
+const LABEL_PX: i32 = 12;
+const LABEL_H: i32 = 14;
+
+fn label_width(label: &str) -> i32 {
+    (label.chars().count() as f64 * 0.6 * LABEL_PX as f64).ceil() as i32 + 2
+}
+
+/// Where each point's label goes, as the offset of its top-left corner from the point: the
+/// first of twelve places around the point where it overlaps no label placed before it and no
+/// marker and stays inside `area` (x0, y0, x1, y1); where none is free, the place that
+/// overlaps least.
+fn place_labels(
+    points: &[(i32, i32)],
+    widths: &[i32],
+    area: (i32, i32, i32, i32),
+) -> Vec<(i32, i32)> {
+    type Rect = (i32, i32, i32, i32);
+    let overlap = |a: Rect, b: Rect| {
+        let w = (a.2.min(b.2) - a.0.max(b.0)).max(0);
+        let h = (a.3.min(b.3) - a.1.max(b.1)).max(0);
+        w * h
+    };
+    let markers: Vec<Rect> = points
+        .iter()
+        .map(|&(x, y)| (x - 6, y - 6, x + 6, y + 6))
+        .collect();
+    let mut placed: Vec<Rect> = Vec::new();
+    let mut out = Vec::with_capacity(points.len());
+    for (&(x, y), &w) in points.iter().zip(widths) {
+        let h = LABEL_H;
+        let tries = [
+            (7, -h),
+            (7, 2),
+            (-7 - w, -h),
+            (-7 - w, 2),
+            (-w / 2, -h - 6),
+            (-w / 2, 7),
+            (7, -2 * h),
+            (-7 - w, 2 + h),
+            (7, 2 + h),
+            (-7 - w, -2 * h),
+            (-w / 2, -2 * h - 6),
+            (-w / 2, 7 + h),
+        ];
+        let cost = |&(dx, dy): &(i32, i32)| {
+            let r = (x + dx, y + dy, x + dx + w, y + dy + h);
+            let outside = (area.0 - r.0).max(0)
+                + (r.2 - area.2).max(0)
+                + (area.1 - r.1).max(0)
+                + (r.3 - area.3).max(0);
+            let hits: i32 = placed.iter().chain(&markers).map(|&o| overlap(r, o)).sum();
+            hits + outside * h
+        };
+        let best = tries
+            .iter()
+            .copied()
+            .min_by_key(|t| cost(t))
+            .unwrap_or((7, -h));
+        let r = (x + best.0, y + best.1, x + best.0 + w, y + best.1 + h);
+        placed.push(r);
+        out.push(best);
+    }
+    out
+}
+
 fn plot(path: &Path, rows: &[Row], device: &str) -> Result<()> {
     use plotters::prelude::*;
     let e = |e: &dyn std::fmt::Display| anyhow!("report.png: {e}");
@@ -776,13 +843,18 @@ fn plot(path: &Path, rows: &[Row], device: &str) -> Result<()> {
                 ShapeStyle::from(&BLACK).stroke_width(2),
             ))
             .map_err(|x| e(&x))?;
-        for q in &p {
+        let pixels: Vec<(i32, i32)> = p.iter().map(|q| chart.backend_coord(&at(q))).collect();
+        let widths: Vec<i32> = p.iter().map(|q| label_width(&q.label)).collect();
+        let (xs, ys) = chart.plotting_area().get_pixel_range();
+        let area = (xs.start, ys.start, xs.end, ys.end);
+        let offsets = place_labels(&pixels, &widths, area);
+        for (q, offset) in p.iter().zip(offsets) {
             let c = colour(q.technique);
             chart
                 .draw_series(std::iter::once(
                     EmptyElement::at(at(q))
                         + Circle::new((0, 0), 5, c.filled())
-                        + Text::new(q.label.clone(), (7, -14), ("sans-serif", 12)),
+                        + Text::new(q.label.clone(), offset, ("sans-serif", LABEL_PX)),
                 ))
                 .map_err(|x| e(&x))?;
         }
@@ -794,6 +866,57 @@ fn plot(path: &Path, rows: &[Row], device: &str) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Labels of points in a cluster (the chart's worst case: equal times, near errors) and at
+    /// the plot's right edge overlap no other label and no marker and stay inside.
+    #[test]
+    fn labels_of_clustered_points_do_not_overlap() {
+        let points = [
+            (100, 100),
+            (104, 103),
+            (108, 98),
+            (300, 200),
+            (395, 60),
+            (392, 64),
+        ];
+        let widths: Vec<i32> = [
+            "sh l=2 (no lights)",
+            "sh_brdf l=2",
+            "mc N=64",
+            "x",
+            "split_sum (no lights)",
+            "split_sum",
+        ]
+        .iter()
+        .map(|l| label_width(l))
+        .collect();
+        let area = (0, 0, 400, 300);
+        let at = place_labels(&points, &widths, area);
+        let rect = |k: usize| {
+            let (x, y) = (points[k].0 + at[k].0, points[k].1 + at[k].1);
+            (x, y, x + widths[k], y + LABEL_H)
+        };
+        for a in 0..points.len() {
+            let r = rect(a);
+            assert!(
+                r.0 >= 0 && r.1 >= 0 && r.2 <= 400 && r.3 <= 300,
+                "label {a} outside: {r:?}"
+            );
+            for b in 0..points.len() {
+                let (m, o) = (points[b], rect(b));
+                let apart = |p: (i32, i32, i32, i32), q: (i32, i32, i32, i32)| {
+                    p.2 <= q.0 || q.2 <= p.0 || p.3 <= q.1 || q.3 <= p.1
+                };
+                assert!(
+                    apart(r, (m.0 - 5, m.1 - 5, m.0 + 5, m.1 + 5)),
+                    "label {a} on marker {b}"
+                );
+                if a != b {
+                    assert!(apart(r, o), "labels {a} and {b} overlap: {r:?} {o:?}");
+                }
+            }
+        }
+    }
 
     fn point(label: &str, ms: f64, rms: f64) -> Point {
         Point {
