@@ -902,8 +902,8 @@ mod tests {
                 r.0 >= 0 && r.1 >= 0 && r.2 <= 400 && r.3 <= 300,
                 "label {a} outside: {r:?}"
             );
-            for b in 0..points.len() {
-                let (m, o) = (points[b], rect(b));
+            for (b, &m) in points.iter().enumerate() {
+                let o = rect(b);
                 let apart = |p: (i32, i32, i32, i32), q: (i32, i32, i32, i32)| {
                     p.2 <= q.0 || q.2 <= p.0 || p.3 <= q.1 || q.3 <= p.1
                 };
