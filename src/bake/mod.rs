@@ -33,8 +33,8 @@ use crate::{EnvMap, Mapping};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-/// What a bake computes: [`Default`] (what `envlight bake` writes without flags), then the
-/// fields that differ.
+/// What a bake computes: [`BakeOptions::new`] or [`Default`] (what `envlight bake` writes
+/// without flags), then the fields that differ.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 #[non_exhaustive]
@@ -60,6 +60,16 @@ pub struct BakeOptions {
     /// irradiance cube and the specular levels ≥ 1, which then see only the residual
     /// through SH and FIS.
     pub lights: bool,
+}
+
+impl BakeOptions {
+    /// A specular cube of `specular_size`² at level 0, the rest as [`Default`] has it.
+    pub fn new(specular_size: u32) -> Self {
+        BakeOptions {
+            specular_size,
+            ..Default::default()
+        }
+    }
 }
 
 impl Default for BakeOptions {

@@ -111,7 +111,7 @@ pub enum Bench {
         /// Timed pairs for the Phong job
         #[arg(long, default_value_t = 1)]
         phong_reps: usize,
-        /// The performance page (docs/performance/<device>.md) to write this job's section into
+        /// The performance page (docs/performance/DEVICE.md) to write this job's section into
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -141,7 +141,7 @@ pub enum Bench {
         /// Texels checked per level against the exact prefilter
         #[arg(long, default_value_t = 192)]
         texels: u32,
-        /// The performance page (docs/performance/<device>.md) to write this job's section into
+        /// The performance page (docs/performance/DEVICE.md) to write this job's section into
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -160,7 +160,7 @@ pub enum Bench {
         /// Irradiance cube face size
         #[arg(long, default_value_t = 32)]
         irradiance_size: u32,
-        /// The performance page (docs/performance/<device>.md) to write this job's section into
+        /// The performance page (docs/performance/DEVICE.md) to write this job's section into
         #[arg(long)]
         out: Option<PathBuf>,
     },

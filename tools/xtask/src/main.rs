@@ -92,7 +92,8 @@ fn cargo(args: &[&str]) -> Result<(), String> {
 
 /// The inner-loop subset of `test --quick` (under 2 minutes once built): the library's unit
 /// tests and float64 oracles, input validation and bad files, the fuzz corpora, the layering
-/// and plan checks, and the quick GPU checks of context teardown and mappings.
+/// and plan checks, and the quick GPU checks of context teardown, mappings, GPU maps and the
+/// G-buffer.
 const QUICK: &[&str] = &[
     "--lib",
     "--test",
@@ -109,6 +110,10 @@ const QUICK: &[&str] = &[
     "mappings_gpu",
     "--test",
     "hard_cases",
+    "--test",
+    "map",
+    "--test",
+    "gbuffer",
 ];
 
 /// `cargo test` (everything, or with `--quick` the [`QUICK`] subset), then a summary of the
