@@ -276,9 +276,11 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
                 cmft: cmft.as_deref(),
                 reps: *reps,
                 phong_reps: *phong_reps,
-                out: out.as_deref(),
                 // The parent's context only names the device; it is gone before any timing.
-                provenance: page::Provenance::of(context(g)?.info()),
+                page: match out {
+                    Some(p) => Some((p.as_path(), page::Provenance::of(context(g)?.info()))),
+                    None => None,
+                },
             })
         }
     }

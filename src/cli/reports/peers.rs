@@ -22,10 +22,9 @@ pub struct PeersOptions<'a> {
     pub reps: usize,
     /// Timed pairs for the Phong job (each envlight run takes many seconds on lavapipe).
     pub phong_reps: usize,
-    /// The performance page to write the job's section into (also printed).
-    pub out: Option<&'a Path>,
-    /// The device, CPU, commit, date and command the page names.
-    pub provenance: super::page::Provenance,
+    /// The performance page to write the job's section into (the section is also printed),
+    /// and the device, CPU, commit, date and command it names.
+    pub page: Option<(&'a Path, super::page::Provenance)>,
 }
 
 /// How `bench peers` measures, as its page section states it.
@@ -178,14 +177,14 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     let measured = measure(&me, opts, &jobs, &tmp)?;
     let md = peers_markdown(opts, &measured);
     println!("{md}");
-    if let Some(out) = opts.out {
+    if let Some((out, provenance)) = &opts.page {
         let section = super::page::Section {
             job: "peers",
             title: "The jobs users give cmft, paired with cmft",
             method: METHOD,
             body: &md,
         };
-        super::page::write_section(out, &section, &opts.provenance)?;
+        super::page::write_section(out, &section, provenance)?;
     }
     let _ = std::fs::remove_dir_all(&tmp);
     Ok(())
