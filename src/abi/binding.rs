@@ -29,6 +29,10 @@ bindings! {
     COPY_DST = 1;
     /// busy: the buffer the costly loop writes to.
     BUSY_OUT = 0;
+    /// poison_image: the level a pass wrote, corrupted in place (rgba32f image2DArray).
+    POISON_IMAGE = 0;
+    /// poison_buffer: the floats a pass wrote, corrupted in place (float storage buffer).
+    POISON_BUFFER = 0;
     /// sh_project: the map (sampler2DArray, read with texelFetch).
     SH_SRC = 0;
     /// sh_project: per-workgroup partial sums (storage buffer).

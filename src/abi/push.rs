@@ -101,6 +101,34 @@ push_blocks! {
         /// Padding.
         pad: [u32; 2] = "uint[2]",
     }
+    /// `glsl/poison.comp` (both variants).
+    PoisonPush {
+        /// 0: one NaN, 1: scale, 2: mirror.
+        mode: u32 = "uint",
+        /// The scale factor (mode 1).
+        factor: f32 = "float",
+        /// Image: layer width; buffer: floats in the region.
+        width: u32 = "uint",
+        /// Image: layer height (buffer: 1).
+        height: u32 = "uint",
+        /// Image: layers (buffer: 1).
+        layers: u32 = "uint",
+        /// Flat index of the NaN (texel, or float in the region).
+        nan_at: u32 = "uint",
+        /// Buffer: the region's first float.
+        first: u32 = "uint",
+        /// Buffer: floats per record.
+        stride: u32 = "uint",
+        /// Buffer: bit k set where float k of a record is scaled.
+        scale_mask: u32 = "uint",
+        /// Buffer: bit k set where float k of a record changes sign under the mirror.
+        mirror_mask: u32 = "uint",
+        /// Buffer: where non-zero, the mirror x → −x of SH coefficients: float f of the region
+        /// is channel f % sh_channels of coefficient (f / sh_channels) % sh_count.
+        sh_channels: u32 = "uint",
+        /// Buffer: coefficients per SH record.
+        sh_count: u32 = "uint",
+    }
     /// `glsl/sh_project.comp`.
     ShProjectPush {
         /// Rows of the file → world matrix.

@@ -117,6 +117,12 @@ macro_rules! shader_table {
             /// A deliberately costly dispatch (timestamp test).
             Busy = "busy", "busy.comp", Compute, [], BusyPush,
                 [(BUSY_OUT, StorageBuffer, Write)];
+            /// Test hook: corrupts a level a pass wrote, in place (tests/mutation.rs).
+            PoisonImage = "poison_image", "poison_image.comp", Compute, [], PoisonPush,
+                [(POISON_IMAGE, StorageImage, ReadWrite)];
+            /// Test hook: corrupts floats a pass wrote, in place.
+            PoisonBuffer = "poison_buffer", "poison_buffer.comp", Compute, [],
+                PoisonPush, [(POISON_BUFFER, StorageBuffer, ReadWrite)];
             /// Fullscreen triangle vertex shader.
             FullscreenVert = "fullscreen_vert", "fullscreen.vert", Vertex, [], (), [];
             /// Flat colour fragment shader.

@@ -222,6 +222,10 @@ pub(crate) struct Shared {
     sink: Arc<MessageSink>,
     /// The shader of every pipeline created, in order (what `envlight plan` is checked by).
     pub(crate) pipelines: Mutex<Vec<&'static str>>,
+    /// What a test hook set on this context (feature `test-hooks`: `passes::testing`), opaque
+    /// here.
+    #[cfg(feature = "test-hooks")]
+    pub(crate) test_hook: Mutex<Option<Arc<dyn std::any::Any + Send + Sync>>>,
 }
 
 /// A Vulkan device envlight runs its passes on. Cloning is cheap (shared ownership); the device
@@ -539,6 +543,8 @@ impl Context {
             command_pool: Mutex::new(command_pool),
             live: AtomicI64::new(0),
             pipelines: Mutex::new(Vec::new()),
+            #[cfg(feature = "test-hooks")]
+            test_hook: Mutex::new(None),
             owns_device,
             sink,
         };

@@ -6,6 +6,7 @@ use crate::abi::{area, binding, push::ConvertPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing};
 use crate::math::{Mapping, Orientation};
+use crate::passes::testing::poison::{self, PassId};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use std::sync::OnceLock;
@@ -329,7 +330,8 @@ impl Converter {
         let cube = src.mapping == Mapping::Cube;
         if self.uses_area((src.mapping, src.width, src.height), opts) {
             let split = split_area(opts)?;
-            return self.record_area(rec, src, dst, &push, (w, h), (split, points));
+            self.record_area(rec, src, dst, &push, (w, h), (split, points))?;
+            return poison::image(rec, PassId::Convert, &dst.image, 0..1);
         }
         let pipeline = self.pipeline(src.mapping, opts.to)?;
         let label = format!(
@@ -355,7 +357,8 @@ impl Converter {
                     opts.to.layers(),
                 ],
             )
-        })
+        })?;
+        poison::image(rec, PassId::Convert, &dst.image, 0..1)
     }
 
     /// The lat-long to cube or dual-paraboloid conversion by exact footprint areas: the

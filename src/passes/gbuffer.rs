@@ -8,10 +8,24 @@ use crate::error::Result;
 use crate::gpu::{Bind, Buffer, Context, ImageDesc, Pipeline, Recorder, Timing};
 use crate::math::camera::{Camera, Projection, Shape};
 use crate::math::Mapping;
+use crate::passes::testing::poison::{self, PassId};
 use ash::vk;
 
 /// Format of the G-buffer images and of shaded frames.
 pub const FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+/// Usage of the G-buffer images and of shaded frames: drawn, sampled, copied out; and, where
+/// the tests may poison what a pass draws (feature `test-hooks`), written as storage.
+pub const TARGET_USAGE: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
+    vk::ImageUsageFlags::COLOR_ATTACHMENT.as_raw()
+        | vk::ImageUsageFlags::SAMPLED.as_raw()
+        | vk::ImageUsageFlags::TRANSFER_SRC.as_raw()
+        | if cfg!(feature = "test-hooks") {
+            vk::ImageUsageFlags::STORAGE.as_raw()
+        } else {
+            0
+        },
+);
 
 /// An object of the scene as the GPU reads it (`Object` in `glsl/include/scene.glsl`): its
 /// shape, and its material and technique for the shading passes.
@@ -147,9 +161,7 @@ pub fn target(ctx: &Context, name: &str, w: u32, h: u32) -> Result<GpuEnvMap> {
             height: h,
             layers: 1,
             format: FORMAT,
-            usage: vk::ImageUsageFlags::COLOR_ATTACHMENT
-                | vk::ImageUsageFlags::SAMPLED
-                | vk::ImageUsageFlags::TRANSFER_SRC,
+            usage: TARGET_USAGE,
             cube: false,
             mips: 1,
         },
@@ -227,7 +239,11 @@ impl GBufferPass {
                 &push,
                 &[&gbuf.normal.image, &gbuf.position.image, &gbuf.view.image],
             )
-        })
+        })?;
+        for image in [&gbuf.normal.image, &gbuf.position.image, &gbuf.view.image] {
+            poison::image(rec, PassId::GBuffer, image, 0..1)?;
+        }
+        Ok(())
     }
 
     /// Casts the camera's rays against `objects` into a new G-buffer and waits.

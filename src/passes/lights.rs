@@ -13,6 +13,7 @@ pub use crate::math::lights::{
     Cluster, ExtractOptions, Extraction, LightKernel, LightTexel, PreparedLight,
 };
 use crate::math::split_sum::chain_norm;
+use crate::passes::testing::poison::{self, PassId};
 use crate::EnvMap;
 use crate::Mapping;
 
@@ -234,6 +235,7 @@ impl LightsPass {
                     6,
                 ],
             )
-        })
+        })?;
+        poison::image(rec, PassId::Lights, &dst.image, level..level + 1)
     }
 }

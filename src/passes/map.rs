@@ -6,6 +6,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, Image, ImageDesc, Recorder, Usage};
 use crate::math::envmap::EnvMap;
 use crate::math::Mapping;
+use crate::passes::testing::poison::{self, PassId};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -158,7 +159,7 @@ impl GpuEnvMap {
         })?;
         rec.copy_buffer_to_image(&staging, &self.image, 0, true);
         rec.keep(staging);
-        Ok(())
+        poison::image(rec, PassId::Map, &self.image, 0..1)
     }
 
     /// Uploads a map into a new GPU map and waits (see [`GpuEnvMap::record_upload`]).

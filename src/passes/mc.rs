@@ -11,6 +11,7 @@ use crate::gpu::{groups, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, S
 use crate::math::envmap::luminance;
 pub use crate::math::envsample::EnvSampler;
 use crate::math::{Mapping, Orientation};
+use crate::passes::testing::poison::{self, PassId};
 use crate::EnvMap;
 
 /// The environment as the Monte Carlo pass reads it: the full-resolution lat-long map and its
@@ -263,7 +264,7 @@ impl MonteCarlo {
             done += n;
             k += 1;
         }
-        Ok(())
+        poison::image(rec, PassId::Mc, &accum.image, 0..1)
     }
 
     /// Accumulates samples for every pixel of `gbuf` whose material asks for MC, until

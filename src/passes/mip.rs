@@ -7,6 +7,7 @@ use crate::abi::{binding, push::MipPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Context, Pipeline, Recorder, Timing};
 use crate::math::Mapping;
+use crate::passes::testing::poison::{self, PassId};
 
 /// The MIP chain pass.
 pub struct MipChain {
@@ -64,7 +65,7 @@ impl MipChain {
                 )
             })?;
         }
-        Ok(())
+        poison::image(rec, PassId::Mip, &dp.image, 0..dp.mips())
     }
 
     /// Fills every level of `dp` (see [`MipChain::record`]) and waits; returns one timing per

@@ -11,6 +11,7 @@ use crate::math::brdf::Brdf;
 use crate::math::sh::count;
 pub use crate::math::sh_brdf::ViewGrid;
 use crate::math::sh_rotate::x90;
+use crate::passes::testing::poison::{self, PassId};
 use ash::vk;
 use glam::DMat3;
 use gpu_allocator::MemoryLocation;
@@ -125,7 +126,10 @@ impl ShBrdfProjector {
                 )?;
             }
             Ok(())
-        })
+        })?;
+        let (floats, coeffs) = (Self::table_floats(lmax, grid), crate::math::sh::count(lmax));
+        let f = poison::Floats::sh(offset, floats as u32, 1, coeffs as u32);
+        poison::buffer(rec, PassId::ShBrdf, out, f)
     }
 
     /// Computes one table and reads it back.

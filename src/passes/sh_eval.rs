@@ -7,6 +7,7 @@ use crate::abi::{binding, push::ShEvalPush, ShaderId, SH_MAX_LMAX, WORKGROUP_2D}
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Timing};
 use crate::math::sh;
+use crate::passes::testing::poison::{self, PassId};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -133,7 +134,7 @@ impl ShEvaluator {
             )
         })?;
         rec.keep(buf);
-        Ok(())
+        poison::image(rec, PassId::ShEval, &dst.image, 0..1)
     }
 
     /// Evaluates into a new `target` map and waits (see [`ShEvaluator::record`]).

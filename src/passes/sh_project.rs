@@ -10,6 +10,7 @@ use crate::abi::{
 use crate::error::{Error, Result};
 use crate::gpu::{mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
 use crate::math::sh;
+use crate::passes::testing::poison::{self, PassId};
 use crate::{Mapping, Orientation};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -318,6 +319,8 @@ impl ShProjector {
             Ok(())
         })?;
         let result = if (levels.len() - 1) % 2 == 0 { &a } else { &b };
+        let f = poison::Floats::sh(0, 3 * n, 3, n);
+        poison::buffer(rec, PassId::ShProject, result, f)?;
         rec.copy_buffer(result, out, row_bytes);
         rec.keep((a, b));
         Ok(())

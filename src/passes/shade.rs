@@ -12,6 +12,7 @@ use crate::abi::{binding, push::ShadePush, ShaderId};
 use crate::error::Result;
 use crate::gpu::{mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
 use crate::math::{Mapping, Orientation};
+use crate::passes::testing::poison::{self, PassId};
 use std::sync::{Arc, Mutex};
 
 /// What the shading reads besides the G-buffer; techniques no material uses are `None`.
@@ -454,7 +455,7 @@ impl Shade {
         if let Some(c) = camera {
             rec.keep(c);
         }
-        Ok(())
+        poison::image(rec, PassId::Shade, &frame.image, 0..1)
     }
 
     /// Shades `gbuf` into a new frame and waits; returns the frame (linear RGB) and its GPU

@@ -11,6 +11,7 @@ use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Tim
 pub use crate::math::split_sum::DfgAxes;
 use crate::math::split_sum::{level_alpha, level_size};
 use crate::math::Mapping;
+use crate::passes::testing::poison::{self, PassId};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -120,7 +121,17 @@ impl SplitSum {
                 )?;
             }
             Ok(())
-        })
+        })?;
+        // (A, B) records: both scaled; the table has no frame to mirror (the chain has).
+        let f = poison::Floats {
+            first: offset,
+            count: Self::dfg_floats(size) as u32,
+            stride: 2,
+            scale_mask: 0b11,
+            mirror_mask: 0,
+            sh: None,
+        };
+        poison::buffer(rec, PassId::SplitSum, out, f)
     }
 
     /// Computes one DFG table (at endpoints) and reads it back, with its GPU time.
@@ -243,7 +254,8 @@ impl SplitSum {
                 )
             })?;
         }
-        Ok(())
+        let written = levels.start..levels.end.min(opts.levels);
+        poison::image(rec, PassId::SplitSum, &dst.image, written)
     }
 
     /// A cube `size` a side with exactly `levels` MIP levels, one roughness each (a bake's

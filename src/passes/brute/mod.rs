@@ -61,6 +61,7 @@ mod source;
 mod sum;
 mod variants;
 
+use crate::passes::testing::poison::{self, PassId};
 use source::CoarseLevel;
 use variants::{default_texel_lanes, lane_count, PIPELINE_SLOTS};
 
@@ -138,7 +139,7 @@ impl BruteFilter {
         let prep = self.prepare(rec, src, orientation, kernel)?;
         self.convolve(rec, &prep, None, kernel, dst)?;
         rec.keep(prep);
-        Ok(())
+        poison::image(rec, PassId::Brute, &dst.image, 0..1)
     }
 
     /// Records one convolution per `(kernel, dst)` pair, each from the source level of the
@@ -178,6 +179,7 @@ impl BruteFilter {
             }
             let coarse = levels.iter().find(|l| l.0 == s).map(|l| &l.1);
             self.convolve(rec, &prep, coarse, kernel, dst)?;
+            poison::image(rec, PassId::Brute, &dst.image, 0..1)?;
         }
         rec.keep((prep, levels));
         Ok(chosen)

@@ -6,6 +6,7 @@
 
 pub mod copy;
 pub mod diagnostics;
+pub mod poison;
 pub mod probe;
 
 use crate::gpu::Context;
