@@ -246,8 +246,8 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
     frame_raw.destroy(&engine);
     // SAFETY: the command buffer's work completed; the pool is the engine's.
     unsafe { engine.device.destroy_command_pool(pool, None) };
-    let warnings = engine.warnings();
-    drop(engine);
+    // Counted after the device and instance are gone: leaks are reported as they go.
+    let warnings = engine.finish();
     Ok(Frame {
         frame,
         warnings,

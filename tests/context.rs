@@ -41,8 +41,9 @@ fn costly_dispatch_after_graphics_work_measures_nonzero_time() {
 fn cpu_device_can_be_forced() {
     let ctx = Context::new(&validated(DeviceSelector::Cpu)).unwrap();
     assert_eq!(ctx.info().device_type, ash::vk::PhysicalDeviceType::CPU);
-    let by_name = Context::new(&validated(DeviceSelector::Name("llvmpipe".into())));
-    assert!(by_name.is_ok());
+    let by_name = Context::new(&validated(DeviceSelector::Name("llvmpipe".into()))).unwrap();
+    assert_eq!(by_name.info().device_type, ash::vk::PhysicalDeviceType::CPU);
+    common::finish(by_name);
     let missing = Context::new(&validated(DeviceSelector::Name("no such gpu".into())));
     let e = missing.err().unwrap().to_string();
     assert!(e.contains("no such gpu") && e.contains("devices:"), "{e}");
