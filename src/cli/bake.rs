@@ -231,6 +231,10 @@ struct Entry {
     /// lights.json.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     separated: Option<[f64; 3]>,
+    /// Seconds this run waited for the probe's lock, which another live bake held (absent
+    /// where the lock was free: a killed holder's lock is dropped with its process).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    lock_wait_seconds: Option<f64>,
 }
 
 /// What clamping took from one probe's cubes.
@@ -268,6 +272,8 @@ struct InGpu {
     lights: Option<SeparateLights>,
     /// The probe's lock, held until its files and record are written.
     _lock: std::fs::File,
+    /// Seconds spent waiting for the lock (None: it was free).
+    lock_wait: Option<f64>,
 }
 
 /// The manifest entry of a probe that failed, reported above the progress bar.
@@ -291,6 +297,7 @@ fn failed(
         check: None,
         clamped: None,
         separated: None,
+        lock_wait_seconds: None,
     }
 }
 
@@ -672,8 +679,9 @@ struct Record {
 const RECORD: &str = "probe.json";
 
 /// Takes probe `name`'s lock in `out` (a file lock, which the system drops with a killed
-/// process), waiting while another run holds it.
-fn lock_probe(out: &Path, name: &str, pb: &ProgressBar) -> Result<std::fs::File> {
+/// process), waiting while another run holds it; the lock and the seconds waited (None where
+/// it was free).
+fn lock_probe(out: &Path, name: &str, pb: &ProgressBar) -> Result<(std::fs::File, Option<f64>)> {
     let dir = out.join(name);
     std::fs::create_dir_all(&dir).with_context(|| dir.display().to_string())?;
     let path = dir.join(".lock");
@@ -683,17 +691,19 @@ fn lock_probe(out: &Path, name: &str, pb: &ProgressBar) -> Result<std::fs::File>
         .write(true)
         .open(&path)
         .with_context(|| path.display().to_string())?;
-    match f.try_lock() {
-        Ok(()) => {}
+    let waited = match f.try_lock() {
+        Ok(()) => None,
         Err(std::fs::TryLockError::WouldBlock) => {
             pb.suspend(|| eprintln!("waiting for another bake of {name} to finish"));
+            let t0 = Instant::now();
             f.lock().with_context(|| path.display().to_string())?;
+            Some(t0.elapsed().as_secs_f64())
         }
         Err(std::fs::TryLockError::Error(e)) => {
             return Err(anyhow::Error::from(e).context(path.display().to_string()))
         }
-    }
-    Ok(f)
+    };
+    Ok((f, waited))
 }
 
 /// Probe `name`'s entry when its folder already holds a bake of `input_sha256` with these
@@ -1023,7 +1033,7 @@ impl Run<'_> {
             .map(|n| n.to_string_lossy().to_string())
             .unwrap_or_default();
         pb.set_message(name.clone());
-        let lock = match lock_probe(self.out, &name, pb) {
+        let (lock, lock_wait) = match lock_probe(self.out, &name, pb) {
             Ok(l) => l,
             Err(e) => return Started::Done(Box::new(failed(pb, input, input_sha256, e, read_s))),
         };
@@ -1031,6 +1041,7 @@ impl Run<'_> {
             if let Some(e) = recorded(self.out, &name, self.settings_sha256, &input_sha256) {
                 return Started::Done(Box::new(Entry {
                     status: "skipped".into(),
+                    lock_wait_seconds: lock_wait,
                     ..e
                 }));
             }
@@ -1062,6 +1073,7 @@ impl Run<'_> {
                 pending,
                 lights,
                 _lock: lock,
+                lock_wait,
             })),
             Err(e) => {
                 let e = e.context(path.display().to_string());
@@ -1102,6 +1114,7 @@ impl Run<'_> {
                 check,
                 clamped,
                 separated: w.lights.as_ref().map(|l| l.share),
+                lock_wait_seconds: w.lock_wait,
             },
             Err(e) => return failed(pb, w.input, w.input_sha256, e, w.read_s),
         };
@@ -1140,6 +1153,7 @@ fn read_probes(
         let job = match (done, force) {
             (Some(e), false) => Prepared::Skip(Entry {
                 status: "skipped".into(),
+                lock_wait_seconds: None,
                 ..e.clone()
             }),
             _ => {
