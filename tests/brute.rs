@@ -3,50 +3,20 @@
 //! its visit floor.
 
 mod common;
+#[path = "twins/brute.rs"]
+mod twin;
 
-use envlight::gpu::Context;
+use twin::{brute_gpu, worst_relative};
+
+use common::compare::{max_of, min_of, rel_err};
 use envlight::math::filter::{self, at_centres, Kernel};
-use envlight::math::synth::{smooth_env, Sky};
+use envlight::math::synth::Sky;
 use envlight::math::{Mapping, Orientation};
 use envlight::passes::{BruteFilter, FilterTarget};
 use envlight::EnvMap;
 use envlight::GpuEnvMap;
 use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
-
-fn brute_gpu(
-    ctx: &Context,
-    pass: &BruteFilter,
-    map: &EnvMap,
-    kernel: Kernel,
-    target: FilterTarget,
-) -> EnvMap {
-    let g = GpuEnvMap::upload(ctx, map).unwrap();
-    let (out, t) = pass
-        .run(&g, &Orientation::default(), kernel, target)
-        .unwrap();
-    let spans: Vec<&str> = t.iter().map(|t| t.label.as_str()).collect();
-    assert_eq!(spans[..2], ["brute prepare", "brute tiles"]);
-    assert_eq!(spans.len(), 3);
-    out.download(ctx).unwrap()
-}
-
-/// Worst per-texel relative difference over the texels the target mapping reads.
-fn worst_relative(gpu: &EnvMap, cpu: &[[f64; 3]]) -> f64 {
-    let (w, h) = (gpu.width, gpu.height);
-    let mut worst: f64 = 0.0;
-    for (k, (g, c)) in gpu.texels.iter().zip(cpu).enumerate() {
-        let (i, j) = ((k as u32 % (w * h)) % w, (k as u32 % (w * h)) / w);
-        if !gpu.mapping.texel_in_domain(w, h, i, j) {
-            continue;
-        }
-        for ch in 0..3 {
-            assert!(g[ch].is_finite());
-            worst = worst.max((g[ch] as f64 - c[ch]).abs() / c[ch].abs().max(1e-30));
-        }
-    }
-    worst
-}
 
 /// Brute-force irradiance and Phong prefilters of a 64×32 map against the float64
 /// convolution with the same per-texel rules. Both sum the same ~2k texels; the GPU's error
@@ -55,64 +25,7 @@ fn worst_relative(gpu: &EnvMap, cpu: &[[f64; 3]]) -> f64 {
 #[test]
 fn brute_force_matches_float64_convolution() {
     let ctx = common::ctx();
-    {
-        let pass = BruteFilter::new(&ctx).unwrap();
-        let sky = Sky::default();
-        let sources = [
-            (
-                "sky",
-                EnvMap::from_fn(Mapping::LatLong, 64, 32, 4, |d| sky.radiance(d)),
-            ),
-            (
-                "smooth",
-                EnvMap::from_fn(Mapping::LatLong, 64, 32, 4, smooth_env),
-            ),
-            (
-                "smooth cube",
-                EnvMap::from_fn(Mapping::Cube, 12, 12, 4, smooth_env),
-            ),
-            (
-                "smooth angular",
-                EnvMap::from_fn(Mapping::Angular, 40, 40, 4, smooth_env),
-            ),
-            (
-                "smooth dp",
-                EnvMap::from_fn(Mapping::DualParaboloid, 20, 20, 4, smooth_env),
-            ),
-        ];
-        for (name, map) in &sources {
-            let kernels: &[Kernel] = if *name == "sky" || *name == "smooth" {
-                &[
-                    Kernel::Cosine,
-                    Kernel::Phong { n: 1.0 },
-                    Kernel::Phong { n: 100.0 },
-                    Kernel::Phong { n: 1e3 },
-                    Kernel::Phong { n: 1e4 },
-                ]
-            } else {
-                &[Kernel::Cosine, Kernel::Phong { n: 30.0 }]
-            };
-            for &kernel in kernels {
-                for target in [
-                    FilterTarget {
-                        to: Mapping::Cube,
-                        size: 6,
-                    },
-                    FilterTarget {
-                        to: Mapping::LatLong,
-                        size: 16,
-                    },
-                ] {
-                    let gpu = brute_gpu(&ctx, &pass, map, kernel, target);
-                    let (w, h) = target.extent();
-                    let cpu = filter::filter_map(map, DMat3::IDENTITY, kernel, target.to, w, h);
-                    let worst = worst_relative(&gpu, &cpu);
-                    eprintln!("{name} {kernel:?} -> {:?}: worst {worst:.2e}", target.to);
-                    assert!(worst < 1e-4, "{name} {kernel:?} {:?}: {worst:e}", target.to);
-                }
-            }
-        }
-    }
+    twin::check(&ctx);
     common::finish(ctx);
 }
 
@@ -140,11 +53,12 @@ fn phong_lobe_is_normalised_up_to_n_1e4() {
                     size: 4,
                 };
                 let out = brute_gpu(&ctx, &pass, &map, kernel, target);
-                let worst = out
-                    .texels
-                    .iter()
-                    .map(|t| (t[0] as f64 / truth - 1.0).abs())
-                    .fold(0.0, f64::max);
+                let worst = max_of(
+                    out.texels
+                        .iter()
+                        .enumerate()
+                        .map(|(k, t)| rel_err(t[0], truth, 0.0, k)),
+                );
                 eprintln!("{m:?} {kernel:?}: worst {worst:.2e}");
                 assert!(worst < 1e-4, "{m:?} {kernel:?}: {worst:e}");
             }
@@ -513,7 +427,7 @@ fn the_visit_floor_visits_the_lobes_reach() {
                 let out = out.download(&ctx).unwrap();
                 let inner = at_centres(Mapping::LatLong, 32, 16, |a| sum_within(a, cap - 1e-4));
                 let outer = at_centres(Mapping::LatLong, 32, 16, |a| sum_within(a, past + 1e-4));
-                let (mut low, mut high) = (f64::INFINITY, 0.0f64);
+                let mut ratios = Vec::new();
                 for ((got, lo), hi) in out.texels.iter().zip(&inner).zip(&outer) {
                     for c in 0..3 {
                         let g = got[c] as f64;
@@ -523,10 +437,10 @@ fn the_visit_floor_visits_the_lobes_reach() {
                             lo[c],
                             hi[c]
                         );
-                        low = low.min(g / lo[c]);
-                        high = high.max(g / lo[c]);
+                        ratios.push(g / lo[c]);
                     }
                 }
+                let (low, high) = (min_of(ratios.iter().copied()), max_of(ratios));
                 eprintln!("n {n}, {lanes} lanes: floor / cap's sum from {low:.4} to {high:.4}");
             }
         }

@@ -7,6 +7,7 @@
 
 mod common;
 
+use common::compare::{abs_err, max_of, min_of, rel_err, Errors};
 use envlight::math::sh;
 use envlight::math::synth::smooth_env;
 use envlight::math::Mapping;
@@ -398,18 +399,18 @@ fn each_presets_irradiance_is_e_over_pi_in_its_consumers_world() {
             Consumer::Bevy => 2f64.powi(-9),
             Consumer::Khronos => 2f64.powi(-11),
         };
-        let (mut worst, mut sum, mut n) = (0.0f64, 0.0, 0);
+        let mut errors = Errors::new();
         for (c, _, t) in texels(&irr.levels[0], irr.size) {
             let want = sh::eval(&e, consumer.world_of(c)).map(|v| v / PI);
-            let top = want.iter().copied().fold(0.0, f64::max);
+            let top = max_of(want);
             for k in 0..3 {
-                let err = (t[k] as f64 - want[k]).abs() / top;
-                worst = worst.max(err);
-                sum += err;
-                n += 1;
+                errors.add(
+                    common::compare::abs_err(t[k], want[k], (c, k)) / top,
+                    (c, k),
+                );
             }
         }
-        let mean = sum / n as f64;
+        let (worst, mean) = (errors.worst(), errors.mean());
         eprintln!("{consumer:?}: irradiance against E/π: mean {mean:.2e}, worst {worst:.2e}");
         assert!(worst <= step + 1e-4, "{consumer:?}: worst {worst:.2e}");
         assert!(mean <= 1e-3, "{consumer:?}: mean {mean:.2e}");
@@ -482,13 +483,12 @@ fn the_khronos_presets_level_0_matches_gltf_ibl_samplers() {
     let theirs = read(&theirs);
     assert_eq!((ours.size, theirs.size), (16, 16));
     assert_eq!(ours.levels.len(), theirs.levels.len());
-    let (mut worst, mut sum) = (0.0f64, 0.0);
-    for (a, b) in ours.levels[0].iter().zip(&theirs.levels[0]) {
-        let e = (luminance(*a) - luminance(*b)).abs() / luminance(*b);
-        worst = worst.max(e);
-        sum += e;
+    let mut errors = Errors::new();
+    for (k, (a, b)) in ours.levels[0].iter().zip(&theirs.levels[0]).enumerate() {
+        errors.rel(luminance(*a), luminance(*b), 0.0, k);
     }
-    let mean = sum / ours.levels[0].len() as f64;
+    assert_eq!(errors.count(), ours.levels[0].len());
+    let (worst, mean) = (errors.worst(), errors.mean());
     eprintln!("khronos level 0 against glTF-IBL-Sampler: mean {mean:.2e}, worst {worst:.2e}");
     assert!(
         mean < 0.01 && worst < 0.05,
@@ -513,6 +513,78 @@ fn entry(out: &Path, manifest: &str) -> serde_json::Value {
     let m: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join(manifest)).unwrap()).unwrap();
     m["probes"][0].clone()
+}
+
+/// Checks that a decoded cube level is the rgba32f bake's `want` clamped into the format whose
+/// largest values are `top`, texel for texel, each within the format's rounding: half an ulp
+/// of rgba16f (2⁻¹¹ relative) and of b10g11r11's 6- and 5-bit mantissas (2⁻⁷, 2⁻⁶); for
+/// e5b9g9r9 half a step of the shared exponent, at most 2⁻⁹ of the texel's largest channel.
+/// BC6H interpolates each channel of a 4 × 4 block between two endpoints in the half-float
+/// bit pattern (nearly logarithmic), at 8 or 16 indices, from endpoints of 10 bits in most
+/// modes: a texel is held, in half-float bit units, to one index interval (the block's range
+/// of that channel over 7) plus one endpoint step (the 6 bits of 16 the endpoints drop, 64
+/// units). Measured worst 0.76 of that. Returns the worst error in units of the step (≤ 1).
+fn clamped_into_the_format(
+    got: &[[f32; 3]],
+    want: &[[f32; 3]],
+    s: u32,
+    vk_format: u32,
+    top: [f32; 3],
+) -> f64 {
+    let unsigned = vk_format != 97;
+    let clamp = |t: [f32; 3]| {
+        [0, 1, 2].map(|k| {
+            let v = t[k].min(top[k]) as f64;
+            if unsigned {
+                v.max(0.0)
+            } else {
+                v
+            }
+        })
+    };
+    let s = s as usize;
+    assert_eq!((got.len(), want.len()), (6 * s * s, 6 * s * s));
+    // A value's half-float bit pattern, as a number.
+    let bits = |v: f64| half::f16::from_f64(v).to_bits() as f64;
+    // The range of channel k's bit patterns over the BC6H block holding texel n.
+    let block_range = |n: usize, k: usize| {
+        let (face, j, i) = (n / (s * s), (n / s) % s, n % s);
+        let (bi, bj) = (i / 4 * 4, j / 4 * 4);
+        let patterns: Vec<f64> = (bj..(bj + 4).min(s))
+            .flat_map(|y| {
+                (bi..(bi + 4).min(s)).map(move |x| bits(clamp(want[(face * s + y) * s + x])[k]))
+            })
+            .collect();
+        max_of(patterns.iter().copied()) - min_of(patterns)
+    };
+    let mut errors = Errors::new();
+    for (n, (g, w)) in got.iter().zip(want).enumerate() {
+        let c = clamp(*w);
+        let largest = max_of(c);
+        for k in 0..3 {
+            let e = if vk_format == 143 {
+                let step = block_range(n, k) / 7.0 + 64.0;
+                abs_err(bits(g[k] as f64), bits(c[k]), (n, k)) / step
+            } else {
+                let step = match vk_format {
+                    97 => 2f64.powi(-11) * c[k].abs().max(6.1e-5),
+                    122 => 2f64.powi(if k == 2 { -6 } else { -7 }) * c[k].max(6.1e-5),
+                    123 => 2f64.powi(-9) * largest.max(6.1e-5),
+                    f => panic!("vkFormat {f}"),
+                };
+                abs_err(g[k], c[k], (n, k)) / step
+            };
+            let e = errors.add(e, (n, k));
+            assert!(
+                e <= 1.0,
+                "vkFormat {vk_format}, texel {n} channel {k}: {} decoded, {} clamped ({} before)",
+                g[k],
+                c[k],
+                w[k]
+            );
+        }
+    }
+    errors.worst()
 }
 
 /// ∑ Ω·Y over a cube level, and the same after clamping each channel into [0, top].
@@ -605,8 +677,8 @@ fn a_sun_brighter_than_any_format_is_clamped_and_reported() {
                 "{name} level {k}: {r} {share}"
             );
             any |= r > 0.0;
-            let brightest = level.iter().map(|t| t[0]).fold(0.0f32, f32::max);
-            assert!(brightest <= top[0] * 1.001, "{name}: {brightest}");
+            let worst = clamped_into_the_format(level, &want.levels[k], s, got.vk_format, top);
+            eprintln!("{name} level {k}: against the rgba32f bake clamped, worst {worst:.2e} of the format's step");
         }
         assert!(any, "{name}: the sun was not clamped?");
         eprintln!(
@@ -622,12 +694,15 @@ fn a_sun_brighter_than_any_format_is_clamped_and_reported() {
 
 /// `--lights separate`: lights.json holds the sun (direction, solid angle, radiance,
 /// illuminance, a KHR_lights_punctual light whose node shines along −direction) and the cubes
-/// the residual, which now fits e5b9g9r9 without clamping. Residual + lights reproduce the
-/// whole map: its power per channel to 1e-4, and its irradiance (float64 sums over every texel,
-/// the lights as directional lights) to 1e-4 at 64 normals that see the sun whole or not at all
-/// (a directional light cannot stand for a disc cut by the horizon). The map is 512 × 256 so
-/// that the 2 × 2-texel sun spans 1.4°: a directional light errs by 1 − cos of the sun's
-/// radius, 7.5e-5 here.
+/// the residual, which now fits e5b9g9r9 without clamping. The baked files, read back, plus
+/// lights.json as directional lights reproduce the whole map (float64 sums over its every
+/// texel): the specular cube's level 0 (the mirror, the residual resampled by exact areas)
+/// holds the map's power less the lights' illuminance, per channel to 1e-4 (2.8e-5 measured:
+/// the exact-area conversion and e5b9g9r9's rounding); the irradiance cube plus the lights is
+/// the map's irradiance at every texel whose normal sees the sun whole or not at all (a
+/// directional light cannot stand for a disc cut by the horizon), to 1.5e-4 of the largest
+/// (1.1e-4 measured). The map is 512 × 256 so that the 2 × 2-texel sun spans 1.4°: a
+/// directional light errs by 1 − cos of the sun's radius, 7.5e-5 here.
 #[test]
 fn separated_lights_and_the_residual_reproduce_the_map() {
     let dir = temp("separate");
@@ -646,10 +721,10 @@ fn separated_lights_and_the_residual_reproduce_the_map() {
         "0",
         "--lights",
         "separate",
+        "--texels",
+        "e5b9g9r9",
     ];
-    let mut a = args.to_vec();
-    a.extend(["--texels", "e5b9g9r9"]);
-    ok(&bake(&[&p], &out, &a));
+    ok(&bake(&[&p], &out, &args));
     let e = entry(&out, "manifest.json");
     assert!(e["clamped"].is_null(), "the residual was clamped: {e}");
     let json: serde_json::Value =
@@ -657,11 +732,6 @@ fn separated_lights_and_the_residual_reproduce_the_map() {
     let lights = json["lights"].as_array().unwrap();
     assert!(!lights.is_empty());
     let v3 = |v: &serde_json::Value| -> [f64; 3] { [0, 1, 2].map(|k| v[k].as_f64().unwrap()) };
-    // The residual as the bake saw it: the same extraction, float64.
-    let opts =
-        envlight::bake::output::separate_options(&map, envlight::io::ktx2::Ktx2Format::E5b9g9r9);
-    let ex = envlight::math::lights::extract(&map, &opts);
-    let mut power = ex.residual.stats().power;
     for l in lights {
         let (ill, rad, o) = (
             v3(&l["illuminance"]),
@@ -669,16 +739,8 @@ fn separated_lights_and_the_residual_reproduce_the_map() {
             l["solid_angle"].as_f64().unwrap(),
         );
         for k in 0..3 {
-            power[k] += ill[k];
             assert!((rad[k] * o - ill[k]).abs() <= 1e-9 * ill[k]);
         }
-    }
-    let whole = map.stats().power;
-    for k in 0..3 {
-        assert!(
-            (power[k] - whole[k]).abs() <= 1e-4 * whole[k],
-            "{power:?} {whole:?}"
-        );
     }
     // The glTF light: −Z of its node turned to −direction (glTF world = envlight's here).
     let node = &json["gltf"]["nodes"][0];
@@ -695,15 +757,37 @@ fn separated_lights_and_the_residual_reproduce_the_map() {
         json["gltf"]["extensions"]["KHR_lights_punctual"]["lights"][0]["type"],
         "directional"
     );
-    // Irradiance at 64 normals: residual (every texel) + lights (directional) against the map.
-    let irradiance = |m: &EnvMap, n: DVec3| {
+    // Power: the baked mirror level's ∑ Ω·L plus the lights' illuminance.
+    let specular = read(&out.join("sun.exr/specular.ktx2"));
+    let mut power = [0.0f64; 3];
+    for (_, o, t) in texels(&specular.levels[0], specular.size) {
+        for k in 0..3 {
+            power[k] += o * t[k] as f64;
+        }
+    }
+    for l in lights {
+        let ill = v3(&l["illuminance"]);
+        for k in 0..3 {
+            power[k] += ill[k];
+        }
+    }
+    let whole = map.stats().power;
+    let power_error = max_of((0..3).map(|k| rel_err(power[k], whole[k], 0.0, k)));
+    eprintln!("baked mirror level + lights against the map's power: {power_error:.2e}");
+    assert!(
+        power_error <= 1e-4,
+        "power off by {power_error:e}: {power:?} {whole:?}"
+    );
+    // Irradiance at every texel of the baked cube: residual (as baked) + lights (directional)
+    // against the whole map's, every texel summed in float64.
+    let irradiance = |n: DVec3| {
         let mut e = [0.0; 3];
-        for j in 0..m.height {
-            for i in 0..m.width {
-                let c = Mapping::texel_center(m.width, m.height, 0, i, j);
+        for j in 0..map.height {
+            for i in 0..map.width {
+                let c = Mapping::texel_center(map.width, map.height, 0, i, j);
                 let d = Mapping::LatLong.coord_to_dir(c);
-                let o = Mapping::LatLong.texel_solid_angle(m.width, m.height, i, j);
-                let t = m.texel(0, i, j);
+                let o = Mapping::LatLong.texel_solid_angle(map.width, map.height, i, j);
+                let t = map.texel(0, i, j);
                 let w = o * n.dot(d).max(0.0);
                 for k in 0..3 {
                     e[k] += w * t[k] as f64;
@@ -712,35 +796,36 @@ fn separated_lights_and_the_residual_reproduce_the_map() {
         }
         e
     };
+    let irr = read(&out.join("sun.exr/irradiance.ktx2"));
     let sun = DVec3::from(v3(&lights[0]["direction"]));
-    let mut worst = 0.0f64;
-    let mut normals = 0;
-    for q in 0..96u32 {
-        let z = 1.0 - (2 * q + 1) as f64 / 96.0;
-        let phi = q as f64 * 2.399963;
-        let r = (1.0 - z * z).sqrt();
-        let n = DVec3::new(r * phi.cos(), z, r * phi.sin());
-        if n.dot(sun).abs() < 2f64.to_radians().sin() || normals == 64 {
+    let mut wants = Vec::new();
+    for (t, (n, _, got)) in texels(&irr.levels[0], irr.size).enumerate() {
+        if n.dot(sun).abs() < 2f64.to_radians().sin() {
             continue;
         }
-        normals += 1;
-        let whole = irradiance(&map, n);
-        let mut got = irradiance(&ex.residual, n);
+        let mut got = got.map(f64::from);
         for l in lights {
-            let d = DVec3::from(v3(&l["direction"]));
-            let ill = v3(&l["illuminance"]);
+            let (d, ill) = (DVec3::from(v3(&l["direction"])), v3(&l["illuminance"]));
             for k in 0..3 {
                 got[k] += ill[k] * n.dot(d).max(0.0);
             }
         }
-        let top = whole.iter().copied().fold(0.0, f64::max);
+        wants.push((t, got, irradiance(n)));
+    }
+    let top = max_of(wants.iter().flat_map(|w| w.2));
+    let mut worst = Errors::new();
+    for (t, got, want) in &wants {
         for k in 0..3 {
-            worst = worst.max((got[k] - whole[k]).abs() / top);
+            worst.add(abs_err(got[k], want[k], (t, k)) / top, (*t, k));
         }
     }
-    assert_eq!(normals, 64);
-    eprintln!("residual + lights against the whole map's irradiance: worst {worst:.2e}");
-    assert!(worst <= 1e-4, "{worst:.2e}");
+    assert!(wants.len() > 300, "{} texels compared", wants.len());
+    let worst = worst.worst();
+    eprintln!(
+        "baked irradiance + lights against the map's, {} texels: worst {worst:.2e} of the largest",
+        wants.len()
+    );
+    assert!(worst <= 1.5e-4, "{worst:.2e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -748,7 +833,9 @@ fn separated_lights_and_the_residual_reproduce_the_map() {
 /// retried job) bake each probe once: for every probe one run says "baked" and the other
 /// "skipped", and the files are the ones a single run writes, byte for byte. A probe locked by
 /// a process that was then killed (`flock -o LOCK sleep`, SIGKILL) does not hold a later bake
-/// up: the system drops the lock with the process.
+/// up: the system drops the lock with the process, so the run that bakes each probe records
+/// that it took the lock at once (no `lock_wait_seconds`), p0's included; only a run that found
+/// the other run baking may have waited, and it then skipped (times printed, not asserted).
 #[test]
 fn two_bakes_into_one_folder_bake_each_probe_once() {
     let dir = temp("two");
@@ -800,13 +887,32 @@ fn two_bakes_into_one_folder_bake_each_probe_once() {
     let t0 = std::time::Instant::now();
     let (a, b) = (spawn(&out), spawn(&out));
     let (a, b) = (a.wait_with_output().unwrap(), b.wait_with_output().unwrap());
+    eprintln!("both bakes: {:.1} s", t0.elapsed().as_secs_f64());
     ok(&a);
     ok(&b);
-    assert!(
-        t0.elapsed().as_secs() < 50,
-        "a bake waited for the killed holder"
-    );
     common::ktx_validate_all(&out);
+    // What the bakes recorded of their locks: each probe's record (written by the run that
+    // baked it) says that run took the lock at once, p0's whose killed holder held it last.
+    for k in 0..4 {
+        let record: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(out.join(format!("p{k}.exr/probe.json"))).unwrap(),
+        )
+        .unwrap();
+        let entry = &record["entry"];
+        assert_eq!(entry["status"], "baked", "p{k}: {entry}");
+        assert!(
+            entry["lock_wait_seconds"].is_null(),
+            "p{k} was baked after waiting for its lock: {entry}"
+        );
+    }
+    for (run, o) in [&a, &b].iter().enumerate() {
+        let err = String::from_utf8_lossy(&o.stderr);
+        let waits: Vec<&str> = err
+            .lines()
+            .filter(|l| l.starts_with("waiting for"))
+            .collect();
+        eprintln!("run {run} waited for the other run: {waits:?}");
+    }
     // Both wrote manifest.json; each run's table says what it did.
     let said = |o: &Output| -> Vec<String> {
         String::from_utf8_lossy(&o.stdout)
@@ -840,12 +946,24 @@ fn two_bakes_into_one_folder_bake_each_probe_once() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Bounds on the mirror level's power against the reported shares, per run of
+/// [`every_shared_probe_with_a_blinding_sun_bakes_in_every_format`] (bevy, khronos, bc6h,
+/// b10g11r11, separate): 1.3 × the worst measured over the probes. The mirror level samples
+/// the map rather than integrating it over each texel, so a sun much smaller than a 64²
+/// texel (quarry's, royal_esplanade's) moves its power by up to 10% unclamped (bevy and
+/// khronos bake the originals too); the clamped shares are 0.65 to 0.88, so a share reported
+/// wrong by a tenth of itself still fails.
+const POWER_BOUNDS: [f64; 5] = [0.13, 0.13, 0.072, 0.034, 0.022];
+
 /// Every shared probe, and each again with a 2 × 2-texel sun of 2·10⁶ added at the centre of
 /// its first face (above what every format but rgba32f holds, even averaged into the cube),
 /// bakes with exit status 0 for both presets (e5b9g9r9 + Zstandard, rgba16f), and the sun
 /// variants in bc6h, b10g11r11 + Zstandard and rgba32f with --lights separate; every file
 /// passes `ktx validate`, no texel decodes to Inf or NaN, and every sun variant's manifest
-/// reports the power clamped away (or, separated, the lights' share).
+/// reports the power clamped away (or, separated, the lights' share). What the files hold
+/// agrees with what was reported: the baked mirror level's power (∑ Ω·Y, read back) is the
+/// probe's less the share reported clamped away at level 0 (or separated, per channel), to
+/// the format's error in power (bounds: printed, measured ×1.3).
 #[test]
 fn every_shared_probe_with_a_blinding_sun_bakes_in_every_format() {
     let Some(probes) = common::probes() else {
@@ -854,6 +972,8 @@ fn every_shared_probe_with_a_blinding_sun_bakes_in_every_format() {
     let dir = temp("shared");
     let mut originals = Vec::new();
     let mut suns = Vec::new();
+    // Each input's power per channel, by file name.
+    let mut powers = std::collections::HashMap::new();
     for e in std::fs::read_dir(&probes).unwrap() {
         let p = e.unwrap().path();
         let ext = p.extension().and_then(|x| x.to_str()).unwrap_or("");
@@ -861,6 +981,8 @@ fn every_shared_probe_with_a_blinding_sun_bakes_in_every_format() {
             continue;
         }
         let mut map = envlight::io::load(&p, &Default::default()).unwrap();
+        let file = p.file_name().unwrap().to_string_lossy().to_string();
+        powers.insert(file, map.stats().power);
         let (i, j) = (map.width / 2, map.height / 2);
         for (di, dj) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
             let k = map.index(0, i + di, j + dj);
@@ -869,32 +991,38 @@ fn every_shared_probe_with_a_blinding_sun_bakes_in_every_format() {
         let name = p.file_stem().unwrap().to_string_lossy().to_string();
         let s = dir.join(format!("{name}.sun.exr"));
         envlight::io::save_exr(&map, &s).unwrap();
+        powers.insert(format!("{name}.sun.exr"), map.stats().power);
         originals.push(p);
         suns.push(s);
     }
     assert_eq!(originals.len(), 20, "the shared probes changed");
     let all: Vec<&Path> = originals.iter().chain(&suns).map(|p| p.as_path()).collect();
     let only_suns: Vec<&Path> = suns.iter().map(|p| p.as_path()).collect();
-    let runs: [(&str, &[&Path], &[&str]); 5] = [
+    // (name, inputs, options, the bound on the mirror level's power against what was
+    // reported: 1.3 × the worst measured over the probes).
+    let runs: [(&str, &[&Path], &[&str], f64); 5] = [
         (
             "bevy",
             &all,
             &["--preset", "bevy", "--specular-levels", "5"],
+            POWER_BOUNDS[0],
         ),
-        ("khronos", &all, &["--preset", "khronos"]),
-        ("bc6h", &only_suns, &["--texels", "bc6h"]),
+        ("khronos", &all, &["--preset", "khronos"], POWER_BOUNDS[1]),
+        ("bc6h", &only_suns, &["--texels", "bc6h"], POWER_BOUNDS[2]),
         (
             "b10g11r11",
             &only_suns,
             &["--texels", "b10g11r11", "--zstd"],
+            POWER_BOUNDS[3],
         ),
         (
             "separate",
             &only_suns,
             &["--texels", "rgba32f", "--lights", "separate"],
+            POWER_BOUNDS[4],
         ),
     ];
-    for (name, inputs, args) in runs {
+    for (name, inputs, args, bound) in runs {
         let out = dir.join(name);
         let mut a = args.to_vec();
         a.extend(["--check", "0"]);
@@ -922,7 +1050,8 @@ fn every_shared_probe_with_a_blinding_sun_bakes_in_every_format() {
         common::ktx_validate_all(&out);
         let m: serde_json::Value =
             serde_json::from_slice(&std::fs::read(out.join("manifest.json")).unwrap()).unwrap();
-        let mut worst: f64 = 0.0;
+        let mut shares = Vec::new();
+        let mut power_errors = Errors::new();
         for e in m["probes"].as_array().unwrap() {
             let input = e["input"].as_str().unwrap();
             let probe = Path::new(input)
@@ -937,6 +1066,24 @@ fn every_shared_probe_with_a_blinding_sun_bakes_in_every_format() {
                     "{name} {probe} {f}"
                 );
             }
+            // The mirror level's power, read back, against the probe's less what was reported.
+            let specular = read(&out.join(&probe).join("specular.ktx2"));
+            let mut baked = [0.0f64; 3];
+            for (_, o, t) in texels(&specular.levels[0], specular.size) {
+                for k in 0..3 {
+                    baked[k] += o * t[k] as f64;
+                }
+            }
+            let source = powers[&probe];
+            let (got, want) = if name == "separate" {
+                let share = e["separated"][1].as_f64().unwrap_or(0.0);
+                (baked[1], (1.0 - share) * source[1])
+            } else {
+                let share = e["clamped"]["specular"]["power"][0].as_f64().unwrap_or(0.0);
+                let y = |p: [f64; 3]| envlight::math::envmap::luminance(p);
+                (y(baked), (1.0 - share) * y(source))
+            };
+            power_errors.rel(got, want, 0.0, probe.clone());
             if input.ends_with(".sun.exr") {
                 let reported = if name == "separate" {
                     e["separated"][1].as_f64().unwrap_or(0.0)
@@ -944,14 +1091,24 @@ fn every_shared_probe_with_a_blinding_sun_bakes_in_every_format() {
                     e["clamped"]["specular"]["power"][0].as_f64().unwrap_or(0.0)
                 };
                 assert!(reported > 0.0, "{name} {probe}: nothing reported: {e}");
-                worst = worst.max(reported);
+                shares.push(reported);
             }
         }
         eprintln!(
             "{name}: {} probes in {:.1} s; largest share reported (clamped at level 0, or \
-             separated) {worst:.3}",
+             separated) {:.3}; the mirror level's power against it: worst {:.2e} ({:?})",
             inputs.len(),
-            t0.elapsed().as_secs_f64()
+            t0.elapsed().as_secs_f64(),
+            max_of(shares),
+            power_errors.worst(),
+            power_errors.at()
+        );
+        assert!(power_errors.count() == inputs.len());
+        assert!(
+            power_errors.worst() <= bound,
+            "{name}: the mirror level's power is off what was reported by {:e} at {:?}",
+            power_errors.worst(),
+            power_errors.at()
         );
     }
     let _ = std::fs::remove_dir_all(&dir);

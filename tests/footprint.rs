@@ -3,6 +3,7 @@
 
 mod common;
 
+use common::compare::{max_of, rel_err, Errors};
 use common::scenes::{object, scene, sphere_camera, unit_sphere};
 use envlight::math::brdf::Brdf;
 use envlight::math::camera::{trace, Camera, Shape};
@@ -142,7 +143,7 @@ fn footprint_lookups_match_their_float64_twin() {
             };
             let chain = envlight::math::mip::chain(&box_dp(&source, size));
             let what = |i: i64, j: i64| footprint::looked_up(&cam, &shapes, i, j).map(|w| w.0);
-            let (mut worst, mut n, mut edge, mut above) = (0.0f64, 0, 0, 0);
+            let (mut errors, mut n, mut edge, mut above) = (Errors::new(), 0, 0, 0);
             for j in 0..cam.height {
                 for i in 0..cam.width {
                     let (ii, jj) = (i as i64, j as i64);
@@ -157,15 +158,13 @@ fn footprint_lookups_match_their_float64_twin() {
                     }
                     let want = footprint::pixel(&chain, &cam, &shapes, &prepared, i, j);
                     let px = frame.texels[(j * cam.width + i) as usize];
-                    let mut e = 0.0f64;
-                    for c in 0..3 {
-                        e = e.max((px[c] as f64 - want[c]).abs() / want[c].max(1e-3));
-                    }
-                    worst = worst.max(e);
+                    let e = max_of((0..3).map(|c| rel_err(px[c], want[c], 1e-3, (i, j, c))));
+                    errors.add(e, (i, j));
                     above += (e > 1e-4) as u32;
                     n += 1;
                 }
             }
+            let worst = errors.worst();
             eprintln!(
                 "{lights:?}: {n} pixels, worst {worst:.2e}, {above} above 1e-4; {edge} on silhouettes left out"
             );

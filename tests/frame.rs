@@ -2,9 +2,11 @@
 //! engine's images, submitted once. The frame must equal what `envlight render` makes of the
 //! same scene, with no validation message and no envlight object left behind.
 
+mod common;
 #[path = "../examples/frame.rs"]
 mod frame_example;
 
+use common::compare::Errors;
 use std::path::Path;
 use std::process::Command;
 
@@ -41,14 +43,13 @@ fn an_engine_frame_matches_the_cli_render() {
     // The same passes with the same inputs on the same device: only how the commands were
     // grouped into submissions differs, so the pixels agree to f32 rounding (1e-6 relative,
     // with a floor for dark pixels).
-    let mut worst = 0.0f64;
-    for (a, b) in f.frame.texels.iter().zip(&cli.texels) {
+    let mut errors = Errors::new();
+    for (k, (a, b)) in f.frame.texels.iter().zip(&cli.texels).enumerate() {
         for c in 0..3 {
-            let (a, b) = (a[c] as f64, b[c] as f64);
-            assert!(a.is_finite() && b.is_finite());
-            worst = worst.max((a - b).abs() / b.abs().max(1e-3));
+            errors.rel(a[c], b[c], 1e-3, (k, c));
         }
     }
+    let worst = errors.worst();
     assert!(
         worst <= 1e-6,
         "engine frame differs from the CLI render by {worst:e}"

@@ -3,65 +3,8 @@
 //! perspective and orthographic cameras at odd sizes, at grazing incidence on the plane.
 
 mod common;
-
-use envlight::math::camera::{trace, Camera, Projection, Shape};
-use envlight::passes::gbuffer::{GBufferPass, Object};
-use glam::DVec3;
-
-/// Three spheres (one far, one small), a plane they stand on, cut to a disc, seen nearly
-/// edge-on by one of the cameras.
-fn objects() -> Vec<Object> {
-    let sphere = |center: [f64; 3], radius: f64| Object {
-        shape: Shape::Sphere { center, radius },
-        albedo: [0.5; 3],
-    };
-    vec![
-        sphere([0.0, 0.0, 0.0], 1.0),
-        sphere([-2.2, -0.4, -0.5], 0.6),
-        sphere([1.9, -0.7, 0.8], 0.3),
-        sphere([0.5, 2.0, -30.0], 4.0),
-        Object {
-            shape: Shape::Plane {
-                normal: [0.0, 1.0, 0.0],
-                offset: -1.0,
-                extent: 6.0,
-            },
-            albedo: [0.5; 3],
-        },
-    ]
-}
-
-fn cameras() -> [Camera; 3] {
-    let camera = |projection, eye: [f64; 3], width, height| Camera {
-        projection,
-        eye,
-        target: [0.0, -0.2, 0.0],
-        up: [0.0, 1.0, 0.0],
-        width,
-        height,
-    };
-    [
-        camera(
-            Projection::Perspective { fov_y: 45.0 },
-            [0.5, 1.5, 6.0],
-            67,
-            41,
-        ),
-        camera(
-            Projection::Orthographic { height: 5.0 },
-            [3.0, 4.0, 5.0],
-            33,
-            35,
-        ),
-        // Just above the plane: most of it is seen at grazing incidence.
-        camera(
-            Projection::Perspective { fov_y: 60.0 },
-            [0.0, -0.9, 7.0],
-            48,
-            27,
-        ),
-    ]
-}
+#[path = "twins/gbuffer.rs"]
+mod twin;
 
 /// Each pixel against the float64 ray cast through its centre. Pixels whose hit float32
 /// cannot decide (margin under 1e-3: silhouettes, the disc's rim, near-ties) are left out and
@@ -73,63 +16,6 @@ fn cameras() -> [Camera; 3] {
 #[test]
 fn gbuffer_matches_the_float64_ray_cast() {
     let ctx = common::ctx();
-    {
-        let pass = GBufferPass::new(&ctx).unwrap();
-        let objects = objects();
-        let shapes: Vec<Shape> = objects.iter().map(|o| o.shape).collect();
-        let records: Vec<_> = objects.iter().map(|o| o.gpu(2)).collect();
-        let mut all_misses = 0;
-        for (c, cam) in cameras().iter().enumerate() {
-            let (g, t) = pass.run(cam, &records).unwrap();
-            assert_eq!(t[0].label, "gbuffer");
-            let normal = g.normal.download_level(&ctx, 0).unwrap();
-            let position = g.position.download_level(&ctx, 0).unwrap();
-            let view = g.view.download_level(&ctx, 0).unwrap();
-            let (mut hits, mut misses, mut skipped) = (0, 0, 0);
-            let (mut worst_n, mut worst_p): (f64, f64) = (0.0, 0.0);
-            for j in 0..cam.height {
-                for i in 0..cam.width {
-                    let k = (j * cam.width + i) as usize;
-                    let at = format!("camera {c}, pixel ({i}, {j})");
-                    let f64x3 = |v: [f32; 4]| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
-                    for v in [normal[k], position[k], view[k]] {
-                        assert!(v.iter().all(|x| x.is_finite()), "{at}: {v:?}");
-                    }
-                    let (o, d) = cam.ray(i, j);
-                    let Some(hit) = trace(&shapes, o, d) else {
-                        misses += 1;
-                        assert_eq!(normal[k][3], -1.0, "{at}: a miss with an object index");
-                        assert!((f64x3(view[k]) + d).length() < 1e-5, "{at}: {:?}", view[k]);
-                        continue;
-                    };
-                    if hit.margin < 1e-3 {
-                        skipped += 1;
-                        continue;
-                    }
-                    hits += 1;
-                    assert_eq!(normal[k][3], hit.index as f32, "{at}: another object");
-                    let p = o + hit.t * d;
-                    let dn = (f64x3(normal[k]) - hit.normal).length();
-                    let dp = (f64x3(position[k]) - p).length() / (1.0 + hit.t);
-                    let dt = (position[k][3] as f64 - hit.t).abs() / (1.0 + hit.t);
-                    let dv = (f64x3(view[k]) + d).length();
-                    (worst_n, worst_p) = (worst_n.max(dn), worst_p.max(dp.max(dt)));
-                    assert!(dn < 1e-4, "{at}: normal off by {dn:e}");
-                    assert!(
-                        dp < 1e-4 && dt < 1e-4,
-                        "{at}: position off by {dp:e}, t {dt:e}"
-                    );
-                    assert!(dv < 1e-5, "{at}: view off by {dv:e}");
-                }
-            }
-            eprintln!(
-                "camera {c}: {hits} hits, {misses} misses, {skipped} undecidable; worst normal \
-                 {worst_n:.1e}, position {worst_p:.1e}"
-            );
-            assert!(hits > 4 * skipped, "camera {c}: too few decided hits");
-            all_misses += misses;
-        }
-        assert!(all_misses > 100, "the cameras see too little background");
-    }
+    twin::check(&ctx);
     common::finish(ctx);
 }

@@ -7,6 +7,7 @@
 
 mod common;
 
+use common::compare::{abs_err, max_abs, max_of, Errors};
 use common::scenes::{fis, object, scene, sphere_camera, unit_sphere};
 use envlight::math::brdf::{local_view, Brdf, Frame};
 use envlight::math::camera::trace;
@@ -102,10 +103,7 @@ fn is_constant(map: &EnvMap) -> Option<[f32; 3]> {
 
 /// Largest channel of any texel: no normalised filter or energy-conserving BRDF returns more.
 fn brightest(map: &EnvMap) -> f64 {
-    map.texels
-        .iter()
-        .flatten()
-        .fold(0.0f64, |a, &c| a.max(c as f64))
+    max_of(map.texels.iter().flatten().copied())
 }
 
 /// SH projection at orders 2 and 8 against the float64 projection: 1e-5 of the largest
@@ -129,7 +127,7 @@ fn sh_projection_matches_float64_on_every_hard_map() {
                 }
                 let (gpu, _) = p.run(&g, order).unwrap();
                 let cpu = sh::project(&c.map, order);
-                let scale = cpu.iter().flatten().fold(0.0f64, |a, b| a.max(b.abs()));
+                let scale = max_abs(cpu.iter().flatten().copied());
                 for (k, (a, b)) in gpu.coeffs.iter().zip(&cpu).enumerate() {
                     for ch in 0..3 {
                         assert!(
@@ -247,18 +245,18 @@ fn brute_force_of_every_hard_map_matches_float64() {
                 finite_nonnegative(&what, &out.texels);
                 let (w, h) = target.extent();
                 let cpu = filter::filter_map(&c.map, DMat3::IDENTITY, kernel, target.to, w, h);
-                let scale = cpu.iter().flatten().fold(0.0f64, |a, b| a.max(b.abs()));
-                let mut worst = 0.0f64;
+                let scale = max_abs(cpu.iter().flatten().copied());
+                let mut errors = Errors::new();
                 for (k, (a, b)) in out.texels.iter().zip(&cpu).enumerate() {
                     for ch in 0..3 {
-                        let e = (a[ch] as f64 - b[ch]).abs() / b[ch].abs().max(1e-6 * scale);
                         if scale == 0.0 {
                             assert_eq!(a[ch], 0.0, "{what}: texel {k}");
                         } else {
-                            worst = worst.max(e);
+                            errors.rel(a[ch], b[ch], 1e-6 * scale, (k, ch));
                         }
                     }
                 }
+                let worst = errors.worst();
                 eprintln!("MEASURE {what}: worst {worst:.2e}");
                 assert!(worst < 1e-4, "{what}: {worst:e} off the float64 twin");
             }
@@ -363,7 +361,7 @@ fn every_technique_on_every_hard_map() {
                     (Technique::Prefiltered { .. }, _) => 6e-3,
                     _ => 1e-3,
                 };
-                let mut worst = 0.0f64;
+                let mut errors = Errors::new();
                 for (k, px) in r.frame.texels.iter().enumerate() {
                     let (i, j) = (k as u32 % cam.width, k as u32 / cam.width);
                     if is_black(&c.map) {
@@ -402,8 +400,7 @@ fn every_technique_on_every_hard_map() {
                         Technique::Prefiltered { .. } => rule,
                         _ => 2e-3,
                     };
-                    let e = (px[1] as f64 - want).abs() / k[1] as f64;
-                    worst = worst.max(e);
+                    let e = errors.add(abs_err(px[1], want, (i, j)) / k[1] as f64, (i, j));
                     assert!(
                         e <= tol,
                         "{what}: pixel ({i}, {j}) {} vs {want} ({e:e})",
@@ -411,7 +408,7 @@ fn every_technique_on_every_hard_map() {
                     );
                 }
                 if is_constant(&c.map).is_some() {
-                    eprintln!("MEASURE {what}: worst furnace error {worst:.2e}");
+                    eprintln!("MEASURE {what}: worst furnace error {:.2e}", errors.worst());
                 }
             }
         }

@@ -4,7 +4,12 @@
 //! sum, so extracting lights loses nothing the exact filter sees.
 
 mod common;
+#[path = "twins/lights.rs"]
+mod twin;
 
+use twin::sky;
+
+use common::compare::Errors;
 use envlight::math::exact::ExactFilter;
 use envlight::math::lights::{
     cluster_irradiance, clusters, diffuse_options, extract, light_sum, prepare, ExtractOptions,
@@ -13,15 +18,8 @@ use envlight::math::lights::{
 use envlight::math::split_sum::chain_norm;
 use envlight::math::synth::Sky;
 use envlight::math::{Coord, Mapping, Orientation};
-use envlight::passes::{GpuLights, LightsPass, SplitSum};
 use envlight::EnvMap;
 use glam::DVec3;
-
-fn sky(mapping: Mapping, size: u32) -> EnvMap {
-    let sky = Sky::default();
-    let (w, h) = mapping.extent_for_size(size);
-    EnvMap::from_fn(mapping, w, h, 2, move |d| sky.radiance(d))
-}
 
 /// Every texel of a 16² cube level (and an 8² one) against the twin, for the cosine and GGX
 /// α 0.02 (a lobe far narrower than the 64-wide maps' texels: every node counts) and 0.3, the
@@ -30,68 +28,7 @@ fn sky(mapping: Mapping, size: u32) -> EnvMap {
 #[test]
 fn lights_pass_matches_its_float64_twin() {
     let ctx = common::ctx();
-    {
-        let pass = LightsPass::new(&ctx).unwrap();
-        let o = Orientation {
-            flip_u: true,
-            flip_v: false,
-            rotate_y_degrees: 30.0,
-        };
-        let f2w = o.world_to_file().transpose();
-        for mapping in [Mapping::LatLong, Mapping::Angular] {
-            let map = sky(mapping, 64);
-            let ex = extract(&map, &ExtractOptions::default());
-            assert!(!ex.lights.is_empty());
-            let prepared = prepare(&map, &ex, f2w, 0.02);
-            let gpu = GpuLights::upload(&ctx, &prepared).unwrap();
-            for kernel in [
-                LightKernel::Cosine,
-                LightKernel::Ggx { alpha: 0.02 },
-                LightKernel::Ggx { alpha: 0.3 },
-            ] {
-                let cube = SplitSum::cube_chain(&ctx, 16, 2).unwrap();
-                let (levels, _) = ctx
-                    .run("lights test", |rec| {
-                        rec.clear(&cube.image, [0.0; 4]);
-                        pass.record(rec, &gpu, kernel, &cube, 0)?;
-                        pass.record(rec, &gpu, kernel, &cube, 1)?;
-                        Ok([cube.record_download(rec, 0)?, cube.record_download(rec, 1)?])
-                    })
-                    .unwrap();
-                let norm = match kernel {
-                    LightKernel::Cosine => 1.0,
-                    LightKernel::Ggx { alpha } => chain_norm(alpha),
-                };
-                for (k, level) in levels.iter().enumerate() {
-                    let got = level.read();
-                    let s = 16u32 >> k;
-                    let want: Vec<[f64; 3]> = (0..6 * s * s)
-                        .map(|t| {
-                            let d = Mapping::Cube.coord_to_dir(Coord {
-                                layer: t / (s * s),
-                                u: ((t % s) as f64 + 0.5) / s as f64,
-                                v: ((t / s % s) as f64 + 0.5) / s as f64,
-                            });
-                            light_sum(&prepared, d, kernel).map(|v| v / norm)
-                        })
-                        .collect();
-                    let top = want.iter().map(|w| w[1]).fold(0.0, f64::max);
-                    assert!(top > 0.0);
-                    let worst = got
-                        .iter()
-                        .zip(&want)
-                        .flat_map(|(g, w)| (0..3).map(move |c| (g[c] as f64 - w[c]).abs()))
-                        .fold(0.0, f64::max);
-                    eprintln!("{mapping:?} {kernel:?} level {k}: {:.2e}", worst / top);
-                    assert!(
-                        worst < 1e-5 * top,
-                        "{mapping:?} {kernel:?}: {worst:e} of {top:e}"
-                    );
-                }
-            }
-            drop(gpu);
-        }
-    }
+    twin::check(&ctx);
     common::finish(ctx);
 }
 
@@ -503,14 +440,13 @@ fn prefiltered_irradiance_with_lights_matches_its_float64_twin() {
             render(&ctx, &sc, &map).unwrap().frame
         };
         let (with, without) = (frame(LightsMode::Extract), frame(LightsMode::None));
-        let (mut worst, mut compared, mut sunlit) = (0.0f64, 0, 0);
+        let (mut errors, mut compared, mut sunlit) = (Errors::new(), 0, 0);
         for (k, n, _) in sphere_pixels(&cam) {
             let e = lookup(n);
             let l = cluster_irradiance(&cl, n);
             for ch in 0..3 {
                 let want = (e[ch] + l[ch]) / std::f64::consts::PI;
-                let rel = (with.texels[k][ch] as f64 - want).abs() / want;
-                worst = worst.max(rel);
+                errors.rel(with.texels[k][ch], want, 0.0, (k, ch));
             }
             if l[1] > 0.1 * e[1] {
                 sunlit += 1;
@@ -523,8 +459,9 @@ fn prefiltered_irradiance_with_lights_matches_its_float64_twin() {
             .zip(&without.texels)
             .filter(|(a, b)| (a[1] - b[1]).abs() > 1e-3 * b[1])
             .count();
+        let worst = errors.worst();
         eprintln!("{compared} pixels within {worst:.1e} ({sunlit} sunlit); {moved} differ from lights = none");
-        assert!(worst < 1e-4, "{worst:e}");
+        assert!(worst < 1e-4, "{worst:e} at {:?}", errors.at());
         assert!(
             compared > 300 && sunlit > 50 && moved > 100,
             "{compared} {sunlit} {moved}"
@@ -623,7 +560,7 @@ fn prefiltered_phong_with_lights_matches_its_float64_twin() {
             let pre = prefiltered_twin(&ex.residual, f2w, Kernel::Phong { n }, w, h);
             let tree = LightTree::new(prepare(&map, &ex, f2w, scale));
             let (with, without) = (frame(n, LightsMode::Extract), frame(n, LightsMode::None));
-            let (mut worst, mut sunlit, mut moved) = (0.0f64, 0, 0);
+            let (mut errors, mut sunlit, mut moved) = (Errors::new(), 0, 0);
             let pixels = sphere_pixels(&cam);
             for &(k, normal, d) in &pixels {
                 let v = -d;
@@ -638,7 +575,7 @@ fn prefiltered_phong_with_lights_matches_its_float64_twin() {
                 );
                 for ch in 0..3 {
                     let want = m[ch] + l[ch];
-                    worst = worst.max((with.texels[k][ch] as f64 - want).abs() / want);
+                    errors.rel(with.texels[k][ch], want, 0.0, (k, ch));
                 }
                 if l[1] > m[1] {
                     sunlit += 1;
@@ -649,8 +586,9 @@ fn prefiltered_phong_with_lights_matches_its_float64_twin() {
                     }
                 }
             }
+            let worst = errors.worst();
             eprintln!("n {n}: {} pixels within {worst:.1e}; {sunlit} lit mostly by the sun, {moved} of them differ from lights = none", pixels.len());
-            assert!(worst < 1e-4, "n {n}: {worst:e}");
+            assert!(worst < 1e-4, "n {n}: {worst:e} at {:?}", errors.at());
             assert!(sunlit > 5 && moved > 5, "n {n}: {sunlit} {moved}");
         }
         // Too narrow for the nodes (not for the brute force): the whole map, as without

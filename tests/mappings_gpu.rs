@@ -2,6 +2,7 @@
 
 mod common;
 
+use common::compare::{abs_err, Errors};
 use envlight::math::synth::stress_directions;
 use envlight::math::Mapping;
 use envlight::passes::testing::probe::MappingProbe;
@@ -24,7 +25,7 @@ fn glsl_round_trip_under_1e5_rad() {
             .collect();
         for m in Mapping::ALL {
             let out = probe.round_trip(m, &dirs).unwrap();
-            let mut worst = (0.0f64, DVec3::ZERO);
+            let mut worst = Errors::new();
             for (d, r) in dirs.iter().zip(&out) {
                 // The f32 input, renormalised in f64, is the truth the GPU must return.
                 let d = DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64).normalize();
@@ -37,18 +38,15 @@ fn glsl_round_trip_under_1e5_rad() {
                 );
                 assert!(r.layer < m.layers());
                 // The GPU's face or half must be the f64 one except on exact ties.
-                let e = angle(d, back.normalize());
-                if e > worst.0 {
-                    worst = (e, d);
-                }
+                worst.add(angle(d, back.normalize()), d);
             }
             assert!(
-                worst.0 < 1e-5,
-                "{m:?}: worst GLSL round trip {:e} rad at {}",
-                worst.0,
-                worst.1
+                worst.count() == dirs.len() && worst.worst() < 1e-5,
+                "{m:?}: worst GLSL round trip {:e} rad at {:?}",
+                worst.worst(),
+                worst.at()
             );
-            eprintln!("{m:?}: worst GLSL round trip {:.2e} rad", worst.0);
+            eprintln!("{m:?}: worst GLSL round trip {:.2e} rad", worst.worst());
         }
     }
     common::finish(ctx);
@@ -123,8 +121,7 @@ fn glsl_solid_angles_sum_to_4pi_and_match_f64() {
                 };
                 let gpu = probe.solid_angles(m, w, h).unwrap();
                 let mut sum = 0.0f64;
-                let mut worst_rel = 0.0f64;
-                let mut worst_at = (0, 0, 0.0, 0.0);
+                let mut worst = Errors::new();
                 for j in 0..h {
                     for i in 0..w {
                         let g = gpu[(j * w + i) as usize] as f64;
@@ -134,18 +131,17 @@ fn glsl_solid_angles_sum_to_4pi_and_match_f64() {
                         // Rim texels can hold slivers; compare them against the texel scale.
                         let scale =
                             f.max(4.0 * std::f64::consts::PI / (w * h * m.layers()) as f64 * 1e-2);
-                        if (g - f).abs() / scale > worst_rel {
-                            worst_rel = (g - f).abs() / scale;
-                            worst_at = (i, j, g, f);
-                        }
+                        worst.add(abs_err(g, f, (i, j)) / scale, (i, j, g, f));
                     }
                 }
                 let total = sum * m.layers() as f64;
                 let rel = (total / (4.0 * std::f64::consts::PI) - 1.0).abs();
                 assert!(rel < 1e-5, "{m:?} {w}x{h}: GPU sum {total} rel err {rel:e}");
                 assert!(
-                    worst_rel < 2e-3,
-                    "{m:?} {w}x{h}: worst texel rel err {worst_rel:e} at {worst_at:?}"
+                    worst.worst() < 2e-3,
+                    "{m:?} {w}x{h}: worst texel rel err {:e} at {:?}",
+                    worst.worst(),
+                    worst.at()
                 );
             }
         }

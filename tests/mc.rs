@@ -2,18 +2,16 @@
 //! sampling against the converged reference on real probes.
 
 mod common;
+#[path = "twins/mc.rs"]
+mod twin;
 
+use common::compare::{finite, Errors};
 use common::scenes::{fis, object, scene, sphere_camera, unit_sphere};
 use envlight::math::brdf::Brdf;
-use envlight::math::camera::{trace, Camera, Projection, Shape};
+use envlight::math::camera::trace;
 use envlight::math::envmap::luminance;
-use envlight::math::mc::{estimate, McPoint, McSetup};
-use envlight::math::{Mapping, Orientation};
-use envlight::passes::gbuffer::GBufferPass;
-use envlight::passes::mc::{pixel_stats, McEnv, McOptions, MonteCarlo};
-use envlight::render::{object_record, render};
+use envlight::render::render;
 use envlight::scene::Technique;
-use envlight::EnvMap;
 
 /// GPU and CPU estimates of the same pixels with independent seeds agree within their
 /// combined statistical error: per pixel, z = (Y_gpu − Y_cpu)/√(σ²_gpu + σ²_cpu) of the mean
@@ -23,125 +21,7 @@ use envlight::EnvMap;
 #[test]
 fn gpu_monte_carlo_matches_the_float64_estimator() {
     let ctx = common::ctx();
-    {
-        let sky = envlight::math::synth::Sky::default();
-        let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, |d| sky.radiance(d));
-        let orientation = Orientation {
-            rotate_y_degrees: 70.0,
-            ..Default::default()
-        };
-        let mc = |s| Technique::Mc {
-            samples: s,
-            error: None,
-        };
-        let objs = [
-            object(
-                Shape::Sphere {
-                    center: [-0.6, 0.0, 0.0],
-                    radius: 0.6,
-                },
-                Brdf::Ggx {
-                    alpha: 0.3,
-                    correlated: false,
-                },
-                [0.9, 0.8, 0.7],
-                mc(512),
-            ),
-            object(
-                Shape::Sphere {
-                    center: [0.7, -0.1, 0.2],
-                    radius: 0.5,
-                },
-                Brdf::Lambert,
-                [0.7, 0.7, 0.7],
-                mc(512),
-            ),
-            object(
-                Shape::Sphere {
-                    center: [0.2, 0.6, -0.8],
-                    radius: 0.35,
-                },
-                Brdf::Phong { n: 10.0 },
-                [1.0; 3],
-                mc(512),
-            ),
-            object(
-                Shape::Plane {
-                    normal: [0.0, 1.0, 0.0],
-                    offset: -0.6,
-                    extent: 4.0,
-                },
-                Brdf::Ward { ax: 0.3, ay: 0.1 },
-                [0.6, 0.6, 0.6],
-                mc(512),
-            ),
-        ];
-        let cam = Camera {
-            projection: Projection::Perspective { fov_y: 45.0 },
-            eye: [0.3, 1.2, 3.5],
-            target: [0.0, -0.1, 0.0],
-            up: [0.0, 1.0, 0.0],
-            width: 14,
-            height: 10,
-        };
-        let records: Vec<_> = objs.iter().map(|o| object_record(o, 0)).collect();
-        let (gbuf, _) = GBufferPass::new(&ctx).unwrap().run(&cam, &records).unwrap();
-        let mc_env = McEnv::new(&ctx, &env, &orientation).unwrap();
-        let (res, t) = MonteCarlo::new(&ctx)
-            .unwrap()
-            .run(&gbuf, &mc_env, &{
-                let mut o = McOptions::new(512);
-                (o.shadows, o.seed, o.per_frame) = (true, 11, 128);
-                o
-            })
-            .unwrap();
-        assert_eq!(res.samples, 512);
-        assert!(t.iter().all(|t| t.label.starts_with("mc frame")));
-        let accum = res.accum.download_level(&ctx, 0).unwrap();
-        let shapes: Vec<Shape> = objs.iter().map(|o| o.shape).collect();
-        let setup = McSetup {
-            env: &mc_env.sampler,
-            shapes: &shapes,
-            shadows: true,
-            mis: true,
-            seed: 12345,
-        };
-        let (mut n, mut z2, mut zmax) = (0, 0.0, 0.0f64);
-        for j in 0..cam.height {
-            for i in 0..cam.width {
-                let (o, d) = cam.ray(i, j);
-                let Some(hit) = trace(&shapes, o, d) else {
-                    continue;
-                };
-                if hit.margin < 1e-3 {
-                    continue;
-                }
-                let m = &objs[hit.index].material;
-                let p = McPoint {
-                    pixel: (i, j),
-                    position: o + hit.t * d,
-                    normal: hit.normal,
-                    view: -d,
-                    brdf: m.kind,
-                    albedo: m.albedo,
-                };
-                let cpu = estimate(&setup, &p, 0, 512);
-                let (gm, gv) = pixel_stats(accum[(j * cam.width + i) as usize], 512);
-                assert!(gm.iter().all(|v| v.is_finite()));
-                let z = (luminance(gm) - luminance(cpu.mean)) / (gv + cpu.lum_var).sqrt();
-                z2 += z * z;
-                zmax = zmax.max(z.abs());
-                n += 1;
-            }
-        }
-        let mean_z2 = z2 / n as f64;
-        eprintln!("{n} pixels: max |z| {zmax:.2}, mean z² {mean_z2:.2}");
-        assert!(n > 60);
-        assert!(
-            zmax < 5.0 && (0.4..2.0).contains(&mean_z2),
-            "max |z| {zmax}, mean z² {mean_z2}"
-        );
-    }
+    twin::check(&ctx);
     common::finish(ctx);
 }
 
@@ -214,7 +94,7 @@ fn fis_converges_towards_monte_carlo_on_real_probes() {
                     &env,
                 )
                 .unwrap();
-                let (mut se, mut sr, mut n, mut worst_ratio) = (0.0, 0.0, 0, 0.0f64);
+                let (mut se, mut sr, mut n, mut ratios) = (0.0, 0.0, 0, Errors::new());
                 let mean_ref: f64 = m
                     .frame
                     .texels
@@ -235,8 +115,10 @@ fn fis_converges_towards_monte_carlo_on_real_probes() {
                     se += (la - lb).powi(2);
                     sr += lb * lb;
                     n += 1;
-                    worst_ratio = worst_ratio.max(la / (lb + 0.01 * mean_ref));
+                    let ratio = finite(la, "FIS", &k) / finite(lb + 0.01 * mean_ref, "MC", &k);
+                    ratios.add(ratio, k);
                 }
+                let worst_ratio = ratios.worst();
                 let rel = (se / sr).sqrt();
                 eprintln!("{file} {kind:?}: FIS-64 relative RMS {rel:.3} over {n} pixels, worst ratio to reference {worst_ratio:.2}");
                 assert!(rel < tol, "{file} {kind:?}: {rel}");

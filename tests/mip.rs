@@ -2,9 +2,10 @@
 //! dual paraboloid's rim.
 
 mod common;
+#[path = "twins/mip.rs"]
+mod twin;
 
-use envlight::math::synth::smooth_env;
-use envlight::math::{mip, Mapping};
+use envlight::math::Mapping;
 use envlight::passes::mip::MipChain;
 use envlight::EnvMap;
 use envlight::GpuEnvMap;
@@ -15,53 +16,7 @@ use envlight::GpuEnvMap;
 #[test]
 fn mip_levels_match_the_float64_box_filter() {
     let ctx = common::ctx();
-    {
-        let chain_pass = MipChain::new(&ctx).unwrap();
-        for size in [64u32, 45] {
-            let map = EnvMap::from_fn(Mapping::DualParaboloid, size, size, 1, smooth_env);
-            let dp = GpuEnvMap::upload_mipped(&ctx, &map).unwrap();
-            let level0 = dp.download(&ctx).unwrap();
-            let t = chain_pass.run(&dp).unwrap();
-            assert_eq!(t.len() as u32, dp.mips());
-            let reference = mip::chain(&level0);
-            assert_eq!(reference.len() as u32, dp.mips());
-            let mut worst: f64 = 0.0;
-            for (k, l) in reference.iter().enumerate() {
-                let got = dp.download_level(&ctx, k as u32).unwrap();
-                for layer in 0..2 {
-                    for j in 0..l.size {
-                        for i in 0..l.size {
-                            let g = got[((layer * l.size + j) * l.size + i) as usize];
-                            assert!(g.iter().all(|v| v.is_finite()));
-                            if g[3] <= 0.0 {
-                                assert!(
-                                    l.texels[((layer * l.size + j) * l.size + i) as usize][3]
-                                        == 0.0
-                                );
-                                continue;
-                            }
-                            let want = if size.is_power_of_two() {
-                                mip::box_reference(&level0, k as u32, layer, i, j)
-                            } else {
-                                l.radiance(layer, i, j)
-                            };
-                            for c in 0..3 {
-                                let rel = ((g[c] / g[3]) as f64 - want[c]).abs() / want[c];
-                                worst = worst.max(rel);
-                                assert!(
-                                    rel < 2e-6,
-                                    "size {size} level {k} ({layer}, {i}, {j}) ch {c}: {} vs {}",
-                                    g[c] / g[3],
-                                    want[c]
-                                );
-                            }
-                        }
-                    }
-                }
-            }
-            eprintln!("size {size}: {} levels within {worst:.1e}", dp.mips());
-        }
-    }
+    twin::check(&ctx);
     common::finish(ctx);
 }
 

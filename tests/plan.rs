@@ -2,6 +2,7 @@
 
 mod common;
 
+use common::compare::{abs_err, max_abs, max_of};
 use envlight::math::synth::Sky;
 use envlight::math::Mapping;
 use envlight::render::{plan, render, PassKind, Renderer};
@@ -226,20 +227,17 @@ fn one_technique_scenes_take_their_shade_variant_and_match_the_whole_shader() {
             assert_eq!(built.len(), 1, "{what}: {built:?}");
             assert!(built[0] != whole_name, "{what}: {built:?}");
             assert_eq!(both, [built[0], whole_name], "{what}");
-            let peak = whole
-                .frame
-                .texels
-                .iter()
-                .flatten()
-                .fold(0.0f32, |m, &c| m.max(c.abs()));
+            let peak = max_abs(whole.frame.texels.iter().flatten().copied());
             assert!(peak > 0.0, "{what}: a black frame");
-            let worst = variant
-                .frame
-                .texels
-                .iter()
-                .zip(&whole.frame.texels)
-                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
-                .fold(0.0f32, f32::max);
+            let worst = max_of(
+                variant
+                    .frame
+                    .texels
+                    .iter()
+                    .zip(&whole.frame.texels)
+                    .enumerate()
+                    .flat_map(|(k, (a, b))| (0..3).map(move |c| abs_err(a[c], b[c], (k, c)))),
+            );
             eprintln!(
                 "{what}: {} vs {whole_name}, worst {:.1e} of {peak}",
                 built[0], worst

@@ -3,6 +3,7 @@
 
 mod common;
 
+use common::compare::finite;
 use envlight::io::{self, LoadOptions};
 use envlight::math::Mapping;
 use envlight::passes::{ConvertOptions, Converter};
@@ -118,13 +119,15 @@ fn conversion_preserves_power_of_every_real_probe() {
                     let (out, _) = conv.run(&g, &ConvertOptions::new(to, size)).unwrap();
                     let out = out.download(&ctx).unwrap();
                     let pout = out.power();
-                    let worst = (0..3).map(|k| pout[k] / pin[k] - 1.0).fold(0.0f64, |a, b| {
-                        if b.abs() > a.abs() {
-                            b
-                        } else {
-                            a
+                    // The channel's signed power error of largest magnitude.
+                    let mut largest = 0.0f64;
+                    for k in 0..3 {
+                        let e = finite(pout[k] / pin[k] - 1.0, "the power error", &(&spec, k));
+                        if e.abs() > largest.abs() {
+                            largest = e;
                         }
-                    });
+                    }
+                    let worst = largest;
                     eprintln!(
                         "{spec} -> {} {size}: power {:+.3}%",
                         to.name(),

@@ -3,6 +3,7 @@
 
 mod common;
 
+use common::compare::Errors;
 use envlight::math::camera::{trace, Camera, Projection, Shape};
 use envlight::math::sh;
 use envlight::math::synth::smooth_env;
@@ -115,7 +116,7 @@ fn diffuse_spheres_match_float64_irradiance() {
                 let img = frame.download(&ctx).unwrap();
                 let (mut compared, mut skipped, mut misses) = (0, 0, 0);
                 let mut seen = vec![0usize; objects.len()];
-                let mut worst: f64 = 0.0;
+                let mut worst = Errors::new();
                 for j in 0..cam.height {
                     for i in 0..cam.width {
                         let px = img.texels[(j * cam.width + i) as usize];
@@ -134,8 +135,7 @@ fn diffuse_spheres_match_float64_irradiance() {
                         let a = objects[hit.index].albedo;
                         for ch in 0..3 {
                             let want = a[ch] * e[ch].max(0.0) / PI;
-                            let rel = (px[ch] as f64 - want).abs() / want;
-                            worst = worst.max(rel);
+                            let rel = worst.rel(px[ch], want, 0.0, (i, j, ch));
                             assert!(
                                 rel < 1e-4,
                                 "L={lmax} {:?} pixel ({i}, {j}) ch {ch}: {} vs {want}",
@@ -147,8 +147,9 @@ fn diffuse_spheres_match_float64_irradiance() {
                     }
                 }
                 eprintln!(
-                    "L={lmax} {:?}: {compared} pixels within {worst:.1e}, {skipped} edge pixels left out, {misses} background",
-                    cam.projection
+                    "L={lmax} {:?}: {compared} pixels within {:.1e}, {skipped} edge pixels left out, {misses} background",
+                    cam.projection,
+                    worst.worst()
                 );
                 assert!(compared > 10 * skipped && compared > 300);
                 assert!(
@@ -245,7 +246,7 @@ fn diffuse_with_lights_matches_float64() {
                 .unwrap();
             frames.push(frame.download(&ctx).unwrap());
         }
-        let (mut compared, mut worst, mut sunlit) = (0, 0.0f64, 0);
+        let (mut compared, mut worst, mut sunlit) = (0, Errors::new(), 0);
         for j in 0..cam.height {
             for i in 0..cam.width {
                 let (o_ray, d) = cam.ray(i, j);
@@ -262,8 +263,7 @@ fn diffuse_with_lights_matches_float64() {
                 for ch in 0..3 {
                     let want = a[ch] * (e[ch].max(0.0) + l[ch]) / PI;
                     let got = frames[0].texels[k][ch] as f64;
-                    let rel = (got - want).abs() / want;
-                    worst = worst.max(rel);
+                    let rel = worst.rel(got, want, 0.0, (i, j, ch));
                     assert!(rel < 1e-4, "pixel ({i}, {j}) ch {ch}: {got} vs {want}");
                 }
                 if l[1] > 0.1 * e[1] {
@@ -273,7 +273,10 @@ fn diffuse_with_lights_matches_float64() {
                 compared += 1;
             }
         }
-        eprintln!("{compared} pixels within {worst:.1e}, {sunlit} sunlit");
+        eprintln!(
+            "{compared} pixels within {:.1e}, {sunlit} sunlit",
+            worst.worst()
+        );
         assert!(compared > 300 && sunlit > 100, "{compared} {sunlit}");
         drop(gpu_lights);
     }

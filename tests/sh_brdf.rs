@@ -3,7 +3,12 @@
 //! error against converged references.
 
 mod common;
+#[path = "twins/sh_brdf.rs"]
+mod twin;
 
+use twin::brdfs;
+
+use common::compare::{max_of, Errors};
 use common::scenes::{object, scene, sphere_camera, sphere_pixels, unit_sphere};
 use envlight::math::brdf::{local_view, Brdf, Frame};
 use envlight::math::sh::{self, count};
@@ -12,7 +17,7 @@ use envlight::math::sh_rotate::{by_quadrature, ivanic, ShRotation};
 use envlight::math::synth::smooth_env;
 use envlight::math::Mapping;
 use envlight::passes::sh_brdf::Rotation;
-use envlight::passes::{ShBrdfProjector, ShRotator};
+use envlight::passes::ShRotator;
 use envlight::render::Renderer;
 use envlight::scene::Technique;
 use envlight::EnvMap;
@@ -72,7 +77,7 @@ fn gpu_rotation_is_orthogonal_and_matches_float64() {
         }
         for method in [Rotation::Zxzxz, Rotation::Ivanic] {
             let (out, t) = rot.run(method, 8, &items).unwrap();
-            let (mut ortho, mut diff) = (0.0f64, 0.0f64);
+            let (mut orthos, mut diff) = (Vec::new(), Errors::new());
             for (k, r) in rs.iter().enumerate() {
                 let cols = &out[k * n..(k + 1) * n];
                 let gpu = ShRotation {
@@ -85,10 +90,16 @@ fn gpu_rotation_is_orthogonal_and_matches_float64() {
                         })
                         .collect(),
                 };
-                ortho = ortho.max(gpu.orthogonality_error());
-                diff = diff.max(gpu.max_difference(&ivanic(8, r)));
-                assert!(ivanic(8, r).max_difference(&by_quadrature(8, r)) < 1e-12);
+                let want = ivanic(8, r);
+                for (l, (g, w)) in gpu.bands.iter().zip(&want.bands).enumerate() {
+                    for (q, (g, w)) in g.iter().zip(w).enumerate() {
+                        diff.abs(*g, *w, (k, l, q));
+                    }
+                }
+                orthos.push(gpu.orthogonality_error());
+                assert!(want.max_difference(&by_quadrature(8, r)) < 1e-12);
             }
+            let (ortho, diff) = (max_of(orthos), diff.worst());
             let ms: f64 = t.iter().map(|t| t.ms).sum();
             eprintln!(
                 "{method:?}: orthogonality {ortho:.1e}, against float64 {diff:.1e}, {} rotations in {ms:.2} ms",
@@ -101,27 +112,6 @@ fn gpu_rotation_is_orthogonal_and_matches_float64() {
     common::finish(ctx);
 }
 
-fn brdfs() -> Vec<Brdf> {
-    vec![
-        Brdf::Lambert,
-        Brdf::Phong { n: 50.0 },
-        Brdf::Blinn { n: 200.0 },
-        Brdf::Ggx {
-            alpha: 0.3,
-            correlated: true,
-        },
-        Brdf::Ggx {
-            alpha: 0.05,
-            correlated: false,
-        },
-        Brdf::Ggx {
-            alpha: 1.0,
-            correlated: false,
-        },
-        Brdf::Ward { ax: 0.1, ay: 0.4 },
-    ]
-}
-
 /// The GPU's table (same nodes, float32) against the float64 projection, view by view, worst
 /// coefficient relative to the table's largest c₀₀. Bound 1e-5: float32 sums of 4096 node
 /// terms and a float32 basis give about 1e-6; sampling a narrow lobe in float32 moves its
@@ -132,39 +122,7 @@ fn brdfs() -> Vec<Brdf> {
 #[test]
 fn gpu_table_matches_the_float64_projection() {
     let ctx = common::ctx();
-    {
-        let pass = ShBrdfProjector::new(&ctx);
-        let grid = ViewGrid { size: 6 };
-        for b in brdfs() {
-            for lmax in [2, 8] {
-                let (gpu, t) = pass.run(&b, lmax, grid).unwrap();
-                let cpu = sh_brdf::table(&b, lmax, grid);
-                let nc = count(lmax);
-                let scale = cpu.iter().step_by(nc).fold(0.0f64, |a, v| a.max(v.abs()));
-                let (mut worst, mut inner) = (0.0f64, 0.0f64);
-                for (k, (g, c)) in gpu.iter().zip(&cpu).enumerate() {
-                    let e = (*g as f64 - c).abs() / scale;
-                    worst = worst.max(e);
-                    let v = (k / nc) as u32;
-                    if grid.view(v % grid.size, v / grid.size).z > 0.05 {
-                        inner = inner.max(e);
-                    }
-                }
-                let ms: f64 = t.iter().map(|t| t.ms).sum();
-                eprintln!(
-                    "{b:?} l = {lmax}: worst {worst:.1e} (views above 3°: {inner:.1e}), {ms:.1} ms for 36 views"
-                );
-                assert!(gpu.iter().all(|v| v.is_finite()));
-                let bound = if matches!(b, Brdf::Ward { .. }) {
-                    2e-3
-                } else {
-                    1e-5
-                };
-                assert!(worst < bound, "{b:?} l = {lmax}: {worst:e}");
-                assert!(inner < 1e-5, "{b:?} l = {lmax}: {inner:e}");
-            }
-        }
-    }
+    twin::check(&ctx);
     common::finish(ctx);
 }
 
@@ -223,21 +181,20 @@ fn render_matches_the_float64_twin() {
                     .all(|px| px.iter().all(|v| v.is_finite() && *v >= 0.0)));
                 let pixels = sphere_pixels(&cam);
                 let n = pixels.len();
-                let (mut worst, mut peak) = (0.0f64, 0.0f64);
                 let mut want_all = Vec::new();
                 for (k, normal, d) in pixels {
                     let px = r.frame.texels[k];
                     let want = sh_brdf::shade(&table, g, order, lit, normal, -d);
                     for ch in 0..3 {
-                        let w = want[ch] * albedo[ch];
-                        peak = peak.max(w);
-                        want_all.push((px[ch] as f64, w));
+                        want_all.push((px[ch], want[ch] * albedo[ch], (k, ch)));
                     }
                 }
-                for (got, w) in want_all {
-                    worst = worst.max((got - w).abs());
+                let peak = max_of(want_all.iter().map(|w| w.1));
+                let mut errors = Errors::new();
+                for (got, w, at) in want_all {
+                    errors.abs(got, w, at);
                 }
-                let rel = worst / peak;
+                let rel = errors.worst() / peak;
                 eprintln!("{method:?} {b:?} l = {order}: {n} pixels, worst {rel:.1e} of the peak");
                 assert!(n > 200);
                 assert!(rel < 2e-4, "{method:?} {b:?}: {rel:e}");
@@ -263,7 +220,7 @@ fn furnace_shows_each_brdfs_albedo() {
         let env = EnvMap::new(Mapping::LatLong, 16, 8, vec![[1.0; 3]; 16 * 8]);
         let cam = sphere_camera(20);
         let renderer = Renderer::new(&ctx);
-        let (mut low, mut high) = (0.0f64, 0.0f64);
+        let (mut low, mut high) = (Errors::new(), Errors::new());
         for b in brdfs() {
             let sc = scene(
                 cam,
@@ -279,23 +236,24 @@ fn furnace_shows_each_brdfs_albedo() {
                 .all(|px| px.iter().all(|v| v.is_finite() && *v >= 0.0)));
             let pixels = sphere_pixels(&cam);
             let n = pixels.len();
-            let mut bins = [0.0f64; 2];
+            let mut bins = [Errors::new(), Errors::new()];
             for (k, normal, d) in pixels {
                 let wo = local_view(&Frame::new(normal), -d);
-                let e = (r.frame.texels[k][1] as f64 - b.albedo(wo)).abs();
                 let grazing = wo.z < 80f64.to_radians().cos();
-                bins[grazing as usize] = bins[grazing as usize].max(e);
+                bins[grazing as usize].abs(r.frame.texels[k][1], b.albedo(wo), k);
             }
             eprintln!(
                 "{b:?}: {n} pixels, worst below 80°: {:.1e}, beyond: {:.1e}",
-                bins[0], bins[1]
+                bins[0].worst(),
+                bins[1].worst()
             );
             assert!(n > 200);
-            low = low.max(bins[0]);
+            low.merge(&bins[0]);
             if !matches!(b, Brdf::Ward { .. }) {
-                high = high.max(bins[1]);
+                high.merge(&bins[1]);
             }
         }
+        let (low, high) = (low.worst(), high.worst());
         assert!(low < 8.7e-3, "below 80°: {low:e}");
         assert!(high < 2.5e-2, "beyond 80°: {high:e}");
     }

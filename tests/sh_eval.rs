@@ -2,7 +2,10 @@
 //! and a clamped-cosine sky's closed form, within the truncation bound; windowing.
 
 mod common;
+#[path = "twins/sh_eval.rs"]
+mod twin;
 
+use common::compare::{abs_err, max_of};
 use envlight::math::filter::{self, at_centres, Kernel};
 use envlight::math::sh::{self, Window};
 use envlight::math::synth::{fibonacci_sphere, smooth_env, Sky};
@@ -59,14 +62,14 @@ fn clamped_cosine_sky_closed_form_is_right() {
     }
     for lmax in [1, 2, 4, 8] {
         let bound = truncation_bound(lmax);
-        let worst = (0..=400)
-            .map(|k| {
-                let b = PI * k as f64 / 400.0;
-                (series(lmax, b.cos())
-                    - clamped_cosine_sky_irradiance(DVec3::new(b.sin(), b.cos(), 0.0)))
-                .abs()
-            })
-            .fold(0.0, f64::max);
+        let worst = max_of((0..=400).map(|k| {
+            let b = PI * k as f64 / 400.0;
+            abs_err(
+                series(lmax, b.cos()),
+                clamped_cosine_sky_irradiance(DVec3::new(b.sin(), b.cos(), 0.0)),
+                k,
+            )
+        }));
         eprintln!("L = {lmax}: worst {worst:.3e}, bound {bound:.3e}");
         assert!(
             worst <= bound * (1.0 + 1e-9) && worst > bound / 3.0,
@@ -114,15 +117,14 @@ fn sh_irradiance_of_clamped_cosine_sky_is_within_truncation_error() {
                 [clamped_cosine_sky_irradiance(d); 3]
             });
             let neg = sh::negativity(&irr, &fibonacci_sphere(2000));
-            let worst = out
-                .texels
-                .iter()
-                .zip(&truth)
-                .map(|(g, t)| {
-                    // The pass clamps ringing at 0; so does the comparison.
-                    (g[0] as f64 - t[0]).abs()
-                })
-                .fold(0.0, f64::max);
+            // The pass clamps ringing at 0; so does the comparison.
+            let worst = max_of(
+                out.texels
+                    .iter()
+                    .zip(&truth)
+                    .enumerate()
+                    .map(|(k, (g, t))| abs_err(g[0], t[0], k)),
+            );
             eprintln!(
                 "L = {lmax}: worst {worst:.3e}, truncation {:.3e}, discretisation {disc:.1e}, negative {:.1}% of directions",
                 truncation_bound(lmax),
@@ -155,39 +157,7 @@ fn analytic_coefficients(lmax: u32) -> Vec<f64> {
 #[test]
 fn sh_eval_matches_float64() {
     let ctx = common::ctx();
-    {
-        let eval = ShEvaluator::new(&ctx).unwrap();
-        let sky = Sky::default();
-        let map = EnvMap::from_fn(Mapping::LatLong, 128, 64, 4, |d| sky.radiance(d));
-        let radiance = sh::project(&map, 8);
-        for window in [
-            Window::None,
-            Window::Hanning { width: 3.0 },
-            Window::Sloan { lambda: 0.01 },
-        ] {
-            for lmax in [2u32, 8] {
-                let irr = sh::irradiance_coeffs(&window.apply(&radiance[..sh::count(lmax)]));
-                let scale = irr[0][2].abs();
-                for to in Mapping::ALL {
-                    let target = FilterTarget { to, size: 8 };
-                    let (out, _) = eval.run(&irr, target).unwrap();
-                    let out = out.download(&ctx).unwrap();
-                    let (w, h) = target.extent();
-                    let cpu = at_centres(to, w, h, |d| sh::eval(&irr, d).map(|v| v.max(0.0)));
-                    for (g, c) in out.texels.iter().zip(&cpu) {
-                        for ch in 0..3 {
-                            assert!(
-                                (g[ch] as f64 - c[ch]).abs() < 2e-6 * scale,
-                                "{window:?} L={lmax} {to:?}: {} vs {}",
-                                g[ch],
-                                c[ch]
-                            );
-                        }
-                    }
-                }
-            }
-        }
-    }
+    twin::check(&ctx);
     common::finish(ctx);
 }
 
@@ -245,11 +215,12 @@ fn windowing_removes_negative_irradiance() {
     let mean = brute.iter().sum::<f64>() / brute.len() as f64;
     let plain = sh::irradiance_coeffs(&r);
     let error = |irr: &[[f64; 3]]| {
-        normals
-            .iter()
-            .zip(&brute)
-            .map(|(&n, &b)| (sh::eval(irr, n)[0] - b).abs())
-            .fold(0.0, f64::max)
+        max_of(
+            normals
+                .iter()
+                .zip(&brute)
+                .map(|(&n, &b)| abs_err(sh::eval(irr, n)[0], b, n)),
+        )
     };
     let base = error(&plain);
     for width in [3.0, 6.0] {
@@ -264,10 +235,11 @@ fn windowing_removes_negative_irradiance() {
             }
         }
         let irr = sh::irradiance_coeffs(&window.apply(&r));
-        let change = normals
-            .iter()
-            .map(|&n| (sh::eval(&irr, n)[0] - sh::eval(&plain, n)[0]).abs())
-            .fold(0.0, f64::max);
+        let change = max_of(
+            normals
+                .iter()
+                .map(|&n| abs_err(sh::eval(&irr, n)[0], sh::eval(&plain, n)[0], n)),
+        );
         let err = error(&irr);
         eprintln!(
             "smooth map, Hanning {width}: change {:.2e}, bound {:.2e}, error {:.2e} (unwindowed {:.2e}) of the mean",

@@ -2,7 +2,10 @@
 //! their float64 twins, the furnace, suns, vote-ended walks and the paraboloid it reads.
 
 mod common;
+#[path = "twins/shade.rs"]
+mod twin;
 
+use common::compare::Errors;
 use common::scenes::{fis, object, scene, sphere_camera, unit_sphere};
 use envlight::math::brdf::Brdf;
 use envlight::math::brdf::{local_view, Frame};
@@ -66,7 +69,7 @@ fn furnace_renders_each_brdfs_albedo() {
             );
             let r = render(&ctx, &sc, &env).unwrap();
             let brdf = kind;
-            let (mut worst, mut n, mut sum) = (0.0f64, 0, 0.0);
+            let mut errors = Errors::new();
             for j in 0..cam.height {
                 for i in 0..cam.width {
                     let px = r.frame.texels[(j * cam.width + i) as usize];
@@ -82,18 +85,16 @@ fn furnace_renders_each_brdfs_albedo() {
                         continue;
                     }
                     let want = brdf.albedo(local_view(&Frame::new(hit.normal), -d));
-                    let err = (px[1] as f64 - want).abs();
-                    worst = worst.max(err);
-                    sum += err;
-                    n += 1;
+                    let err = errors.abs(px[1], want, (i, j));
                     if err >= 1e-3 {
                         eprintln!("{kind:?} pixel ({i}, {j}): {} vs albedo {want}", px[1]);
                     }
                 }
             }
+            let (n, worst) = (errors.count(), errors.worst());
             eprintln!(
                 "{kind:?}: {n} pixels, worst {worst:.1e}, mean {:.1e}",
-                sum / n as f64
+                errors.mean()
             );
             assert!(n > 200);
             assert!(worst < 1e-3, "{kind:?}: worst error {worst}");
@@ -171,16 +172,18 @@ fn mirror_is_the_lookup_and_the_glossy_limits_reach_it() {
                 &env,
             )
             .unwrap();
-            let mut worst: f64 = 0.0;
+            let mut errors = Errors::new();
             for (k, (a, b)) in g.frame.texels.iter().zip(&r.frame.texels).enumerate() {
                 let (o, d) = cam.ray(k as u32 % cam.width, k as u32 / cam.width);
                 if trace(&[unit_sphere()], o, d).is_none_or(|h| h.margin < 1e-3) {
                     continue;
                 }
                 for c in 0..3 {
-                    worst = worst.max(((a[c] - b[c]) / b[c]).abs() as f64);
+                    errors.rel(a[c], b[c], 0.0, (k, c));
                 }
             }
+            assert!(errors.count() > 0);
+            let worst = errors.worst();
             eprintln!("{kind:?} against the mirror: worst {worst:.2e}");
             assert!(worst < 1e-2, "{kind:?}: {worst}");
         }
@@ -258,70 +261,8 @@ fn fis_stays_finite_with_a_sun() {
 /// disagree on which samples fall below the horizon.
 #[test]
 fn fis_pass_matches_its_float64_twin() {
-    use envlight::math::{fis as fis64, sequence};
     let ctx = common::ctx();
-    {
-        let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, smooth_env);
-        let size = 32;
-        let dp = common::dp_f64(&env, size);
-        let chain = mip::chain(&dp);
-        let cam = sphere_camera(20);
-        for (kind, rotate) in [
-            (
-                Brdf::Ggx {
-                    alpha: 0.3,
-                    correlated: false,
-                },
-                false,
-            ),
-            (Brdf::Phong { n: 50.0 }, true),
-            (Brdf::Ward { ax: 0.4, ay: 0.1 }, false),
-        ] {
-            let technique = Technique::Fis {
-                samples: 16,
-                bias: None,
-                rotate,
-            };
-            let mut sc = scene(
-                cam,
-                vec![object(unit_sphere(), kind, [1.0; 3], technique)],
-                false,
-                size,
-            );
-            // The pass alone: the chain holds the whole map (a smooth map still has texels
-            // above the default extraction's 2 × the mean).
-            sc.environment.lights = envlight::scene::LightsMode::None;
-            let r = render(&ctx, &sc, &env).unwrap();
-            let (mut worst, mut n) = (0.0f64, 0);
-            for j in 0..cam.height {
-                for i in 0..cam.width {
-                    let (o, d) = cam.ray(i, j);
-                    let Some(hit) = trace(&[unit_sphere()], o, d) else {
-                        continue;
-                    };
-                    if hit.margin < 1e-3 {
-                        continue;
-                    }
-                    let offset = if rotate {
-                        sequence::pixel_offset(i, j)
-                    } else {
-                        [0.0; 2]
-                    };
-                    let bias = envlight::scene::defaults::FIS_BIAS;
-                    let want = fis64::estimate(&chain, &kind, hit.normal, -d, 16, bias, offset);
-                    let px = r.frame.texels[(j * cam.width + i) as usize];
-                    for c in 0..3 {
-                        let e = (px[c] as f64 - want[c]).abs() / want[c].max(1e-3);
-                        worst = worst.max(e);
-                    }
-                    n += 1;
-                }
-            }
-            eprintln!("{kind:?} rotate {rotate}: {n} pixels, worst {worst:.2e}");
-            assert!(n > 150);
-            assert!(worst < 1e-4, "{kind:?}: worst {worst:e}");
-        }
-    }
+    twin::check(&ctx);
     common::finish(ctx);
 }
 
@@ -369,7 +310,7 @@ fn fis_with_lights_matches_its_float64_twin() {
             );
             let r = render(&ctx, &sc, &env).unwrap();
             assert!(r.lights_ms.is_some_and(|ms| ms[0] >= 0.0 && ms[1] >= 0.0));
-            let (mut worst, mut n, mut lit) = (0.0f64, 0, 0);
+            let (mut errors, mut n, mut lit) = (Errors::new(), 0, 0);
             for j in 0..cam.height {
                 for i in 0..cam.width {
                     let (o, d) = cam.ray(i, j);
@@ -385,9 +326,7 @@ fn fis_with_lights_matches_its_float64_twin() {
                     let l = tree.sum_brdf(&kind, hit.normal, -d, scale, lum);
                     let px = r.frame.texels[(j * cam.width + i) as usize];
                     for c in 0..3 {
-                        let want = f[c] + l[c];
-                        let e = (px[c] as f64 - want).abs() / want.max(1e-3);
-                        worst = worst.max(e);
+                        errors.rel(px[c], f[c] + l[c], 1e-3, (i, j, c));
                     }
                     if l[1] > f[1] {
                         lit += 1;
@@ -395,6 +334,7 @@ fn fis_with_lights_matches_its_float64_twin() {
                     n += 1;
                 }
             }
+            let worst = errors.worst();
             eprintln!("{kind:?}: {n} pixels, worst {worst:.2e}, {lit} lit mostly by the sun");
             assert!(n > 150 && lit > 10, "{n} {lit}");
             assert!(worst < 1e-4, "{kind:?}: worst {worst:e}");
@@ -451,7 +391,7 @@ fn halved_residual_costs_little_against_the_whole() {
                     size,
                 );
                 let r = render(&ctx, &sc, &env).unwrap();
-                let mut worst = [0.0f64; 2];
+                let mut worst = [Errors::new(), Errors::new()];
                 let mut n = 0;
                 for (k, normal, d) in common::scenes::sphere_pixels(&cam) {
                     let bias = envlight::scene::defaults::FIS_BIAS_RESIDUAL;
@@ -461,8 +401,7 @@ fn halved_residual_costs_little_against_the_whole() {
                         let lum = envlight::math::envmap::luminance(f);
                         let l = tree.sum_brdf(&kind, normal, -d, scale, lum);
                         for c in 0..3 {
-                            let want = f[c] + l[c];
-                            *worst = worst.max((px[c] as f64 - want).abs() / want.max(1e-3));
+                            worst.rel(px[c], f[c] + l[c], 1e-3, (k, c));
                         }
                     }
                     n += 1;
@@ -470,11 +409,13 @@ fn halved_residual_costs_little_against_the_whole() {
                 eprintln!(
                     "α {alpha}, paraboloid {size} of the residual halved: {n} pixels, \
                      worst {:.2e} against the halved twin, {:.2e} against the whole",
-                    worst[0], worst[1]
+                    worst[0].worst(),
+                    worst[1].worst()
                 );
                 assert!(n > 150);
-                assert!(worst[0] < 1e-4, "α {alpha} {size}: {:e}", worst[0]);
-                assert!(worst[1] < bound, "α {alpha} {size}: {:e}", worst[1]);
+                let [halved, whole] = [0, 1].map(|k| worst[k].worst());
+                assert!(halved < 1e-4, "α {alpha} {size}: {halved:e}");
+                assert!(whole < bound, "α {alpha} {size}: {whole:e}");
             }
         }
     }
@@ -571,23 +512,42 @@ fn walks_ending_by_vote_match_walks_ending_alone() {
             false,
             32,
         );
+        if !common::require(
+            ctx.info().fragment_vote,
+            "subgroup vote in fragment shaders",
+        ) {
+            return;
+        }
         let mut frames = Vec::new();
         for subgroups in [Subgroups::Auto, Subgroups::Off] {
+            let before = envlight::passes::testing::pipelines_created(&ctx).len();
             let mut renderer = envlight::render::Renderer::new(&ctx);
             renderer.set_subgroups(subgroups);
             frames.push(renderer.render(&sc, &env).unwrap().frame);
+            // Each arm built its own shading module: the vote's, then the lone walks'.
+            let made = envlight::passes::testing::pipelines_created(&ctx)[before..].to_vec();
+            let votes = made.iter().filter(|m| m.starts_with("shade_vote")).count();
+            let alone = made
+                .iter()
+                .filter(|m| m.starts_with("shade") && !m.starts_with("shade_vote"))
+                .count();
+            let want = if subgroups == Subgroups::Auto {
+                (1, 0)
+            } else {
+                (0, 1)
+            };
+            assert_eq!((votes, alone), want, "{subgroups:?}: {made:?}");
         }
-        let (mut worst, mut bright) = (0.0f64, 0);
-        for (a, b) in frames[0].texels.iter().zip(&frames[1].texels) {
+        let (mut errors, mut bright) = (Errors::new(), 0);
+        for (k, (a, b)) in frames[0].texels.iter().zip(&frames[1].texels).enumerate() {
             for c in 0..3 {
-                let (x, y) = (a[c] as f64, b[c] as f64);
-                assert!(x.is_finite() && y.is_finite());
-                worst = worst.max((x - y).abs() / y.abs().max(1e-3));
+                errors.rel(a[c], b[c], 1e-3, (k, c));
             }
             if a[1] > 10.0 {
                 bright += 1;
             }
         }
+        let worst = errors.worst();
         eprintln!(
             "vote (device has it: {}) against alone: worst {worst:.2e}, {bright} bright pixels",
             ctx.info().fragment_vote

@@ -3,17 +3,18 @@
 //! integral and the Monte Carlo reference.
 
 mod common;
+#[path = "twins/split_sum.rs"]
+mod twin;
 
+use common::compare::Errors;
 use common::scenes::{object, rel_rms, scene, sphere_camera, sphere_pixels, unit_sphere};
 use envlight::math::brdf::{local_view, Brdf, Frame};
-use envlight::math::split_sum::{self, dfg_table, dfg_table_at, prefiltered_chain, DfgAxes};
+use envlight::math::split_sum::{self, dfg_table, prefiltered_chain};
 use envlight::math::synth::{smooth_env, Sky};
 use envlight::math::{mip, Mapping};
-use envlight::passes::{MipChain, PrefilterOptions, SplitSum};
 use envlight::render::Renderer;
 use envlight::scene::{Scene, SplitSumSettings, Technique};
-use envlight::{EnvMap, GpuEnvMap};
-use glam::DVec3;
+use envlight::EnvMap;
 
 fn ggx(alpha: f64, correlated: bool) -> Brdf {
     Brdf::Ggx { alpha, correlated }
@@ -43,37 +44,7 @@ fn split_scene(
 #[test]
 fn dfg_table_matches_its_float64_twin() {
     let ctx = common::ctx();
-    {
-        let pass = SplitSum::new(&ctx).unwrap();
-        let size = 16;
-        for (correlated, axes) in [
-            (false, DfgAxes::Endpoints),
-            (true, DfgAxes::Endpoints),
-            (true, DfgAxes::Centres),
-        ] {
-            let (got, t) = pass.run_dfg_at(size, correlated, axes).unwrap();
-            let want = dfg_table_at(size, correlated, axes);
-            if axes == DfgAxes::Centres {
-                let other = dfg_table(size, correlated);
-                let apart = want
-                    .iter()
-                    .zip(&other)
-                    .map(|(a, b)| (a[0] - b[0]).abs())
-                    .fold(0.0, f64::max);
-                assert!(apart > 1e-2, "the axes do not differ: {apart:e}");
-            }
-            let mut worst: f64 = 0.0;
-            for (g, w) in got.iter().zip(&want) {
-                assert!(g.iter().all(|v| v.is_finite() && *v >= 0.0));
-                worst = worst.max((g[0] as f64 - w[0]).abs().max((g[1] as f64 - w[1]).abs()));
-            }
-            eprintln!(
-                "DFG {size}² correlated {correlated} {axes:?}: worst {worst:.2e}, {:.1} ms",
-                t.iter().map(|t| t.ms).sum::<f64>()
-            );
-            assert!(worst < 2e-6, "{worst:e}");
-        }
-    }
+    twin::check(&ctx);
     common::finish(ctx);
 }
 
@@ -87,46 +58,7 @@ fn dfg_table_matches_its_float64_twin() {
 #[test]
 fn prefiltered_levels_match_their_float64_twin() {
     let ctx = common::ctx();
-    {
-        let mips = MipChain::new(&ctx).unwrap();
-        let pass = SplitSum::new(&ctx).unwrap();
-        let sky = Sky::default();
-        let size = 32;
-        let (levels, samples, bias) = (3, 16, 0.25);
-        type Radiance = Box<dyn Fn(DVec3) -> [f64; 3] + Sync>;
-        let cases: [(&str, Radiance, f64); 2] = [
-            ("smooth", Box::new(smooth_env), 1e-5),
-            ("sky", Box::new(move |d| sky.radiance(d)), 2e-5),
-        ];
-        for (name, f, bound) in cases {
-            let map = EnvMap::from_fn(Mapping::DualParaboloid, size, size, 2, f);
-            let src = GpuEnvMap::upload_mipped(&ctx, &map).unwrap();
-            let level0 = src.download(&ctx).unwrap();
-            mips.run(&src).unwrap();
-            let chain = SplitSum::chain(&ctx, size, levels).unwrap();
-            let mut opts = PrefilterOptions::new(levels);
-            (opts.samples, opts.bias) = (samples, bias);
-            ctx.run("split-sum test", |rec| {
-                pass.record_prefilter(rec, &src, &chain, &opts)
-            })
-            .unwrap();
-            let want = prefiltered_chain(&mip::chain(&level0), size, levels, samples, bias);
-            for (k, l) in want.iter().enumerate() {
-                let got = chain.download_level(&ctx, k as u32).unwrap();
-                let mean = l.texels.iter().map(|t| t[1]).sum::<f64>() / l.texels.len() as f64;
-                let mut worst: f64 = 0.0;
-                for (g, w) in got.iter().zip(&l.texels) {
-                    for c in 0..3 {
-                        assert!(g[c].is_finite());
-                        let e = (g[c] as f64 - w[c]).abs() / w[c].max(mean);
-                        worst = worst.max(e);
-                    }
-                }
-                eprintln!("{name} level {k} ({}²): worst {worst:.2e}", l.size);
-                assert!(worst < bound, "{name} level {k}: {worst:e}");
-            }
-        }
-    }
+    twin::check_chain(&ctx);
     common::finish(ctx);
 }
 
@@ -174,18 +106,19 @@ fn render_matches_its_float64_twin() {
             let mut sc = split_scene(cam, b, dp_size, SplitSumSettings { taps, ..settings });
             sc.environment.lights = envlight::scene::LightsMode::None;
             let r = renderer.render(&sc, &env).unwrap();
-            let mut worst: f64 = 0.0;
+            let mut errors = Errors::new();
             for (k, normal, d) in sphere_pixels(&cam) {
                 let want = if taps == 1 {
                     split_sum::shade(&chain, &table, 16, alpha, normal, -d)
                 } else {
                     split_sum::shade_taps(&chain, &table, 16, &b, normal, -d, taps)
                 };
-                for (g, w) in r.frame.texels[k].iter().zip(want) {
-                    worst = worst.max((*g as f64 - w).abs() / w);
+                for (c, (g, w)) in r.frame.texels[k].iter().zip(want).enumerate() {
+                    errors.rel(*g, w, 0.0, (k, c));
                 }
             }
-            eprintln!("{b:?} taps {taps}: worst {worst:.2e}");
+            let worst = errors.worst();
+            eprintln!("{b:?} taps {taps}: worst {worst:.2e} at {:?}", errors.at());
             assert!(worst < 1e-5, "{b:?} taps {taps}: {worst:e}");
         }
     }
@@ -203,7 +136,7 @@ fn furnace_shows_the_albedo() {
         let env = EnvMap::new(Mapping::LatLong, 16, 8, vec![[1.0; 3]; 16 * 8]);
         let cam = sphere_camera(20);
         let renderer = Renderer::new(&ctx);
-        let mut bins = [0.0f64; 2];
+        let mut bins: [Errors<usize>; 2] = [Errors::new(), Errors::new()];
         // Lobe taps are a weighted mean of the chain, normalised by their weights: 1 here.
         for (b, taps) in [
             (ggx(1e-4, false), 1),
@@ -231,22 +164,24 @@ fn furnace_shows_the_albedo() {
                 .unwrap();
             let pixels = sphere_pixels(&cam);
             let n = pixels.len();
-            let mut worst = [0.0f64; 2];
+            let mut worst = [Errors::new(), Errors::new()];
             for (k, normal, d) in pixels {
                 let wo = local_view(&Frame::new(normal), -d);
-                let e = (r.frame.texels[k][1] as f64 - b.albedo(wo)).abs();
                 let grazing = wo.z < 80f64.to_radians().cos();
-                worst[grazing as usize] = worst[grazing as usize].max(e);
+                worst[grazing as usize].abs(r.frame.texels[k][1], b.albedo(wo), k);
             }
             eprintln!(
                 "{b:?} taps {taps}: {n} pixels, worst below 80° {:.1e}, beyond {:.1e}",
-                worst[0], worst[1]
+                worst[0].worst(),
+                worst[1].worst()
             );
             assert!(n > 200);
-            bins = [bins[0].max(worst[0]), bins[1].max(worst[1])];
+            for (bin, w) in bins.iter_mut().zip(&worst) {
+                bin.merge(w);
+            }
         }
-        assert!(bins[0] < 2.5e-3, "below 80°: {:e}", bins[0]);
-        assert!(bins[1] < 4e-3, "beyond 80°: {:e}", bins[1]);
+        assert!(bins[0].worst() < 2.5e-3, "below 80°: {:e}", bins[0].worst());
+        assert!(bins[1].worst() < 4e-3, "beyond 80°: {:e}", bins[1].worst());
     }
     common::finish(ctx);
 }
@@ -361,7 +296,7 @@ fn render_with_lights_matches_its_float64_twin() {
                 .render(&split_scene(cam, b, dp_size, settings), &env)
                 .unwrap();
             let norm = split_sum::chain_norm(alpha);
-            let (mut worst, mut lit): (f64, usize) = (0.0, 0);
+            let (mut errors, mut lit) = (Errors::new(), 0usize);
             for (k, normal, d) in sphere_pixels(&cam) {
                 let v = -d;
                 let base = split_sum::shade(&chain, &table, 16, alpha, normal, v);
@@ -374,12 +309,13 @@ fn render_with_lights_matches_its_float64_twin() {
                 for c in 0..3 {
                     let want = base[c] + l[c] / norm * (ab[0] + ab[1]);
                     let g = r.frame.texels[k][c] as f64;
-                    worst = worst.max((g - want).abs() / want);
+                    errors.rel(g, want, 0.0, (k, c));
                 }
                 if l[1] / norm > base[1] {
                     lit += 1;
                 }
             }
+            let worst = errors.worst();
             eprintln!("{b:?}: worst {worst:.2e}, {lit} pixels lit mostly by the sun");
             assert!(worst < 1e-4, "{b:?}: {worst:e}");
             assert!(lit > 5, "{lit}");
@@ -405,7 +341,7 @@ fn render_with_lights_matches_its_float64_twin() {
                 )
                 .unwrap();
             let scale = alpha.max(envlight::math::brdf::GGX_ALPHA_MIN);
-            let (mut worst, mut lit): (f64, usize) = (0.0, 0);
+            let (mut errors, mut lit) = (Errors::new(), 0usize);
             for (k, normal, d) in sphere_pixels(&cam) {
                 let v = -d;
                 let base = split_sum::shade_taps(&chain, &table, 16, &b, normal, v, taps);
@@ -414,12 +350,13 @@ fn render_with_lights_matches_its_float64_twin() {
                 for c in 0..3 {
                     let want = base[c] + l[c];
                     let g = r.frame.texels[k][c] as f64;
-                    worst = worst.max((g - want).abs() / want);
+                    errors.rel(g, want, 0.0, (k, c));
                 }
                 if l[1] > base[1] {
                     lit += 1;
                 }
             }
+            let worst = errors.worst();
             eprintln!("{b:?} taps {taps}: worst {worst:.2e}, {lit} pixels lit mostly by the sun");
             assert!(worst < 1e-4, "{b:?} taps {taps}: {worst:e}");
             assert!(lit > 5, "{lit}");

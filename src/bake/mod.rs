@@ -156,9 +156,19 @@ pub struct SpotCheck {
 }
 
 impl SpotCheck {
-    /// The worst over the specular levels.
+    /// The worst over the specular levels (NaN where any is).
     pub fn specular_worst(&self) -> f64 {
-        self.specular.iter().copied().fold(0.0, f64::max)
+        self.specular.iter().copied().fold(0.0, worse)
+    }
+}
+
+/// The larger of two errors, NaN where either is (`f64::max` would drop it and call a check
+/// that computed NaN clean).
+fn worse(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
     }
 }
 
@@ -247,8 +257,8 @@ pub fn spot_check(
     let mut specular = vec![0.0f64; opts.specular_levels as usize];
     for (&(level, _, _), e) in jobs.iter().zip(errors) {
         match level {
-            None => irradiance = irradiance.max(e),
-            Some(k) => specular[k as usize] = specular[k as usize].max(e),
+            None => irradiance = worse(irradiance, e),
+            Some(k) => specular[k as usize] = worse(specular[k as usize], e),
         }
     }
     SpotCheck {

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod bake;
+pub mod compare;
 pub mod scenes;
 
 /// The tuning constants GLSL and Rust share (`src/abi/parameters.rs`; the layout is private to
@@ -67,6 +68,23 @@ pub fn probes() -> Option<PathBuf> {
             None
         }
     }
+}
+
+/// Whether the device has `what` (`has`), for a test whose comparison needs it: a test that
+/// compares a feature's path with its fallback compares the fallback with itself where the
+/// feature is missing. Without it the test is recorded as skipped, and in CI (`CI` set)
+/// fails.
+pub fn require(has: bool, what: &str) -> bool {
+    if !has {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set but the device has no {what}: the comparison would run one path twice"
+        );
+        skipped(&format!(
+            "the device has no {what}: the comparison would run one path twice"
+        ));
+    }
+    has
 }
 
 /// Records that the current test skipped its work, and why.
@@ -230,12 +248,17 @@ pub fn ktx_validate_all(dir: &std::path::Path) -> usize {
     n
 }
 
-/// Largest |GPU − f64| over all coefficients and channels, relative to |L00|.
+/// Largest |GPU − f64| over all coefficients and channels, relative to |L00| (the largest
+/// channel of the float64 L00); a non-finite coefficient on either side fails the test.
 pub fn worst_vs_cpu(gpu: &[[f64; 3]], cpu: &[[f64; 3]]) -> f64 {
-    let l00 = cpu[0].iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-    gpu.iter()
-        .zip(cpu)
-        .flat_map(|(g, c)| (0..3).map(move |k| (g[k] - c[k]).abs()))
-        .fold(0.0, f64::max)
-        / l00
+    assert_eq!(gpu.len(), cpu.len(), "coefficient counts differ");
+    let l00 = compare::max_abs(cpu[0]);
+    assert!(l00 > 0.0, "L00 of the float64 projection is 0");
+    let mut e = compare::Errors::new();
+    for (k, (g, c)) in gpu.iter().zip(cpu).enumerate() {
+        for ch in 0..3 {
+            e.abs(g[ch], c[ch], (k, ch));
+        }
+    }
+    e.worst() / l00
 }

@@ -92,8 +92,8 @@ fn cargo(args: &[&str]) -> Result<(), String> {
 
 /// The inner-loop subset of `test --quick` (under 2 minutes once built): the library's unit
 /// tests and float64 oracles, input validation and bad files, the fuzz corpora, the layering
-/// and plan checks, and the quick GPU checks of context teardown, mappings, GPU maps and the
-/// G-buffer.
+/// and plan checks, the tests' own hygiene and mutation matrix, and the quick GPU checks of
+/// context teardown, mappings, GPU maps and the G-buffer.
 const QUICK: &[&str] = &[
     "--lib",
     "--test",
@@ -102,6 +102,10 @@ const QUICK: &[&str] = &[
     "fuzz_corpus",
     "--test",
     "layering",
+    "--test",
+    "honest",
+    "--test",
+    "mutation",
     "--test",
     "plan",
     "--test",

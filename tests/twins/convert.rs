@@ -1,0 +1,127 @@
+//! The conversion pass against its float64 twin: what `tests/convert.rs` runs, and what
+//! `tests/mutation.rs` runs on poisoned outputs.
+#![allow(dead_code)]
+
+use crate::common::compare::Errors;
+use envlight::gpu::Context;
+use envlight::math::synth::smooth_env;
+use envlight::math::Mapping;
+use envlight::passes::{ConvertOptions, Converter};
+use envlight::GpuEnvMap;
+use envlight::{EnvMap, Orientation};
+use std::f64::consts::PI;
+
+/// The smallest bound [`check`] holds the pass to (relative, 2D sources).
+pub const BOUND: f64 = 1e-5;
+
+/// Source size per mapping (lat-long width; others their side).
+pub fn src_size(m: Mapping) -> u32 {
+    match m {
+        Mapping::LatLong => 256,
+        Mapping::Angular => 192,
+        Mapping::Cube => 64,
+        Mapping::DualParaboloid => 96,
+    }
+}
+
+/// Largest angular size of a texel of a map, in radians (its longest side on the sphere).
+pub fn texel_angle(m: Mapping, size: u32) -> f64 {
+    let n = size as f64;
+    match m {
+        Mapping::LatLong => 2.0 * PI / n,
+        // θ = πr: a texel spans π·(2/n) radially.
+        Mapping::Angular => 2.0 * PI / n,
+        // At a face centre a texel spans 2/n; that is the largest.
+        Mapping::Cube => 2.0 / n,
+        // At the disc centre dω/ds = 2, so a texel spans 2·(2/n).
+        Mapping::DualParaboloid => 4.0 / n,
+    }
+}
+
+pub fn convert(
+    ctx: &Context,
+    conv: &Converter,
+    src: &EnvMap,
+    to: Mapping,
+    size: u32,
+    o: Orientation,
+) -> EnvMap {
+    let g = GpuEnvMap::upload(ctx, src).unwrap();
+    let (out, t) = conv
+        .run(&g, &ConvertOptions::new(to, size).with_orientation(o))
+        .unwrap();
+    assert!(t.iter().all(|t| t.ms >= 0.0 && t.ms.is_finite()));
+    out.download(ctx).unwrap()
+}
+
+/// The GPU pass against its float64 twin (`envlight::math::convert`), same algorithm and
+/// sample positions. What remains is float32 arithmetic (directions to ~1e-7 rad, texel
+/// values to 6e-8 relative) and, for cube sources, the hardware's bilinear weights, which
+/// Vulkan quantises to subTexelPrecisionBits (at least 4; 8 on lavapipe): a weight error of up
+/// to 2⁻⁹ times the difference of neighbouring texels (≤ G·h_s ≈ 0.06 here), and the filtering
+/// of cube corners, which Vulkan leaves to the implementation. Tolerances: 1e-5 relative to the
+/// map's scale (about 1) for 2D sources (1.5e-6 seen on lavapipe); 3e-4 for cube sources.
+pub fn check(ctx: &Context) {
+    let conv = Converter::new(ctx).unwrap();
+    let o = Orientation {
+        flip_u: false,
+        flip_v: true,
+        rotate_y_degrees: 17.0,
+    };
+    for from in Mapping::ALL {
+        let n = src_size(from) / 2;
+        let (w, h) = from.extent_for_size(n);
+        // A sharper function than smooth_env so that reconstruction matters.
+        let src = EnvMap::from_fn(from, w, h, 4, |d| {
+            let l = smooth_env(d);
+            let s = (20.0 * (d.dot(glam::DVec3::new(0.6, 0.0, -0.8)) - 1.0)).exp() * 5.0;
+            [l[0] + s, l[1], l[2] + 0.5 * s]
+        });
+        for to in Mapping::ALL {
+            let size = src_size(to) / 4;
+            let (ow, oh) = to.extent_for_size(size);
+            let ss = Converter::supersampling((from, w, h), (to, ow, oh));
+            let gpu = convert(ctx, &conv, &src, to, size, o);
+            let opts = ConvertOptions::new(to, size).with_orientation(o);
+            let area = conv.uses_area((from, w, h), &opts);
+            let cpu = if area {
+                envlight::math::convert::latlong_area(&src, to, size, o.world_to_file())
+            } else {
+                envlight::math::convert::convert(&src, to, size, o.world_to_file(), ss)
+            };
+            let tol = if from == Mapping::Cube { 3e-4 } else { BOUND };
+            let mut errors = Errors::new();
+            for layer in 0..gpu.layers() {
+                for j in 0..gpu.height {
+                    for i in 0..gpu.width {
+                        let (a, b) = (gpu.texel(layer, i, j), cpu.texel(layer, i, j));
+                        // Area paraboloid texels outside the disc hold a nearest texel
+                        // (area_conversion_matches_its_float64_twin checks them).
+                        if area && !to.texel_in_domain(gpu.width, gpu.height, i, j) {
+                            continue;
+                        }
+                        for k in 0..3 {
+                            errors.rel(a[k], b[k], 1.0, (layer, i, j));
+                        }
+                    }
+                }
+            }
+            let (worst, at) = (errors.worst(), errors.at().copied());
+            eprintln!(
+                "{from:?} -> {to:?} ({}): GPU vs f64 worst {worst:.2e} at {at:?}",
+                if area {
+                    "area".to_string()
+                } else {
+                    format!("ss {ss}")
+                }
+            );
+            if worst > tol {
+                crate::common::dump_pair(&format!("ref_{}_{}", from.name(), to.name()), &gpu, &cpu);
+            }
+            assert!(
+                errors.count() > 0 && worst <= tol,
+                "{from:?} -> {to:?}: GPU vs f64 {worst:e} > {tol:e} at {at:?}"
+            );
+        }
+    }
+}
