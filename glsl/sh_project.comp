@@ -1,5 +1,6 @@
 #version 460
-// SH projection, first level: each invocation walks RUN texels (strided by the workgroup,
+// SH projection of angular, cube and paraboloid maps (lat-long maps separate: sh_rows.comp
+// and sh_latlong.comp), first level: each invocation walks RUN texels (strided by the workgroup,
 // so neighbouring lanes read neighbouring texels), adds L·∫Y_k dω over each texel in
 // registers, and the workgroup then sums its invocations (subgroup adds, or a shared-memory
 // tree without subgroups) into one partial sum per coefficient. sh_reduce.comp sums the
@@ -14,20 +15,12 @@
 #include "generated.glsl"
 
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
-#ifdef FIXED_LMAX
-// The common case (R&H's nine coefficients of a lat-long map) in a module of its own, band and
-// mapping compile-time constants: glslang folds them, and the module is a third the size,
-// which lavapipe (compiling SPIR-V at every pipeline creation) builds faster.
-const uint LMAX = FIXED_LMAX;
-const uint MAPPING = FIXED_MAPPING;
-#else
 // The band is a specialisation constant: the arrays are sized for it and the basis loops
 // unroll, so llvmpipe keeps the sums in registers instead of spilling an 81-float array.
 layout(constant_id = 1) const uint LMAX = 2u;
-// The mapping too: the other mappings' branches (and the rim rule on lat-long and cube maps)
-// vanish, which shortens both the run and llvmpipe's JIT of the shader.
+// The mapping too: the other mappings' branches (and the rim rule on cube maps) vanish, which
+// shortens both the run and llvmpipe's JIT of the shader.
 layout(constant_id = 2) const uint MAPPING = 0u;
-#endif
 const uint NC = (LMAX + 1u) * (LMAX + 1u);
 // Texels per invocation: SH_RUN, or 1 on disc mappings. llvmpipe cuts a loop after 65535
 // iterations per invocation, counted across re-entries, and one rim texel's clipped rule at
@@ -118,7 +111,7 @@ void add_texel(uint i, inout vec3 acc[NC]) {
     vec2 hi = 2.0 * vec2(p + 1) / vec2(pc.size) - 1.0;
     vec2 far_ = max(abs(lo), abs(hi));
 #ifndef GRID_ONLY
-    // (Built with GRID_ONLY for lat-long and cube maps, which have no rim: a smaller module.)
+    // (Built with GRID_ONLY for cube maps, which have no rim: a smaller module.)
     if ((MAPPING == MAPPING_ANGULAR || MAPPING == MAPPING_DUAL_PARABOLOID) && dot(far_, far_) > 1.0) {
         float wsum = sh_clipped(MAPPING, layer, lo, hi, false, vec3(0.0), acc);
         if (wsum > 0.0) {
@@ -129,31 +122,16 @@ void add_texel(uint i, inout vec3 acc[NC]) {
 #endif
     vec3 dirs[4];
     float w[4];
-    if (MAPPING == MAPPING_LATLONG) {
-        // A lat-long node's θ depends on the row and φ on the column alone: two sines and
-        // cosines of each instead of a full coord_to_dir per node.
-        vec2 th = PI * (float(p.y) + 0.5 + vec2(-GAUSS2_OFFSET, GAUSS2_OFFSET)) / float(pc.size.y);
-        vec2 ph = TAU * (float(p.x) + 0.5 + vec2(-GAUSS2_OFFSET, GAUSS2_OFFSET)) / float(pc.size.x);
-        vec2 st = sin(th), ct = cos(th), sp = sin(ph), cp = cos(ph);
-        for (uint q = 0u; q < 4u; q++) {
-            uint a = q & 1u, b = q >> 1u;
-            w[q] = 2.0 * PI * PI * st[b];
-            dirs[q] = vec3(st[b] * sp[a], ct[b], -st[b] * cp[a]);
-        }
-    } else {
-        for (uint q = 0u; q < 4u; q++) {
-            vec2 off = vec2((q & 1u) == 0u ? -GAUSS2_OFFSET : GAUSS2_OFFSET, q < 2u ? -GAUSS2_OFFSET : GAUSS2_OFFSET);
-            Coord c;
-            c.layer = layer;
-            c.uv = (vec2(p) + 0.5 + off) / vec2(pc.size);
-            w[q] = density(MAPPING, c.uv);
-            dirs[q] = coord_to_dir(MAPPING, c);
-        }
+    for (uint q = 0u; q < 4u; q++) {
+        vec2 off = vec2((q & 1u) == 0u ? -GAUSS2_OFFSET : GAUSS2_OFFSET, q < 2u ? -GAUSS2_OFFSET : GAUSS2_OFFSET);
+        Coord c;
+        c.layer = layer;
+        c.uv = (vec2(p) + 0.5 + off) / vec2(pc.size);
+        w[q] = density(MAPPING, c.uv);
+        dirs[q] = coord_to_dir(MAPPING, c);
     }
     float wsum = w[0] + w[1] + w[2] + w[3];
-    // (Never for lat-long, whose nodes all have sin θ > 0: the constant drops the branch,
-    // which llvmpipe would run at every texel.)
-    if (MAPPING != MAPPING_LATLONG && wsum <= 0.0) {
+    if (wsum <= 0.0) {
         // A sliver too thin for any node: its centre stands for it.
         Coord c;
         c.layer = layer;

@@ -14,6 +14,10 @@
 #define BINDING_POISON_BUFFER 0
 #define BINDING_SH_SRC 0
 #define BINDING_SH_PARTIALS 1
+#define BINDING_SH_ROWS_SRC 0
+#define BINDING_SH_ROWS_OUT 1
+#define BINDING_SH_LATLONG_ROWS 0
+#define BINDING_SH_LATLONG_PARTIALS 1
 #define BINDING_SH_REDUCE_IN 0
 #define BINDING_SH_REDUCE_OUT 1
 #define BINDING_BRUTE_PREP_SRC 0
@@ -167,6 +171,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_BusyPush layout(push_constant) uniform Push { uint iterations; uint count; uint[2] pad; } pc;
 #define PUSH_PoisonPush layout(push_constant) uniform Push { uint mode; float factor; uint width; uint height; uint layers; uint nan_at; uint first; uint stride; uint scale_mask; uint mirror_mask; uint sh_channels; uint sh_count; } pc;
 #define PUSH_ShProjectPush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 size; uint mapping; uint lmax; uint texels; uint[3] pad; } pc;
+#define PUSH_ShLatLongPush layout(push_constant) uniform Push { vec4[3] rotation; uvec2 size; uint lmax; uint parity; } pc;
 #define PUSH_ShReducePush layout(push_constant) uniform Push { uint rows; uint coeffs; uint[2] pad; } pc;
 #define PUSH_BrutePush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint texels; float exponent; uint chunk_begin; uint chunk_end; uint src_layers; uint src_level; uvec2 parts; uint part_slots; uint pad; } pc;
 #define PUSH_ShEvalPush layout(push_constant) uniform Push { uvec2 dst_size; uint dst_mapping; uint lmax; } pc;

@@ -37,6 +37,14 @@ bindings! {
     SH_SRC = 0;
     /// sh_project: per-workgroup partial sums (storage buffer).
     SH_PARTIALS = 1;
+    /// sh_rows: the lat-long map (sampler2DArray, read with texelFetch).
+    SH_ROWS_SRC = 0;
+    /// sh_rows: per row its Fourier sums, 2·lmax + 1 RGB triples (storage buffer).
+    SH_ROWS_OUT = 1;
+    /// sh_latlong: the rows' Fourier sums.
+    SH_LATLONG_ROWS = 0;
+    /// sh_latlong: per workgroup of rows its partial sums, world frame (storage buffer).
+    SH_LATLONG_PARTIALS = 1;
     /// sh_reduce: partial sums in.
     SH_REDUCE_IN = 0;
     /// sh_reduce: partial sums out.

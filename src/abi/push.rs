@@ -144,6 +144,17 @@ push_blocks! {
         /// Padding.
         pad: [u32; 3] = "uint[3]",
     }
+    /// `glsl/sh_rows.comp` and `glsl/sh_latlong.comp`.
+    ShLatLongPush {
+        /// Rows of the rotation the partial sums turn by into the world frame.
+        rotation: [[f32; 4]; 3] = "vec4[3]",
+        /// Layer size.
+        size: [u32; 2] = "uvec2",
+        /// Highest band.
+        lmax: u32 = "uint",
+        /// 1: the odd bands change sign before the rotation (an improper frame change).
+        parity: u32 = "uint",
+    }
     /// `glsl/sh_reduce.comp`.
     ShReducePush {
         /// Rows of partial sums in the input.

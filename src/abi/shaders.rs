@@ -134,26 +134,30 @@ macro_rules! shader_table {
             /// SH projection, first level, shared-memory tree.
             ShProjectShared = "sh_project_shared", "sh_project.comp", Compute, [], ShProjectPush,
                 [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
-            /// SH projection of lat-long and cube maps (no disc rim rule in the module, which
+            /// SH projection of cube maps (no disc rim rule in the module, which
             /// lavapipe compiles at every run, so it builds faster), with subgroup arithmetic.
             ShProjectGridSubgroup = "sh_project_grid_subgroup", "sh_project.comp", Compute,
                 [("USE_SUBGROUPS", "1"), ("GRID_ONLY", "1")], ShProjectPush,
                 [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
-            /// SH projection of lat-long and cube maps, shared-memory tree.
+            /// SH projection of cube maps, shared-memory tree.
             ShProjectGridShared = "sh_project_grid_shared", "sh_project.comp", Compute,
                 [("GRID_ONLY", "1")], ShProjectPush,
                 [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
-            /// SH projection of lat-long maps to l = 2, band and mapping compile-time
-            /// constants (a smaller module, faster to build on lavapipe), subgroups.
-            ShProjectLatLong2Subgroup = "sh_project_latlong2_subgroup", "sh_project.comp", Compute,
-                [("USE_SUBGROUPS", "1"), ("GRID_ONLY", "1"), ("FIXED_LMAX", "2u"),
-                 ("FIXED_MAPPING", "MAPPING_LATLONG")], ShProjectPush,
-                [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
+            /// SH projection of lat-long maps, first step: each row's Fourier sums, subgroups.
+            ShRowsSubgroup = "sh_rows_subgroup", "sh_rows.comp", Compute,
+                [("USE_SUBGROUPS", "1")], ShLatLongPush,
+                [(SH_ROWS_SRC, Sampled, Read), (SH_ROWS_OUT, StorageBuffer, Write)];
             /// The same, shared-memory tree.
-            ShProjectLatLong2Shared = "sh_project_latlong2_shared", "sh_project.comp", Compute,
-                [("GRID_ONLY", "1"), ("FIXED_LMAX", "2u"), ("FIXED_MAPPING", "MAPPING_LATLONG")],
-                ShProjectPush,
-                [(SH_SRC, Sampled, Read), (SH_PARTIALS, StorageBuffer, Write)];
+            ShRowsShared = "sh_rows_shared", "sh_rows.comp", Compute, [], ShLatLongPush,
+                [(SH_ROWS_SRC, Sampled, Read), (SH_ROWS_OUT, StorageBuffer, Write)];
+            /// SH projection of lat-long maps, second step: the sum over rows, turned into the
+            /// world frame, a partial sum per workgroup, subgroups.
+            ShLatLongSubgroup = "sh_latlong_subgroup", "sh_latlong.comp", Compute,
+                [("USE_SUBGROUPS", "1")], ShLatLongPush,
+                [(SH_LATLONG_ROWS, StorageBuffer, Read), (SH_LATLONG_PARTIALS, StorageBuffer, Write)];
+            /// The same, shared-memory tree.
+            ShLatLongShared = "sh_latlong_shared", "sh_latlong.comp", Compute, [], ShLatLongPush,
+                [(SH_LATLONG_ROWS, StorageBuffer, Read), (SH_LATLONG_PARTIALS, StorageBuffer, Write)];
             /// SH partial-sum reduction with subgroup arithmetic.
             ShReduceSubgroup = "sh_reduce_subgroup", "sh_reduce.comp", Compute,
                 [("USE_SUBGROUPS", "1")], ShReducePush,

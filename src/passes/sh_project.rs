@@ -1,10 +1,14 @@
 //! SH projection of an environment map on the GPU (Ramamoorthi & Hanrahan 2001): coefficients
-//! to any band up to `SH_MAX_LMAX`, and R&H's 4×4 irradiance matrices.
+//! to any band up to `SH_MAX_LMAX`, and R&H's 4×4 irradiance matrices. A lat-long map's
+//! projection separates (`glsl/sh_rows.comp`, `glsl/sh_latlong.comp`): per row its Fourier
+//! sums in φ, then a sum over rows, 2·lmax + 1 multiply-adds a texel and channel; the other
+//! mappings take the basis at each texel's quadrature nodes (`glsl/sh_project.comp`). Both
+//! end in the same tree of partial sums and match `math::sh::project` node for node.
 
 use super::map::GpuEnvMap;
 use crate::abi::{
     binding,
-    push::{ShProjectPush, ShReducePush},
+    push::{ShLatLongPush, ShProjectPush, ShReducePush},
     ShaderId, SH_MAX_LMAX, SH_RUN, SH_WORKGROUP,
 };
 use crate::error::{Error, Result};
@@ -101,17 +105,23 @@ pub enum Subgroups {
 
 /// Projection pipelines: one per band and mapping.
 const PROJECT_VARIANTS: usize = (SH_MAX_LMAX as usize + 1) * 4;
+/// Pipelines of the lat-long path: one per band.
+const BANDS: usize = SH_MAX_LMAX as usize + 1;
 
 /// The projection pass.
 pub struct ShProjector {
     ctx: Context,
-    /// One projection pipeline per band and mapping (specialisation constants), built on first use.
+    /// One projection pipeline per band and mapping (specialisation constants), built on first
+    /// use: angular, cube and paraboloid maps.
     project: [OnceLock<Pipeline>; PROJECT_VARIANTS],
     project_shader: ShaderId,
-    /// The same without the disc rim rule, for lat-long and cube maps.
+    /// The same without the disc rim rule, for cube maps.
     grid_shader: ShaderId,
-    /// Lat-long maps to l = 2, with band and mapping fixed at compile time.
-    latlong2_shader: ShaderId,
+    /// Lat-long maps: the rows' Fourier sums and their sum over rows, per band.
+    rows: [OnceLock<Pipeline>; BANDS],
+    rows_shader: ShaderId,
+    latlong: [OnceLock<Pipeline>; BANDS],
+    latlong_shader: ShaderId,
     reduce: Pipeline,
     sampler: Sampler,
     subgroups: bool,
@@ -126,18 +136,20 @@ impl ShProjector {
     /// Builds the pipelines (subgroup variants where allowed and available).
     pub fn new(ctx: &Context, subgroups: Subgroups) -> Result<ShProjector> {
         let use_sg = subgroups == Subgroups::Auto && ctx.info().subgroup_arithmetic;
-        let (p, grid, latlong2, r) = if use_sg {
+        let (p, grid, rows, latlong, r) = if use_sg {
             (
                 ShaderId::ShProjectSubgroup,
                 ShaderId::ShProjectGridSubgroup,
-                ShaderId::ShProjectLatLong2Subgroup,
+                ShaderId::ShRowsSubgroup,
+                ShaderId::ShLatLongSubgroup,
                 ShaderId::ShReduceSubgroup,
             )
         } else {
             (
                 ShaderId::ShProjectShared,
                 ShaderId::ShProjectGridShared,
-                ShaderId::ShProjectLatLong2Shared,
+                ShaderId::ShRowsShared,
+                ShaderId::ShLatLongShared,
                 ShaderId::ShReduceShared,
             )
         };
@@ -146,7 +158,10 @@ impl ShProjector {
             project: std::array::from_fn(|_| OnceLock::new()),
             project_shader: p,
             grid_shader: grid,
-            latlong2_shader: latlong2,
+            rows: std::array::from_fn(|_| OnceLock::new()),
+            rows_shader: rows,
+            latlong: std::array::from_fn(|_| OnceLock::new()),
+            latlong_shader: latlong,
             reduce: Pipeline::compute(ctx, r, &[SH_WORKGROUP])?,
             sampler: Sampler::linear_clamp(ctx, "sh sampler")?,
             subgroups: use_sg,
@@ -162,16 +177,39 @@ impl ShProjector {
     }
 
     fn project_pipeline(&self, lmax: u32, mapping: Mapping) -> Result<&Pipeline> {
+        assert_ne!(
+            mapping,
+            Mapping::LatLong,
+            "lat-long maps take the separable path"
+        );
         Pipeline::compute_once(
             &self.project[(lmax + (SH_MAX_LMAX + 1) * mapping.id()) as usize],
             &self.ctx,
             match mapping {
-                Mapping::LatLong if lmax == 2 => self.latlong2_shader,
                 Mapping::LatLong | Mapping::Cube => self.grid_shader,
                 Mapping::Angular | Mapping::DualParaboloid => self.project_shader,
             },
             &[SH_WORKGROUP, lmax, mapping.id(), Self::run_length(mapping)],
         )
+    }
+
+    /// The lat-long path's pipelines for band `lmax`: the rows' sums, and their sum.
+    fn latlong_pipelines(&self, lmax: u32) -> Result<(&Pipeline, &Pipeline)> {
+        let spec = [SH_WORKGROUP, lmax];
+        Ok((
+            Pipeline::compute_once(
+                &self.rows[lmax as usize],
+                &self.ctx,
+                self.rows_shader,
+                &spec,
+            )?,
+            Pipeline::compute_once(
+                &self.latlong[lmax as usize],
+                &self.ctx,
+                self.latlong_shader,
+                &spec,
+            )?,
+        ))
     }
 
     /// Builds the projection pipeline for band `lmax` of `mapping` maps now rather than at
@@ -183,6 +221,9 @@ impl ShProjector {
             return Err(Error::Invalid(format!(
                 "SH order {lmax} is above the maximum, {SH_MAX_LMAX}"
             )));
+        }
+        if mapping == Mapping::LatLong {
+            return self.latlong_pipelines(lmax).map(|_| ());
         }
         self.project_pipeline(lmax, mapping).map(|_| ())
     }
@@ -253,30 +294,49 @@ impl ShProjector {
         let n = sh::count(lmax) as u32;
         let row_bytes = ShProjector::output_bytes(lmax);
         assert!(out.size() >= row_bytes, "the SH output buffer is too small");
+        let file_to_world = orientation.checked_world_to_file()?.transpose();
+        let (partials, keep) = rec.span("sh project", |rec| {
+            if map.mapping == Mapping::LatLong {
+                self.record_latlong(rec, map, lmax, file_to_world)
+            } else {
+                self.record_texels(rec, map, lmax, file_to_world)
+            }
+        })?;
+        let result = self.record_reduce(rec, partials, lmax)?;
+        let f = poison::Floats::sh(0, 3 * n, 3, n);
+        poison::buffer(rec, PassId::ShProject, &result, f)?;
+        rec.copy_buffer(&result, out, row_bytes);
+        rec.keep((result, keep));
+        Ok(())
+    }
+
+    /// Rows of partial sums, (lmax + 1)² RGB triples each, as the first level of the tree.
+    fn partials(&self, rows: u32, lmax: u32) -> Result<Buffer> {
+        Buffer::new(
+            &self.ctx,
+            "sh partials",
+            ShProjector::output_bytes(lmax) * rows as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+        )
+    }
+
+    /// Records the per-texel projection (angular, cube and paraboloid maps): a partial sum per
+    /// workgroup of SH_WORKGROUP·run texels. Returns the partials and their count.
+    fn record_texels(
+        &self,
+        rec: &mut Recorder,
+        map: &GpuEnvMap,
+        lmax: u32,
+        file_to_world: glam::DMat3,
+    ) -> Result<((Buffer, u32), Option<Buffer>)> {
         let texels = map.width * map.height * map.mapping.layers();
         let max = self.ctx.info().max_workgroup_count;
-        let run = Self::run_length(map.mapping);
-        let groups = texels.div_ceil(SH_WORKGROUP * run);
+        let groups = texels.div_ceil(SH_WORKGROUP * Self::run_length(map.mapping));
         let (gx, gy) = grid(groups, max);
-        // Rows of partial sums at each level of the tree, down to one.
-        let mut levels = vec![gx * gy];
-        while *levels.last().unwrap_or(&1) > 1 {
-            let g = levels.last().copied().unwrap_or(1).div_ceil(SH_WORKGROUP);
-            let (x, y) = grid(g, max);
-            levels.push(x * y);
-        }
-        let mk = |name: &str| {
-            Buffer::new(
-                &self.ctx,
-                name,
-                row_bytes * levels[0] as u64,
-                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
-                MemoryLocation::GpuOnly,
-            )
-        };
-        let (a, b) = (mk("sh partials A")?, mk("sh partials B")?);
+        let partials = self.partials(gx * gy, lmax)?;
         let push = ShProjectPush {
-            file_to_world: mat3_rows(orientation.checked_world_to_file()?.transpose()),
+            file_to_world: mat3_rows(file_to_world),
             size: [map.width, map.height],
             mapping: map.mapping.id(),
             lmax,
@@ -284,20 +344,95 @@ impl ShProjector {
             pad: [0; 3],
         };
         let pipeline = self.project_pipeline(lmax, map.mapping)?;
-        rec.span("sh project", |rec| {
-            rec.dispatch(
-                pipeline,
-                &[
-                    (
-                        binding::SH_SRC,
-                        Bind::Sampled(&map.image, &self.sampler, false),
-                    ),
-                    (binding::SH_PARTIALS, Bind::Buffer(&a)),
-                ],
-                &push,
-                [gx, gy, 1],
-            )
-        })?;
+        rec.dispatch(
+            pipeline,
+            &[
+                (
+                    binding::SH_SRC,
+                    Bind::Sampled(&map.image, &self.sampler, false),
+                ),
+                (binding::SH_PARTIALS, Bind::Buffer(&partials)),
+            ],
+            &push,
+            [gx, gy, 1],
+        )?;
+        Ok(((partials, gx * gy), None))
+    }
+
+    /// Records the separable projection of a lat-long map: the rows' Fourier sums (a
+    /// workgroup a row), then their sum over rows, turned into the world frame (a partial sum
+    /// per workgroup of SH_WORKGROUP rows). Returns the partials, their count, and the rows'
+    /// sums (to keep until the work completes).
+    fn record_latlong(
+        &self,
+        rec: &mut Recorder,
+        map: &GpuEnvMap,
+        lmax: u32,
+        file_to_world: glam::DMat3,
+    ) -> Result<((Buffer, u32), Option<Buffer>)> {
+        let (w, h) = (map.width, map.height);
+        let max = self.ctx.info().max_workgroup_count;
+        let sums = Buffer::new(
+            &self.ctx,
+            "sh row sums",
+            (h * (2 * lmax + 1) * 12) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuOnly,
+        )?;
+        let (rows_pipeline, latlong_pipeline) = self.latlong_pipelines(lmax)?;
+        let (rotation, parity) = latlong_rotation(file_to_world);
+        let push = ShLatLongPush {
+            rotation: mat3_rows(rotation),
+            size: [w, h],
+            lmax,
+            parity: parity as u32,
+        };
+        let (rx, ry) = grid(h, max);
+        rec.dispatch(
+            rows_pipeline,
+            &[
+                (
+                    binding::SH_ROWS_SRC,
+                    Bind::Sampled(&map.image, &self.sampler, false),
+                ),
+                (binding::SH_ROWS_OUT, Bind::Buffer(&sums)),
+            ],
+            &push,
+            [rx, ry, 1],
+        )?;
+        let (gx, gy) = grid(h.div_ceil(SH_WORKGROUP), max);
+        let partials = self.partials(gx * gy, lmax)?;
+        rec.dispatch(
+            latlong_pipeline,
+            &[
+                (binding::SH_LATLONG_ROWS, Bind::Buffer(&sums)),
+                (binding::SH_LATLONG_PARTIALS, Bind::Buffer(&partials)),
+            ],
+            &push,
+            [gx, gy, 1],
+        )?;
+        Ok(((partials, gx * gy), Some(sums)))
+    }
+
+    /// Records the pairwise tree over `rows` partial sums of bands up to `lmax`, down to one
+    /// row: the buffer holding it. Span: "sh reduce" (empty where one row is all there is).
+    fn record_reduce(
+        &self,
+        rec: &mut Recorder,
+        (first, rows): (Buffer, u32),
+        lmax: u32,
+    ) -> Result<Buffer> {
+        let max = self.ctx.info().max_workgroup_count;
+        let n = sh::count(lmax) as u32;
+        // Rows of partial sums at each level of the tree, down to one.
+        let mut levels = vec![rows];
+        while *levels.last().unwrap_or(&1) > 1 {
+            let g = levels.last().copied().unwrap_or(1).div_ceil(SH_WORKGROUP);
+            let (x, y) = grid(g, max);
+            levels.push(x * y);
+        }
+        let second = self.partials(levels.get(1).copied().unwrap_or(1), lmax)?;
+        let (a, b) = (first, second);
         rec.span("sh reduce", |rec| {
             for (lvl, rows) in levels.iter().enumerate().take(levels.len() - 1) {
                 let (from, to) = if lvl % 2 == 0 { (&a, &b) } else { (&b, &a) };
@@ -318,12 +453,13 @@ impl ShProjector {
             }
             Ok(())
         })?;
-        let result = if (levels.len() - 1) % 2 == 0 { &a } else { &b };
-        let f = poison::Floats::sh(0, 3 * n, 3, n);
-        poison::buffer(rec, PassId::ShProject, result, f)?;
-        rec.copy_buffer(result, out, row_bytes);
-        rec.keep((a, b));
-        Ok(())
+        Ok(if (levels.len() - 1) % 2 == 0 {
+            rec.keep(b);
+            a
+        } else {
+            rec.keep(a);
+            b
+        })
     }
 
     /// Projects `map` up to band `lmax`; returns the coefficients and the GPU time.
@@ -342,6 +478,25 @@ impl ShProjector {
             self.record(rec, map, lmax, orientation)
         })?;
         Ok((readback.read(), timings))
+    }
+}
+
+/// The rotation that turns coefficients in the lat-long's polar frame P (pole along the file's
+/// +Y, φ = 2πu: P·f = (−f.z, f.x, f.y)) into the world frame, and whether the odd bands flip
+/// first: c = M(Qᵀ)·c' for Q = P·file_to_worldᵀ, and for an improper Q = −R (a flipped file,
+/// or P itself, which is a reflection) c = M(−Qᵀ)·((−1)^l c'), M(−Qᵀ) a proper rotation's.
+fn latlong_rotation(file_to_world: glam::DMat3) -> (glam::DMat3, bool) {
+    // Pᵀ, columns: P's rows (0, 0, −1), (1, 0, 0), (0, 1, 0).
+    let pt = glam::DMat3::from_cols(
+        glam::DVec3::new(0.0, 0.0, -1.0),
+        glam::DVec3::new(1.0, 0.0, 0.0),
+        glam::DVec3::new(0.0, 1.0, 0.0),
+    );
+    let qt = file_to_world * pt;
+    if qt.determinant() < 0.0 {
+        (-qt, true)
+    } else {
+        (qt, false)
     }
 }
 
