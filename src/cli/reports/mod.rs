@@ -6,6 +6,7 @@ pub mod accuracy;
 pub mod cubes;
 pub mod fis;
 pub mod fis_report;
+mod floors;
 pub mod formats;
 pub mod ibl;
 pub mod page;
@@ -58,6 +59,20 @@ pub enum Bench {
         /// Timed repetitions per case (the median is reported)
         #[arg(long, default_value_t = 5)]
         reps: usize,
+    },
+    /// Every pass (upload, conversions, MIP chain, SH by order, filters, lights, shading per
+    /// technique) against its floor, a copy of its input, with its error
+    Floors {
+        /// Lat-long widths of the source
+        #[arg(long, value_delimiter = ',', default_value = "512,1024,2048")]
+        sizes: Vec<u32>,
+        /// Timed repetitions per case (the median is reported)
+        #[arg(long, default_value_t = 3)]
+        reps: usize,
+        /// Write the result as the "floors" section of this performance page
+        /// (docs/performance/<device>.md)
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Brute-force irradiance against SH (projection + evaluation) at equal output sizes
     Irradiance {
@@ -258,6 +273,9 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
             reps,
         } => bench_irradiance(g, sizes, *source, *reps),
         Bench::Sh { sizes, reps } => bench_sh(g, sizes, *reps),
+        Bench::Floors { sizes, reps, out } => {
+            floors::bench_floors(&context(g)?, sizes, *reps, out.as_deref())
+        }
         Bench::Peers {
             map,
             cmft,

@@ -9,7 +9,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// The jobs' order on a page (others follow, by name).
-const ORDER: [&str; 3] = ["peers", "ibl", "formats"];
+const ORDER: [&str; 4] = ["floors", "peers", "ibl", "formats"];
 
 /// Where and when a section's figures were measured.
 pub struct Provenance {
