@@ -1,16 +1,24 @@
 #version 460
-// ConvertArea's fast path (convert_area.comp has the method): one invocation per cube texel
-// away from the poles.
+// ConvertArea's fast path (convert_area.comp has the method): one invocation per cube or
+// paraboloid texel away from the poles (and inside a paraboloid's disc).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #include "convert_area.glsl"
-// The fast path for a cube texel away from the poles: its polygon is the EDGE_STEPS points a
-// side, with no pole on or inside it. Rather than clipping it band by band, each source texel
+// The fast path for a texel away from the poles: its polygon is the edge points a side (the
+// cube's AREA_EDGE_STEPS, a paraboloid's EDGE_POINTS), with no pole on or inside it and, on a
+// paraboloid, wholly in its half (no clip at the rim). Rather than clipping it band by band, each source texel
 // (cell) of its bounding box takes, from each edge, the integrals under the edge clamped to the
 // cell's band, ∫(clamp(z, zlo, zhi) − zlo) dU and the moments (Green's theorem again: the
 // clamped edges bound the polygon's overlap with the band), so there are no arrays indexed at
 // run time and no loops over clipped vertices, which llvmpipe takes lane by lane.
-const uint FAST_POINTS = 4u * AREA_EDGE_STEPS;
+#ifdef SIDE_EDGE_POINTS
+// A paraboloid's (a specialisation constant: its loops unroll once specialised).
+const uint SIDE_POINTS = EDGE_POINTS;
+#else
+// The cube's (a constant: glslang unrolls the loops).
+const uint SIDE_POINTS = AREA_EDGE_STEPS;
+#endif
+const uint FAST_POINTS = 4u * SIDE_POINTS;
 
 // (area, ∫∫(U − uc), ∫∫(z − zc)) of the polygon edge a → b within column [c, c + 1] and the
 // band [zlo, zhi] (zc its centre, uc the column's), signed by the edge's direction, computed
@@ -61,7 +69,7 @@ void main() {
     const uvec2 steps[4] = uvec2[4](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 1));
     vec2 v[FAST_POINTS];
     [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
-        uint e = k / AREA_EDGE_STEPS, q = k % AREA_EDGE_STEPS, m = AREA_EDGE_STEPS;
+        uint e = k / SIDE_POINTS, q = k % SIDE_POINTS, m = SIDE_POINTS;
         uvec2 e0 = uvec2(i, j) + steps[e], e1 = uvec2(i, j) + steps[(e + 1u) % 4u];
         uvec2 ab = e0 * (m - q) + e1 * q;
         vec3 d = point(face, ab.x, ab.y, m);

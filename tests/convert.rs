@@ -490,8 +490,9 @@ fn default_opts(to: Mapping, size: u32, o: Orientation) -> ConvertOptions {
 }
 
 /// Lat-long to cube and dual paraboloid by exact footprint areas, on the GPU against its
-/// float64 twin (`math::convert::latlong_area`, the same polygons and band walks; at cube
-/// sizes from 32 the fast path's clamped edges away from the poles), at even and odd sizes (a
+/// float64 twin (`math::convert::latlong_area`, the same polygons and band walks; at sizes
+/// from 32 the fast path's clamped edges away from the poles and, on a paraboloid, inside its
+/// disc), at even and odd sizes (a
 /// pole on a corner or inside a texel) and turned and flipped. What differs
 /// is float32: polygon points to ~1e-7 of a column, so a share of ~1e-5 of a source texel can
 /// move between neighbouring output texels; on this map (texel values 0.5–2, no suns) that
@@ -528,9 +529,12 @@ fn area_conversion_matches_its_float64_twin() {
             (Mapping::DualParaboloid, 2, Orientation::default()),
             (Mapping::Cube, 1, Orientation::default()),
             // Large enough for the fast path away from the poles (and the general walk over
-            // the window about them): even and odd, upright and turned upside down.
+            // the window about them, and a paraboloid's rim): even and odd, upright and
+            // turned upside down.
             (Mapping::Cube, 40, Orientation::default()),
             (Mapping::Cube, 33, turned(true)),
+            (Mapping::DualParaboloid, 40, Orientation::default()),
+            (Mapping::DualParaboloid, 33, turned(false)),
         ] {
             assert!(conv.uses_area((Mapping::LatLong, 96, 48), &default_opts(to, size, o)));
             let gpu = convert(&ctx, &conv, &src, to, size, o);
@@ -541,7 +545,10 @@ fn area_conversion_matches_its_float64_twin() {
                     for i in 0..gpu.width {
                         let (a, b) = (gpu.texel(layer, i, j), cpu.texel(layer, i, j));
                         if !to.texel_in_domain(gpu.width, gpu.height, i, j) {
-                            assert!(src.texels.contains(&a), "{to:?} {size}: {a:?}");
+                            assert!(
+                                src.texels.contains(&a),
+                                "{to:?} {size}: ({layer}, {i}, {j}) {a:?} vs {b:?}"
+                            );
                             continue;
                         }
                         for k in 0..3 {

@@ -259,15 +259,24 @@ void general(uvec3 id) {
 }
 
 // Whether texel (i, j) of layer `face` is left to the general walk (general()): every texel of
-// a small output, and on the faces that hold the poles (+Y and −Y: the orientations turn about
-// Y and may flip it) a window of AREA_FAST_WINDOW texels either side of the centre, which holds
-// every texel with a corner near the pole's axis (AREA_POLE_NEAR). Integers, so that
-// the fast and the general dispatch split the texels exactly (twin:
-// math::convert::area_general_texel).
+// a small output; on the layers that hold the poles (the cube's +Y and −Y faces, each
+// paraboloid half: the orientations turn about Y and may flip it) a window of AREA_FAST_WINDOW
+// texels either side of the centre, which holds every texel with a corner near the pole's axis
+// (AREA_POLE_NEAR); and a paraboloid's texels with a corner outside the disc, whose polygons are
+// clipped to their half. Integers, so that the fast and the general dispatch split the texels
+// exactly (twin: math::convert::area_general_texel).
 bool general_texel(uint face, uint i, uint j, uint n) {
     if (n < AREA_FAST_MIN_SIZE) return true;
-    if (face != AREA_POLE_FACE_0 && face != AREA_POLE_FACE_1) return false;
     int lim = 2 * int(AREA_FAST_WINDOW);
-    return abs(int(2u * i + 1u) - int(n)) <= lim && abs(int(2u * j + 1u) - int(n)) <= lim;
+    bool window = abs(int(2u * i + 1u) - int(n)) <= lim && abs(int(2u * j + 1u) - int(n)) <= lim;
+    if (DST_MAPPING == MAPPING_DUAL_PARABOLOID) {
+        int nn = int(n) * int(n);
+        for (uint k = 0u; k < 4u; k++) {
+            int a = 2 * int(i + (k & 1u)) - int(n), b = 2 * int(j + (k >> 1u)) - int(n);
+            if (a * a + b * b > nn) return true;
+        }
+        return window;
+    }
+    return (face == AREA_POLE_FACE_0 || face == AREA_POLE_FACE_1) && window;
 }
 #endif

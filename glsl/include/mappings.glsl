@@ -169,10 +169,11 @@ bool texel_in_domain(uint m, uvec2 size, ivec2 p) {
         vec2 ab = 2.0 * (vec2(p) + 0.5) / vec2(size) - 1.0;
         return dot(ab, ab) <= 1.0;
     } else if (m == MAPPING_DUAL_PARABOLOID) {
-        vec2 lo = 2.0 * vec2(p) / vec2(size) - 1.0;
-        vec2 hi = 2.0 * vec2(p + 1) / vec2(size) - 1.0;
-        vec2 n = clamp(vec2(0.0), lo, hi);
-        return dot(n, n) < 1.0;
+        // The texel's nearest point to the disc's centre in half texels: integers, as the
+        // twin's (a square map: n² fits an int up to 46340 a side).
+        int n = int(size.x);
+        ivec2 near_ = clamp(ivec2(0), 2 * p - n, 2 * p + 2 - n);
+        return near_.x * near_.x + near_.y * near_.y < n * n;
     }
     return true;
 }

@@ -100,6 +100,17 @@ macro_rules! shader_table {
                 [("DST", "MAPPING_CUBE")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
                  (CONVERT_SLOPES, TexelBuffer, Read)];
+            /// ConvertAreaParaboloid's fast path for texels inside the disc away from the poles.
+            ConvertAreaFastParaboloid = "convert_area_fast_paraboloid", "convert_area_fast.comp",
+                Compute, [("DST", "MAPPING_DUAL_PARABOLOID"), ("SIDE_EDGE_POINTS", "1")],
+                ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
+                 (CONVERT_SLOPES, TexelBuffer, Read)];
+            /// ConvertAreaParaboloid's general walk over the texels its fast path leaves.
+            ConvertAreaListParaboloid = "convert_area_list_paraboloid", "convert_area_list.comp",
+                Compute, [("DST", "MAPPING_DUAL_PARABOLOID")], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
+                 (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
             /// ConvertArea's general walk over a list of texels (those the fast path leaves).
             ConvertAreaList = "convert_area_list", "convert_area_list.comp", Compute,
                 [("DST", "MAPPING_CUBE")], ConvertPush,

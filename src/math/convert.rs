@@ -256,32 +256,44 @@ pub fn area_walk_steps(width: u32, height: u32, to: Mapping, size: u32) -> f64 {
     rows * (2.0 * area::MAX_VERTICES as f64 + 0.5 * width as f64)
 }
 
-/// Whether the area conversion to a cube of side `n` leaves texel (`i`, `j`) of `face` to the
-/// general walk rather than its fast path (glsl/convert_area.comp, twin of `general_texel`):
-/// every texel below [`area::FAST_MIN_SIZE`], and the window of [`area::FAST_WINDOW`] texels
-/// about the centre of the faces that hold the poles (+Y, −Y), where the polygons meet the
-/// pole's axis or come near it. Integer tests, so that the two dispatches split the texels
-/// exactly.
-pub fn area_general_texel(face: u32, i: u32, j: u32, n: u32) -> bool {
+/// Whether the area conversion to a cube or dual paraboloid of side `n` leaves texel
+/// (`i`, `j`) of `layer` to the general walk rather than its fast path
+/// (glsl/convert_area.glsl, twin of `general_texel`): every texel below
+/// [`area::FAST_MIN_SIZE`]; the window of [`area::FAST_WINDOW`] texels about the centre of
+/// the layers that hold the poles (the cube's +Y and −Y faces, each paraboloid half), where
+/// the polygons meet the pole's axis or come near it; and a paraboloid's texels that the rim
+/// of its disc cuts or that lie outside it (a corner outside the disc), whose polygons are
+/// clipped to their half. Integer tests, so that the two dispatches split the texels exactly.
+pub fn area_general_texel(to: Mapping, layer: u32, i: u32, j: u32, n: u32) -> bool {
     if n < area::FAST_MIN_SIZE {
         return true;
     }
-    if !area::POLE_FACES.contains(&face) {
-        return false;
-    }
     let lim = 2 * area::FAST_WINDOW as i64;
-    (2 * i as i64 + 1 - n as i64).abs() <= lim && (2 * j as i64 + 1 - n as i64).abs() <= lim
+    let window =
+        (2 * i as i64 + 1 - n as i64).abs() <= lim && (2 * j as i64 + 1 - n as i64).abs() <= lim;
+    match to {
+        Mapping::DualParaboloid => {
+            let n2 = n as i64 * n as i64;
+            let out = |c: u32, d: u32| {
+                let (a, b) = (2 * c as i64 - n as i64, 2 * d as i64 - n as i64);
+                a * a + b * b > n2
+            };
+            out(i, j) || out(i + 1, j) || out(i, j + 1) || out(i + 1, j + 1) || window
+        }
+        _ => area::POLE_FACES.contains(&layer) && window,
+    }
 }
 
-/// The texels of a cube of side `n` that [`area_general_texel`] leaves to the general walk,
-/// as (i, j, face, 0), face by face and row by row.
-pub fn area_general_texels(n: u32) -> Vec<[u32; 4]> {
+/// The texels of a cube or dual paraboloid of side `n` that [`area_general_texel`] leaves to
+/// the general walk, as (i, j, layer, 0), layer by layer and row by row.
+pub fn area_general_texels(to: Mapping, n: u32) -> Vec<[u32; 4]> {
     let mut list = Vec::new();
-    for face in 0..6 {
-        // Only the pole faces' windows, unless the cube is small enough to be all general.
-        let (lo, hi) = if n < area::FAST_MIN_SIZE {
+    for layer in 0..to.layers() {
+        // A cube's pole faces' windows (a paraboloid's rims and windows), unless the map is
+        // small enough to be all general.
+        let (lo, hi) = if n < area::FAST_MIN_SIZE || to == Mapping::DualParaboloid {
             (0, n)
-        } else if area::POLE_FACES.contains(&face) {
+        } else if area::POLE_FACES.contains(&layer) {
             let half = area::FAST_WINDOW + 1;
             ((n / 2).saturating_sub(half), (n / 2 + half).min(n))
         } else {
@@ -289,8 +301,8 @@ pub fn area_general_texels(n: u32) -> Vec<[u32; 4]> {
         };
         for j in lo..hi {
             for i in lo..hi {
-                if area_general_texel(face, i, j, n) {
-                    list.push([i, j, face, 0]);
+                if area_general_texel(to, layer, i, j, n) {
+                    list.push([i, j, layer, 0]);
                 }
             }
         }
@@ -690,7 +702,9 @@ mod tests {
     /// The fast path's split: the list holds exactly the texels `area_general_texel` names,
     /// and every texel with a corner nearer the pole's axis than POLE_NEAR / size (where the
     /// general walk takes more points, and where a pole can lie on or inside the polygon) is
-    /// among them, upright and upside down, at even and odd sizes from the smallest fast one.
+    /// among them, upright and upside down, at even and odd sizes from the smallest fast one;
+    /// on a paraboloid also every texel with a corner outside its disc (whose polygon the
+    /// general walk clips to the half).
     #[test]
     fn fast_path_leaves_every_texel_near_a_pole_to_the_general_walk() {
         use crate::math::Orientation;
@@ -702,56 +716,82 @@ mod tests {
             };
             assert!((Mapping::Cube.coord_to_dir(c) - DVec3::new(0.0, y, 0.0)).length() < 1e-12);
         }
-        for n in (area::FAST_MIN_SIZE - 2..area::FAST_MIN_SIZE + 40).chain([255, 256, 1000]) {
-            let list = area_general_texels(n);
-            let mut all = Vec::new();
-            for face in 0..6 {
-                for j in 0..n {
-                    for i in 0..n {
-                        if area_general_texel(face, i, j, n) {
-                            all.push([i, j, face, 0]);
-                        }
-                    }
-                }
-            }
-            assert_eq!(list, all, "size {n}");
-            for flip_v in [false, true] {
-                let o = Orientation {
-                    flip_u: false,
-                    flip_v,
-                    rotate_y_degrees: 29.0,
-                };
-                let wtf = o.world_to_file();
-                let near = |face: u32, a: u32, b: u32| {
-                    let c = Coord {
-                        layer: face,
-                        u: a as f64 / n as f64,
-                        v: b as f64 / n as f64,
+        for to in [Mapping::Cube, Mapping::DualParaboloid] {
+            for n in (area::FAST_MIN_SIZE - 2..area::FAST_MIN_SIZE + 40).chain([255, 256, 1000]) {
+                check_split(to, n);
+                for flip_v in [false, true] {
+                    let o = Orientation {
+                        flip_u: false,
+                        flip_v,
+                        rotate_y_degrees: 29.0,
                     };
-                    let d = wtf * Mapping::Cube.coord_to_dir(c);
-                    // The GLSL tests in float32: a margin of 1e-3 of the radius covers it.
-                    d.x.hypot(d.z) < area::POLE_NEAR / n as f64 * (1.0 + 1e-3)
-                };
-                let mut nears = 0;
-                for face in 0..6 {
-                    for j in 0..n {
-                        for i in 0..n {
-                            let any = [(0, 0), (1, 0), (1, 1), (0, 1)]
-                                .iter()
-                                .any(|&(a, b)| near(face, i + a, j + b));
-                            if any {
-                                nears += 1;
-                                assert!(
-                                    area_general_texel(face, i, j, n),
-                                    "size {n} {face} {i} {j}"
-                                );
-                            }
-                        }
-                    }
+                    check_near_poles(to, n, o.world_to_file());
                 }
-                assert!(nears > 0, "size {n}: no texel near a pole");
             }
         }
+    }
+
+    /// The list is what `area_general_texel` names; on a paraboloid the texels with a corner
+    /// outside the disc are general; from the smallest fast size some texels are not.
+    fn check_split(to: Mapping, n: u32) {
+        let list = area_general_texels(to, n);
+        let mut all = Vec::new();
+        let mut fast = 0;
+        for layer in 0..to.layers() {
+            for j in 0..n {
+                for i in 0..n {
+                    let general = area_general_texel(to, layer, i, j, n);
+                    if general {
+                        all.push([i, j, layer, 0]);
+                    } else {
+                        fast += 1;
+                    }
+                    if to == Mapping::DualParaboloid {
+                        let out = [(0, 0), (1, 0), (1, 1), (0, 1)].iter().any(|&(a, b)| {
+                            let s = 2.0 * (i + a) as f64 / n as f64 - 1.0;
+                            let t = 2.0 * (j + b) as f64 / n as f64 - 1.0;
+                            s * s + t * t > 1.0 + 1e-12
+                        });
+                        assert!(!out || general, "{to:?} {n}: ({layer}, {i}, {j}) is cut");
+                    }
+                }
+            }
+        }
+        assert_eq!(list, all, "{to:?} size {n}");
+        assert_eq!(fast > 0, n >= area::FAST_MIN_SIZE, "{to:?} size {n}");
+    }
+
+    /// Every texel of `to` at side `n` with a corner near a pole's axis, the file turned by
+    /// `world_to_file`, is general.
+    fn check_near_poles(to: Mapping, n: u32, world_to_file: DMat3) {
+        let near = |layer: u32, a: u32, b: u32| {
+            let c = Coord {
+                layer,
+                u: a as f64 / n as f64,
+                v: b as f64 / n as f64,
+            };
+            let d = world_to_file * to.coord_to_dir(c);
+            // The GLSL tests in float32: a margin of 1e-3 of the radius covers it.
+            d.x.hypot(d.z) < area::POLE_NEAR / n as f64 * (1.0 + 1e-3)
+        };
+        let mut nears = 0;
+        for layer in 0..to.layers() {
+            for j in 0..n {
+                for i in 0..n {
+                    let any = [(0, 0), (1, 0), (1, 1), (0, 1)]
+                        .iter()
+                        .any(|&(a, b)| near(layer, i + a, j + b));
+                    if any {
+                        nears += 1;
+                        assert!(
+                            area_general_texel(to, layer, i, j, n),
+                            "{to:?} size {n} {layer} {i} {j}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(nears > 0, "{to:?} size {n}: no texel near a pole");
     }
 
     /// The halving keeps the power of a map with suns 10⁵ × the sky on both polar rows, the

@@ -123,11 +123,11 @@ fn slopes_bytes(w: u32, h: u32) -> u64 {
     w as u64 * h as u64 * 16 * crate::abi::area::SLOPE_VEC4S as u64
 }
 
-/// Whether an area conversion with `opts` takes the cube's fast path and list: the fast
-/// path's window sits where the poles are for orientations that keep the Y axis (all that
-/// Orientation makes).
+/// Whether an area conversion with `opts` takes the fast path and a list for the general
+/// walk: the fast path's windows sit where the poles are for orientations that keep the Y
+/// axis (all that Orientation makes).
 fn split_area(opts: &ConvertOptions) -> Result<bool> {
-    Ok(opts.to == Mapping::Cube
+    Ok(matches!(opts.to, Mapping::Cube | Mapping::DualParaboloid)
         && opts.orientation.checked_world_to_file()?.y_axis.abs() == glam::DVec3::Y)
 }
 
@@ -146,6 +146,9 @@ pub struct Converter {
     /// the texels it leaves (`math::convert::area_general_texels`).
     area_fast: OnceLock<Pipeline>,
     area_list: OnceLock<Pipeline>,
+    /// The same to a dual paraboloid, one pair per count of points per texel edge.
+    area_fast_paraboloid: [OnceLock<Pipeline>; area::POLE_STEPS as usize],
+    area_list_paraboloid: [OnceLock<Pipeline>; area::POLE_STEPS as usize],
     slopes: OnceLock<Pipeline>,
     sampler: Sampler,
 }
@@ -160,6 +163,8 @@ impl Converter {
             area_paraboloid: Default::default(),
             area_fast: OnceLock::new(),
             area_list: OnceLock::new(),
+            area_fast_paraboloid: Default::default(),
+            area_list_paraboloid: Default::default(),
             slopes: OnceLock::new(),
             sampler: Sampler::linear_clamp(ctx, "convert sampler")?,
         })
@@ -202,7 +207,7 @@ impl Converter {
     fn prepare_area(&self, to: Mapping, split: bool, points: u32) -> Result<()> {
         self.slopes_pipeline()?;
         match split {
-            true => self.area_split_pipelines().map(|_| ()),
+            true => self.area_split_pipelines(to, points).map(|_| ()),
             false => self.area_pipeline(to, points).map(|_| ()),
         }
     }
@@ -235,27 +240,36 @@ impl Converter {
         }
     }
 
-    /// The cube's fast-path and list pipelines, built side by side (llvmpipe takes ~20 ms
-    /// for each).
-    fn area_split_pipelines(&self) -> Result<(&Pipeline, &Pipeline)> {
-        if let (Some(fast), Some(list)) = (self.area_fast.get(), self.area_list.get()) {
+    /// The fast-path and list pipelines to `to` (a paraboloid's with `points` per texel
+    /// edge), built side by side (llvmpipe takes ~20 ms for each).
+    fn area_split_pipelines(&self, to: Mapping, points: u32) -> Result<(&Pipeline, &Pipeline)> {
+        let (fast_cell, list_cell, fast_id, list_id) = match to {
+            Mapping::DualParaboloid => (
+                &self.area_fast_paraboloid[points as usize - 1],
+                &self.area_list_paraboloid[points as usize - 1],
+                ShaderId::ConvertAreaFastParaboloid,
+                ShaderId::ConvertAreaListParaboloid,
+            ),
+            _ => (
+                &self.area_fast,
+                &self.area_list,
+                ShaderId::ConvertAreaFast,
+                ShaderId::ConvertAreaList,
+            ),
+        };
+        if let (Some(fast), Some(list)) = (fast_cell.get(), list_cell.get()) {
             // Built: no thread to start (a bake records one conversion per probe).
             return Ok((fast, list));
         }
         let (fast, list) = std::thread::scope(|s| {
             let list = s.spawn(|| {
-                Pipeline::compute_once(
-                    &self.area_list,
-                    &self.ctx,
-                    ShaderId::ConvertAreaList,
-                    &[LIST_GROUP, 1],
-                )
+                Pipeline::compute_once(list_cell, &self.ctx, list_id, &[LIST_GROUP, 1, points])
             });
             let fast = Pipeline::compute_once(
-                &self.area_fast,
+                fast_cell,
                 &self.ctx,
-                ShaderId::ConvertAreaFast,
-                &WORKGROUP_2D,
+                fast_id,
+                &[WORKGROUP_2D[0], WORKGROUP_2D[1], points],
             );
             (
                 fast,
@@ -424,11 +438,11 @@ impl Converter {
             let area = self.area_pipeline(to, points)?;
             rec.span(&label, |rec| over_map(rec, area))?;
         } else {
-            let (fast, general) = self.area_split_pipelines()?;
-            let texels = crate::math::convert::area_general_texels(w);
+            let (fast, general) = self.area_split_pipelines(to, points)?;
+            let texels = crate::math::convert::area_general_texels(to, w);
             let list = Buffer::storage(&self.ctx, "convert general texels", &texels)?;
             rec.span(&label, |rec| {
-                if texels.len() < (w * h * 6) as usize {
+                if texels.len() < (w * h * to.layers()) as usize {
                     over_map(rec, fast)?;
                 }
                 rec.dispatch(

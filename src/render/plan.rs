@@ -603,9 +603,14 @@ impl PassKind {
         match self {
             PassKind::GBuffer => &[GBuffer],
             // A lat-long source takes exact footprint areas (slopes, then areas).
-            PassKind::DualParaboloid => {
-                &[Convert2d, ConvertCube, ConvertSlopes, ConvertAreaParaboloid]
-            }
+            PassKind::DualParaboloid => &[
+                Convert2d,
+                ConvertCube,
+                ConvertSlopes,
+                ConvertAreaParaboloid,
+                ConvertAreaFastParaboloid,
+                ConvertAreaListParaboloid,
+            ],
             PassKind::LatLong => &[Convert2d, ConvertCube],
             PassKind::MipChain => &[Mip],
             PassKind::ShProjection => &[
