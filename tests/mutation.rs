@@ -1,4 +1,4 @@
-//! The mutation matrix: each of the twelve passes corrupts its own output three ways — one
+//! The mutation matrix: each of the thirteen passes corrupts its own output three ways — one
 //! NaN, every value scaled by 1 + 10 × its twin test's bound, the output mirrored
 //! (`passes::testing::poison`, feature `test-hooks`) — and its twin test's comparisons, the
 //! ones `tests/<pass>.rs` runs, must fail on every one. A comparison that a NaN or a mirrored
@@ -10,6 +10,8 @@ mod common;
 mod brute;
 #[path = "twins/convert.rs"]
 mod convert;
+#[path = "twins/extract.rs"]
+mod extract;
 #[path = "twins/gbuffer.rs"]
 mod gbuffer;
 #[path = "twins/lights.rs"]
@@ -24,6 +26,8 @@ mod mip;
 mod sh_brdf;
 #[path = "twins/sh_eval.rs"]
 mod sh_eval;
+#[path = "twins/sh_pack.rs"]
+mod sh_pack;
 #[path = "twins/sh_project.rs"]
 mod sh_project;
 #[path = "twins/shade.rs"]
@@ -40,10 +44,11 @@ use std::sync::{Arc, Mutex};
 type Row = (PassId, fn(&Context), f64);
 
 /// Each pass with its twin test and that test's bound.
-fn rows() -> [Row; 12] {
+fn rows() -> [Row; 14] {
     [
         (PassId::Brute, brute::check, brute::BOUND),
         (PassId::Convert, convert::check, convert::BOUND),
+        (PassId::Extract, extract::check, extract::BOUND),
         (PassId::GBuffer, gbuffer::check, gbuffer::BOUND),
         (PassId::Lights, lights::check, lights::BOUND),
         (PassId::Map, map::check, map::BOUND),
@@ -51,6 +56,7 @@ fn rows() -> [Row; 12] {
         (PassId::Mip, mip::check, mip::BOUND),
         (PassId::ShBrdf, sh_brdf::check, sh_brdf::BOUND),
         (PassId::ShEval, sh_eval::check, sh_eval::BOUND),
+        (PassId::ShPack, sh_pack::check, sh_pack::BOUND),
         (PassId::ShProject, sh_project::check, sh_project::BOUND),
         (PassId::Shade, shade::check, shade::BOUND),
         (PassId::SplitSum, split_sum::check, split_sum::BOUND),

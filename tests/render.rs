@@ -99,7 +99,7 @@ fn diffuse_spheres_match_float64_irradiance() {
                         &ShadeInputs {
                             env: &g,
                             orientation: Orientation::default(),
-                            sh: Some(&irr_gpu),
+                            sh: Some(envlight::passes::shade::ShCoeffs::Host(&irr_gpu)),
                             dp: None,
                             prefiltered: None,
                             mc: None,
@@ -231,7 +231,7 @@ fn diffuse_with_lights_matches_float64() {
                     &ShadeInputs {
                         env: &env,
                         orientation: o,
-                        sh: Some(&irr_gpu),
+                        sh: Some(envlight::passes::shade::ShCoeffs::Host(&irr_gpu)),
                         dp: None,
                         prefiltered: None,
                         mc: None,
@@ -279,6 +279,83 @@ fn diffuse_with_lights_matches_float64() {
         );
         assert!(compared > 300 && sunlit > 100, "{compared} {sunlit}");
         drop(gpu_lights);
+    }
+    common::finish(ctx);
+}
+
+/// A render without Monte Carlo is one submission: the SH coefficients are packed for each
+/// object on the GPU, no host read-back stands between the projection and the shading. The
+/// scene has every other technique (SH with lights extracted, whose light texels' coefficients
+/// are subtracted on the GPU; SH-BRDF, whose lighting's ringing is noted from a host copy read
+/// after the frame; FIS, split-sum, a prefiltered map, a mirror), on the sky whose sun is
+/// 5·10⁴ × the zenith. With Monte Carlo, its batches and the shading follow the inputs' in
+/// submissions of their own.
+#[test]
+fn a_render_without_monte_carlo_is_one_submission() {
+    use common::scenes::{fis, object, scene as scene_of, sphere_camera};
+    use envlight::math::brdf::Brdf;
+    use envlight::scene::Technique;
+    let ctx = common::ctx();
+    {
+        let sky = envlight::math::synth::Sky::default();
+        let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, |d| sky.radiance(d));
+        let at = |x: f64, y: f64| Shape::Sphere {
+            center: [x, y, 0.0],
+            radius: 0.45,
+        };
+        let ggx = Brdf::Ggx {
+            alpha: 0.3,
+            correlated: true,
+        };
+        let mut objects: Vec<envlight::scene::SceneObject> = vec![
+            object(
+                at(-1.0, 0.5),
+                Brdf::Lambert,
+                [1.0; 3],
+                Technique::Sh { order: 2 },
+            ),
+            object(
+                at(0.0, 0.5),
+                Brdf::Phong { n: 8.0 },
+                [1.0; 3],
+                Technique::ShBrdf {
+                    order: 2,
+                    grid: 4,
+                    window: None,
+                },
+            ),
+            object(at(1.0, 0.5), ggx, [1.0; 3], fis(16)),
+            object(at(-1.0, -0.5), ggx, [1.0; 3], Technique::SplitSum),
+            object(
+                at(0.0, -0.5),
+                Brdf::Lambert,
+                [1.0; 3],
+                Technique::Prefiltered { size: 8 },
+            ),
+            object(at(1.0, -0.5), Brdf::Mirror, [1.0; 3], Technique::Lookup),
+        ];
+        let renderer = envlight::render::Renderer::new(&ctx);
+        let submissions = |objects: Vec<envlight::scene::SceneObject>| {
+            let mut sc = scene_of(sphere_camera(24), objects, false, 32);
+            (sc.split_sum.size, sc.split_sum.levels, sc.split_sum.samples) = (Some(32), 3, 16);
+            let before = ctx.submissions();
+            let r = renderer.render(&sc, &env).unwrap();
+            assert!(r.frame.texels.iter().flatten().all(|v| v.is_finite()));
+            assert!(r.lights_ms.is_some(), "no lights were extracted");
+            ctx.submissions() - before
+        };
+        assert_eq!(submissions(objects.clone()), 1);
+        objects.truncate(1);
+        objects.push(object(
+            at(0.0, 0.0),
+            ggx,
+            [1.0; 3],
+            Technique::Mc {
+                samples: 16,
+                error: None,
+            },
+        ));
+        assert!(submissions(objects) > 2);
     }
     common::finish(ctx);
 }

@@ -18,6 +18,10 @@
 #define BINDING_SH_ROWS_OUT 1
 #define BINDING_SH_LATLONG_ROWS 0
 #define BINDING_SH_LATLONG_PARTIALS 1
+#define BINDING_SH_PACK_RADIANCE 0
+#define BINDING_SH_PACK_ENTRIES 1
+#define BINDING_SH_PACK_MINUS 2
+#define BINDING_SH_PACK_OUT 3
 #define BINDING_SH_REDUCE_IN 0
 #define BINDING_SH_REDUCE_OUT 1
 #define BINDING_BRUTE_PREP_SRC 0
@@ -75,6 +79,11 @@
 #define BINDING_PREFILTER_GGX_DST 1
 #define BINDING_LIGHTS_TEXELS 0
 #define BINDING_LIGHTS_DST 1
+#define BINDING_EXTRACT_MAP 0
+#define BINDING_EXTRACT_SH 1
+#define BINDING_EXTRACT_STATE 2
+#define BINDING_EXTRACT_LIGHTS 3
+#define BINDING_EXTRACT_RESIDUAL 4
 #define SH_MAX_LMAX 8
 #define SH_MAX_COEFFS 81
 #define SH_WORKGROUP 64
@@ -95,6 +104,25 @@
 #define LIGHT_LEAF_TEXELS 4u
 #define LIGHT_TREE_TAIL 0.25
 #define LIGHT_TREE_VEC4S 5u
+#define EXTRACT_HEADER_WORDS 16u
+#define EXTRACT_TOP_BINS 32768u
+#define EXTRACT_LOW_BINS 65536u
+#define EXTRACT_RECORD_VEC4S 3u
+#define EXTRACT_MODE_HISTOGRAM 0u
+#define EXTRACT_MODE_SELECT_TOP 1u
+#define EXTRACT_MODE_HISTOGRAM_LOW 2u
+#define EXTRACT_MODE_SELECT_LOW 3u
+#define EXTRACT_MODE_COMPACT 4u
+#define EXTRACT_WORD_LOW_ARGS 0u
+#define EXTRACT_WORD_LIGHT_ARGS 4u
+#define EXTRACT_WORD_CANDIDATES 8u
+#define EXTRACT_WORD_KEPT 9u
+#define EXTRACT_WORD_THRESHOLD 10u
+#define EXTRACT_WORD_BIN 11u
+#define EXTRACT_WORD_RANK 12u
+#define EXTRACT_WORD_NONFINITE 13u
+#define EXTRACT_WORD_TAU 14u
+#define EXTRACT_WORD_COUNTER 15u
 #define AREA_EDGE_STEPS 2u
 #define AREA_POLE_STEPS 8u
 #define AREA_POLE_NEAR 8.0
@@ -172,6 +200,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_PoisonPush layout(push_constant) uniform Push { uint mode; float factor; uint width; uint height; uint layers; uint nan_at; uint first; uint stride; uint scale_mask; uint mirror_mask; uint sh_channels; uint sh_count; } pc;
 #define PUSH_ShProjectPush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 size; uint mapping; uint lmax; uint texels; uint[3] pad; } pc;
 #define PUSH_ShLatLongPush layout(push_constant) uniform Push { vec4[3] rotation; uvec2 size; uint lmax; uint parity; } pc;
+#define PUSH_ShPackPush layout(push_constant) uniform Push { uint count; uint[3] pad; } pc;
 #define PUSH_ShReducePush layout(push_constant) uniform Push { uint rows; uint coeffs; uint[2] pad; } pc;
 #define PUSH_BrutePush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint texels; float exponent; uint chunk_begin; uint chunk_end; uint src_layers; uint src_level; uvec2 parts; uint part_slots; uint pad; } pc;
 #define PUSH_ShEvalPush layout(push_constant) uniform Push { uvec2 dst_size; uint dst_mapping; uint lmax; } pc;
@@ -180,6 +209,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_ShBrdfPush layout(push_constant) uniform Push { uint grid; float p0; float p1; uint offset; uint panel; uint[3] pad; } pc;
 #define PUSH_DfgPush layout(push_constant) uniform Push { uint size; uint correlated; uint offset; uint panel; uint centres; } pc;
 #define PUSH_PrefilterGgxPush layout(push_constant) uniform Push { uint size; uint src_size; float src_max_lod; float alpha; uint samples; float bias; uint dst_mapping; uint pad; } pc;
+#define PUSH_ExtractPush layout(push_constant) uniform Push { uvec2 size; uint mapping; uint mode; uint max; float ratio; uint[2] pad; } pc;
 #define PUSH_LightsPush layout(push_constant) uniform Push { uint size; uint count; uint nodes; uint kernel; float alpha; float inv_norm; uint at; uint pad; } pc;
 #define PUSH_ShRotatePush layout(push_constant) uniform Push { uint count; uint lmax; uint method; uint pad; } pc;
 #define PUSH_MipPush layout(push_constant) uniform Push { uint src_size; uint dst_size; uint mode; uint pad; } pc;

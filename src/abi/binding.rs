@@ -45,6 +45,14 @@ bindings! {
     SH_LATLONG_ROWS = 0;
     /// sh_latlong: per workgroup of rows its partial sums, world frame (storage buffer).
     SH_LATLONG_PARTIALS = 1;
+    /// sh_pack: the radiance coefficients, RGB f32 triples (storage buffer).
+    SH_PACK_RADIANCE = 0;
+    /// sh_pack: per packed coefficient (source, scale's bits, minus + 1 or 0, 0) (uvec4).
+    SH_PACK_ENTRIES = 1;
+    /// sh_pack: the set subtracted, vec4 each (rgb used).
+    SH_PACK_MINUS = 2;
+    /// sh_pack: the packed coefficients, vec4 each, as the shade pass reads them.
+    SH_PACK_OUT = 3;
     /// sh_reduce: partial sums in.
     SH_REDUCE_IN = 0;
     /// sh_reduce: partial sums out.
@@ -169,4 +177,14 @@ bindings! {
     LIGHTS_TEXELS = 0;
     /// lights: the level their light is added to (rgba32f storage image).
     LIGHTS_DST = 1;
+    /// extract: the map (sampler2DArray, read with texelFetch).
+    EXTRACT_MAP = 0;
+    /// extract: the SH projection's output, RGB f32 triples (L00 gives the mean).
+    EXTRACT_SH = 1;
+    /// extract: header and histograms (uint storage buffer, also the indirect arguments).
+    EXTRACT_STATE = 2;
+    /// extract: the light records (storage buffer, `EXTRACT_RECORD_VEC4S` vec4 each).
+    EXTRACT_LIGHTS = 3;
+    /// extract: the residual map (rgba32f image2DArray).
+    EXTRACT_RESIDUAL = 4;
 }

@@ -77,6 +77,43 @@ fn define_sizes_and_lights(s: &mut String) {
     let _ = writeln!(s, "#define LIGHT_LEAF_TEXELS {}u", lights::LEAF_TEXELS);
     let _ = writeln!(s, "#define LIGHT_TREE_TAIL {:?}", lights::TREE_TAIL as f32);
     let _ = writeln!(s, "#define LIGHT_TREE_VEC4S {}u", lights::TREE_VEC4S);
+    let _ = writeln!(
+        s,
+        "#define EXTRACT_HEADER_WORDS {}u",
+        lights::EXTRACT_HEADER_WORDS
+    );
+    let _ = writeln!(s, "#define EXTRACT_TOP_BINS {}u", lights::EXTRACT_TOP_BINS);
+    let _ = writeln!(s, "#define EXTRACT_LOW_BINS {}u", lights::EXTRACT_LOW_BINS);
+    let _ = writeln!(
+        s,
+        "#define EXTRACT_RECORD_VEC4S {}u",
+        lights::EXTRACT_RECORD_VEC4S
+    );
+    use lights::extract_mode as m;
+    for (name, v) in [
+        ("HISTOGRAM", m::HISTOGRAM),
+        ("SELECT_TOP", m::SELECT_TOP),
+        ("HISTOGRAM_LOW", m::HISTOGRAM_LOW),
+        ("SELECT_LOW", m::SELECT_LOW),
+        ("COMPACT", m::COMPACT),
+    ] {
+        let _ = writeln!(s, "#define EXTRACT_MODE_{name} {v}u");
+    }
+    use lights::extract_word as w;
+    for (name, v) in [
+        ("LOW_ARGS", w::LOW_ARGS),
+        ("LIGHT_ARGS", w::LIGHT_ARGS),
+        ("CANDIDATES", w::CANDIDATES),
+        ("KEPT", w::KEPT),
+        ("THRESHOLD", w::THRESHOLD),
+        ("BIN", w::BIN),
+        ("RANK", w::RANK),
+        ("NONFINITE", w::NONFINITE),
+        ("TAU", w::TAU),
+        ("COUNTER", w::COUNTER),
+    ] {
+        let _ = writeln!(s, "#define EXTRACT_WORD_{name} {v}u");
+    }
 }
 
 /// The area conversion's and the footprint's parameters, and every shared float.

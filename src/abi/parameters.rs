@@ -266,6 +266,53 @@ pub mod lights {
     pub const LEAF_TEXELS: u32 = 4;
     /// vec4s per light tree node in the GPU's list (math::light_tree::LightTree::gpu_nodes).
     pub const TREE_VEC4S: u32 = 5;
+    /// The GPU extraction's state buffer (`passes::extract`): words before its histograms.
+    pub const EXTRACT_HEADER_WORDS: u32 = 16;
+    /// Bins of the first histogram: the top 16 bits of a positive float luminance's bits
+    /// (sign clear, so 2¹⁵ of them).
+    pub const EXTRACT_TOP_BINS: u32 = 32768;
+    /// Bins of the second histogram: the low 16 bits, within the top bin the cap falls in.
+    pub const EXTRACT_LOW_BINS: u32 = 65536;
+    /// vec4s per light record of the GPU extraction: (file-frame centre direction, ω),
+    /// (excess rgb, luminance Y), (layer, i, j, 0) as uints.
+    pub const EXTRACT_RECORD_VEC4S: u32 = 3;
+    /// Steps of `glsl/extract.comp` (`ExtractPush::mode`), in recording order.
+    pub mod extract_mode {
+        /// Per texel: τ from L00, the texels above it counted into the top histogram.
+        pub const HISTOGRAM: u32 = 0;
+        /// One workgroup: the top bin where the cap falls, or τ kept where it does not bind.
+        pub const SELECT_TOP: u32 = 1;
+        /// Per texel (indirect, none unless the cap binds): that bin's low histogram.
+        pub const HISTOGRAM_LOW: u32 = 2;
+        /// One workgroup: the exact threshold from the low histogram.
+        pub const SELECT_LOW: u32 = 3;
+        /// Per texel: light records above the threshold, the residual everywhere.
+        pub const COMPACT: u32 = 4;
+    }
+    /// Words of the extraction's header (see `passes::extract::ExtractState`).
+    pub mod extract_word {
+        /// Workgroups (x, y, z) of the second histogram's indirect dispatch: none unless
+        /// the cap binds.
+        pub const LOW_ARGS: u32 = 0;
+        /// Workgroups (x, 1, 1) of 64 invocations for a pass over the light records.
+        pub const LIGHT_ARGS: u32 = 4;
+        /// Texels above the ratio's threshold τ.
+        pub const CANDIDATES: u32 = 8;
+        /// Light texels kept (at most the cap).
+        pub const KEPT: u32 = 9;
+        /// The final threshold's f32 bits (τ, or raised by the cap).
+        pub const THRESHOLD: u32 = 10;
+        /// The top bin the cap falls in (`u32::MAX` where it does not bind).
+        pub const BIN: u32 = 11;
+        /// Rank (from the brightest) of the threshold's texel within that bin.
+        pub const RANK: u32 = 12;
+        /// Texels with a NaN or infinite channel (zero in the residual, never lights).
+        pub const NONFINITE: u32 = 13;
+        /// τ's f32 bits (ratio × the mean luminance, from the SH projection's L00).
+        pub const TAU: u32 = 14;
+        /// The records written so far (the compaction's counter).
+        pub const COUNTER: u32 = 15;
+    }
 }
 
 /// Bits of shade.frag's code mask (its specialisation constant 0) beside the techniques' and

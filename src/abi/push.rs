@@ -155,6 +155,13 @@ push_blocks! {
         /// 1: the odd bands change sign before the rotation (an improper frame change).
         parity: u32 = "uint",
     }
+    /// `glsl/sh_pack.comp`.
+    ShPackPush {
+        /// Packed coefficients.
+        count: u32 = "uint",
+        /// Padding.
+        pad: [u32; 3] = "uint[3]",
+    }
     /// `glsl/sh_reduce.comp`.
     ShReducePush {
         /// Rows of partial sums in the input.
@@ -302,6 +309,21 @@ push_blocks! {
         dst_mapping: u32 = "uint",
         /// Padding.
         pad: u32 = "uint",
+    }
+    /// `glsl/extract.comp`.
+    ExtractPush {
+        /// Layer size of the map.
+        size: [u32; 2] = "uvec2",
+        /// Mapping id of the map.
+        mapping: u32 = "uint",
+        /// Which step: `passes::extract`'s MODE_* constants.
+        mode: u32 = "uint",
+        /// Most light texels kept.
+        max: u32 = "uint",
+        /// Threshold over the mean luminance.
+        ratio: f32 = "float",
+        /// Padding.
+        pad: [u32; 2] = "uint[2]",
     }
     /// `glsl/lights.comp`.
     LightsPush {

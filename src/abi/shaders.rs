@@ -169,6 +169,10 @@ macro_rules! shader_table {
             /// The same, shared-memory tree.
             ShLatLongShared = "sh_latlong_shared", "sh_latlong.comp", Compute, [], ShLatLongPush,
                 [(SH_LATLONG_ROWS, StorageBuffer, Read), (SH_LATLONG_PARTIALS, StorageBuffer, Write)];
+            /// SH coefficients packed for the shade pass: irradiance or windowed sets.
+            ShPack = "sh_pack", "sh_pack.comp", Compute, [], ShPackPush,
+                [(SH_PACK_RADIANCE, StorageBuffer, Read), (SH_PACK_ENTRIES, StorageBuffer, Read),
+                 (SH_PACK_MINUS, StorageBuffer, Read), (SH_PACK_OUT, StorageBuffer, Write)];
             /// SH partial-sum reduction with subgroup arithmetic.
             ShReduceSubgroup = "sh_reduce_subgroup", "sh_reduce.comp", Compute,
                 [("USE_SUBGROUPS", "1")], ShReducePush,
@@ -351,6 +355,11 @@ macro_rules! shader_table {
             /// Light texels (extracted from a map) added exactly to a cube level.
             Lights = "lights", "lights.comp", Compute, [], LightsPush,
                 [(LIGHTS_TEXELS, StorageBuffer, Read), (LIGHTS_DST, StorageImage, ReadWrite)];
+            /// Light texels found on the GPU: histograms, the cap's threshold, compaction.
+            Extract = "extract", "extract.comp", Compute, [], ExtractPush,
+                [(EXTRACT_MAP, Sampled, Read), (EXTRACT_SH, StorageBuffer, Read),
+                 (EXTRACT_STATE, StorageBuffer, ReadWrite), (EXTRACT_LIGHTS, StorageBuffer, Write),
+                 (EXTRACT_RESIDUAL, StorageImage, Write)];
             /// SH projection of a BRDF per view of a grid (SH-BRDF shading's table).
             ShBrdf = "sh_brdf", "sh_brdf.comp", Compute, [], ShBrdfPush,
                 [(SH_BRDF_TABLE, StorageBuffer, ReadWrite)];

@@ -28,6 +28,8 @@ pub enum Usage {
     FragmentReadWrite,
     /// Written as a colour attachment.
     ColorAttachment,
+    /// Read as the arguments of an indirect dispatch.
+    IndirectRead,
     /// Read by the host after the GPU is done.
     HostRead,
     /// Written by the host before the GPU reads it.
@@ -84,6 +86,7 @@ pub fn usage_info(u: Usage) -> UsageInfo {
             A::COLOR_ATTACHMENT_WRITE | A::COLOR_ATTACHMENT_READ,
             L::COLOR_ATTACHMENT_OPTIMAL,
         ),
+        Usage::IndirectRead => (S::DRAW_INDIRECT, A::INDIRECT_COMMAND_READ, L::GENERAL),
         Usage::HostRead => (S::HOST, A::HOST_READ, L::GENERAL),
         Usage::HostWrite => (S::HOST, A::HOST_WRITE, L::GENERAL),
     };
@@ -218,6 +221,7 @@ mod tests {
             Usage::ComputeRead,
             Usage::FragmentSampled,
             Usage::FragmentRead,
+            Usage::IndirectRead,
             Usage::HostRead,
         ] {
             assert!(!usage_info(u).access.intersects(write_bits), "{u:?}");

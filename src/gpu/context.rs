@@ -7,7 +7,7 @@ use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::AllocationSizes;
 use std::ffi::{c_void, CStr};
 use std::mem::ManuallyDrop;
-use std::sync::atomic::{AtomicI64, Ordering};
+use std::sync::atomic::{AtomicI64, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 const MB: u64 = 1 << 20;
@@ -222,6 +222,8 @@ pub(crate) struct Shared {
     sink: Arc<MessageSink>,
     /// The shader of every pipeline created, in order (what `envlight plan` is checked by).
     pub(crate) pipelines: Mutex<Vec<&'static str>>,
+    /// Submissions made so far ([`Context::submissions`]).
+    submissions: AtomicU64,
     /// What a test hook set on this context (feature `test-hooks`: `passes::testing`), opaque
     /// here.
     #[cfg(feature = "test-hooks")]
@@ -543,6 +545,7 @@ impl Context {
             command_pool: Mutex::new(command_pool),
             live: AtomicI64::new(0),
             pipelines: Mutex::new(Vec::new()),
+            submissions: AtomicU64::new(0),
             #[cfg(feature = "test-hooks")]
             test_hook: Mutex::new(None),
             owns_device,
@@ -580,6 +583,12 @@ impl Context {
     /// (buffers, images, views, samplers, pipelines, layouts, pools, fences…).
     pub fn live_objects(&self) -> i64 {
         self.shared.live.load(Ordering::SeqCst)
+    }
+
+    /// How many submissions envlight has made on this context so far ([`Context::run`] and
+    /// [`Context::submit`]; work recorded into an engine's command buffers is not counted).
+    pub fn submissions(&self) -> u64 {
+        self.shared.submissions.load(Ordering::SeqCst)
     }
 
     /// The shader module name of every pipeline created on this context so far, in order.
@@ -685,6 +694,7 @@ impl Shared {
             let cmds = [cmd];
             let submit = vk::SubmitInfo::default().command_buffers(&cmds);
             let queue = self.queue.lock().unwrap_or_else(|e| e.into_inner());
+            self.submissions.fetch_add(1, Ordering::SeqCst);
             // SAFETY: the queue is externally synchronised by its mutex.
             unsafe { d.queue_submit(*queue, &[submit], fence) }.vk(what)
         })();

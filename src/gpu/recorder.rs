@@ -213,6 +213,50 @@ impl Recorder {
         Ok(())
     }
 
+    /// Records a dispatch of the compute `pipeline` as [`Recorder::dispatch`] does, its
+    /// workgroup counts read by the GPU from the three u32 at byte `offset` of `args` (a
+    /// buffer made with INDIRECT_BUFFER usage, written by an earlier pass).
+    pub(crate) fn dispatch_indirect<P: PushBlock>(
+        &mut self,
+        pipeline: &Pipeline,
+        binds: &[(u32, Bind<'_>)],
+        push: &P,
+        args: (&Buffer, u64),
+    ) -> Result<()> {
+        assert!(
+            pipeline.is_compute(),
+            "{:?} is not compute",
+            pipeline.shader()
+        );
+        assert!(args.1.is_multiple_of(4) && args.1 + 12 <= args.0.size());
+        // The arguments' read waits for their writer; a binding of the same buffer then
+        // waits for the read (write after read).
+        self.use_buffer(args.0, Usage::IndirectRead);
+        self.bind(pipeline, binds, push)?;
+        // SAFETY: cmd is recording with the compute pipeline and its set bound; the
+        // arguments lie inside the live buffer and were made visible to the indirect stage.
+        unsafe {
+            self.ctx
+                .device()
+                .cmd_dispatch_indirect(self.cmd, args.0.raw, args.1)
+        };
+        Ok(())
+    }
+
+    /// Fills the first `bytes` of `buffer` (made with TRANSFER_DST usage) with the u32
+    /// `value`.
+    pub fn fill_buffer(&mut self, buffer: &Buffer, bytes: u64, value: u32) {
+        assert!(bytes.is_multiple_of(4) && bytes <= buffer.size());
+        self.use_buffer(buffer, Usage::TransferDst);
+        // SAFETY: cmd is recording outside a render pass; the range lies inside the live
+        // buffer, a multiple of 4 bytes from offset 0.
+        unsafe {
+            self.ctx
+                .device()
+                .cmd_fill_buffer(self.cmd, buffer.raw, 0, bytes, value)
+        };
+    }
+
     /// Records a fullscreen draw of the graphics `pipeline` into `targets` (one-layer images
     /// of equal size, contents discarded), after the barriers its bindings need.
     pub(crate) fn draw_fullscreen<P: PushBlock>(

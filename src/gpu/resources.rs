@@ -260,6 +260,8 @@ pub struct Image {
     pub(crate) state: Mutex<Usage>,
     /// Whether envlight created the image (and so destroys it); views are always envlight's.
     owned: bool,
+    /// The name it was made or wrapped with (for errors).
+    name: String,
 }
 
 impl Image {
@@ -288,7 +290,7 @@ impl Image {
         // SAFETY: valid device and create info.
         let raw = unsafe { s.device.create_image(&info, None) }.vk("creating an image")?;
         s.track();
-        let mut image = Image::wrap(s, raw, desc, Usage::Undefined, true);
+        let mut image = Image::wrap(s, name, raw, desc, Usage::Undefined, true);
         s.name(raw, name);
         // SAFETY: raw is a live image of this device.
         let requirements = unsafe { s.device.get_image_memory_requirements(raw) };
@@ -323,7 +325,7 @@ impl Image {
         assert!(desc.width > 0 && desc.height > 0 && desc.layers > 0 && desc.mips > 0);
         assert!(!desc.cube || (desc.layers == 6 && desc.width == desc.height));
         ctx.shared.track();
-        let mut image = Image::wrap(&ctx.shared, raw, desc, current, false);
+        let mut image = Image::wrap(&ctx.shared, name, raw, desc, current, false);
         image.make_views(name)?;
         Ok(image)
     }
@@ -331,6 +333,7 @@ impl Image {
     /// An image value around `raw`, with no memory and no views yet.
     fn wrap(
         shared: &Arc<Shared>,
+        name: &str,
         raw: vk::Image,
         desc: ImageDesc,
         state: Usage,
@@ -343,6 +346,7 @@ impl Image {
             view: vk::ImageView::null(),
             cube_view: vk::ImageView::null(),
             level_views: Vec::new(),
+            name: name.to_owned(),
             desc,
             state: Mutex::new(state),
             owned,
@@ -407,6 +411,11 @@ impl Image {
         self.shared.track();
         self.shared.name(v, &format!("{name} ({ty:?} view)"));
         Ok(v)
+    }
+
+    /// The name it was created or wrapped with.
+    pub fn name(&self) -> &str {
+        &self.name
     }
 
     /// The description it was created with.

@@ -169,6 +169,65 @@ pub fn project_oriented(map: &EnvMap, lmax: u32, file_to_world: DMat3) -> Vec<[f
     c
 }
 
+/// One coefficient of a packed set, as `passes::sh_pack` writes it for the shade pass:
+/// `scale` × (radiance coefficient `source`, less coefficient `minus` of a second set where
+/// there is one).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PackEntry {
+    /// The radiance coefficient (flat index).
+    pub source: u32,
+    /// What the difference is multiplied by (Â_l for irradiance, a window's w_l).
+    pub scale: f64,
+    /// The coefficient of the second set subtracted first, if any.
+    pub minus: Option<u32>,
+}
+
+/// The entries of an irradiance set to band `order` (Â_l folded in, as
+/// [`irradiance_coeffs`]), of the radiance less the second set where `residual` (an
+/// extraction's light texels: the residual's irradiance).
+pub fn irradiance_entries(order: u32, residual: bool) -> Vec<PackEntry> {
+    (0..=order)
+        .flat_map(|l| {
+            (-(l as i32)..=(l as i32)).map(move |m| {
+                let k = index(l, m) as u32;
+                PackEntry {
+                    source: k,
+                    scale: cosine_lobe(l),
+                    minus: residual.then_some(k),
+                }
+            })
+        })
+        .collect()
+}
+
+/// The entries of the radiance to band `order` windowed by `window` (as [`Window::apply`]).
+pub fn windowed_entries(order: u32, window: Window) -> Vec<PackEntry> {
+    let w = window.weights(order);
+    (0..=order)
+        .flat_map(|l| {
+            let wl = w[l as usize];
+            (-(l as i32)..=(l as i32)).map(move |m| PackEntry {
+                source: index(l, m) as u32,
+                scale: wl,
+                minus: None,
+            })
+        })
+        .collect()
+}
+
+/// The packed set `entries` describe, from `radiance` and the second set `minus`: the float64
+/// twin of `passes::sh_pack`.
+pub fn pack(radiance: &[[f64; 3]], minus: &[[f64; 3]], entries: &[PackEntry]) -> Vec<[f64; 3]> {
+    entries
+        .iter()
+        .map(|e| {
+            let c = radiance[e.source as usize];
+            let m = e.minus.map_or([0.0; 3], |j| minus[j as usize]);
+            [0, 1, 2].map(|ch| (c[ch] - m[ch]) * e.scale)
+        })
+        .collect()
+}
+
 /// Evaluates an SH expansion at `d`.
 pub fn eval(coeffs: &[[f64; 3]], d: DVec3) -> [f64; 3] {
     let lmax = (coeffs.len() as f64).sqrt() as u32 - 1;

@@ -7,6 +7,7 @@
 
 pub mod brute;
 pub mod convert;
+pub mod extract;
 pub mod gbuffer;
 pub mod lights;
 pub mod map;
@@ -14,6 +15,7 @@ pub mod mc;
 pub mod mip;
 pub mod sh_brdf;
 pub mod sh_eval;
+pub mod sh_pack;
 pub mod sh_project;
 pub mod shade;
 pub mod split_sum;
@@ -25,6 +27,7 @@ pub(crate) mod testing;
 
 pub use brute::{BruteFilter, FilterTarget};
 pub use convert::{ConvertOptions, Converter};
+pub use extract::{Extractor, GpuExtraction};
 pub use gbuffer::{GBuffer, GBufferPass};
 pub use lights::{GpuLights, LightsPass};
 pub use map::GpuEnvMap;
@@ -32,6 +35,7 @@ pub use mc::MonteCarlo;
 pub use mip::MipChain;
 pub use sh_brdf::{ShBrdfProjector, ShRotator};
 pub use sh_eval::ShEvaluator;
-pub use sh_project::{ShCoefficients, ShProjector, ShReadback};
+pub use sh_pack::ShPacker;
+pub use sh_project::{ShCoefficients, ShProjector, ShReadback, Subgroups};
 pub use shade::Shade;
 pub use split_sum::{PrefilterOptions, SplitSum};

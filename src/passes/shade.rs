@@ -21,8 +21,9 @@ pub struct ShadeInputs<'a> {
     pub env: &'a GpuEnvMap,
     /// How its file is oriented.
     pub orientation: Orientation,
-    /// SH irradiance coefficient sets, concatenated (each object's record holds its offset).
-    pub sh: Option<&'a [[f64; 3]]>,
+    /// SH coefficient sets, concatenated (each object's record holds its offset): irradiance
+    /// (Â_l folded in) for SH objects, radiance for SH-BRDF objects.
+    pub sh: Option<ShCoeffs<'a>>,
     /// The dual-paraboloid MIP chain (FIS).
     pub dp: Option<&'a GpuEnvMap>,
     /// Prefiltered lat-long maps, concatenated, one vec4 per texel.
@@ -44,6 +45,16 @@ pub struct ShadeInputs<'a> {
     pub lights: Option<&'a GpuLights>,
     /// Which lookups are filtered over the pixel's footprint (they read `dp`).
     pub footprint: Footprint,
+}
+
+/// Where the shade pass reads SH coefficient sets from.
+#[derive(Clone, Copy)]
+pub enum ShCoeffs<'a> {
+    /// From the host: uploaded by the recording.
+    Host(&'a [[f64; 3]]),
+    /// From a GPU buffer, one vec4 a coefficient (rgb used), as
+    /// [`crate::passes::ShPacker`] writes them: nothing comes back to the host.
+    Gpu(&'a Buffer),
 }
 
 /// Which lookups read the dual-paraboloid chain over the pixel's footprint
@@ -330,8 +341,8 @@ impl Shade {
         frame: &GpuEnvMap,
     ) -> Result<()> {
         assert_eq!((frame.width, frame.height), (gbuf.width, gbuf.height));
-        let coeffs = match inputs.sh {
-            Some(c) if !c.is_empty() => {
+        let uploaded = match inputs.sh {
+            Some(ShCoeffs::Host(c)) if !c.is_empty() => {
                 let data: Vec<[f32; 4]> = c
                     .iter()
                     .map(|v| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0])
@@ -343,6 +354,10 @@ impl Shade {
                 )?)
             }
             _ => None,
+        };
+        let coeffs = match inputs.sh {
+            Some(ShCoeffs::Gpu(b)) => Some(b),
+            _ => uploaded.as_ref(),
         };
         // The unused image is bound but never read; it only needs a defined layout.
         if self.dummy_image.image.usage() == Usage::Undefined {
@@ -401,7 +416,7 @@ impl Shade {
                     (binding::SHADE_OBJECTS, Bind::Buffer(&gbuf.objects)),
                     (
                         binding::SHADE_COEFFS,
-                        Bind::Buffer(coeffs.as_ref().unwrap_or(&self.dummy_buffer)),
+                        Bind::Buffer(coeffs.unwrap_or(&self.dummy_buffer)),
                     ),
                     (
                         binding::SHADE_ENV,
@@ -449,7 +464,7 @@ impl Shade {
                 &[&frame.image],
             )
         })?;
-        if let Some(c) = coeffs {
+        if let Some(c) = uploaded {
             rec.keep(c);
         }
         if let Some(c) = camera {

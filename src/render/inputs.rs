@@ -11,11 +11,13 @@ use crate::gpu::{Buffer, Context, Recorder, Usage};
 use crate::math::brdf::Brdf;
 use crate::math::convert::residual_edge_points;
 use crate::math::filter::Kernel;
+use crate::math::sh::Window;
 use crate::math::Mapping;
 use crate::passes::gbuffer::GBuffer;
+use crate::passes::sh_pack::{irradiance_entries, windowed_entries, PackEntry};
 use crate::passes::{
     BruteFilter, Converter, GBufferPass, GpuEnvMap, MipChain, PrefilterOptions, ShBrdfProjector,
-    ShProjector, SplitSum,
+    ShPacker, ShProjector, SplitSum,
 };
 use crate::scene::{Technique, DEFAULT_FIS_BIAS};
 use ash::vk;
@@ -23,7 +25,7 @@ use gpu_allocator::MemoryLocation;
 
 /// The passes a plan runs, built once per renderer.
 pub(super) struct Passes<'r> {
-    pub sh: Option<&'r ShProjector>,
+    pub sh: Option<(&'r ShProjector, &'r ShPacker)>,
     pub dp: Option<(&'r Converter, &'r MipChain)>,
     pub brute: Option<&'r BruteFilter>,
     pub gbuffer: &'r GBufferPass,
@@ -44,8 +46,16 @@ pub(super) struct PrefilteredMap {
 pub(super) struct Inputs {
     /// The environment.
     pub env: GpuEnvMap,
-    /// SH coefficients, read back.
+    /// The map's radiance SH coefficients (the projection's output, on the GPU).
     pub sh_out: Option<Buffer>,
+    /// The sets the shade pass reads, packed from them on the GPU, and their entries.
+    pub sh_packed: Option<Buffer>,
+    pub sh_entries: Vec<PackEntry>,
+    /// The light texels' radiance coefficients, subtracted for the residual's irradiance.
+    pub sh_minus: Option<Buffer>,
+    /// A host copy of the radiance coefficients, read after the frame for its notes (where an
+    /// SH-BRDF object's lighting may ring).
+    pub sh_host: Option<Buffer>,
     /// The SH-BRDF tables.
     pub tables: Option<Buffer>,
     /// The FIS dual paraboloid with its MIP chain.
@@ -61,8 +71,9 @@ pub(super) struct Inputs {
 }
 
 impl Inputs {
-    /// The resources of `job`'s plan, given what the lights stage found.
-    pub fn new(job: &Job<'_>, lit: &Lit) -> Result<Inputs> {
+    /// The resources of `job`'s plan, given what the lights stage found and where the SH
+    /// objects' sets go.
+    pub fn new(job: &Job<'_>, lit: &Lit, sh: &ShLayout) -> Result<Inputs> {
         let (ctx, plan, env) = (job.ctx, job.plan, job.env);
         let storage =
             |name, bytes: u64, usage| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
@@ -74,10 +85,47 @@ impl Inputs {
             )?),
             false => None,
         };
-        let sh_out = match plan.runs(PassKind::ShProjection) {
+        let projects = plan.runs(PassKind::ShProjection);
+        let sh_out = match projects {
+            true => Some(storage(
+                "sh coefficients",
+                ShProjector::output_bytes(plan.lmax),
+                vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::TRANSFER_DST
+                    | vk::BufferUsageFlags::TRANSFER_SRC,
+            )?),
+            false => None,
+        };
+        let sh_packed = match projects && !sh.entries.is_empty() {
+            true => Some(storage(
+                "sh packed coefficients",
+                ShPacker::output_bytes(sh.entries.len()),
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            )?),
+            false => None,
+        };
+        let sh_minus = match (&lit.sh_coeffs, projects) {
+            (Some(c), true) => {
+                let quads: Vec<[f32; 4]> = c
+                    .iter()
+                    .map(|v| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0])
+                    .collect();
+                Some(Buffer::storage(
+                    ctx,
+                    "light texels' sh coefficients",
+                    &quads,
+                )?)
+            }
+            _ => None,
+        };
+        let rings = plan
+            .objects
+            .iter()
+            .any(|o| matches!(o.technique, Technique::ShBrdf { .. }));
+        let sh_host = match projects && rings {
             true => Some(Buffer::new(
                 ctx,
-                "sh coefficients",
+                "sh coefficients (host copy)",
                 ShProjector::output_bytes(plan.lmax),
                 vk::BufferUsageFlags::TRANSFER_DST,
                 MemoryLocation::GpuToCpu,
@@ -115,6 +163,10 @@ impl Inputs {
         Ok(Inputs {
             env,
             sh_out,
+            sh_packed,
+            sh_entries: sh.entries.clone(),
+            sh_minus,
+            sh_host,
             tables,
             dp,
             pre,
@@ -188,11 +240,20 @@ pub(super) fn record(
 ) -> Result<()> {
     let (plan, orientation) = (job.plan, &job.orientation);
     inputs.env.record_upload(rec, job.env)?;
-    if let (Some(p), Some(out)) = (passes.sh, &inputs.sh_out) {
+    if let (Some((p, pack)), Some(out)) = (passes.sh, &inputs.sh_out) {
         marks.record(rec, PassKind::ShProjection, |rec| {
-            p.record_into(rec, &inputs.env, plan.lmax, orientation, out)
+            p.record_into(rec, &inputs.env, plan.lmax, orientation, out)?;
+            // Each object's set, from the coefficients where they are: no readback.
+            if let Some(packed) = &inputs.sh_packed {
+                let minus = inputs.sh_minus.as_ref();
+                pack.record(rec, out, &inputs.sh_entries, minus, packed)?;
+            }
+            Ok(())
         })?;
-        rec.use_buffer(out, Usage::HostRead);
+        if let Some(host) = &inputs.sh_host {
+            rec.copy_buffer(out, host, ShProjector::output_bytes(plan.lmax));
+            rec.use_buffer(host, Usage::HostRead);
+        }
     }
     if let (Some(ex), Some(map)) = (&lit.chain, &lit.chain_residual) {
         map.record_upload(rec, &ex.residual)?;
@@ -280,4 +341,49 @@ fn record_chain(
         };
         p.record_prefilter(rec, map, chain, &opts)
     })
+}
+
+/// Where each SH or SH-BRDF object's set sits in the packed coefficients the shade pass reads,
+/// and the entries that pack them from the projection's output on the GPU
+/// ([`crate::passes::ShPacker`]).
+pub(super) struct ShLayout {
+    /// Per object: the offset of its set (in coefficients) and whether it is the diffuse
+    /// residual's (the shader then adds the light clusters).
+    pub offsets: Vec<super::records::ShOffset>,
+    /// The packer's entries, every object's set in turn.
+    pub entries: Vec<PackEntry>,
+}
+
+/// The packed sets of `job`'s SH objects: irradiance (Â_l folded in) of the map less its
+/// light texels' where the lights stage extracted them, SH-BRDF objects' windowed radiance.
+pub(super) fn sh_layout(job: &Job<'_>, lit: &Lit) -> ShLayout {
+    let residual = lit.sh_coeffs.is_some();
+    let mut layout = ShLayout {
+        offsets: Vec::new(),
+        entries: Vec::new(),
+    };
+    for p in &job.plan.objects {
+        let offset = layout.entries.len() as u32;
+        let (entries, of_residual) = match p.technique {
+            Technique::Sh { order } => (irradiance_entries(order, residual), residual),
+            Technique::ShBrdf { order, window, .. } => {
+                (windowed_entries(order, window_of(window)), false)
+            }
+            _ => {
+                layout.offsets.push(None);
+                continue;
+            }
+        };
+        layout.entries.extend(entries);
+        layout.offsets.push(Some((offset, of_residual)));
+    }
+    layout
+}
+
+/// An SH-BRDF object's window.
+pub(super) fn window_of(width: Option<f64>) -> Window {
+    match width {
+        Some(width) => Window::Hanning { width },
+        None => Window::None,
+    }
 }

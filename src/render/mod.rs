@@ -1,6 +1,6 @@
 //! Rendering a [`Scene`]: [`plan()`] resolves what the scene asks of the GPU once; the stages
-//! then run it in order (lights, the inputs' resources and their one submission, SH
-//! coefficients, Monte Carlo, shading) and record what each pass cost.
+//! then run it in order (lights, the inputs' resources, Monte Carlo where asked, shading: one
+//! submission without Monte Carlo) and record what each pass cost.
 
 mod inputs;
 mod lights;
@@ -22,8 +22,8 @@ use crate::passes::gbuffer::GBuffer;
 use crate::passes::sh_project::Subgroups;
 use crate::passes::shade::Rotation;
 use crate::passes::{
-    BruteFilter, Converter, GBufferPass, MipChain, MonteCarlo, ShBrdfProjector, ShProjector, Shade,
-    SplitSum,
+    BruteFilter, Converter, GBufferPass, MipChain, MonteCarlo, ShBrdfProjector, ShPacker,
+    ShProjector, Shade, SplitSum,
 };
 use crate::scene::Scene;
 use inputs::{Inputs, Passes};
@@ -112,6 +112,7 @@ pub struct Renderer {
     converter: OnceCell<Converter>,
     mip: OnceCell<MipChain>,
     sh: OnceCell<ShProjector>,
+    sh_pack: OnceCell<ShPacker>,
     brute: OnceCell<BruteFilter>,
     gbuffer: OnceCell<GBufferPass>,
     mc: OnceCell<MonteCarlo>,
@@ -139,6 +140,7 @@ impl Renderer {
             converter: OnceCell::new(),
             mip: OnceCell::new(),
             sh: OnceCell::new(),
+            sh_pack: OnceCell::new(),
             brute: OnceCell::new(),
             gbuffer: OnceCell::new(),
             mc: OnceCell::new(),
@@ -174,10 +176,12 @@ impl Renderer {
         pass(&self.converter, || Converter::new(&self.ctx))
     }
 
-    /// Renders `scene` with `env` (from [`load_environment`]). Everything up to the shading
-    /// is recorded into one submission and stays on the GPU; only SH coefficients (a few
-    /// hundred bytes) and, for Monte Carlo on a map that is not lat-long, the converted map
-    /// (its sampling tables are built on the CPU) come back to the host before shading.
+    /// Renders `scene` with `env` (from [`load_environment`]). Without Monte Carlo the render
+    /// is one submission: the uploads, every pass before the shading (SH coefficients stay on
+    /// the GPU, packed there for each object), the draw and the frame's download. Monte Carlo
+    /// submits in turn the inputs, its batches (an error target reads the estimate back between
+    /// them; a map that is not lat-long comes back converted for its sampling tables) and the
+    /// shading.
     pub fn render(&self, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
         scene.validate().map_err(Error::Invalid)?;
         let plan = plan(scene, env);
@@ -230,7 +234,10 @@ impl Renderer {
         let runs = |k| plan.runs(k);
         Ok(Passes {
             sh: match runs(PassKind::ShProjection) {
-                true => Some(pass(&self.sh, || ShProjector::new(ctx, self.subgroups))?),
+                true => Some((
+                    pass(&self.sh, || ShProjector::new(ctx, self.subgroups))?,
+                    pass(&self.sh_pack, || ShPacker::new(ctx))?,
+                )),
                 false => None,
             },
             dp: match runs(PassKind::DualParaboloid) {
@@ -259,52 +266,79 @@ impl Renderer {
         // Pipeline creation first: it is not GPU work.
         let passes = self.passes(job.plan)?;
         let lit = lights::extract(job.ctx, job.plan, job.env, &job.orientation)?;
-        let inputs = Inputs::new(job, &lit)?;
+        let sh = inputs::sh_layout(job, &lit);
+        let inputs = Inputs::new(job, &lit, &sh)?;
         let levels = inputs.split.as_ref().map(|(chain, _)| chain.mips());
-        let objects = gpu_objects(job.scene, job.plan, &lit, &inputs.pre_offsets, levels);
+        let at = (&inputs.pre_offsets[..], &sh.offsets[..]);
+        let objects = gpu_objects(job.scene, job.plan, &lit, at, levels);
         let camera = &job.scene.camera;
         let mut gbuf = GBuffer::new(job.ctx, camera.width, camera.height, &objects)?;
         gbuf.camera = Some(*camera);
 
         let mut records = Vec::new();
         let mut marks = Marks(Vec::new());
+        let ins = (&inputs, &lit, &gbuf);
+        if job.plan.mc.is_none() {
+            // One submission: everything before the shading, the draw and the download.
+            let with = Shading {
+                mc: None,
+                sh_rotation: self.sh_rotation,
+            };
+            let draw = shading::draw(job, ins, with)?;
+            let Builds {
+                shade: built,
+                convert,
+            } = builds;
+            let (readback, t) = job.ctx.run("rendering", |rec| {
+                inputs::record(rec, &mut marks, job, &passes, ins, convert)?;
+                built()?;
+                shading::record_draw(rec, &mut marks, shade, &gbuf, &draw)
+            })?;
+            marks.split(&t, &mut records);
+            let frame = shading::frame_of(&readback, &gbuf)?;
+            return Ok(self.rendered(job, &inputs, frame, records, None, &lit));
+        }
         let ((), t) = job.ctx.run("rendering: inputs", |rec| {
-            let ins = (&inputs, &lit, &gbuf);
             inputs::record(rec, &mut marks, job, &passes, ins, builds.convert)
         })?;
         marks.split(&t, &mut records);
-
-        let (sh, ringing) = shading::sh_coefficients(job, &inputs, &lit, &objects, &mut gbuf);
-        let mc = match job.plan.mc {
-            Some(_) => {
-                let mc_pass = pass(&self.mc, || MonteCarlo::new(job.ctx))?;
-                let with = (self.converter()?, mc_pass);
-                shading::monte_carlo(job, with, &inputs, &gbuf, &mut records)?
-            }
-            None => None,
-        };
+        // Monte Carlo reads the host between its batches (an error target, a sampling table).
+        let mc_pass = pass(&self.mc, || MonteCarlo::new(job.ctx))?;
+        let with = (self.converter()?, mc_pass);
+        let mc = shading::monte_carlo(job, with, &inputs, &gbuf, &mut records)?;
         let with = Shading {
-            sh: &sh,
             mc: mc.as_ref(),
             sh_rotation: self.sh_rotation,
         };
-        let frame = shading::shade(
-            job,
-            shade,
-            (&inputs, &lit, &gbuf),
-            with,
-            builds.shade,
-            &mut records,
-        )?;
+        let frame = shading::shade(job, shade, ins, with, builds.shade, &mut records)?;
+        let mc = mc.map(|m| (m.samples, m.error));
+        Ok(self.rendered(job, &inputs, frame, records, mc, &lit))
+    }
+
+    /// What a render produced, the notes of its SH-BRDF objects' lighting added (from the
+    /// coefficients' host copy, read once the frame is done).
+    fn rendered(
+        &self,
+        job: &Job<'_>,
+        inputs: &Inputs,
+        frame: crate::math::envmap::EnvMap,
+        records: Vec<PassRecord>,
+        mc: Option<(u32, Option<f64>)>,
+        lit: &lights::Lit,
+    ) -> Rendered {
         let mut plan = job.plan.clone();
-        plan.notes.extend(ringing);
-        Ok(Rendered {
+        if let Some(host) = &inputs.sh_host {
+            let flat: Vec<f32> = host.read(crate::math::sh::count(job.plan.lmax) * 3);
+            let c = crate::passes::ShCoefficients::from_f32(job.plan.lmax, &flat).coeffs;
+            plan.notes.extend(shading::ringing_notes(job, &c));
+        }
+        Rendered {
             frame,
             records,
             plan,
-            mc: mc.map(|m| (m.samples, m.error)),
+            mc,
             lights_ms: lit.ms,
-        })
+        }
     }
 }
 

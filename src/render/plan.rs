@@ -624,6 +624,7 @@ impl PassKind {
                 ShRowsShared,
                 ShLatLongShared,
                 ShReduceShared,
+                ShPack,
             ],
             PassKind::ShBrdfTable => &[ShBrdf],
             PassKind::SplitSum => &[Dfg, PrefilterGgx],

@@ -113,22 +113,31 @@ impl Marks {
     }
 }
 
+/// Where an SH or SH-BRDF object's packed set starts (in coefficients), and whether it is
+/// the diffuse residual's; `None` for other objects.
+pub(super) type ShOffset = Option<(u32, bool)>;
+
 /// The G-buffer's object records for `scene` under `plan`: each object's technique and data
-/// offset (`pre_offsets`: its prefiltered map's, in texels), then the flags by which the
-/// shader adds back the lights `lit` holds. `chain_levels` is the split-sum chain's.
+/// offset (`pre_offsets`: its prefiltered map's, in texels; `sh_offsets`: an SH or SH-BRDF
+/// object's packed set's, in coefficients, and whether it is the diffuse residual's), then the
+/// flags by which the shader adds back the lights `lit` holds. `chain_levels` is the
+/// split-sum chain's.
 pub(super) fn gpu_objects(
     scene: &Scene,
     plan: &Plan,
     lit: &Lit,
-    pre_offsets: &[u32],
+    (pre_offsets, sh_offsets): (&[u32], &[ShOffset]),
     chain_levels: Option<u32>,
 ) -> Vec<GpuObject> {
     let mut objects: Vec<GpuObject> = scene
         .objects
         .iter()
         .zip(&plan.objects)
-        .zip(pre_offsets)
-        .map(|((o, p), &off)| planned_record(o, p, off))
+        .zip(pre_offsets.iter().zip(sh_offsets))
+        .map(|((o, p), (&off, sh))| match *sh {
+            Some((offset, residual)) => sh_record(o, p, offset, residual),
+            None => planned_record(o, p, off),
+        })
         .collect();
     if let (Some(levels), Some(split)) = (chain_levels, &plan.split) {
         let ss = &scene.split_sum;
@@ -178,15 +187,10 @@ pub(super) fn gpu_objects(
     objects
 }
 
-/// The record of an SH or SH-BRDF object once its coefficients are known: they start at
-/// `sh_offset` (in coefficient triples); `residual` where they are the diffuse residual's, the
-/// light clusters added by the shader.
-pub(super) fn sh_record(
-    o: &SceneObject,
-    p: &ObjectPlan,
-    sh_offset: u32,
-    residual: bool,
-) -> GpuObject {
+/// The record of an SH or SH-BRDF object: its coefficients start at `sh_offset` (in
+/// coefficients); `residual` where they are the diffuse residual's, the light clusters added
+/// by the shader.
+fn sh_record(o: &SceneObject, p: &ObjectPlan, sh_offset: u32, residual: bool) -> GpuObject {
     let mut g = planned_record(o, p, sh_offset);
     if residual {
         // extra.w = 1: the shader adds the light clusters.

@@ -1,79 +1,45 @@
-//! The shading stage: the SH coefficients each object reads (read back from the projection),
-//! the Monte Carlo accumulation, and the draw that shades every pixel.
+//! The shading stage: where each SH object's coefficients sit (packed on the GPU from the
+//! projection), the Monte Carlo accumulation, and the draw that shades every pixel.
 
-use super::inputs::Inputs;
+use super::inputs::{window_of, Inputs};
 use super::lights::Lit;
 use super::plan::PassKind;
-use super::records::{sh_record, Marks};
+use super::records::Marks;
 use super::{Job, PassRecord};
 use crate::error::{Error, Result};
 
+use crate::gpu::Recorder;
 use crate::math::envmap::EnvMap;
-use crate::math::sh::Window;
 use crate::math::{sh, Mapping};
-use crate::passes::gbuffer::{target, GBuffer, GpuObject};
+use crate::passes::gbuffer::{target, GBuffer};
+use crate::passes::map::Readback;
 use crate::passes::mc::{McEnv, McOptions, McResult};
-use crate::passes::shade::{Rotation, ShadeInputs};
-use crate::passes::{Converter, MonteCarlo, ShCoefficients, Shade};
+use crate::passes::shade::{Rotation, ShCoeffs, ShadeInputs};
+use crate::passes::GpuEnvMap;
+use crate::passes::{Converter, MonteCarlo, Shade};
 use crate::scene::Technique;
 
-/// Each SH object's coefficients, concatenated (with Â_l folded in for SH irradiance), and
-/// remarks where an SH-BRDF object's lighting rings negative. Rewrites the G-buffer's records
-/// of SH objects (`objects`) with their coefficients' offsets.
-pub(super) fn sh_coefficients(
-    job: &Job<'_>,
-    inputs: &Inputs,
-    lit: &Lit,
-    objects: &[GpuObject],
-    gbuf: &mut GBuffer,
-) -> (Vec<[f64; 3]>, Vec<String>) {
-    let mut sh_coeffs: Vec<[f64; 3]> = Vec::new();
+/// Remarks where an SH-BRDF object's lighting, the map's radiance coefficients `c` windowed,
+/// rings negative.
+pub(super) fn ringing_notes(job: &Job<'_>, c: &[[f64; 3]]) -> Vec<String> {
     let mut ringing = Vec::new();
-    let Some(out) = &inputs.sh_out else {
-        return (sh_coeffs, ringing);
-    };
-    let flat: Vec<f32> = out.read(sh::count(job.plan.lmax) * 3);
-    let c = ShCoefficients::from_f32(job.plan.lmax, &flat).coeffs;
-    // The residual's: the whole map's less the light texels'.
-    let c_res: Option<Vec<[f64; 3]>> = lit.sh_coeffs.as_ref().map(|l| {
-        c.iter()
-            .zip(l)
-            .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
-            .collect()
-    });
-    let mut objects = objects.to_vec();
-    let planned = job.scene.objects.iter().zip(&job.plan.objects);
-    for (k, (o, p)) in planned.enumerate() {
-        let offset = sh_coeffs.len() as u32;
-        match p.technique {
-            Technique::Sh { order } => {
-                objects[k] = sh_record(o, p, offset, c_res.is_some());
-                let c = c_res.as_ref().unwrap_or(&c);
-                sh_coeffs.extend(sh::irradiance_coeffs(&c[..sh::count(order)]));
-            }
-            Technique::ShBrdf { order, window, .. } => {
-                objects[k] = sh_record(o, p, offset, false);
-                let w = match window {
-                    Some(width) => Window::Hanning { width },
-                    None => Window::None,
-                };
-                let lighting = w.apply(&c[..sh::count(order)]);
-                let neg = sh::negativity(&lighting, &ringing_directions());
-                if neg.fraction > 0.0 {
-                    ringing.push(format!(
-                        "ringing: object {k}'s order-{order} lighting ({w:?}) is negative \
-                         on {:.1}% of the sphere, down to {:.2}% of its mean",
-                        100.0 * neg.fraction,
-                        100.0 * neg.worst
-                    ));
-                }
-                sh_coeffs.extend(lighting);
-            }
-            _ => {}
+    for (k, p) in job.plan.objects.iter().enumerate() {
+        let Technique::ShBrdf { order, window, .. } = p.technique else {
+            continue;
+        };
+        let w = window_of(window);
+        let lighting = w.apply(&c[..sh::count(order)]);
+        let neg = sh::negativity(&lighting, &ringing_directions());
+        if neg.fraction > 0.0 {
+            ringing.push(format!(
+                "ringing: object {k}'s order-{order} lighting ({w:?}) is negative \
+                 on {:.1}% of the sphere, down to {:.2}% of its mean",
+                100.0 * neg.fraction,
+                100.0 * neg.worst
+            ));
         }
     }
-    gbuf.objects.write(&objects);
-    (sh_coeffs, ringing)
+    ringing
 }
 
 /// Directions on which SH lighting's ringing is measured: a 64 × 32 lat-long grid's centres.
@@ -129,28 +95,29 @@ pub(super) fn monte_carlo(
     Ok(Some(res))
 }
 
-/// What the draw reads besides the G-buffer.
+/// What the draw reads besides the G-buffer and the inputs.
 pub(super) struct Shading<'a> {
-    pub sh: &'a [[f64; 3]],
     pub mc: Option<&'a McResult>,
     pub sh_rotation: Rotation,
 }
 
-/// Shades every pixel of `gbuf` with `shade` (once `shade_built` returns: its pipeline builds
-/// meanwhile) and reads the frame back; a pixel that is not finite is an error.
-pub(super) fn shade(
-    job: &Job<'_>,
-    shade: &Shade,
-    (inputs, lit, gbuf): (&Inputs, &Lit, &GBuffer),
-    with: Shading<'_>,
-    shade_built: impl FnOnce() -> Result<()>,
-    records: &mut Vec<PassRecord>,
-) -> Result<EnvMap> {
+/// A draw before it is recorded: the frame it shades into and what it reads.
+pub(super) struct Draw<'a> {
+    frame: GpuEnvMap,
+    inputs: ShadeInputs<'a>,
+}
+
+/// The draw that shades every pixel of `gbuf`, reading `inputs` and `lit`'s lights.
+pub(super) fn draw<'a>(
+    job: &Job<'a>,
+    (inputs, lit, gbuf): (&'a Inputs, &'a Lit, &GBuffer),
+    with: Shading<'a>,
+) -> Result<Draw<'a>> {
     let frame = target(job.ctx, "shaded frame", gbuf.width, gbuf.height)?;
     let inputs = ShadeInputs {
         env: &inputs.env,
         orientation: job.orientation,
-        sh: (!with.sh.is_empty()).then_some(with.sh),
+        sh: inputs.sh_packed.as_ref().map(ShCoeffs::Gpu),
         dp: inputs.dp.as_ref(),
         prefiltered: inputs.pre_buffer.as_ref(),
         mc: with.mc.map(|m| (&m.accum, m.samples)),
@@ -166,15 +133,26 @@ pub(super) fn shade(
         crate::passes::shade::code_mask(&inputs, gbuf),
         crate::passes::shade::code_bits(&job.plan.code)
     );
-    shade_built()?;
-    let mut marks = Marks(Vec::new());
-    let (readback, t) = job.ctx.run("rendering: shading", |rec| {
-        marks.record(rec, PassKind::Shade, |rec| {
-            shade.record(rec, gbuf, &inputs, &frame)
-        })?;
-        frame.record_download(rec, 0)
+    Ok(Draw { frame, inputs })
+}
+
+/// Records `draw` with `shade` and the frame's download.
+pub(super) fn record_draw(
+    rec: &mut Recorder,
+    marks: &mut Marks,
+    shade: &Shade,
+    gbuf: &GBuffer,
+    draw: &Draw<'_>,
+) -> Result<Readback> {
+    marks.record(rec, PassKind::Shade, |rec| {
+        shade.record(rec, gbuf, &draw.inputs, &draw.frame)
     })?;
-    marks.split(&t, records);
+    draw.frame.record_download(rec, 0)
+}
+
+/// The shaded frame from its download (once the work has completed); a pixel that is not
+/// finite is an error.
+pub(super) fn frame_of(readback: &Readback, gbuf: &GBuffer) -> Result<EnvMap> {
     let frame = EnvMap::new(
         Mapping::LatLong,
         gbuf.width,
@@ -198,4 +176,24 @@ pub(super) fn shade(
         )));
     }
     Ok(frame)
+}
+
+/// Shades every pixel of `gbuf` with `shade` in a submission of its own (once `shade_built`
+/// returns: its pipeline builds meanwhile) and reads the frame back.
+pub(super) fn shade(
+    job: &Job<'_>,
+    shade: &Shade,
+    (inputs, lit, gbuf): (&Inputs, &Lit, &GBuffer),
+    with: Shading<'_>,
+    shade_built: impl FnOnce() -> Result<()>,
+    records: &mut Vec<PassRecord>,
+) -> Result<EnvMap> {
+    let draw = draw(job, (inputs, lit, gbuf), with)?;
+    shade_built()?;
+    let mut marks = Marks(Vec::new());
+    let (readback, t) = job.ctx.run("rendering: shading", |rec| {
+        record_draw(rec, &mut marks, shade, gbuf, &draw)
+    })?;
+    marks.split(&t, records);
+    frame_of(&readback, gbuf)
 }

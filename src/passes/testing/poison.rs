@@ -15,6 +15,8 @@ pub enum PassId {
     Brute,
     /// `passes::convert`: the converted map.
     Convert,
+    /// `passes::extract`: the residual map and the light records.
+    Extract,
     /// `passes::gbuffer`: normals, positions and view directions.
     GBuffer,
     /// `passes::lights`: the light sums added to a cube level.
@@ -29,6 +31,8 @@ pub enum PassId {
     ShBrdf,
     /// `passes::sh_eval`: the irradiance map.
     ShEval,
+    /// `passes::sh_pack`: the packed coefficients.
+    ShPack,
     /// `passes::sh_project`: the coefficients.
     ShProject,
     /// `passes::shade`: the shaded frame.
@@ -39,9 +43,10 @@ pub enum PassId {
 
 impl PassId {
     /// Every pass, in the order above.
-    pub const ALL: [PassId; 12] = [
+    pub const ALL: [PassId; 14] = [
         PassId::Brute,
         PassId::Convert,
+        PassId::Extract,
         PassId::GBuffer,
         PassId::Lights,
         PassId::Map,
@@ -49,6 +54,7 @@ impl PassId {
         PassId::Mip,
         PassId::ShBrdf,
         PassId::ShEval,
+        PassId::ShPack,
         PassId::ShProject,
         PassId::Shade,
         PassId::SplitSum,
@@ -59,6 +65,7 @@ impl PassId {
         match self {
             PassId::Brute => "brute",
             PassId::Convert => "convert",
+            PassId::Extract => "extract",
             PassId::GBuffer => "gbuffer",
             PassId::Lights => "lights",
             PassId::Map => "map",
@@ -66,6 +73,7 @@ impl PassId {
             PassId::Mip => "mip",
             PassId::ShBrdf => "sh_brdf",
             PassId::ShEval => "sh_eval",
+            PassId::ShPack => "sh_pack",
             PassId::ShProject => "sh_project",
             PassId::Shade => "shade",
             PassId::SplitSum => "split_sum",

@@ -1,0 +1,383 @@
+//! Light extraction on the GPU (`glsl/extract.comp`, float64 twin
+//! [`crate::math::lights::extract`] without `fill`): the light texels of a map that lives on the
+//! GPU — an engine's own image that changes every frame — found, capped and compacted into a
+//! bounded record buffer with an indirect-dispatch count, and the residual map written beside
+//! them, with nothing read back and nothing waited for.
+//!
+//! The rule is the host's: a texel position holding part of the sphere is a light texel when its
+//! luminance Y exceeds τ = `ratio` × the map's mean luminance, the threshold raised where needed
+//! so that at most `max_texels` pass (it becomes the (max+1)-th brightest luminance, found
+//! exactly by a two-level radix select over Y's float bits). The mean is the SH projection's
+//! L00 × Y00, so the pass reads the coefficients a frame projects anyway (band 0 is enough,
+//! [`super::ShProjector::record_into`]). Residual plus lights equal the map to float32 rounding;
+//! texels above τ that the cap leaves out stay in the residual and are counted
+//! ([`ExtractStats::candidates`] − [`ExtractStats::kept`]). Texels with a NaN or infinite
+//! channel are zero in the residual and counted, so a broken frame leaves finite lights and a
+//! finite residual, and the next frame starts afresh.
+//!
+//! Light records are in no particular order (an atomic compaction). Steps, one pipeline:
+//! histogram of the top 16 bits of Y above τ; one workgroup selects the bin the cap falls in;
+//! an indirect dispatch (no workgroups unless the cap binds) histograms that bin's low bits; one
+//! workgroup selects the exact threshold; the compaction writes records and residual.
+
+use crate::abi::lights::{
+    extract_mode as mode, extract_word as word, EXTRACT_HEADER_WORDS, EXTRACT_LOW_BINS,
+    EXTRACT_RECORD_VEC4S, EXTRACT_TOP_BINS,
+};
+use crate::abi::{binding, push::ExtractPush, ShaderId, WORKGROUP_2D};
+use crate::error::{Error, Result};
+use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
+use crate::math::envmap::EnvMap;
+use crate::math::lights::ExtractOptions;
+use crate::math::{Mapping, Orientation};
+use crate::passes::testing::poison::{self, PassId};
+use crate::passes::{GpuEnvMap, ShProjector};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+/// What one extraction found, from its header.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExtractStats {
+    /// τ: the ratio times the mean luminance (infinite where the mean is not positive).
+    pub tau: f32,
+    /// The threshold the light texels exceed: τ, or higher where the cap binds.
+    pub threshold: f32,
+    /// Texel positions above τ.
+    pub candidates: u32,
+    /// Light texels kept (at most the cap; the rest stay in the residual).
+    pub kept: u32,
+    /// Texels with a NaN or infinite channel, zero in the residual.
+    pub nonfinite: u32,
+}
+
+/// One light record as the pass writes it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GpuLightTexel {
+    /// Layer, column and row of the texel position.
+    pub texel: [u32; 3],
+    /// Its centre direction (file frame).
+    pub dir: [f32; 3],
+    /// Its solid angle.
+    pub omega: f32,
+    /// Its excess radiance over the residual's clamp.
+    pub excess: [f32; 3],
+    /// The luminance of the value standing for it.
+    pub luminance: f32,
+}
+
+/// What [`Extractor::run`] reads back.
+#[derive(Clone, Debug)]
+pub struct Extracted {
+    /// The header's figures.
+    pub stats: ExtractStats,
+    /// The light records, in the order the GPU wrote them.
+    pub lights: Vec<GpuLightTexel>,
+    /// The residual map.
+    pub residual: EnvMap,
+}
+
+/// The GPU resources of an extraction, made once for a map's mapping and size and a cap and
+/// reused every frame: the state buffer (header, histograms, indirect arguments), the light
+/// records and the residual map.
+pub struct GpuExtraction {
+    state: Buffer,
+    lights: Buffer,
+    residual: GpuEnvMap,
+    max: u32,
+}
+
+impl GpuExtraction {
+    /// Resources for maps of `mapping`, `width` × `height`, keeping at most `max` light texels.
+    pub fn new(
+        ctx: &Context,
+        mapping: Mapping,
+        width: u32,
+        height: u32,
+        max: u32,
+    ) -> Result<GpuExtraction> {
+        if max == 0 {
+            return Err(Error::Invalid(
+                "a GPU light extraction needs room for at least one light texel".into(),
+            ));
+        }
+        let words = (EXTRACT_HEADER_WORDS + EXTRACT_TOP_BINS + EXTRACT_LOW_BINS) as u64;
+        let state = Buffer::new(
+            ctx,
+            "extraction state",
+            words * 4,
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC
+                | vk::BufferUsageFlags::INDIRECT_BUFFER,
+            MemoryLocation::GpuOnly,
+        )?;
+        let lights = Buffer::new(
+            ctx,
+            "extracted lights",
+            Self::record_bytes(max),
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+        )?;
+        let residual = GpuEnvMap::new(ctx, "extracted residual", mapping, width, height)?;
+        Ok(GpuExtraction {
+            state,
+            lights,
+            residual,
+            max,
+        })
+    }
+
+    /// Bytes of `max` light records.
+    pub fn record_bytes(max: u32) -> u64 {
+        max as u64 * EXTRACT_RECORD_VEC4S as u64 * 16
+    }
+
+    /// The state buffer: header words (`crate::abi::lights::extract_word`), then the
+    /// histograms. [`GpuExtraction::light_args`] is where an indirect dispatch over the
+    /// records reads its workgroup counts.
+    pub fn state(&self) -> &Buffer {
+        &self.state
+    }
+
+    /// Byte offset in [`GpuExtraction::state`] of the indirect arguments (x, 1, 1) for a
+    /// dispatch of 64-invocation workgroups over the kept light records.
+    pub fn light_args() -> u64 {
+        word::LIGHT_ARGS as u64 * 4
+    }
+
+    /// The light records (`EXTRACT_RECORD_VEC4S` vec4s each, see [`GpuLightTexel`]); the
+    /// count is the header's `KEPT` word.
+    pub fn lights(&self) -> &Buffer {
+        &self.lights
+    }
+
+    /// The residual map.
+    pub fn residual(&self) -> &GpuEnvMap {
+        &self.residual
+    }
+
+    /// The most light texels kept.
+    pub fn max(&self) -> u32 {
+        self.max
+    }
+
+    /// Whether these resources serve `map`.
+    pub fn fits(&self, map: &GpuEnvMap) -> bool {
+        (
+            self.residual.mapping,
+            self.residual.width,
+            self.residual.height,
+        ) == (map.mapping, map.width, map.height)
+    }
+}
+
+/// The extraction pass.
+pub struct Extractor {
+    ctx: Context,
+    pipeline: Pipeline,
+    sampler: Sampler,
+}
+
+impl Extractor {
+    /// Builds the pipeline.
+    pub fn new(ctx: &Context) -> Result<Extractor> {
+        Ok(Extractor {
+            ctx: ctx.clone(),
+            pipeline: Pipeline::compute(ctx, ShaderId::Extract, &WORKGROUP_2D)?,
+            sampler: Sampler::linear_clamp(ctx, "extraction")?,
+        })
+    }
+
+    /// Records the extraction of `map` by `ratio` (over the mean luminance, which `sh` —
+    /// the SH projection's output of this map, at least band 0 — gives) into `out`, keeping at
+    /// most `out.max()` light texels. Refused, naming the image, where `map` cannot be sampled
+    /// or `out` was made for another mapping or size. Span: "extract lights".
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        map: &GpuEnvMap,
+        sh: &Buffer,
+        ratio: f64,
+        out: &GpuExtraction,
+    ) -> Result<()> {
+        check_inputs(map, sh, ratio, out)?;
+        let size = [map.width, map.height];
+        let binds = [
+            (
+                binding::EXTRACT_MAP,
+                Bind::Sampled(&map.image, &self.sampler, false),
+            ),
+            (binding::EXTRACT_SH, Bind::Buffer(sh)),
+            (binding::EXTRACT_STATE, Bind::Buffer(&out.state)),
+            (binding::EXTRACT_LIGHTS, Bind::Buffer(&out.lights)),
+            (
+                binding::EXTRACT_RESIDUAL,
+                Bind::Storage(&out.residual.image),
+            ),
+        ];
+        let push = |m| ExtractPush {
+            size,
+            mapping: map.mapping.id(),
+            mode: m,
+            max: out.max,
+            ratio: ratio as f32,
+            pad: [0; 2],
+        };
+        let per_texel = [
+            groups(map.width, WORKGROUP_2D[0]),
+            groups(map.height, WORKGROUP_2D[1]),
+            map.mapping.layers(),
+        ];
+        rec.span("extract lights", |rec| {
+            rec.fill_buffer(&out.state, out.state.size(), 0);
+            rec.discard(&out.residual.image);
+            rec.dispatch(&self.pipeline, &binds, &push(mode::HISTOGRAM), per_texel)?;
+            rec.dispatch(&self.pipeline, &binds, &push(mode::SELECT_TOP), [1, 1, 1])?;
+            let low = (&out.state, word::LOW_ARGS as u64 * 4);
+            rec.dispatch_indirect(&self.pipeline, &binds, &push(mode::HISTOGRAM_LOW), low)?;
+            rec.dispatch(&self.pipeline, &binds, &push(mode::SELECT_LOW), [1, 1, 1])?;
+            rec.dispatch(&self.pipeline, &binds, &push(mode::COMPACT), per_texel)
+        })?;
+        poison::image(rec, PassId::Extract, &out.residual.image, 0..1)?;
+        // Excess radiance scaled; the direction's x and the excess's red negated by the mirror.
+        let floats = poison::Floats {
+            first: 0,
+            count: out.max * 12,
+            stride: 12,
+            scale_mask: 0b111_0000,
+            mirror_mask: 0b1_0001,
+            sh: None,
+        };
+        poison::buffer(rec, PassId::Extract, &out.lights, floats)
+    }
+
+    /// Uploads `map`, projects its band 0, extracts by `opts` (no `fill`) and reads everything
+    /// back, waiting (for tests and one-off jobs).
+    pub fn run(&self, map: &EnvMap, opts: &ExtractOptions) -> Result<(Extracted, Vec<Timing>)> {
+        let gpu = GpuEnvMap::upload(&self.ctx, map)?;
+        self.run_on(&gpu, opts)
+    }
+
+    /// [`Extractor::run`] on a map already on the GPU.
+    pub fn run_on(
+        &self,
+        gpu: &GpuEnvMap,
+        opts: &ExtractOptions,
+    ) -> Result<(Extracted, Vec<Timing>)> {
+        if opts.fill.is_some() {
+            return Err(Error::Invalid(
+                "the GPU light extraction clamps the residual; it has no fill".into(),
+            ));
+        }
+        let max = u32::try_from(opts.max_texels)
+            .map_err(|_| Error::Invalid(format!("{} light texels", opts.max_texels)))?;
+        let out = GpuExtraction::new(&self.ctx, gpu.mapping, gpu.width, gpu.height, max)?;
+        let projector = ShProjector::new(&self.ctx, crate::passes::Subgroups::Auto)?;
+        let sh = Buffer::new(
+            &self.ctx,
+            "extraction L00",
+            ShProjector::output_bytes(0),
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        let words = EXTRACT_HEADER_WORDS as usize;
+        let host = |name, bytes| {
+            Buffer::new(
+                &self.ctx,
+                name,
+                bytes,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )
+        };
+        let header = host("extraction header", words as u64 * 4)?;
+        let records = host("extraction records", out.lights.size())?;
+        let ((residual, ()), t) = self.ctx.run("extracting lights", |rec| {
+            projector.record_into(rec, gpu, 0, &Orientation::default(), &sh)?;
+            self.record(rec, gpu, &sh, opts.ratio, &out)?;
+            rec.copy_buffer(&out.state, &header, words as u64 * 4);
+            rec.copy_buffer(&out.lights, &records, out.lights.size());
+            rec.use_buffer(&header, Usage::HostRead);
+            rec.use_buffer(&records, Usage::HostRead);
+            Ok((out.residual.record_download(rec, 0)?, ()))
+        })?;
+        let h: Vec<u32> = header.read(words);
+        let stats = ExtractStats {
+            tau: f32::from_bits(h[word::TAU as usize]),
+            threshold: f32::from_bits(h[word::THRESHOLD as usize]),
+            candidates: h[word::CANDIDATES as usize],
+            kept: h[word::KEPT as usize],
+            nonfinite: h[word::NONFINITE as usize],
+        };
+        let written = h[word::COUNTER as usize].min(max) as usize;
+        let raw: Vec<[u32; 12]> = records.read(written);
+        let lights = raw.iter().map(record_of).collect();
+        let texels = residual.read();
+        let residual = EnvMap::new(
+            gpu.mapping,
+            gpu.width,
+            gpu.height,
+            texels.into_iter().map(|t| [t[0], t[1], t[2]]).collect(),
+        );
+        Ok((
+            Extracted {
+                stats,
+                lights,
+                residual,
+            },
+            t,
+        ))
+    }
+}
+
+/// A record from its twelve words.
+fn record_of(r: &[u32; 12]) -> GpuLightTexel {
+    let f = |k: usize| f32::from_bits(r[k]);
+    GpuLightTexel {
+        dir: [f(0), f(1), f(2)],
+        omega: f(3),
+        excess: [f(4), f(5), f(6)],
+        luminance: f(7),
+        texel: [r[8], r[9], r[10]],
+    }
+}
+
+/// The checks [`Extractor::record`] makes before recording anything.
+fn check_inputs(map: &GpuEnvMap, sh: &Buffer, ratio: f64, out: &GpuExtraction) -> Result<()> {
+    let name = map.image.name();
+    if !map
+        .image
+        .desc()
+        .usage
+        .contains(vk::ImageUsageFlags::SAMPLED)
+    {
+        return Err(Error::Invalid(format!(
+            "light extraction: the image '{name}' was made without SAMPLED usage, which the \
+             extraction reads it through"
+        )));
+    }
+    if !out.fits(map) {
+        let r = &out.residual;
+        return Err(Error::Invalid(format!(
+            "light extraction: the image '{name}' is a {} x {} {} map, but the extraction's \
+             resources were made for {} x {} {} maps",
+            map.width,
+            map.height,
+            map.mapping.name(),
+            r.width,
+            r.height,
+            r.mapping.name()
+        )));
+    }
+    if sh.size() < ShProjector::output_bytes(0) {
+        return Err(Error::Invalid(
+            "light extraction: the SH buffer holds no band-0 coefficient".into(),
+        ));
+    }
+    if !(ratio.is_finite() && ratio > 0.0) {
+        return Err(Error::Invalid(format!(
+            "light extraction: the ratio {ratio} is not a positive number"
+        )));
+    }
+    Ok(())
+}

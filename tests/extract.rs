@@ -1,0 +1,203 @@
+//! Light extraction on the GPU (`passes::extract`): against the float64 twin on every mapping,
+//! the cap's exact threshold with ties, power conserved, non-finite texels, resources reused
+//! from frame to frame, and refused inputs.
+
+mod common;
+#[path = "twins/extract.rs"]
+mod twin;
+
+use envlight::gpu::{Buffer, Image, ImageDesc};
+use envlight::math::envmap::luminance;
+use envlight::math::lights::{extract, ExtractOptions};
+use envlight::math::Mapping;
+use envlight::passes::map::{map_desc, FORMAT};
+use envlight::passes::{Extractor, GpuEnvMap, GpuExtraction};
+use envlight::EnvMap;
+
+/// Every mapping's sun sky, uncapped and capped, within 1e-5 of the host's rule (see the twin).
+#[test]
+fn extraction_matches_the_float64_twin_on_every_mapping() {
+    let ctx = common::ctx();
+    twin::check(&ctx);
+    common::finish(ctx);
+}
+
+/// A lat-long map with 900 distinct bright texels and a plateau of 41 equal ones where the cap
+/// falls: the GPU keeps exactly the host's texels (all brighter than the plateau, none of it,
+/// as the host's strict rule does), its threshold is the plateau's luminance, the texels the
+/// cap leaves out stay whole in the residual and are counted, and power is conserved.
+#[test]
+fn the_cap_keeps_the_host_texels_and_counts_the_rest() {
+    let ctx = common::ctx();
+    let (w, h) = (64u32, 32u32);
+    let mut texels = vec![[0.2f32, 0.3, 0.4]; (w * h) as usize];
+    // 900 bright texels, luminance rising in steps of 0.37 from 50 (all distinct); the
+    // plateau: 40 more at the luminance of the 250th brightest, so the 256th falls in it.
+    for k in 0..900usize {
+        let v = 50.0 + k as f32 * 0.37;
+        texels[(k * 2 + 100) % (w * h) as usize] = [v, v * 0.9, v * 0.8];
+    }
+    let plateau = texels[(650 * 2 + 100) % (w * h) as usize];
+    for k in 0..40usize {
+        texels[k * 13 + 1] = plateau;
+    }
+    let map = EnvMap::new(Mapping::LatLong, w, h, texels);
+    let opts = ExtractOptions {
+        ratio: 2.0,
+        max_texels: 256,
+        fill: None,
+    };
+    let ex = Extractor::new(&ctx).unwrap();
+    let (got, _) = ex.run(&map, &opts).unwrap();
+    let want = extract(&map, &opts);
+    let y_plateau = luminance(plateau.map(f64::from));
+    assert!(
+        (want.threshold - y_plateau).abs() < 1e-9 * y_plateau,
+        "the plateau sets the host's threshold"
+    );
+    assert!(want.lights.len() < 256, "ties at the cap are all left out");
+    let mut g: Vec<_> = got.lights.iter().map(|l| l.texel).collect();
+    let mut w_: Vec<_> = want.lights.iter().map(|l| [l.layer, l.i, l.j]).collect();
+    g.sort_unstable();
+    w_.sort_unstable();
+    assert_eq!(g, w_, "the GPU keeps the host's light texels");
+    let rel = (got.stats.threshold as f64 - y_plateau).abs() / y_plateau;
+    assert!(
+        rel < 1e-6,
+        "threshold {} vs {y_plateau}",
+        got.stats.threshold
+    );
+    let above_tau = map
+        .texels
+        .iter()
+        .filter(|t| luminance(t.map(f64::from)) > got.stats.tau as f64)
+        .count();
+    assert_eq!(
+        got.stats.candidates as usize, above_tau,
+        "every texel above τ counted"
+    );
+    assert_eq!(got.stats.kept as usize, want.lights.len());
+    eprintln!(
+        "cap 256: {} texels above τ {}, {} kept, threshold {}",
+        got.stats.candidates, got.stats.tau, got.stats.kept, got.stats.threshold
+    );
+    assert!(
+        got.stats.candidates > 256 && got.stats.candidates - got.stats.kept >= 41,
+        "the cap binds and what it leaves out is counted"
+    );
+    // Left out by the cap: whole in the residual.
+    for (k, (r, t)) in got.residual.texels.iter().zip(&map.texels).enumerate() {
+        let y = luminance(t.map(f64::from));
+        if y <= y_plateau {
+            assert_eq!(r, t, "texel {k} at or below the threshold is kept whole");
+        }
+    }
+    let (p, q) = (twin::power(&map), twin::split_power(&got));
+    assert!((q - p).abs() < 1e-5 * p, "power {q} vs {p}");
+    drop(ex);
+    common::finish(ctx);
+}
+
+/// One frame's map holds a NaN and an infinite texel: its residual is finite (those texels
+/// zero), they are counted, every record is finite, and its mean (L00) is not finite, so
+/// nothing is extracted that frame. The next frame, through the same resources, extracts the
+/// clean map as the host does.
+#[test]
+fn nonfinite_texels_are_zero_and_counted_and_the_next_frame_recovers() {
+    let ctx = common::ctx();
+    let clean = twin::sky(Mapping::LatLong, 64);
+    let mut texels: Vec<[f32; 4]> = clean
+        .texels
+        .iter()
+        .map(|t| [t[0], t[1], t[2], 1.0])
+        .collect();
+    texels[70][1] = f32::NAN;
+    texels[900][0] = f32::INFINITY;
+    let map = GpuEnvMap::new(&ctx, "frame map", Mapping::LatLong, 64, 32).unwrap();
+    let mut staging = Buffer::new(
+        &ctx,
+        "frame texels",
+        (texels.len() * 16) as u64,
+        ash::vk::BufferUsageFlags::TRANSFER_SRC,
+        gpu_allocator::MemoryLocation::CpuToGpu,
+    )
+    .unwrap();
+    staging.write(&texels);
+    let ex = Extractor::new(&ctx).unwrap();
+    let opts = ExtractOptions {
+        ratio: 32.0,
+        max_texels: 256,
+        fill: None,
+    };
+    ctx.run("a broken frame's map", |rec| {
+        rec.copy_buffer_to_image(&staging, &map.image, 0, true);
+        Ok(())
+    })
+    .unwrap();
+    let (broken, _) = ex.run_on(&map, &opts).unwrap();
+    assert_eq!(broken.stats.nonfinite, 2, "both texels counted");
+    assert!(broken
+        .residual
+        .texels
+        .iter()
+        .flatten()
+        .all(|c| c.is_finite()));
+    assert_eq!(broken.residual.texels[70], [0.0; 3]);
+    assert_eq!(broken.residual.texels[900], [0.0; 3]);
+    assert_eq!(
+        broken.residual.texels[71], clean.texels[71],
+        "the rest untouched"
+    );
+    assert!(
+        broken.lights.is_empty(),
+        "a non-finite mean extracts nothing"
+    );
+    // The next frame: the clean map through the same resources.
+    let up = ctx.run("the next frame's map", |rec| map.record_upload(rec, &clean));
+    up.unwrap();
+    let (next, _) = ex.run_on(&map, &opts).unwrap();
+    let want = extract(&clean, &opts);
+    assert_eq!(next.stats.nonfinite, 0);
+    assert_eq!(next.lights.len(), want.lights.len(), "the sun is back");
+    drop((ex, map, staging));
+    common::finish(ctx);
+}
+
+/// An image without SAMPLED usage, and resources made for another size, are refused when the
+/// pass records, naming the image; nothing reaches the device (validation stays silent).
+#[test]
+fn unusable_images_are_refused_naming_them() {
+    let ctx = common::ctx();
+    let ex = Extractor::new(&ctx).unwrap();
+    let sh = Buffer::storage(&ctx, "sh", &[1.0f32; 3]).unwrap();
+    let out = GpuExtraction::new(&ctx, Mapping::LatLong, 64, 32, 16).unwrap();
+    let desc = ImageDesc {
+        usage: ash::vk::ImageUsageFlags::STORAGE | ash::vk::ImageUsageFlags::TRANSFER_DST,
+        ..map_desc(Mapping::LatLong, 64, 32, 1)
+    };
+    assert_eq!(desc.format, FORMAT);
+    let unsampled = GpuEnvMap::from_image(
+        Image::new(&ctx, "engine sky (storage only)", desc).unwrap(),
+        Mapping::LatLong,
+    );
+    let err = ctx
+        .run("refused", |rec| ex.record(rec, &unsampled, &sh, 32.0, &out))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("engine sky (storage only)") && err.contains("SAMPLED"),
+        "{err}"
+    );
+    let other = GpuEnvMap::new(&ctx, "engine sky 128", Mapping::LatLong, 128, 64).unwrap();
+    let err = ctx
+        .run("refused", |rec| ex.record(rec, &other, &sh, 32.0, &out))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("engine sky 128") && err.contains("64 x 32"),
+        "{err}"
+    );
+    assert!(GpuExtraction::new(&ctx, Mapping::Cube, 8, 8, 0).is_err());
+    drop((ex, sh, out, unsampled, other));
+    common::finish(ctx);
+}

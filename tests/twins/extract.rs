@@ -1,0 +1,193 @@
+//! The GPU light extraction against its float64 twin (`math::lights::extract`, no fill).
+//! `tests/extract.rs` runs it; `tests/mutation.rs` runs it on the pass's poisoned outputs.
+#![allow(dead_code, unused_imports)]
+
+use crate::common::compare::Errors;
+use envlight::gpu::Context;
+use envlight::math::envmap::luminance;
+use envlight::math::lights::{extract, ExtractOptions};
+use envlight::math::synth::Sky;
+use envlight::math::Mapping;
+use envlight::passes::extract::Extracted;
+use envlight::passes::Extractor;
+use envlight::EnvMap;
+use std::collections::HashMap;
+
+/// The bound [`check`] holds the threshold, every light's excess (relative to its luminance)
+/// and every residual texel (relative to the threshold) to: the GPU's mean is the SH
+/// projection's float32 L00 (within ~1e-6 of the float64 sum) and its luminances are float32.
+pub const BOUND: f64 = 1e-5;
+
+/// Texels whose luminance lies this close (relative) to the threshold may fall on either side
+/// of it in float32 and float64; they are left out of the set comparison and counted.
+pub const NEAR: f64 = 1e-5;
+
+/// The sun sky at `size` in `mapping`, its sun 3° across (at least a sample of every map
+/// here falls in it) at 5·10⁴ times the zenith.
+pub fn sky(mapping: Mapping, size: u32) -> EnvMap {
+    sky_with(mapping, size, 3.0, 5e4)
+}
+
+/// A sky whose sun is `radius_deg` in radius and `ratio` times the zenith.
+pub fn sky_with(mapping: Mapping, size: u32, radius_deg: f64, ratio: f64) -> EnvMap {
+    let sky = Sky {
+        sun_radius: radius_deg.to_radians(),
+        sun_ratio: ratio,
+        ..Sky::default()
+    };
+    let (w, h) = mapping.extent_for_size(size);
+    EnvMap::from_fn(mapping, w, h, 2, move |d| sky.radiance(d))
+}
+
+/// [`sky`] with a broad glow (peak 200, about 13° wide) low in the west: dozens of texels
+/// above twice the mean luminance, graded (no plateau for the cap to fall in).
+pub fn glow_sky(mapping: Mapping, size: u32) -> EnvMap {
+    let sky = Sky {
+        sun_radius: 3f64.to_radians(),
+        ..Sky::default()
+    };
+    let glow = glam::DVec3::new(-0.8, 0.2, 0.3).normalize();
+    let (w, h) = mapping.extent_for_size(size);
+    EnvMap::from_fn(mapping, w, h, 2, move |d| {
+        let g = 200.0 * (20.0 * (d.dot(glow) - 1.0)).exp();
+        sky.radiance(d).map(|c| c + g)
+    })
+}
+
+/// Power of a map: Σ Y·ω over the texels that hold the sphere.
+pub fn power(map: &EnvMap) -> f64 {
+    let mut p = 0.0;
+    map.for_each_texel(|_, _, _, t, o| p += luminance(t.map(f64::from)) * o);
+    p
+}
+
+/// Power of the residual plus the light records' excess: the map's, to float32 rounding.
+pub fn split_power(got: &Extracted) -> f64 {
+    power(&got.residual)
+        + got
+            .lights
+            .iter()
+            .map(|l| luminance(l.excess.map(f64::from)) * l.omega as f64)
+            .sum::<f64>()
+}
+
+/// The GPU extraction of `map` by `opts` against the host's: the threshold, the set of light
+/// texels (but for those within [`NEAR`] of the threshold), each light's excess, direction and
+/// solid angle, every residual texel, and power conserved. Returns the worst error.
+pub fn compare(ex: &Extractor, map: &EnvMap, opts: &ExtractOptions) -> (Extracted, f64) {
+    let (got, t) = ex.run(map, opts).unwrap();
+    assert!(t.iter().any(|t| t.label == "extract lights"));
+    let want = extract(map, opts);
+    let thr = want.threshold;
+    assert!(
+        thr.is_finite() && !want.lights.is_empty(),
+        "a map with lights: {:?} threshold {thr}, max luminance {}, power {}",
+        map.mapping,
+        crate::common::compare::max_of(map.texels.iter().map(|t| luminance(t.map(f64::from)))),
+        power(map)
+    );
+    let mut errors = Errors::new();
+    errors.rel(got.stats.threshold, thr, 0.0, ("threshold", 0, 0, 0));
+    assert_eq!(got.stats.kept as usize, got.lights.len(), "kept = records");
+    let host: HashMap<[u32; 3], _> = want
+        .lights
+        .iter()
+        .map(|l| ([l.layer, l.i, l.j], l))
+        .collect();
+    let near = |y: f64| ((y - thr) / thr).abs() < NEAR;
+    let mut matched = 0;
+    for g in &got.lights {
+        let [layer, i, j] = g.texel;
+        let Some(h) = host.get(&g.texel) else {
+            assert!(
+                near(g.luminance as f64),
+                "GPU light {:?} (Y {}) not the host's",
+                g.texel,
+                g.luminance
+            );
+            continue;
+        };
+        matched += 1;
+        let y = luminance(map.texel(layer, i, j).map(f64::from)).max(g.luminance as f64);
+        for c in 0..3 {
+            errors.add(
+                ((g.excess[c] - h.radiance[c]) as f64).abs() / y,
+                ("excess", layer, i, j),
+            );
+            errors.abs(g.dir[c], h.dir[c], ("dir", layer, i, j));
+        }
+        errors.rel(g.omega, h.omega, 0.0, ("omega", layer, i, j));
+    }
+    let gpu_set: std::collections::HashSet<_> = got.lights.iter().map(|g| g.texel).collect();
+    for h in &want.lights {
+        let y = luminance(map.texel(h.layer, h.i, h.j).map(f64::from));
+        assert!(
+            gpu_set.contains(&[h.layer, h.i, h.j]) || near(y),
+            "host light {:?} missing on the GPU",
+            (h.layer, h.i, h.j)
+        );
+    }
+    assert!(matched > 0 && matched + 4 >= want.lights.len());
+    for (k, (g, w)) in got
+        .residual
+        .texels
+        .iter()
+        .zip(&want.residual.texels)
+        .enumerate()
+    {
+        let y = luminance(map.texels[k].map(f64::from));
+        if near(y) {
+            continue;
+        }
+        for c in 0..3 {
+            errors.add(
+                ((g[c] - w[c]) as f64).abs() / thr,
+                ("residual", k as u32, c as u32, 0),
+            );
+        }
+    }
+    let (p, q) = (power(map), split_power(&got));
+    errors.rel(q, p, 0.0, ("power", 0, 0, 0));
+    eprintln!(
+        "extract {:?} {}x{} ratio {} cap {}: {} lights ({} above τ), worst {:.2e} at {:?}",
+        map.mapping,
+        map.width,
+        map.height,
+        opts.ratio,
+        opts.max_texels,
+        got.lights.len(),
+        got.stats.candidates,
+        errors.worst(),
+        errors.at()
+    );
+    errors.assert_within(BOUND, "GPU light extraction");
+    let worst = errors.worst();
+    (got, worst)
+}
+
+/// Each mapping's sun sky extracted as bakes do (32× the mean, at most 256: the sun alone),
+/// and the sun sky with a broad glow as renders extract for diffuse techniques (2× the mean)
+/// capped at 16, so that the cap binds and the threshold is the 17th brightest luminance:
+/// within [`BOUND`].
+pub fn check(ctx: &Context) {
+    let ex = Extractor::new(ctx).unwrap();
+    for (mapping, size) in [
+        (Mapping::LatLong, 64),
+        (Mapping::Cube, 16),
+        (Mapping::Angular, 48),
+        (Mapping::DualParaboloid, 24),
+    ] {
+        for (map, ratio, max_texels) in [
+            (sky(mapping, size), 32.0, 256),
+            (glow_sky(mapping, size), 2.0, 16),
+        ] {
+            let opts = ExtractOptions {
+                ratio,
+                max_texels,
+                fill: None,
+            };
+            let (got, _) = compare(&ex, &map, &opts);
+            assert!(ratio > 2.0 || got.stats.candidates > 16, "the cap binds");
+        }
+    }
+}
