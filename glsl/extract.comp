@@ -9,7 +9,9 @@
 // of no workgroups where the cap does not bind), the exact key. The mean comes from the SH
 // projection's L00 (mean = L00 · Y00), so nothing is read back. A light keeps L·(1 − thr/Y),
 // the residual L·thr/Y; texels with a NaN or infinite channel are zero in the residual and
-// counted. Records are in no particular order (atomic compaction).
+// counted. Records are in no particular order (atomic compaction). Built twice: the per-texel
+// steps, and with EXTRACT_SELECT the one-workgroup selects (their barriers and shared memory
+// kept out of the per-texel steps).
 #extension GL_GOOGLE_include_directive : require
 #include "generated.glsl"
 #include "mappings.glsl"
@@ -36,7 +38,6 @@ const uint LOW = EXTRACT_HEADER_WORDS + EXTRACT_TOP_BINS;
 const uint NO_BIN = 0xffffffffu;
 // Y00 = K00 (the generated SH_K table).
 
-shared uint chunk_sums[gl_WorkGroupSize.x * gl_WorkGroupSize.y];
 
 // τ, or +inf where the mean is not positive and finite (nothing is a light).
 float tau() {
@@ -63,6 +64,60 @@ bool source_value(ivec2 p, uint layer, out vec3 l, out bool own) {
 float lum(vec3 l) {
     return finite3(l) ? dot(LUMINANCE, l) : 0.0;
 }
+
+// Per texel: the histograms (HISTOGRAM, HISTOGRAM_LOW) or the records and residual (COMPACT).
+void per_texel() {
+    uvec3 id = gl_GlobalInvocationID;
+    if (any(greaterThanEqual(id.xy, pc.size)) || id.z >= mapping_layers(pc.mapping)) return;
+    ivec2 p = ivec2(id.xy);
+    vec3 l = vec3(0.0);
+    bool own;
+    bool counted = source_value(p, id.z, l, own);
+    bool good = finite3(l);
+    float y = counted ? lum(l) : 0.0;
+    float t = tau();
+    if (pc.mode == EXTRACT_MODE_HISTOGRAM) {
+        if (id == uvec3(0u)) state[EXTRACT_WORD_TAU] = floatBitsToUint(t);
+        if (counted && own && !good) atomicAdd(state[EXTRACT_WORD_NONFINITE], 1u);
+        if (y > t) {
+            atomicAdd(state[EXTRACT_WORD_CANDIDATES], 1u);
+            atomicAdd(state[TOP + (floatBitsToUint(y) >> 16)], 1u);
+        }
+        return;
+    }
+    if (pc.mode == EXTRACT_MODE_HISTOGRAM_LOW) {
+        uint key = floatBitsToUint(y);
+        if (y > t && (key >> 16) == state[EXTRACT_WORD_BIN]) {
+            atomicAdd(state[LOW + (key & 0xffffu)], 1u);
+        }
+        return;
+    }
+    float thr = uintBitsToFloat(state[EXTRACT_WORD_THRESHOLD]);
+    vec3 kept = good ? l : vec3(0.0);
+    if (y > thr && y > t) {
+        vec3 r = l * (thr / y);
+        if (own) kept = r;
+        uint k = atomicAdd(state[EXTRACT_WORD_COUNTER], 1u);
+        if (k < pc.max) {
+            vec2 uv = (vec2(p) + 0.5) / vec2(pc.size);
+            vec3 dir = coord_to_dir(pc.mapping, Coord(id.z, uv));
+            float omega = texel_solid_angle(pc.mapping, pc.size, p);
+            records[k].dir_omega = vec4(dir, omega);
+            records[k].excess_y = vec4(l - r, y);
+            records[k].texel = uvec4(id.z, id.xy, 0u);
+            atomicMax(state[EXTRACT_WORD_OMEGA_MAX], floatBitsToUint(omega));
+        }
+    }
+    if (!own) {
+        // A rim or caption texel: stored as is (finite), its value stands elsewhere.
+        vec3 v = texelFetch(map_, ivec3(p, id.z), 0).rgb;
+        kept = finite3(v) ? v : vec3(0.0);
+    }
+    imageStore(residual, ivec3(p, id.z), vec4(kept, 1.0));
+}
+
+#ifdef EXTRACT_SELECT
+shared uint chunk_sums[gl_WorkGroupSize.x * gl_WorkGroupSize.y];
 
 // One workgroup: the bin, from the top of `bins` bins at `base`, where the running count from
 // the top first exceeds `target`; `above` the count in the bins above it.
@@ -138,61 +193,16 @@ void select_low() {
     write_light_args(state[EXTRACT_WORD_KEPT] + above);
 }
 
-// Per texel: the histograms (HISTOGRAM, HISTOGRAM_LOW) or the records and residual (COMPACT).
-void per_texel() {
-    uvec3 id = gl_GlobalInvocationID;
-    if (any(greaterThanEqual(id.xy, pc.size)) || id.z >= mapping_layers(pc.mapping)) return;
-    ivec2 p = ivec2(id.xy);
-    vec3 l = vec3(0.0);
-    bool own;
-    bool counted = source_value(p, id.z, l, own);
-    bool good = finite3(l);
-    float y = counted ? lum(l) : 0.0;
-    float t = tau();
-    if (pc.mode == EXTRACT_MODE_HISTOGRAM) {
-        if (id == uvec3(0u)) state[EXTRACT_WORD_TAU] = floatBitsToUint(t);
-        if (counted && own && !good) atomicAdd(state[EXTRACT_WORD_NONFINITE], 1u);
-        if (y > t) {
-            atomicAdd(state[EXTRACT_WORD_CANDIDATES], 1u);
-            atomicAdd(state[TOP + (floatBitsToUint(y) >> 16)], 1u);
-        }
-        return;
-    }
-    if (pc.mode == EXTRACT_MODE_HISTOGRAM_LOW) {
-        uint key = floatBitsToUint(y);
-        if (y > t && (key >> 16) == state[EXTRACT_WORD_BIN]) {
-            atomicAdd(state[LOW + (key & 0xffffu)], 1u);
-        }
-        return;
-    }
-    float thr = uintBitsToFloat(state[EXTRACT_WORD_THRESHOLD]);
-    vec3 kept = good ? l : vec3(0.0);
-    if (y > thr && y > t) {
-        vec3 r = l * (thr / y);
-        if (own) kept = r;
-        uint k = atomicAdd(state[EXTRACT_WORD_COUNTER], 1u);
-        if (k < pc.max) {
-            vec2 uv = (vec2(p) + 0.5) / vec2(pc.size);
-            vec3 dir = coord_to_dir(pc.mapping, Coord(id.z, uv));
-            records[k].dir_omega = vec4(dir, texel_solid_angle(pc.mapping, pc.size, p));
-            records[k].excess_y = vec4(l - r, y);
-            records[k].texel = uvec4(id.z, id.xy, 0u);
-        }
-    }
-    if (!own) {
-        // A rim or caption texel: stored as is (finite), its value stands elsewhere.
-        vec3 v = texelFetch(map_, ivec3(p, id.z), 0).rgb;
-        kept = finite3(v) ? v : vec3(0.0);
-    }
-    imageStore(residual, ivec3(p, id.z), vec4(kept, 1.0));
-}
+#endif
 
 void main() {
+#ifdef EXTRACT_SELECT
     if (pc.mode == EXTRACT_MODE_SELECT_TOP) {
         select_top();
-    } else if (pc.mode == EXTRACT_MODE_SELECT_LOW) {
-        select_low();
     } else {
-        per_texel();
+        select_low();
     }
+#else
+    per_texel();
+#endif
 }

@@ -187,4 +187,10 @@ bindings! {
     EXTRACT_LIGHTS = 3;
     /// extract: the residual map (rgba32f image2DArray).
     EXTRACT_RESIDUAL = 4;
+    /// extract_add: the extraction's state (its count and largest solid angle).
+    EXTRACT_ADD_STATE = 0;
+    /// extract_add: the extraction's light records.
+    EXTRACT_ADD_LIGHTS = 1;
+    /// extract_add: the cube level the filtered lights are added to (rgba32f image2DArray).
+    EXTRACT_ADD_DST = 2;
 }

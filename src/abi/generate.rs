@@ -102,6 +102,7 @@ fn define_sizes_and_lights(s: &mut String) {
     use lights::extract_word as w;
     for (name, v) in [
         ("LOW_ARGS", w::LOW_ARGS),
+        ("OMEGA_MAX", w::OMEGA_MAX),
         ("LIGHT_ARGS", w::LIGHT_ARGS),
         ("CANDIDATES", w::CANDIDATES),
         ("KEPT", w::KEPT),

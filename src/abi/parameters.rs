@@ -294,6 +294,9 @@ pub mod lights {
         /// Workgroups (x, y, z) of the second histogram's indirect dispatch: none unless
         /// the cap binds.
         pub const LOW_ARGS: u32 = 0;
+        /// The largest kept light texel's solid angle, f32 bits (the word after LOW_ARGS'
+        /// three): its quadrature's cells, as `math::lights::cells_for`.
+        pub const OMEGA_MAX: u32 = 3;
         /// Workgroups (x, 1, 1) of 64 invocations for a pass over the light records.
         pub const LIGHT_ARGS: u32 = 4;
         /// Texels above the ratio's threshold τ.

@@ -325,6 +325,25 @@ push_blocks! {
         /// Padding.
         pad: [u32; 2] = "uint[2]",
     }
+    /// `glsl/extract_add.comp`.
+    ExtractAddPush {
+        /// Rows of the file → world rotation/reflection (w unused).
+        file_to_world: [[f32; 4]; 3] = "vec4[3]",
+        /// Layer size of the map the lights were extracted from.
+        map_size: [u32; 2] = "uvec2",
+        /// Its mapping id.
+        mapping: u32 = "uint",
+        /// Side of the cube level written.
+        size: u32 = "uint",
+        /// `lights::KERNEL_COSINE` or `KERNEL_GGX`.
+        kernel: u32 = "uint",
+        /// GGX α.
+        alpha: f32 = "float",
+        /// 1 / ∫ K dω (1 for the cosine).
+        inv_norm: f32 = "float",
+        /// Padding.
+        pad: u32 = "uint",
+    }
     /// `glsl/lights.comp`.
     LightsPush {
         /// Side of the level written (a cube face).

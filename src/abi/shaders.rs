@@ -355,11 +355,23 @@ macro_rules! shader_table {
             /// Light texels (extracted from a map) added exactly to a cube level.
             Lights = "lights", "lights.comp", Compute, [], LightsPush,
                 [(LIGHTS_TEXELS, StorageBuffer, Read), (LIGHTS_DST, StorageImage, ReadWrite)];
-            /// Light texels found on the GPU: histograms, the cap's threshold, compaction.
+            /// Light texels found on the GPU, the per-texel steps: histograms, compaction.
             Extract = "extract", "extract.comp", Compute, [], ExtractPush,
                 [(EXTRACT_MAP, Sampled, Read), (EXTRACT_SH, StorageBuffer, Read),
                  (EXTRACT_STATE, StorageBuffer, ReadWrite), (EXTRACT_LIGHTS, StorageBuffer, Write),
                  (EXTRACT_RESIDUAL, StorageImage, Write)];
+            /// The same, the one-workgroup selects of the cap's threshold (shared memory and
+            /// barriers kept out of the per-texel steps, which llvmpipe would otherwise run
+            /// one invocation at a time).
+            ExtractSelect = "extract_select", "extract.comp", Compute, [("EXTRACT_SELECT", "1")],
+                ExtractPush,
+                [(EXTRACT_MAP, Sampled, Read), (EXTRACT_SH, StorageBuffer, Read),
+                 (EXTRACT_STATE, StorageBuffer, ReadWrite), (EXTRACT_LIGHTS, StorageBuffer, Write),
+                 (EXTRACT_RESIDUAL, StorageImage, Write)];
+            /// The GPU extraction's light records filtered by a kernel into a cube level.
+            ExtractAdd = "extract_add", "extract_add.comp", Compute, [], ExtractAddPush,
+                [(EXTRACT_ADD_STATE, StorageBuffer, Read), (EXTRACT_ADD_LIGHTS, StorageBuffer, Read),
+                 (EXTRACT_ADD_DST, StorageImage, ReadWrite)];
             /// SH projection of a BRDF per view of a grid (SH-BRDF shading's table).
             ShBrdf = "sh_brdf", "sh_brdf.comp", Compute, [], ShBrdfPush,
                 [(SH_BRDF_TABLE, StorageBuffer, ReadWrite)];

@@ -24,11 +24,13 @@ use crate::abi::lights::{
     extract_mode as mode, extract_word as word, EXTRACT_HEADER_WORDS, EXTRACT_LOW_BINS,
     EXTRACT_RECORD_VEC4S, EXTRACT_TOP_BINS,
 };
+use crate::abi::lights::{KERNEL_COSINE, KERNEL_GGX};
+use crate::abi::push::ExtractAddPush;
 use crate::abi::{binding, push::ExtractPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
 use crate::math::envmap::EnvMap;
-use crate::math::lights::ExtractOptions;
+use crate::math::lights::{ExtractOptions, LightKernel};
 use crate::math::{Mapping, Orientation};
 use crate::passes::testing::poison::{self, PassId};
 use crate::passes::{GpuEnvMap, ShProjector};
@@ -171,10 +173,12 @@ impl GpuExtraction {
     }
 }
 
-/// The extraction pass.
+/// The extraction pass, and the addition of its lights to a cube level.
 pub struct Extractor {
     ctx: Context,
     pipeline: Pipeline,
+    select: Pipeline,
+    add: Pipeline,
     sampler: Sampler,
 }
 
@@ -184,6 +188,8 @@ impl Extractor {
         Ok(Extractor {
             ctx: ctx.clone(),
             pipeline: Pipeline::compute(ctx, ShaderId::Extract, &WORKGROUP_2D)?,
+            select: Pipeline::compute(ctx, ShaderId::ExtractSelect, &WORKGROUP_2D)?,
+            add: Pipeline::compute(ctx, ShaderId::ExtractAdd, &WORKGROUP_2D)?,
             sampler: Sampler::linear_clamp(ctx, "extraction")?,
         })
     }
@@ -232,10 +238,10 @@ impl Extractor {
             rec.fill_buffer(&out.state, out.state.size(), 0);
             rec.discard(&out.residual.image);
             rec.dispatch(&self.pipeline, &binds, &push(mode::HISTOGRAM), per_texel)?;
-            rec.dispatch(&self.pipeline, &binds, &push(mode::SELECT_TOP), [1, 1, 1])?;
+            rec.dispatch(&self.select, &binds, &push(mode::SELECT_TOP), [1, 1, 1])?;
             let low = (&out.state, word::LOW_ARGS as u64 * 4);
             rec.dispatch_indirect(&self.pipeline, &binds, &push(mode::HISTOGRAM_LOW), low)?;
-            rec.dispatch(&self.pipeline, &binds, &push(mode::SELECT_LOW), [1, 1, 1])?;
+            rec.dispatch(&self.select, &binds, &push(mode::SELECT_LOW), [1, 1, 1])?;
             rec.dispatch(&self.pipeline, &binds, &push(mode::COMPACT), per_texel)
         })?;
         poison::image(rec, PassId::Extract, &out.residual.image, 0..1)?;
@@ -249,6 +255,69 @@ impl Extractor {
             sh: None,
         };
         poison::buffer(rec, PassId::Extract, &out.lights, floats)
+    }
+
+    /// Records the addition of `from`'s kept lights (an extraction recorded earlier, of a map
+    /// whose file directions reach the world through `file_to_world`) filtered by `kernel` —
+    /// divided by ∫K dω for GGX (`chain_norm`, `norm` here so that a frame computes it once),
+    /// as is for the cosine — to level `level` of the cube `dst`. The count is read on the GPU.
+    /// Span: "add lights".
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_add(
+        &self,
+        rec: &mut Recorder,
+        from: &GpuExtraction,
+        file_to_world: glam::DMat3,
+        kernel: LightKernel,
+        norm: f64,
+        dst: &GpuEnvMap,
+        level: u32,
+    ) -> Result<()> {
+        if dst.mapping != Mapping::Cube || level >= dst.mips() {
+            return Err(Error::Invalid(format!(
+                "adding lights: level {level} of the {} map '{}' with {} levels (a cube's level \
+                 expected)",
+                dst.mapping.name(),
+                dst.image.name(),
+                dst.mips()
+            )));
+        }
+        let (kind, alpha) = match kernel {
+            LightKernel::Cosine => (KERNEL_COSINE, 0.0),
+            LightKernel::Ggx { alpha } => (KERNEL_GGX, alpha),
+        };
+        let size = dst.level_size(level).0;
+        let r = &from.residual;
+        let push = ExtractAddPush {
+            file_to_world: crate::gpu::mat3_rows(file_to_world),
+            map_size: [r.width, r.height],
+            mapping: r.mapping.id(),
+            size,
+            kernel: kind,
+            alpha: alpha as f32,
+            inv_norm: (1.0 / norm) as f32,
+            pad: 0,
+        };
+        rec.span("add lights", |rec| {
+            rec.dispatch(
+                &self.add,
+                &[
+                    (binding::EXTRACT_ADD_STATE, Bind::Buffer(&from.state)),
+                    (binding::EXTRACT_ADD_LIGHTS, Bind::Buffer(&from.lights)),
+                    (
+                        binding::EXTRACT_ADD_DST,
+                        Bind::StorageLevel(&dst.image, level),
+                    ),
+                ],
+                &push,
+                [
+                    groups(size, WORKGROUP_2D[0]),
+                    groups(size, WORKGROUP_2D[1]),
+                    6,
+                ],
+            )
+        })?;
+        poison::image(rec, PassId::Extract, &dst.image, level..level + 1)
     }
 
     /// Uploads `map`, projects its band 0, extracts by `opts` (no `fill`) and reads everything

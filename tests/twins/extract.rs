@@ -5,11 +5,14 @@
 use crate::common::compare::Errors;
 use envlight::gpu::Context;
 use envlight::math::envmap::luminance;
-use envlight::math::lights::{extract, ExtractOptions};
+use envlight::math::lights::{extract, light_sum, prepare, ExtractOptions, LightKernel};
+use envlight::math::split_sum::chain_norm;
 use envlight::math::synth::Sky;
 use envlight::math::Mapping;
+use envlight::math::Orientation;
 use envlight::passes::extract::Extracted;
 use envlight::passes::Extractor;
+use envlight::passes::{GpuEnvMap, GpuExtraction, ShProjector, SplitSum, Subgroups};
 use envlight::EnvMap;
 use std::collections::HashMap;
 
@@ -165,6 +168,97 @@ pub fn compare(ex: &Extractor, map: &EnvMap, opts: &ExtractOptions) -> (Extracte
     (got, worst)
 }
 
+/// The extraction's lights of `map` added to a 16² cube (the cosine into level 0, GGX α
+/// `alpha` into level 1), the map turned 30° and mirrored, against the float64 sums of the
+/// host's extraction (`light_sum` of `prepare`); returns the worst texel error relative to the
+/// level's largest.
+pub fn compare_add(
+    ctx: &Context,
+    ex: &Extractor,
+    map: &EnvMap,
+    opts: &ExtractOptions,
+    alpha: f64,
+) -> f64 {
+    let o = Orientation {
+        flip_u: true,
+        flip_v: false,
+        rotate_y_degrees: 30.0,
+    };
+    let f2w = o.world_to_file().transpose();
+    let gpu = GpuEnvMap::upload(ctx, map).unwrap();
+    let out = GpuExtraction::new(
+        ctx,
+        map.mapping,
+        map.width,
+        map.height,
+        opts.max_texels as u32,
+    )
+    .unwrap();
+    let proj = ShProjector::new(ctx, Subgroups::Auto).unwrap();
+    let sh = envlight::gpu::Buffer::new(
+        ctx,
+        "L00",
+        ShProjector::output_bytes(0),
+        ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::TRANSFER_DST,
+        gpu_allocator::MemoryLocation::GpuOnly,
+    )
+    .unwrap();
+    let cube = SplitSum::cube_chain(ctx, 16, 2).unwrap();
+    let norm = chain_norm(alpha);
+    let (levels, t) = ctx
+        .run("adding extracted lights", |rec| {
+            proj.record_into(rec, &gpu, 0, &Orientation::default(), &sh)?;
+            ex.record(rec, &gpu, &sh, opts.ratio, &out)?;
+            rec.clear(&cube.image, [0.0; 4]);
+            ex.record_add(rec, &out, f2w, LightKernel::Cosine, 1.0, &cube, 0)?;
+            ex.record_add(rec, &out, f2w, LightKernel::Ggx { alpha }, norm, &cube, 1)?;
+            Ok([cube.record_download(rec, 0)?, cube.record_download(rec, 1)?])
+        })
+        .unwrap();
+    assert!(t.iter().any(|t| t.label == "add lights"));
+    let host = extract(map, opts);
+    let mut worst = 0.0f64;
+    for (level, (kernel, scale, inv)) in [
+        (LightKernel::Cosine, 1.0, 1.0),
+        (LightKernel::Ggx { alpha }, alpha, 1.0 / norm),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let prepared = prepare(map, &host, f2w, scale);
+        let side = 16u32 >> level;
+        let got = levels[level].read();
+        let want: Vec<[f64; 3]> = (0..6 * side * side)
+            .map(|k| {
+                let c = envlight::math::Coord {
+                    layer: k / (side * side),
+                    u: ((k % side) as f64 + 0.5) / side as f64,
+                    v: ((k / side % side) as f64 + 0.5) / side as f64,
+                };
+                light_sum(&prepared, Mapping::Cube.coord_to_dir(c), kernel).map(|v| v * inv)
+            })
+            .collect();
+        let top = crate::common::compare::max_of(want.iter().map(|w| w[1]));
+        let mut errors = Errors::new();
+        for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+            for c in 0..3 {
+                errors.abs(g[c], w[c], (level, k, c));
+            }
+        }
+        let e = errors.worst() / top;
+        eprintln!(
+            "add lights {:?} {kernel:?}: {} lights, worst {e:.2e} of the largest at {:?}",
+            map.mapping,
+            host.lights.len(),
+            errors.at()
+        );
+        assert!(e <= BOUND, "adding lights {kernel:?}: {e:e} > {BOUND:e}");
+        worst = crate::common::compare::max_of([worst, e]);
+    }
+    drop((proj, out, gpu, sh, cube));
+    worst
+}
+
 /// Each mapping's sun sky extracted as bakes do (32× the mean, at most 256: the sun alone),
 /// and the sun sky with a broad glow as renders extract for diffuse techniques (2× the mean)
 /// capped at 16, so that the cap binds and the threshold is the 17th brightest luminance:
@@ -188,6 +282,9 @@ pub fn check(ctx: &Context) {
             };
             let (got, _) = compare(&ex, &map, &opts);
             assert!(ratio > 2.0 || got.stats.candidates > 16, "the cap binds");
+            if mapping == Mapping::Cube || mapping == Mapping::Angular {
+                compare_add(ctx, &ex, &map, &opts, 0.1);
+            }
         }
     }
 }

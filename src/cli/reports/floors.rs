@@ -36,7 +36,7 @@ struct Row {
 }
 
 /// The median of `reps` runs' total GPU time, after one untimed run (pipelines, warm-up).
-fn time(reps: usize, mut run: impl FnMut() -> Result<Vec<Timing>>) -> Result<f64> {
+pub(super) fn time(reps: usize, mut run: impl FnMut() -> Result<Vec<Timing>>) -> Result<f64> {
     run()?;
     let mut ms = Vec::new();
     for _ in 0..reps.max(1) {
@@ -47,7 +47,7 @@ fn time(reps: usize, mut run: impl FnMut() -> Result<Vec<Timing>>) -> Result<f64
 
 /// The GPU time of a copy of a `mapping` map `w` × `h` (the floor of a pass reading or
 /// writing one).
-fn copy_ms(
+pub(super) fn copy_ms(
     ctx: &Context,
     copy: &CopyPass,
     mapping: Mapping,
@@ -70,7 +70,7 @@ fn power_error(out: &EnvMap, src: &EnvMap) -> f64 {
 }
 
 /// The larger of two errors, NaN where either is.
-fn worse(a: f64, b: f64) -> f64 {
+pub(super) fn worse(a: f64, b: f64) -> f64 {
     if a.is_nan() || b.is_nan() {
         f64::NAN
     } else {
@@ -79,14 +79,14 @@ fn worse(a: f64, b: f64) -> f64 {
 }
 
 /// Relative luminance error of a GPU texel against a float64 value.
-fn rel_lum(got: [f32; 4], want: [f64; 3]) -> f64 {
+pub(super) fn rel_lum(got: [f32; 4], want: [f64; 3]) -> f64 {
     let y = |c: [f64; 3]| crate::math::envmap::luminance(c);
     let w = y(want);
     (y([got[0] as f64, got[1] as f64, got[2] as f64]) - w).abs() / w.abs().max(1e-30)
 }
 
 /// Eight texel centres of a cube level `s` a side, spread over the faces.
-fn probe_texels(s: u32) -> Vec<(usize, DVec3)> {
+pub(super) fn probe_texels(s: u32) -> Vec<(usize, DVec3)> {
     (0..8u32)
         .map(|q| {
             let (face, i, j) = (q % 6, (q * 37 + 11) % s, (q * 23 + 5) % s);

@@ -4,6 +4,7 @@
 
 pub mod accuracy;
 pub mod cubes;
+mod dynamic;
 pub mod fis;
 pub mod fis_report;
 mod floors;
@@ -70,6 +71,31 @@ pub enum Bench {
         #[arg(long, default_value_t = 3)]
         reps: usize,
         /// Write the result as the "floors" section of this performance page
+        /// (docs/performance/<device>.md)
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// What refiltering an environment that changes every frame costs: SH 2 + irradiance,
+    /// light extraction and the GGX chain recorded into one submission a frame, per-stage GPU
+    /// time, error and the frame's floor
+    Dynamic {
+        /// Cube inputs (face sides)
+        #[arg(long, value_delimiter = ',', default_value = "64,128,256")]
+        cubes: Vec<u32>,
+        /// Lat-long inputs (widths)
+        #[arg(long, value_delimiter = ',', default_value = "512,1024,2048")]
+        widths: Vec<u32>,
+        /// Side of the GGX chain's cube (the paraboloid it filters: twice this)
+        #[arg(long, default_value_t = 128)]
+        chain: u32,
+        /// FIS samples per chain texel (128: every level's mean error within 1% of the exact
+        /// prefilter on the sun sky; 64 leaves α = 1 at 1.5%)
+        #[arg(long, default_value_t = 128)]
+        samples: u32,
+        /// Timed rounds of three frames each (the median is reported)
+        #[arg(long, default_value_t = 3)]
+        reps: usize,
+        /// Write the result as the "dynamic" section of this performance page
         /// (docs/performance/<device>.md)
         #[arg(long)]
         out: Option<PathBuf>,
@@ -273,6 +299,32 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
             reps,
         } => bench_irradiance(g, sizes, *source, *reps),
         Bench::Sh { sizes, reps } => bench_sh(g, sizes, *reps),
+        Bench::Dynamic {
+            cubes,
+            widths,
+            chain,
+            samples,
+            reps,
+            out,
+        } => {
+            let settings = dynamic::FrameSettings {
+                chain: *chain,
+                levels: 7,
+                samples: *samples,
+                paraboloid: 2 * chain,
+                irradiance: 32,
+                ratio: crate::abi::lights::DIFFUSE_RATIO,
+                max_lights: crate::abi::lights::CHAIN_MAX_TEXELS,
+            };
+            dynamic::bench_dynamic(
+                &context(g)?,
+                cubes,
+                widths,
+                &settings,
+                *reps,
+                out.as_deref(),
+            )
+        }
         Bench::Floors { sizes, reps, out } => {
             floors::bench_floors(&context(g)?, sizes, *reps, out.as_deref())
         }
