@@ -17,6 +17,9 @@
 #include "mappings.glsl"
 
 layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
+// The map's mapping, specialised per pipeline (the per-texel steps then compile one mapping's
+// branches, not four; pc.mapping holds the same id).
+layout(constant_id = 2) const uint MAPPING = 0u;
 layout(set = 0, binding = BINDING_EXTRACT_MAP) uniform sampler2DArray map_;
 layout(std430, set = 0, binding = BINDING_EXTRACT_SH) readonly buffer Sh { float sh[]; };
 layout(std430, set = 0, binding = BINDING_EXTRACT_STATE) buffer State { uint state[]; };
@@ -53,7 +56,7 @@ bool finite3(vec3 v) {
 // The value standing for texel position p of layer `layer` and whether p holds part of the
 // sphere; `own`: p is its own source (the residual keeps a light's clamp there).
 bool source_value(ivec2 p, uint layer, out vec3 l, out bool own) {
-    ivec2 s = integration_source(pc.mapping, pc.size, p);
+    ivec2 s = integration_source(MAPPING, pc.size, p);
     own = s == p;
     if (s.x < 0) return false;
     l = texelFetch(map_, ivec3(s, layer), 0).rgb;
@@ -68,7 +71,7 @@ float lum(vec3 l) {
 // Per texel: the histograms (HISTOGRAM, HISTOGRAM_LOW) or the records and residual (COMPACT).
 void per_texel() {
     uvec3 id = gl_GlobalInvocationID;
-    if (any(greaterThanEqual(id.xy, pc.size)) || id.z >= mapping_layers(pc.mapping)) return;
+    if (any(greaterThanEqual(id.xy, pc.size)) || id.z >= mapping_layers(MAPPING)) return;
     ivec2 p = ivec2(id.xy);
     vec3 l = vec3(0.0);
     bool own;
@@ -100,8 +103,8 @@ void per_texel() {
         uint k = atomicAdd(state[EXTRACT_WORD_COUNTER], 1u);
         if (k < pc.max) {
             vec2 uv = (vec2(p) + 0.5) / vec2(pc.size);
-            vec3 dir = coord_to_dir(pc.mapping, Coord(id.z, uv));
-            float omega = texel_solid_angle(pc.mapping, pc.size, p);
+            vec3 dir = coord_to_dir(MAPPING, Coord(id.z, uv));
+            float omega = texel_solid_angle(MAPPING, pc.size, p);
             records[k].dir_omega = vec4(dir, omega);
             records[k].excess_y = vec4(l - r, y);
             records[k].texel = uvec4(id.z, id.xy, 0u);

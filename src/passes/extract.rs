@@ -176,7 +176,8 @@ impl GpuExtraction {
 /// The extraction pass, and the addition of its lights to a cube level.
 pub struct Extractor {
     ctx: Context,
-    pipeline: Pipeline,
+    /// The per-texel steps, one pipeline per mapping (specialised), built on first use.
+    pipelines: [std::sync::OnceLock<Pipeline>; 4],
     select: Pipeline,
     add: Pipeline,
     sampler: Sampler,
@@ -187,7 +188,7 @@ impl Extractor {
     pub fn new(ctx: &Context) -> Result<Extractor> {
         Ok(Extractor {
             ctx: ctx.clone(),
-            pipeline: Pipeline::compute(ctx, ShaderId::Extract, &WORKGROUP_2D)?,
+            pipelines: Default::default(),
             select: Pipeline::compute(ctx, ShaderId::ExtractSelect, &WORKGROUP_2D)?,
             add: Pipeline::compute(ctx, ShaderId::ExtractAdd, &WORKGROUP_2D)?,
             sampler: Sampler::linear_clamp(ctx, "extraction")?,
@@ -234,15 +235,22 @@ impl Extractor {
             groups(map.height, WORKGROUP_2D[1]),
             map.mapping.layers(),
         ];
+        let id = map.mapping.id();
+        let pipeline = Pipeline::compute_once(
+            &self.pipelines[id as usize],
+            &self.ctx,
+            ShaderId::Extract,
+            &[WORKGROUP_2D[0], WORKGROUP_2D[1], id],
+        )?;
         rec.span("extract lights", |rec| {
             rec.fill_buffer(&out.state, out.state.size(), 0);
             rec.discard(&out.residual.image);
-            rec.dispatch(&self.pipeline, &binds, &push(mode::HISTOGRAM), per_texel)?;
+            rec.dispatch(pipeline, &binds, &push(mode::HISTOGRAM), per_texel)?;
             rec.dispatch(&self.select, &binds, &push(mode::SELECT_TOP), [1, 1, 1])?;
             let low = (&out.state, word::LOW_ARGS as u64 * 4);
-            rec.dispatch_indirect(&self.pipeline, &binds, &push(mode::HISTOGRAM_LOW), low)?;
+            rec.dispatch_indirect(pipeline, &binds, &push(mode::HISTOGRAM_LOW), low)?;
             rec.dispatch(&self.select, &binds, &push(mode::SELECT_LOW), [1, 1, 1])?;
-            rec.dispatch(&self.pipeline, &binds, &push(mode::COMPACT), per_texel)
+            rec.dispatch(pipeline, &binds, &push(mode::COMPACT), per_texel)
         })?;
         poison::image(rec, PassId::Extract, &out.residual.image, 0..1)?;
         // Excess radiance scaled; the direction's x and the excess's red negated by the mirror.

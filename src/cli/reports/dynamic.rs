@@ -371,8 +371,8 @@ pub fn bench_dynamic(
          from the floor: {n} FIS samples for each of the 7 levels' texels, each a filtered read \
          of the paraboloid, where the floor reads and writes each texel once; the lights \
          added back at level 1 (α ≈ 0.03) take their texels' node quadratures near the peak. \
-         The extraction's two passes over the map cost several copies each on lavapipe: \
-         every mapping's branches are compiled into one shader.\n",
+         The extraction stage is L00 (on a cube, per-texel Gauss–Legendre solid angles) and \
+         two passes over the map, each specialised to its mapping.\n",
         shares.join("; "),
         n = s.samples
     ));
