@@ -106,7 +106,7 @@ void add_texel(uint i, inout vec3 acc[NC]) {
     ivec2 source = integration_source(MAPPING, pc.size, p);
     if (source.x < 0) return;
     float omega = texel_solid_angle(MAPPING, pc.size, p);
-    vec3 radiance = texelFetch(src, ivec3(source, int(layer)), 0).rgb;
+    vec3 radiance = finite_or_zero(texelFetch(src, ivec3(source, int(layer)), 0).rgb);
     vec2 lo = 2.0 * vec2(p) / vec2(pc.size) - 1.0;
     vec2 hi = 2.0 * vec2(p + 1) / vec2(pc.size) - 1.0;
     vec2 far_ = max(abs(lo), abs(hi));

@@ -14,6 +14,7 @@
 #extension GL_KHR_shader_subgroup_basic : require
 #endif
 #include "generated.glsl"
+#include "mappings.glsl"
 
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 // The band: the sums' array is sized for it, its loops unroll and stay in registers.
@@ -41,7 +42,7 @@ void main() {
     for (uint k = 0u; k < NM; k++) f[k] = vec3(0.0);
     float step = 6.28318530717958647692 / float(pc.size.x);
     for (uint i = tid; i < pc.size.x; i += SH_WORKGROUP) {
-        vec3 l = texelFetch(src, ivec3(int(i), int(row), 0), 0).rgb;
+        vec3 l = finite_or_zero(texelFetch(src, ivec3(int(i), int(row), 0), 0).rgb);
         float phi = step * (float(i) + 0.5);
         float c1 = cos(phi), s1 = sin(phi);
         f[LMAX] += l;

@@ -98,10 +98,10 @@ fn the_cap_keeps_the_host_texels_and_counts_the_rest() {
     common::finish(ctx);
 }
 
-/// One frame's map holds a NaN and an infinite texel: its residual is finite (those texels
-/// zero), they are counted, every record is finite, and its mean (L00) is not finite, so
-/// nothing is extracted that frame. The next frame, through the same resources, extracts the
-/// clean map as the host does.
+/// One frame's map holds a NaN and an infinite texel: they count as zero everywhere — in the
+/// residual, in the SH projection's L00 and so in the mean — and are counted; the frame's
+/// lights are the host's of the map with those texels zeroed, every record finite. The next
+/// frame, written into the same image, extracts the clean map as the host does.
 #[test]
 fn nonfinite_texels_are_zero_and_counted_and_the_next_frame_recovers() {
     let ctx = common::ctx();
@@ -148,10 +148,17 @@ fn nonfinite_texels_are_zero_and_counted_and_the_next_frame_recovers() {
         broken.residual.texels[71], clean.texels[71],
         "the rest untouched"
     );
-    assert!(
-        broken.lights.is_empty(),
-        "a non-finite mean extracts nothing"
-    );
+    let mut zeroed = clean.clone();
+    zeroed.texels[70] = [0.0; 3];
+    zeroed.texels[900] = [0.0; 3];
+    let want = extract(&zeroed, &opts);
+    assert!(!want.lights.is_empty());
+    assert_eq!(broken.lights.len(), want.lights.len(), "the frame's lights");
+    let rel = (broken.stats.threshold as f64 / want.threshold - 1.0).abs();
+    assert!(rel < 1e-5, "threshold {rel:e} from the host's");
+    for l in &broken.lights {
+        assert!(l.excess.iter().chain(&l.dir).all(|c| c.is_finite()));
+    }
     // The next frame: the clean map through the same resources.
     let up = ctx.run("the next frame's map", |rec| map.record_upload(rec, &clean));
     up.unwrap();
