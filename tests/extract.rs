@@ -77,6 +77,12 @@ fn the_cap_keeps_the_host_texels_and_counts_the_rest() {
         "every texel above τ counted"
     );
     assert_eq!(got.stats.kept as usize, want.lights.len());
+    let groups = got.stats.kept.div_ceil(64);
+    assert_eq!(
+        got.stats.light_groups,
+        [groups, 1, 1],
+        "the records' indirect arguments"
+    );
     eprintln!(
         "cap 256: {} texels above τ {}, {} kept, threshold {}",
         got.stats.candidates, got.stats.tau, got.stats.kept, got.stats.threshold

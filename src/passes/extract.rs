@@ -50,6 +50,9 @@ pub struct ExtractStats {
     pub kept: u32,
     /// Texels with a NaN or infinite channel, zero in the residual.
     pub nonfinite: u32,
+    /// The indirect arguments for a pass over the records ([`GpuExtraction::light_args`]):
+    /// workgroups of 64 invocations covering `kept`, then 1, 1.
+    pub light_groups: [u32; 3],
 }
 
 /// One light record as the pass writes it.
@@ -385,6 +388,10 @@ impl Extractor {
             candidates: h[word::CANDIDATES as usize],
             kept: h[word::KEPT as usize],
             nonfinite: h[word::NONFINITE as usize],
+            light_groups: {
+                let a = word::LIGHT_ARGS as usize;
+                [h[a], h[a + 1], h[a + 2]]
+            },
         };
         let written = h[word::COUNTER as usize].min(max) as usize;
         let raw: Vec<[u32; 12]> = records.read(written);

@@ -92,6 +92,11 @@ pub fn compare(ex: &Extractor, map: &EnvMap, opts: &ExtractOptions) -> (Extracte
     let mut errors = Errors::new();
     errors.rel(got.stats.threshold, thr, 0.0, ("threshold", 0, 0, 0));
     assert_eq!(got.stats.kept as usize, got.lights.len(), "kept = records");
+    let groups = [got.stats.kept.div_ceil(64), 1, 1];
+    assert_eq!(
+        got.stats.light_groups, groups,
+        "the records' indirect arguments"
+    );
     let host: HashMap<[u32; 3], _> = want
         .lights
         .iter()
