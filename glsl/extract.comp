@@ -15,6 +15,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "generated.glsl"
 #include "mappings.glsl"
+#include "extract.glsl"
 
 layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 // The map's mapping, specialised per pipeline (the per-texel steps then compile one mapping's
@@ -23,13 +24,6 @@ layout(constant_id = 2) const uint MAPPING = 0u;
 layout(set = 0, binding = BINDING_EXTRACT_MAP) uniform sampler2DArray map_;
 layout(std430, set = 0, binding = BINDING_EXTRACT_SH) readonly buffer Sh { float sh[]; };
 layout(std430, set = 0, binding = BINDING_EXTRACT_STATE) buffer State { uint state[]; };
-// A light record (EXTRACT_RECORD_VEC4S vec4s): (file-frame centre direction, ω), (excess rgb,
-// Y), (layer, i, j, 0).
-struct Record {
-    vec4 dir_omega;
-    vec4 excess_y;
-    uvec4 texel;
-};
 layout(std430, set = 0, binding = BINDING_EXTRACT_LIGHTS) writeonly buffer Lights { Record records[]; };
 layout(set = 0, binding = BINDING_EXTRACT_RESIDUAL, rgba32f) uniform writeonly image2DArray residual;
 
@@ -46,11 +40,7 @@ const uint NO_BIN = 0xffffffffu;
 float tau() {
     float mean = dot(LUMINANCE, vec3(sh[0], sh[1], sh[2])) * SH_K[0];
     float t = pc.ratio * mean;
-    return (t > 0.0 && !isinf(t)) ? t : uintBitsToFloat(0x7f800000u);
-}
-
-bool finite3(vec3 v) {
-    return !any(isnan(v)) && !any(isinf(v));
+    return (t > 0.0 && !isinf(t)) ? t : FLOAT_INF;
 }
 
 // The value standing for texel position p of layer `layer` and whether p holds part of the
@@ -159,7 +149,7 @@ uint select_bin(uint base, uint bins, uint target, out uint above) {
 
 void write_light_args(uint kept) {
     state[EXTRACT_WORD_KEPT] = kept;
-    state[EXTRACT_WORD_LIGHT_ARGS] = (kept + 63u) / 64u;
+    state[EXTRACT_WORD_LIGHT_ARGS] = (kept + EXTRACT_LIGHT_GROUP - 1u) / EXTRACT_LIGHT_GROUP;
     state[EXTRACT_WORD_LIGHT_ARGS + 1u] = 1u;
     state[EXTRACT_WORD_LIGHT_ARGS + 2u] = 1u;
 }

@@ -10,13 +10,9 @@
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
 #include "lights.glsl"
+#include "extract.glsl"
 
 layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
-struct Record {
-    vec4 dir_omega;
-    vec4 excess_y;
-    uvec4 texel;
-};
 layout(std430, set = 0, binding = BINDING_EXTRACT_ADD_STATE) readonly buffer State { uint state[]; };
 layout(std430, set = 0, binding = BINDING_EXTRACT_ADD_LIGHTS) readonly buffer Lights { Record records[]; };
 layout(set = 0, binding = BINDING_EXTRACT_ADD_DST, rgba32f) uniform image2DArray dst;

@@ -77,7 +77,10 @@ fn the_cap_keeps_the_host_texels_and_counts_the_rest() {
         "every texel above τ counted"
     );
     assert_eq!(got.stats.kept as usize, want.lights.len());
-    let groups = got.stats.kept.div_ceil(64);
+    let groups = got
+        .stats
+        .kept
+        .div_ceil(common::abi::lights::EXTRACT_LIGHT_GROUP);
     assert_eq!(
         got.stats.light_groups,
         [groups, 1, 1],
@@ -98,7 +101,7 @@ fn the_cap_keeps_the_host_texels_and_counts_the_rest() {
             assert_eq!(r, t, "texel {k} at or below the threshold is kept whole");
         }
     }
-    let (p, q) = (twin::power(&map), twin::split_power(&got));
+    let (p, q) = (twin::power(&map), got.power());
     assert!((q - p).abs() < 1e-5 * p, "power {q} vs {p}");
     drop(ex);
     common::finish(ctx);

@@ -151,11 +151,18 @@ float footprint_weight(uint m, vec2 uv) {
     return density(m, uv);
 }
 
+// +∞.
+#define FLOAT_INF uintBitsToFloat(0x7f800000u)
+
+// Whether every channel is finite (|NaN| < x is false: one comparison a channel).
+bool finite3(vec3 v) {
+    return all(lessThan(abs(v), vec3(FLOAT_INF)));
+}
+
 // A radiance value as integrals over the sphere count it: zero where a channel is NaN or
 // infinite (an engine's frame may hold such texels; the light extraction counts them).
 vec3 finite_or_zero(vec3 l) {
-    // |NaN| < x is false: one comparison per channel, no branch.
-    return all(lessThan(abs(l), vec3(uintBitsToFloat(0x7f800000u)))) ? l : vec3(0.0);
+    return finite3(l) ? l : vec3(0.0);
 }
 
 // Layers of a map of mapping m (twin of Mapping::layers).

@@ -89,6 +89,11 @@ fn define_sizes_and_lights(s: &mut String) {
         "#define EXTRACT_RECORD_VEC4S {}u",
         lights::EXTRACT_RECORD_VEC4S
     );
+    let _ = writeln!(
+        s,
+        "#define EXTRACT_LIGHT_GROUP {}u",
+        lights::EXTRACT_LIGHT_GROUP
+    );
     use lights::extract_mode as m;
     for (name, v) in [
         ("HISTOGRAM", m::HISTOGRAM),

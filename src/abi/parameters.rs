@@ -273,6 +273,9 @@ pub mod lights {
     pub const EXTRACT_TOP_BINS: u32 = 32768;
     /// Bins of the second histogram: the low 16 bits, within the top bin the cap falls in.
     pub const EXTRACT_LOW_BINS: u32 = 65536;
+    /// Invocations per workgroup of a pass over the extraction's records (its indirect
+    /// arguments count workgroups of this many).
+    pub const EXTRACT_LIGHT_GROUP: u32 = super::WORKGROUP_1D;
     /// vec4s per light record of the GPU extraction: (file-frame centre direction, ω),
     /// (excess rgb, luminance Y), (layer, i, j, 0) as uints.
     pub const EXTRACT_RECORD_VEC4S: u32 = 3;

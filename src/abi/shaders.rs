@@ -360,9 +360,8 @@ macro_rules! shader_table {
                 [(EXTRACT_MAP, Sampled, Read), (EXTRACT_SH, StorageBuffer, Read),
                  (EXTRACT_STATE, StorageBuffer, ReadWrite), (EXTRACT_LIGHTS, StorageBuffer, Write),
                  (EXTRACT_RESIDUAL, StorageImage, Write)];
-            /// The same, the one-workgroup selects of the cap's threshold (shared memory and
-            /// barriers kept out of the per-texel steps, which llvmpipe would otherwise run
-            /// one invocation at a time).
+            /// The same, the one-workgroup selects of the cap's threshold (their shared memory
+            /// and barriers kept out of the per-texel steps).
             ExtractSelect = "extract_select", "extract.comp", Compute, [("EXTRACT_SELECT", "1")],
                 ExtractPush,
                 [(EXTRACT_MAP, Sampled, Read), (EXTRACT_SH, StorageBuffer, Read),

@@ -29,7 +29,7 @@ use crate::abi::push::ExtractAddPush;
 use crate::abi::{binding, push::ExtractPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
-use crate::math::envmap::EnvMap;
+use crate::math::envmap::{luminance, EnvMap};
 use crate::math::lights::{ExtractOptions, LightKernel};
 use crate::math::{Mapping, Orientation};
 use crate::passes::testing::poison::{self, PassId};
@@ -51,7 +51,7 @@ pub struct ExtractStats {
     /// Texels with a NaN or infinite channel, zero in the residual.
     pub nonfinite: u32,
     /// The indirect arguments for a pass over the records ([`GpuExtraction::light_args`]):
-    /// workgroups of 64 invocations covering `kept`, then 1, 1.
+    /// workgroups of `EXTRACT_LIGHT_GROUP` (64) invocations covering `kept`, then 1, 1.
     pub light_groups: [u32; 3],
 }
 
@@ -79,6 +79,19 @@ pub struct Extracted {
     pub lights: Vec<GpuLightTexel>,
     /// The residual map.
     pub residual: EnvMap,
+}
+
+impl Extracted {
+    /// Luminous power Σ Y·ω of the residual plus the lights' excess: the map's, to float32
+    /// rounding (texels the extraction counted as non-finite aside).
+    pub fn power(&self) -> f64 {
+        let lights: f64 = self
+            .lights
+            .iter()
+            .map(|l| luminance(l.excess.map(f64::from)) * l.omega as f64)
+            .sum();
+        luminance(self.residual.power()) + lights
+    }
 }
 
 /// The GPU resources of an extraction, made once for a map's mapping and size and a cap and
@@ -259,8 +272,8 @@ impl Extractor {
         // Excess radiance scaled; the direction's x and the excess's red negated by the mirror.
         let floats = poison::Floats {
             first: 0,
-            count: out.max * 12,
-            stride: 12,
+            count: out.max * RECORD_WORDS as u32,
+            stride: RECORD_WORDS as u32,
             scale_mask: 0b111_0000,
             mirror_mask: 0b1_0001,
             sh: None,
@@ -394,7 +407,7 @@ impl Extractor {
             },
         };
         let written = h[word::COUNTER as usize].min(max) as usize;
-        let raw: Vec<[u32; 12]> = records.read(written);
+        let raw: Vec<[u32; RECORD_WORDS]> = records.read(written);
         let lights = raw.iter().map(record_of).collect();
         let texels = residual.read();
         let residual = EnvMap::new(
@@ -414,8 +427,11 @@ impl Extractor {
     }
 }
 
-/// A record from its twelve words.
-fn record_of(r: &[u32; 12]) -> GpuLightTexel {
+/// Words of a light record.
+const RECORD_WORDS: usize = EXTRACT_RECORD_VEC4S as usize * 4;
+
+/// A record from its words.
+fn record_of(r: &[u32; RECORD_WORDS]) -> GpuLightTexel {
     let f = |k: usize| f32::from_bits(r[k]);
     GpuLightTexel {
         dir: [f(0), f(1), f(2)],

@@ -16,6 +16,9 @@ use envlight::passes::{GpuEnvMap, GpuExtraction, ShProjector, SplitSum, Subgroup
 use envlight::EnvMap;
 use std::collections::HashMap;
 
+/// Invocations a workgroup of the records' indirect arguments counts.
+const GROUP: u32 = crate::common::abi::lights::EXTRACT_LIGHT_GROUP;
+
 /// The bound [`check`] holds the threshold, every light's excess (relative to its luminance)
 /// and every residual texel (relative to the threshold) to: the GPU's mean is the SH
 /// projection's float32 L00 (within ~1e-6 of the float64 sum) and its luminances are float32.
@@ -59,19 +62,7 @@ pub fn glow_sky(mapping: Mapping, size: u32) -> EnvMap {
 
 /// Power of a map: Σ Y·ω over the texels that hold the sphere.
 pub fn power(map: &EnvMap) -> f64 {
-    let mut p = 0.0;
-    map.for_each_texel(|_, _, _, t, o| p += luminance(t.map(f64::from)) * o);
-    p
-}
-
-/// Power of the residual plus the light records' excess: the map's, to float32 rounding.
-pub fn split_power(got: &Extracted) -> f64 {
-    power(&got.residual)
-        + got
-            .lights
-            .iter()
-            .map(|l| luminance(l.excess.map(f64::from)) * l.omega as f64)
-            .sum::<f64>()
+    luminance(map.power())
 }
 
 /// The GPU extraction of `map` by `opts` against the host's: the threshold, the set of light
@@ -92,7 +83,7 @@ pub fn compare(ex: &Extractor, map: &EnvMap, opts: &ExtractOptions) -> (Extracte
     let mut errors = Errors::new();
     errors.rel(got.stats.threshold, thr, 0.0, ("threshold", 0, 0, 0));
     assert_eq!(got.stats.kept as usize, got.lights.len(), "kept = records");
-    let groups = [got.stats.kept.div_ceil(64), 1, 1];
+    let groups = [got.stats.kept.div_ceil(GROUP), 1, 1];
     assert_eq!(
         got.stats.light_groups, groups,
         "the records' indirect arguments"
@@ -154,7 +145,7 @@ pub fn compare(ex: &Extractor, map: &EnvMap, opts: &ExtractOptions) -> (Extracte
             );
         }
     }
-    let (p, q) = (power(map), split_power(&got));
+    let (p, q) = (power(map), got.power());
     errors.rel(q, p, 0.0, ("power", 0, 0, 0));
     eprintln!(
         "extract {:?} {}x{} ratio {} cap {}: {} lights ({} above τ), worst {:.2e} at {:?}",

@@ -127,7 +127,7 @@ fn record_frame(
         p.split.record_prefilter(rec, &f.dp, &f.chain, &chain)?;
         // Level 0 is the mirror: its lights are the records themselves, which mirror lookups
         // take directly (a GGX lobe at α → 0 would need every light's finest nodes at every
-        // texel, 90% of the frame on lavapipe).
+        // texel, more than the rest of the frame).
         for (k, &norm) in p.norms.iter().enumerate().skip(1) {
             let ggx = LightKernel::Ggx {
                 alpha: level_alpha(k as u32, s.levels),
@@ -284,23 +284,13 @@ fn frame_errors(
     };
     let (got, _): (Extracted, _) = p.extractor.run_on(env, &opts)?;
     let want = extract(map, &opts);
-    let power = |m: &EnvMap| {
-        let mut q = 0.0;
-        m.for_each_texel(|_, _, _, t, o| q += luminance(t.map(f64::from)) * o);
-        q
-    };
-    let split = power(&got.residual)
-        + got
-            .lights
-            .iter()
-            .map(|l| luminance(l.excess.map(f64::from)) * l.omega as f64)
-            .sum::<f64>();
+    let split = got.power();
     let lights = format!(
         "{} texels (host {}), threshold {:.1e} of the host's, power {:.1e}",
         got.stats.kept,
         want.lights.len(),
         (got.stats.threshold as f64 / want.threshold - 1.0).abs(),
-        (split / power(map) - 1.0).abs()
+        (split / luminance(map.power()) - 1.0).abs()
     );
     let mut worst_mean = 0.0f64;
     for k in 1..s.levels {
