@@ -241,6 +241,7 @@ fn input_rows(
     let mut rows = String::new();
     let stage = per_stage.map(median);
     for (k, (_, name)) in STAGES.iter().enumerate() {
+        let name = name.replace("GGX chain", &format!("GGX chain {}²", s.chain));
         rows.push_str(&format!(
             "| {input} | {name} | {:.3} | | | {} |\n",
             stage[k], errors[k]
@@ -248,11 +249,14 @@ fn input_rows(
     }
     let all = median(whole);
     rows.push_str(&format!(
-        "| {input} | **whole refilter, one submission** | **{all:.3}** | {floor:.3} | {:.1} | |\n",
+        "| {input} | **whole refilter (chain {}²), one submission** | **{all:.3}** | {floor:.3} | \
+         {:.1} | |\n",
+        s.chain,
         all / floor
     ));
     eprintln!(
-        "dynamic {input}: {all:.3} ms a frame, {:.1}× its floor",
+        "dynamic {input}, chain {}: {all:.3} ms a frame, {:.1}× its floor",
+        s.chain,
         all / floor
     );
     let total: f64 = stage.iter().sum();
@@ -316,12 +320,13 @@ fn frame_errors(
 }
 
 /// Runs the benchmark: cube inputs of `cubes` sides and lat-long inputs of `widths`, each
-/// refiltered with `s`; prints the table and, with `out`, writes the "dynamic" section of that
-/// performance page.
+/// refiltered with `s` into a chain of each side in `chains` (its paraboloid twice that);
+/// prints the table and, with `out`, writes the "dynamic" section of that performance page.
 pub fn bench_dynamic(
     ctx: &Context,
     cubes: &[u32],
     widths: &[u32],
+    chains: &[u32],
     s: &FrameSettings,
     reps: usize,
     out: Option<&std::path::Path>,
@@ -340,16 +345,25 @@ pub fn bench_dynamic(
     let mut body = String::from(
         "| input | stage | GPU ms | floor ms | ratio | error |\n|---|---|---|---|---|---|\n",
     );
-    let inputs = cubes
+    let inputs: Vec<(Mapping, u32)> = cubes
         .iter()
         .map(|&n| (Mapping::Cube, n))
-        .chain(widths.iter().map(|&w| (Mapping::LatLong, w)));
+        .chain(widths.iter().map(|&w| (Mapping::LatLong, w)))
+        .collect();
     let mut shares = Vec::new();
-    for (mapping, size) in inputs {
+    for (&c, &(mapping, size)) in chains
+        .iter()
+        .flat_map(|c| inputs.iter().map(move |i| (c, i)))
+    {
+        let s = &FrameSettings {
+            chain: c,
+            paraboloid: 2 * c,
+            ..*s
+        };
         let (rows, share) = input_rows(ctx, &passes, mapping, size, s, reps)?;
         body.push_str(&rows);
         shares.push(format!(
-            "{} {size}: {:.0}% / {:.0}% / {:.0}%",
+            "{} {size}, chain {c}²: {:.0}% / {:.0}% / {:.0}%",
             mapping.name(),
             100.0 * share[0],
             100.0 * share[1],
@@ -371,9 +385,9 @@ pub fn bench_dynamic(
          frame's refilter recorded into one command buffer and submitted once, nothing read \
          back (counted). GPU time from timestamps per stage, the median of {reps} rounds \
          after an untimed one. Settings: SH 2 and a {i}² irradiance cube; lights above \
-         {ratio}× the mean luminance, at most {max}; the residual converted to a {dp}² dual \
-         paraboloid with its MIP chain and filtered into a {c}² cube of {l} GGX levels, {n} \
-         samples a texel. Floor: copies of the source, of the chain's cube (its levels: 4/3 of \
+         {ratio}× the mean luminance, at most {max}; the residual converted to a dual \
+         paraboloid (twice the chain's side) with its MIP chain and filtered into a cube of \
+         {l} GGX levels ({c}² at level 0), {n} samples a texel. Floor: copies of the source, of the chain's cube (its levels: 4/3 of \
          level 0) and of the irradiance cube, in the same run. Errors on the last frame, \
          against the map's exact irradiance and exact GGX prefilter (float64): the lights are \
          filtered exactly from the GPU's records (`Extractor::record_add`), the residual by SH 2 \
@@ -381,8 +395,11 @@ pub fn bench_dynamic(
         i = s.irradiance,
         ratio = s.ratio,
         max = s.max_lights,
-        dp = s.paraboloid,
-        c = s.chain,
+        c = chains
+            .iter()
+            .map(u32::to_string)
+            .collect::<Vec<_>>()
+            .join("² or "),
         l = s.levels,
         n = s.samples,
     );

@@ -85,9 +85,10 @@ pub enum Bench {
         /// Lat-long inputs (widths)
         #[arg(long, value_delimiter = ',', default_value = "512,1024,2048")]
         widths: Vec<u32>,
-        /// Side of the GGX chain's cube (the paraboloid it filters: twice this)
-        #[arg(long, default_value_t = 128)]
-        chain: u32,
+        /// Sides of the GGX chain's cube, each measured on every input (the paraboloid it
+        /// filters: twice this)
+        #[arg(long, value_delimiter = ',', default_value = "128")]
+        chain: Vec<u32>,
         /// FIS samples per chain texel (128: every level's mean error within 1% of the exact
         /// prefilter on the sun sky; 64 leaves α = 1 at 1.5%)
         #[arg(long, default_value_t = 128)]
@@ -308,10 +309,10 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
             out,
         } => {
             let settings = dynamic::FrameSettings {
-                chain: *chain,
+                chain: 0,
                 levels: 7,
                 samples: *samples,
-                paraboloid: 2 * chain,
+                paraboloid: 0,
                 irradiance: 32,
                 ratio: crate::abi::lights::DIFFUSE_RATIO,
                 max_lights: crate::abi::lights::CHAIN_MAX_TEXELS,
@@ -320,6 +321,7 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
                 &context(g)?,
                 cubes,
                 widths,
+                chain,
                 &settings,
                 *reps,
                 out.as_deref(),
