@@ -137,8 +137,13 @@ fn glsl_solid_angles_sum_to_4pi_and_match_f64() {
                 let total = sum * m.layers() as f64;
                 let rel = (total / (4.0 * std::f64::consts::PI) - 1.0).abs();
                 assert!(rel < 1e-5, "{m:?} {w}x{h}: GPU sum {total} rel err {rel:e}");
+                // Lat-long texels have a closed form: a few float ulps, also at the rows
+                // next to the poles and at 512 rows, where a sine accurate only to an absolute
+                // 2^-21 (as drivers are allowed, NVIDIA's) would be 1e-4 off. Disc mappings'
+                // rim slivers are integrated numerically: 2e-3 of the texel scale.
+                let bound = if m == Mapping::LatLong { 2e-6 } else { 2e-3 };
                 assert!(
-                    worst.worst() < 2e-3,
+                    worst.worst() < bound,
                     "{m:?} {w}x{h}: worst texel rel err {:e} at {:?}",
                     worst.worst(),
                     worst.at()

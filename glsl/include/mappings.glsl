@@ -308,13 +308,33 @@ bool in_rect(vec2 p, vec2 lo, vec2 hi) {
     return all(greaterThanEqual(p, lo)) && all(lessThanEqual(p, hi));
 }
 
+// sin(x) for x in [0, π/2] to a few ulps relative. GLSL's sin is bound by an absolute error
+// only (NVIDIA's is ~2^-21): at the small angles of a lat-long row's half height and of the
+// rows next to the poles that is a relative error of 1e-4 or more, which the texel solid
+// angles, the SH mean of a map and the light threshold taken from it would carry. Taylor
+// terms to x^9 below π/4, the cosine's to x^10 above (as cos(π/2 - x)).
+float sin_half_pi(float x) {
+    float y = x <= 0.25 * PI ? x : 0.5 * PI - x;
+    float y2 = y * y;
+    if (x <= 0.25 * PI) {
+        return y * (1.0 + y2 * (-1.0 / 6.0 + y2 * (1.0 / 120.0 + y2 * (-1.0 / 5040.0
+            + y2 * (1.0 / 362880.0)))));
+    }
+    return 1.0 + y2 * (-0.5 + y2 * (1.0 / 24.0 + y2 * (-1.0 / 720.0 + y2 * (1.0 / 40320.0
+        + y2 * (-1.0 / 3628800.0)))));
+}
+
 // Solid angle of texel (i, j) of a w x h layer (the part inside the disc for angular and
 // paraboloid maps). Closed form for lat-long; 8x8 Gauss-Legendre for cube texels and for disc
 // texels wholly inside; clipped_square for texels the rim cuts.
 float texel_solid_angle(uint m, uvec2 size, ivec2 p) {
     if (m == MAPPING_LATLONG) {
-        float t0 = PI * float(p.y) / float(size.y), t1 = PI * float(p.y + 1) / float(size.y);
-        return (TAU / float(size.x)) * 2.0 * sin(0.5 * (t0 + t1)) * sin(0.5 * (t1 - t0));
+        // 2 sin(θ_mid) sin(Δθ/2) per unit φ, θ_mid folded into the northern half (the rows
+        // are symmetric about the equator, and half-integers fold exactly).
+        float rows = float(size.y), mid = float(p.y) + 0.5;
+        float north = min(mid, rows - mid);
+        return (TAU / float(size.x)) * 2.0 * sin_half_pi(PI * north / rows)
+            * sin_half_pi(0.5 * PI / rows);
     }
     vec2 lo = 2.0 * vec2(p) / vec2(size) - 1.0;
     vec2 hi = 2.0 * vec2(p + 1) / vec2(size) - 1.0;
