@@ -359,3 +359,167 @@ fn a_render_without_monte_carlo_is_one_submission() {
     }
     common::finish(ctx);
 }
+
+/// The seven techniques the resident path renders (SH irradiance, SH-BRDF, FIS, split-sum, a
+/// prefiltered map, a mirror by lookup and one filtered over its footprint), on a lat-long
+/// and a cube sky whose sun is 5·10⁴ × the zenith, lights left in the map.
+fn resident_scene(footprint: bool) -> envlight::scene::Scene {
+    use common::scenes::{fis, object, scene as scene_of, sphere_camera};
+    use envlight::math::brdf::Brdf;
+    use envlight::scene::{LightsMode, LookupFilter, Technique};
+    let at = |x: f64, y: f64| Shape::Sphere {
+        center: [x, y, 0.0],
+        radius: 0.45,
+    };
+    let ggx = Brdf::Ggx {
+        alpha: 0.3,
+        correlated: true,
+    };
+    let sh_brdf = Technique::ShBrdf {
+        order: 2,
+        grid: 4,
+        window: None,
+    };
+    let objects = vec![
+        object(
+            at(-1.0, 0.5),
+            Brdf::Lambert,
+            [1.0; 3],
+            Technique::Sh { order: 2 },
+        ),
+        object(at(0.0, 0.5), Brdf::Phong { n: 8.0 }, [1.0; 3], sh_brdf),
+        object(at(1.0, 0.5), ggx, [1.0; 3], fis(16)),
+        object(at(-1.0, -0.5), ggx, [1.0; 3], Technique::SplitSum),
+        object(
+            at(0.0, -0.5),
+            Brdf::Lambert,
+            [1.0; 3],
+            Technique::Prefiltered { size: 8 },
+        ),
+        object(at(1.0, -0.5), Brdf::Mirror, [1.0; 3], Technique::Lookup),
+    ];
+    let mut sc = scene_of(sphere_camera(24), objects, false, 32);
+    (sc.split_sum.size, sc.split_sum.levels, sc.split_sum.samples) = (Some(32), 3, 16);
+    sc.environment.lights = LightsMode::None;
+    sc.environment.filter = match footprint {
+        true => LookupFilter::Footprint,
+        false => LookupFilter::Point,
+    };
+    sc
+}
+
+/// `Renderer::resident` + `render_resident` (what `envlight render --resident` runs: the map
+/// on the GPU, one frame recorded from the image) against `Renderer::render` (the host path):
+/// the same passes on the same inputs, only the environment's image is the caller's, so the
+/// frames agree to f32 rounding (1e-6 relative, floor 1e-3) on a lat-long and a cube map, with
+/// point and footprint-filtered lookups. The frames are no constant image: the spheres differ.
+#[test]
+fn the_resident_path_renders_what_the_host_path_does() {
+    use envlight::render::{MapShape, Renderer};
+    let ctx = common::ctx();
+    {
+        let sky = envlight::math::synth::Sky::default();
+        let renderer = Renderer::new(&ctx);
+        for (mapping, w, h) in [(Mapping::LatLong, 64, 32), (Mapping::Cube, 16, 16)] {
+            let env = EnvMap::from_fn(mapping, w, h, 2, |d| sky.radiance(d));
+            let gpu = GpuEnvMap::upload(&ctx, &env).unwrap();
+            for footprint in [false, true] {
+                let sc = resident_scene(footprint);
+                let host = renderer.render(&sc, &env).unwrap();
+                let prepared = renderer.resident(&sc, MapShape::of(&env)).unwrap();
+                let before = ctx.submissions();
+                let got = renderer.render_resident(&prepared, &gpu).unwrap();
+                assert_eq!(ctx.submissions() - before, 1);
+                let mut errors = Errors::new();
+                for (k, (a, b)) in got.frame.texels.iter().zip(&host.frame.texels).enumerate() {
+                    for c in 0..3 {
+                        errors.rel(a[c], b[c], 1e-3, (k, c));
+                    }
+                }
+                assert!(
+                    errors.worst() <= 1e-6,
+                    "{mapping:?} footprint {footprint}: resident differs by {:e} at {:?}",
+                    errors.worst(),
+                    errors.at()
+                );
+                let lum: Vec<f32> = got.frame.texels.iter().map(|t| t[1]).collect();
+                let distinct = {
+                    let mut v: Vec<u32> = lum.iter().map(|x| x.to_bits()).collect();
+                    v.sort_unstable();
+                    v.dedup();
+                    v.len()
+                };
+                assert!(distinct > lum.len() / 4, "{distinct} distinct pixels");
+            }
+        }
+    }
+    common::finish(ctx);
+}
+
+/// What the resident path cannot render is refused when it is prepared, and an image it
+/// cannot read when a frame is recorded, each naming what is wrong: Monte Carlo and extracted
+/// lights (both prepared on the host), a map of another shape, an image without SAMPLED
+/// usage.
+#[test]
+fn the_resident_path_refuses_what_it_cannot_render() {
+    use envlight::gpu::{Image, ImageDesc};
+    use envlight::passes::map::map_desc;
+    use envlight::render::{MapShape, Renderer};
+    use envlight::scene::{LightsMode, Technique};
+    let ctx = common::ctx();
+    {
+        let renderer = Renderer::new(&ctx);
+        let shape = MapShape {
+            mapping: Mapping::LatLong,
+            width: 64,
+            height: 32,
+        };
+        let mut sc = resident_scene(false);
+        sc.environment.lights = LightsMode::Extract;
+        let err = renderer.resident(&sc, shape).err().unwrap().to_string();
+        assert!(err.contains("extracts lights"), "{err}");
+        let mut sc = resident_scene(false);
+        sc.objects[2].material.technique = Some(Technique::Mc {
+            samples: 16,
+            error: None,
+        });
+        let err = renderer.resident(&sc, shape).err().unwrap().to_string();
+        assert!(
+            err.contains("object 2") && err.contains("Monte Carlo"),
+            "{err}"
+        );
+
+        let prepared = renderer.resident(&resident_scene(false), shape).unwrap();
+        let other = GpuEnvMap::new(&ctx, "engine sky 32", Mapping::LatLong, 32, 16).unwrap();
+        let err = ctx
+            .run("refused", |rec| {
+                renderer.record_resident(rec, &prepared, &other)
+            })
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("engine sky 32") && err.contains("64x32"),
+            "{err}"
+        );
+        let desc = ImageDesc {
+            usage: ash::vk::ImageUsageFlags::STORAGE | ash::vk::ImageUsageFlags::TRANSFER_DST,
+            ..map_desc(Mapping::LatLong, 64, 32, 1)
+        };
+        let unsampled = GpuEnvMap::from_image(
+            Image::new(&ctx, "engine sky (storage only)", desc).unwrap(),
+            Mapping::LatLong,
+        );
+        let err = ctx
+            .run("refused", |rec| {
+                renderer.record_resident(rec, &prepared, &unsampled)
+            })
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("engine sky (storage only)") && err.contains("SAMPLED"),
+            "{err}"
+        );
+        drop((prepared, other, unsampled, renderer));
+    }
+    common::finish(ctx);
+}

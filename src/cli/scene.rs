@@ -17,6 +17,11 @@ pub struct RenderArgs {
     /// Output EXR (the PNG gets the same name with .png)
     #[arg(short, long)]
     output: PathBuf,
+    /// Render through the resident path, as an engine does with a map on the GPU: the map is
+    /// uploaded once, then one frame is recorded from the GPU image with nothing read back
+    /// before the frame (no Monte Carlo, lights = "none")
+    #[arg(long)]
+    resident: bool,
 }
 
 /// Print the GPU passes a render of a scene will run, and why
@@ -43,7 +48,7 @@ pub struct DemoArgs {
 
 /// `envlight render`.
 pub fn render(g: &Global, a: &RenderArgs) -> Result<()> {
-    render_scene(g, &a.scene, &a.output)
+    render_scene(g, &a.scene, &a.output, a.resident)
 }
 
 /// `envlight plan`.
@@ -152,10 +157,10 @@ fn demo_maps(cli: &Global, input: &Path, out: &Path, size: u32) -> Result<()> {
 fn demo_scene(cli: &Global, out: &Path) -> Result<()> {
     let scene = Path::new("assets/scenes/materials.toml");
     println!("\nevery material side by side ({}):", scene.display());
-    render_scene(cli, scene, &out.join("materials.exr"))
+    render_scene(cli, scene, &out.join("materials.exr"), false)
 }
 
-fn render_scene(cli: &Global, scene: &Path, output: &Path) -> Result<()> {
+fn render_scene(cli: &Global, scene: &Path, output: &Path, resident: bool) -> Result<()> {
     let mut clock = HostClock::start();
     let sc = crate::scene::Scene::load(scene)?;
     let base = scene.parent().unwrap_or(Path::new("."));
@@ -164,7 +169,15 @@ fn render_scene(cli: &Global, scene: &Path, output: &Path) -> Result<()> {
     let (env, ctx) = context_while(cli, || Ok(crate::render::load_environment(&sc, base)?))?;
     clock.lap("load scene and map ∥ create device");
     let t0 = std::time::Instant::now();
-    let r = crate::render::render(&ctx, &sc, &env)?;
+    let r = match resident {
+        false => crate::render::render(&ctx, &sc, &env)?,
+        true => {
+            let renderer = crate::render::Renderer::new(&ctx);
+            let prepared = renderer.resident(&sc, crate::render::MapShape::of(&env))?;
+            let gpu = GpuEnvMap::upload(&ctx, &env)?;
+            renderer.render_resident(&prepared, &gpu)?
+        }
+    };
     let wall = t0.elapsed().as_secs_f64();
     clock.lap("render (pipelines, passes, waits)");
     if let Some(dir) = output.parent() {

@@ -218,6 +218,8 @@ pub(crate) struct Shared {
     allocator: ManuallyDrop<Mutex<Allocator>>,
     command_pool: Mutex<vk::CommandPool>,
     live: AtomicI64,
+    /// Objects created so far (never decremented): what a frame allocates.
+    created: AtomicU64,
     owns_device: bool,
     sink: Arc<MessageSink>,
     /// The shader of every pipeline created, in order (what `envlight plan` is checked by).
@@ -544,6 +546,7 @@ impl Context {
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             command_pool: Mutex::new(command_pool),
             live: AtomicI64::new(0),
+            created: AtomicU64::new(0),
             pipelines: Mutex::new(Vec::new()),
             submissions: AtomicU64::new(0),
             #[cfg(feature = "test-hooks")]
@@ -585,6 +588,13 @@ impl Context {
         self.shared.live.load(Ordering::SeqCst)
     }
 
+    /// How many Vulkan objects envlight has created on this context so far (resources, views,
+    /// pipelines, descriptor pools, query pools; never decremented): a frame that creates
+    /// none allocates nothing.
+    pub fn objects_created(&self) -> u64 {
+        self.shared.created.load(Ordering::SeqCst)
+    }
+
     /// How many submissions envlight has made on this context so far ([`Context::run`] and
     /// [`Context::submit`]; work recorded into an engine's command buffers is not counted).
     pub fn submissions(&self) -> u64 {
@@ -617,6 +627,13 @@ impl Context {
     }
 }
 
+/// A number no other resource, sampler or pipeline of this process has had: what a
+/// [`super::DescriptorCache`] keys its sets by (Vulkan may reuse a destroyed object's handle).
+pub(crate) fn next_serial() -> u64 {
+    static NEXT: AtomicU64 = AtomicU64::new(1);
+    NEXT.fetch_add(1, Ordering::Relaxed)
+}
+
 impl Shared {
     pub(crate) fn allocator(&self) -> MutexGuard<'_, Allocator> {
         // A poisoned lock only means another thread panicked mid-allocation; the allocator's
@@ -626,6 +643,7 @@ impl Shared {
 
     pub(crate) fn track(&self) {
         self.live.fetch_add(1, Ordering::SeqCst);
+        self.created.fetch_add(1, Ordering::SeqCst);
     }
 
     pub(crate) fn untrack(&self) {

@@ -6,7 +6,8 @@ use super::shaders::{descriptor_type, spirv};
 use crate::abi::{Kind, PushBlock, ShaderId};
 use crate::error::{Result, VkContext};
 use ash::vk;
-use std::sync::Arc;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 
 fn shader_module(shared: &Shared, id: ShaderId) -> Result<vk::ShaderModule> {
     let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv(id)))
@@ -26,6 +27,8 @@ pub struct Pipeline {
     pub(crate) layout: vk::PipelineLayout,
     pub(crate) set_layout: vk::DescriptorSetLayout,
     pub(crate) shader: ShaderId,
+    /// Unique in the process (descriptor caches key by it).
+    pub(crate) serial: u64,
     stages: vk::ShaderStageFlags,
 }
 
@@ -58,6 +61,7 @@ impl Pipeline {
             layout: vk::PipelineLayout::null(),
             set_layout,
             shader,
+            serial: super::context::next_serial(),
             stages,
         };
         shared.name(set_layout, shader.name());
@@ -328,7 +332,70 @@ impl Bind<'_> {
     }
 }
 
-/// A descriptor set in a pool of its own, for one submission.
+impl Bind<'_> {
+    /// What identifies this binding's descriptor: its kind, its resources' serials, its level.
+    fn key(&self) -> [u64; 3] {
+        match self {
+            Bind::Sampled(i, s, cube) => [1 + *cube as u64, i.serial, s.serial],
+            Bind::Storage(i) => [3, i.serial, 0],
+            Bind::StorageLevel(i, level) => [4, i.serial, *level as u64],
+            Bind::Buffer(b) => [5, b.serial, 0],
+            Bind::Texels(b) => [6, b.serial, 0],
+        }
+    }
+}
+
+/// Descriptor sets kept across recordings, one per pipeline and distinct bindings, so that a
+/// frame recorded again on the same resources allocates nothing (a recorder uses one after
+/// [`super::Recorder::use_descriptor_cache`]). Keys are the resources' serials, never reused,
+/// so a set is never bound to a resource that replaced a destroyed one; sets of resources
+/// since dropped stay until the cache is dropped (a caller that wraps new images every frame
+/// grows it by their sets). Cheap to clone: clones share the sets.
+#[derive(Clone, Default)]
+pub struct DescriptorCache {
+    sets: Arc<Mutex<HashMap<Vec<u64>, Arc<DescriptorSet>>>>,
+}
+
+impl DescriptorCache {
+    /// An empty cache.
+    pub fn new() -> DescriptorCache {
+        DescriptorCache::default()
+    }
+
+    /// Sets made so far.
+    pub fn len(&self) -> usize {
+        self.sets.lock().map_or(0, |s| s.len())
+    }
+
+    /// Whether no set was made yet.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The set of `pipeline` with `binds`, written on first use.
+    pub(crate) fn get(
+        &self,
+        ctx: &Context,
+        pipeline: &Pipeline,
+        binds: &[(u32, Bind<'_>)],
+    ) -> Result<Arc<DescriptorSet>> {
+        let mut key = vec![pipeline.serial];
+        for (b, bind) in binds {
+            key.push(*b as u64);
+            key.extend(bind.key());
+        }
+        let mut sets = self.sets.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(s) = sets.get(&key) {
+            return Ok(s.clone());
+        }
+        let set = Arc::new(DescriptorSet::new(ctx, pipeline, binds)?);
+        sets.insert(key, set.clone());
+        Ok(set)
+    }
+}
+
+/// A descriptor set in a pool of its own, for one submission (or, in a [`DescriptorCache`],
+/// for every recording on the same resources).
 pub struct DescriptorSet {
     shared: Arc<Shared>,
     pool: vk::DescriptorPool,

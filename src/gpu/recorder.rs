@@ -8,7 +8,7 @@ use super::barrier::{
     buffer_needs_barrier, image_barrier, memory_barrier, needs_barrier, usage_info, Usage,
 };
 use super::context::Context;
-use super::pipeline::{Bind, DescriptorSet, Pipeline};
+use super::pipeline::{Bind, DescriptorCache, DescriptorSet, Pipeline};
 use super::resources::{Buffer, Image};
 use super::shaders::binding_usage;
 use super::timing::{Timestamps, Timing};
@@ -29,6 +29,8 @@ pub struct Recorder {
     cmd: vk::CommandBuffer,
     timestamps: Option<Timestamps>,
     keep: Vec<Box<dyn Any>>,
+    /// Where descriptor sets are kept across recordings, if anywhere.
+    cache: Option<DescriptorCache>,
 }
 
 /// What a finished recording holds until the GPU has executed it: the transient resources and
@@ -68,7 +70,24 @@ impl Recorder {
             cmd,
             timestamps,
             keep: Vec::new(),
+            cache: None,
         }
+    }
+
+    /// Takes descriptor sets from `cache` from now on, making only those it lacks: a frame
+    /// recorded again with the same passes on the same resources then allocates nothing
+    /// (with timestamps off, whose query pools are per recording).
+    pub fn use_descriptor_cache(&mut self, cache: &DescriptorCache) {
+        self.cache = Some(cache.clone());
+    }
+
+    /// Replaces the descriptor cache in use (`None`: sets per recording), returning the one
+    /// before, for a caller to restore.
+    pub fn swap_descriptor_cache(
+        &mut self,
+        cache: Option<DescriptorCache>,
+    ) -> Option<DescriptorCache> {
+        std::mem::replace(&mut self.cache, cache)
     }
 
     /// Ends recording (the command buffer stays in the recording state, the caller's).
@@ -177,12 +196,14 @@ impl Recorder {
                 self.use_buffer(buf, usage);
             }
         }
-        let set = if binds.is_empty() {
-            None
-        } else {
-            Some(DescriptorSet::new(&self.ctx, pipeline, binds)?)
+        let set = match (&self.cache, binds.is_empty()) {
+            (_, true) => None,
+            (Some(cache), false) => Some(cache.get(&self.ctx, pipeline, binds)?),
+            (None, false) => Some(std::sync::Arc::new(DescriptorSet::new(
+                &self.ctx, pipeline, binds,
+            )?)),
         };
-        pipeline.bind(self.cmd, set.as_ref(), push);
+        pipeline.bind(self.cmd, set.as_deref(), push);
         if let Some(s) = set {
             self.keep(s);
         }

@@ -36,6 +36,8 @@ fn allocate(
 pub struct Buffer {
     shared: Arc<Shared>,
     pub(crate) raw: vk::Buffer,
+    /// Unique in the process (descriptor caches key by it).
+    pub(crate) serial: u64,
     /// Its rgba32f view where it was made with UNIFORM_TEXEL_BUFFER usage (else null).
     pub(crate) texel_view: vk::BufferView,
     allocation: Option<Allocation>,
@@ -84,6 +86,7 @@ impl Buffer {
         let mut buffer = Buffer {
             shared: s.clone(),
             raw,
+            serial: super::context::next_serial(),
             texel_view: vk::BufferView::null(),
             allocation: None,
             size,
@@ -251,6 +254,8 @@ impl ImageDesc {
 pub struct Image {
     shared: Arc<Shared>,
     pub(crate) raw: vk::Image,
+    /// Unique in the process (descriptor caches key by it).
+    pub(crate) serial: u64,
     allocation: Option<Allocation>,
     pub(crate) view: vk::ImageView,
     pub(crate) cube_view: vk::ImageView,
@@ -342,6 +347,7 @@ impl Image {
         Image {
             shared: shared.clone(),
             raw,
+            serial: super::context::next_serial(),
             allocation: None,
             view: vk::ImageView::null(),
             cube_view: vk::ImageView::null(),
@@ -469,6 +475,8 @@ impl Drop for Image {
 pub struct Sampler {
     shared: Arc<Shared>,
     pub(crate) raw: vk::Sampler,
+    /// Unique in the process (descriptor caches key by it).
+    pub(crate) serial: u64,
 }
 
 impl Sampler {
@@ -534,6 +542,7 @@ impl Sampler {
         Ok(Sampler {
             shared: ctx.shared.clone(),
             raw,
+            serial: super::context::next_serial(),
         })
     }
 }

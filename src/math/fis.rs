@@ -189,7 +189,12 @@ pub fn dp_size_for(brdf: &Brdf, samples: u32, bias: f64) -> u32 {
 /// Side of the dual paraboloid for `map`: about as many texels in the two discs as the map
 /// has on the sphere, as a power of two from 16 to 1024.
 pub fn default_dp_size(map: &super::envmap::EnvMap) -> u32 {
-    let n = (map.width as f64) * (map.height as f64) * map.layers() as f64;
+    default_dp_size_of(map.width, map.height, map.layers())
+}
+
+/// [`default_dp_size`] of a map of `layers` layers of `width` × `height` texels.
+pub fn default_dp_size_of(width: u32, height: u32, layers: u32) -> u32 {
+    let n = (width as f64) * (height as f64) * layers as f64;
     let side = (2.0 * n / std::f64::consts::PI).sqrt();
     (side.max(1.0) as u32).next_power_of_two().clamp(16, 1024)
 }

@@ -42,10 +42,9 @@ pub(super) struct PrefilteredMap {
     lit: bool,
 }
 
-/// The GPU resources the passes write and the shading reads.
+/// The GPU resources the passes write and the shading reads (the environment itself is the
+/// caller's: uploaded by the host path, the engine's own image on the resident path).
 pub(super) struct Inputs {
-    /// The environment.
-    pub env: GpuEnvMap,
     /// The map's radiance SH coefficients (the projection's output, on the GPU).
     pub sh_out: Option<Buffer>,
     /// The sets the shade pass reads, packed from them on the GPU, and their entries.
@@ -74,7 +73,7 @@ impl Inputs {
     /// The resources of `job`'s plan, given what the lights stage found and where the SH
     /// objects' sets go.
     pub fn new(job: &Job<'_>, lit: &Lit, sh: &ShLayout) -> Result<Inputs> {
-        let (ctx, plan, env) = (job.ctx, job.plan, job.env);
+        let (ctx, plan) = (job.ctx, job.plan);
         let storage =
             |name, bytes: u64, usage| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
         let tables = match plan.runs(PassKind::ShBrdfTable) {
@@ -159,9 +158,7 @@ impl Inputs {
             }
             None => None,
         };
-        let env = GpuEnvMap::new(ctx, "environment", env.mapping, env.width, env.height)?;
         Ok(Inputs {
-            env,
             sh_out,
             sh_packed,
             sh_entries: sh.entries.clone(),
@@ -227,22 +224,23 @@ fn prefiltered_maps(
     Ok((maps, offsets, texels))
 }
 
-/// Records everything before the shading into `rec`: the uploads, then each pass the plan
-/// runs, its GPU time marked in `marks`. `convert_built` waits for the paraboloid's
-/// conversion pipelines, built on another thread meanwhile.
+/// Records everything before the shading into `rec`, reading the environment `env`: the
+/// residuals' uploads, then each pass the plan runs, its GPU time marked in `marks`.
+/// `convert_built` waits for the paraboloid's conversion pipelines, built on another thread
+/// meanwhile.
 pub(super) fn record(
     rec: &mut Recorder,
     marks: &mut Marks,
     job: &Job<'_>,
     passes: &Passes<'_>,
     (inputs, lit, gbuf): (&Inputs, &Lit, &GBuffer),
+    env: &GpuEnvMap,
     convert_built: impl FnOnce() -> Result<()>,
 ) -> Result<()> {
     let (plan, orientation) = (job.plan, &job.orientation);
-    inputs.env.record_upload(rec, job.env)?;
     if let (Some((p, pack)), Some(out)) = (passes.sh, &inputs.sh_out) {
         marks.record(rec, PassKind::ShProjection, |rec| {
-            p.record_into(rec, &inputs.env, plan.lmax, orientation, out)?;
+            p.record_into(rec, env, plan.lmax, orientation, out)?;
             // Each object's set, from the coefficients where they are: no readback.
             if let Some(packed) = &inputs.sh_packed {
                 let minus = inputs.sh_minus.as_ref();
@@ -274,7 +272,7 @@ pub(super) fn record(
     if passes.dp.is_some() && inputs.dp.is_some() && plan.dp.is_some() {
         // After the uploads' staging copies, which this thread makes meanwhile.
         convert_built()?;
-        record_chain(rec, marks, job, passes, inputs, lit)?;
+        record_chain(rec, marks, job, passes, (inputs, lit), env)?;
     }
     if let (Some(b), Some(buf)) = (passes.brute, &inputs.pre_buffer) {
         for m in &inputs.pre {
@@ -284,7 +282,7 @@ pub(super) fn record(
             };
             let source = match residual {
                 Some(res) if m.lit => res,
-                _ => &inputs.env,
+                _ => env,
             };
             marks.record(rec, PassKind::Prefilter, |rec| {
                 b.record(rec, source, orientation, m.kernel, &m.map)
@@ -297,15 +295,15 @@ pub(super) fn record(
     })
 }
 
-/// Records the paraboloid's conversion, its MIP chain and the split-sum chain filtered from
-/// it.
+/// Records the paraboloid's conversion (from `env` or its residual), its MIP chain and the
+/// split-sum chain filtered from it.
 fn record_chain(
     rec: &mut Recorder,
     marks: &mut Marks,
     job: &Job<'_>,
     passes: &Passes<'_>,
-    inputs: &Inputs,
-    lit: &Lit,
+    (inputs, lit): (&Inputs, &Lit),
+    env: &GpuEnvMap,
 ) -> Result<()> {
     let (Some((conv, mip)), Some(map), Some(opts)) = (passes.dp, &inputs.dp, &job.plan.dp) else {
         return Ok(());
@@ -313,7 +311,7 @@ fn record_chain(
     let source = match (&lit.dp_source, &lit.chain_residual) {
         (Some((_, gpu)), _) => gpu,
         (None, Some(res)) if lit.dp => res,
-        _ => &inputs.env,
+        _ => env,
     };
     // A residual holds no sun for the rim's chords to misplace: fewer points (as predicted
     // for the pipeline built meanwhile, unless the lobes were too narrow for the lights

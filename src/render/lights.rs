@@ -43,6 +43,27 @@ pub(super) struct Lit {
     pub diffuse_residual: Option<GpuEnvMap>,
 }
 
+impl Lit {
+    /// Nothing extracted (a scene without lights, or rendered from a GPU image).
+    pub(super) fn none(plan: &Plan) -> Lit {
+        Lit {
+            chain: None,
+            diffuse: None,
+            gpu: None,
+            dp: false,
+            below_threshold: false,
+            phong: vec![false; plan.objects.len()],
+            sh: false,
+            prefiltered: false,
+            sh_coeffs: None,
+            ms: None,
+            dp_source: None,
+            chain_residual: None,
+            diffuse_residual: None,
+        }
+    }
+}
+
 /// Runs the lights stage of `plan` on `env`.
 pub(super) fn extract(
     ctx: &Context,

@@ -6,13 +6,15 @@ mod inputs;
 mod lights;
 pub mod plan;
 mod records;
+mod resident;
 mod shading;
 
 pub use plan::{
-    chain_of_texel_means, fis_dp_size, footprint_of, plan, split_size, LightsPlan, ObjectPlan,
-    PassKind, Plan, PlannedPass, SplitPlan, TablePlan,
+    chain_of_texel_means, fis_dp_size, fis_dp_size_for, footprint_of, plan, plan_for, split_size,
+    LightsPlan, MapShape, ObjectPlan, PassKind, Plan, PlannedPass, SplitPlan, TablePlan,
 };
 pub use records::{object_record, object_record_with, split_record};
+pub use resident::Resident;
 
 use crate::error::{Error, Result};
 use crate::gpu::{Context, Timing};
@@ -22,8 +24,8 @@ use crate::passes::gbuffer::GBuffer;
 use crate::passes::sh_project::Subgroups;
 use crate::passes::shade::Rotation;
 use crate::passes::{
-    BruteFilter, Converter, GBufferPass, MipChain, MonteCarlo, ShBrdfProjector, ShPacker,
-    ShProjector, Shade, SplitSum,
+    BruteFilter, Converter, GBufferPass, GpuEnvMap, MipChain, MonteCarlo, ShBrdfProjector,
+    ShPacker, ShProjector, Shade, SplitSum,
 };
 use crate::scene::Scene;
 use inputs::{Inputs, Passes};
@@ -176,6 +178,17 @@ impl Renderer {
         pass(&self.converter, || Converter::new(&self.ctx))
     }
 
+    /// The shade pass, built on first use.
+    fn shade_pass(&self) -> Result<&Shade> {
+        pass(&self.shade, || {
+            let mut s = Shade::with_subgroups(&self.ctx, self.subgroups)?;
+            if self.whole_shade {
+                s.whole_shader_only();
+            }
+            Ok(s)
+        })
+    }
+
     /// Renders `scene` with `env` (from [`load_environment`]). Without Monte Carlo the render
     /// is one submission: the uploads, every pass before the shading (SH coefficients stay on
     /// the GPU, packed there for each object), the draw and the frame's download. Monte Carlo
@@ -185,13 +198,7 @@ impl Renderer {
     pub fn render(&self, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
         scene.validate().map_err(Error::Invalid)?;
         let plan = plan(scene, env);
-        let shade = pass(&self.shade, || {
-            let mut s = Shade::with_subgroups(&self.ctx, self.subgroups)?;
-            if self.whole_shade {
-                s.whole_shader_only();
-            }
-            Ok(s)
-        })?;
+        let shade = self.shade_pass()?;
         // The shade pipeline is the longest build: it builds on a second thread while this
         // one builds the other passes, extracts the lights and records and runs everything
         // before the shading. So do the dual paraboloid's conversion pipelines, on a third.
@@ -220,11 +227,10 @@ impl Renderer {
             let job = Job {
                 ctx: &self.ctx,
                 scene,
-                env,
                 plan: &plan,
                 orientation: scene.environment.orientation(),
             };
-            self.render_planned(&job, shade, builds)
+            self.render_planned(&job, env, shade, builds)
         })
     }
 
@@ -262,10 +268,17 @@ impl Renderer {
 
     /// [`Renderer::render`] once the shade pipeline, and the conversion to the dual
     /// paraboloid where there is one, are being built: the plan's stages in order.
-    fn render_planned(&self, job: &Job<'_>, shade: &Shade, builds: Builds<'_>) -> Result<Rendered> {
+    fn render_planned(
+        &self,
+        job: &Job<'_>,
+        env: &EnvMap,
+        shade: &Shade,
+        builds: Builds<'_>,
+    ) -> Result<Rendered> {
         // Pipeline creation first: it is not GPU work.
         let passes = self.passes(job.plan)?;
-        let lit = lights::extract(job.ctx, job.plan, job.env, &job.orientation)?;
+        let lit = lights::extract(job.ctx, job.plan, env, &job.orientation)?;
+        let env_gpu = GpuEnvMap::new(job.ctx, "environment", env.mapping, env.width, env.height)?;
         let sh = inputs::sh_layout(job, &lit);
         let inputs = Inputs::new(job, &lit, &sh)?;
         let levels = inputs.split.as_ref().map(|(chain, _)| chain.mips());
@@ -284,33 +297,37 @@ impl Renderer {
                 mc: None,
                 sh_rotation: self.sh_rotation,
             };
-            let draw = shading::draw(job, ins, with)?;
+            let draw = shading::draw(job, ins, &env_gpu, with)?;
+            let frame = shading::frame_target(job, &gbuf)?;
             let Builds {
                 shade: built,
                 convert,
             } = builds;
             let (readback, t) = job.ctx.run("rendering", |rec| {
-                inputs::record(rec, &mut marks, job, &passes, ins, convert)?;
+                env_gpu.record_upload(rec, env)?;
+                inputs::record(rec, &mut marks, job, &passes, ins, &env_gpu, convert)?;
                 built()?;
-                shading::record_draw(rec, &mut marks, shade, &gbuf, &draw)
+                shading::record_draw(rec, &mut marks, shade, &gbuf, &draw, &frame)?;
+                frame.record_download(rec, 0)
             })?;
             marks.split(&t, &mut records);
             let frame = shading::frame_of(&readback, &gbuf)?;
             return Ok(self.rendered(job, &inputs, frame, records, None, &lit));
         }
         let ((), t) = job.ctx.run("rendering: inputs", |rec| {
-            inputs::record(rec, &mut marks, job, &passes, ins, builds.convert)
+            env_gpu.record_upload(rec, env)?;
+            inputs::record(rec, &mut marks, job, &passes, ins, &env_gpu, builds.convert)
         })?;
         marks.split(&t, &mut records);
         // Monte Carlo reads the host between its batches (an error target, a sampling table).
         let mc_pass = pass(&self.mc, || MonteCarlo::new(job.ctx))?;
         let with = (self.converter()?, mc_pass);
-        let mc = shading::monte_carlo(job, with, &inputs, &gbuf, &mut records)?;
+        let mc = shading::monte_carlo(job, with, (env, &env_gpu), &gbuf, &mut records)?;
         let with = Shading {
             mc: mc.as_ref(),
             sh_rotation: self.sh_rotation,
         };
-        let frame = shading::shade(job, shade, ins, with, builds.shade, &mut records)?;
+        let frame = shading::shade(job, shade, ins, &env_gpu, with, builds.shade, &mut records)?;
         let mc = mc.map(|m| (m.samples, m.error));
         Ok(self.rendered(job, &inputs, frame, records, mc, &lit))
     }
@@ -346,7 +363,6 @@ impl Renderer {
 pub(crate) struct Job<'a> {
     ctx: &'a Context,
     scene: &'a Scene,
-    env: &'a EnvMap,
     plan: &'a Plan,
     /// The environment's orientation (world to file).
     orientation: Orientation,

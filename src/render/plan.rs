@@ -8,7 +8,7 @@ use crate::abi::{split_sum, ShaderId};
 use crate::math::brdf::Brdf;
 use crate::math::convert::residual_edge_points;
 use crate::math::envmap::EnvMap;
-use crate::math::fis::default_dp_size;
+use crate::math::fis::default_dp_size_of;
 use crate::math::lights::{lobe_scale, ExtractOptions};
 use crate::math::sh_brdf::ViewGrid;
 use crate::math::Mapping;
@@ -209,8 +209,36 @@ impl Plan {
     }
 }
 
+/// What a plan reads of its environment: its mapping and size, never its texels (the
+/// resident path plans for an image on the GPU).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MapShape {
+    /// The mapping.
+    pub mapping: Mapping,
+    /// Width in texels (of one face or half where there are several).
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+}
+
+impl MapShape {
+    /// The shape of `env`.
+    pub fn of(env: &EnvMap) -> MapShape {
+        MapShape {
+            mapping: env.mapping,
+            width: env.width,
+            height: env.height,
+        }
+    }
+}
+
 /// Plans a render of `scene` lit by `env` (its mapping and size; the texels are not read).
 pub fn plan(scene: &Scene, env: &EnvMap) -> Plan {
+    plan_for(scene, MapShape::of(env))
+}
+
+/// Plans a render of `scene` lit by an environment of shape `env`.
+pub fn plan_for(scene: &Scene, env: MapShape) -> Plan {
     let objects = object_plans(scene);
     let users = Users::of(scene);
     let passes = passes(scene, &users, env.mapping);
@@ -653,10 +681,15 @@ fn kind_name(k: &Brdf) -> &'static str {
 /// source converts to that size by exact footprint areas, so that its power is kept; else
 /// `default_dp_size`.
 pub fn fis_dp_size(scene: &Scene, env: &EnvMap) -> u32 {
+    fis_dp_size_for(scene, MapShape::of(env))
+}
+
+/// [`fis_dp_size`] for an environment of shape `env`.
+pub fn fis_dp_size_for(scene: &Scene, env: MapShape) -> u32 {
     if let Some(s) = scene.fis.size {
         return s;
     }
-    let full = default_dp_size(env);
+    let full = default_dp_size_of(env.width, env.height, env.mapping.layers());
     // The footprint lookups a chain would serve (mirrors, the background) read its finest levels.
     let footprint = footprint_of(scene, true, false);
     let split_sum = scene
@@ -717,8 +750,8 @@ pub fn split_size(settings: &SplitSumSettings, dp_size: u32) -> u32 {
 /// where [`chain_of_texel_means`], the residual's points per texel edge where the chain is to
 /// take the lights ([`chain_takes_lights`]; the record takes the default's where the lights
 /// found are too small for its lobes' quadrature and so stay in the chain).
-fn dp_convert_options(scene: &Scene, env: &EnvMap) -> ConvertOptions {
-    let size = fis_dp_size(scene, env);
+fn dp_convert_options(scene: &Scene, env: MapShape) -> ConvertOptions {
+    let size = fis_dp_size_for(scene, env);
     ConvertOptions::new(Mapping::DualParaboloid, size)
         .with_orientation(scene.environment.orientation())
         .with_nearest(chain_of_texel_means(scene))

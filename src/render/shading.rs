@@ -61,14 +61,14 @@ fn ringing_directions() -> Vec<glam::DVec3> {
 pub(super) fn monte_carlo(
     job: &Job<'_>,
     (converter, mc_pass): (&Converter, &MonteCarlo),
-    inputs: &Inputs,
+    (env, env_gpu): (&EnvMap, &GpuEnvMap),
     gbuf: &GBuffer,
     records: &mut Vec<PassRecord>,
 ) -> Result<Option<McResult>> {
     let Some((samples, error)) = job.plan.mc else {
         return Ok(None);
     };
-    let (mc_env, t) = McEnv::for_map(job.ctx, converter, job.env, &inputs.env, &job.orientation)?;
+    let (mc_env, t) = McEnv::for_map(job.ctx, converter, env, env_gpu, &job.orientation)?;
     if !t.is_empty() {
         records.push(PassRecord {
             kind: PassKind::LatLong,
@@ -101,21 +101,20 @@ pub(super) struct Shading<'a> {
     pub sh_rotation: Rotation,
 }
 
-/// A draw before it is recorded: the frame it shades into and what it reads.
+/// A draw before it is recorded: what it reads.
 pub(super) struct Draw<'a> {
-    frame: GpuEnvMap,
-    inputs: ShadeInputs<'a>,
+    pub inputs: ShadeInputs<'a>,
 }
 
-/// The draw that shades every pixel of `gbuf`, reading `inputs` and `lit`'s lights.
+/// The draw that shades every pixel of `gbuf`, reading `env`, `inputs` and `lit`'s lights.
 pub(super) fn draw<'a>(
     job: &Job<'a>,
     (inputs, lit, gbuf): (&'a Inputs, &'a Lit, &GBuffer),
+    env: &'a GpuEnvMap,
     with: Shading<'a>,
 ) -> Result<Draw<'a>> {
-    let frame = target(job.ctx, "shaded frame", gbuf.width, gbuf.height)?;
     let inputs = ShadeInputs {
-        env: &inputs.env,
+        env,
         orientation: job.orientation,
         sh: inputs.sh_packed.as_ref().map(ShCoeffs::Gpu),
         dp: inputs.dp.as_ref(),
@@ -133,21 +132,26 @@ pub(super) fn draw<'a>(
         crate::passes::shade::code_mask(&inputs, gbuf),
         crate::passes::shade::code_bits(&job.plan.code)
     );
-    Ok(Draw { frame, inputs })
+    Ok(Draw { inputs })
 }
 
-/// Records `draw` with `shade` and the frame's download.
+/// Records `draw` with `shade` into `frame` (a target of the G-buffer's size).
 pub(super) fn record_draw(
     rec: &mut Recorder,
     marks: &mut Marks,
     shade: &Shade,
     gbuf: &GBuffer,
     draw: &Draw<'_>,
-) -> Result<Readback> {
+    frame: &GpuEnvMap,
+) -> Result<()> {
     marks.record(rec, PassKind::Shade, |rec| {
-        shade.record(rec, gbuf, &draw.inputs, &draw.frame)
-    })?;
-    draw.frame.record_download(rec, 0)
+        shade.record(rec, gbuf, &draw.inputs, frame)
+    })
+}
+
+/// The frame a draw shades into, for `gbuf`.
+pub(super) fn frame_target(job: &Job<'_>, gbuf: &GBuffer) -> Result<GpuEnvMap> {
+    target(job.ctx, "shaded frame", gbuf.width, gbuf.height)
 }
 
 /// The shaded frame from its download (once the work has completed); a pixel that is not
@@ -184,15 +188,18 @@ pub(super) fn shade(
     job: &Job<'_>,
     shade: &Shade,
     (inputs, lit, gbuf): (&Inputs, &Lit, &GBuffer),
+    env: &GpuEnvMap,
     with: Shading<'_>,
     shade_built: impl FnOnce() -> Result<()>,
     records: &mut Vec<PassRecord>,
 ) -> Result<EnvMap> {
-    let draw = draw(job, (inputs, lit, gbuf), with)?;
+    let draw = draw(job, (inputs, lit, gbuf), env, with)?;
+    let frame = frame_target(job, gbuf)?;
     shade_built()?;
     let mut marks = Marks(Vec::new());
     let (readback, t) = job.ctx.run("rendering: shading", |rec| {
-        record_draw(rec, &mut marks, shade, gbuf, &draw)
+        record_draw(rec, &mut marks, shade, gbuf, &draw, &frame)?;
+        frame.record_download(rec, 0)
     })?;
     marks.split(&t, records);
     frame_of(&readback, gbuf)

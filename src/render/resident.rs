@@ -1,0 +1,211 @@
+//! The resident path: a scene rendered from an environment that lives on the GPU (an image
+//! the engine owns, rewritten every frame), recorded into the caller's command buffer with
+//! nothing read back, nothing submitted and, after the first frame, nothing allocated.
+//!
+//! [`Renderer::resident`] plans the scene for a map's shape and makes every resource once;
+//! [`Renderer::record_resident`] records a frame: SH projection and packing, SH-BRDF tables,
+//! the paraboloid and its chain, split-sum, prefiltered maps, the G-buffer and the shading,
+//! each from the image given, into [`Resident::frame`].
+
+use super::inputs::{self, Inputs};
+use super::lights::Lit;
+use super::plan::{plan_for, MapShape, Plan};
+use super::records::{gpu_objects, Marks};
+use super::shading::{self, Shading};
+use super::{Job, Rendered, Renderer};
+use crate::error::{Error, Result};
+use crate::gpu::{DescriptorCache, Recorder};
+use crate::passes::gbuffer::{target, GBuffer};
+use crate::passes::GpuEnvMap;
+use crate::scene::{LightsMode, Scene};
+use ash::vk;
+
+/// A scene prepared for environments of one shape on the GPU: its plan and every resource
+/// its passes write, made once and reused by every frame.
+pub struct Resident {
+    scene: Scene,
+    plan: Plan,
+    shape: MapShape,
+    lit: Lit,
+    inputs: Inputs,
+    gbuf: GBuffer,
+    frame: GpuEnvMap,
+    cache: DescriptorCache,
+}
+
+impl Resident {
+    /// The shaded frame (linear RGB, the camera's size), written by each recorded frame; a
+    /// caller reads it in its own passes or downloads it.
+    pub fn frame(&self) -> &GpuEnvMap {
+        &self.frame
+    }
+
+    /// The plan every frame follows.
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    /// The shape of the environments it renders from.
+    pub fn shape(&self) -> MapShape {
+        self.shape
+    }
+}
+
+/// Why `scene` cannot render from a GPU image, if it cannot: Monte Carlo builds its sampling
+/// tables on the host, and extracted lights are prepared on the host (texel quadratures, the
+/// light tree, clusters) for the shade pass.
+fn refusal(scene: &Scene, plan: &Plan) -> Option<String> {
+    if let Some(k) = plan
+        .objects
+        .iter()
+        .position(|o| matches!(o.technique, crate::scene::Technique::Mc { .. }))
+    {
+        return Some(format!(
+            "object {k} is shaded by Monte Carlo, whose sampling tables are built on the host: \
+             the resident path cannot render it"
+        ));
+    }
+    if scene.environment.lights == LightsMode::Extract
+        && (plan.lights.chain.is_some() || plan.lights.diffuse.is_some())
+    {
+        return Some(
+            "the scene extracts lights ([environment] lights = \"extract\"), which the shade \
+             pass takes prepared on the host: the resident path renders with lights = \"none\" \
+             (passes::Extractor extracts them on the GPU for an engine's own filtering)"
+                .into(),
+        );
+    }
+    None
+}
+
+impl Renderer {
+    /// Prepares `scene` for rendering from environments of shape `env` that live on the GPU:
+    /// plans it, builds its pipelines and makes every resource its passes write. Refuses a
+    /// scene with Monte Carlo objects or extracted lights (both need the map on the host).
+    pub fn resident(&self, scene: &Scene, env: MapShape) -> Result<Resident> {
+        scene.validate().map_err(Error::Invalid)?;
+        let plan = plan_for(scene, env);
+        if let Some(why) = refusal(scene, &plan) {
+            return Err(Error::Invalid(why));
+        }
+        let ctx = &self.ctx;
+        let shade = self.shade_pass()?;
+        shade.prepare_code(&plan.code)?;
+        if let Some(opts) = &plan.dp {
+            self.converter()?
+                .prepare_for((env.mapping, env.width, env.height), opts)?;
+        }
+        let _ = self.passes(&plan)?;
+        let lit = Lit::none(&plan);
+        let job = Job {
+            ctx,
+            scene,
+            plan: &plan,
+            orientation: scene.environment.orientation(),
+        };
+        let sh = inputs::sh_layout(&job, &lit);
+        let inputs = Inputs::new(&job, &lit, &sh)?;
+        let levels = inputs.split.as_ref().map(|(chain, _)| chain.mips());
+        let at = (&inputs.pre_offsets[..], &sh.offsets[..]);
+        let objects = gpu_objects(scene, &plan, &lit, at, levels);
+        let camera = &scene.camera;
+        let mut gbuf = GBuffer::new(ctx, camera.width, camera.height, &objects)?;
+        gbuf.camera = Some(*camera);
+        let frame = target(ctx, "resident frame", camera.width, camera.height)?;
+        Ok(Resident {
+            scene: scene.clone(),
+            plan,
+            shape: env,
+            lit,
+            inputs,
+            gbuf,
+            frame,
+            cache: DescriptorCache::new(),
+        })
+    }
+
+    /// Records one frame of `r` from `env` into `rec` (the caller's command buffer): every
+    /// pass before the shading, the G-buffer and the shading into [`Resident::frame`]. Reads
+    /// nothing back and submits nothing; descriptor sets come from `r`'s cache, so a frame on
+    /// the same images allocates nothing (record with timestamps off for that: their query
+    /// pools are per recording). `env` must have `r`'s shape and SAMPLED usage.
+    pub fn record_resident(&self, rec: &mut Recorder, r: &Resident, env: &GpuEnvMap) -> Result<()> {
+        self.record_frame(rec, r, env, &mut Marks(Vec::new()))
+    }
+
+    /// Renders one frame of `r` from `env` (already on the GPU) in a submission of its own,
+    /// timed, and reads the frame back: `envlight render --resident`, to compare the
+    /// resident path with the host one on any scene it can render.
+    pub fn render_resident(&self, r: &Resident, env: &GpuEnvMap) -> Result<Rendered> {
+        let mut marks = Marks(Vec::new());
+        let (readback, t) = self.ctx.run("rendering (resident)", |rec| {
+            self.record_frame(rec, r, env, &mut marks)?;
+            r.frame.record_download(rec, 0)
+        })?;
+        let mut records = Vec::new();
+        marks.split(&t, &mut records);
+        Ok(Rendered {
+            frame: shading::frame_of(&readback, &r.gbuf)?,
+            records,
+            plan: r.plan.clone(),
+            mc: None,
+            lights_ms: None,
+        })
+    }
+
+    /// [`Renderer::record_resident`], each pass's spans marked in `marks`.
+    fn record_frame(
+        &self,
+        rec: &mut Recorder,
+        r: &Resident,
+        env: &GpuEnvMap,
+        marks: &mut Marks,
+    ) -> Result<()> {
+        let s = r.shape;
+        if (env.mapping, env.width, env.height) != (s.mapping, s.width, s.height) {
+            return Err(Error::Invalid(format!(
+                "image '{}': a {} {}x{} map, but this resident render was prepared for a {} \
+                 {}x{} one",
+                env.image.name(),
+                env.mapping.name(),
+                env.width,
+                env.height,
+                s.mapping.name(),
+                s.width,
+                s.height
+            )));
+        }
+        if !env
+            .image
+            .desc()
+            .usage
+            .contains(vk::ImageUsageFlags::SAMPLED)
+        {
+            return Err(Error::Invalid(format!(
+                "image '{}' lacks SAMPLED usage, which every pass reading the environment needs",
+                env.image.name()
+            )));
+        }
+        let job = Job {
+            ctx: &self.ctx,
+            scene: &r.scene,
+            plan: &r.plan,
+            orientation: r.scene.environment.orientation(),
+        };
+        let passes = self.passes(&r.plan)?;
+        let shade = self.shade_pass()?;
+        let previous = rec.swap_descriptor_cache(Some(r.cache.clone()));
+        let ins = (&r.inputs, &r.lit, &r.gbuf);
+        let recorded = (|| {
+            inputs::record(rec, marks, &job, &passes, ins, env, || Ok(()))?;
+            let with = Shading {
+                mc: None,
+                sh_rotation: self.sh_rotation,
+            };
+            let draw = shading::draw(&job, ins, env, with)?;
+            shading::record_draw(rec, marks, shade, &r.gbuf, &draw, &r.frame)
+        })();
+        rec.swap_descriptor_cache(previous);
+        recorded
+    }
+}
