@@ -301,12 +301,32 @@ pub fn source_hash(glsl_dir: &Path, src: &ShaderSource) -> std::io::Result<u64> 
         let _ = writeln!(text, "#define {k} {v}");
     }
     text.push_str(&expand_includes(glsl_dir, src.file, 0)?);
+    Ok(fnv1a(&text))
+}
+
+/// FNV-1a, 64 bits, of `text`.
+pub fn fnv1a(text: &str) -> u64 {
+    fnv1a_bytes(text.as_bytes())
+}
+
+/// FNV-1a, 64 bits, of `bytes`.
+pub fn fnv1a_bytes(bytes: &[u8]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in text.bytes() {
+    for &b in bytes {
         h ^= b as u64;
         h = h.wrapping_mul(0x0000_0100_0000_01b3);
     }
-    Ok(h)
+    h
+}
+
+/// Compute shaders of the examples' own (an engine's, not envlight's): `tools/shaderc`
+/// compiles each `<path>.comp` (no includes) into `<path>.spv` beside it and records
+/// [`example_hash`] of its source in `<path>.spv.hash`, which a test recomputes.
+pub const EXAMPLE_SHADERS: &[&str] = &["examples/support/sky"];
+
+/// What an example shader's SPIR-V is built from: target, optimisation and its source.
+pub fn example_hash(source: &str) -> u64 {
+    fnv1a(&format!("{TARGET_ENV} {OPTIMIZATION} example\n{source}"))
 }
 
 /// The manifest's text for the current sources.

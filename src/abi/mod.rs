@@ -15,7 +15,10 @@ pub mod parameters;
 pub mod push;
 pub mod shaders;
 
-pub use generate::{expand_includes, generated_header, manifest, source_hash};
+pub use generate::{
+    example_hash, expand_includes, fnv1a, fnv1a_bytes, generated_header, manifest, source_hash,
+    EXAMPLE_SHADERS,
+};
 pub use parameters::*;
 pub use push::PushBlock;
 pub(crate) use shaders::shader_table;

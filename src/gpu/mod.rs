@@ -14,7 +14,7 @@ pub use barrier::Usage;
 pub use context::{
     AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSelector, Startup, ValidationLog,
 };
-pub use pipeline::DescriptorCache;
+pub use pipeline::FrameCache;
 pub(crate) use pipeline::{Bind, Pipeline};
 pub use recorder::{InFlight, Recorded, Recorder};
 pub use resources::{Buffer, Image, ImageDesc, Sampler};

@@ -345,35 +345,52 @@ impl Bind<'_> {
     }
 }
 
-/// Descriptor sets kept across recordings, one per pipeline and distinct bindings, so that a
-/// frame recorded again on the same resources allocates nothing (a recorder uses one after
-/// [`super::Recorder::use_descriptor_cache`]). Keys are the resources' serials, never reused,
-/// so a set is never bound to a resource that replaced a destroyed one; sets of resources
-/// since dropped stay until the cache is dropped (a caller that wraps new images every frame
-/// grows it by their sets). Cheap to clone: clones share the sets.
+/// What a frame recorded again on the same resources would otherwise make anew, kept across
+/// recordings: descriptor sets (one per pipeline and distinct bindings), buffers uploaded with
+/// the same contents, and GPU-only scratch buffers (the k-th of each name and size a recording
+/// asks for). A recorder uses one after [`super::Recorder::use_frame_cache`]; then a frame
+/// recorded again allocates nothing (with timestamps off, whose query pools are per
+/// recording). Keys are resources' serials, never reused, so a set is never bound to a
+/// resource that replaced a destroyed one; what was made for resources since dropped stays
+/// until the cache is dropped. An uploaded buffer is never rewritten (an earlier frame may
+/// still read it); a scratch buffer is shared by successive recordings, whose barriers order
+/// its uses when they are submitted in recording order. Cheap to clone: clones share.
 #[derive(Clone, Default)]
-pub struct DescriptorCache {
-    sets: Arc<Mutex<HashMap<Vec<u64>, Arc<DescriptorSet>>>>,
+pub struct FrameCache {
+    inner: Arc<Mutex<CacheInner>>,
 }
 
-impl DescriptorCache {
+#[derive(Default)]
+struct CacheInner {
+    sets: HashMap<Vec<u64>, Arc<DescriptorSet>>,
+    uploads: HashMap<(String, u64, usize), Arc<Buffer>>,
+    scratch: HashMap<(String, u64, u32, usize), Arc<Buffer>>,
+}
+
+impl FrameCache {
     /// An empty cache.
-    pub fn new() -> DescriptorCache {
-        DescriptorCache::default()
+    pub fn new() -> FrameCache {
+        FrameCache::default()
     }
 
-    /// Sets made so far.
+    /// Descriptor sets and buffers made so far.
     pub fn len(&self) -> usize {
-        self.sets.lock().map_or(0, |s| s.len())
+        self.inner
+            .lock()
+            .map_or(0, |c| c.sets.len() + c.uploads.len() + c.scratch.len())
     }
 
-    /// Whether no set was made yet.
+    /// Whether nothing was made yet.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
+    fn lock(&self) -> std::sync::MutexGuard<'_, CacheInner> {
+        self.inner.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
     /// The set of `pipeline` with `binds`, written on first use.
-    pub(crate) fn get(
+    pub(crate) fn set(
         &self,
         ctx: &Context,
         pipeline: &Pipeline,
@@ -384,17 +401,52 @@ impl DescriptorCache {
             key.push(*b as u64);
             key.extend(bind.key());
         }
-        let mut sets = self.sets.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(s) = sets.get(&key) {
+        let mut c = self.lock();
+        if let Some(s) = c.sets.get(&key) {
             return Ok(s.clone());
         }
         let set = Arc::new(DescriptorSet::new(ctx, pipeline, binds)?);
-        sets.insert(key, set.clone());
+        c.sets.insert(key, set.clone());
         Ok(set)
+    }
+
+    /// A storage buffer named `name` holding `bytes`, made on first use.
+    pub(crate) fn upload(&self, ctx: &Context, name: &str, bytes: &[u8]) -> Result<Arc<Buffer>> {
+        let key = (
+            name.to_string(),
+            crate::abi::fnv1a_bytes(bytes),
+            bytes.len(),
+        );
+        let mut c = self.lock();
+        if let Some(b) = c.uploads.get(&key) {
+            return Ok(b.clone());
+        }
+        let b = Arc::new(Buffer::storage(ctx, name, bytes)?);
+        c.uploads.insert(key, b.clone());
+        Ok(b)
+    }
+
+    /// The `k`-th GPU-only scratch buffer of `name`, `size` bytes and `usage` a recording
+    /// asks for, made on first use.
+    pub(crate) fn scratch(
+        &self,
+        ctx: &Context,
+        (name, size, usage): (&str, u64, ash::vk::BufferUsageFlags),
+        k: usize,
+    ) -> Result<Arc<Buffer>> {
+        let key = (name.to_string(), size, usage.as_raw(), k);
+        let mut c = self.lock();
+        if let Some(b) = c.scratch.get(&key) {
+            return Ok(b.clone());
+        }
+        let location = gpu_allocator::MemoryLocation::GpuOnly;
+        let b = Arc::new(Buffer::new(ctx, name, size, usage, location)?);
+        c.scratch.insert(key, b.clone());
+        Ok(b)
     }
 }
 
-/// A descriptor set in a pool of its own, for one submission (or, in a [`DescriptorCache`],
+/// A descriptor set in a pool of its own, for one submission (or, in a [`FrameCache`],
 /// for every recording on the same resources).
 pub struct DescriptorSet {
     shared: Arc<Shared>,

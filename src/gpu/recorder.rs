@@ -8,7 +8,7 @@ use super::barrier::{
     buffer_needs_barrier, image_barrier, memory_barrier, needs_barrier, usage_info, Usage,
 };
 use super::context::Context;
-use super::pipeline::{Bind, DescriptorCache, DescriptorSet, Pipeline};
+use super::pipeline::{Bind, DescriptorSet, FrameCache, Pipeline};
 use super::resources::{Buffer, Image};
 use super::shaders::binding_usage;
 use super::timing::{Timestamps, Timing};
@@ -29,8 +29,10 @@ pub struct Recorder {
     cmd: vk::CommandBuffer,
     timestamps: Option<Timestamps>,
     keep: Vec<Box<dyn Any>>,
-    /// Where descriptor sets are kept across recordings, if anywhere.
-    cache: Option<DescriptorCache>,
+    /// Where descriptor sets and transient buffers are kept across recordings, if anywhere.
+    cache: Option<FrameCache>,
+    /// Scratch buffers asked for so far in this recording, by name, size and usage.
+    scratch_asked: std::collections::HashMap<(String, u64, u32), usize>,
 }
 
 /// What a finished recording holds until the GPU has executed it: the transient resources and
@@ -71,23 +73,67 @@ impl Recorder {
             timestamps,
             keep: Vec::new(),
             cache: None,
+            scratch_asked: Default::default(),
         }
     }
 
-    /// Takes descriptor sets from `cache` from now on, making only those it lacks: a frame
-    /// recorded again with the same passes on the same resources then allocates nothing
-    /// (with timestamps off, whose query pools are per recording).
-    pub fn use_descriptor_cache(&mut self, cache: &DescriptorCache) {
+    /// Takes descriptor sets and transient buffers from `cache` from now on, making only
+    /// those it lacks: a frame recorded again with the same passes on the same resources then
+    /// allocates nothing (with timestamps off, whose query pools are per recording).
+    pub fn use_frame_cache(&mut self, cache: &FrameCache) {
         self.cache = Some(cache.clone());
     }
 
-    /// Replaces the descriptor cache in use (`None`: sets per recording), returning the one
+    /// Replaces the frame cache in use (`None`: everything per recording), returning the one
     /// before, for a caller to restore.
-    pub fn swap_descriptor_cache(
-        &mut self,
-        cache: Option<DescriptorCache>,
-    ) -> Option<DescriptorCache> {
+    pub fn swap_frame_cache(&mut self, cache: Option<FrameCache>) -> Option<FrameCache> {
         std::mem::replace(&mut self.cache, cache)
+    }
+
+    /// A storage buffer holding `data` for this recording's commands (kept until it has
+    /// executed); from the frame cache where one is in use and it holds one of that name and
+    /// contents.
+    pub(crate) fn upload<T: bytemuck::Pod>(
+        &mut self,
+        name: &str,
+        data: &[T],
+    ) -> Result<std::sync::Arc<Buffer>> {
+        let b = match &self.cache {
+            Some(c) => c.upload(&self.ctx, name, bytemuck::cast_slice(data))?,
+            None => std::sync::Arc::new(Buffer::storage(&self.ctx, name, data)?),
+        };
+        self.keep(b.clone());
+        Ok(b)
+    }
+
+    /// A GPU-only buffer of `size` bytes and `usage` for this recording's commands (kept
+    /// until it has executed): the same buffer every recording asks for in the same order
+    /// where a frame cache is in use.
+    pub(crate) fn scratch(
+        &mut self,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+    ) -> Result<std::sync::Arc<Buffer>> {
+        let b = match &self.cache {
+            Some(c) => {
+                let asked = self
+                    .scratch_asked
+                    .entry((name.to_string(), size, usage.as_raw()))
+                    .or_insert(0);
+                *asked += 1;
+                c.scratch(&self.ctx, (name, size, usage), *asked - 1)?
+            }
+            None => std::sync::Arc::new(Buffer::new(
+                &self.ctx,
+                name,
+                size,
+                usage,
+                gpu_allocator::MemoryLocation::GpuOnly,
+            )?),
+        };
+        self.keep(b.clone());
+        Ok(b)
     }
 
     /// Ends recording (the command buffer stays in the recording state, the caller's).
@@ -198,7 +244,7 @@ impl Recorder {
         }
         let set = match (&self.cache, binds.is_empty()) {
             (_, true) => None,
-            (Some(cache), false) => Some(cache.get(&self.ctx, pipeline, binds)?),
+            (Some(cache), false) => Some(cache.set(&self.ctx, pipeline, binds)?),
             (None, false) => Some(std::sync::Arc::new(DescriptorSet::new(
                 &self.ctx, pipeline, binds,
             )?)),

@@ -4,11 +4,10 @@
 use super::map::GpuEnvMap;
 use crate::abi::{area, binding, push::ConvertPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
-use crate::gpu::{groups, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing};
+use crate::gpu::{groups, mat3_rows, Bind, Context, Pipeline, Recorder, Sampler, Timing};
 use crate::math::{Mapping, Orientation};
 use crate::passes::testing::poison::{self, PassId};
 use ash::vk;
-use gpu_allocator::MemoryLocation;
 use std::sync::OnceLock;
 
 /// Per-call options of [`Converter::run`] and [`Converter::record`]: start from
@@ -387,13 +386,11 @@ impl Converter {
         (w, h): (u32, u32),
         (split, points): (bool, u32),
     ) -> Result<()> {
-        let slopes = Buffer::new(
-            &self.ctx,
+        let slopes = rec.scratch(
             "convert slopes",
             slopes_bytes(src.width, src.height),
             // Written as a storage buffer, read through its texel view.
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
-            MemoryLocation::GpuOnly,
         )?;
         let slopes_pipeline = self.slopes_pipeline()?;
         let to = dst.mapping;
@@ -440,7 +437,7 @@ impl Converter {
         } else {
             let (fast, general) = self.area_split_pipelines(to, points)?;
             let texels = crate::math::convert::area_general_texels(to, w);
-            let list = Buffer::storage(&self.ctx, "convert general texels", &texels)?;
+            let list = rec.upload("convert general texels", &texels)?;
             rec.span(&label, |rec| {
                 if texels.len() < (w * h * to.layers()) as usize {
                     over_map(rec, fast)?;
@@ -457,9 +454,7 @@ impl Converter {
                     [groups(texels.len() as u32, LIST_GROUP), 1, 1],
                 )
             })?;
-            rec.keep(list);
         }
-        rec.keep(slopes);
         Ok(())
     }
 

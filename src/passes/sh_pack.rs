@@ -68,18 +68,14 @@ impl ShPacker {
         if entries.is_empty() {
             return Ok(());
         }
-        let list = Buffer::storage(&self.ctx, "sh pack entries", &entry_words(entries))?;
+        let list = rec.upload("sh pack entries", &entry_words(entries))?;
         // An unused binding still needs a buffer.
         let none = match minus {
             Some(_) => None,
-            None => Some(Buffer::storage(
-                &self.ctx,
-                "sh pack: nothing subtracted",
-                &[[0f32; 4]],
-            )?),
+            None => Some(rec.upload("sh pack: nothing subtracted", &[[0f32; 4]])?),
         };
         let minus = minus
-            .or(none.as_ref())
+            .or(none.as_deref())
             .unwrap_or_else(|| unreachable!("set above"));
         let count = entries.len() as u32;
         rec.span("sh pack", |rec| {
@@ -95,7 +91,6 @@ impl ShPacker {
                 [groups(count, WORKGROUP_1D), 1, 1],
             )
         })?;
-        rec.keep((list, none));
         // Mirrored as one run of coefficients (exactly the first set's x → −x).
         poison::buffer(
             rec,

@@ -18,6 +18,7 @@ use crate::passes::testing::poison::{self, PassId};
 use crate::{Mapping, Orientation};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
 use std::sync::OnceLock;
 
 /// SH coefficients of radiance, RGB, flat index k = l(l+1)+m.
@@ -295,7 +296,7 @@ impl ShProjector {
         let row_bytes = ShProjector::output_bytes(lmax);
         assert!(out.size() >= row_bytes, "the SH output buffer is too small");
         let file_to_world = orientation.checked_world_to_file()?.transpose();
-        let (partials, keep) = rec.span("sh project", |rec| {
+        let partials = rec.span("sh project", |rec| {
             if map.mapping == Mapping::LatLong {
                 self.record_latlong(rec, map, lmax, file_to_world)
             } else {
@@ -306,18 +307,16 @@ impl ShProjector {
         let f = poison::Floats::sh(0, 3 * n, 3, n);
         poison::buffer(rec, PassId::ShProject, &result, f)?;
         rec.copy_buffer(&result, out, row_bytes);
-        rec.keep((result, keep));
         Ok(())
     }
 
-    /// Rows of partial sums, (lmax + 1)² RGB triples each, as the first level of the tree.
-    fn partials(&self, rows: u32, lmax: u32) -> Result<Buffer> {
-        Buffer::new(
-            &self.ctx,
+    /// Rows of partial sums, (lmax + 1)² RGB triples each, as the first level of the tree (a
+    /// scratch buffer of the recording).
+    fn partials(rec: &mut Recorder, rows: u32, lmax: u32) -> Result<Arc<Buffer>> {
+        rec.scratch(
             "sh partials",
             ShProjector::output_bytes(lmax) * rows as u64,
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::GpuOnly,
         )
     }
 
@@ -329,12 +328,12 @@ impl ShProjector {
         map: &GpuEnvMap,
         lmax: u32,
         file_to_world: glam::DMat3,
-    ) -> Result<((Buffer, u32), Option<Buffer>)> {
+    ) -> Result<(Arc<Buffer>, u32)> {
         let texels = map.width * map.height * map.mapping.layers();
         let max = self.ctx.info().max_workgroup_count;
         let groups = texels.div_ceil(SH_WORKGROUP * Self::run_length(map.mapping));
         let (gx, gy) = grid(groups, max);
-        let partials = self.partials(gx * gy, lmax)?;
+        let partials = Self::partials(rec, gx * gy, lmax)?;
         let push = ShProjectPush {
             file_to_world: mat3_rows(file_to_world),
             size: [map.width, map.height],
@@ -356,28 +355,26 @@ impl ShProjector {
             &push,
             [gx, gy, 1],
         )?;
-        Ok(((partials, gx * gy), None))
+        Ok((partials, gx * gy))
     }
 
     /// Records the separable projection of a lat-long map: the rows' Fourier sums (a
     /// workgroup a row), then their sum over rows, turned into the world frame (a partial sum
-    /// per workgroup of SH_WORKGROUP rows). Returns the partials, their count, and the rows'
-    /// sums (to keep until the work completes).
+    /// per workgroup of SH_WORKGROUP rows). Returns the partials and their count (the rows'
+    /// sums are a scratch buffer the recorder keeps).
     fn record_latlong(
         &self,
         rec: &mut Recorder,
         map: &GpuEnvMap,
         lmax: u32,
         file_to_world: glam::DMat3,
-    ) -> Result<((Buffer, u32), Option<Buffer>)> {
+    ) -> Result<(Arc<Buffer>, u32)> {
         let (w, h) = (map.width, map.height);
         let max = self.ctx.info().max_workgroup_count;
-        let sums = Buffer::new(
-            &self.ctx,
+        let sums = rec.scratch(
             "sh row sums",
             (h * (2 * lmax + 1) * 12) as u64,
             vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::GpuOnly,
         )?;
         let (rows_pipeline, latlong_pipeline) = self.latlong_pipelines(lmax)?;
         let (rotation, parity) = latlong_rotation(file_to_world);
@@ -401,7 +398,7 @@ impl ShProjector {
             [rx, ry, 1],
         )?;
         let (gx, gy) = grid(h.div_ceil(SH_WORKGROUP), max);
-        let partials = self.partials(gx * gy, lmax)?;
+        let partials = Self::partials(rec, gx * gy, lmax)?;
         rec.dispatch(
             latlong_pipeline,
             &[
@@ -411,7 +408,7 @@ impl ShProjector {
             &push,
             [gx, gy, 1],
         )?;
-        Ok(((partials, gx * gy), Some(sums)))
+        Ok((partials, gx * gy))
     }
 
     /// Records the pairwise tree over `rows` partial sums of bands up to `lmax`, down to one
@@ -419,9 +416,9 @@ impl ShProjector {
     fn record_reduce(
         &self,
         rec: &mut Recorder,
-        (first, rows): (Buffer, u32),
+        (first, rows): (Arc<Buffer>, u32),
         lmax: u32,
-    ) -> Result<Buffer> {
+    ) -> Result<Arc<Buffer>> {
         let max = self.ctx.info().max_workgroup_count;
         let n = sh::count(lmax) as u32;
         // Rows of partial sums at each level of the tree, down to one.
@@ -431,7 +428,7 @@ impl ShProjector {
             let (x, y) = grid(g, max);
             levels.push(x * y);
         }
-        let second = self.partials(levels.get(1).copied().unwrap_or(1), lmax)?;
+        let second = Self::partials(rec, levels.get(1).copied().unwrap_or(1), lmax)?;
         let (a, b) = (first, second);
         rec.span("sh reduce", |rec| {
             for (lvl, rows) in levels.iter().enumerate().take(levels.len() - 1) {
@@ -453,13 +450,7 @@ impl ShProjector {
             }
             Ok(())
         })?;
-        Ok(if (levels.len() - 1) % 2 == 0 {
-            rec.keep(b);
-            a
-        } else {
-            rec.keep(a);
-            b
-        })
+        Ok(if (levels.len() - 1) % 2 == 0 { a } else { b })
     }
 
     /// Projects `map` up to band `lmax`; returns the coefficients and the GPU time.

@@ -347,17 +347,13 @@ impl Shade {
                     .iter()
                     .map(|v| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0])
                     .collect();
-                Some(Buffer::storage(
-                    rec.context(),
-                    "shade SH coefficients",
-                    &data,
-                )?)
+                Some(rec.upload("shade SH coefficients", &data)?)
             }
             _ => None,
         };
         let coeffs = match inputs.sh {
             Some(ShCoeffs::Gpu(b)) => Some(b),
-            _ => uploaded.as_ref(),
+            _ => uploaded.as_deref(),
         };
         // The unused image is bound but never read; it only needs a defined layout.
         if self.dummy_image.image.usage() == Usage::Undefined {
@@ -389,11 +385,7 @@ impl Shade {
         };
         let camera = match (inputs.footprint.flags(), gbuf.camera) {
             (0, _) => None,
-            (_, Some(c)) => Some(Buffer::storage(
-                &self.ctx,
-                "shade camera",
-                &super::gbuffer::camera_record(&c),
-            )?),
+            (_, Some(c)) => Some(rec.upload("shade camera", &super::gbuffer::camera_record(&c))?),
             (_, None) => {
                 return Err(crate::Error::Invalid(
                     "footprint lookups need the G-buffer's camera (GBuffer::camera)".into(),
@@ -457,19 +449,13 @@ impl Shade {
                     ),
                     (
                         binding::SHADE_CAMERA,
-                        Bind::Buffer(camera.as_ref().unwrap_or(&self.dummy_buffer)),
+                        Bind::Buffer(camera.as_deref().unwrap_or(&self.dummy_buffer)),
                     ),
                 ],
                 &push,
                 &[&frame.image],
             )
         })?;
-        if let Some(c) = uploaded {
-            rec.keep(c);
-        }
-        if let Some(c) = camera {
-            rec.keep(c);
-        }
         poison::image(rec, PassId::Shade, &frame.image, 0..1)
     }
 

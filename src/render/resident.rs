@@ -14,7 +14,7 @@ use super::records::{gpu_objects, Marks};
 use super::shading::{self, Shading};
 use super::{Job, Rendered, Renderer};
 use crate::error::{Error, Result};
-use crate::gpu::{DescriptorCache, Recorder};
+use crate::gpu::{FrameCache, Recorder};
 use crate::passes::gbuffer::{target, GBuffer};
 use crate::passes::GpuEnvMap;
 use crate::scene::{LightsMode, Scene};
@@ -30,7 +30,7 @@ pub struct Resident {
     inputs: Inputs,
     gbuf: GBuffer,
     frame: GpuEnvMap,
-    cache: DescriptorCache,
+    cache: FrameCache,
 }
 
 impl Resident {
@@ -120,7 +120,7 @@ impl Renderer {
             inputs,
             gbuf,
             frame,
-            cache: DescriptorCache::new(),
+            cache: FrameCache::new(),
         })
     }
 
@@ -194,7 +194,7 @@ impl Renderer {
         };
         let passes = self.passes(&r.plan)?;
         let shade = self.shade_pass()?;
-        let previous = rec.swap_descriptor_cache(Some(r.cache.clone()));
+        let previous = rec.swap_frame_cache(Some(r.cache.clone()));
         let ins = (&r.inputs, &r.lit, &r.gbuf);
         let recorded = (|| {
             inputs::record(rec, marks, &job, &passes, ins, env, || Ok(()))?;
@@ -205,7 +205,7 @@ impl Renderer {
             let draw = shading::draw(&job, ins, env, with)?;
             shading::record_draw(rec, marks, shade, &r.gbuf, &draw, &r.frame)
         })();
-        rec.swap_descriptor_cache(previous);
+        rec.swap_frame_cache(previous);
         recorded
     }
 }
