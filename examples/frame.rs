@@ -12,7 +12,7 @@
 mod engine;
 
 use ash::vk;
-use envlight::gpu::{AdoptInfo, Context, Image, ImageDesc, Recorder, Usage};
+use envlight::gpu::{Context, Image, ImageDesc, Recorder, Usage};
 use envlight::passes::gbuffer::{GBuffer, GpuObject};
 use envlight::passes::map::{full_mips, map_desc};
 use envlight::passes::shade::ShadeInputs;
@@ -24,42 +24,6 @@ use std::path::Path;
 
 type Error = Box<dyn std::error::Error>;
 
-/// An image the engine creates and binds to memory of its own.
-struct EngineImage {
-    raw: vk::Image,
-    memory: vk::DeviceMemory,
-}
-
-impl EngineImage {
-    fn new(e: &engine::Engine, desc: &ImageDesc) -> Result<EngineImage, Error> {
-        // The create info envlight expects of an image it is handed.
-        let info = desc.create_info();
-        // SAFETY: valid device and create info.
-        let raw = unsafe { e.device.create_image(&info, None)? };
-        // SAFETY: raw is a live image of this device.
-        let req = unsafe { e.device.get_image_memory_requirements(raw) };
-        let ty = e
-            .memory_type(req.memory_type_bits, vk::MemoryPropertyFlags::DEVICE_LOCAL)
-            .ok_or("no device-local memory")?;
-        let alloc = vk::MemoryAllocateInfo::default()
-            .allocation_size(req.size)
-            .memory_type_index(ty);
-        // SAFETY: valid allocation info; the memory is bound once and freed after the image.
-        let memory = unsafe { e.device.allocate_memory(&alloc, None)? };
-        unsafe { e.device.bind_image_memory(raw, memory, 0)? };
-        Ok(EngineImage { raw, memory })
-    }
-
-    /// Destroys the image and frees its memory (after the GPU is done with it).
-    fn destroy(self, e: &engine::Engine) {
-        // SAFETY: no pending work uses the image; envlight's views of it are gone.
-        unsafe {
-            e.device.destroy_image(self.raw, None);
-            e.device.free_memory(self.memory, None);
-        }
-    }
-}
-
 /// What a run produced.
 pub struct Frame {
     /// The shaded frame, linear RGB.
@@ -70,26 +34,6 @@ pub struct Frame {
     pub leaked: i64,
     /// GPU time of each span of the one command buffer.
     pub timings: Vec<envlight::gpu::Timing>,
-}
-
-/// Ends `cmd`, submits it once and waits on the engine's own fence.
-///
-/// # Safety
-/// `cmd` is recording, on `engine`'s device, for its queue family.
-unsafe fn submit_and_wait(engine: &engine::Engine, cmd: vk::CommandBuffer) -> Result<(), Error> {
-    // SAFETY: as the caller promises; the fence is made and destroyed here.
-    unsafe {
-        engine.device.end_command_buffer(cmd)?;
-        let fence = engine
-            .device
-            .create_fence(&vk::FenceCreateInfo::default(), None)?;
-        let cmds = [cmd];
-        let submit = vk::SubmitInfo::default().command_buffers(&cmds);
-        engine.device.queue_submit(engine.queue, &[submit], fence)?;
-        engine.device.wait_for_fences(&[fence], true, u64::MAX)?;
-        engine.device.destroy_fence(fence, None);
-    }
-    Ok(())
 }
 
 /// Renders `scene` (lookup and FIS materials only) in one command buffer of the engine's.
@@ -111,15 +55,7 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
     let engine = engine::Engine::new()?;
 
     // The engine's command pool and command buffer.
-    let pool_info = vk::CommandPoolCreateInfo::default().queue_family_index(engine.family);
-    // SAFETY: valid device and create info.
-    let pool = unsafe { engine.device.create_command_pool(&pool_info, None)? };
-    let alloc = vk::CommandBufferAllocateInfo::default()
-        .command_pool(pool)
-        .level(vk::CommandBufferLevel::PRIMARY)
-        .command_buffer_count(1);
-    // SAFETY: the pool is the engine's.
-    let cmd = unsafe { engine.device.allocate_command_buffers(&alloc)? }[0];
+    let (pool, cmd) = engine.command_buffer()?;
 
     // The engine's images: the dual-paraboloid chain and the frame.
     let dp_size = fis_dp_size(&scene, &env);
@@ -137,22 +73,12 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
         cube: false,
         mips: 1,
     };
-    let dp_raw = EngineImage::new(&engine, &dp_desc)?;
-    let frame_raw = EngineImage::new(&engine, &frame_desc)?;
+    let dp_raw = engine::EngineImage::new(&engine, &dp_desc)?;
+    let frame_raw = engine::EngineImage::new(&engine, &frame_desc)?;
 
     let (frame, timings, leaked) = {
         // SAFETY: the engine's handles are valid and outlive the context (this block).
-        let ctx = unsafe {
-            Context::adopt(AdoptInfo {
-                entry: engine.entry.clone(),
-                instance: engine.instance.clone(),
-                physical_device: engine.physical,
-                device: engine.device.clone(),
-                queue: engine.queue,
-                queue_family_index: engine.family,
-                debug_utils: true,
-            })?
-        };
+        let ctx = unsafe { Context::adopt(engine.adopt_info())? };
         // SAFETY: both images were created above as their descriptions say, and are
         // destroyed by the engine only after every envlight object using them is gone.
         let dp = GpuEnvMap::from_image(
@@ -223,7 +149,7 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
         let readback = target.record_download(&mut rec, 0)?;
         let recorded = rec.finish();
         // SAFETY: cmd is recording on the engine's device.
-        unsafe { submit_and_wait(&engine, cmd)? };
+        unsafe { engine.submit_and_wait(cmd)? };
         let timings = recorded.timings()?;
         let frame = EnvMap::new(
             Mapping::LatLong,

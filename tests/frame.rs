@@ -8,7 +8,6 @@ mod frame_example;
 
 use common::compare::Errors;
 use std::path::Path;
-use std::process::Command;
 
 #[test]
 fn an_engine_frame_matches_the_cli_render() {
@@ -30,15 +29,7 @@ fn an_engine_frame_matches_the_cli_render() {
     let dir = std::env::temp_dir().join(format!("envlight-frame-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join("cli.exr");
-    let o = Command::new(env!("CARGO_BIN_EXE_envlight"))
-        .args(["--validation", "--device", "cpu", "render"])
-        .arg(&scene)
-        .arg("-o")
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let cli = envlight::io::load(&out, &Default::default()).unwrap();
+    let cli = common::scenes::cli_render(&scene, &out);
     assert_eq!((cli.width, cli.height), (f.frame.width, f.frame.height));
     // The same passes with the same inputs on the same device: only how the commands were
     // grouped into submissions differs, so the pixels agree to f32 rounding (1e-6 relative,

@@ -213,3 +213,25 @@ fn push_blocks_match_the_rust_structs_field_by_field() {
     }
     assert!(checked > 50, "only {checked} push members found");
 }
+
+/// The examples' own shaders (an engine's, compiled by tools/shaderc beside their source) are
+/// in step with their source: the hash recorded at compilation is the current source's, and
+/// the module is SPIR-V.
+#[test]
+fn example_shaders_are_not_stale() {
+    for path in layout::EXAMPLE_SHADERS {
+        let source = std::fs::read_to_string(root().join(format!("{path}.comp"))).unwrap();
+        let recorded = std::fs::read_to_string(root().join(format!("{path}.spv.hash"))).unwrap();
+        assert_eq!(
+            recorded.trim(),
+            format!("{:016x}", layout::example_hash(&source)),
+            "{path}.spv is stale against {path}.comp: run `cargo xtask shaders`"
+        );
+        let spv = std::fs::read(root().join(format!("{path}.spv"))).unwrap();
+        assert_eq!(
+            &spv[..4],
+            &0x0723_0203u32.to_le_bytes(),
+            "{path}.spv is not SPIR-V"
+        );
+    }
+}

@@ -7,6 +7,8 @@
 use ash::vk;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+type Error = Box<dyn std::error::Error>;
+
 /// Counts the messages into the engine's counter, which `user` points at.
 unsafe extern "system" fn callback(
     severity: vk::DebugUtilsMessageSeverityFlagsEXT,
@@ -44,6 +46,8 @@ pub struct Engine {
     warnings: Box<AtomicUsize>,
     /// Whether the device and instance are still alive.
     alive: bool,
+    /// Submissions made.
+    submissions: AtomicUsize,
 }
 
 impl Engine {
@@ -118,6 +122,7 @@ impl Engine {
             family,
             warnings,
             alive: true,
+            submissions: AtomicUsize::new(0),
         })
     }
 
@@ -150,6 +155,62 @@ impl Engine {
         }
     }
 
+    /// Ends `cmd`, submits it once and waits on a fence of its own; counts the submission.
+    ///
+    /// # Safety
+    /// `cmd` is recording, on this device, for its queue family.
+    pub unsafe fn submit_and_wait(&self, cmd: vk::CommandBuffer) -> Result<(), Error> {
+        // SAFETY: as the caller promises; the fence is made and destroyed here.
+        unsafe {
+            self.device.end_command_buffer(cmd)?;
+            let fence = self
+                .device
+                .create_fence(&vk::FenceCreateInfo::default(), None)?;
+            let cmds = [cmd];
+            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            self.device.queue_submit(self.queue, &[submit], fence)?;
+            self.device.wait_for_fences(&[fence], true, u64::MAX)?;
+            self.device.destroy_fence(fence, None);
+        }
+        self.submissions.fetch_add(1, Ordering::SeqCst);
+        Ok(())
+    }
+
+    /// Submissions made through [`Engine::submit_and_wait`].
+    pub fn submissions(&self) -> usize {
+        self.submissions.load(Ordering::SeqCst)
+    }
+
+    /// What envlight needs to adopt the engine's device (`envlight::gpu::Context::adopt`).
+    pub fn adopt_info(&self) -> envlight::gpu::AdoptInfo {
+        envlight::gpu::AdoptInfo {
+            entry: self.entry.clone(),
+            instance: self.instance.clone(),
+            physical_device: self.physical,
+            device: self.device.clone(),
+            queue: self.queue,
+            queue_family_index: self.family,
+            debug_utils: true,
+        }
+    }
+
+    /// A command pool of the queue's family (its buffers resettable) and one primary command
+    /// buffer from it; the caller destroys the pool.
+    pub fn command_buffer(&self) -> Result<(vk::CommandPool, vk::CommandBuffer), Error> {
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(self.family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: valid device and create info.
+        let pool = unsafe { self.device.create_command_pool(&pool_info, None)? };
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the pool is the engine's.
+        let cmd = unsafe { self.device.allocate_command_buffers(&alloc)? }[0];
+        Ok((pool, cmd))
+    }
+
     /// A memory type of `bits` with `flags`.
     pub fn memory_type(&self, bits: u32, flags: vk::MemoryPropertyFlags) -> Option<u32> {
         // SAFETY: valid physical device.
@@ -169,5 +230,105 @@ impl Engine {
 impl Drop for Engine {
     fn drop(&mut self) {
         self.teardown();
+    }
+}
+
+/// An image the engine creates and binds to memory of its own.
+pub struct EngineImage {
+    pub raw: vk::Image,
+    memory: vk::DeviceMemory,
+}
+
+impl EngineImage {
+    pub fn new(e: &Engine, desc: &envlight::gpu::ImageDesc) -> Result<EngineImage, Error> {
+        // The create info envlight expects of an image it is handed.
+        let info = desc.create_info();
+        // SAFETY: valid device and create info.
+        let raw = unsafe { e.device.create_image(&info, None)? };
+        // SAFETY: raw is a live image of this device.
+        let req = unsafe { e.device.get_image_memory_requirements(raw) };
+        let ty = e
+            .memory_type(req.memory_type_bits, vk::MemoryPropertyFlags::DEVICE_LOCAL)
+            .ok_or("no device-local memory")?;
+        let alloc = vk::MemoryAllocateInfo::default()
+            .allocation_size(req.size)
+            .memory_type_index(ty);
+        // SAFETY: valid allocation info; the memory is bound once and freed after the image.
+        let memory = unsafe { e.device.allocate_memory(&alloc, None)? };
+        unsafe { e.device.bind_image_memory(raw, memory, 0)? };
+        Ok(EngineImage { raw, memory })
+    }
+
+    /// Destroys the image and frees its memory (after the GPU is done with it).
+    pub fn destroy(self, e: &Engine) {
+        // SAFETY: no pending work uses the image; envlight's views of it are gone.
+        unsafe {
+            e.device.destroy_image(self.raw, None);
+            e.device.free_memory(self.memory, None);
+        }
+    }
+}
+
+/// A host-visible, coherent buffer the engine reads its frames back through.
+pub struct HostBuffer {
+    pub raw: vk::Buffer,
+    memory: vk::DeviceMemory,
+    ptr: *const u8,
+    size: u64,
+}
+
+impl HostBuffer {
+    /// A buffer of `size` bytes, a transfer destination, mapped for reading.
+    pub fn new(e: &Engine, size: u64) -> Result<HostBuffer, Error> {
+        let info = vk::BufferCreateInfo::default()
+            .size(size)
+            .usage(vk::BufferUsageFlags::TRANSFER_DST);
+        // SAFETY: valid device and create info.
+        let raw = unsafe { e.device.create_buffer(&info, None)? };
+        // SAFETY: raw is a live buffer of this device.
+        let req = unsafe { e.device.get_buffer_memory_requirements(raw) };
+        let flags = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+        let ty = e
+            .memory_type(req.memory_type_bits, flags)
+            .ok_or("no host-visible coherent memory")?;
+        let alloc = vk::MemoryAllocateInfo::default()
+            .allocation_size(req.size)
+            .memory_type_index(ty);
+        // SAFETY: valid allocation info; bound once, mapped whole, freed after the buffer.
+        let memory = unsafe { e.device.allocate_memory(&alloc, None)? };
+        let ptr = unsafe {
+            e.device.bind_buffer_memory(raw, memory, 0)?;
+            e.device
+                .map_memory(memory, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty())?
+        } as *const u8;
+        Ok(HostBuffer {
+            raw,
+            memory,
+            ptr,
+            size,
+        })
+    }
+
+    /// Its contents as RGBA32F texels (after the copies into it have completed).
+    pub fn texels(&self) -> Vec<[f32; 4]> {
+        // SAFETY: the mapping covers `size` bytes and the GPU is done writing them.
+        let bytes = unsafe { std::slice::from_raw_parts(self.ptr, self.size as usize) };
+        bytes
+            .chunks_exact(16)
+            .map(|c| {
+                std::array::from_fn(|i| {
+                    f32::from_le_bytes([c[4 * i], c[4 * i + 1], c[4 * i + 2], c[4 * i + 3]])
+                })
+            })
+            .collect()
+    }
+
+    /// Destroys the buffer and frees its memory (after the GPU is done with it).
+    pub fn destroy(self, e: &Engine) {
+        // SAFETY: no pending work uses the buffer.
+        unsafe {
+            e.device.destroy_buffer(self.raw, None);
+            e.device.free_memory(self.memory, None);
+        }
     }
 }

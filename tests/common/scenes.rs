@@ -80,3 +80,16 @@ pub fn rel_rms(
     }
     (se / sw).sqrt()
 }
+
+/// `envlight render` of `scene` into `out` (validation on, lavapipe): the frame it wrote.
+pub fn cli_render(scene: &std::path::Path, out: &std::path::Path) -> envlight::EnvMap {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .args(["--validation", "--device", "cpu", "render"])
+        .arg(scene)
+        .arg("-o")
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    envlight::io::load(out, &Default::default()).unwrap()
+}

@@ -66,5 +66,26 @@ fn main() -> Result<()> {
     }
     std::fs::write(root.join(layout::MANIFEST), layout::manifest(&glsl)?)?;
     println!("wrote {}", layout::MANIFEST);
+    for path in layout::EXAMPLE_SHADERS {
+        let src = root.join(format!("{path}.comp"));
+        let text = std::fs::read_to_string(&src).with_context(|| src.display().to_string())?;
+        let mut opts = shaderc::CompileOptions::new().context("shaderc options")?;
+        opts.set_target_env(
+            shaderc::TargetEnv::Vulkan,
+            shaderc::EnvVersion::Vulkan1_2 as u32,
+        );
+        opts.set_optimization_level(shaderc::OptimizationLevel::Performance);
+        opts.set_warnings_as_errors();
+        let kind = shaderc::ShaderKind::Compute;
+        let name = format!("{path}.comp");
+        let out = match compiler.compile_into_spirv(&text, kind, &name, "main", Some(&opts)) {
+            Ok(o) => o,
+            Err(e) => bail!("{name}: {e}"),
+        };
+        std::fs::write(root.join(format!("{path}.spv")), out.as_binary_u8())?;
+        let hash = format!("{:016x}\n", layout::example_hash(&text));
+        std::fs::write(root.join(format!("{path}.spv.hash")), hash)?;
+        println!("compiled {name} -> {path}.spv");
+    }
     Ok(())
 }
