@@ -4,9 +4,9 @@
 // (their count from the extraction's header, so nothing is read back), each integral by t's
 // centre where t is small next to the kernel's scale there (light_centre_only), else by
 // (2·cells)² Gauss nodes over t weighted by the mapping's footprint and scaled to t's ω, cells
-// from the largest kept ω as math::lights::cells_for. The kernel is the clamped cosine
-// (irradiance) or split-sum's GGX at n = v = r. Float64 twin: math::lights::light_sum of
-// math::lights::prepare.
+// ⌈PER_WIDTH·ρ/w⌉ (1 to 8) from t's own size ρ and the kernel's scale w at t: PER_WIDTH nodes
+// across the local width, 4 nodes far in the tail. The kernel is the clamped cosine
+// (irradiance) or split-sum's GGX at n = v = r. Float64 twin: math::lights::light_sum_local.
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
 #include "lights.glsl"
@@ -59,14 +59,13 @@ void main() {
     float a2 = a * a;
     float scale = pc.kernel == LIGHTS_KERNEL_COSINE ? 1.0 : a;
     uint count = state[EXTRACT_WORD_KEPT];
-    float rho_max = sqrt(uintBitsToFloat(state[EXTRACT_WORD_OMEGA_MAX]));
-    uint cells = uint(clamp(ceil(LIGHT_PER_WIDTH * rho_max / scale), 1.0, 8.0));
     vec3 sum = vec3(0.0);
     for (uint k = 0u; k < count; k++) {
         Record t = records[k];
         vec3 c = to_world(t.dir_omega.xyz);
         float w2 = light_scale2(scale, r - c);
         float rho = sqrt(t.dir_omega.w);
+        uint cells = uint(clamp(ceil(LIGHT_PER_WIDTH * rho / sqrt(w2)), 1.0, 8.0));
         float integral = light_centre_only(rho, w2, LIGHT_HEADER_VEC4S + 1u)
             ? kern(a2, r, c) * t.dir_omega.w
             : by_nodes(t, cells, a2, r);

@@ -546,6 +546,41 @@ pub fn light_sum(lights: &[PreparedLight], r: DVec3, kernel: LightKernel) -> [f6
     sum
 }
 
+/// [`light_sum`] of `ex`'s texels with each texel's nodes only as fine as the kernel's scale
+/// w at that texel asks: (2·cells)² nodes, cells = ⌈[`PER_WIDTH`]·ρ/w⌉ (1 to 8), where
+/// [`prepare`] takes one count for every texel from the largest ρ and the lobe's own scale.
+/// The rule per node is the same ([`PER_WIDTH`] nodes across the local width), and far in
+/// the tail, where w ≫ α, a texel takes 4 nodes instead of up to 256. The float64 twin of
+/// `Extractor::record_add` (glsl/extract_add.comp).
+pub fn light_sum_local(
+    map: &EnvMap,
+    ex: &Extraction,
+    file_to_world: glam::DMat3,
+    r: DVec3,
+    kernel: LightKernel,
+) -> [f64; 3] {
+    let (scale, kern) = kernel_of(kernel, r);
+    let mut sum = [0.0; 3];
+    for t in &ex.lights {
+        let centre = file_to_world * t.dir;
+        let rho = t.omega.sqrt();
+        let w = scale_at(scale, (r - centre).length());
+        let k = if PER_WIDTH * rho < CENTRE_BELOW * w {
+            kern(centre) * t.omega
+        } else {
+            let cells = ((PER_WIDTH * rho / w).ceil() as u32).clamp(1, 8);
+            nodes(map, t, cells)
+                .into_iter()
+                .map(|(d, wt)| kern(file_to_world * d) * wt)
+                .sum()
+        };
+        for (s, l) in sum.iter_mut().zip(t.radiance) {
+            *s += k * l as f64;
+        }
+    }
+    sum
+}
+
 /// A kernel's scale and its value along a direction, about `r`.
 pub(crate) fn kernel_of(kernel: LightKernel, r: DVec3) -> (f64, impl Fn(DVec3) -> f64) {
     let scale = match kernel {

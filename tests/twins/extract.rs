@@ -5,7 +5,7 @@
 use crate::common::compare::Errors;
 use envlight::gpu::Context;
 use envlight::math::envmap::luminance;
-use envlight::math::lights::{extract, light_sum, prepare, ExtractOptions, LightKernel};
+use envlight::math::lights::{extract, light_sum_local, ExtractOptions, LightKernel};
 use envlight::math::split_sum::chain_norm;
 use envlight::math::synth::Sky;
 use envlight::math::Mapping;
@@ -166,7 +166,8 @@ pub fn compare(ex: &Extractor, map: &EnvMap, opts: &ExtractOptions) -> (Extracte
 
 /// The extraction's lights of `map` added to a 16² cube (the cosine into level 0, GGX α
 /// `alpha` into level 1), the map turned 30° and mirrored, against the float64 sums of the
-/// host's extraction (`light_sum` of `prepare`); returns the worst texel error relative to the
+/// host's extraction (`light_sum_local`, each texel's nodes as fine as the kernel's scale
+/// there asks); returns the worst texel error relative to the
 /// level's largest.
 pub fn compare_add(
     ctx: &Context,
@@ -214,14 +215,13 @@ pub fn compare_add(
     assert!(t.iter().any(|t| t.label == "add lights"));
     let host = extract(map, opts);
     let mut worst = 0.0f64;
-    for (level, (kernel, scale, inv)) in [
-        (LightKernel::Cosine, 1.0, 1.0),
-        (LightKernel::Ggx { alpha }, alpha, 1.0 / norm),
+    for (level, (kernel, inv)) in [
+        (LightKernel::Cosine, 1.0),
+        (LightKernel::Ggx { alpha }, 1.0 / norm),
     ]
     .into_iter()
     .enumerate()
     {
-        let prepared = prepare(map, &host, f2w, scale);
         let side = 16u32 >> level;
         let got = levels[level].read();
         let want: Vec<[f64; 3]> = (0..6 * side * side)
@@ -231,7 +231,8 @@ pub fn compare_add(
                     u: ((k % side) as f64 + 0.5) / side as f64,
                     v: ((k / side % side) as f64 + 0.5) / side as f64,
                 };
-                light_sum(&prepared, Mapping::Cube.coord_to_dir(c), kernel).map(|v| v * inv)
+                let r = Mapping::Cube.coord_to_dir(c);
+                light_sum_local(map, &host, f2w, r, kernel).map(|v| v * inv)
             })
             .collect();
         let top = crate::common::compare::max_of(want.iter().map(|w| w[1]));
