@@ -13,6 +13,7 @@ use crate::gpu::{Buffer, Context, Timing};
 use crate::math::envmap::luminance;
 use crate::math::exact::ExactFilter;
 use crate::math::lights::{extract, ExtractOptions, LightKernel};
+use crate::math::convert::residual_edge_points;
 use crate::math::split_sum::{chain_norm, level_alpha};
 use crate::math::synth::Sky;
 use crate::math::{Mapping, Orientation};
@@ -119,7 +120,10 @@ fn record_frame(
         )
     })?;
     rec.span(STAGES[2].0, |rec| {
-        let opts = ConvertOptions::new(Mapping::DualParaboloid, s.paraboloid);
+        // The residual holds no sun for the rim's chords to misplace: fewer points per
+        // paraboloid texel edge, as the renderer's chain takes (`residual_edge_points`).
+        let opts = ConvertOptions::new(Mapping::DualParaboloid, s.paraboloid)
+            .with_edge_points(Some(residual_edge_points(s.paraboloid)));
         p.conv.record(rec, residual, &f.dp, &opts)?;
         p.mip.record(rec, &f.dp)?;
         let mut chain = PrefilterOptions::new(s.levels);
