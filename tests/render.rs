@@ -2,6 +2,8 @@
 //! f64 SH projection and evaluation.
 
 mod common;
+#[path = "twins/map.rs"]
+mod map_twin;
 
 use common::compare::Errors;
 use envlight::math::camera::{trace, Camera, Projection, Shape};
@@ -520,6 +522,78 @@ fn the_resident_path_refuses_what_it_cannot_render() {
             "{err}"
         );
         drop((prepared, other, unsampled, renderer));
+    }
+    common::finish(ctx);
+}
+
+/// An engine's frame holding NaN, infinite and negative texels: the resident path reads them
+/// as zero and counts them (`Resident::zeroed_texels`), so the frame is finite and equals the
+/// host path's render of the map with those texels zeroed (`EnvMap::sanitized`, to 1e-6); the
+/// next frame, written into the same image, renders the clean map as the host path does.
+#[test]
+fn a_broken_frame_shades_finite_pixels_and_the_next_recovers() {
+    use envlight::render::{MapShape, Renderer};
+    let ctx = common::ctx();
+    {
+        let sky = envlight::math::synth::Sky::default();
+        let renderer = Renderer::new(&ctx);
+        for (mapping, w, h) in [(Mapping::LatLong, 64, 32), (Mapping::Cube, 16, 16)] {
+            let clean = EnvMap::from_fn(mapping, w, h, 2, |d| sky.radiance(d));
+            let mut broken = clean.clone();
+            let n = broken.texels.len();
+            broken.texels[n / 3] = [f32::NAN; 3];
+            broken.texels[n / 2] = [f32::INFINITY, 1.0, 1.0];
+            broken.texels[2 * n / 3] = [1.0, -2.0, f32::NAN];
+            let (zeroed_map, zeroed) = broken.sanitized();
+            assert_eq!(zeroed, 3);
+            let sc = resident_scene(true);
+            let prepared = renderer.resident(&sc, MapShape::of(&clean)).unwrap();
+            let gpu = map_twin::raw_gpu_map(&ctx, &broken);
+            for (map, want_zeroed) in [(&zeroed_map, 3u32), (&clean, 0)] {
+                if want_zeroed == 0 {
+                    // The next frame, into the same image.
+                    let texels: Vec<[f32; 4]> = clean
+                        .texels
+                        .iter()
+                        .map(|t| [t[0], t[1], t[2], 1.0])
+                        .collect();
+                    let mut staging = envlight::gpu::Buffer::new(
+                        &ctx,
+                        "next frame",
+                        (texels.len() * 16) as u64,
+                        ash::vk::BufferUsageFlags::TRANSFER_SRC,
+                        gpu_allocator::MemoryLocation::CpuToGpu,
+                    )
+                    .unwrap();
+                    staging.write(&texels);
+                    ctx.run("the next frame", |rec| {
+                        rec.copy_buffer_to_image(&staging, &gpu.image, 0, true);
+                        Ok(())
+                    })
+                    .unwrap();
+                }
+                let got = renderer.render_resident(&prepared, &gpu).unwrap();
+                let host = renderer.render(&sc, map).unwrap();
+                let mut errors = Errors::new();
+                for (k, (a, b)) in got.frame.texels.iter().zip(&host.frame.texels).enumerate() {
+                    assert!(
+                        a.iter().all(|v| v.is_finite()),
+                        "{mapping:?}: pixel {k} {a:?}"
+                    );
+                    for c in 0..3 {
+                        errors.rel(a[c], b[c], 1e-3, (k, c));
+                    }
+                }
+                assert!(
+                    errors.worst() <= 1e-6,
+                    "{mapping:?} ({want_zeroed} zeroed): {:e} at {:?}",
+                    errors.worst(),
+                    errors.at()
+                );
+                let counted = map_twin::read_u32(&ctx, prepared.zeroed_texels());
+                assert_eq!(counted, want_zeroed, "{mapping:?}");
+            }
+        }
     }
     common::finish(ctx);
 }

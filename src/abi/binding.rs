@@ -27,6 +27,12 @@ bindings! {
     COPY_SRC = 0;
     /// copy: the destination image (rgba32f image2DArray).
     COPY_DST = 1;
+    /// sanitize: the engine's map (sampler2DArray, read with texelFetch).
+    SANITIZE_SRC = 0;
+    /// sanitize: envlight's copy of it (rgba32f image2DArray).
+    SANITIZE_DST = 1;
+    /// sanitize: the count of texels zeroed (uint storage buffer).
+    SANITIZE_COUNT = 2;
     /// busy: the buffer the costly loop writes to.
     BUSY_OUT = 0;
     /// poison_image: the level a pass wrote, corrupted in place (rgba32f image2DArray).

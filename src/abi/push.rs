@@ -85,6 +85,13 @@ push_blocks! {
         /// Padding.
         pad: [u32; 3] = "uint[3]",
     }
+    /// `glsl/sanitize.comp`.
+    SanitizePush {
+        /// Layer size.
+        size: [u32; 2] = "uvec2",
+        /// Padding.
+        pad: [u32; 2] = "uint[2]",
+    }
     /// `glsl/copy.comp`.
     CopyPush {
         /// Layer size.

@@ -122,6 +122,11 @@ macro_rules! shader_table {
             /// Mapping functions exposed for tests.
             MappingProbe = "mapping_probe", "mapping_probe.comp", Compute, [], ProbePush,
                 [(PROBE_IN, StorageBuffer, Read), (PROBE_OUT, StorageBuffer, Write)];
+            /// An engine's map copied with texels that are not finite and non-negative zeroed
+            /// and counted (the resident path's first pass).
+            Sanitize = "sanitize", "sanitize.comp", Compute, [], SanitizePush,
+                [(SANITIZE_SRC, Sampled, Read), (SANITIZE_DST, StorageImage, Write),
+                 (SANITIZE_COUNT, StorageBuffer, ReadWrite)];
             /// A plain texel copy (the benchmark floor).
             Copy = "copy", "copy.comp", Compute, [], CopyPush,
                 [(COPY_SRC, Sampled, Read), (COPY_DST, StorageImage, Write)];

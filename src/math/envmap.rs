@@ -45,6 +45,28 @@ pub fn luminance(c: [f64; 3]) -> f64 {
 }
 
 impl EnvMap {
+    /// The map with every texel that is not a finite, non-negative radiance set to zero, and
+    /// how many were: the float64 twin of the resident path's first pass
+    /// (`passes::map::Sanitizer`, glsl/sanitize.comp).
+    pub fn sanitized(&self) -> (EnvMap, usize) {
+        let mut zeroed = 0;
+        let texels = self
+            .texels
+            .iter()
+            .map(|t| match t.iter().all(|c| c.is_finite() && *c >= 0.0) {
+                true => *t,
+                false => {
+                    zeroed += 1;
+                    [0.0; 3]
+                }
+            })
+            .collect();
+        (
+            EnvMap::new(self.mapping, self.width, self.height, texels),
+            zeroed,
+        )
+    }
+
     /// Wraps texels; panics if their count does not match the size (a caller bug).
     pub fn new(mapping: Mapping, width: u32, height: u32, texels: Vec<[f32; 3]>) -> EnvMap {
         assert_eq!(

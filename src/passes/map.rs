@@ -234,3 +234,80 @@ fn bad_texel(map: &EnvMap, k: usize) -> Error {
         map.texels[k]
     ))
 }
+
+/// The resident path's first pass: an engine's map copied into envlight's own image with
+/// every texel that is not a finite, non-negative radiance zeroed and counted on the GPU, so
+/// that no later pass sees NaN and a broken frame still shades finite pixels (float64 twin:
+/// [`EnvMap::sanitized`]).
+pub struct Sanitizer {
+    pipeline: crate::gpu::Pipeline,
+    sampler: crate::gpu::Sampler,
+}
+
+impl Sanitizer {
+    /// Builds the pipeline.
+    pub fn new(ctx: &Context) -> Result<Sanitizer> {
+        Ok(Sanitizer {
+            pipeline: crate::gpu::Pipeline::compute(
+                ctx,
+                crate::abi::ShaderId::Sanitize,
+                &crate::abi::WORKGROUP_2D,
+            )?,
+            sampler: crate::gpu::Sampler::linear_clamp(ctx, "sanitize sampler")?,
+        })
+    }
+
+    /// Bytes of the count buffer [`Sanitizer::record`] writes (one u32).
+    pub const COUNT_BYTES: u64 = 4;
+
+    /// Records the copy of `src` into `dst` (same mapping and size), the texels zeroed counted
+    /// into the first u32 of `count` (STORAGE and TRANSFER_DST usage; reset here).
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        src: &GpuEnvMap,
+        dst: &GpuEnvMap,
+        count: &Buffer,
+    ) -> Result<()> {
+        use crate::abi::{binding, push::SanitizePush, WORKGROUP_2D};
+        use crate::gpu::{groups, Bind};
+        if (src.mapping, src.width, src.height) != (dst.mapping, dst.width, dst.height) {
+            return Err(Error::Invalid(format!(
+                "image '{}': a {} {}x{} map, copied into '{}', a {} {}x{} one",
+                src.image.name(),
+                src.mapping.name(),
+                src.width,
+                src.height,
+                dst.image.name(),
+                dst.mapping.name(),
+                dst.width,
+                dst.height
+            )));
+        }
+        rec.fill_buffer(count, Self::COUNT_BYTES, 0);
+        rec.discard(&dst.image);
+        rec.span("sanitize", |rec| {
+            rec.dispatch(
+                &self.pipeline,
+                &[
+                    (
+                        binding::SANITIZE_SRC,
+                        Bind::Sampled(&src.image, &self.sampler, false),
+                    ),
+                    (binding::SANITIZE_DST, Bind::Storage(&dst.image)),
+                    (binding::SANITIZE_COUNT, Bind::Buffer(count)),
+                ],
+                &SanitizePush {
+                    size: [src.width, src.height],
+                    pad: [0; 2],
+                },
+                [
+                    groups(src.width, WORKGROUP_2D[0]),
+                    groups(src.height, WORKGROUP_2D[1]),
+                    src.mapping.layers(),
+                ],
+            )
+        })?;
+        poison::image(rec, PassId::Map, &dst.image, 0..1)
+    }
+}

@@ -3,7 +3,8 @@
 //! nothing read back, nothing submitted and, after the first frame, nothing allocated.
 //!
 //! [`Renderer::resident`] plans the scene for a map's shape and makes every resource once;
-//! [`Renderer::record_resident`] records a frame: SH projection and packing, SH-BRDF tables,
+//! [`Renderer::record_resident`] records a frame: the image copied with every texel that is no
+//! finite, non-negative radiance zeroed and counted, then SH projection and packing, SH-BRDF tables,
 //! the paraboloid and its chain, split-sum, prefiltered maps, the G-buffer and the shading,
 //! each from the image given, into [`Resident::frame`].
 
@@ -14,8 +15,9 @@ use super::records::{gpu_objects, Marks};
 use super::shading::{self, Shading};
 use super::{Job, Rendered, Renderer};
 use crate::error::{Error, Result};
-use crate::gpu::{FrameCache, Recorder};
+use crate::gpu::{Buffer, FrameCache, Recorder};
 use crate::passes::gbuffer::{target, GBuffer};
+use crate::passes::map::Sanitizer;
 use crate::passes::GpuEnvMap;
 use crate::scene::{LightsMode, Scene};
 use ash::vk;
@@ -31,6 +33,10 @@ pub struct Resident {
     gbuf: GBuffer,
     frame: GpuEnvMap,
     cache: FrameCache,
+    /// The environment as the passes read it: the caller's, its non-radiance texels zeroed.
+    clean: GpuEnvMap,
+    sanitizer: Sanitizer,
+    zeroed: Buffer,
 }
 
 impl Resident {
@@ -48,6 +54,13 @@ impl Resident {
     /// The shape of the environments it renders from.
     pub fn shape(&self) -> MapShape {
         self.shape
+    }
+
+    /// How many texels of the last recorded frame's environment were not a finite,
+    /// non-negative radiance and were read as zero: one u32 on the GPU (STORAGE, TRANSFER_SRC),
+    /// for the caller to copy or read in its own passes.
+    pub fn zeroed_texels(&self) -> &Buffer {
+        &self.zeroed
     }
 }
 
@@ -112,6 +125,22 @@ impl Renderer {
         let mut gbuf = GBuffer::new(ctx, camera.width, camera.height, &objects)?;
         gbuf.camera = Some(*camera);
         let frame = target(ctx, "resident frame", camera.width, camera.height)?;
+        let clean = GpuEnvMap::new(
+            ctx,
+            "resident environment",
+            env.mapping,
+            env.width,
+            env.height,
+        )?;
+        let zeroed = Buffer::new(
+            ctx,
+            "resident zeroed texels",
+            Sanitizer::COUNT_BYTES,
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
+            gpu_allocator::MemoryLocation::GpuOnly,
+        )?;
         Ok(Resident {
             scene: scene.clone(),
             plan,
@@ -121,6 +150,9 @@ impl Renderer {
             gbuf,
             frame,
             cache: FrameCache::new(),
+            clean,
+            sanitizer: Sanitizer::new(ctx)?,
+            zeroed,
         })
     }
 
@@ -197,6 +229,10 @@ impl Renderer {
         let previous = rec.swap_frame_cache(Some(r.cache.clone()));
         let ins = (&r.inputs, &r.lit, &r.gbuf);
         let recorded = (|| {
+            // What the engine's frame holds that is no radiance (NaN, ∞, negative) is read as
+            // zero by every pass, and counted.
+            r.sanitizer.record(rec, env, &r.clean, &r.zeroed)?;
+            let env = &r.clean;
             inputs::record(rec, marks, &job, &passes, ins, env, || Ok(()))?;
             let with = Shading {
                 mc: None,

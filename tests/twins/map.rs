@@ -27,8 +27,10 @@ pub fn varied(mapping: Mapping, size: u32) -> EnvMap {
 }
 
 /// Every mapping at sizes 1, 5 and 16 (odd, and a cube's six layers): what comes back is what
-/// went up, bit for bit, with alpha 1; downloading level 0 of a mipped map the same.
+/// went up, bit for bit, with alpha 1; downloading level 0 of a mipped map the same; and the
+/// sanitizing copy of an engine's frame ([`check_sanitize`]).
 pub fn check(ctx: &Context) {
+    check_sanitize(ctx);
     for mapping in Mapping::ALL {
         for size in [1, 5, 16] {
             let map = varied(mapping, size);
@@ -50,5 +52,87 @@ pub fn check(ctx: &Context) {
             assert_eq!(mipped.mips(), full_mips(w, h), "{what}");
             assert_eq!(mipped.download(ctx).unwrap().texels, map.texels, "{what}");
         }
+    }
+}
+
+/// `map` as an engine's frame may hold it, copied into a GPU map as raw RGBA (no upload
+/// check): texels that are NaN, infinite or negative included.
+pub fn raw_gpu_map(ctx: &Context, map: &EnvMap) -> GpuEnvMap {
+    let texels: Vec<[f32; 4]> = map.texels.iter().map(|t| [t[0], t[1], t[2], 1.0]).collect();
+    let gpu = GpuEnvMap::new(ctx, "engine frame", map.mapping, map.width, map.height).unwrap();
+    let mut staging = envlight::gpu::Buffer::new(
+        ctx,
+        "engine frame texels",
+        (texels.len() * 16) as u64,
+        ash::vk::BufferUsageFlags::TRANSFER_SRC,
+        gpu_allocator::MemoryLocation::CpuToGpu,
+    )
+    .unwrap();
+    staging.write(&texels);
+    ctx.run("an engine's frame", |rec| {
+        rec.copy_buffer_to_image(&staging, &gpu.image, 0, true);
+        Ok(())
+    })
+    .unwrap();
+    gpu
+}
+
+/// The u32 at the start of `buffer` (TRANSFER_SRC usage).
+pub fn read_u32(ctx: &Context, buffer: &envlight::gpu::Buffer) -> u32 {
+    let host = envlight::gpu::Buffer::new(
+        ctx,
+        "count readback",
+        4,
+        ash::vk::BufferUsageFlags::TRANSFER_DST,
+        gpu_allocator::MemoryLocation::GpuToCpu,
+    )
+    .unwrap();
+    ctx.run("reading a count", |rec| {
+        rec.copy_buffer(buffer, &host, 4);
+        rec.use_buffer(&host, envlight::gpu::Usage::HostRead);
+        Ok(())
+    })
+    .unwrap();
+    host.read::<u32>(1)[0]
+}
+
+/// [`varied`] with a NaN, +∞, −∞ and a negative texel, as an engine's frame may hold them:
+/// the sanitizing copy (`passes::map::Sanitizer`, the resident path's first pass) gives
+/// `EnvMap::sanitized` bit for bit, and counts its four zeroed texels.
+pub fn check_sanitize(ctx: &Context) {
+    let pass = envlight::passes::map::Sanitizer::new(ctx).unwrap();
+    for mapping in Mapping::ALL {
+        let mut map = varied(mapping, 16);
+        let n = map.texels.len();
+        map.texels[n / 5] = [f32::NAN, 1.0, 1.0];
+        map.texels[n / 4] = [1.0, f32::INFINITY, 1.0];
+        map.texels[2 * n / 3] = [1.0, 1.0, f32::NEG_INFINITY];
+        map.texels[3 * n / 4] = [0.5, -1e-3, 0.5];
+        let (want, zeroed) = map.sanitized();
+        assert_eq!(zeroed, 4);
+        let src = raw_gpu_map(ctx, &map);
+        let dst = GpuEnvMap::new(ctx, "sanitized", mapping, map.width, map.height).unwrap();
+        let count = envlight::gpu::Buffer::new(
+            ctx,
+            "zeroed",
+            4,
+            ash::vk::BufferUsageFlags::STORAGE_BUFFER
+                | ash::vk::BufferUsageFlags::TRANSFER_DST
+                | ash::vk::BufferUsageFlags::TRANSFER_SRC,
+            gpu_allocator::MemoryLocation::GpuOnly,
+        )
+        .unwrap();
+        ctx.run("sanitizing", |rec| pass.record(rec, &src, &dst, &count))
+            .unwrap();
+        let back = dst.download_level(ctx, 0).unwrap();
+        for (k, (b, t)) in back.iter().zip(&want.texels).enumerate() {
+            let w = [t[0], t[1], t[2], 1.0];
+            assert!(
+                b.iter().zip(&w).all(|(x, y)| x.to_bits() == y.to_bits()),
+                "{}: texel {k} sanitized to {b:?}, want {w:?}",
+                mapping.name()
+            );
+        }
+        assert_eq!(read_u32(ctx, &count), 4, "{}", mapping.name());
     }
 }

@@ -10,10 +10,10 @@
 use super::floors::{copy_ms, probe_texels, rel_lum, worse};
 use super::{median, page};
 use crate::gpu::{Buffer, Context, Timing};
+use crate::math::convert::residual_edge_points;
 use crate::math::envmap::luminance;
 use crate::math::exact::ExactFilter;
 use crate::math::lights::{extract, ExtractOptions, LightKernel};
-use crate::math::convert::residual_edge_points;
 use crate::math::split_sum::{chain_norm, level_alpha};
 use crate::math::synth::Sky;
 use crate::math::{Mapping, Orientation};
