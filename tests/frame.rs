@@ -49,3 +49,49 @@ fn an_engine_frame_matches_the_cli_render() {
     assert!(lit > f.frame.texels.len() / 2, "the frame is mostly black");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `envlight render --resident` (the map uploaded once, the frame recorded from the GPU image)
+/// makes the CLI's host render of the same scene (the same passes on the same map: 1e-6), and
+/// refuses a scene that extracts lights, saying why.
+#[test]
+fn render_resident_matches_render() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = std::env::temp_dir().join(format!("envlight-resident-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = root.join("assets/scenes/dynamic.toml");
+    let host = common::scenes::cli_render(&scene, &dir.join("host.exr"));
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .args(["--validation", "--device", "cpu", "render", "--resident"])
+        .arg(&scene)
+        .arg("-o")
+        .arg(dir.join("resident.exr"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let resident = envlight::io::load(dir.join("resident.exr"), &Default::default()).unwrap();
+    let mut errors = Errors::new();
+    for (k, (a, b)) in resident.texels.iter().zip(&host.texels).enumerate() {
+        for c in 0..3 {
+            errors.rel(a[c], b[c], 1e-3, (k, c));
+        }
+    }
+    assert!(
+        errors.worst() <= 1e-6,
+        "resident differs by {:e}",
+        errors.worst()
+    );
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .args(["--device", "cpu", "render", "--resident"])
+        .arg(root.join("assets/scenes/split_sum.toml"))
+        .arg("-o")
+        .arg(dir.join("refused.exr"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("extracts lights"),
+        "{err}"
+    );
+    assert!(!dir.join("refused.exr").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
