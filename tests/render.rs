@@ -597,3 +597,48 @@ fn a_broken_frame_shades_finite_pixels_and_the_next_recovers() {
     }
     common::finish(ctx);
 }
+
+/// Frames after the first create no Vulkan object for SH, SH-BRDF, FIS, split-sum and lookup
+/// objects (each alone, recorded untimed: objects created while recording, the submission's
+/// own fence aside); the first frame makes the descriptor sets and scratch buffers the rest
+/// reuse. Prefiltered maps are left out: the brute-force filter still makes its transient
+/// buffers and images every recording (12 objects a frame here).
+#[test]
+fn resident_frames_after_the_first_create_nothing() {
+    use envlight::render::{MapShape, Renderer};
+    use envlight::scene::Technique;
+    let ctx = common::ctx();
+    {
+        let sky = envlight::math::synth::Sky::default();
+        let renderer = Renderer::new(&ctx);
+        let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, |d| sky.radiance(d));
+        let gpu = GpuEnvMap::upload(&ctx, &env).unwrap();
+        let full = resident_scene(true);
+        for object in &full.objects {
+            let technique = object.material.technique;
+            if matches!(technique, Some(Technique::Prefiltered { .. })) {
+                continue;
+            }
+            let mut sc = full.clone();
+            sc.objects = vec![object.clone()];
+            let prepared = renderer.resident(&sc, MapShape::of(&env)).unwrap();
+            let mut created = Vec::new();
+            for _ in 0..3 {
+                let n = ctx
+                    .run_untimed("a resident frame", |rec| {
+                        let before = ctx.objects_created();
+                        renderer.record_resident(rec, &prepared, &gpu)?;
+                        Ok(ctx.objects_created() - before)
+                    })
+                    .unwrap();
+                created.push(n);
+            }
+            assert!(
+                created[0] > 0,
+                "{technique:?}: the first frame made nothing"
+            );
+            assert_eq!(&created[1..], [0, 0], "{technique:?}: created {created:?}");
+        }
+    }
+    common::finish(ctx);
+}

@@ -578,13 +578,32 @@ impl Context {
         what: &'static str,
         record: impl FnOnce(&mut Recorder) -> Result<R>,
     ) -> Result<(R, Vec<Timing>)> {
+        self.run_with(what, true, record)
+    }
+
+    /// [`Context::run`] without timestamps, whose query pools each recording makes: how a
+    /// frame is recorded when what it creates is counted ([`Context::objects_created`]).
+    pub fn run_untimed<R>(
+        &self,
+        what: &'static str,
+        record: impl FnOnce(&mut Recorder) -> Result<R>,
+    ) -> Result<R> {
+        self.run_with(what, false, record).map(|(r, _)| r)
+    }
+
+    fn run_with<R>(
+        &self,
+        what: &'static str,
+        timestamps: bool,
+        record: impl FnOnce(&mut Recorder) -> Result<R>,
+    ) -> Result<(R, Vec<Timing>)> {
         let mut out = None;
         let mut recorded = None;
         self.shared.submit_and_wait(what, |cmd| {
             // SAFETY: submit_and_wait hands a fresh primary command buffer in the recording
             // state, submits it to this context's queue, and waits before returning; the
             // Recorded is kept past that wait.
-            let mut rec = unsafe { Recorder::begin(self, cmd, true) };
+            let mut rec = unsafe { Recorder::begin(self, cmd, timestamps) };
             let r = record(&mut rec);
             recorded = Some(rec.finish());
             out = Some(r?);
