@@ -598,15 +598,13 @@ fn a_broken_frame_shades_finite_pixels_and_the_next_recovers() {
     common::finish(ctx);
 }
 
-/// Frames after the first create no Vulkan object for SH, SH-BRDF, FIS, split-sum and lookup
-/// objects (each alone, recorded untimed: objects created while recording, the submission's
-/// own fence aside); the first frame makes the descriptor sets and scratch buffers the rest
-/// reuse. Prefiltered maps are left out: the brute-force filter still makes its transient
-/// buffers and images every recording (12 objects a frame here).
+/// Frames after the first create no Vulkan object, for each technique of the resident scene
+/// alone (SH, SH-BRDF, FIS, split-sum, a prefiltered map, lookups; recorded untimed: objects
+/// created while recording, the submission's own fence aside); the first frame makes the
+/// descriptor sets, scratch buffers and scratch images the rest reuse.
 #[test]
 fn resident_frames_after_the_first_create_nothing() {
     use envlight::render::{MapShape, Renderer};
-    use envlight::scene::Technique;
     let ctx = common::ctx();
     {
         let sky = envlight::math::synth::Sky::default();
@@ -616,9 +614,6 @@ fn resident_frames_after_the_first_create_nothing() {
         let full = resident_scene(true);
         for object in &full.objects {
             let technique = object.material.technique;
-            if matches!(technique, Some(Technique::Prefiltered { .. })) {
-                continue;
-            }
             let mut sc = full.clone();
             sc.objects = vec![object.clone()];
             let prepared = renderer.resident(&sc, MapShape::of(&env)).unwrap();

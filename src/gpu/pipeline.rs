@@ -347,8 +347,8 @@ impl Bind<'_> {
 
 /// What a frame recorded again on the same resources would otherwise make anew, kept across
 /// recordings: descriptor sets (one per pipeline and distinct bindings), buffers uploaded with
-/// the same contents, and GPU-only scratch buffers (the k-th of each name and size a recording
-/// asks for). A recorder uses one after [`super::Recorder::use_frame_cache`]; then a frame
+/// the same contents, and GPU-only scratch buffers and images (the k-th of each name and size
+/// or description a recording asks for). A recorder uses one after [`super::Recorder::use_frame_cache`]; then a frame
 /// recorded again allocates nothing (with timestamps off, whose query pools are per
 /// recording). Keys are resources' serials, never reused, so a set is never bound to a
 /// resource that replaced a destroyed one; what was made for resources since dropped stays
@@ -365,6 +365,7 @@ struct CacheInner {
     sets: HashMap<Vec<u64>, Arc<DescriptorSet>>,
     uploads: HashMap<(String, u64, usize), Arc<Buffer>>,
     scratch: HashMap<(String, u64, u32, usize), Arc<Buffer>>,
+    images: HashMap<(String, [u32; 7], usize), Arc<super::Image>>,
 }
 
 impl FrameCache {
@@ -375,9 +376,9 @@ impl FrameCache {
 
     /// Descriptor sets and buffers made so far.
     pub fn len(&self) -> usize {
-        self.inner
-            .lock()
-            .map_or(0, |c| c.sets.len() + c.uploads.len() + c.scratch.len())
+        self.inner.lock().map_or(0, |c| {
+            c.sets.len() + c.uploads.len() + c.scratch.len() + c.images.len()
+        })
     }
 
     /// Whether nothing was made yet.
@@ -444,6 +445,37 @@ impl FrameCache {
         c.scratch.insert(key, b.clone());
         Ok(b)
     }
+
+    /// The `k`-th scratch image of `name` and `desc` a recording asks for, made on first use.
+    pub(crate) fn image(
+        &self,
+        ctx: &Context,
+        name: &str,
+        desc: super::ImageDesc,
+        k: usize,
+    ) -> Result<Arc<super::Image>> {
+        let key = (name.to_string(), image_key(&desc), k);
+        let mut c = self.lock();
+        if let Some(i) = c.images.get(&key) {
+            return Ok(i.clone());
+        }
+        let i = Arc::new(super::Image::new(ctx, name, desc)?);
+        c.images.insert(key, i.clone());
+        Ok(i)
+    }
+}
+
+/// What identifies an image description in a [`FrameCache`].
+pub(crate) fn image_key(d: &super::ImageDesc) -> [u32; 7] {
+    [
+        d.width,
+        d.height,
+        d.layers,
+        d.format.as_raw() as u32,
+        d.usage.as_raw(),
+        d.cube as u32,
+        d.mips,
+    ]
 }
 
 /// A descriptor set in a pool of its own, for one submission (or, in a [`FrameCache`],

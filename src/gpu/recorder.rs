@@ -33,6 +33,8 @@ pub struct Recorder {
     cache: Option<FrameCache>,
     /// Scratch buffers asked for so far in this recording, by name, size and usage.
     scratch_asked: std::collections::HashMap<(String, u64, u32), usize>,
+    /// Scratch images asked for so far in this recording, by name and description.
+    images_asked: std::collections::HashMap<(String, [u32; 7]), usize>,
 }
 
 /// What a finished recording holds until the GPU has executed it: the transient resources and
@@ -74,6 +76,7 @@ impl Recorder {
             keep: Vec::new(),
             cache: None,
             scratch_asked: Default::default(),
+            images_asked: Default::default(),
         }
     }
 
@@ -104,6 +107,29 @@ impl Recorder {
         };
         self.keep(b.clone());
         Ok(b)
+    }
+
+    /// An image of `desc` for this recording's commands (kept until it has executed): the
+    /// same image every recording asks for in the same order where a frame cache is in use.
+    pub(crate) fn scratch_image(
+        &mut self,
+        name: &str,
+        desc: super::ImageDesc,
+    ) -> Result<std::sync::Arc<Image>> {
+        let i = match &self.cache {
+            Some(c) => {
+                let key = super::pipeline::image_key(&desc);
+                let asked = self
+                    .images_asked
+                    .entry((name.to_string(), key))
+                    .or_insert(0);
+                *asked += 1;
+                c.image(&self.ctx, name, desc, *asked - 1)?
+            }
+            None => std::sync::Arc::new(Image::new(&self.ctx, name, desc)?),
+        };
+        self.keep(i.clone());
+        Ok(i)
     }
 
     /// A GPU-only buffer of `size` bytes and `usage` for this recording's commands (kept

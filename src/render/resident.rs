@@ -160,9 +160,8 @@ impl Renderer {
     /// pass before the shading, the G-buffer and the shading into [`Resident::frame`]. Reads
     /// nothing back and submits nothing; descriptor sets and transient buffers come from `r`'s
     /// cache, so a frame on the same images allocates nothing (record with timestamps off for
-    /// that: their query pools are per recording), prefiltered maps excepted (the brute-force
-    /// filter's transient buffers and images are per recording). `env` must have `r`'s shape
-    /// and SAMPLED usage.
+    /// that: their query pools are per recording). `env` must have `r`'s shape and SAMPLED
+    /// usage.
     pub fn record_resident(&self, rec: &mut Recorder, r: &Resident, env: &GpuEnvMap) -> Result<()> {
         self.record_frame(rec, r, env, &mut Marks(Vec::new()))
     }

@@ -9,14 +9,14 @@ use crate::gpu::{mat3_rows, Bind, Buffer, Context, Image, ImageDesc, Pipeline, R
 use crate::math::filter::Kernel;
 use crate::math::{Mapping, Orientation};
 use ash::vk;
-use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
 
 /// The source prepared for the sums: per-texel cones, radiance and shapes, and the tiles.
 pub(super) struct PreparedSource {
-    pub(super) cones: Image,
-    pub(super) rad: Image,
-    pub(super) shapes: Image,
-    pub(super) tiles: Buffer,
+    pub(super) cones: Arc<Image>,
+    pub(super) rad: Arc<Image>,
+    pub(super) shapes: Arc<Image>,
+    pub(super) tiles: Arc<Buffer>,
     pub(super) push: BrutePush,
     pub(super) mapping: Mapping,
     pub(super) size: (u32, u32),
@@ -24,9 +24,9 @@ pub(super) struct PreparedSource {
 
 /// One level of the moment pyramid: its cones, light and tiles, and its push block.
 pub(super) struct CoarseLevel {
-    pub(super) cones: Image,
-    pub(super) light: Image,
-    pub(super) tiles: Buffer,
+    pub(super) cones: Arc<Image>,
+    pub(super) light: Arc<Image>,
+    pub(super) tiles: Arc<Buffer>,
     pub(super) push: BrutePush,
 }
 
@@ -57,9 +57,9 @@ impl BruteFilter {
         let texels = src.width * src.height * src.mapping.layers();
         let ctx = rec.context().clone();
         let (w, h, layers) = (src.width, src.height, src.mapping.layers());
-        let cones = texel_image(&ctx, "brute cones", w, h, layers)?;
-        let rad = texel_image(&ctx, "brute radiance", w, h, layers)?;
-        let shapes = texel_image(&ctx, "brute shapes", w, h, 3 * layers)?;
+        let cones = texel_image(rec, "brute cones", w, h, layers)?;
+        let rad = texel_image(rec, "brute radiance", w, h, layers)?;
+        let shapes = texel_image(rec, "brute shapes", w, h, 3 * layers)?;
         let push = BrutePush {
             file_to_world: mat3_rows(orientation.checked_world_to_file()?.transpose()),
             src_size: [src.width, src.height],
@@ -118,10 +118,10 @@ impl BruteFilter {
         rec: &mut Recorder,
         cones: &Image,
         push: &BrutePush,
-    ) -> Result<Buffer> {
+    ) -> Result<Arc<Buffer>> {
         let ctx = rec.context().clone();
         let tile_count = tile_count(push);
-        let tiles = scratch(&ctx, "brute tiles", tile_count as u64 * 16)?;
+        let tiles = scratch(rec, "brute tiles", tile_count as u64 * 16)?;
         rec.span("brute tiles", |rec| {
             rec.dispatch(
                 &self.tiles,
@@ -147,8 +147,8 @@ impl BruteFilter {
         let (w, h) = (prep.size.0 >> s, prep.size.1 >> s);
         let texels = w * h * prep.mapping.layers();
         let layers = prep.mapping.layers();
-        let cones = texel_image(&ctx, "brute level cones", w, h, layers)?;
-        let light = texel_image(&ctx, "brute level light", w, h, 9 * layers)?;
+        let cones = texel_image(rec, "brute level cones", w, h, layers)?;
+        let light = texel_image(rec, "brute level light", w, h, 9 * layers)?;
         let push = BrutePush {
             src_size: [w, h],
             texels,
@@ -185,10 +185,16 @@ impl BruteFilter {
     }
 }
 
-/// An rgba32f storage image of `layers` `w` × `h` layers for per-texel data.
-pub(super) fn texel_image(ctx: &Context, name: &str, w: u32, h: u32, layers: u32) -> Result<Image> {
-    Image::new(
-        ctx,
+/// An rgba32f storage image of `layers` `w` × `h` layers for per-texel data (a scratch image
+/// of the recording: reused by the next where a frame cache is in use).
+pub(super) fn texel_image(
+    rec: &mut Recorder,
+    name: &str,
+    w: u32,
+    h: u32,
+    layers: u32,
+) -> Result<Arc<Image>> {
+    rec.scratch_image(
         name,
         ImageDesc {
             width: w,
@@ -202,14 +208,9 @@ pub(super) fn texel_image(ctx: &Context, name: &str, w: u32, h: u32, layers: u32
     )
 }
 
-pub(super) fn scratch(ctx: &Context, name: &str, bytes: u64) -> Result<Buffer> {
-    Buffer::new(
-        ctx,
-        name,
-        bytes,
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryLocation::GpuOnly,
-    )
+/// A GPU-only storage buffer of `bytes` (a scratch buffer of the recording).
+pub(super) fn scratch(rec: &mut Recorder, name: &str, bytes: u64) -> Result<Arc<Buffer>> {
+    rec.scratch(name, bytes, vk::BufferUsageFlags::STORAGE_BUFFER)
 }
 
 /// Tiles of BRUTE_TILE² texels over a map of `push.src_size` and `push.src_layers`.

@@ -22,7 +22,6 @@ impl BruteFilter {
         dst: &GpuEnvMap,
     ) -> Result<()> {
         let exponent = check_kernel(kernel)?;
-        let ctx = rec.context().clone();
         let (w, h) = (dst.width, dst.height);
         let base = coarse.map_or(prep.push, |c| c.push);
         // A coarse texel may descend to all of its 4^s prepared texels.
@@ -58,7 +57,7 @@ impl BruteFilter {
             chosen => chosen,
         };
         let partials = scratch(
-            &ctx,
+            rec,
             "brute partial sums",
             outputs as u64 * split.parts() as u64 * lanes as u64 * 32,
         )?;
