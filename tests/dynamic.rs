@@ -9,7 +9,7 @@ mod common;
 #[path = "../examples/dynamic.rs"]
 mod dynamic_example;
 
-use common::compare::Errors;
+use common::compare::frame_errors;
 use envlight::EnvMap;
 use std::path::Path;
 
@@ -62,13 +62,7 @@ fn an_engine_loop_renders_every_frame_from_its_own_sky() {
         std::fs::write(&scene_k, swapped).unwrap();
         let out = dir.join(format!("cli_{k}.exr"));
         let cli = common::scenes::cli_render(&scene_k, &out);
-        assert_eq!((cli.width, cli.height), (frame.width, frame.height));
-        let mut errors = Errors::new();
-        for (p, (a, b)) in frame.texels.iter().zip(&cli.texels).enumerate() {
-            for c in 0..3 {
-                errors.rel(a[c], b[c], 1e-3, (p, c));
-            }
-        }
+        let errors = frame_errors(frame, &cli);
         assert!(
             errors.worst() <= 1e-6,
             "frame {k} differs from the CLI render of its sky by {:e} at {:?}",

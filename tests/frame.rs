@@ -6,7 +6,7 @@ mod common;
 #[path = "../examples/frame.rs"]
 mod frame_example;
 
-use common::compare::Errors;
+use common::compare::frame_errors;
 use std::path::Path;
 
 #[test]
@@ -34,13 +34,7 @@ fn an_engine_frame_matches_the_cli_render() {
     // The same passes with the same inputs on the same device: only how the commands were
     // grouped into submissions differs, so the pixels agree to f32 rounding (1e-6 relative,
     // with a floor for dark pixels).
-    let mut errors = Errors::new();
-    for (k, (a, b)) in f.frame.texels.iter().zip(&cli.texels).enumerate() {
-        for c in 0..3 {
-            errors.rel(a[c], b[c], 1e-3, (k, c));
-        }
-    }
-    let worst = errors.worst();
+    let worst = frame_errors(&f.frame, &cli).worst();
     assert!(
         worst <= 1e-6,
         "engine frame differs from the CLI render by {worst:e}"
@@ -69,12 +63,7 @@ fn render_resident_matches_render() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let resident = envlight::io::load(dir.join("resident.exr"), &Default::default()).unwrap();
-    let mut errors = Errors::new();
-    for (k, (a, b)) in resident.texels.iter().zip(&host.texels).enumerate() {
-        for c in 0..3 {
-            errors.rel(a[c], b[c], 1e-3, (k, c));
-        }
-    }
+    let errors = frame_errors(&resident, &host);
     assert!(
         errors.worst() <= 1e-6,
         "resident differs by {:e}",

@@ -432,12 +432,7 @@ fn the_resident_path_renders_what_the_host_path_does() {
                 let before = ctx.submissions();
                 let got = renderer.render_resident(&prepared, &gpu).unwrap();
                 assert_eq!(ctx.submissions() - before, 1);
-                let mut errors = Errors::new();
-                for (k, (a, b)) in got.frame.texels.iter().zip(&host.frame.texels).enumerate() {
-                    for c in 0..3 {
-                        errors.rel(a[c], b[c], 1e-3, (k, c));
-                    }
-                }
+                let errors = common::compare::frame_errors(&got.frame, &host.frame);
                 assert!(
                     errors.worst() <= 1e-6,
                     "{mapping:?} footprint {footprint}: resident differs by {:e} at {:?}",
@@ -552,38 +547,12 @@ fn a_broken_frame_shades_finite_pixels_and_the_next_recovers() {
             for (map, want_zeroed) in [(&zeroed_map, 3u32), (&clean, 0)] {
                 if want_zeroed == 0 {
                     // The next frame, into the same image.
-                    let texels: Vec<[f32; 4]> = clean
-                        .texels
-                        .iter()
-                        .map(|t| [t[0], t[1], t[2], 1.0])
-                        .collect();
-                    let mut staging = envlight::gpu::Buffer::new(
-                        &ctx,
-                        "next frame",
-                        (texels.len() * 16) as u64,
-                        ash::vk::BufferUsageFlags::TRANSFER_SRC,
-                        gpu_allocator::MemoryLocation::CpuToGpu,
-                    )
-                    .unwrap();
-                    staging.write(&texels);
-                    ctx.run("the next frame", |rec| {
-                        rec.copy_buffer_to_image(&staging, &gpu.image, 0, true);
-                        Ok(())
-                    })
-                    .unwrap();
+                    map_twin::write_raw(&ctx, &gpu, &clean);
                 }
                 let got = renderer.render_resident(&prepared, &gpu).unwrap();
                 let host = renderer.render(&sc, map).unwrap();
-                let mut errors = Errors::new();
-                for (k, (a, b)) in got.frame.texels.iter().zip(&host.frame.texels).enumerate() {
-                    assert!(
-                        a.iter().all(|v| v.is_finite()),
-                        "{mapping:?}: pixel {k} {a:?}"
-                    );
-                    for c in 0..3 {
-                        errors.rel(a[c], b[c], 1e-3, (k, c));
-                    }
-                }
+                // A non-finite pixel fails here, at its place.
+                let errors = common::compare::frame_errors(&got.frame, &host.frame);
                 assert!(
                     errors.worst() <= 1e-6,
                     "{mapping:?} ({want_zeroed} zeroed): {:e} at {:?}",

@@ -183,3 +183,18 @@ impl<L: Clone + Debug> Errors<L> {
         );
     }
 }
+
+/// Per-channel relative errors of frame `a` against frame `b` of the same size, with a floor
+/// of 1e-3 for dark pixels: how two renders by the same passes on the same inputs are compared
+/// (they agree to f32 rounding). A non-finite pixel fails the test at its place.
+#[track_caller]
+pub fn frame_errors(a: &envlight::EnvMap, b: &envlight::EnvMap) -> Errors<(usize, usize)> {
+    assert_eq!((a.width, a.height), (b.width, b.height), "frame sizes");
+    let mut errors = Errors::new();
+    for (k, (x, y)) in a.texels.iter().zip(&b.texels).enumerate() {
+        for c in 0..3 {
+            errors.rel(x[c], y[c], 1e-3, (k, c));
+        }
+    }
+    errors
+}

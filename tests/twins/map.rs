@@ -58,8 +58,14 @@ pub fn check(ctx: &Context) {
 /// `map` as an engine's frame may hold it, copied into a GPU map as raw RGBA (no upload
 /// check): texels that are NaN, infinite or negative included.
 pub fn raw_gpu_map(ctx: &Context, map: &EnvMap) -> GpuEnvMap {
-    let texels: Vec<[f32; 4]> = map.texels.iter().map(|t| [t[0], t[1], t[2], 1.0]).collect();
     let gpu = GpuEnvMap::new(ctx, "engine frame", map.mapping, map.width, map.height).unwrap();
+    write_raw(ctx, &gpu, map);
+    gpu
+}
+
+/// Writes `map` into `gpu` (same shape) as raw RGBA, as an engine writes its next frame.
+pub fn write_raw(ctx: &Context, gpu: &GpuEnvMap, map: &EnvMap) {
+    let texels: Vec<[f32; 4]> = map.texels.iter().map(|t| [t[0], t[1], t[2], 1.0]).collect();
     let mut staging = envlight::gpu::Buffer::new(
         ctx,
         "engine frame texels",
@@ -74,7 +80,6 @@ pub fn raw_gpu_map(ctx: &Context, map: &EnvMap) -> GpuEnvMap {
         Ok(())
     })
     .unwrap();
-    gpu
 }
 
 /// The u32 at the start of `buffer` (TRANSFER_SRC usage).
