@@ -224,10 +224,43 @@ fn prefiltered_maps(
     Ok((maps, offsets, texels))
 }
 
+/// Records the tables no environment changes into `rec`: the SH-BRDF tables and split-sum's
+/// DFG tables, their GPU time marked in `marks`. The host path records them with every
+/// render; the resident path once, when it is prepared.
+pub(super) fn record_tables(
+    rec: &mut Recorder,
+    marks: &mut Marks,
+    job: &Job<'_>,
+    passes: &Passes<'_>,
+    inputs: &Inputs,
+) -> Result<()> {
+    let plan = job.plan;
+    if let (Some(p), Some(buf)) = (passes.sh_brdf, &inputs.tables) {
+        for t in &plan.tables {
+            marks.record(rec, PassKind::ShBrdfTable, |rec| {
+                p.record(rec, &t.brdf, t.order, t.grid, buf, t.offset)
+            })?;
+        }
+    }
+    if let (Some(p), Some((_, tables)), Some(sp)) = (passes.split, &inputs.split, &plan.split) {
+        let size = job.scene.split_sum.dfg_size;
+        marks.record(rec, PassKind::SplitSum, |rec| {
+            for (i, &correlated) in sp.forms.iter().enumerate() {
+                let off = (i * SplitSum::dfg_floats(size)) as u32;
+                p.record_dfg(rec, size, correlated, tables, off)?;
+            }
+            Ok(())
+        })?;
+    }
+    Ok(())
+}
+
 /// Records everything before the shading into `rec`, reading the environment `env`: the
-/// residuals' uploads, then each pass the plan runs, its GPU time marked in `marks`.
+/// residuals' uploads, then each pass the plan runs, its GPU time marked in `marks`; the
+/// environment-independent tables too where `tables` ([`record_tables`]).
 /// `convert_built` waits for the paraboloid's conversion pipelines, built on another thread
 /// meanwhile.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn record(
     rec: &mut Recorder,
     marks: &mut Marks,
@@ -235,6 +268,7 @@ pub(super) fn record(
     passes: &Passes<'_>,
     (inputs, lit, gbuf): (&Inputs, &Lit, &GBuffer),
     env: &GpuEnvMap,
+    tables: bool,
     convert_built: impl FnOnce() -> Result<()>,
 ) -> Result<()> {
     let (plan, orientation) = (job.plan, &job.orientation);
@@ -262,12 +296,8 @@ pub(super) fn record(
     if let (Some(ex), Some(map)) = (&lit.diffuse, &lit.diffuse_residual) {
         map.record_upload(rec, &ex.residual)?;
     }
-    if let (Some(p), Some(buf)) = (passes.sh_brdf, &inputs.tables) {
-        for t in &plan.tables {
-            marks.record(rec, PassKind::ShBrdfTable, |rec| {
-                p.record(rec, &t.brdf, t.order, t.grid, buf, t.offset)
-            })?;
-        }
+    if tables {
+        record_tables(rec, marks, job, passes, inputs)?;
     }
     if passes.dp.is_some() && inputs.dp.is_some() && plan.dp.is_some() {
         // After the uploads' staging copies, which this thread makes meanwhile.
@@ -322,16 +352,11 @@ fn record_chain(
         conv.record(rec, source, map, &opts)
     })?;
     marks.record(rec, PassKind::MipChain, |rec| mip.record(rec, map))?;
-    let (Some(p), Some((chain, tables)), Some(sp)) = (passes.split, &inputs.split, &job.plan.split)
-    else {
+    let (Some(p), Some((chain, _))) = (passes.split, &inputs.split) else {
         return Ok(());
     };
     let ss = &job.scene.split_sum;
     marks.record(rec, PassKind::SplitSum, |rec| {
-        for (i, &correlated) in sp.forms.iter().enumerate() {
-            let off = (i * SplitSum::dfg_floats(ss.dfg_size)) as u32;
-            p.record_dfg(rec, ss.dfg_size, correlated, tables, off)?;
-        }
         let opts = PrefilterOptions {
             levels: ss.levels,
             samples: ss.samples,

@@ -305,7 +305,7 @@ impl Renderer {
             } = builds;
             let (readback, t) = job.ctx.run("rendering", |rec| {
                 env_gpu.record_upload(rec, env)?;
-                inputs::record(rec, &mut marks, job, &passes, ins, &env_gpu, convert)?;
+                inputs::record(rec, &mut marks, job, &passes, ins, &env_gpu, true, convert)?;
                 built()?;
                 shading::record_draw(rec, &mut marks, shade, &gbuf, &draw, &frame)?;
                 frame.record_download(rec, 0)
@@ -316,7 +316,16 @@ impl Renderer {
         }
         let ((), t) = job.ctx.run("rendering: inputs", |rec| {
             env_gpu.record_upload(rec, env)?;
-            inputs::record(rec, &mut marks, job, &passes, ins, &env_gpu, builds.convert)
+            inputs::record(
+                rec,
+                &mut marks,
+                job,
+                &passes,
+                ins,
+                &env_gpu,
+                true,
+                builds.convert,
+            )
         })?;
         marks.split(&t, &mut records);
         // Monte Carlo reads the host between its batches (an error target, a sampling table).

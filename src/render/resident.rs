@@ -2,11 +2,12 @@
 //! the engine owns, rewritten every frame), recorded into the caller's command buffer with
 //! nothing read back, nothing submitted and, after the first frame, nothing allocated.
 //!
-//! [`Renderer::resident`] plans the scene for a map's shape and makes every resource once;
-//! [`Renderer::record_resident`] records a frame: the image copied with every texel that is no
-//! finite, non-negative radiance zeroed and counted, then SH projection and packing, SH-BRDF tables,
-//! the paraboloid and its chain, split-sum, prefiltered maps, the G-buffer and the shading,
-//! each from the image given, into [`Resident::frame`].
+//! [`Renderer::resident`] plans the scene for a map's shape, makes every resource once and
+//! computes what no environment changes (the SH-BRDF and DFG tables, in one submission of its
+//! own); [`Renderer::record_resident`] records a frame: the image copied with every texel that
+//! is no finite, non-negative radiance zeroed and counted, then SH projection and packing, the
+//! paraboloid and its chain, split-sum's levels, prefiltered maps, the G-buffer and the
+//! shading, each from the image given, into [`Resident::frame`].
 
 use super::inputs::{self, Inputs};
 use super::lights::Lit;
@@ -108,7 +109,7 @@ impl Renderer {
             self.converter()?
                 .prepare_for((env.mapping, env.width, env.height), opts)?;
         }
-        let _ = self.passes(&plan)?;
+        let passes = self.passes(&plan)?;
         let lit = Lit::none(&plan);
         let job = Job {
             ctx,
@@ -118,6 +119,14 @@ impl Renderer {
         };
         let sh = inputs::sh_layout(&job, &lit);
         let inputs = Inputs::new(&job, &lit, &sh)?;
+        // What no environment changes (SH-BRDF and DFG tables) is computed now, once, not in
+        // every frame.
+        if !plan.tables.is_empty() || plan.split.is_some() {
+            let mut marks = Marks(Vec::new());
+            ctx.run_untimed("resident: tables", |rec| {
+                inputs::record_tables(rec, &mut marks, &job, &passes, &inputs)
+            })?;
+        }
         let levels = inputs.split.as_ref().map(|(chain, _)| chain.mips());
         let at = (&inputs.pre_offsets[..], &sh.offsets[..]);
         let objects = gpu_objects(scene, &plan, &lit, at, levels);
@@ -234,7 +243,7 @@ impl Renderer {
             // zero by every pass, and counted.
             r.sanitizer.record(rec, env, &r.clean, &r.zeroed)?;
             let env = &r.clean;
-            inputs::record(rec, marks, &job, &passes, ins, env, || Ok(()))?;
+            inputs::record(rec, marks, &job, &passes, ins, env, false, || Ok(()))?;
             let with = Shading {
                 mc: None,
                 sh_rotation: self.sh_rotation,
