@@ -33,8 +33,10 @@ pub fn descriptor_type(kind: Kind) -> vk::DescriptorType {
 pub fn binding_usage(compute: bool, kind: Kind, access: Access) -> super::barrier::Usage {
     use super::barrier::Usage::*;
     match (compute, kind, access) {
-        (true, Kind::Sampled, _) => ComputeSampled,
-        (false, Kind::Sampled, _) => FragmentSampled,
+        // A uniform texel buffer is read as sampled (synchronization2's SHADER_SAMPLED_READ),
+        // not as storage.
+        (true, Kind::Sampled | Kind::TexelBuffer, _) => ComputeSampled,
+        (false, Kind::Sampled | Kind::TexelBuffer, _) => FragmentSampled,
         (true, _, Access::Read) => ComputeRead,
         (true, _, Access::Write) => ComputeWrite,
         (true, _, Access::ReadWrite) => ComputeReadWrite,
@@ -61,6 +63,10 @@ mod tests {
         assert_eq!(
             binding_usage(true, Kind::StorageImage, Access::Write),
             Usage::ComputeWrite
+        );
+        assert_eq!(
+            binding_usage(true, Kind::TexelBuffer, Access::Read),
+            Usage::ComputeSampled
         );
         assert_eq!(
             binding_usage(true, Kind::StorageBuffer, Access::ReadWrite),
