@@ -52,7 +52,7 @@ float by_nodes(Record t, uint cells, float a2, vec3 r) {
 }
 
 void main() {
-    uvec3 id = gl_GlobalInvocationID;
+    uvec3 id = gl_GlobalInvocationID + uvec3(0u, 0u, pc.layer);
     if (any(greaterThanEqual(id.xy, uvec2(pc.size)))) return;
     vec3 r = coord_to_dir(MAPPING_CUBE, Coord(id.z, (vec2(id.xy) + 0.5) / float(pc.size)));
     float a = max(pc.alpha, GGX_ALPHA_MIN);

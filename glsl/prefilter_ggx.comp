@@ -24,7 +24,7 @@ vec3 src_lookup(vec3 d, float lod) {
 }
 
 void main() {
-    uvec3 id = gl_GlobalInvocationID;
+    uvec3 id = gl_GlobalInvocationID + uvec3(0u, 0u, pc.layer);
     if (id.x >= pc.size || id.y >= pc.size) return;
     Coord c;
     c.layer = id.z;

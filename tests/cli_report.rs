@@ -268,18 +268,7 @@ fn numbers_after(page: &str, row: &str, key: &str) -> Vec<f64> {
 /// frame slower than its floor.
 #[test]
 fn bench_dynamic_prices_a_frame_with_its_errors() {
-    let page = std::env::temp_dir().join(format!("envlight-dynamic-{}.md", std::process::id()));
-    let _ = std::fs::remove_file(&page);
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
-        .args(["--validation", "--device", "cpu", "bench", "dynamic"])
-        .args([
-            "--cubes", "16", "--widths", "64", "--chain", "64", "--reps", "1", "--out",
-        ])
-        .arg(&page)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let text = std::fs::read_to_string(&page).unwrap();
+    let text = bench_dynamic_page("dynamic", &[]);
     assert!(
         text.contains("## An environment that changes every frame"),
         "{text}"
@@ -320,5 +309,48 @@ fn bench_dynamic_prices_a_frame_with_its_errors() {
         ratios.iter().all(|&r| r.is_finite() && r > 1.0),
         "{ratios:?}"
     );
+}
+
+/// `bench dynamic --slices 2` (the chain's rough levels over two frames), validation on: its
+/// own section, beside the whole-refilter one; per input the three stages, the slowest frame
+/// and the median; and the chain, refiltered from an unchanged map for as many frames again,
+/// within 3% of the exact prefilter (as unsliced: every slice refiltered once), where the
+/// last timed frame's levels may lag its moving sun.
+#[test]
+fn bench_dynamic_time_slices_the_chain() {
+    let text = bench_dynamic_page("sliced", &["--slices", "2"]);
+    assert!(
+        text.contains("<!-- bench:dynamic-sliced -->") && text.contains("its chain time-sliced"),
+        "{text}"
+    );
+    for input in ["cube 16x16", "latlong 64x32"] {
+        let rows = text
+            .lines()
+            .filter(|l| l.starts_with(&format!("| {input} |")));
+        assert_eq!(rows.count(), 5, "stages, slowest and whole: {text}");
+    }
+    let caught = numbers_after(&text, "GGX chain", "its map unchanged:");
+    assert_eq!(caught.len(), 2, "{text}");
+    assert!(caught.iter().all(|&e| e < 0.03), "caught up: {caught:?}");
+}
+
+/// The page `bench dynamic` writes, validation on, for a 16² cube and a 64 × 32 lat-long map
+/// with a 64² chain, one round, and `more` arguments (the command must succeed).
+fn bench_dynamic_page(tag: &str, more: &[&str]) -> String {
+    let page = std::env::temp_dir().join(format!("envlight-{tag}-{}.md", std::process::id()));
     let _ = std::fs::remove_file(&page);
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .args(["--validation", "--device", "cpu", "bench", "dynamic"])
+        .args([
+            "--cubes", "16", "--widths", "64", "--chain", "64", "--reps", "1",
+        ])
+        .args(more)
+        .arg("--out")
+        .arg(&page)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&page).unwrap();
+    let _ = std::fs::remove_file(&page);
+    text
 }

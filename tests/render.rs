@@ -582,6 +582,77 @@ fn a_broken_frame_shades_finite_pixels_and_the_next_recovers() {
     common::finish(ctx);
 }
 
+/// Time slicing (`Resident::set_time_slices`): with the split-sum chain's rough levels spread
+/// over 3 frames, the first frame refilters everything (= the host path's frame of its map);
+/// after the map changes, the frames before the last slice still show some levels of the old
+/// map (the split-sum sphere differs from the host's frame of the new map by more than 1e-2)
+/// and the third frame equals it to f32 rounding (1e-6): every (level, half) was refiltered
+/// exactly once. `refilter_all` makes the next frame whole again; one slice is no slicing.
+/// Refused: 0 slices, a scene without split-sum.
+#[test]
+fn a_time_sliced_chain_catches_up_with_its_map() {
+    use envlight::math::synth::Sky;
+    use envlight::render::{MapShape, Renderer};
+    let ctx = common::ctx();
+    {
+        let renderer = Renderer::new(&ctx);
+        let sky_at = |az: f64| {
+            let (el, az) = (30f64.to_radians(), az.to_radians());
+            let sky = Sky {
+                sun_dir: glam::DVec3::new(el.cos() * az.sin(), el.sin(), -el.cos() * az.cos()),
+                ..Sky::default()
+            };
+            EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, move |d| sky.radiance(d))
+        };
+        let (a, b) = (sky_at(40.0), sky_at(100.0));
+        let (ga, gb) = (
+            GpuEnvMap::upload(&ctx, &a).unwrap(),
+            GpuEnvMap::upload(&ctx, &b).unwrap(),
+        );
+        // Three levels of 32² halves: units (1, 0), (1, 1) and both halves of level 2.
+        let sc = resident_scene(false);
+        let (host_a, host_b) = (
+            renderer.render(&sc, &a).unwrap().frame,
+            renderer.render(&sc, &b).unwrap().frame,
+        );
+        let mut prepared = renderer.resident(&sc, MapShape::of(&a)).unwrap();
+        assert!(prepared.set_time_slices(0).is_err());
+        prepared.set_time_slices(3).unwrap();
+        assert_eq!(prepared.time_slices(), 3);
+        let frame = |p: &envlight::render::Resident, g: &GpuEnvMap| {
+            renderer.render_resident(p, g).unwrap().frame
+        };
+        let worst = |got: &EnvMap, want: &EnvMap| common::compare::frame_errors(got, want).worst();
+        let first = worst(&frame(&prepared, &ga), &host_a);
+        assert!(first <= 1e-6, "the first frame differs by {first:e}");
+        let behind: Vec<f64> = (0..2)
+            .map(|_| worst(&frame(&prepared, &gb), &host_b))
+            .collect();
+        let caught = worst(&frame(&prepared, &gb), &host_b);
+        assert!(
+            behind.iter().all(|&e| e > 1e-2) && caught <= 1e-6,
+            "frames after the change: {behind:?}, then {caught:e}"
+        );
+        prepared.refilter_all();
+        let again = worst(&frame(&prepared, &ga), &host_a);
+        assert!(again <= 1e-6, "a whole refilter differs by {again:e}");
+        prepared.set_time_slices(1).unwrap();
+        let whole = worst(&frame(&prepared, &gb), &host_b);
+        assert!(whole <= 1e-6, "one slice differs by {whole:e}");
+        let mut no_split = resident_scene(false);
+        no_split.objects.retain(|o| {
+            !matches!(
+                o.material.technique,
+                Some(envlight::scene::Technique::SplitSum)
+            )
+        });
+        let mut other = renderer.resident(&no_split, MapShape::of(&a)).unwrap();
+        let err = other.set_time_slices(2).err().unwrap().to_string();
+        assert!(err.contains("split-sum"), "{err}");
+    }
+    common::finish(ctx);
+}
+
 /// Frames after the first create no Vulkan object, for each technique of the resident scene
 /// alone (SH, SH-BRDF, FIS, split-sum, a prefiltered map, lookups; recorded untimed: objects
 /// created while recording, the submission's own fence aside); the first frame makes the

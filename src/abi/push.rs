@@ -314,8 +314,9 @@ push_blocks! {
         bias: f32 = "float",
         /// Mapping of the chain written: dual paraboloid (the shading's) or cube (bakes).
         dst_mapping: u32 = "uint",
-        /// Padding.
-        pad: u32 = "uint",
+        /// The first layer written: the dispatch's z counts layers from it (a time slice
+        /// refilters some layers of a level).
+        layer: u32 = "uint",
     }
     /// `glsl/extract.comp`.
     ExtractPush {
@@ -348,8 +349,8 @@ push_blocks! {
         alpha: f32 = "float",
         /// 1 / ∫ K dω (1 for the cosine).
         inv_norm: f32 = "float",
-        /// Padding.
-        pad: u32 = "uint",
+        /// The first cube face written: the dispatch's z counts faces from it.
+        layer: u32 = "uint",
     }
     /// `glsl/lights.comp`.
     LightsPush {

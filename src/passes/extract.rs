@@ -32,6 +32,7 @@ use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Tim
 use crate::math::envmap::{luminance, EnvMap};
 use crate::math::lights::{ExtractOptions, LightKernel};
 use crate::math::{Mapping, Orientation};
+use crate::passes::split_sum::LevelLayers;
 use crate::passes::testing::poison::{self, PassId};
 use crate::passes::{GpuEnvMap, ShProjector};
 use ash::vk;
@@ -297,10 +298,35 @@ impl Extractor {
         dst: &GpuEnvMap,
         level: u32,
     ) -> Result<()> {
-        if dst.mapping != Mapping::Cube || level >= dst.mips() {
+        let unit = LevelLayers {
+            level,
+            layers: 0..6,
+        };
+        self.record_add_to(rec, from, file_to_world, kernel, norm, dst, &unit)
+    }
+
+    /// [`Extractor::record_add`] to some faces of a level only (`unit`): what a time slice
+    /// of the chain refilters ([`crate::passes::split_sum::time_slices`]). Span: "add lights".
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_add_to(
+        &self,
+        rec: &mut Recorder,
+        from: &GpuExtraction,
+        file_to_world: glam::DMat3,
+        kernel: LightKernel,
+        norm: f64,
+        dst: &GpuEnvMap,
+        unit: &LevelLayers,
+    ) -> Result<()> {
+        let (level, faces) = (unit.level, unit.layers.clone());
+        if dst.mapping != Mapping::Cube
+            || level >= dst.mips()
+            || faces.start >= faces.end
+            || faces.end > 6
+        {
             return Err(Error::Invalid(format!(
-                "adding lights: level {level} of the {} map '{}' with {} levels (a cube's level \
-                 expected)",
+                "adding lights: level {level} faces {faces:?} of the {} map '{}' with {} levels \
+                 (a cube's level and faces expected)",
                 dst.mapping.name(),
                 dst.image.name(),
                 dst.mips()
@@ -320,7 +346,7 @@ impl Extractor {
             kernel: kind,
             alpha: alpha as f32,
             inv_norm: (1.0 / norm) as f32,
-            pad: 0,
+            layer: faces.start,
         };
         rec.span("add lights", |rec| {
             rec.dispatch(
@@ -337,7 +363,7 @@ impl Extractor {
                 [
                     groups(size, WORKGROUP_2D[0]),
                     groups(size, WORKGROUP_2D[1]),
-                    6,
+                    faces.len() as u32,
                 ],
             )
         })?;

@@ -47,6 +47,60 @@ impl Default for PrefilterOptions {
     }
 }
 
+/// Some layers of one level of a prefiltered chain: the unit a time slice refilters.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LevelLayers {
+    /// The level.
+    pub level: u32,
+    /// Its layers (cube faces, paraboloid halves) refiltered.
+    pub layers: std::ops::Range<u32>,
+}
+
+/// The rough levels (1 to `levels` − 1) of a chain `size` a side at level 0 with `layers`
+/// layers, dealt into `slices` time slices of about equal cost, as Unity spreads a probe's
+/// refilter over frames: each (level, layer) lands in exactly one slice. A frame that records
+/// slice `f mod slices` (after one that refilters everything) keeps every level at most
+/// `slices` − 1 frames behind its map. Level 0, the mirror, is in no slice: one read a texel,
+/// it is cheap and the sharpest, so a frame refilters it whole. The cost of a unit is its
+/// texels (each level takes the same samples); units go, largest first, to the slice with the
+/// least so far (ties: the lowest level and layer, the first slice), so no slice costs more
+/// than the even share plus the largest unit. Each slice lists its units by level and layer,
+/// a level's neighbouring layers merged.
+pub fn time_slices(size: u32, layers: u32, levels: u32, slices: u32) -> Vec<Vec<LevelLayers>> {
+    let slices = slices.max(1) as usize;
+    let mut units: Vec<(u64, u32, u32)> = (1..levels)
+        .flat_map(|k| {
+            let side = level_size(size, k) as u64;
+            (0..layers).map(move |l| (side * side, k, l))
+        })
+        .collect();
+    units.sort_by_key(|&(cost, k, l)| (std::cmp::Reverse(cost), k, l));
+    let mut load = vec![0u64; slices];
+    let mut dealt: Vec<Vec<(u32, u32)>> = vec![Vec::new(); slices];
+    for (cost, k, l) in units {
+        let i = (0..slices).min_by_key(|&i| (load[i], i)).unwrap_or(0);
+        load[i] += cost;
+        dealt[i].push((k, l));
+    }
+    dealt
+        .into_iter()
+        .map(|mut v| {
+            v.sort_unstable();
+            let mut out: Vec<LevelLayers> = Vec::new();
+            for (k, l) in v {
+                match out.last_mut() {
+                    Some(u) if u.level == k && u.layers.end == l => u.layers.end = l + 1,
+                    _ => out.push(LevelLayers {
+                        level: k,
+                        layers: l..l + 1,
+                    }),
+                }
+            }
+            out
+        })
+        .collect()
+}
+
 /// The split-sum passes.
 pub struct SplitSum {
     ctx: Context,
@@ -205,6 +259,27 @@ impl SplitSum {
         opts: &PrefilterOptions,
         levels: std::ops::Range<u32>,
     ) -> Result<()> {
+        let layers = dst.mapping.layers();
+        let units: Vec<LevelLayers> = (levels.start..levels.end.min(opts.levels))
+            .map(|level| LevelLayers {
+                level,
+                layers: 0..layers,
+            })
+            .collect();
+        self.record_prefilter_slice(rec, src, dst, opts, &units)
+    }
+
+    /// As [`SplitSum::record_prefilter`], for the layers of the levels `units` names only:
+    /// a time slice of the chain ([`time_slices`]), the rest of it left as it was. Units
+    /// beyond `opts.levels` or the chain's layers are refused.
+    pub fn record_prefilter_slice(
+        &self,
+        rec: &mut Recorder,
+        src: &GpuEnvMap,
+        dst: &GpuEnvMap,
+        opts: &PrefilterOptions,
+        units: &[LevelLayers],
+    ) -> Result<()> {
         if src.mapping != Mapping::DualParaboloid
             || !matches!(dst.mapping, Mapping::DualParaboloid | Mapping::Cube)
         {
@@ -220,7 +295,17 @@ impl SplitSum {
                 dst.mips()
             )));
         }
-        for k in levels.start..levels.end.min(opts.levels) {
+        let layers = dst.mapping.layers();
+        if let Some(u) = units.iter().find(|u| {
+            u.level >= opts.levels || u.layers.end > layers || u.layers.start >= u.layers.end
+        }) {
+            return Err(Error::Invalid(format!(
+                "split-sum: level {} layers {:?} of a chain of {} levels, {layers} layers",
+                u.level, u.layers, opts.levels
+            )));
+        }
+        for u in units {
+            let k = u.level;
             let size = level_size(dst.width, k);
             let push = PrefilterGgxPush {
                 size,
@@ -230,9 +315,13 @@ impl SplitSum {
                 samples: opts.samples,
                 bias: opts.bias as f32,
                 dst_mapping: dst.mapping.id(),
-                pad: 0,
+                layer: u.layers.start,
             };
-            rec.span(&format!("split-sum level {k}"), |rec| {
+            let span = match u.layers.len() as u32 == layers {
+                true => format!("split-sum level {k}"),
+                false => format!("split-sum level {k} layers {:?}", u.layers),
+            };
+            rec.span(&span, |rec| {
                 rec.dispatch(
                     &self.prefilter,
                     &[
@@ -249,13 +338,14 @@ impl SplitSum {
                     [
                         groups(size, WORKGROUP_2D[0]),
                         groups(size, WORKGROUP_2D[1]),
-                        dst.mapping.layers(),
+                        u.layers.len() as u32,
                     ],
                 )
             })?;
         }
-        let written = levels.start..levels.end.min(opts.levels);
-        poison::image(rec, PassId::SplitSum, &dst.image, written)
+        let lo = units.iter().map(|u| u.level).min().unwrap_or(0);
+        let hi = units.iter().map(|u| u.level + 1).max().unwrap_or(0);
+        poison::image(rec, PassId::SplitSum, &dst.image, lo..hi)
     }
 
     /// A cube `size` a side with exactly `levels` MIP levels, one roughness each (a bake's
@@ -272,5 +362,48 @@ impl SplitSum {
             map_desc(Mapping::Cube, size, size, levels),
             Mapping::Cube,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{time_slices, LevelLayers};
+
+    /// Every (level ≥ 1, layer) of the chain lands in exactly one slice, level 0 in none,
+    /// and no slice costs more than the even share plus the largest unit; one slice holds
+    /// every rough level whole.
+    #[test]
+    fn time_slices_deal_every_unit_once_evenly() {
+        for (size, layers, levels) in [(128, 6, 7), (32, 2, 3), (256, 2, 8), (64, 6, 2)] {
+            for slices in 1..=8u32 {
+                let dealt = time_slices(size, layers, levels, slices);
+                assert_eq!(dealt.len(), slices as usize);
+                let mut seen = Vec::new();
+                let cost = |u: &LevelLayers| {
+                    let side = (size >> u.level).max(1) as u64;
+                    side * side * u.layers.len() as u64
+                };
+                let loads: Vec<u64> = dealt.iter().map(|s| s.iter().map(cost).sum()).collect();
+                for u in dealt.iter().flatten() {
+                    assert!(u.level >= 1 && u.level < levels, "{u:?}");
+                    seen.extend(u.layers.clone().map(|l| (u.level, l)));
+                }
+                seen.sort_unstable();
+                let want: Vec<(u32, u32)> = (1..levels)
+                    .flat_map(|k| (0..layers).map(move |l| (k, l)))
+                    .collect();
+                assert_eq!(seen, want, "{size} {layers} {levels} in {slices}");
+                let total: u64 = loads.iter().sum();
+                let largest = ((size >> 1).max(1) as u64).pow(2);
+                let most = loads.iter().copied().max().unwrap_or(0);
+                assert!(
+                    most <= total / slices as u64 + largest,
+                    "{size} {layers} {levels} in {slices}: {loads:?}"
+                );
+            }
+        }
+        let one = time_slices(128, 6, 7, 1);
+        assert_eq!(one[0].len(), 6);
+        assert!(one[0].iter().all(|u| u.layers == (0..6)));
     }
 }

@@ -16,8 +16,8 @@ use crate::math::Mapping;
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::sh_pack::{irradiance_entries, windowed_entries, PackEntry};
 use crate::passes::{
-    BruteFilter, Converter, GBufferPass, GpuEnvMap, MipChain, PrefilterOptions, ShBrdfProjector,
-    ShPacker, ShProjector, SplitSum,
+    BruteFilter, Converter, GBufferPass, GpuEnvMap, LevelLayers, MipChain, PrefilterOptions,
+    ShBrdfProjector, ShPacker, ShProjector, SplitSum,
 };
 use crate::scene::{Technique, DEFAULT_FIS_BIAS};
 use ash::vk;
@@ -255,11 +255,26 @@ pub(super) fn record_tables(
     Ok(())
 }
 
+/// What a recording of the inputs covers beyond the passes every frame runs.
+pub(super) struct Work {
+    /// The environment-independent tables ([`record_tables`]).
+    pub tables: bool,
+    /// The split-sum chain's units this frame refilters (`None`: every level).
+    pub split: Option<Vec<LevelLayers>>,
+}
+
+impl Work {
+    /// Everything: the host path's one render.
+    pub const ALL: Work = Work {
+        tables: true,
+        split: None,
+    };
+}
+
 /// Records everything before the shading into `rec`, reading the environment `env`: the
 /// residuals' uploads, then each pass the plan runs, its GPU time marked in `marks`; the
-/// environment-independent tables too where `tables` ([`record_tables`]).
-/// `convert_built` waits for the paraboloid's conversion pipelines, built on another thread
-/// meanwhile.
+/// tables and the split-sum levels as `work` says. `convert_built` waits for the paraboloid's
+/// conversion pipelines, built on another thread meanwhile.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn record(
     rec: &mut Recorder,
@@ -268,7 +283,7 @@ pub(super) fn record(
     passes: &Passes<'_>,
     (inputs, lit, gbuf): (&Inputs, &Lit, &GBuffer),
     env: &GpuEnvMap,
-    tables: bool,
+    work: &Work,
     convert_built: impl FnOnce() -> Result<()>,
 ) -> Result<()> {
     let (plan, orientation) = (job.plan, &job.orientation);
@@ -296,13 +311,13 @@ pub(super) fn record(
     if let (Some(ex), Some(map)) = (&lit.diffuse, &lit.diffuse_residual) {
         map.record_upload(rec, &ex.residual)?;
     }
-    if tables {
+    if work.tables {
         record_tables(rec, marks, job, passes, inputs)?;
     }
     if passes.dp.is_some() && inputs.dp.is_some() && plan.dp.is_some() {
         // After the uploads' staging copies, which this thread makes meanwhile.
         convert_built()?;
-        record_chain(rec, marks, job, passes, (inputs, lit), env)?;
+        record_chain(rec, marks, job, passes, (inputs, lit), env, work)?;
     }
     if let (Some(b), Some(buf)) = (passes.brute, &inputs.pre_buffer) {
         for m in &inputs.pre {
@@ -334,6 +349,7 @@ fn record_chain(
     passes: &Passes<'_>,
     (inputs, lit): (&Inputs, &Lit),
     env: &GpuEnvMap,
+    work: &Work,
 ) -> Result<()> {
     let (Some((conv, mip)), Some(map), Some(opts)) = (passes.dp, &inputs.dp, &job.plan.dp) else {
         return Ok(());
@@ -362,7 +378,10 @@ fn record_chain(
             samples: ss.samples,
             bias: ss.bias.unwrap_or(DEFAULT_FIS_BIAS),
         };
-        p.record_prefilter(rec, map, chain, &opts)
+        match &work.split {
+            Some(units) => p.record_prefilter_slice(rec, map, chain, &opts, units),
+            None => p.record_prefilter(rec, map, chain, &opts),
+        }
     })
 }
 

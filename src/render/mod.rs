@@ -28,7 +28,7 @@ use crate::passes::{
     ShPacker, ShProjector, Shade, SplitSum,
 };
 use crate::scene::Scene;
-use inputs::{Inputs, Passes};
+use inputs::{Inputs, Passes, Work};
 use records::{gpu_objects, Marks};
 use shading::Shading;
 use std::cell::OnceCell;
@@ -305,7 +305,16 @@ impl Renderer {
             } = builds;
             let (readback, t) = job.ctx.run("rendering", |rec| {
                 env_gpu.record_upload(rec, env)?;
-                inputs::record(rec, &mut marks, job, &passes, ins, &env_gpu, true, convert)?;
+                inputs::record(
+                    rec,
+                    &mut marks,
+                    job,
+                    &passes,
+                    ins,
+                    &env_gpu,
+                    &Work::ALL,
+                    convert,
+                )?;
                 built()?;
                 shading::record_draw(rec, &mut marks, shade, &gbuf, &draw, &frame)?;
                 frame.record_download(rec, 0)
@@ -323,7 +332,7 @@ impl Renderer {
                 &passes,
                 ins,
                 &env_gpu,
-                true,
+                &Work::ALL,
                 builds.convert,
             )
         })?;

@@ -9,7 +9,7 @@
 //! paraboloid and its chain, split-sum's levels, prefiltered maps, the G-buffer and the
 //! shading, each from the image given, into [`Resident::frame`].
 
-use super::inputs::{self, Inputs};
+use super::inputs::{self, Inputs, Work};
 use super::lights::Lit;
 use super::plan::{plan_for, MapShape, Plan};
 use super::records::{gpu_objects, Marks};
@@ -17,11 +17,13 @@ use super::shading::{self, Shading};
 use super::{Job, Rendered, Renderer};
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, FrameCache, Recorder};
+use crate::math::Mapping;
 use crate::passes::gbuffer::{target, GBuffer};
 use crate::passes::map::Sanitizer;
-use crate::passes::GpuEnvMap;
+use crate::passes::{time_slices, GpuEnvMap, LevelLayers};
 use crate::scene::{LightsMode, Scene};
 use ash::vk;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// A scene prepared for environments of one shape on the GPU: its plan and every resource
 /// its passes write, made once and reused by every frame.
@@ -38,6 +40,10 @@ pub struct Resident {
     clean: GpuEnvMap,
     sanitizer: Sanitizer,
     zeroed: Buffer,
+    /// The split-sum chain's rough levels dealt into time slices (one: no slicing).
+    slices: Vec<Vec<LevelLayers>>,
+    /// Frames recorded since the last whole refilter.
+    frames: AtomicU64,
 }
 
 impl Resident {
@@ -62,6 +68,59 @@ impl Resident {
     /// for the caller to copy or read in its own passes.
     pub fn zeroed_texels(&self) -> &Buffer {
         &self.zeroed
+    }
+
+    /// Spreads the split-sum chain's rough levels over `slices` frames (Unity's time
+    /// slicing; 1, the default, refilters every level every frame): the next frame recorded
+    /// refilters every level, each after it level 0 (the mirror) and one slice of the rest
+    /// in turn ([`time_slices`]: each (level, layer) in one slice, the slices of about equal
+    /// cost), so a level lags its map by at most `slices` − 1 frames. Everything else (SH,
+    /// the FIS paraboloid, prefiltered maps) follows the map every frame. Refused for 0 or
+    /// a scene without split-sum.
+    pub fn set_time_slices(&mut self, slices: u32) -> Result<()> {
+        let Some(split) = &self.plan.split else {
+            return Err(Error::Invalid(
+                "time slicing spreads the split-sum chain over frames, and this scene has no \
+                 split-sum object"
+                    .into(),
+            ));
+        };
+        if slices == 0 {
+            return Err(Error::Invalid("time slicing over 0 frames".into()));
+        }
+        let levels = self.scene.split_sum.levels;
+        self.slices = time_slices(split.size, Mapping::DualParaboloid.layers(), levels, slices);
+        self.refilter_all();
+        Ok(())
+    }
+
+    /// The frames the split-sum chain's refilter is spread over ([`Resident::set_time_slices`]).
+    pub fn time_slices(&self) -> u32 {
+        self.slices.len().max(1) as u32
+    }
+
+    /// Makes the next frame recorded refilter every level (after a cut, where the old map's
+    /// levels should not linger); later frames go on slice by slice.
+    pub fn refilter_all(&self) {
+        self.frames.store(0, Ordering::Relaxed);
+    }
+
+    /// The split-sum units the next frame refilters (`None`: all), counting it recorded.
+    fn next_split(&self) -> Option<Vec<LevelLayers>> {
+        let f = self.frames.fetch_add(1, Ordering::Relaxed);
+        if self.slices.len() <= 1 || f == 0 {
+            return None;
+        }
+        let slice = &self.slices[((f - 1) % self.slices.len() as u64) as usize];
+        let mirror = LevelLayers {
+            level: 0,
+            layers: 0..Mapping::DualParaboloid.layers(),
+        };
+        Some(
+            std::iter::once(mirror)
+                .chain(slice.iter().cloned())
+                .collect(),
+        )
     }
 }
 
@@ -162,6 +221,8 @@ impl Renderer {
             clean,
             sanitizer: Sanitizer::new(ctx)?,
             zeroed,
+            slices: Vec::new(),
+            frames: AtomicU64::new(0),
         })
     }
 
@@ -243,7 +304,11 @@ impl Renderer {
             // zero by every pass, and counted.
             r.sanitizer.record(rec, env, &r.clean, &r.zeroed)?;
             let env = &r.clean;
-            inputs::record(rec, marks, &job, &passes, ins, env, false, || Ok(()))?;
+            let work = Work {
+                tables: false,
+                split: r.next_split(),
+            };
+            inputs::record(rec, marks, &job, &passes, ins, env, &work, || Ok(()))?;
             let with = Shading {
                 mc: None,
                 sh_rotation: self.sh_rotation,

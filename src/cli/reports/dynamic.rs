@@ -20,8 +20,8 @@ use crate::math::{Mapping, Orientation};
 use crate::passes::extract::Extracted;
 use crate::passes::testing::copy::CopyPass;
 use crate::passes::{
-    ConvertOptions, Converter, Extractor, GpuExtraction, MipChain, PrefilterOptions, ShEvaluator,
-    ShProjector, SplitSum, Subgroups,
+    time_slices, ConvertOptions, Converter, Extractor, GpuExtraction, LevelLayers, MipChain,
+    PrefilterOptions, ShEvaluator, ShProjector, SplitSum, Subgroups,
 };
 use crate::{EnvMap, GpuEnvMap};
 use anyhow::Result;
@@ -38,6 +38,8 @@ pub struct FrameSettings {
     pub levels: u32,
     /// FIS samples per chain texel.
     pub samples: u32,
+    /// Frames the chain's rough levels are spread over (1: every level every frame).
+    pub slices: u32,
     /// Side of the paraboloid the chain filters.
     pub paraboloid: u32,
     /// Side of the irradiance cube.
@@ -91,13 +93,31 @@ fn sky_at(mapping: Mapping, size: u32, azimuth: f64) -> EnvMap {
     EnvMap::from_fn(mapping, w, h, 2, move |d| sky.radiance(d))
 }
 
-/// Records one frame's refilter of `env` into `frame`, each stage in its span.
+/// The chain's (level, faces) frame `index` refilters: everything in frame 0 or without
+/// slicing, else level 0 and slice (index − 1) mod `slices` (`time_slices`).
+fn chain_units(s: &FrameSettings, index: usize) -> Vec<LevelLayers> {
+    let all = |level| LevelLayers {
+        level,
+        layers: 0..6,
+    };
+    if s.slices <= 1 || index == 0 {
+        return (0..s.levels).map(all).collect();
+    }
+    let slices = time_slices(s.chain, 6, s.levels, s.slices);
+    let slice = &slices[(index - 1) % slices.len()];
+    std::iter::once(all(0))
+        .chain(slice.iter().cloned())
+        .collect()
+}
+
+/// Records the refilter of frame `index` (of `env`) into `frame`, each stage in its span.
 fn record_frame(
     rec: &mut crate::gpu::Recorder,
     p: &Passes,
     env: &GpuEnvMap,
     f: &Frame,
     s: &FrameSettings,
+    index: usize,
 ) -> crate::error::Result<()> {
     let o = Orientation::default();
     let residual = f.lights.residual();
@@ -128,23 +148,19 @@ fn record_frame(
         p.mip.record(rec, &f.dp)?;
         let mut chain = PrefilterOptions::new(s.levels);
         chain.samples = s.samples;
-        p.split.record_prefilter(rec, &f.dp, &f.chain, &chain)?;
+        let units = chain_units(s, index);
+        p.split
+            .record_prefilter_slice(rec, &f.dp, &f.chain, &chain, &units)?;
         // Level 0 is the mirror: its lights are the records themselves, which mirror lookups
         // take directly (a GGX lobe at α → 0 would need every light's finest nodes at every
         // texel, more than the rest of the frame).
-        for (k, &norm) in p.norms.iter().enumerate().skip(1) {
+        for u in units.iter().filter(|u| u.level >= 1) {
             let ggx = LightKernel::Ggx {
-                alpha: level_alpha(k as u32, s.levels),
+                alpha: level_alpha(u.level, s.levels),
             };
-            p.extractor.record_add(
-                rec,
-                &f.lights,
-                DMat3::IDENTITY,
-                ggx,
-                norm,
-                &f.chain,
-                k as u32,
-            )?;
+            let norm = p.norms[u.level as usize];
+            p.extractor
+                .record_add_to(rec, &f.lights, DMat3::IDENTITY, ggx, norm, &f.chain, u)?;
         }
         Ok(())
     })
@@ -210,11 +226,13 @@ fn input_rows(
     let submissions = ctx.submissions();
     let mut per_stage: [Vec<f64>; 3] = Default::default();
     let mut whole = Vec::new();
+    let mut index = 0;
     for r in 0..=reps.max(1) {
         for env in &gpu {
             let ((), t) = ctx.run("a frame's refilter", |rec| {
-                record_frame(rec, p, env, &frame, s)
+                record_frame(rec, p, env, &frame, s, index)
             })?;
+            index += 1;
             if r > 0 {
                 let ms = stage_ms(&t);
                 for (v, m) in per_stage.iter_mut().zip(ms) {
@@ -233,14 +251,25 @@ fn input_rows(
     let floor = copy_ms(ctx, &copy, mapping, w, h, reps)?
         + copy_ms(ctx, &copy, Mapping::Cube, s.chain, s.chain, reps)? * 4.0 / 3.0
         + copy_ms(ctx, &copy, Mapping::Cube, s.irradiance, s.irradiance, reps)?;
-    let errors = frame_errors(
-        ctx,
-        p,
-        frames.last().unwrap_or_else(|| unreachable!()),
-        &gpu[2],
-        &frame,
-        s,
-    )?;
+    let last = frames.last().unwrap_or_else(|| unreachable!());
+    let mut errors = frame_errors(ctx, p, last, &gpu[2], &frame, s)?;
+    if s.slices > 1 {
+        // As many frames again of the last map: every slice refiltered from it once.
+        for _ in 0..s.slices {
+            ctx.run_untimed("a frame's refilter", |rec| {
+                record_frame(rec, p, &gpu[2], &frame, s, index)
+            })?;
+            index += 1;
+        }
+        let exact = ExactFilter::new(last, DMat3::IDENTITY);
+        let caught = chain_error(ctx, &exact, &frame, s)?;
+        errors[2] = format!(
+            "{} (levels up to {} frames behind); {} frames later, its map unchanged: {caught:.1e}",
+            errors[2],
+            s.slices - 1,
+            s.slices
+        );
+    }
     let input = format!("{} {w}x{h}", mapping.name());
     let mut rows = String::new();
     let stage = per_stage.map(median);
@@ -251,7 +280,15 @@ fn input_rows(
             stage[k], errors[k]
         ));
     }
+    let most = whole.iter().copied().fold(0.0, worse);
     let all = median(whole);
+    if s.slices > 1 {
+        rows.push_str(&format!(
+            "| {input} | slowest frame (one slice of {}) | {most:.3} | {floor:.3} | {:.1} | |\n",
+            s.slices,
+            most / floor
+        ));
+    }
     rows.push_str(&format!(
         "| {input} | **whole refilter (chain {}²), one submission** | **{all:.3}** | {floor:.3} | \
          {:.1} | |\n",
@@ -265,6 +302,23 @@ fn input_rows(
     );
     let total: f64 = stage.iter().sum();
     Ok((rows, stage.map(|m| m / total)))
+}
+
+/// The chain's levels 1.. against the exact GGX prefilter (`exact`): each level's mean over
+/// eight texels, the worst level's.
+fn chain_error(ctx: &Context, exact: &ExactFilter, f: &Frame, s: &FrameSettings) -> Result<f64> {
+    let mut worst_mean = 0.0f64;
+    for k in 1..s.levels {
+        let side = (s.chain >> k).max(1);
+        let level = f.chain.download_level(ctx, k)?;
+        let e: Vec<f64> = probe_texels(side)
+            .into_iter()
+            .map(|(t, d)| rel_lum(level[t], exact.ggx(d, level_alpha(k, s.levels))))
+            .collect();
+        let mean = e.iter().sum::<f64>() / e.len() as f64;
+        worst_mean = worse(worst_mean, mean);
+    }
+    Ok(worst_mean)
 }
 
 /// Each stage's error on the last frame: the extraction against the host's (count,
@@ -300,17 +354,7 @@ fn frame_errors(
         (got.stats.threshold as f64 / want.threshold - 1.0).abs(),
         (split / luminance(map.power()) - 1.0).abs()
     );
-    let mut worst_mean = 0.0f64;
-    for k in 1..s.levels {
-        let side = (s.chain >> k).max(1);
-        let level = f.chain.download_level(ctx, k)?;
-        let e: Vec<f64> = probe_texels(side)
-            .into_iter()
-            .map(|(t, d)| rel_lum(level[t], exact.ggx(d, level_alpha(k, s.levels))))
-            .collect();
-        let mean = e.iter().sum::<f64>() / e.len() as f64;
-        worst_mean = worse(worst_mean, mean);
-    }
+    let worst_mean = chain_error(ctx, &exact, f, s)?;
     let mean = tech.iter().sum::<f64>() / tech.len() as f64;
     let most = tech.into_iter().fold(0.0, worse);
     Ok([
@@ -349,6 +393,7 @@ pub fn bench_dynamic(
     let mut body = String::from(
         "| input | stage | GPU ms | floor ms | ratio | error |\n|---|---|---|---|---|---|\n",
     );
+    let sliced = s.slices > 1;
     let inputs: Vec<(Mapping, u32)> = cubes
         .iter()
         .map(|&n| (Mapping::Cube, n))
@@ -407,11 +452,28 @@ pub fn bench_dynamic(
         l = s.levels,
         n = s.samples,
     );
+    let method = match sliced {
+        false => method,
+        true => format!(
+            "{method} Time-sliced: after a first frame that refilters everything, each frame \
+             refilters the chain's level 0 and one of {n} slices of its rough levels' faces \
+             (`passes::time_slices`, about equal cost; their lights added to those faces only), \
+             so a level lags its map by up to {lag} frames: the errors are the last frame's \
+             chain against the exact prefilter of that frame's map, the sun 25° further round \
+             each frame.",
+            n = s.slices,
+            lag = s.slices - 1
+        ),
+    };
     print!("{method}\n\n{body}");
     if let Some(out) = out {
         let section = page::Section {
-            job: "dynamic",
-            title: "An environment that changes every frame",
+            job: if sliced { "dynamic-sliced" } else { "dynamic" },
+            title: if sliced {
+                "An environment that changes every frame, its chain time-sliced"
+            } else {
+                "An environment that changes every frame"
+            },
             method: &method,
             body: &body,
         };

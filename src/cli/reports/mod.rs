@@ -93,6 +93,11 @@ pub enum Bench {
         /// prefilter on the sun sky; 64 leaves α = 1 at 1.5%)
         #[arg(long, default_value_t = 128)]
         samples: u32,
+        /// Spread the chain's rough levels over this many frames (Unity-style time slicing:
+        /// level 0 and one slice a frame; 1: every level every frame). Above 1 the result is
+        /// the page's "dynamic-sliced" section
+        #[arg(long, default_value_t = 1)]
+        slices: u32,
         /// Timed rounds of three frames each (the median is reported)
         #[arg(long, default_value_t = 3)]
         reps: usize,
@@ -305,6 +310,7 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
             widths,
             chain,
             samples,
+            slices,
             reps,
             out,
         } => {
@@ -312,6 +318,7 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
                 chain: 0,
                 levels: 7,
                 samples: *samples,
+                slices: *slices,
                 paraboloid: 0,
                 irradiance: 32,
                 ratio: crate::abi::lights::DIFFUSE_RATIO,
