@@ -217,3 +217,60 @@ fn unusable_images_are_refused_naming_them() {
     drop((ex, sh, out, unsampled, other));
     common::finish(ctx);
 }
+
+/// The GPU records gathered into clusters (`Extractor::record_clusters`) against the host's
+/// `clusters` of the host's extraction (ratio 2, uncapped: a glow of dozens of texels across
+/// several cells and the sun), on every mapping: the count of non-empty cells, and the
+/// clusters' irradiance at 400 normals (what the shade pass adds) within 1e-5 of the largest
+/// (float32 sums of float64 ones).
+#[test]
+fn gpu_clusters_match_the_host_clusters_on_every_mapping() {
+    use envlight::math::lights::{
+        cluster_irradiance, clusters, diffuse_options, Cluster, CLUSTER_GRID,
+    };
+    let ctx = common::ctx();
+    {
+        let extractor = Extractor::new(&ctx).unwrap();
+        for mapping in Mapping::ALL {
+            let map = twin::glow_sky(mapping, 32);
+            let host_ex = extract(&map, &diffuse_options(2.0));
+            let host = clusters(&host_ex, glam::DMat3::IDENTITY, CLUSTER_GRID);
+            let opts = ExtractOptions {
+                max_texels: map.texels.len(),
+                ..diffuse_options(2.0)
+            };
+            let got = extractor.run_clusters(&map, &opts, CLUSTER_GRID).unwrap();
+            let gpu: Vec<Cluster> = got
+                .iter()
+                .filter(|c| c.iter().flatten().any(|&x| x != 0.0))
+                .map(|c| Cluster {
+                    v: c.map(|v| glam::DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)),
+                })
+                .collect();
+            assert!(host.len() > 3, "{mapping:?}: {} clusters", host.len());
+            assert_eq!(gpu.len(), host.len(), "{mapping:?}: non-empty cells");
+            let mut errors = common::compare::Errors::new();
+            let normals: Vec<glam::DVec3> = (0..400)
+                .map(|k| {
+                    let z = 1.0 - (2 * k + 1) as f64 / 400.0;
+                    let phi = k as f64 * 2.399963;
+                    let s = (1.0 - z * z).sqrt();
+                    glam::DVec3::new(s * phi.cos(), z, s * phi.sin())
+                })
+                .collect();
+            let want: Vec<[f64; 3]> = normals
+                .iter()
+                .map(|&n| cluster_irradiance(&host, n))
+                .collect();
+            let largest = common::compare::max_of(want.iter().map(|e| luminance(*e)));
+            for (n, w) in normals.iter().zip(&want) {
+                let g = cluster_irradiance(&gpu, *n);
+                for ch in 0..3 {
+                    errors.abs(g[ch] / largest, w[ch] / largest, (mapping, *n, ch));
+                }
+            }
+            errors.assert_within(1e-5, "GPU light clusters");
+        }
+    }
+    common::finish(ctx);
+}

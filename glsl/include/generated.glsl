@@ -90,6 +90,10 @@
 #define BINDING_EXTRACT_ADD_STATE 0
 #define BINDING_EXTRACT_ADD_LIGHTS 1
 #define BINDING_EXTRACT_ADD_DST 2
+#define BINDING_CLUSTERS_STATE 0
+#define BINDING_CLUSTERS_LIGHTS 1
+#define BINDING_CLUSTERS_SORT 2
+#define BINDING_CLUSTERS_OUT 3
 #define SH_MAX_LMAX 8
 #define SH_MAX_COEFFS 81
 #define SH_WORKGROUP 64
@@ -120,6 +124,10 @@
 #define EXTRACT_MODE_HISTOGRAM_LOW 2u
 #define EXTRACT_MODE_SELECT_LOW 3u
 #define EXTRACT_MODE_COMPACT 4u
+#define CLUSTERS_MODE_COUNT 0u
+#define CLUSTERS_MODE_SCAN 1u
+#define CLUSTERS_MODE_SCATTER 2u
+#define CLUSTERS_MODE_SUM 3u
 #define EXTRACT_WORD_LOW_ARGS 0u
 #define EXTRACT_WORD_OMEGA_MAX 3u
 #define EXTRACT_WORD_LIGHT_ARGS 4u
@@ -220,6 +228,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_PrefilterGgxPush layout(push_constant) uniform Push { uint size; uint src_size; float src_max_lod; float alpha; uint samples; float bias; uint dst_mapping; uint layer; } pc;
 #define PUSH_ExtractPush layout(push_constant) uniform Push { uvec2 size; uint mapping; uint mode; uint max; float ratio; uint[2] pad; } pc;
 #define PUSH_ExtractAddPush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 map_size; uint mapping; uint size; uint kernel; float alpha; float inv_norm; uint layer; } pc;
+#define PUSH_ExtractClustersPush layout(push_constant) uniform Push { vec4[3] file_to_world; uint mode; uint grid; uint at; uint max; } pc;
 #define PUSH_LightsPush layout(push_constant) uniform Push { uint size; uint count; uint nodes; uint kernel; float alpha; float inv_norm; uint at; uint pad; } pc;
 #define PUSH_ShRotatePush layout(push_constant) uniform Push { uint count; uint lmax; uint method; uint pad; } pc;
 #define PUSH_MipPush layout(push_constant) uniform Push { uint src_size; uint dst_size; uint mode; uint pad; } pc;

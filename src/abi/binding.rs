@@ -199,4 +199,12 @@ bindings! {
     EXTRACT_ADD_LIGHTS = 1;
     /// extract_add: the cube level the filtered lights are added to (rgba32f image2DArray).
     EXTRACT_ADD_DST = 2;
+    /// extract_clusters: the extraction's state (its count).
+    CLUSTERS_STATE = 0;
+    /// extract_clusters: the extraction's light records.
+    CLUSTERS_LIGHTS = 1;
+    /// extract_clusters: the counting sort's counts, slots and order (uint buffer).
+    CLUSTERS_SORT = 2;
+    /// extract_clusters: the clusters written (vec4 buffer, the shade pass's lights).
+    CLUSTERS_OUT = 3;
 }

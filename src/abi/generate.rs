@@ -104,6 +104,15 @@ fn define_sizes_and_lights(s: &mut String) {
     ] {
         let _ = writeln!(s, "#define EXTRACT_MODE_{name} {v}u");
     }
+    use lights::clusters_mode as c;
+    for (name, v) in [
+        ("COUNT", c::COUNT),
+        ("SCAN", c::SCAN),
+        ("SCATTER", c::SCATTER),
+        ("SUM", c::SUM),
+    ] {
+        let _ = writeln!(s, "#define CLUSTERS_MODE_{name} {v}u");
+    }
     use lights::extract_word as w;
     for (name, v) in [
         ("LOW_ARGS", w::LOW_ARGS),

@@ -292,6 +292,18 @@ pub mod lights {
         /// Per texel: light records above the threshold, the residual everywhere.
         pub const COMPACT: u32 = 4;
     }
+    /// Steps of `glsl/extract_clusters.comp` (`ExtractClustersPush::mode`), in recording
+    /// order.
+    pub mod clusters_mode {
+        /// Per record (indirect): its cell, counted.
+        pub const COUNT: u32 = 0;
+        /// One workgroup: each cell's first slot.
+        pub const SCAN: u32 = 1;
+        /// Per record (indirect): its slot in its cell's run.
+        pub const SCATTER: u32 = 2;
+        /// Per cell: its records summed into its cluster.
+        pub const SUM: u32 = 3;
+    }
     /// Words of the extraction's header (see `passes::extract::ExtractState`).
     pub mod extract_word {
         /// Workgroups (x, y, z) of the second histogram's indirect dispatch: none unless

@@ -352,6 +352,19 @@ push_blocks! {
         /// The first cube face written: the dispatch's z counts faces from it.
         layer: u32 = "uint",
     }
+    /// `glsl/extract_clusters.comp`.
+    ExtractClustersPush {
+        /// Rows of the file → world rotation/reflection (w unused).
+        file_to_world: [[f32; 4]; 3] = "vec4[3]",
+        /// Which step: `lights::clusters_mode`.
+        mode: u32 = "uint",
+        /// Columns of the cells' lat-long grid (rows: half as many).
+        grid: u32 = "uint",
+        /// Where the clusters start in the output, in vec4s.
+        at: u32 = "uint",
+        /// The extraction's most records.
+        max: u32 = "uint",
+    }
     /// `glsl/lights.comp`.
     LightsPush {
         /// Side of the level written (a cube face).

@@ -376,6 +376,11 @@ macro_rules! shader_table {
             ExtractAdd = "extract_add", "extract_add.comp", Compute, [], ExtractAddPush,
                 [(EXTRACT_ADD_STATE, StorageBuffer, Read), (EXTRACT_ADD_LIGHTS, StorageBuffer, Read),
                  (EXTRACT_ADD_DST, StorageImage, ReadWrite)];
+            /// The GPU extraction's light records gathered into the diffuse clusters.
+            ExtractClusters = "extract_clusters", "extract_clusters.comp", Compute, [],
+                ExtractClustersPush,
+                [(CLUSTERS_STATE, StorageBuffer, Read), (CLUSTERS_LIGHTS, StorageBuffer, Read),
+                 (CLUSTERS_SORT, StorageBuffer, ReadWrite), (CLUSTERS_OUT, StorageBuffer, Write)];
             /// SH projection of a BRDF per view of a grid (SH-BRDF shading's table).
             ShBrdf = "sh_brdf", "sh_brdf.comp", Compute, [], ShBrdfPush,
                 [(SH_BRDF_TABLE, StorageBuffer, ReadWrite)];

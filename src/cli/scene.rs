@@ -19,7 +19,7 @@ pub struct RenderArgs {
     output: PathBuf,
     /// Render through the resident path, as an engine does with a map on the GPU: the map is
     /// uploaded once, then one frame is recorded from the GPU image with nothing read back
-    /// before the frame (no Monte Carlo, lights = "none")
+    /// before the frame (no Monte Carlo; extracted lights for diffuse techniques only)
     #[arg(long)]
     resident: bool,
 }

@@ -20,13 +20,13 @@
 //! an indirect dispatch (no workgroups unless the cap binds) histograms that bin's low bits; one
 //! workgroup selects the exact threshold; the compaction writes records and residual.
 
+use crate::abi::lights::{clusters_mode, CLUSTER_VEC4S, KERNEL_COSINE, KERNEL_GGX};
 use crate::abi::lights::{
     extract_mode as mode, extract_word as word, EXTRACT_HEADER_WORDS, EXTRACT_LOW_BINS,
     EXTRACT_RECORD_VEC4S, EXTRACT_TOP_BINS,
 };
-use crate::abi::lights::{KERNEL_COSINE, KERNEL_GGX};
-use crate::abi::push::ExtractAddPush;
-use crate::abi::{binding, push::ExtractPush, ShaderId, WORKGROUP_2D};
+use crate::abi::push::{ExtractAddPush, ExtractClustersPush};
+use crate::abi::{binding, push::ExtractPush, ShaderId, WORKGROUP_1D, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
 use crate::math::envmap::{luminance, EnvMap};
@@ -197,6 +197,7 @@ pub struct Extractor {
     pipelines: [std::sync::OnceLock<Pipeline>; 4],
     select: Pipeline,
     add: Pipeline,
+    clusters: Pipeline,
     sampler: Sampler,
 }
 
@@ -208,6 +209,7 @@ impl Extractor {
             pipelines: Default::default(),
             select: Pipeline::compute(ctx, ShaderId::ExtractSelect, &WORKGROUP_2D)?,
             add: Pipeline::compute(ctx, ShaderId::ExtractAdd, &WORKGROUP_2D)?,
+            clusters: Pipeline::compute(ctx, ShaderId::ExtractClusters, &[WORKGROUP_1D])?,
             sampler: Sampler::linear_clamp(ctx, "extraction")?,
         })
     }
@@ -368,6 +370,112 @@ impl Extractor {
             )
         })?;
         poison::image(rec, PassId::Extract, &dst.image, level..level + 1)
+    }
+
+    /// Records the gathering of `from`'s kept lights (an extraction recorded earlier, of a map
+    /// whose file directions reach the world through `file_to_world`) into the clusters of a
+    /// `grid` × `grid`/2 lat-long grid (`math::lights::clusters`' rule, every cell written,
+    /// row-major, an empty one zero) at vec4 `at` of `out`, `CLUSTER_VEC4S` vec4s a cell:
+    /// what SH irradiance and prefiltered irradiance maps add per pixel. The count is read
+    /// on the GPU; a scratch buffer of the recorder's holds the counting sort. Span: "light
+    /// clusters (gpu)".
+    pub fn record_clusters(
+        &self,
+        rec: &mut Recorder,
+        from: &GpuExtraction,
+        file_to_world: glam::DMat3,
+        grid: u32,
+        out: &Buffer,
+        at: u32,
+    ) -> Result<()> {
+        let cells = grid as u64 * (grid as u64 / 2).max(1);
+        if grid == 0 || out.size() < (at as u64 + cells * CLUSTER_VEC4S as u64) * 16 {
+            return Err(Error::Invalid(format!(
+                "light clusters: {cells} cells from vec4 {at} do not fit a buffer of {} bytes",
+                out.size()
+            )));
+        }
+        let words = 3 * cells + 2 * from.max as u64;
+        let sort = rec.scratch(
+            "light clusters sort",
+            words * 4,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+        )?;
+        let push = |m| ExtractClustersPush {
+            file_to_world: crate::gpu::mat3_rows(file_to_world),
+            mode: m,
+            grid,
+            at,
+            max: from.max,
+        };
+        let binds = [
+            (binding::CLUSTERS_STATE, Bind::Buffer(&from.state)),
+            (binding::CLUSTERS_LIGHTS, Bind::Buffer(&from.lights)),
+            (binding::CLUSTERS_SORT, Bind::Buffer(&sort)),
+            (binding::CLUSTERS_OUT, Bind::Buffer(out)),
+        ];
+        let records = (&from.state, GpuExtraction::light_args());
+        let p = &self.clusters;
+        rec.span("light clusters (gpu)", |rec| {
+            rec.fill_buffer(&sort, cells * 4, 0);
+            rec.dispatch_indirect(p, &binds, &push(clusters_mode::COUNT), records)?;
+            rec.dispatch(p, &binds, &push(clusters_mode::SCAN), [1, 1, 1])?;
+            rec.dispatch_indirect(p, &binds, &push(clusters_mode::SCATTER), records)?;
+            let groups = groups(cells as u32, WORKGROUP_1D);
+            rec.dispatch(p, &binds, &push(clusters_mode::SUM), [groups, 1, 1])
+        })
+    }
+
+    /// Uploads `map`, projects its band 0, extracts by `opts` (no `fill`), gathers the lights
+    /// into the clusters of a `grid` × `grid`/2 grid (file frame = world) and reads them back,
+    /// every cell row-major, waiting (for tests).
+    pub fn run_clusters(
+        &self,
+        map: &EnvMap,
+        opts: &ExtractOptions,
+        grid: u32,
+    ) -> Result<Vec<[[f32; 3]; 3]>> {
+        let gpu = GpuEnvMap::upload(&self.ctx, map)?;
+        let max = u32::try_from(opts.max_texels)
+            .map_err(|_| Error::Invalid(format!("{} light texels", opts.max_texels)))?;
+        let out = GpuExtraction::new(&self.ctx, map.mapping, map.width, map.height, max)?;
+        let projector = ShProjector::new(&self.ctx, crate::passes::Subgroups::Auto)?;
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        let sh = Buffer::new(
+            &self.ctx,
+            "extraction L00",
+            ShProjector::output_bytes(0),
+            usage,
+            MemoryLocation::GpuOnly,
+        )?;
+        let cells = (grid * (grid / 2).max(1)) as usize;
+        let bytes = (cells * CLUSTER_VEC4S as usize * 16) as u64;
+        let clusters = Buffer::new(
+            &self.ctx,
+            "clusters",
+            bytes,
+            usage | vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+        )?;
+        let host = Buffer::new(
+            &self.ctx,
+            "clusters (host)",
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        self.ctx.run_untimed("light clusters", |rec| {
+            projector.record_into(rec, &gpu, 0, &Orientation::default(), &sh)?;
+            self.record(rec, &gpu, &sh, opts.ratio, &out)?;
+            self.record_clusters(rec, &out, glam::DMat3::IDENTITY, grid, &clusters, 0)?;
+            rec.copy_buffer(&clusters, &host, bytes);
+            rec.use_buffer(&host, Usage::HostRead);
+            Ok(())
+        })?;
+        let v: Vec<[f32; 4]> = host.read(cells * CLUSTER_VEC4S as usize);
+        Ok(v.chunks_exact(CLUSTER_VEC4S as usize)
+            .map(|c| [0, 1, 2].map(|ch| [c[ch][0], c[ch][1], c[ch][2]]))
+            .collect())
     }
 
     /// Uploads `map`, projects its band 0, extracts by `opts` (no `fill`) and reads everything

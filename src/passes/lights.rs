@@ -76,6 +76,26 @@ impl GpuLights {
         })
     }
 
+    /// Lights of clusters alone, `cells` of them, written on the GPU
+    /// (`super::Extractor::record_clusters` at vec4 [`GpuLights::cluster_at`]): no light
+    /// texels, no tree. The resident path's diffuse lights.
+    pub fn clusters_on_gpu(ctx: &Context, cells: u32) -> Result<GpuLights> {
+        let bytes = (cells.max(1) * crate::abi::lights::CLUSTER_VEC4S) as u64 * 16;
+        Ok(GpuLights {
+            buffer: Buffer::new(
+                ctx,
+                "light clusters",
+                bytes,
+                ash::vk::BufferUsageFlags::STORAGE_BUFFER,
+                gpu_allocator::MemoryLocation::GpuOnly,
+            )?,
+            count: 0,
+            nodes: 0,
+            clusters: cells,
+            tree_nodes: 0,
+        })
+    }
+
     /// Nodes of the light texels' tree.
     pub fn tree_nodes(&self) -> u32 {
         self.tree_nodes

@@ -85,10 +85,12 @@ impl Inputs {
             false => None,
         };
         let projects = plan.runs(PassKind::ShProjection);
+        // The resident path's diffuse residual projects into a second half.
+        let halves = 1 + lit.sh_residual_at.is_some() as u64;
         let sh_out = match projects {
             true => Some(storage(
                 "sh coefficients",
-                ShProjector::output_bytes(plan.lmax),
+                halves * ShProjector::output_bytes(plan.lmax),
                 vk::BufferUsageFlags::STORAGE_BUFFER
                     | vk::BufferUsageFlags::TRANSFER_DST
                     | vk::BufferUsageFlags::TRANSFER_SRC,
@@ -226,7 +228,7 @@ fn prefiltered_maps(
 
 /// Records the tables no environment changes into `rec`: the SH-BRDF tables and split-sum's
 /// DFG tables, their GPU time marked in `marks`. The host path records them with every
-/// render; the resident path once, when it is prepared.
+/// render (each where its pass runs); the resident path once, when it is prepared.
 pub(super) fn record_tables(
     rec: &mut Recorder,
     marks: &mut Marks,
@@ -234,15 +236,37 @@ pub(super) fn record_tables(
     passes: &Passes<'_>,
     inputs: &Inputs,
 ) -> Result<()> {
-    let plan = job.plan;
+    record_sh_brdf_tables(rec, marks, job, passes, inputs)?;
+    record_dfg_tables(rec, marks, job, passes, inputs)
+}
+
+/// The SH-BRDF tables ([`record_tables`]).
+fn record_sh_brdf_tables(
+    rec: &mut Recorder,
+    marks: &mut Marks,
+    job: &Job<'_>,
+    passes: &Passes<'_>,
+    inputs: &Inputs,
+) -> Result<()> {
     if let (Some(p), Some(buf)) = (passes.sh_brdf, &inputs.tables) {
-        for t in &plan.tables {
+        for t in &job.plan.tables {
             marks.record(rec, PassKind::ShBrdfTable, |rec| {
                 p.record(rec, &t.brdf, t.order, t.grid, buf, t.offset)
             })?;
         }
     }
-    if let (Some(p), Some((_, tables)), Some(sp)) = (passes.split, &inputs.split, &plan.split) {
+    Ok(())
+}
+
+/// Split-sum's DFG tables ([`record_tables`]).
+fn record_dfg_tables(
+    rec: &mut Recorder,
+    marks: &mut Marks,
+    job: &Job<'_>,
+    passes: &Passes<'_>,
+    inputs: &Inputs,
+) -> Result<()> {
+    if let (Some(p), Some((_, tables)), Some(sp)) = (passes.split, &inputs.split, &job.plan.split) {
         let size = job.scene.split_sum.dfg_size;
         marks.record(rec, PassKind::SplitSum, |rec| {
             for (i, &correlated) in sp.forms.iter().enumerate() {
@@ -256,18 +280,22 @@ pub(super) fn record_tables(
 }
 
 /// What a recording of the inputs covers beyond the passes every frame runs.
-pub(super) struct Work {
+pub(super) struct Work<'a> {
     /// The environment-independent tables ([`record_tables`]).
     pub tables: bool,
     /// The split-sum chain's units this frame refilters (`None`: every level).
     pub split: Option<Vec<LevelLayers>>,
+    /// The diffuse residual on the GPU (the resident path's extraction), which prefiltered
+    /// irradiance maps of a residual filter.
+    pub diffuse_residual: Option<&'a GpuEnvMap>,
 }
 
-impl Work {
+impl Work<'static> {
     /// Everything: the host path's one render.
-    pub const ALL: Work = Work {
+    pub const ALL: Work<'static> = Work {
         tables: true,
         split: None,
+        diffuse_residual: None,
     };
 }
 
@@ -283,7 +311,7 @@ pub(super) fn record(
     passes: &Passes<'_>,
     (inputs, lit, gbuf): (&Inputs, &Lit, &GBuffer),
     env: &GpuEnvMap,
-    work: &Work,
+    work: &Work<'_>,
     convert_built: impl FnOnce() -> Result<()>,
 ) -> Result<()> {
     let (plan, orientation) = (job.plan, &job.orientation);
@@ -312,7 +340,7 @@ pub(super) fn record(
         map.record_upload(rec, &ex.residual)?;
     }
     if work.tables {
-        record_tables(rec, marks, job, passes, inputs)?;
+        record_sh_brdf_tables(rec, marks, job, passes, inputs)?;
     }
     if passes.dp.is_some() && inputs.dp.is_some() && plan.dp.is_some() {
         // After the uploads' staging copies, which this thread makes meanwhile.
@@ -322,8 +350,8 @@ pub(super) fn record(
     if let (Some(b), Some(buf)) = (passes.brute, &inputs.pre_buffer) {
         for m in &inputs.pre {
             let residual = match m.kernel {
-                Kernel::Cosine => &lit.diffuse_residual,
-                Kernel::Phong { .. } => &lit.chain_residual,
+                Kernel::Cosine => work.diffuse_residual.or(lit.diffuse_residual.as_ref()),
+                Kernel::Phong { .. } => lit.chain_residual.as_ref(),
             };
             let source = match residual {
                 Some(res) if m.lit => res,
@@ -349,7 +377,7 @@ fn record_chain(
     passes: &Passes<'_>,
     (inputs, lit): (&Inputs, &Lit),
     env: &GpuEnvMap,
-    work: &Work,
+    work: &Work<'_>,
 ) -> Result<()> {
     let (Some((conv, mip)), Some(map), Some(opts)) = (passes.dp, &inputs.dp, &job.plan.dp) else {
         return Ok(());
@@ -371,6 +399,9 @@ fn record_chain(
     let (Some(p), Some((chain, _))) = (passes.split, &inputs.split) else {
         return Ok(());
     };
+    if work.tables {
+        record_dfg_tables(rec, marks, job, passes, inputs)?;
+    }
     let ss = &job.scene.split_sum;
     marks.record(rec, PassKind::SplitSum, |rec| {
         let opts = PrefilterOptions {
@@ -400,6 +431,12 @@ pub(super) struct ShLayout {
 /// light texels' where the lights stage extracted them, SH-BRDF objects' windowed radiance.
 pub(super) fn sh_layout(job: &Job<'_>, lit: &Lit) -> ShLayout {
     let residual = lit.sh_coeffs.is_some();
+    let shift = |mut e: Vec<PackEntry>| {
+        for x in &mut e {
+            x.source += lit.sh_residual_at.unwrap_or(0);
+        }
+        e
+    };
     let mut layout = ShLayout {
         offsets: Vec::new(),
         entries: Vec::new(),
@@ -407,6 +444,9 @@ pub(super) fn sh_layout(job: &Job<'_>, lit: &Lit) -> ShLayout {
     for p in &job.plan.objects {
         let offset = layout.entries.len() as u32;
         let (entries, of_residual) = match p.technique {
+            Technique::Sh { order } if lit.sh_residual_at.is_some() => {
+                (shift(irradiance_entries(order, false)), true)
+            }
             Technique::Sh { order } => (irradiance_entries(order, residual), residual),
             Technique::ShBrdf { order, window, .. } => {
                 (windowed_entries(order, window_of(window)), false)

@@ -33,6 +33,9 @@ pub(super) struct Lit {
     pub prefiltered: bool,
     /// The light texels' SH coefficients, to subtract from the whole map's.
     pub sh_coeffs: Option<Vec<[f64; 3]>>,
+    /// Where the diffuse residual's own projection sits in the SH output, in coefficients
+    /// (the resident path projects it on the GPU instead of subtracting the lights').
+    pub sh_residual_at: Option<u32>,
     /// Host milliseconds extracting, then preparing the lights, where any were extracted.
     pub ms: Option<[f64; 2]>,
     /// The paraboloid's source where it is the residual halved.
@@ -56,6 +59,7 @@ impl Lit {
             sh: false,
             prefiltered: false,
             sh_coeffs: None,
+            sh_residual_at: None,
             ms: None,
             dp_source: None,
             chain_residual: None,
@@ -119,6 +123,7 @@ pub(super) fn extract(
         (!asked.is_empty()).then(|| [extract_ms, 1e3 * lights_started.elapsed().as_secs_f64()]);
     let mut lit = Lit {
         sh_coeffs: None,
+        sh_residual_at: None,
         sh: lp.sh && found,
         prefiltered: lp.prefiltered && found,
         chain,

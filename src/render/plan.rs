@@ -597,6 +597,9 @@ pub enum PassKind {
     LatLong,
     /// Monte Carlo frames.
     MonteCarlo,
+    /// Light extraction on the GPU (the resident path's: band 0, extraction, clusters, the
+    /// residual's SH).
+    Lights,
     /// Shading and compositing.
     Shade,
 }
@@ -614,6 +617,7 @@ impl PassKind {
             PassKind::Prefilter => "prefilter",
             PassKind::LatLong => "lat-long",
             PassKind::MonteCarlo => "monte carlo",
+            PassKind::Lights => "light extraction",
             PassKind::Shade => "shade",
         }
     }
@@ -658,6 +662,7 @@ impl PassKind {
             PassKind::SplitSum => &[Dfg, PrefilterGgx],
             PassKind::Prefilter => &[BrutePrepare, BruteTiles, Brute, BruteResolve],
             PassKind::MonteCarlo => &[Mc],
+            PassKind::Lights => &[Extract, ExtractSelect, ExtractClusters],
             PassKind::Shade => &crate::passes::shade::MODULES,
         }
     }

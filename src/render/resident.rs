@@ -11,16 +11,20 @@
 
 use super::inputs::{self, Inputs, Work};
 use super::lights::Lit;
-use super::plan::{plan_for, MapShape, Plan};
+use super::plan::{plan_for, MapShape, PassKind, Plan};
 use super::records::{gpu_objects, Marks};
 use super::shading::{self, Shading};
 use super::{Job, Rendered, Renderer};
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, FrameCache, Recorder};
+use crate::math::lights::CLUSTER_GRID;
 use crate::math::Mapping;
 use crate::passes::gbuffer::{target, GBuffer};
 use crate::passes::map::Sanitizer;
-use crate::passes::{time_slices, GpuEnvMap, LevelLayers};
+use crate::passes::{
+    time_slices, Extractor, GpuEnvMap, GpuExtraction, GpuLights, LevelLayers, ShProjector,
+    Subgroups,
+};
 use crate::scene::{LightsMode, Scene};
 use ash::vk;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -40,6 +44,8 @@ pub struct Resident {
     clean: GpuEnvMap,
     sanitizer: Sanitizer,
     zeroed: Buffer,
+    /// The diffuse lights, extracted on the GPU every frame, where the scene extracts them.
+    diffuse: Option<DiffuseLights>,
     /// The split-sum chain's rough levels dealt into time slices (one: no slicing).
     slices: Vec<Vec<LevelLayers>>,
     /// Frames recorded since the last whole refilter.
@@ -125,8 +131,8 @@ impl Resident {
 }
 
 /// Why `scene` cannot render from a GPU image, if it cannot: Monte Carlo builds its sampling
-/// tables on the host, and extracted lights are prepared on the host (texel quadratures, the
-/// light tree, clusters) for the shade pass.
+/// tables on the host, and the lights of the chain's techniques are prepared on the host
+/// (texel quadratures, the light tree) for the shade pass.
 fn refusal(scene: &Scene, plan: &Plan) -> Option<String> {
     if let Some(k) = plan
         .objects
@@ -138,13 +144,12 @@ fn refusal(scene: &Scene, plan: &Plan) -> Option<String> {
              the resident path cannot render it"
         ));
     }
-    if scene.environment.lights == LightsMode::Extract
-        && (plan.lights.chain.is_some() || plan.lights.diffuse.is_some())
-    {
+    if scene.environment.lights == LightsMode::Extract && plan.lights.chain.is_some() {
         return Some(
-            "the scene extracts lights ([environment] lights = \"extract\"), which the shade \
-             pass takes prepared on the host: the resident path renders with lights = \"none\" \
-             (passes::Extractor extracts them on the GPU for an engine's own filtering)"
+            "the scene extracts lights ([environment] lights = \"extract\") for FIS, split-sum, \
+             prefiltered Phong maps or footprint lookups, which take them through a light tree \
+             built on the host: the resident path extracts on the GPU only the diffuse lights \
+             (SH and prefiltered irradiance); render those with lights = \"none\""
                 .into(),
         );
     }
@@ -169,7 +174,21 @@ impl Renderer {
                 .prepare_for((env.mapping, env.width, env.height), opts)?;
         }
         let passes = self.passes(&plan)?;
-        let lit = Lit::none(&plan);
+        let mut lit = Lit::none(&plan);
+        let diffuse = match &plan.lights.diffuse {
+            Some(opts) if scene.environment.lights == LightsMode::Extract => {
+                let d = DiffuseLights::new(ctx, &plan, env, opts.ratio)?;
+                lit.sh = plan.lights.sh;
+                lit.prefiltered = plan.lights.prefiltered;
+                lit.sh_residual_at = d
+                    .sh_residual
+                    .is_some()
+                    .then(|| crate::math::sh::count(plan.lmax) as u32);
+                lit.gpu = Some(GpuLights::clusters_on_gpu(ctx, CLUSTER_CELLS)?);
+                Some(d)
+            }
+            _ => None,
+        };
         let job = Job {
             ctx,
             scene,
@@ -221,6 +240,7 @@ impl Renderer {
             clean,
             sanitizer: Sanitizer::new(ctx)?,
             zeroed,
+            diffuse,
             slices: Vec::new(),
             frames: AtomicU64::new(0),
         })
@@ -304,9 +324,16 @@ impl Renderer {
             // zero by every pass, and counted.
             r.sanitizer.record(rec, env, &r.clean, &r.zeroed)?;
             let env = &r.clean;
+            if let (Some(d), Some(lights)) = (&r.diffuse, &r.lit.gpu) {
+                let out = r.inputs.sh_out.as_ref();
+                marks.record(rec, PassKind::Lights, |rec| {
+                    d.record(rec, &job, env, lights, out)
+                })?;
+            }
             let work = Work {
                 tables: false,
                 split: r.next_split(),
+                diffuse_residual: r.diffuse.as_ref().map(|d| d.extraction.residual()),
             };
             inputs::record(rec, marks, &job, &passes, ins, env, &work, || Ok(()))?;
             let with = Shading {
@@ -318,5 +345,96 @@ impl Renderer {
         })();
         rec.swap_frame_cache(previous);
         recorded
+    }
+}
+
+/// Cells of the diffuse lights' clusters (`CLUSTER_GRID` × `CLUSTER_GRID`/2).
+const CLUSTER_CELLS: u32 = CLUSTER_GRID * (CLUSTER_GRID / 2);
+
+/// Most light texels the resident path's diffuse extraction keeps (the host's is uncapped):
+/// its records and sort take 56 bytes each. A map with more texels above the ratio keeps the
+/// brightest; the rest stay in the residual, counted.
+pub const DIFFUSE_GPU_MAX: u32 = 1 << 20;
+
+/// The resident path's diffuse lights: each frame the map's band 0 (its mean), the
+/// extraction by the scene's diffuse ratio, its records gathered into clusters the shade pass
+/// adds to SH and prefiltered irradiance objects, and the residual projected to SH, which
+/// those objects shade with instead of the map's (the host path subtracts the light texels'
+/// coefficients instead: the same sum).
+struct DiffuseLights {
+    extractor: Extractor,
+    projector: ShProjector,
+    extraction: GpuExtraction,
+    l00: Buffer,
+    /// The residual's projection, copied after the map's in the SH output (where SH objects
+    /// add the lights).
+    sh_residual: Option<Buffer>,
+    ratio: f64,
+}
+
+impl DiffuseLights {
+    fn new(ctx: &crate::gpu::Context, plan: &Plan, env: MapShape, ratio: f64) -> Result<Self> {
+        let layers = env.mapping.layers();
+        let texels = (env.width as u64 * env.height as u64 * layers as u64)
+            .min(DIFFUSE_GPU_MAX as u64) as u32;
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let buffer = |name, lmax| {
+            Buffer::new(
+                ctx,
+                name,
+                ShProjector::output_bytes(lmax),
+                usage,
+                gpu_allocator::MemoryLocation::GpuOnly,
+            )
+        };
+        Ok(DiffuseLights {
+            extractor: Extractor::new(ctx)?,
+            projector: ShProjector::new(ctx, Subgroups::Auto)?,
+            extraction: GpuExtraction::new(ctx, env.mapping, env.width, env.height, texels)?,
+            l00: buffer("resident L00", 0)?,
+            sh_residual: match plan.lights.sh {
+                true => Some(buffer("resident residual sh", plan.lmax)?),
+                false => None,
+            },
+            ratio,
+        })
+    }
+
+    /// Records the frame's extraction from `env`, its clusters into `lights` and the
+    /// residual's SH into the second half of `sh_out`.
+    fn record(
+        &self,
+        rec: &mut Recorder,
+        job: &Job<'_>,
+        env: &GpuEnvMap,
+        lights: &GpuLights,
+        sh_out: Option<&Buffer>,
+    ) -> Result<()> {
+        let orientation = &job.orientation;
+        let file_to_world = orientation.checked_world_to_file()?.transpose();
+        self.projector
+            .record_into(rec, env, 0, orientation, &self.l00)?;
+        self.extractor
+            .record(rec, env, &self.l00, self.ratio, &self.extraction)?;
+        let at = lights.cluster_at();
+        self.extractor.record_clusters(
+            rec,
+            &self.extraction,
+            file_to_world,
+            CLUSTER_GRID,
+            lights.buffer(),
+            at,
+        )?;
+        if let (Some(res), Some(out)) = (&self.sh_residual, sh_out) {
+            let lmax = job.plan.lmax;
+            let residual = self.extraction.residual();
+            self.projector
+                .record_into(rec, residual, lmax, orientation, res)?;
+            let bytes = ShProjector::output_bytes(lmax);
+            rec.copy_buffer_regions(res, out, &[(0, bytes, bytes)]);
+        }
+        Ok(())
     }
 }
