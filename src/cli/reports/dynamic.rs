@@ -421,13 +421,18 @@ pub fn bench_dynamic(
     }
     body.push_str(&format!(
         "\nShare of the frame (lights / irradiance / chain): {}. The chain is the stage furthest \
-         from the floor: {n} FIS samples for each of the 7 levels' texels, each a filtered read \
-         of the paraboloid, where the floor reads and writes each texel once; the lights \
+         from the floor: {n} FIS samples for each of the 7 levels' texels{sliced}, each a \
+         filtered read of the paraboloid, where the floor reads and writes each texel once; \
+         the lights \
          added back at level 1 (α ≈ 0.03) take their texels' node quadratures near the peak. \
          The extraction stage is L00 (on a cube, per-texel Gauss–Legendre solid angles) and \
          two passes over the map, each specialised to its mapping.\n",
         shares.join("; "),
-        n = s.samples
+        n = s.samples,
+        sliced = match sliced {
+            true => format!(" (of the rough levels, one slice of {} a frame)", s.slices),
+            false => String::new(),
+        }
     ));
     let method = format!(
         "Three frames, the sun 25° further round each, as images already on the GPU; each \
