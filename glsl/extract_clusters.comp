@@ -1,13 +1,13 @@
 #version 460
 // The GPU extraction's light records (passes::extract) gathered into the clusters diffuse
 // techniques sum (math::lights::clusters, its float64 twin): the cells of a grid × grid/2
-// lat-long grid over the records' file directions, row-major, each holding per channel
-// V = Σ L·Ω·ω (ω turned to the world) over its records, as CLUSTER_VEC4S vec4s (V, 0) from
-// vec4 `at` of the output. Every cell is written (an empty one zero, whose irradiance
-// max(0, n·0) is none), so the shade pass's loop has a fixed bound. A counting sort, the
-// record count read from the extraction's header: COUNT (per record: its cell, counted),
-// SCAN (one workgroup: each cell's first slot), SCATTER (per record: its slot), SUM (per
-// cell: its records summed).
+// lat-long grid over the records' file directions, each holding per channel V = Σ L·Ω·ω (ω
+// turned to the world) over its records, as CLUSTER_VEC4S vec4s (V, 0) from vec4 `at` of the
+// output: the non-empty cells only, in row-major order (the host's), their count after the
+// grid's room (vec4 at + 3·cells, in x), which bounds the shade pass's loop. A counting sort,
+// the record count read from the extraction's header: COUNT (per record: its cell, counted),
+// SCAN (one workgroup: each cell's first slot and its place among the non-empty cells),
+// SCATTER (per record: its slot), SUM (per non-empty cell: its records summed).
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
 #include "extract.glsl"
@@ -15,8 +15,8 @@
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_CLUSTERS_STATE) readonly buffer State { uint state[]; };
 layout(std430, set = 0, binding = BINDING_CLUSTERS_LIGHTS) readonly buffer Lights { Record records[]; };
-// cells' counts, first slots and cursors (grid·grid/2 each), then each record's cell and the
-// records in cell order (max each).
+// cells' counts, first slots, cursors and places among the non-empty cells (grid·grid/2
+// each), then each record's cell and the records in cell order (max each).
 layout(std430, set = 0, binding = BINDING_CLUSTERS_SORT) buffer Sort { uint sorted[]; };
 layout(std430, set = 0, binding = BINDING_CLUSTERS_OUT) writeonly buffer Out { vec4 clusters[]; };
 
@@ -24,6 +24,7 @@ layout(std430, set = 0, binding = BINDING_CLUSTERS_OUT) writeonly buffer Out { v
 PUSH_ExtractClustersPush
 
 shared uint partial[gl_WorkGroupSize.x];
+shared uint partial_used[gl_WorkGroupSize.x];
 
 uint cells() {
     return pc.grid * max(pc.grid / 2u, 1u);
@@ -47,25 +48,34 @@ void scan() {
     uint n = cells(), t = gl_LocalInvocationID.x, lanes = gl_WorkGroupSize.x;
     uint chunk = (n + lanes - 1u) / lanes;
     uint first = min(t * chunk, n), end = min(first + chunk, n);
-    uint sum = 0u;
-    for (uint c = first; c < end; c++) sum += sorted[c];
+    uint sum = 0u, used = 0u;
+    for (uint c = first; c < end; c++) {
+        sum += sorted[c];
+        used += sorted[c] > 0u ? 1u : 0u;
+    }
     partial[t] = sum;
+    partial_used[t] = used;
     barrier();
-    // Exclusive scan of the lanes' sums, one lane (64 values).
+    // Exclusive scans of the lanes' sums, one lane (64 values each).
     if (t == 0u) {
-        uint run = 0u;
+        uint run = 0u, places = 0u;
         for (uint k = 0u; k < lanes; k++) {
-            uint v = partial[k];
+            uint v = partial[k], u = partial_used[k];
             partial[k] = run;
+            partial_used[k] = places;
             run += v;
+            places += u;
         }
+        clusters[pc.at + LIGHT_CLUSTER_VEC4S * n] = vec4(float(places), 0.0, 0.0, 0.0);
     }
     barrier();
-    uint run = partial[t];
+    uint run = partial[t], place = partial_used[t];
     for (uint c = first; c < end; c++) {
         sorted[n + c] = run;
         sorted[2u * n + c] = run;
+        sorted[3u * n + c] = place;
         run += sorted[c];
+        place += sorted[c] > 0u ? 1u : 0u;
     }
 }
 
@@ -77,27 +87,28 @@ void main() {
     }
     uint i = gl_GlobalInvocationID.x;
     if (pc.mode == CLUSTERS_MODE_SUM) {
-        if (i >= n) return;
+        if (i >= n || sorted[i] == 0u) return;
         vec3 v[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
         uint first = sorted[n + i], count = sorted[i];
         for (uint s = first; s < first + count; s++) {
-            Record r = records[sorted[3u * n + pc.max + s]];
+            Record r = records[sorted[4u * n + pc.max + s]];
             vec3 w = to_world(r.dir_omega.xyz) * r.dir_omega.w;
             v[0] += w * r.excess_y.r;
             v[1] += w * r.excess_y.g;
             v[2] += w * r.excess_y.b;
         }
-        for (uint ch = 0u; ch < 3u; ch++) clusters[pc.at + 3u * i + ch] = vec4(v[ch], 0.0);
+        uint place = sorted[3u * n + i];
+        for (uint ch = 0u; ch < 3u; ch++) clusters[pc.at + LIGHT_CLUSTER_VEC4S * place + ch] = vec4(v[ch], 0.0);
         return;
     }
     if (i >= min(state[EXTRACT_WORD_KEPT], pc.max)) return;
     if (pc.mode == CLUSTERS_MODE_COUNT) {
         uint c = cell_of(records[i].dir_omega.xyz);
-        sorted[3u * n + i] = c;
+        sorted[4u * n + i] = c;
         atomicAdd(sorted[c], 1u);
     } else {
-        uint c = sorted[3u * n + i];
+        uint c = sorted[4u * n + i];
         uint slot = atomicAdd(sorted[2u * n + c], 1u);
-        sorted[3u * n + pc.max + slot] = i;
+        sorted[4u * n + pc.max + slot] = i;
     }
 }

@@ -320,10 +320,12 @@ vec3 split_sum(Object ob, vec3 n, vec3 v, vec3 r) {
 }
 
 // The light clusters' irradiance at normal n (math::lights::cluster_irradiance): per
-// channel max(0, n·V), V = Σ L·Ω·ω over a cell's light texels.
+// channel max(0, n·V), V = Σ L·Ω·ω over a cell's light texels. The clusters in use are
+// counted after the room for pc.clusters (the GPU's extraction fills fewer).
 vec3 lights_irradiance(vec3 n) {
     vec3 e = vec3(0.0);
-    for (uint c = 0u; c < pc.clusters; c++) {
+    uint used = min(pc.clusters, uint(lights[pc.cluster_at + pc.clusters * LIGHT_CLUSTER_VEC4S].x));
+    for (uint c = 0u; c < used; c++) {
         uint at = pc.cluster_at + c * LIGHT_CLUSTER_VEC4S;
         e += max(vec3(dot(n, lights[at].xyz), dot(n, lights[at + 1u].xyz), dot(n, lights[at + 2u].xyz)), vec3(0.0));
     }

@@ -374,10 +374,10 @@ impl Extractor {
 
     /// Records the gathering of `from`'s kept lights (an extraction recorded earlier, of a map
     /// whose file directions reach the world through `file_to_world`) into the clusters of a
-    /// `grid` × `grid`/2 lat-long grid (`math::lights::clusters`' rule, every cell written,
-    /// row-major, an empty one zero) at vec4 `at` of `out`, `CLUSTER_VEC4S` vec4s a cell:
-    /// what SH irradiance and prefiltered irradiance maps add per pixel. The count is read
-    /// on the GPU; a scratch buffer of the recorder's holds the counting sort. Span: "light
+    /// `grid` × `grid`/2 lat-long grid (`math::lights::clusters`' rule: the non-empty cells,
+    /// row-major) at vec4 `at` of `out`, `CLUSTER_VEC4S` vec4s a cell, their count (as a
+    /// float in x) after the room for every cell: what SH irradiance and prefiltered
+    /// irradiance maps add per pixel. The records' count is read on the GPU; a scratch buffer of the recorder's holds the counting sort. Span: "light
     /// clusters (gpu)".
     pub fn record_clusters(
         &self,
@@ -389,13 +389,13 @@ impl Extractor {
         at: u32,
     ) -> Result<()> {
         let cells = grid as u64 * (grid as u64 / 2).max(1);
-        if grid == 0 || out.size() < (at as u64 + cells * CLUSTER_VEC4S as u64) * 16 {
+        if grid == 0 || out.size() < (at as u64 + cells * CLUSTER_VEC4S as u64 + 1) * 16 {
             return Err(Error::Invalid(format!(
                 "light clusters: {cells} cells from vec4 {at} do not fit a buffer of {} bytes",
                 out.size()
             )));
         }
-        let words = 3 * cells + 2 * from.max as u64;
+        let words = 4 * cells + 2 * from.max as u64;
         let sort = rec.scratch(
             "light clusters sort",
             words * 4,
@@ -427,8 +427,8 @@ impl Extractor {
     }
 
     /// Uploads `map`, projects its band 0, extracts by `opts` (no `fill`), gathers the lights
-    /// into the clusters of a `grid` × `grid`/2 grid (file frame = world) and reads them back,
-    /// every cell row-major, waiting (for tests).
+    /// into the clusters of a `grid` × `grid`/2 grid (file frame = world) and reads back those
+    /// in use, row-major, waiting (for tests).
     pub fn run_clusters(
         &self,
         map: &EnvMap,
@@ -449,7 +449,7 @@ impl Extractor {
             MemoryLocation::GpuOnly,
         )?;
         let cells = (grid * (grid / 2).max(1)) as usize;
-        let bytes = (cells * CLUSTER_VEC4S as usize * 16) as u64;
+        let bytes = ((cells * CLUSTER_VEC4S as usize + 1) * 16) as u64;
         let clusters = Buffer::new(
             &self.ctx,
             "clusters",
@@ -472,8 +472,10 @@ impl Extractor {
             rec.use_buffer(&host, Usage::HostRead);
             Ok(())
         })?;
-        let v: Vec<[f32; 4]> = host.read(cells * CLUSTER_VEC4S as usize);
-        Ok(v.chunks_exact(CLUSTER_VEC4S as usize)
+        let v: Vec<[f32; 4]> = host.read(cells * CLUSTER_VEC4S as usize + 1);
+        let used = v[cells * CLUSTER_VEC4S as usize][0] as usize;
+        Ok(v[..used.min(cells) * CLUSTER_VEC4S as usize]
+            .chunks_exact(CLUSTER_VEC4S as usize)
             .map(|c| [0, 1, 2].map(|ch| [c[ch][0], c[ch][1], c[ch][2]]))
             .collect())
     }

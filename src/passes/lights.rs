@@ -59,6 +59,8 @@ impl GpuLights {
         let tree = LightTree::new(lights);
         let mut list = gpu_list(&tree.lights);
         list.extend(cluster_list(clusters));
+        // The clusters in use (shade.frag's loop bound; the GPU's fill fewer than their room).
+        list.push([clusters.len() as f32, 0.0, 0.0, 0.0]);
         list.extend(tree.gpu_nodes());
         // shade.frag's walk step loads a texel's header and STEP_NODES quadrature nodes from
         // any item, so from the last node it reads past its TREE_VEC4S: zeros there.
@@ -76,11 +78,12 @@ impl GpuLights {
         })
     }
 
-    /// Lights of clusters alone, `cells` of them, written on the GPU
-    /// (`super::Extractor::record_clusters` at vec4 [`GpuLights::cluster_at`]): no light
-    /// texels, no tree. The resident path's diffuse lights.
+    /// Lights of clusters alone, room for `cells` of them, written on the GPU with the count
+    /// in use after them (`super::Extractor::record_clusters` at vec4
+    /// [`GpuLights::cluster_at`]): no light texels, no tree. The resident path's diffuse
+    /// lights.
     pub fn clusters_on_gpu(ctx: &Context, cells: u32) -> Result<GpuLights> {
-        let bytes = (cells.max(1) * crate::abi::lights::CLUSTER_VEC4S) as u64 * 16;
+        let bytes = (cells * crate::abi::lights::CLUSTER_VEC4S + 1) as u64 * 16;
         Ok(GpuLights {
             buffer: Buffer::new(
                 ctx,
@@ -101,9 +104,10 @@ impl GpuLights {
         self.tree_nodes
     }
 
-    /// Where the tree's nodes start in the buffer, in vec4s.
+    /// Where the tree's nodes start in the buffer, in vec4s: after the clusters and the
+    /// count of those in use.
     pub fn tree_at(&self) -> u32 {
-        self.cluster_at() + self.clusters * crate::abi::lights::CLUSTER_VEC4S
+        self.cluster_at() + self.clusters * crate::abi::lights::CLUSTER_VEC4S + 1
     }
 
     /// The lights of `map` on the GPU, or `None` where neither extraction is given: the
