@@ -751,7 +751,8 @@ fn a_time_sliced_chain_catches_up_with_its_map() {
 }
 
 /// Frames after the first create no Vulkan object, for each technique of the resident scene
-/// alone (SH, SH-BRDF, FIS, split-sum, a prefiltered map, lookups; recorded untimed: objects
+/// alone (SH, SH-BRDF, FIS, split-sum, a prefiltered map, lookups) and for SH with a
+/// prefiltered irradiance map taking diffuse lights extracted on the GPU (recorded untimed: objects
 /// created while recording, the submission's own fence aside); the first frame makes the
 /// descriptor sets, scratch buffers and scratch images the rest reuse.
 #[test]
@@ -764,11 +765,23 @@ fn resident_frames_after_the_first_create_nothing() {
         let env = EnvMap::from_fn(Mapping::LatLong, 64, 32, 2, |d| sky.radiance(d));
         let gpu = GpuEnvMap::upload(&ctx, &env).unwrap();
         let full = resident_scene(true);
-        for object in &full.objects {
-            let technique = object.material.technique;
-            let mut sc = full.clone();
-            sc.objects = vec![object.clone()];
-            let prepared = renderer.resident(&sc, MapShape::of(&env)).unwrap();
+        let mut scenes: Vec<(String, envlight::scene::Scene)> = full
+            .objects
+            .iter()
+            .map(|object| {
+                let mut sc = full.clone();
+                sc.objects = vec![object.clone()];
+                (format!("{:?}", object.material.technique), sc)
+            })
+            .collect();
+        // Diffuse lights extracted on the GPU (SH and a prefiltered irradiance map).
+        let mut lit = full.clone();
+        lit.objects = vec![full.objects[0].clone(), full.objects[4].clone()];
+        lit.environment.lights = envlight::scene::LightsMode::Extract;
+        lit.environment.filter = envlight::scene::LookupFilter::Point;
+        scenes.push(("diffuse lights".into(), lit));
+        for (technique, sc) in &scenes {
+            let prepared = renderer.resident(sc, MapShape::of(&env)).unwrap();
             let mut created = Vec::new();
             for _ in 0..3 {
                 let n = ctx
@@ -780,11 +793,8 @@ fn resident_frames_after_the_first_create_nothing() {
                     .unwrap();
                 created.push(n);
             }
-            assert!(
-                created[0] > 0,
-                "{technique:?}: the first frame made nothing"
-            );
-            assert_eq!(&created[1..], [0, 0], "{technique:?}: created {created:?}");
+            assert!(created[0] > 0, "{technique}: the first frame made nothing");
+            assert_eq!(&created[1..], [0, 0], "{technique}: created {created:?}");
         }
     }
     common::finish(ctx);

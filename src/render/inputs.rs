@@ -288,6 +288,9 @@ pub(super) struct Work<'a> {
     /// The diffuse residual on the GPU (the resident path's extraction), which prefiltered
     /// irradiance maps of a residual filter.
     pub diffuse_residual: Option<&'a GpuEnvMap>,
+    /// The SH output already holds this frame's projection of the map (the resident path's
+    /// lights read its band 0 first): only the packing is recorded.
+    pub sh_projected: bool,
 }
 
 impl Work<'static> {
@@ -296,6 +299,7 @@ impl Work<'static> {
         tables: true,
         split: None,
         diffuse_residual: None,
+        sh_projected: false,
     };
 }
 
@@ -317,7 +321,9 @@ pub(super) fn record(
     let (plan, orientation) = (job.plan, &job.orientation);
     if let (Some((p, pack)), Some(out)) = (passes.sh, &inputs.sh_out) {
         marks.record(rec, PassKind::ShProjection, |rec| {
-            p.record_into(rec, env, plan.lmax, orientation, out)?;
+            if !work.sh_projected {
+                p.record_into(rec, env, plan.lmax, orientation, out)?;
+            }
             // Each object's set, from the coefficients where they are: no readback.
             if let Some(packed) = &inputs.sh_packed {
                 let minus = inputs.sh_minus.as_ref();

@@ -324,16 +324,21 @@ impl Renderer {
             // zero by every pass, and counted.
             r.sanitizer.record(rec, env, &r.clean, &r.zeroed)?;
             let env = &r.clean;
+            // The frame's SH projection, where the diffuse lights read its band 0.
+            let sh = match (&r.diffuse, passes.sh, &r.inputs.sh_out) {
+                (Some(_), Some((p, _)), Some(out)) => Some((p, out)),
+                _ => None,
+            };
             if let (Some(d), Some(lights)) = (&r.diffuse, &r.lit.gpu) {
-                let out = r.inputs.sh_out.as_ref();
                 marks.record(rec, PassKind::Lights, |rec| {
-                    d.record(rec, &job, env, lights, out)
+                    d.record(rec, &job, env, lights, sh)
                 })?;
             }
             let work = Work {
                 tables: false,
                 split: r.next_split(),
                 diffuse_residual: r.diffuse.as_ref().map(|d| d.extraction.residual()),
+                sh_projected: sh.is_some(),
             };
             inputs::record(rec, marks, &job, &passes, ins, env, &work, || Ok(()))?;
             let with = Shading {
@@ -402,22 +407,35 @@ impl DiffuseLights {
         })
     }
 
-    /// Records the frame's extraction from `env`, its clusters into `lights` and the
-    /// residual's SH into the second half of `sh_out`.
+    /// Records the frame's extraction from `env`, its clusters into `lights` and, with `sh`
+    /// (the frame's projector and SH output, where the plan projects), the map's projection
+    /// into the output's first half, whose band 0 the extraction reads (the frame's own, so
+    /// `inputs::record` only packs it), and the residual's into the second half. Without it
+    /// the mean comes from a band-0 projection of its own.
     fn record(
         &self,
         rec: &mut Recorder,
         job: &Job<'_>,
         env: &GpuEnvMap,
         lights: &GpuLights,
-        sh_out: Option<&Buffer>,
+        sh: Option<(&ShProjector, &Buffer)>,
     ) -> Result<()> {
         let orientation = &job.orientation;
         let file_to_world = orientation.checked_world_to_file()?.transpose();
-        self.projector
-            .record_into(rec, env, 0, orientation, &self.l00)?;
+        let lmax = job.plan.lmax;
+        let mean = match sh {
+            Some((p, out)) => {
+                p.record_into(rec, env, lmax, orientation, out)?;
+                out
+            }
+            None => {
+                self.projector
+                    .record_into(rec, env, 0, orientation, &self.l00)?;
+                &self.l00
+            }
+        };
         self.extractor
-            .record(rec, env, &self.l00, self.ratio, &self.extraction)?;
+            .record(rec, env, mean, self.ratio, &self.extraction)?;
         let at = lights.cluster_at();
         self.extractor.record_clusters(
             rec,
@@ -427,11 +445,9 @@ impl DiffuseLights {
             lights.buffer(),
             at,
         )?;
-        if let (Some(res), Some(out)) = (&self.sh_residual, sh_out) {
-            let lmax = job.plan.lmax;
+        if let (Some(res), Some((p, out))) = (&self.sh_residual, sh) {
             let residual = self.extraction.residual();
-            self.projector
-                .record_into(rec, residual, lmax, orientation, res)?;
+            p.record_into(rec, residual, lmax, orientation, res)?;
             let bytes = ShProjector::output_bytes(lmax);
             rec.copy_buffer_regions(res, out, &[(0, bytes, bytes)]);
         }
