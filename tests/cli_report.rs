@@ -264,8 +264,8 @@ fn numbers_after(page: &str, row: &str, key: &str) -> Vec<f64> {
 /// a row per stage and input, the GPU extraction equal to the host's (count, threshold within
 /// 1e-5, power within 1e-5), the irradiance cube within 5% of the exact irradiance at its
 /// worst texel and each chain level's mean within 3% of the exact GGX prefilter (measured
-/// 4.2e-2 and 1.6e-2 at these tiny sizes; 0.9% and 0.5–0.7% at the published ones), and a
-/// frame slower than its floor.
+/// 4.2e-2 and 1.6e-2 at these tiny sizes; 0.9% and 0.5–0.7% at the published ones), in the
+/// stage rows and in the chain-by-part table, and a frame slower than its floor.
 #[test]
 fn bench_dynamic_prices_a_frame_with_its_errors() {
     let text = bench_dynamic_page("dynamic", &[]);
@@ -277,7 +277,11 @@ fn bench_dynamic_prices_a_frame_with_its_errors() {
         let rows = text
             .lines()
             .filter(|l| l.starts_with(&format!("| {input} |")));
-        assert_eq!(rows.count(), 4, "three stages and the whole: {text}");
+        assert_eq!(
+            rows.count(),
+            5,
+            "three stages, the whole, the chain by part: {text}"
+        );
     }
     let host = numbers_after(&text, "light extraction", "(host");
     assert_eq!(host.len(), 2, "{text}");
@@ -296,6 +300,23 @@ fn bench_dynamic_prices_a_frame_with_its_errors() {
     let irr = numbers_after(&text, "irradiance cube", "worst");
     assert_eq!(irr.len(), 2);
     assert!(irr.iter().all(|&e| e < 0.05), "irradiance {irr:?}");
+    assert!(
+        text.contains("| input | paraboloid + MIP | level 0"),
+        "{text}"
+    );
+    // The chain by part: each rough level's mean error, in brackets after its time.
+    let parts: Vec<f64> = text
+        .lines()
+        .filter(|l| l.starts_with("| cube 16x16 | ") || l.starts_with("| latlong 64x32 | "))
+        .filter(|l| l.matches('|').count() == 10)
+        .flat_map(|l| {
+            l.split('(')
+                .skip(1)
+                .filter_map(|c| c.split(')').next()?.parse().ok())
+        })
+        .collect::<Vec<f64>>();
+    assert_eq!(parts.len(), 12, "six rough levels a row: {text}");
+    assert!(parts.iter().all(|&e| e < 0.03), "levels {parts:?}");
     let chain = numbers_after(&text, "GGX chain", "worst level's mean");
     assert_eq!(chain.len(), 2);
     assert!(chain.iter().all(|&e| e < 0.03), "chain {chain:?}");

@@ -144,26 +144,53 @@ fn record_frame(
         // paraboloid texel edge, as the renderer's chain takes (`residual_edge_points`).
         let opts = ConvertOptions::new(Mapping::DualParaboloid, s.paraboloid)
             .with_edge_points(Some(residual_edge_points(s.paraboloid)));
-        p.conv.record(rec, residual, &f.dp, &opts)?;
-        p.mip.record(rec, &f.dp)?;
+        rec.span(PARABOLOID_SPAN, |rec| {
+            p.conv.record(rec, residual, &f.dp, &opts)?;
+            p.mip.record(rec, &f.dp)
+        })?;
         let mut chain = PrefilterOptions::new(s.levels);
         chain.samples = s.samples;
-        let units = chain_units(s, index);
-        p.split
-            .record_prefilter_slice(rec, &f.dp, &f.chain, &chain, &units)?;
-        // Level 0 is the mirror: its lights are the records themselves, which mirror lookups
-        // take directly (a GGX lobe at α → 0 would need every light's finest nodes at every
-        // texel, more than the rest of the frame).
-        for u in units.iter().filter(|u| u.level >= 1) {
-            let ggx = LightKernel::Ggx {
-                alpha: level_alpha(u.level, s.levels),
-            };
-            let norm = p.norms[u.level as usize];
-            p.extractor
-                .record_add_to(rec, &f.lights, DMat3::IDENTITY, ggx, norm, &f.chain, u)?;
+        for u in chain_units(s, index) {
+            rec.span(&level_span(u.level), |rec| {
+                p.split.record_prefilter_slice(
+                    rec,
+                    &f.dp,
+                    &f.chain,
+                    &chain,
+                    std::slice::from_ref(&u),
+                )?;
+                // Level 0 is the mirror: its lights are the records themselves, which mirror
+                // lookups take directly (a GGX lobe at α → 0 would need every light's finest
+                // nodes at every texel, more than the rest of the frame).
+                if u.level == 0 {
+                    return Ok(());
+                }
+                let ggx = LightKernel::Ggx {
+                    alpha: level_alpha(u.level, s.levels),
+                };
+                let norm = p.norms[u.level as usize];
+                p.extractor
+                    .record_add_to(rec, &f.lights, DMat3::IDENTITY, ggx, norm, &f.chain, &u)
+            })?;
         }
         Ok(())
     })
+}
+
+/// The span of the chain's conversion to the paraboloid and its MIP chain.
+const PARABOLOID_SPAN: &str = "chain: paraboloid + mip";
+
+/// The span of a chain level's refilter and its lights.
+fn level_span(level: u32) -> String {
+    format!("chain: level {level}")
+}
+
+/// The GPU milliseconds in `t` of the paraboloid, then of each of `levels` levels.
+fn chain_parts_ms(t: &[Timing], levels: u32) -> Vec<f64> {
+    let ms = |label: &str| t.iter().filter(|t| t.label == label).map(|t| t.ms).sum();
+    std::iter::once(ms(PARABOLOID_SPAN))
+        .chain((0..levels).map(|k| ms(&level_span(k))))
+        .collect()
 }
 
 /// The GPU milliseconds of each stage in `t`.
@@ -180,7 +207,7 @@ fn input_rows(
     size: u32,
     s: &FrameSettings,
     reps: usize,
-) -> Result<(String, [f64; 3])> {
+) -> Result<(String, [f64; 3], String)> {
     let frames: Vec<EnvMap> = (0..3)
         .map(|k| sky_at(mapping, size, 40.0 + 25.0 * k as f64))
         .collect();
@@ -223,36 +250,14 @@ fn input_rows(
         )?,
         chain: SplitSum::cube_chain(ctx, s.chain, s.levels)?,
     };
-    let submissions = ctx.submissions();
-    let mut per_stage: [Vec<f64>; 3] = Default::default();
-    let mut whole = Vec::new();
     let mut index = 0;
-    for r in 0..=reps.max(1) {
-        for env in &gpu {
-            let ((), t) = ctx.run("a frame's refilter", |rec| {
-                record_frame(rec, p, env, &frame, s, index)
-            })?;
-            index += 1;
-            if r > 0 {
-                let ms = stage_ms(&t);
-                for (v, m) in per_stage.iter_mut().zip(ms) {
-                    v.push(m);
-                }
-                whole.push(ms.iter().sum::<f64>());
-            }
-        }
-    }
-    let runs = (reps.max(1) + 1) * gpu.len();
-    let made = ctx.submissions() - submissions;
-    if made as usize != runs {
-        anyhow::bail!("{runs} frames took {made} submissions");
-    }
+    let timed = time_frames(ctx, p, &gpu, &frame, s, reps, &mut index)?;
     let copy = CopyPass::new(ctx)?;
     let floor = copy_ms(ctx, &copy, mapping, w, h, reps)?
         + copy_ms(ctx, &copy, Mapping::Cube, s.chain, s.chain, reps)? * 4.0 / 3.0
         + copy_ms(ctx, &copy, Mapping::Cube, s.irradiance, s.irradiance, reps)?;
     let last = frames.last().unwrap_or_else(|| unreachable!());
-    let mut errors = frame_errors(ctx, p, last, &gpu[2], &frame, s)?;
+    let (mut errors, level_errors) = frame_errors(ctx, p, last, &gpu[2], &frame, s)?;
     if s.slices > 1 {
         // As many frames again of the last map: every slice refiltered from it once.
         for _ in 0..s.slices {
@@ -262,7 +267,9 @@ fn input_rows(
             index += 1;
         }
         let exact = ExactFilter::new(last, DMat3::IDENTITY);
-        let caught = chain_error(ctx, &exact, &frame, s)?;
+        let caught = chain_error(ctx, &exact, &frame, s)?
+            .into_iter()
+            .fold(0.0, worse);
         errors[2] = format!(
             "{} (levels up to {} frames behind); {} frames later, its map unchanged: {caught:.1e}",
             errors[2],
@@ -272,7 +279,7 @@ fn input_rows(
     }
     let input = format!("{} {w}x{h}", mapping.name());
     let mut rows = String::new();
-    let stage = per_stage.map(median);
+    let stage = timed.stages.map(median);
     for (k, (_, name)) in STAGES.iter().enumerate() {
         let name = name.replace("GGX chain", &format!("GGX chain {}²", s.chain));
         rows.push_str(&format!(
@@ -280,8 +287,8 @@ fn input_rows(
             stage[k], errors[k]
         ));
     }
-    let most = whole.iter().copied().fold(0.0, worse);
-    let all = median(whole);
+    let most = timed.whole.iter().copied().fold(0.0, worse);
+    let all = median(timed.whole);
     if s.slices > 1 {
         rows.push_str(&format!(
             "| {input} | slowest frame (one slice of {}) | {most:.3} | {floor:.3} | {:.1} | |\n",
@@ -301,13 +308,77 @@ fn input_rows(
         all / floor
     );
     let total: f64 = stage.iter().sum();
-    Ok((rows, stage.map(|m| m / total)))
+    let parts: Vec<f64> = timed.parts.into_iter().map(median).collect();
+    let levels: Vec<String> = (0..s.levels as usize)
+        .map(|k| match k {
+            0 => format!("{:.1}", parts[1]),
+            _ => format!("{:.1} ({:.1e})", parts[k + 1], level_errors[k - 1]),
+        })
+        .collect();
+    let level_row = format!("| {input} | {:.1} | {} |\n", parts[0], levels.join(" | "));
+    Ok((rows, stage.map(|m| m / total), level_row))
+}
+
+/// The GPU milliseconds of timed frames: per stage, whole, and per part of the chain (the
+/// paraboloid, then each level), each a list over the frames.
+struct Timed {
+    stages: [Vec<f64>; 3],
+    whole: Vec<f64>,
+    parts: Vec<Vec<f64>>,
+}
+
+/// Refilters each of `gpu`'s maps into `frame` for `reps` rounds after an untimed one, one
+/// submission a frame (counted: an error otherwise), frame indices from `index` on.
+fn time_frames(
+    ctx: &Context,
+    p: &Passes,
+    gpu: &[GpuEnvMap],
+    frame: &Frame,
+    s: &FrameSettings,
+    reps: usize,
+    index: &mut usize,
+) -> Result<Timed> {
+    let submissions = ctx.submissions();
+    let mut timed = Timed {
+        stages: Default::default(),
+        whole: Vec::new(),
+        parts: vec![Vec::new(); s.levels as usize + 1],
+    };
+    for r in 0..=reps.max(1) {
+        for env in gpu {
+            let ((), t) = ctx.run("a frame's refilter", |rec| {
+                record_frame(rec, p, env, frame, s, *index)
+            })?;
+            *index += 1;
+            if r > 0 {
+                let ms = stage_ms(&t);
+                for (v, m) in timed.stages.iter_mut().zip(ms) {
+                    v.push(m);
+                }
+                timed.whole.push(ms.iter().sum::<f64>());
+                for (v, m) in timed.parts.iter_mut().zip(chain_parts_ms(&t, s.levels)) {
+                    v.push(m);
+                }
+            }
+        }
+    }
+    let runs = (reps.max(1) + 1) * gpu.len();
+    let made = ctx.submissions() - submissions;
+    if made as usize != runs {
+        anyhow::bail!("{runs} frames took {made} submissions");
+    }
+    Ok(timed)
 }
 
 /// The chain's levels 1.. against the exact GGX prefilter (`exact`): each level's mean over
-/// eight texels, the worst level's.
-fn chain_error(ctx: &Context, exact: &ExactFilter, f: &Frame, s: &FrameSettings) -> Result<f64> {
-    let mut worst_mean = 0.0f64;
+/// eight texels.
+fn chain_error(
+    ctx: &Context,
+    exact: &ExactFilter,
+    f: &Frame,
+    s: &FrameSettings,
+) -> Result<Vec<f64>> {
+    let mut means = Vec::new();
     for k in 1..s.levels {
         let side = (s.chain >> k).max(1);
         let level = f.chain.download_level(ctx, k)?;
@@ -315,16 +386,15 @@ fn chain_error(ctx: &Context, exact: &ExactFilter, f: &Frame, s: &FrameSettings)
             .into_iter()
             .map(|(t, d)| rel_lum(level[t], exact.ggx(d, level_alpha(k, s.levels))))
             .collect();
-        let mean = e.iter().sum::<f64>() / e.len() as f64;
-        worst_mean = worse(worst_mean, mean);
+        means.push(e.iter().sum::<f64>() / e.len() as f64);
     }
-    Ok(worst_mean)
+    Ok(means)
 }
 
 /// Each stage's error on the last frame: the extraction against the host's (count,
 /// threshold, power); the irradiance cube against the exact irradiance of the map; the chain's
 /// levels 1.. against the exact GGX prefilter of the map (mean over eight texels a level; the
-/// worst level).
+/// worst level), and each level's mean.
 fn frame_errors(
     ctx: &Context,
     p: &Passes,
@@ -332,7 +402,7 @@ fn frame_errors(
     env: &GpuEnvMap,
     f: &Frame,
     s: &FrameSettings,
-) -> Result<[String; 3]> {
+) -> Result<([String; 3], Vec<f64>)> {
     let irr = f.irradiance.download_level(ctx, 0)?;
     let exact = ExactFilter::new(map, DMat3::IDENTITY);
     let mut tech = Vec::new();
@@ -354,17 +424,19 @@ fn frame_errors(
         (got.stats.threshold as f64 / want.threshold - 1.0).abs(),
         (split / luminance(map.power()) - 1.0).abs()
     );
-    let worst_mean = chain_error(ctx, &exact, f, s)?;
+    let level_means = chain_error(ctx, &exact, f, s)?;
+    let worst_mean = level_means.iter().copied().fold(0.0, worse);
     let mean = tech.iter().sum::<f64>() / tech.len() as f64;
     let most = tech.into_iter().fold(0.0, worse);
-    Ok([
+    let strings = [
         lights,
         format!("exact irradiance: mean {mean:.1e}, worst {most:.1e} (8 texels)"),
         format!(
             "exact GGX prefilter, levels 1–{}: worst level's mean {worst_mean:.1e}",
             s.levels - 1
         ),
-    ])
+    ];
+    Ok((strings, level_means))
 }
 
 /// Runs the benchmark: cube inputs of `cubes` sides and lat-long inputs of `widths`, each
@@ -400,6 +472,7 @@ pub fn bench_dynamic(
         .chain(widths.iter().map(|&w| (Mapping::LatLong, w)))
         .collect();
     let mut shares = Vec::new();
+    let mut level_rows = String::new();
     for (&c, &(mapping, size)) in chains
         .iter()
         .flat_map(|c| inputs.iter().map(move |i| (c, i)))
@@ -409,14 +482,28 @@ pub fn bench_dynamic(
             paraboloid: 2 * c,
             ..*s
         };
-        let (rows, share) = input_rows(ctx, &passes, mapping, size, s, reps)?;
+        let (rows, share, level_row) = input_rows(ctx, &passes, mapping, size, s, reps)?;
         body.push_str(&rows);
+        level_rows.push_str(&level_row);
         shares.push(format!(
             "{} {size}, chain {c}²: {:.0}% / {:.0}% / {:.0}%",
             mapping.name(),
             100.0 * share[0],
             100.0 * share[1],
             100.0 * share[2]
+        ));
+    }
+    if !sliced {
+        let heads: Vec<String> = (0..s.levels)
+            .map(|k| format!("level {k} (α {:.3})", level_alpha(k, s.levels)))
+            .collect();
+        body.push_str(&format!(
+            "\nThe chain by part, GPU ms (the median frame) and, for the rough levels, the \
+             level's mean error against the exact GGX prefilter (8 texels): the paraboloid \
+             (the residual's conversion and MIP chain), then each level's FIS refilter with \
+             its lights added.\n\n| input | paraboloid + MIP | {} |\n|---|---|{}\n{level_rows}",
+            heads.join(" | "),
+            "---|".repeat(s.levels as usize)
         ));
     }
     body.push_str(&format!(
