@@ -81,8 +81,10 @@ impl Resident {
     /// refilters every level, each after it level 0 (the mirror) and one slice of the rest
     /// in turn ([`time_slices`]: each (level, layer) in one slice, the slices of about equal
     /// cost), so a level lags its map by at most `slices` − 1 frames. Everything else (SH,
-    /// the FIS paraboloid, prefiltered maps) follows the map every frame. Refused for 0 or
-    /// a scene without split-sum.
+    /// the FIS paraboloid, prefiltered maps) follows the map every frame. Frames are counted
+    /// when recorded: a recording dropped unsubmitted skips its slice for a round (call
+    /// [`Resident::refilter_all`] to start afresh). Refused for 0 or a scene without
+    /// split-sum.
     pub fn set_time_slices(&mut self, slices: u32) -> Result<()> {
         let Some(split) = &self.plan.split else {
             return Err(Error::Invalid(
