@@ -435,8 +435,8 @@ fn the_resident_path_renders_what_the_host_path_does() {
                 let before = ctx.submissions();
                 let got = renderer.render_resident(&prepared, &gpu).unwrap();
                 assert_eq!(ctx.submissions() - before, 1);
-                // The SH-BRDF and DFG tables were computed when the scene was prepared: a
-                // frame records neither (on lavapipe they were 2.8 s of a 3 s frame).
+                // The SH-BRDF and DFG tables are computed when the scene is prepared: a
+                // frame records neither.
                 let spans: Vec<&str> = got
                     .records
                     .iter()
