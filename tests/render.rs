@@ -593,42 +593,17 @@ fn a_broken_frame_shades_finite_pixels_and_the_next_recovers() {
 /// footprint lookups take the chain's lights too).
 #[test]
 fn the_resident_path_extracts_diffuse_lights_on_the_gpu() {
-    use common::scenes::{object, scene as scene_of, sphere_camera};
-    use envlight::math::brdf::Brdf;
     use envlight::render::{MapShape, Renderer};
-    use envlight::scene::{LightsMode, LookupFilter, Technique};
+    use envlight::scene::LightsMode;
     let ctx = common::ctx();
     {
         let renderer = Renderer::new(&ctx);
-        let at = |x: f64, y: f64| Shape::Sphere {
-            center: [x, y, 0.0],
-            radius: 0.45,
-        };
-        let sh_brdf = Technique::ShBrdf {
-            order: 2,
-            grid: 4,
-            window: None,
-        };
-        let objects = vec![
-            object(
-                at(-0.5, 0.5),
-                Brdf::Lambert,
-                [1.0; 3],
-                Technique::Sh { order: 2 },
-            ),
-            object(
-                at(0.5, 0.5),
-                Brdf::Lambert,
-                [1.0; 3],
-                Technique::Prefiltered { size: 8 },
-            ),
-            object(at(-0.5, -0.5), Brdf::Phong { n: 8.0 }, [1.0; 3], sh_brdf),
-            object(at(0.5, -0.5), Brdf::Mirror, [1.0; 3], Technique::Lookup),
-        ];
-        let mut sc = scene_of(sphere_camera(24), objects, false, 32);
+        // The resident scene's SH, SH-BRDF, prefiltered map and point mirror (footprint
+        // lookups take the chain's lights, refused as FIS below).
+        let full = resident_scene(false);
+        let mut sc = full.clone();
+        sc.objects = [0, 1, 4, 5].map(|k| full.objects[k].clone()).to_vec();
         sc.environment.lights = LightsMode::Extract;
-        // Footprint lookups take the chain's lights (refused, as FIS below).
-        sc.environment.filter = LookupFilter::Point;
         let sky = envlight::math::synth::Sky::default();
         for (mapping, w, h) in [(Mapping::LatLong, 64, 32), (Mapping::Cube, 16, 16)] {
             let env = EnvMap::from_fn(mapping, w, h, 2, |d| sky.radiance(d));
@@ -658,16 +633,8 @@ fn the_resident_path_extracts_diffuse_lights_on_the_gpu() {
                 "{mapping:?}: lights change nothing ({apart:e})"
             );
         }
-        let mut fis = sc.clone();
-        fis.objects[3] = object(
-            at(0.5, -0.5),
-            Brdf::Ggx {
-                alpha: 0.3,
-                correlated: true,
-            },
-            [1.0; 3],
-            common::scenes::fis(16),
-        );
+        let mut fis = full.clone();
+        fis.environment.lights = LightsMode::Extract;
         let shape = MapShape {
             mapping: Mapping::LatLong,
             width: 64,
