@@ -16,7 +16,8 @@ layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_CLUSTERS_STATE) readonly buffer State { uint state[]; };
 layout(std430, set = 0, binding = BINDING_CLUSTERS_LIGHTS) readonly buffer Lights { Record records[]; };
 // cells' counts, first slots, cursors and places among the non-empty cells (grid·grid/2
-// each), then each record's cell and the records in cell order (max each).
+// each: CLUSTER_SORT_CELL_ARRAYS), then each record's cell and the records in cell order
+// (max each).
 layout(std430, set = 0, binding = BINDING_CLUSTERS_SORT) buffer Sort { uint sorted[]; };
 layout(std430, set = 0, binding = BINDING_CLUSTERS_OUT) writeonly buffer Out { vec4 clusters[]; };
 
@@ -91,7 +92,7 @@ void main() {
         vec3 v[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
         uint first = sorted[n + i], count = sorted[i];
         for (uint s = first; s < first + count; s++) {
-            Record r = records[sorted[4u * n + pc.max + s]];
+            Record r = records[sorted[CLUSTER_SORT_CELL_ARRAYS * n + pc.max + s]];
             vec3 w = to_world(r.dir_omega.xyz) * r.dir_omega.w;
             v[0] += w * r.excess_y.r;
             v[1] += w * r.excess_y.g;
@@ -104,11 +105,11 @@ void main() {
     if (i >= min(state[EXTRACT_WORD_KEPT], pc.max)) return;
     if (pc.mode == CLUSTERS_MODE_COUNT) {
         uint c = cell_of(records[i].dir_omega.xyz);
-        sorted[4u * n + i] = c;
+        sorted[CLUSTER_SORT_CELL_ARRAYS * n + i] = c;
         atomicAdd(sorted[c], 1u);
     } else {
-        uint c = sorted[4u * n + i];
+        uint c = sorted[CLUSTER_SORT_CELL_ARRAYS * n + i];
         uint slot = atomicAdd(sorted[2u * n + c], 1u);
-        sorted[4u * n + pc.max + slot] = i;
+        sorted[CLUSTER_SORT_CELL_ARRAYS * n + pc.max + slot] = i;
     }
 }

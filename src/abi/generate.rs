@@ -36,6 +36,11 @@ fn define_sizes_and_lights(s: &mut String) {
     let _ = writeln!(s, "#define LIGHT_HEADER_VEC4S {}u", lights::HEADER_VEC4S);
     let _ = writeln!(s, "#define LIGHT_STEP_NODES {}u", lights::STEP_NODES);
     let _ = writeln!(s, "#define LIGHT_CLUSTER_VEC4S {}u", lights::CLUSTER_VEC4S);
+    let _ = writeln!(
+        s,
+        "#define CLUSTER_SORT_CELL_ARRAYS {}u",
+        lights::CLUSTER_SORT_CELL_ARRAYS
+    );
     let _ = writeln!(s, "#define LIGHTS_KERNEL_COSINE {}u", lights::KERNEL_COSINE);
     let _ = writeln!(s, "#define LIGHTS_KERNEL_GGX {}u", lights::KERNEL_GGX);
     let _ = writeln!(

@@ -292,6 +292,11 @@ pub mod lights {
         /// Per texel: light records above the threshold, the residual everywhere.
         pub const COMPACT: u32 = 4;
     }
+    /// Arrays of one u32 per cell at the start of `glsl/extract_clusters.comp`'s sort buffer:
+    /// counts, first slots, cursors, places among the non-empty cells.
+    pub const CLUSTER_SORT_CELL_ARRAYS: u32 = 4;
+    /// Arrays of one u32 per record after them: each record's cell, the records in cell order.
+    pub const CLUSTER_SORT_RECORD_ARRAYS: u32 = 2;
     /// Steps of `glsl/extract_clusters.comp` (`ExtractClustersPush::mode`), in recording
     /// order.
     pub mod clusters_mode {

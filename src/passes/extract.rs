@@ -20,7 +20,10 @@
 //! an indirect dispatch (no workgroups unless the cap binds) histograms that bin's low bits; one
 //! workgroup selects the exact threshold; the compaction writes records and residual.
 
-use crate::abi::lights::{clusters_mode, CLUSTER_VEC4S, KERNEL_COSINE, KERNEL_GGX};
+use crate::abi::lights::{
+    clusters_mode, CLUSTER_SORT_CELL_ARRAYS, CLUSTER_SORT_RECORD_ARRAYS, CLUSTER_VEC4S,
+    KERNEL_COSINE, KERNEL_GGX,
+};
 use crate::abi::lights::{
     extract_mode as mode, extract_word as word, EXTRACT_HEADER_WORDS, EXTRACT_LOW_BINS,
     EXTRACT_RECORD_VEC4S, EXTRACT_TOP_BINS,
@@ -395,7 +398,8 @@ impl Extractor {
                 out.size()
             )));
         }
-        let words = 4 * cells + 2 * from.max as u64;
+        let words = CLUSTER_SORT_CELL_ARRAYS as u64 * cells
+            + CLUSTER_SORT_RECORD_ARRAYS as u64 * from.max as u64;
         let sort = rec.scratch(
             "light clusters sort",
             words * 4,
