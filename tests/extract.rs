@@ -274,3 +274,73 @@ fn gpu_clusters_match_the_host_clusters_on_every_mapping() {
     }
     common::finish(ctx);
 }
+
+/// The GPU's preparation of its light records for the shade pass's walk
+/// (`Extractor::record_prepare`) against the float64 twin on every mapping (a sun and a glow,
+/// ratio 2 with the cap of 6 binding, directions turned by a rotation and a mirror, 2 cells
+/// a side: 16 quadrature nodes a texel): the host prepares the same records
+/// (`prepare_cells`) in texel order and lays out `LightTree::flat` over them; every float of
+/// the texels and of the tree's nodes, the end node included, agrees within 2e-5 relative to
+/// its own size, floor 1 (directions, float32 trigonometry and sums of the weights against
+/// float64), and the buffer holds the kept count of texels.
+#[test]
+fn gpu_prepared_lights_match_the_float64_twin_on_every_mapping() {
+    use envlight::math::light_tree::{LightTree, TREE_VEC4S};
+    use envlight::math::lights::{gpu_list, prepare_cells, LightTexel};
+    use envlight::passes::GpuLights;
+    let ctx = common::ctx();
+    {
+        let extractor = Extractor::new(&ctx).unwrap();
+        let (room, cells) = (6u32, 2u32);
+        let nodes = 4 * cells * cells;
+        let f2w = glam::DMat3::from_rotation_y(0.7)
+            * glam::DMat3::from_diagonal(glam::DVec3::new(-1.0, 1.0, 1.0));
+        for mapping in Mapping::ALL {
+            let map = twin::glow_sky(mapping, 32);
+            let opts = ExtractOptions {
+                ratio: 2.0,
+                max_texels: room as usize,
+                fill: None,
+            };
+            let lights = GpuLights::on_gpu(&ctx, room, nodes, 0).unwrap();
+            let (ex, got) = extractor.run_prepared(&map, &opts, f2w, &lights).unwrap();
+            let kept = ex.stats.kept;
+            assert!(
+                ex.stats.candidates > room && kept == room,
+                "{mapping:?}: {:?}",
+                ex.stats
+            );
+            let mut texels: Vec<LightTexel> = ex
+                .lights
+                .iter()
+                .map(|l| LightTexel {
+                    layer: l.texel[0],
+                    i: l.texel[1],
+                    j: l.texel[2],
+                    dir: glam::DVec3::new(l.dir[0] as f64, l.dir[1] as f64, l.dir[2] as f64),
+                    omega: l.omega as f64,
+                    radiance: l.excess,
+                })
+                .collect();
+            texels.sort_by_key(|t| (t.layer, t.j, t.i));
+            let tree = LightTree::flat(prepare_cells(&map, &texels, f2w, cells), room);
+            let want_texels = gpu_list(&tree.lights);
+            let want_nodes = tree.gpu_nodes();
+            assert_eq!(want_texels.len() as u32, kept * lights.stride());
+            assert_eq!(want_nodes.len() as u32, (kept + 1) * TREE_VEC4S);
+            let at = lights.tree_at() as usize;
+            let pairs = got[..want_texels.len()]
+                .iter()
+                .zip(&want_texels)
+                .chain(got[at..at + want_nodes.len()].iter().zip(&want_nodes));
+            let mut errors = common::compare::Errors::new();
+            for (k, (g, w)) in pairs.enumerate() {
+                for c in 0..4 {
+                    errors.rel(g[c], w[c], 1.0, (mapping, k, c));
+                }
+            }
+            errors.assert_within(2e-5, "GPU-prepared light texels and nodes");
+        }
+    }
+    common::finish(ctx);
+}

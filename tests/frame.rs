@@ -48,14 +48,25 @@ fn an_engine_frame_matches_the_cli_render() {
 /// makes the CLI's host render of the same scene: the same passes on the same map (1e-6) for
 /// assets/scenes/dynamic.toml (lights left in the map), and within 1e-4 for diffuse.toml, whose
 /// SH objects take lights extracted on the GPU (its clusters, the residual's SH) where the host
-/// subtracts the light texels' coefficients. It refuses a scene whose split-sum takes lights,
-/// saying why.
+/// subtracts the light texels' coefficients. split_sum.toml's split-sum and FIS take the
+/// chain's lights, which the resident path extracts on the GPU (at most 256 texels, walked one
+/// by one, the residual clamped) and the host on the host (16384 in a light tree, the residual
+/// filled): within 1e-3 on average, 3e-3 RMS and 0.1 at the worst pixel (measured 2.8e-4,
+/// 1.0e-3, 4.7e-2 at a sphere's rim). It refuses a scene with Monte Carlo, saying why.
 #[test]
 fn render_resident_matches_render() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = std::env::temp_dir().join(format!("envlight-resident-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    for (name, bound) in [("dynamic", 1e-6), ("diffuse", 1e-4)] {
+    // (worst, mean, RMS) bounds. split_sum.toml's split-sum and FIS take the chain's lights,
+    // extracted on the GPU: at most 256 texels, the residual clamped, where the host keeps
+    // 16384 in a tree and fills the residual.
+    let cases = [
+        ("dynamic", [1e-6; 3]),
+        ("diffuse", [1e-4; 3]),
+        ("split_sum", [0.1, 1e-3, 3e-3]),
+    ];
+    for (name, [worst, mean, rms]) in cases {
         let scene = root.join(format!("assets/scenes/{name}.toml"));
         let host = common::scenes::cli_render(&scene, &dir.join("host.exr"));
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
@@ -67,27 +78,30 @@ fn render_resident_matches_render() {
             .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let out = String::from_utf8_lossy(&o.stdout);
-        assert_eq!(out.contains("light extraction"), name == "diffuse", "{out}");
+        assert_eq!(out.contains("light extraction"), name != "dynamic", "{out}");
         let resident = envlight::io::load(dir.join("resident.exr"), &Default::default()).unwrap();
         let errors = frame_errors(&resident, &host);
         assert!(
-            errors.worst() <= bound,
-            "{name}: resident differs by {:e}",
-            errors.worst()
+            errors.worst() <= worst && errors.mean() <= mean && errors.rms() <= rms,
+            "{name}: resident differs by {:e} at worst ({:?}), {:e} on average, {:e} RMS",
+            errors.worst(),
+            errors.at(),
+            errors.mean(),
+            errors.rms()
         );
     }
+    let mut mc = std::fs::read_to_string(root.join("assets/scenes/materials.toml")).unwrap();
+    mc = mc.replace("\"../", &format!("\"{}/assets/", root.display()));
+    std::fs::write(dir.join("mc.toml"), mc).unwrap();
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
         .args(["--device", "cpu", "render", "--resident"])
-        .arg(root.join("assets/scenes/split_sum.toml"))
+        .arg(dir.join("mc.toml"))
         .arg("-o")
         .arg(dir.join("refused.exr"))
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        !o.status.success() && err.contains("extracts lights"),
-        "{err}"
-    );
+    assert!(!o.status.success() && err.contains("Monte Carlo"), "{err}");
     assert!(!dir.join("refused.exr").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -207,4 +207,11 @@ bindings! {
     CLUSTERS_SORT = 2;
     /// extract_clusters: the clusters written (vec4 buffer, the shade pass's lights).
     CLUSTERS_OUT = 3;
+    /// extract_prepare: the extraction's state (its count).
+    PREPARE_STATE = 0;
+    /// extract_prepare: the extraction's light records.
+    PREPARE_LIGHTS = 1;
+    /// extract_prepare: the shade pass's lights buffer the prepared texels and their flat
+    /// tree are written into (vec4 storage buffer).
+    PREPARE_OUT = 2;
 }

@@ -365,6 +365,25 @@ push_blocks! {
         /// The extraction's most records.
         max: u32 = "uint",
     }
+    /// `glsl/extract_prepare.comp`.
+    ExtractPreparePush {
+        /// Rows of the file → world rotation/reflection (w unused).
+        file_to_world: [[f32; 4]; 3] = "vec4[3]",
+        /// Layer size of the map the lights were extracted from.
+        map_size: [u32; 2] = "uvec2",
+        /// Its mapping id.
+        mapping: u32 = "uint",
+        /// Cells per side of each texel's quadrature ((2·cells)² nodes).
+        cells: u32 = "uint",
+        /// vec4s per prepared texel (header and nodes).
+        stride: u32 = "uint",
+        /// Where the tree's nodes start in the output, in vec4s.
+        tree_at: u32 = "uint",
+        /// The extraction's most records (the texels' room; the tree's is one more).
+        max: u32 = "uint",
+        /// Padding.
+        pad: u32 = "uint",
+    }
     /// `glsl/lights.comp`.
     LightsPush {
         /// Side of the level written (a cube face).

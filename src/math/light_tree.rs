@@ -83,6 +83,39 @@ impl LightTree {
         LightTree { lights, nodes }
     }
 
+    /// The flat tree over `lights` (given in the order they are to be walked) that the GPU
+    /// prepares for lights it extracts each frame (`glsl/extract_prepare.comp`): a leaf of
+    /// one texel per light, then an end node (no power, no texels) whose skip, `room` + 1,
+    /// is past every node of a buffer with room for `room` lights. Its walk visits every
+    /// texel: the texels' per-texel rule alone, at a cost that grows with their count.
+    pub fn flat(lights: Vec<PreparedLight>, room: u32) -> LightTree {
+        let mut nodes: Vec<TreeNode> = lights
+            .iter()
+            .zip(0u32..)
+            .map(|(t, k)| TreeNode {
+                centre: t.dir,
+                reach: t.rho,
+                rho: t.rho,
+                power: t.radiance.map(|l| l * t.omega),
+                axes: [DVec3::ZERO; 2],
+                first: k,
+                count: 1,
+                skip: k + 1,
+            })
+            .collect();
+        nodes.push(TreeNode {
+            centre: DVec3::Z,
+            reach: 0.0,
+            rho: 0.0,
+            power: [0.0; 3],
+            axes: [DVec3::ZERO; 2],
+            first: 0,
+            count: 0,
+            skip: room + 1,
+        });
+        LightTree { lights, nodes }
+    }
+
     /// The GPU's list of nodes, [`TREE_VEC4S`] each: (centre, reach), (power, ρ), (axis 0,
     /// the power's luminance), (axis 1, 0), (first, count, skip, 0) as float values (exact below 2²⁴; as bits
     /// they would be denormals, which llvmpipe flushes to zero).

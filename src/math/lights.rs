@@ -451,7 +451,24 @@ pub fn nodes(map: &EnvMap, t: &LightTexel, cells: u32) -> Vec<(DVec3, f64)> {
 /// would fall between the nodes, so techniques read the whole map instead.
 pub fn resolves(ex: &Extraction, scale: f64) -> bool {
     let rho = ex.lights.iter().map(|t| t.omega.sqrt()).fold(0.0, f64::max);
+    resolves_rho(rho, scale)
+}
+
+/// [`resolves`] for texels up to ρ = `rho`.
+pub fn resolves_rho(rho: f64, scale: f64) -> bool {
     PER_WIDTH * rho <= 8.0 * scale
+}
+
+/// ρ = √Ω of the largest texel of a `width` × `height` layer of `mapping`: the equator's
+/// for lat-long, the centre's for the others (their densities peak there), so the two middle
+/// rows hold it.
+pub fn largest_rho(mapping: super::Mapping, width: u32, height: u32) -> f64 {
+    let rows = [height / 2, (height / 2).saturating_sub(1)];
+    rows.iter()
+        .flat_map(|&j| (0..width).map(move |i| (i, j)))
+        .map(|(i, j)| mapping.texel_solid_angle(width, height, i, j))
+        .fold(0.0, f64::max)
+        .sqrt()
 }
 
 /// Cells per side of every light texel's quadrature for lobes down to `alpha`:
@@ -459,6 +476,11 @@ pub fn resolves(ex: &Extraction, scale: f64) -> bool {
 /// [`super::exact::ExactFilter::ggx`], at the lobe's peak).
 pub fn cells_for(ex: &Extraction, alpha: f64) -> u32 {
     let rho = ex.lights.iter().map(|t| t.omega.sqrt()).fold(0.0, f64::max);
+    cells_for_rho(rho, alpha)
+}
+
+/// [`cells_for`] for texels up to ρ = `rho`.
+pub fn cells_for_rho(rho: f64, alpha: f64) -> u32 {
     let a = alpha.max(super::brdf::GGX_ALPHA_MIN);
     ((PER_WIDTH * rho / a).ceil() as u32).clamp(1, 8)
 }
@@ -514,8 +536,19 @@ pub fn prepare(
     file_to_world: glam::DMat3,
     alpha: f64,
 ) -> Vec<PreparedLight> {
-    let cells = cells_for(ex, alpha);
-    ex.lights
+    prepare_cells(map, &ex.lights, file_to_world, cells_for(ex, alpha))
+}
+
+/// [`prepare`] with `cells` per side of every texel's quadrature: the twin of the GPU's
+/// preparation (`glsl/extract_prepare.comp`), whose cells come from the map's largest texel
+/// ([`cells_for_rho`] of [`largest_rho`]) since it cannot wait for what a frame extracts.
+pub fn prepare_cells(
+    map: &EnvMap,
+    lights: &[LightTexel],
+    file_to_world: glam::DMat3,
+    cells: u32,
+) -> Vec<PreparedLight> {
+    lights
         .iter()
         .map(|t| PreparedLight {
             dir: file_to_world * t.dir,

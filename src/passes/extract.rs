@@ -28,7 +28,7 @@ use crate::abi::lights::{
     extract_mode as mode, extract_word as word, EXTRACT_HEADER_WORDS, EXTRACT_LOW_BINS,
     EXTRACT_RECORD_VEC4S, EXTRACT_TOP_BINS,
 };
-use crate::abi::push::{ExtractAddPush, ExtractClustersPush};
+use crate::abi::push::{ExtractAddPush, ExtractClustersPush, ExtractPreparePush};
 use crate::abi::{binding, push::ExtractPush, ShaderId, WORKGROUP_1D, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
@@ -201,6 +201,7 @@ pub struct Extractor {
     select: Pipeline,
     add: Pipeline,
     clusters: Pipeline,
+    prepare: Pipeline,
     sampler: Sampler,
 }
 
@@ -213,6 +214,7 @@ impl Extractor {
             select: Pipeline::compute(ctx, ShaderId::ExtractSelect, &WORKGROUP_2D)?,
             add: Pipeline::compute(ctx, ShaderId::ExtractAdd, &WORKGROUP_2D)?,
             clusters: Pipeline::compute(ctx, ShaderId::ExtractClusters, &[WORKGROUP_1D])?,
+            prepare: Pipeline::compute(ctx, ShaderId::ExtractPrepare, &[WORKGROUP_1D])?,
             sampler: Sampler::linear_clamp(ctx, "extraction")?,
         })
     }
@@ -430,6 +432,55 @@ impl Extractor {
         })
     }
 
+    /// Records the preparation of `from`'s kept light records (an extraction recorded
+    /// earlier, of a map whose file directions reach the world through `file_to_world`) for
+    /// the shade pass's light walk, into `out` (made by [`super::GpuLights::on_gpu`] with room
+    /// for `from.max()` texels): each texel's header and quadrature of (2·`out`'s cells)²
+    /// nodes, in the order of their texel positions, and a flat tree of one leaf per texel
+    /// (`crate::math::light_tree::LightTree::flat`). The count is read on the GPU. Span:
+    /// "prepare lights (gpu)".
+    pub fn record_prepare(
+        &self,
+        rec: &mut Recorder,
+        from: &GpuExtraction,
+        file_to_world: glam::DMat3,
+        out: &super::GpuLights,
+    ) -> Result<()> {
+        let nodes = out.stride() - crate::abi::lights::HEADER_VEC4S;
+        let cells = (nodes as f64).sqrt() as u32 / 2;
+        if out.count() != from.max || out.tree_nodes() != from.max + 1 || 4 * cells * cells != nodes
+        {
+            return Err(Error::Invalid(format!(
+                "prepare lights: a lights buffer with room for {} texels of {nodes} nodes and \
+                 {} tree nodes cannot hold an extraction of {} (room for each texel, an even \
+                 square of nodes, and one tree node more)",
+                out.count(),
+                out.tree_nodes(),
+                from.max
+            )));
+        }
+        let r = &from.residual;
+        let push = ExtractPreparePush {
+            file_to_world: crate::gpu::mat3_rows(file_to_world),
+            map_size: [r.width, r.height],
+            mapping: r.mapping.id(),
+            cells,
+            stride: out.stride(),
+            tree_at: out.tree_at(),
+            max: from.max,
+            pad: 0,
+        };
+        let binds = [
+            (binding::PREPARE_STATE, Bind::Buffer(&from.state)),
+            (binding::PREPARE_LIGHTS, Bind::Buffer(&from.lights)),
+            (binding::PREPARE_OUT, Bind::Buffer(out.buffer())),
+        ];
+        let groups = groups(from.max + 1, WORKGROUP_1D);
+        rec.span("prepare lights (gpu)", |rec| {
+            rec.dispatch(&self.prepare, &binds, &push, [groups, 1, 1])
+        })
+    }
+
     /// Uploads `map`, projects its band 0, extracts by `opts` (no `fill`), gathers the lights
     /// into the clusters of a `grid` × `grid`/2 grid (file frame = world) and reads back those
     /// in use, row-major, waiting (for tests).
@@ -497,6 +548,44 @@ impl Extractor {
         gpu: &GpuEnvMap,
         opts: &ExtractOptions,
     ) -> Result<(Extracted, Vec<Timing>)> {
+        self.run_then(gpu, opts, |_, _| Ok(()))
+    }
+
+    /// [`Extractor::run`], then the records prepared into `lights`
+    /// ([`Extractor::record_prepare`], `file_to_world` turning their directions) in the same
+    /// submission; returns the extraction and `lights`' whole buffer, waiting (for tests).
+    pub fn run_prepared(
+        &self,
+        map: &EnvMap,
+        opts: &ExtractOptions,
+        file_to_world: glam::DMat3,
+        lights: &super::GpuLights,
+    ) -> Result<(Extracted, Vec<[f32; 4]>)> {
+        let gpu = GpuEnvMap::upload(&self.ctx, map)?;
+        let bytes = lights.buffer().size();
+        let host = Buffer::new(
+            &self.ctx,
+            "prepared lights (host)",
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let (ex, _) = self.run_then(&gpu, opts, |rec, out| {
+            self.record_prepare(rec, out, file_to_world, lights)?;
+            rec.copy_buffer(lights.buffer(), &host, bytes);
+            rec.use_buffer(&host, Usage::HostRead);
+            Ok(())
+        })?;
+        Ok((ex, host.read((bytes / 16) as usize)))
+    }
+
+    /// [`Extractor::run_on`], `then` recorded after the extraction in the same submission.
+    fn run_then(
+        &self,
+        gpu: &GpuEnvMap,
+        opts: &ExtractOptions,
+        then: impl FnOnce(&mut Recorder, &GpuExtraction) -> Result<()>,
+    ) -> Result<(Extracted, Vec<Timing>)> {
         if opts.fill.is_some() {
             return Err(Error::Invalid(
                 "the GPU light extraction clamps the residual; it has no fill".into(),
@@ -532,6 +621,7 @@ impl Extractor {
             rec.copy_buffer(&out.lights, &records, out.lights.size());
             rec.use_buffer(&header, Usage::HostRead);
             rec.use_buffer(&records, Usage::HostRead);
+            then(rec, &out)?;
             Ok((out.residual.record_download(rec, 0)?, ()))
         })?;
         let h: Vec<u32> = header.read(words);

@@ -99,6 +99,41 @@ impl GpuLights {
         })
     }
 
+    /// Room for `room` light texels of `nodes` quadrature nodes each, the flat tree over
+    /// them (`room` + 1 nodes) and `cells` clusters, all written on the GPU
+    /// (`super::Extractor::record_prepare`, `super::Extractor::record_clusters`): the
+    /// resident path's lights, where FIS, split-sum, Phong maps or footprint lookups add the
+    /// light texels (and SH or prefiltered irradiance the clusters) of each frame's map.
+    pub fn on_gpu(ctx: &Context, room: u32, nodes: u32, cells: u32) -> Result<GpuLights> {
+        use crate::abi::lights::{CLUSTER_VEC4S, HEADER_VEC4S, STEP_NODES, TREE_VEC4S};
+        if room == 0 {
+            return Self::clusters_on_gpu(ctx, cells);
+        }
+        let pad = (HEADER_VEC4S + STEP_NODES)
+            .saturating_sub(TREE_VEC4S)
+            .max(1) as u64;
+        let vec4s = room as u64 * (HEADER_VEC4S + nodes) as u64
+            + cells as u64 * CLUSTER_VEC4S as u64
+            + 1
+            + (room as u64 + 1) * TREE_VEC4S as u64
+            + pad;
+        Ok(GpuLights {
+            buffer: Buffer::new(
+                ctx,
+                "light texels and clusters",
+                vec4s * 16,
+                ash::vk::BufferUsageFlags::STORAGE_BUFFER
+                    | ash::vk::BufferUsageFlags::TRANSFER_SRC
+                    | ash::vk::BufferUsageFlags::TRANSFER_DST,
+                gpu_allocator::MemoryLocation::GpuOnly,
+            )?,
+            count: room,
+            nodes,
+            clusters: cells,
+            tree_nodes: room + 1,
+        })
+    }
+
     /// Nodes of the light texels' tree.
     pub fn tree_nodes(&self) -> u32 {
         self.tree_nodes

@@ -288,6 +288,9 @@ pub(super) struct Work<'a> {
     /// The diffuse residual on the GPU (the resident path's extraction), which prefiltered
     /// irradiance maps of a residual filter.
     pub diffuse_residual: Option<&'a GpuEnvMap>,
+    /// The chain's residual on the GPU (the resident path's extraction), which the paraboloid
+    /// converts where it holds the residual and prefiltered Phong maps of a residual filter.
+    pub chain_residual: Option<&'a GpuEnvMap>,
     /// The SH output already holds this frame's projection of the map (the resident path's
     /// lights read its band 0 first): only the packing is recorded.
     pub sh_projected: bool,
@@ -299,6 +302,7 @@ impl Work<'static> {
         tables: true,
         split: None,
         diffuse_residual: None,
+        chain_residual: None,
         sh_projected: false,
     };
 }
@@ -357,7 +361,7 @@ pub(super) fn record(
         for m in &inputs.pre {
             let residual = match m.kernel {
                 Kernel::Cosine => work.diffuse_residual.or(lit.diffuse_residual.as_ref()),
-                Kernel::Phong { .. } => lit.chain_residual.as_ref(),
+                Kernel::Phong { .. } => work.chain_residual.or(lit.chain_residual.as_ref()),
             };
             let source = match residual {
                 Some(res) if m.lit => res,
@@ -391,6 +395,7 @@ fn record_chain(
     let source = match (&lit.dp_source, &lit.chain_residual) {
         (Some((_, gpu)), _) => gpu,
         (None, Some(res)) if lit.dp => res,
+        (None, None) if lit.dp => work.chain_residual.unwrap_or(env),
         _ => env,
     };
     // A residual holds no sun for the rim's chords to misplace: fewer points (as predicted

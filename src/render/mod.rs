@@ -14,7 +14,7 @@ pub use plan::{
     LightsPlan, MapShape, ObjectPlan, PassKind, Plan, PlannedPass, SplitPlan, TablePlan,
 };
 pub use records::{object_record, object_record_with, split_record};
-pub use resident::Resident;
+pub use resident::{Resident, CHAIN_GPU_MAX, DIFFUSE_GPU_MAX};
 
 use crate::error::{Error, Result};
 use crate::gpu::{Context, Timing};
@@ -153,6 +153,11 @@ impl Renderer {
             subgroups: Subgroups::Auto,
             whole_shade: false,
         }
+    }
+
+    /// The context it renders on.
+    pub fn context(&self) -> &Context {
+        &self.ctx
     }
 
     /// Whether passes built from now on may use subgroup operations (the default: where the

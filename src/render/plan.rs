@@ -662,7 +662,7 @@ impl PassKind {
             PassKind::SplitSum => &[Dfg, PrefilterGgx],
             PassKind::Prefilter => &[BrutePrepare, BruteTiles, Brute, BruteResolve],
             PassKind::MonteCarlo => &[Mc],
-            PassKind::Lights => &[Extract, ExtractSelect, ExtractClusters],
+            PassKind::Lights => &[Extract, ExtractSelect, ExtractClusters, ExtractPrepare],
             PassKind::Shade => &crate::passes::shade::MODULES,
         }
     }

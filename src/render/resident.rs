@@ -17,7 +17,7 @@ use super::shading::{self, Shading};
 use super::{Job, Rendered, Renderer};
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, FrameCache, Recorder};
-use crate::math::lights::CLUSTER_GRID;
+use crate::math::lights::{cells_for_rho, largest_rho, resolves_rho, CLUSTER_GRID};
 use crate::math::Mapping;
 use crate::passes::gbuffer::{target, GBuffer};
 use crate::passes::map::Sanitizer;
@@ -46,6 +46,10 @@ pub struct Resident {
     zeroed: Buffer,
     /// The diffuse lights, extracted on the GPU every frame, where the scene extracts them.
     diffuse: Option<DiffuseLights>,
+    /// The chain's lights, extracted on the GPU every frame, where the scene extracts them.
+    chain: Option<ChainLights>,
+    /// The maps' means the extractions read, where there are any.
+    means: Option<Means>,
     /// The split-sum chain's rough levels dealt into time slices (one: no slicing).
     slices: Vec<Vec<LevelLayers>>,
     /// Frames recorded since the last whole refilter.
@@ -133,9 +137,8 @@ impl Resident {
 }
 
 /// Why `scene` cannot render from a GPU image, if it cannot: Monte Carlo builds its sampling
-/// tables on the host, and the lights of the chain's techniques are prepared on the host
-/// (texel quadratures, the light tree) for the shade pass.
-fn refusal(scene: &Scene, plan: &Plan) -> Option<String> {
+/// tables on the host.
+fn refusal(plan: &Plan) -> Option<String> {
     if let Some(k) = plan
         .objects
         .iter()
@@ -146,26 +149,17 @@ fn refusal(scene: &Scene, plan: &Plan) -> Option<String> {
              the resident path cannot render it"
         ));
     }
-    if scene.environment.lights == LightsMode::Extract && plan.lights.chain.is_some() {
-        return Some(
-            "the scene extracts lights ([environment] lights = \"extract\") for FIS, split-sum, \
-             prefiltered Phong maps or footprint lookups, which take them through a light tree \
-             built on the host: the resident path extracts on the GPU only the diffuse lights \
-             (SH and prefiltered irradiance); render those with lights = \"none\""
-                .into(),
-        );
-    }
     None
 }
 
 impl Renderer {
     /// Prepares `scene` for rendering from environments of shape `env` that live on the GPU:
     /// plans it, builds its pipelines and makes every resource its passes write. Refuses a
-    /// scene with Monte Carlo objects or extracted lights (both need the map on the host).
+    /// scene with Monte Carlo objects (their sampling tables need the map on the host).
     pub fn resident(&self, scene: &Scene, env: MapShape) -> Result<Resident> {
         scene.validate().map_err(Error::Invalid)?;
         let plan = plan_for(scene, env);
-        if let Some(why) = refusal(scene, &plan) {
+        if let Some(why) = refusal(&plan) {
             return Err(Error::Invalid(why));
         }
         let ctx = &self.ctx;
@@ -177,8 +171,9 @@ impl Renderer {
         }
         let passes = self.passes(&plan)?;
         let mut lit = Lit::none(&plan);
+        let extract = scene.environment.lights == LightsMode::Extract;
         let diffuse = match &plan.lights.diffuse {
-            Some(opts) if scene.environment.lights == LightsMode::Extract => {
+            Some(opts) if extract => {
                 let d = DiffuseLights::new(ctx, &plan, env, opts.ratio)?;
                 lit.sh = plan.lights.sh;
                 lit.prefiltered = plan.lights.prefiltered;
@@ -186,11 +181,23 @@ impl Renderer {
                     .sh_residual
                     .is_some()
                     .then(|| crate::math::sh::count(plan.lmax) as u32);
-                lit.gpu = Some(GpuLights::clusters_on_gpu(ctx, CLUSTER_CELLS)?);
                 Some(d)
             }
             _ => None,
         };
+        let chain = match &plan.lights.chain {
+            Some(opts) if extract => ChainLights::new(ctx, scene, &plan, env, opts, &mut lit)?,
+            _ => None,
+        };
+        let cells = diffuse.as_ref().map_or(0, |_| CLUSTER_CELLS);
+        lit.gpu = match &chain {
+            Some(c) => Some(GpuLights::on_gpu(ctx, c.extraction.max(), c.nodes, cells)?),
+            None if diffuse.is_some() => Some(GpuLights::clusters_on_gpu(ctx, cells)?),
+            None => None,
+        };
+        let means = (diffuse.is_some() || chain.is_some())
+            .then(|| Means::new(ctx))
+            .transpose()?;
         let job = Job {
             ctx,
             scene,
@@ -243,6 +250,8 @@ impl Renderer {
             sanitizer: Sanitizer::new(ctx)?,
             zeroed,
             diffuse,
+            chain,
+            means,
             slices: Vec::new(),
             frames: AtomicU64::new(0),
         })
@@ -326,20 +335,28 @@ impl Renderer {
             // zero by every pass, and counted.
             r.sanitizer.record(rec, env, &r.clean, &r.zeroed)?;
             let env = &r.clean;
-            // The frame's SH projection, where the diffuse lights read its band 0.
-            let sh = match (&r.diffuse, passes.sh, &r.inputs.sh_out) {
+            // The frame's SH projection, where the lights read its band 0.
+            let sh = match (&r.means, passes.sh, &r.inputs.sh_out) {
                 (Some(_), Some((p, _)), Some(out)) => Some((p, out)),
                 _ => None,
             };
-            if let (Some(d), Some(lights)) = (&r.diffuse, &r.lit.gpu) {
+            if let (Some(means), Some(lights)) = (&r.means, &r.lit.gpu) {
                 marks.record(rec, PassKind::Lights, |rec| {
-                    d.record(rec, &job, env, lights, sh)
+                    let mean = means.record(rec, &job, env, sh)?;
+                    if let Some(d) = &r.diffuse {
+                        d.record(rec, &job, env, lights, mean, sh)?;
+                    }
+                    match &r.chain {
+                        Some(c) => c.record(rec, &job, env, lights, mean),
+                        None => Ok(()),
+                    }
                 })?;
             }
             let work = Work {
                 tables: false,
                 split: r.next_split(),
                 diffuse_residual: r.diffuse.as_ref().map(|d| d.extraction.residual()),
+                chain_residual: r.chain.as_ref().map(|c| c.extraction.residual()),
                 sh_projected: sh.is_some(),
             };
             inputs::record(rec, marks, &job, &passes, ins, env, &work, || Ok(()))?;
@@ -370,9 +387,7 @@ pub const DIFFUSE_GPU_MAX: u32 = 1 << 20;
 /// coefficients instead: the same sum).
 struct DiffuseLights {
     extractor: Extractor,
-    projector: ShProjector,
     extraction: GpuExtraction,
-    l00: Buffer,
     /// The residual's projection, copied after the map's in the SH output (where SH objects
     /// add the lights).
     sh_residual: Option<Buffer>,
@@ -398,9 +413,7 @@ impl DiffuseLights {
         };
         Ok(DiffuseLights {
             extractor: Extractor::new(ctx)?,
-            projector: ShProjector::new(ctx, Subgroups::Auto)?,
             extraction: GpuExtraction::new(ctx, env.mapping, env.width, env.height, texels)?,
-            l00: buffer("resident L00", 0)?,
             sh_residual: match plan.lights.sh {
                 true => Some(buffer("resident residual sh", plan.lmax)?),
                 false => None,
@@ -409,33 +422,21 @@ impl DiffuseLights {
         })
     }
 
-    /// Records the frame's extraction from `env`, its clusters into `lights` and, with `sh`
-    /// (the frame's projector and SH output, where the plan projects), the map's projection
-    /// into the output's first half, whose band 0 the extraction reads (the frame's own, so
-    /// `inputs::record` only packs it), and the residual's into the second half. Without it
-    /// the mean comes from a band-0 projection of its own.
+    /// Records the frame's extraction from `env` by its mean luminance (`mean`'s band 0),
+    /// its clusters into `lights` and, with `sh` (the frame's projector and SH output, where
+    /// the plan projects), the residual's projection into the output's second half.
     fn record(
         &self,
         rec: &mut Recorder,
         job: &Job<'_>,
         env: &GpuEnvMap,
         lights: &GpuLights,
+        mean: &Buffer,
         sh: Option<(&ShProjector, &Buffer)>,
     ) -> Result<()> {
         let orientation = &job.orientation;
         let file_to_world = orientation.checked_world_to_file()?.transpose();
         let lmax = job.plan.lmax;
-        let mean = match sh {
-            Some((p, out)) => {
-                p.record_into(rec, env, lmax, orientation, out)?;
-                out
-            }
-            None => {
-                self.projector
-                    .record_into(rec, env, 0, orientation, &self.l00)?;
-                &self.l00
-            }
-        };
         self.extractor
             .record(rec, env, mean, self.ratio, &self.extraction)?;
         let at = lights.cluster_at();
@@ -454,5 +455,135 @@ impl DiffuseLights {
             rec.copy_buffer_regions(res, out, &[(0, bytes, bytes)]);
         }
         Ok(())
+    }
+}
+
+/// The maps' mean luminance the extractions read: band 0 of the frame's own SH projection
+/// where the plan projects (`inputs::record` then only packs it), else a band-0 projection
+/// of its own.
+struct Means {
+    projector: ShProjector,
+    l00: Buffer,
+}
+
+impl Means {
+    fn new(ctx: &crate::gpu::Context) -> Result<Means> {
+        Ok(Means {
+            projector: ShProjector::new(ctx, Subgroups::Auto)?,
+            l00: Buffer::new(
+                ctx,
+                "resident L00",
+                ShProjector::output_bytes(0),
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                gpu_allocator::MemoryLocation::GpuOnly,
+            )?,
+        })
+    }
+
+    /// Records the projection `env`'s mean is read from, into `sh`'s output where given (the
+    /// frame's projection, at the plan's order) or its own band 0; returns where it is.
+    fn record<'a>(
+        &'a self,
+        rec: &mut Recorder,
+        job: &Job<'_>,
+        env: &GpuEnvMap,
+        sh: Option<(&ShProjector, &'a Buffer)>,
+    ) -> Result<&'a Buffer> {
+        let orientation = &job.orientation;
+        match sh {
+            Some((p, out)) => {
+                p.record_into(rec, env, job.plan.lmax, orientation, out)?;
+                Ok(out)
+            }
+            None => {
+                self.projector
+                    .record_into(rec, env, 0, orientation, &self.l00)?;
+                Ok(&self.l00)
+            }
+        }
+    }
+}
+
+/// Most light texels the resident path's chain extraction keeps where the scene sets no
+/// `light_texels` (the host path's default keeps 16384 in a light tree). Its texels are
+/// walked one by one (a flat tree: `LightTree::flat`), so a pixel's cost grows with this
+/// room; a map with more texels above the ratio keeps the brightest, the rest stay in the
+/// residual, counted.
+pub const CHAIN_GPU_MAX: u32 = 256;
+
+/// The resident path's chain lights: each frame the extraction by the scene's ratio (the
+/// residual clamped at the threshold: the host's default fills it from around the lights,
+/// which the GPU does not), its records prepared for the shade pass's walk
+/// (`Extractor::record_prepare`), and the residual, which the paraboloid converts and
+/// prefiltered Phong maps filter where the lights are added per pixel. What the host path
+/// decides from the texels found (whether their quadratures resolve each lobe, and how fine
+/// they are) is decided here from the map's largest texel, since no frame is read back.
+struct ChainLights {
+    extractor: Extractor,
+    extraction: GpuExtraction,
+    /// Quadrature nodes per light texel.
+    nodes: u32,
+    ratio: f64,
+}
+
+impl ChainLights {
+    /// The chain lights of `scene` for maps of shape `env`, with `lit`'s chain flags set
+    /// (whether the paraboloid holds the residual, which Phong objects add the texels), or
+    /// `None` where no technique would add them.
+    fn new(
+        ctx: &crate::gpu::Context,
+        scene: &Scene,
+        plan: &Plan,
+        env: MapShape,
+        opts: &crate::math::lights::ExtractOptions,
+        lit: &mut Lit,
+    ) -> Result<Option<ChainLights>> {
+        let rho = largest_rho(env.mapping, env.width, env.height);
+        let lp = &plan.lights;
+        lit.dp = lp.dp && resolves_rho(rho, lp.finest_chain);
+        lit.phong = plan
+            .objects
+            .iter()
+            .map(|o| o.phong_prefiltered() && o.lobe.is_some_and(|s| resolves_rho(rho, s)))
+            .collect();
+        if !lit.dp && !lit.phong.contains(&true) {
+            return Ok(None);
+        }
+        let finest = plan
+            .objects
+            .iter()
+            .zip(&lit.phong)
+            .filter(|&(o, &lit_phong)| lit_phong || (lit.dp && o.on_chain))
+            .filter_map(|(o, _)| o.lobe)
+            .fold(1.0, f64::min);
+        let cells = cells_for_rho(rho, finest);
+        let room = scene
+            .environment
+            .light_texels
+            .unwrap_or(CHAIN_GPU_MAX)
+            .max(1);
+        Ok(Some(ChainLights {
+            extractor: Extractor::new(ctx)?,
+            extraction: GpuExtraction::new(ctx, env.mapping, env.width, env.height, room)?,
+            nodes: 4 * cells * cells,
+            ratio: opts.ratio,
+        }))
+    }
+
+    /// Records the frame's extraction from `env` by its mean luminance (`mean`'s band 0) and
+    /// the preparation of its texels into `lights`.
+    fn record(
+        &self,
+        rec: &mut Recorder,
+        job: &Job<'_>,
+        env: &GpuEnvMap,
+        lights: &GpuLights,
+        mean: &Buffer,
+    ) -> Result<()> {
+        let file_to_world = job.orientation.checked_world_to_file()?.transpose();
+        self.extractor
+            .record(rec, env, mean, self.ratio, &self.extraction)?;
+        self.extractor
+            .record_prepare(rec, &self.extraction, file_to_world, lights)
     }
 }

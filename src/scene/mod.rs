@@ -89,6 +89,12 @@ pub struct Environment {
     /// `crate::abi::lights::CHAIN_MAX_TEXELS`).
     #[serde(default)]
     pub light_texels: Option<u32>,
+    /// FIS, split-sum and footprint lookups: rings of texels the light set grows by, the
+    /// residual under the lights filled from around them (default 2,
+    /// `crate::abi::lights::CHAIN_FILL`); 0 clamps the residual at the threshold instead,
+    /// as the resident path's GPU extraction always does.
+    #[serde(default)]
+    pub light_fill: Option<u32>,
     /// Diffuse techniques (SH and prefiltered irradiance) extract texels above this many
     /// times the map's mean luminance, uncapped, and sum them by clusters (default 2,
     /// `crate::math::lights::DIFFUSE_RATIO`).
@@ -129,7 +135,11 @@ impl Environment {
         crate::math::lights::ExtractOptions {
             ratio: self.light_ratio.unwrap_or(d.ratio),
             max_texels: self.light_texels.map_or(d.max_texels, |n| n as usize),
-            fill: d.fill,
+            fill: match self.light_fill {
+                Some(0) => None,
+                Some(n) => Some(n),
+                None => d.fill,
+            },
         }
     }
 }
@@ -430,6 +440,7 @@ impl Scene {
                 lights: LightsMode::default(),
                 light_ratio: None,
                 light_texels: None,
+                light_fill: None,
                 diffuse_light_ratio: None,
                 filter: LookupFilter::default(),
             },

@@ -40,6 +40,13 @@ impl Scene {
                 ));
             }
         }
+        if let Some(n) = self.environment.light_fill {
+            if n > 8 {
+                return Err(format!(
+                    "environment light_fill {n} is outside 0 to 8 (rings of texels around the lights)"
+                ));
+            }
+        }
         if self.objects.is_empty() {
             return Err("a scene needs at least one object".into());
         }

@@ -52,6 +52,10 @@ pub struct ReportArgs {
     /// With --table: only the probes whose file names contain one of these
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
+    /// With --table: render through the resident path (`envlight render --resident`: the map
+    /// on the GPU, its lights extracted there) instead of the host path
+    #[arg(long)]
+    resident: bool,
     /// Instead: the specular recipes (split-sum with and without extracted lights, lobe taps
     /// 4, 8, 16), FIS and SH-BRDF against the reference on every probe of the folder at GGX
     /// α 0.05 to 0.6, with their per-frame GPU time (split_sum.md, split_sum.csv)
@@ -352,6 +356,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         let pick = super::table::Pick {
             materials: args.materials.clone(),
             probes: args.only.clone(),
+            resident: args.resident,
         };
         let dir = probes_dir(args)?;
         return super::table::table(&renderer, &dir, size, reference, &args.out, &device, &pick);

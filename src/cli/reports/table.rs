@@ -8,7 +8,7 @@ use super::scoring::{average, scene, sphere_pixels};
 use crate::math::brdf::Brdf;
 use crate::math::camera::{Camera, Shape};
 use crate::math::envmap::luminance;
-use crate::render::Renderer;
+use crate::render::{MapShape, Renderer};
 use crate::scene::{LightsMode, LookupFilter, Scene, SplitSumSettings, Technique};
 use crate::EnvMap;
 use anyhow::{anyhow, Context as _, Result};
@@ -40,6 +40,9 @@ pub struct Pick {
     pub materials: Vec<String>,
     /// Parts of probe file names.
     pub probes: Vec<String>,
+    /// Render through the resident path (`Renderer::resident`, the map on the GPU, its
+    /// lights extracted there) instead of the host path.
+    pub resident: bool,
 }
 
 /// One measured case.
@@ -270,6 +273,10 @@ pub fn table(
         if n == 0 {
             warm_up(renderer, &env, &all, split)?;
         }
+        let gpu = pick
+            .resident
+            .then(|| crate::passes::GpuEnvMap::upload(renderer.context(), &env))
+            .transpose()?;
         for (material, brdf) in &materials {
             let (material, brdf) = (material.as_str(), *brdf);
             let (truth, noise) =
@@ -277,7 +284,13 @@ pub fn table(
             for c in all.iter().filter(|c| c.material == material) {
                 let mut sc = scene(cam, brdf, c.technique, None, 7, split);
                 with_case(&mut sc, c);
-                let r = renderer.render(&sc, &env)?;
+                let r = match &gpu {
+                    Some(gpu) => {
+                        let prepared = renderer.resident(&sc, MapShape::of(&env))?;
+                        renderer.render_resident(&prepared, gpu)?
+                    }
+                    None => renderer.render(&sc, &env)?,
+                };
                 let (rms, ratio, tile, errors) = score(&r.frame, &truth, &pixels);
                 let gpu_ms: f64 = r.records.iter().map(|p| p.ms()).sum();
                 eprintln!(
@@ -308,7 +321,7 @@ pub fn table(
     std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
     write_csv(&out.join("table.csv"), &rows)?;
     let settings = format!(
-        "Device: {device}. Unit sphere {size}² seen orthographically (normal to grazing \
+        "Device: {device}. {}Unit sphere {size}² seen orthographically (normal to grazing \
          incidence), pixels whose centre sees it. Reference of every lobe: the mean of two \
          {reference}-spp MIS Monte Carlo renders with the whole map (its noise, per pixel: \
          half their difference); of the mirror: its 16×16-supersampled render (the \
@@ -319,6 +332,15 @@ pub fn table(
          extract above {} × the mean luminance, up to {} light texels (grown by {} rings, the \
          residual filled under them, where FIS, split-sum or a prefiltered Phong map reads \
          it); diffuse techniques above {} ×. Run took {:.0} s.",
+        match pick.resident {
+            true => format!(
+                "Rendered through the resident path (the map on the GPU, its lights extracted \
+                 there each frame: at most {} texels for the chain's techniques, the residual \
+                 clamped, not filled). ",
+                crate::render::CHAIN_GPU_MAX
+            ),
+            false => String::new(),
+        },
         crate::scene::DEFAULT_FIS_BIAS,
         crate::scene::DEFAULT_FIS_BIAS_RESIDUAL,
         crate::abi::lights::CHAIN_RATIO,
