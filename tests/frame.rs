@@ -66,7 +66,7 @@ fn render_resident_matches_render() {
         ("diffuse", [1e-4; 3]),
         ("split_sum", [0.1, 1e-3, 3e-3]),
     ];
-    for (name, [worst, mean, rms]) in cases {
+    for (name, [top, mean, rms]) in cases {
         let scene = root.join(format!("assets/scenes/{name}.toml"));
         let host = common::scenes::cli_render(&scene, &dir.join("host.exr"));
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
@@ -82,7 +82,7 @@ fn render_resident_matches_render() {
         let resident = envlight::io::load(dir.join("resident.exr"), &Default::default()).unwrap();
         let errors = frame_errors(&resident, &host);
         assert!(
-            errors.worst() <= worst && errors.mean() <= mean && errors.rms() <= rms,
+            errors.worst() <= top && errors.mean() <= mean && errors.rms() <= rms,
             "{name}: resident differs by {:e} at worst ({:?}), {:e} on average, {:e} RMS",
             errors.worst(),
             errors.at(),
