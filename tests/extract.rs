@@ -277,12 +277,17 @@ fn gpu_clusters_match_the_host_clusters_on_every_mapping() {
 
 /// The GPU's preparation of its light records for the shade pass's walk
 /// (`Extractor::record_prepare`) against the float64 twin on every mapping (a sun and a glow,
-/// ratio 2 with the cap of 6 binding, directions turned by a rotation and a mirror, 2 cells
-/// a side: 16 quadrature nodes a texel): the host prepares the same records
-/// (`prepare_cells`) in texel order and lays out `LightTree::flat` over them; every float of
-/// the texels and of the tree's nodes, the end node included, agrees within 2e-5 relative to
-/// its own size, floor 1 (directions, float32 trigonometry and sums of the weights against
-/// float64), and the buffer holds the kept count of texels.
+/// ratio 2 with the cap of 40 binding on a 64-texel map, directions turned by a rotation and
+/// a mirror, 2 cells a side: 16 quadrature nodes a texel): the GPU's order of the texels is
+/// the kept records' (each once) sorted by the spatial key, up to the few pairs float32
+/// rounding may swap where keys are within a cell of the Morton grid (≤ 2 of 39 adjacent
+/// pairs out of order by the float64 key); over that order the host prepares the same
+/// records (`prepare_cells`) and builds `LightTree::implicit`; every float of the texels and
+/// of the tree's nodes, the end node included, agrees within 5e-6 relative to its own size,
+/// floor 1 (measured 3.9e-7: float32 against float64), the nodes' sigma axes compared as the
+/// covariance they stand for (their signs and, for a round node, their directions are a
+/// basis's choice) within 5e-4 of 1e-4 rad² (measured 5.6e-5: differences of nearby
+/// directions in float32).
 #[test]
 fn gpu_prepared_lights_match_the_float64_twin_on_every_mapping() {
     use envlight::math::light_tree::{LightTree, TREE_VEC4S};
@@ -291,12 +296,12 @@ fn gpu_prepared_lights_match_the_float64_twin_on_every_mapping() {
     let ctx = common::ctx();
     {
         let extractor = Extractor::new(&ctx).unwrap();
-        let (room, cells) = (6u32, 2u32);
+        let (room, cells) = (40u32, 2u32);
         let nodes = 4 * cells * cells;
         let f2w = glam::DMat3::from_rotation_y(0.7)
             * glam::DMat3::from_diagonal(glam::DVec3::new(-1.0, 1.0, 1.0));
         for mapping in Mapping::ALL {
-            let map = twin::glow_sky(mapping, 32);
+            let map = twin::glow_sky(mapping, 64);
             let opts = ExtractOptions {
                 ratio: 2.0,
                 max_texels: room as usize,
@@ -310,37 +315,119 @@ fn gpu_prepared_lights_match_the_float64_twin_on_every_mapping() {
                 "{mapping:?}: {:?}",
                 ex.stats
             );
-            let mut texels: Vec<LightTexel> = ex
-                .lights
+            let texel_of = |l: &envlight::passes::extract::GpuLightTexel| LightTexel {
+                layer: l.texel[0],
+                i: l.texel[1],
+                j: l.texel[2],
+                dir: glam::DVec3::new(l.dir[0] as f64, l.dir[1] as f64, l.dir[2] as f64),
+                omega: l.omega as f64,
+                radiance: l.excess,
+            };
+            // The GPU's order: each prepared texel's world direction names its record.
+            let stride = lights.stride() as usize;
+            let world = |l: &envlight::passes::extract::GpuLightTexel| {
+                f2w * glam::DVec3::new(l.dir[0] as f64, l.dir[1] as f64, l.dir[2] as f64)
+            };
+            let mut order = Vec::new();
+            for k in 0..kept as usize {
+                let d = got[k * stride];
+                let at = glam::DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64);
+                let r = (0..ex.lights.len())
+                    .min_by(|&a, &b| {
+                        (world(&ex.lights[a]) - at)
+                            .length()
+                            .total_cmp(&(world(&ex.lights[b]) - at).length())
+                    })
+                    .unwrap();
+                assert!(
+                    (world(&ex.lights[r]) - at).length() < 1e-5,
+                    "{mapping:?} texel {k}"
+                );
+                order.push(r);
+            }
+            let mut seen = order.clone();
+            seen.sort_unstable();
+            seen.dedup();
+            assert_eq!(seen.len(), kept as usize, "{mapping:?}: a record twice");
+            let keys: Vec<u32> = order
                 .iter()
-                .map(|l| LightTexel {
-                    layer: l.texel[0],
-                    i: l.texel[1],
-                    j: l.texel[2],
-                    dir: glam::DVec3::new(l.dir[0] as f64, l.dir[1] as f64, l.dir[2] as f64),
-                    omega: l.omega as f64,
-                    radiance: l.excess,
-                })
+                .map(|&r| spatial_key(world(&ex.lights[r])))
                 .collect();
-            texels.sort_by_key(|t| (t.layer, t.j, t.i));
-            let tree = LightTree::flat(prepare_cells(&map, &texels, f2w, cells), room);
+            let swapped = keys.windows(2).filter(|w| w[0] > w[1]).count();
+            assert!(
+                swapped <= 2,
+                "{mapping:?}: {swapped} pairs out of order: {keys:?}"
+            );
+            let texels: Vec<LightTexel> = order.iter().map(|&r| texel_of(&ex.lights[r])).collect();
+            let tree = LightTree::implicit(
+                prepare_cells(&map, &texels, f2w, cells),
+                lights.tree_nodes(),
+            );
             let want_texels = gpu_list(&tree.lights);
             let want_nodes = tree.gpu_nodes();
             assert_eq!(want_texels.len() as u32, kept * lights.stride());
-            assert_eq!(want_nodes.len() as u32, (kept + 1) * TREE_VEC4S);
+            assert_eq!(
+                want_nodes.len() as u32,
+                20 * TREE_VEC4S,
+                "2·10 − 1 nodes, the end"
+            );
             let at = lights.tree_at() as usize;
-            let pairs = got[..want_texels.len()]
-                .iter()
-                .zip(&want_texels)
-                .chain(got[at..at + want_nodes.len()].iter().zip(&want_nodes));
             let mut errors = common::compare::Errors::new();
-            for (k, (g, w)) in pairs.enumerate() {
+            let mut spread = common::compare::Errors::new();
+            for (k, (g, w)) in got.iter().zip(&want_texels).enumerate() {
                 for c in 0..4 {
-                    errors.rel(g[c], w[c], 1.0, (mapping, k, c));
+                    errors.rel(g[c], w[c], 1.0, (mapping, "texel", k, c));
                 }
             }
-            errors.assert_within(2e-5, "GPU-prepared light texels and nodes");
+            let got_nodes = &got[at..at + want_nodes.len()];
+            for (n, (g, w)) in got_nodes
+                .chunks_exact(TREE_VEC4S as usize)
+                .zip(want_nodes.chunks_exact(TREE_VEC4S as usize))
+                .enumerate()
+            {
+                for v in [0, 1, 4] {
+                    for c in 0..4 {
+                        errors.rel(g[v][c], w[v][c], 1.0, (mapping, "node", n, 4 * v + c));
+                    }
+                }
+                errors.rel(g[2][3], w[2][3], 1.0, (mapping, "node", n, 11));
+                let cov = |a: &[[f32; 4]]| {
+                    let (x, y) = (a[2], a[3]);
+                    [0, 1, 2].map(|r| [0, 1, 2].map(|c| (x[r] * x[c] + y[r] * y[c]) as f64))
+                };
+                let (cg, cw) = (cov(g), cov(w));
+                for r in 0..3 {
+                    for c in 0..3 {
+                        // The covariance is of order ρ² (1e-3 here): relative to 1e-4.
+                        spread.rel(
+                            1e4 * cg[r][c],
+                            1e4 * cw[r][c],
+                            1.0,
+                            (mapping, "axes", n, 3 * r + c),
+                        );
+                    }
+                }
+            }
+            errors.assert_within(5e-6, "GPU-prepared light texels and tree");
+            spread.assert_within(5e-4, "GPU light tree's spread");
         }
     }
     common::finish(ctx);
+}
+
+/// The spatial key of `glsl/extract_prepare.comp` in float64: 30 bits of a Morton code over
+/// the octahedral map of `d` (z folded).
+fn spatial_key(d: glam::DVec3) -> u32 {
+    let n = d.x.abs() + d.y.abs() + d.z.abs();
+    let (mut px, mut py) = (d.x / n, d.y / n);
+    if d.z < 0.0 {
+        let (sx, sy) = (
+            if px >= 0.0 { 1.0 } else { -1.0 },
+            if py >= 0.0 { 1.0 } else { -1.0 },
+        );
+        (px, py) = ((1.0 - py.abs()) * sx, (1.0 - px.abs()) * sy);
+    }
+    let q = |p: f64| ((p * 0.5 + 0.5) * 32768.0).clamp(0.0, 32767.0) as u32;
+    let spread = |v: u32| (0..15).map(|b| ((v >> b) & 1) << (2 * b)).sum::<u32>();
+    spread(q(px)) | (spread(q(py)) << 1)
 }

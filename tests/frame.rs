@@ -49,18 +49,17 @@ fn an_engine_frame_matches_the_cli_render() {
 /// assets/scenes/dynamic.toml (lights left in the map), and within 1e-4 for diffuse.toml, whose
 /// SH objects take lights extracted on the GPU (its clusters, the residual's SH) where the host
 /// subtracts the light texels' coefficients. split_sum.toml's split-sum and FIS take the
-/// chain's lights, which the resident path extracts on the GPU (at most 256 texels, walked one
-/// by one, the residual clamped) and the host on the host (16384 in a light tree, the residual
-/// filled): within 1e-3 on average, 3e-3 RMS and 0.1 at the worst pixel (measured 2.8e-4,
-/// 1.0e-3, 4.7e-2 at a sphere's rim). It refuses a scene with Monte Carlo, saying why.
+/// chain's lights, which the resident path extracts on the GPU (its light tree over a spatial
+/// order, the residual clamped) and the host on the host (its tree by median splits, the
+/// residual filled): within 1e-3 on average, 3e-3 RMS and 0.1 at the worst pixel (measured
+/// 2.7e-4, 1.0e-3, 4.7e-2 at a sphere's rim). It refuses a scene with Monte Carlo, saying why.
 #[test]
 fn render_resident_matches_render() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = std::env::temp_dir().join(format!("envlight-resident-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     // (worst, mean, RMS) bounds. split_sum.toml's split-sum and FIS take the chain's lights,
-    // extracted on the GPU: at most 256 texels, the residual clamped, where the host keeps
-    // 16384 in a tree and fills the residual.
+    // extracted on the GPU with the residual clamped, where the host fills it.
     let cases = [
         ("dynamic", [1e-6; 3]),
         ("diffuse", [1e-4; 3]),

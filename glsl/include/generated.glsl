@@ -97,6 +97,7 @@
 #define BINDING_PREPARE_STATE 0
 #define BINDING_PREPARE_LIGHTS 1
 #define BINDING_PREPARE_OUT 2
+#define BINDING_PREPARE_SORT 3
 #define SH_MAX_LMAX 8
 #define SH_MAX_COEFFS 81
 #define SH_WORKGROUP 64
@@ -132,6 +133,13 @@
 #define CLUSTERS_MODE_SCAN 1u
 #define CLUSTERS_MODE_SCATTER 2u
 #define CLUSTERS_MODE_SUM 3u
+#define PREPARE_MODE_KEYS 0u
+#define PREPARE_MODE_SCAN 1u
+#define PREPARE_MODE_SCATTER 2u
+#define PREPARE_MODE_TEXELS 3u
+#define PREPARE_MODE_NODES 4u
+#define TREE_BUCKET_BITS 12u
+#define TREE_SORT_BUCKET_ARRAYS 3u
 #define EXTRACT_WORD_LOW_ARGS 0u
 #define EXTRACT_WORD_OMEGA_MAX 3u
 #define EXTRACT_WORD_LIGHT_ARGS 4u
@@ -233,7 +241,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_ExtractPush layout(push_constant) uniform Push { uvec2 size; uint mapping; uint mode; uint max; float ratio; uint[2] pad; } pc;
 #define PUSH_ExtractAddPush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 map_size; uint mapping; uint size; uint kernel; float alpha; float inv_norm; uint layer; } pc;
 #define PUSH_ExtractClustersPush layout(push_constant) uniform Push { vec4[3] file_to_world; uint mode; uint grid; uint at; uint max; } pc;
-#define PUSH_ExtractPreparePush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 map_size; uint mapping; uint cells; uint stride; uint tree_at; uint max; uint pad; } pc;
+#define PUSH_ExtractPreparePush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 map_size; uint mapping; uint cells; uint stride; uint tree_at; uint max; uint mode; uint tree_room; uint[3] pad; } pc;
 #define PUSH_LightsPush layout(push_constant) uniform Push { uint size; uint count; uint nodes; uint kernel; float alpha; float inv_norm; uint at; uint pad; } pc;
 #define PUSH_ShRotatePush layout(push_constant) uniform Push { uint count; uint lmax; uint method; uint pad; } pc;
 #define PUSH_MipPush layout(push_constant) uniform Push { uint src_size; uint dst_size; uint mode; uint pad; } pc;

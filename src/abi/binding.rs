@@ -211,7 +211,9 @@ bindings! {
     PREPARE_STATE = 0;
     /// extract_prepare: the extraction's light records.
     PREPARE_LIGHTS = 1;
-    /// extract_prepare: the shade pass's lights buffer the prepared texels and their flat
-    /// tree are written into (vec4 storage buffer).
+    /// extract_prepare: the shade pass's lights buffer the prepared texels and their tree
+    /// are written into (vec4 storage buffer; the tree's nodes read the texels back).
     PREPARE_OUT = 2;
+    /// extract_prepare: the counting sort's counts, slots, keys and order (uint buffer).
+    PREPARE_SORT = 3;
 }

@@ -118,6 +118,22 @@ fn define_sizes_and_lights(s: &mut String) {
     ] {
         let _ = writeln!(s, "#define CLUSTERS_MODE_{name} {v}u");
     }
+    use lights::prepare_mode as pm;
+    for (name, v) in [
+        ("KEYS", pm::KEYS),
+        ("SCAN", pm::SCAN),
+        ("SCATTER", pm::SCATTER),
+        ("TEXELS", pm::TEXELS),
+        ("NODES", pm::NODES),
+    ] {
+        let _ = writeln!(s, "#define PREPARE_MODE_{name} {v}u");
+    }
+    let _ = writeln!(s, "#define TREE_BUCKET_BITS {}u", lights::TREE_BUCKET_BITS);
+    let _ = writeln!(
+        s,
+        "#define TREE_SORT_BUCKET_ARRAYS {}u",
+        lights::TREE_SORT_BUCKET_ARRAYS
+    );
     use lights::extract_word as w;
     for (name, v) in [
         ("LOW_ARGS", w::LOW_ARGS),

@@ -297,6 +297,29 @@ pub mod lights {
     pub const CLUSTER_SORT_CELL_ARRAYS: u32 = 4;
     /// Arrays of one u32 per record after them: each record's cell, the records in cell order.
     pub const CLUSTER_SORT_RECORD_ARRAYS: u32 = 2;
+    /// Bits of the spatial key's top that bucket `glsl/extract_prepare.comp`'s counting sort
+    /// (its key: 30 bits of a Morton code over the octahedral map of the world direction).
+    pub const TREE_BUCKET_BITS: u32 = 12;
+    /// Arrays of one u32 per bucket at the start of `glsl/extract_prepare.comp`'s sort
+    /// buffer: counts, first slots, cursors; then two of one u32 per record: each record's
+    /// key, the records in bucket order.
+    pub const TREE_SORT_BUCKET_ARRAYS: u32 = 3;
+    /// See [`TREE_SORT_BUCKET_ARRAYS`].
+    pub const TREE_SORT_RECORD_ARRAYS: u32 = 2;
+    /// Steps of `glsl/extract_prepare.comp` (`ExtractPreparePush::mode`), in recording order.
+    pub mod prepare_mode {
+        /// Per record: its spatial key, its bucket counted.
+        pub const KEYS: u32 = 0;
+        /// One workgroup: each bucket's first slot.
+        pub const SCAN: u32 = 1;
+        /// Per record: its slot in its bucket's run.
+        pub const SCATTER: u32 = 2;
+        /// Per record: its place (bucket's first slot + its rank in the bucket by key, then
+        /// texel position) and its texel written there.
+        pub const TEXELS: u32 = 3;
+        /// Per tree node: its range of texels, its statistics; and the end node.
+        pub const NODES: u32 = 4;
+    }
     /// Steps of `glsl/extract_clusters.comp` (`ExtractClustersPush::mode`), in recording
     /// order.
     pub mod clusters_mode {

@@ -379,10 +379,14 @@ push_blocks! {
         stride: u32 = "uint",
         /// Where the tree's nodes start in the output, in vec4s.
         tree_at: u32 = "uint",
-        /// The extraction's most records (the texels' room; the tree's is one more).
+        /// The extraction's most records (the texels' room).
         max: u32 = "uint",
+        /// Which step: `lights::prepare_mode`.
+        mode: u32 = "uint",
+        /// The tree's room in nodes (the end node's skip).
+        tree_room: u32 = "uint",
         /// Padding.
-        pad: u32 = "uint",
+        pad: [u32; 3] = "uint[3]",
     }
     /// `glsl/lights.comp`.
     LightsPush {

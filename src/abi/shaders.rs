@@ -381,12 +381,12 @@ macro_rules! shader_table {
                 ExtractClustersPush,
                 [(CLUSTERS_STATE, StorageBuffer, Read), (CLUSTERS_LIGHTS, StorageBuffer, Read),
                  (CLUSTERS_SORT, StorageBuffer, ReadWrite), (CLUSTERS_OUT, StorageBuffer, Write)];
-            /// The GPU extraction's light records prepared for the shade pass's walk: texel
-            /// quadratures and a flat tree of one leaf per texel.
+            /// The GPU extraction's light records prepared for the shade pass's walk: sorted
+            /// by a spatial key, texel quadratures and a light tree over them.
             ExtractPrepare = "extract_prepare", "extract_prepare.comp", Compute, [],
                 ExtractPreparePush,
                 [(PREPARE_STATE, StorageBuffer, Read), (PREPARE_LIGHTS, StorageBuffer, Read),
-                 (PREPARE_OUT, StorageBuffer, Write)];
+                 (PREPARE_OUT, StorageBuffer, ReadWrite), (PREPARE_SORT, StorageBuffer, ReadWrite)];
             /// SH projection of a BRDF per view of a grid (SH-BRDF shading's table).
             ShBrdf = "sh_brdf", "sh_brdf.comp", Compute, [], ShBrdfPush,
                 [(SH_BRDF_TABLE, StorageBuffer, ReadWrite)];

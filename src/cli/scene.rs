@@ -19,8 +19,8 @@ pub struct RenderArgs {
     output: PathBuf,
     /// Render through the resident path, as an engine does with a map on the GPU: the map is
     /// uploaded once, then one frame is recorded from the GPU image with nothing read back
-    /// before the frame (no Monte Carlo; lights extracted on the GPU, at most 256 texels for
-    /// FIS, split-sum and footprint lookups unless the scene sets light_texels)
+    /// before the frame (no Monte Carlo; lights extracted on the GPU, the residual clamped
+    /// where the host path fills it)
     #[arg(long)]
     resident: bool,
 }

@@ -83,26 +83,18 @@ impl LightTree {
         LightTree { lights, nodes }
     }
 
-    /// The flat tree over `lights` (given in the order they are to be walked) that the GPU
-    /// prepares for lights it extracts each frame (`glsl/extract_prepare.comp`): a leaf of
-    /// one texel per light, then an end node (no power, no texels) whose skip, `room` + 1,
-    /// is past every node of a buffer with room for `room` lights. Its walk visits every
-    /// texel: the texels' per-texel rule alone, at a cost that grows with their count.
-    pub fn flat(lights: Vec<PreparedLight>, room: u32) -> LightTree {
-        let mut nodes: Vec<TreeNode> = lights
-            .iter()
-            .zip(0u32..)
-            .map(|(t, k)| TreeNode {
-                centre: t.dir,
-                reach: t.rho,
-                rho: t.rho,
-                power: t.radiance.map(|l| l * t.omega),
-                axes: [DVec3::ZERO; 2],
-                first: k,
-                count: 1,
-                skip: k + 1,
-            })
-            .collect();
+    /// The tree the GPU builds over `lights` each frame (`glsl/extract_prepare.comp`), given
+    /// in its order (a spatial key's): leaves of [`LEAF_TEXELS`] consecutive texels, each
+    /// node over a run of m leaves with its left child next (⌈m/2⌉ leaves) and its right one
+    /// after the left's subtree, so that a node's range and skip follow from its index
+    /// alone; each node's statistics as [`LightTree::new`]'s. Then an end node (no power, no
+    /// texels) whose skip, `room`, is past every node of a buffer with room for `room` nodes.
+    pub fn implicit(lights: Vec<PreparedLight>, room: u32) -> LightTree {
+        let mut nodes = Vec::new();
+        let leaves = (lights.len() as u32).div_ceil(LEAF_TEXELS);
+        if leaves > 0 {
+            implicit_nodes(&lights, 0, leaves, &mut nodes);
+        }
         nodes.push(TreeNode {
             centre: DVec3::Z,
             reach: 0.0,
@@ -111,7 +103,7 @@ impl LightTree {
             axes: [DVec3::ZERO; 2],
             first: 0,
             count: 0,
-            skip: room + 1,
+            skip: room,
         });
         LightTree { lights, nodes }
     }
@@ -294,6 +286,41 @@ pub fn brdf_slack(cos_o: f64, scale: f64) -> f64 {
 /// Builds the subtree over `order[..]` (indices into `lights`), its texels starting at
 /// `first` in tree order; returns nothing, pushing nodes depth first.
 fn build(lights: &[PreparedLight], order: &mut [usize], first: u32, nodes: &mut Vec<TreeNode>) {
+    let at = nodes.len();
+    nodes.push(node_of(lights, order, first));
+    if order.len() as u32 > LEAF_TEXELS {
+        let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+        for &k in order.iter() {
+            lo = lo.min(lights[k].dir);
+            hi = hi.max(lights[k].dir);
+        }
+        let e = hi - lo;
+        let axis = if e.x >= e.y && e.x >= e.z {
+            0
+        } else if e.y >= e.z {
+            1
+        } else {
+            2
+        };
+        // A median split needs the halves, not their order: selection keeps the build at
+        // O(n log n) where a sort would make it O(n log² n). The order is total, so the halves
+        // are those a sort gives.
+        let m = order.len() / 2;
+        order.select_nth_unstable_by(m, |&a, &b| {
+            lights[a].dir[axis]
+                .total_cmp(&lights[b].dir[axis])
+                .then(a.cmp(&b))
+        });
+        let (left, right) = order.split_at_mut(m);
+        build(lights, left, first, nodes);
+        build(lights, right, first + m as u32, nodes);
+    }
+    nodes[at].skip = nodes.len() as u32;
+}
+
+/// The node over `lights[k]` for k in `order`, its texels from `first` (its skip unset):
+/// power, luminance-weighted centre, reach, largest ρ and sigma axes.
+fn node_of(lights: &[PreparedLight], order: &[usize], first: u32) -> TreeNode {
     let weight = |k: usize| {
         let t = &lights[k];
         luminance(t.radiance).max(0.0) * t.omega
@@ -336,8 +363,7 @@ fn build(lights: &[PreparedLight], order: &mut [usize], first: u32, nodes: &mut 
     let th = 0.5 * (2.0 * sxy).atan2(sxx - syy);
     let e1 = t1 * th.cos() + t2 * th.sin();
     let e2 = t2 * th.cos() - t1 * th.sin();
-    let at = nodes.len();
-    nodes.push(TreeNode {
+    TreeNode {
         centre,
         reach,
         rho,
@@ -346,35 +372,22 @@ fn build(lights: &[PreparedLight], order: &mut [usize], first: u32, nodes: &mut 
         first,
         count: order.len() as u32,
         skip: 0,
-    });
-    if order.len() as u32 > LEAF_TEXELS {
-        let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
-        for &k in order.iter() {
-            lo = lo.min(lights[k].dir);
-            hi = hi.max(lights[k].dir);
-        }
-        let e = hi - lo;
-        let axis = if e.x >= e.y && e.x >= e.z {
-            0
-        } else if e.y >= e.z {
-            1
-        } else {
-            2
-        };
-        // A median split needs the halves, not their order: selection keeps the build at
-        // O(n log n) where a sort would make it O(n log² n). The order is total, so the halves
-        // are those a sort gives.
-        let m = order.len() / 2;
-        order.select_nth_unstable_by(m, |&a, &b| {
-            lights[a].dir[axis]
-                .total_cmp(&lights[b].dir[axis])
-                .then(a.cmp(&b))
-        });
-        let (left, right) = order.split_at_mut(m);
-        build(lights, left, first, nodes);
-        build(lights, right, first + m as u32, nodes);
     }
-    nodes[at].skip = nodes.len() as u32;
+}
+
+/// [`LightTree::implicit`]'s nodes over `leaves` leaves from leaf `lo`, in pre-order.
+fn implicit_nodes(lights: &[PreparedLight], lo: u32, leaves: u32, nodes: &mut Vec<TreeNode>) {
+    let first = lo * LEAF_TEXELS;
+    let last = ((lo + leaves) * LEAF_TEXELS).min(lights.len() as u32);
+    let order: Vec<usize> = (first as usize..last as usize).collect();
+    let at = nodes.len();
+    nodes.push(node_of(lights, &order, first));
+    nodes[at].skip = at as u32 + 2 * leaves - 1;
+    if leaves > 1 {
+        let left = leaves.div_ceil(2);
+        implicit_nodes(lights, lo, left, nodes);
+        implicit_nodes(lights, lo + left, leaves - left, nodes);
+    }
 }
 
 #[cfg(test)]

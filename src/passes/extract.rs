@@ -21,8 +21,9 @@
 //! workgroup selects the exact threshold; the compaction writes records and residual.
 
 use crate::abi::lights::{
-    clusters_mode, CLUSTER_SORT_CELL_ARRAYS, CLUSTER_SORT_RECORD_ARRAYS, CLUSTER_VEC4S,
-    KERNEL_COSINE, KERNEL_GGX,
+    clusters_mode, prepare_mode, CLUSTER_SORT_CELL_ARRAYS, CLUSTER_SORT_RECORD_ARRAYS,
+    CLUSTER_VEC4S, KERNEL_COSINE, KERNEL_GGX, TREE_BUCKET_BITS, TREE_SORT_BUCKET_ARRAYS,
+    TREE_SORT_RECORD_ARRAYS,
 };
 use crate::abi::lights::{
     extract_mode as mode, extract_word as word, EXTRACT_HEADER_WORDS, EXTRACT_LOW_BINS,
@@ -435,10 +436,10 @@ impl Extractor {
     /// Records the preparation of `from`'s kept light records (an extraction recorded
     /// earlier, of a map whose file directions reach the world through `file_to_world`) for
     /// the shade pass's light walk, into `out` (made by [`super::GpuLights::on_gpu`] with room
-    /// for `from.max()` texels): each texel's header and quadrature of (2·`out`'s cells)²
-    /// nodes, in the order of their texel positions, and a flat tree of one leaf per texel
-    /// (`crate::math::light_tree::LightTree::flat`). The count is read on the GPU. Span:
-    /// "prepare lights (gpu)".
+    /// for `from.max()` texels): the records ordered by a spatial key, each texel's header
+    /// and quadrature of (2·cells)² nodes in that order, and the tree over them
+    /// (`crate::math::light_tree::LightTree::implicit`). The count is read on the GPU; a
+    /// scratch buffer of the recorder's holds the sort. Span: "prepare lights (gpu)".
     pub fn record_prepare(
         &self,
         rec: &mut Recorder,
@@ -448,19 +449,27 @@ impl Extractor {
     ) -> Result<()> {
         let nodes = out.stride() - crate::abi::lights::HEADER_VEC4S;
         let cells = (nodes as f64).sqrt() as u32 / 2;
-        if out.count() != from.max || out.tree_nodes() != from.max + 1 || 4 * cells * cells != nodes
-        {
+        let room = super::GpuLights::tree_room(from.max);
+        if out.count() != from.max || out.tree_nodes() != room || 4 * cells * cells != nodes {
             return Err(Error::Invalid(format!(
                 "prepare lights: a lights buffer with room for {} texels of {nodes} nodes and \
                  {} tree nodes cannot hold an extraction of {} (room for each texel, an even \
-                 square of nodes, and one tree node more)",
+                 square of nodes, and {room} tree nodes)",
                 out.count(),
                 out.tree_nodes(),
                 from.max
             )));
         }
+        let buckets = 1u64 << TREE_BUCKET_BITS;
+        let words = TREE_SORT_BUCKET_ARRAYS as u64 * buckets
+            + TREE_SORT_RECORD_ARRAYS as u64 * from.max as u64;
+        let sort = rec.scratch(
+            "light tree sort",
+            words * 4,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+        )?;
         let r = &from.residual;
-        let push = ExtractPreparePush {
+        let push = |mode| ExtractPreparePush {
             file_to_world: crate::gpu::mat3_rows(file_to_world),
             map_size: [r.width, r.height],
             mapping: r.mapping.id(),
@@ -468,16 +477,26 @@ impl Extractor {
             stride: out.stride(),
             tree_at: out.tree_at(),
             max: from.max,
-            pad: 0,
+            mode,
+            tree_room: room,
+            pad: [0; 3],
         };
         let binds = [
             (binding::PREPARE_STATE, Bind::Buffer(&from.state)),
             (binding::PREPARE_LIGHTS, Bind::Buffer(&from.lights)),
             (binding::PREPARE_OUT, Bind::Buffer(out.buffer())),
+            (binding::PREPARE_SORT, Bind::Buffer(&sort)),
         ];
-        let groups = groups(from.max + 1, WORKGROUP_1D);
+        let p = &self.prepare;
+        let per_record = [groups(from.max, WORKGROUP_1D), 1, 1];
         rec.span("prepare lights (gpu)", |rec| {
-            rec.dispatch(&self.prepare, &binds, &push, [groups, 1, 1])
+            rec.fill_buffer(&sort, buckets * 4, 0);
+            rec.dispatch(p, &binds, &push(prepare_mode::KEYS), per_record)?;
+            rec.dispatch(p, &binds, &push(prepare_mode::SCAN), [1, 1, 1])?;
+            rec.dispatch(p, &binds, &push(prepare_mode::SCATTER), per_record)?;
+            rec.dispatch(p, &binds, &push(prepare_mode::TEXELS), per_record)?;
+            let per_node = [groups(room, WORKGROUP_1D), 1, 1];
+            rec.dispatch(p, &binds, &push(prepare_mode::NODES), per_node)
         })
     }
 

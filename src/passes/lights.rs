@@ -99,8 +99,8 @@ impl GpuLights {
         })
     }
 
-    /// Room for `room` light texels of `nodes` quadrature nodes each, the flat tree over
-    /// them (`room` + 1 nodes) and `cells` clusters, all written on the GPU
+    /// Room for `room` light texels of `nodes` quadrature nodes each, the tree over them
+    /// ([`GpuLights::tree_room`] nodes) and `cells` clusters, all written on the GPU
     /// (`super::Extractor::record_prepare`, `super::Extractor::record_clusters`): the
     /// resident path's lights, where FIS, split-sum, Phong maps or footprint lookups add the
     /// light texels (and SH or prefiltered irradiance the clusters) of each frame's map.
@@ -115,7 +115,7 @@ impl GpuLights {
         let vec4s = room as u64 * (HEADER_VEC4S + nodes) as u64
             + cells as u64 * CLUSTER_VEC4S as u64
             + 1
-            + (room as u64 + 1) * TREE_VEC4S as u64
+            + Self::tree_room(room) as u64 * TREE_VEC4S as u64
             + pad;
         Ok(GpuLights {
             buffer: Buffer::new(
@@ -130,8 +130,15 @@ impl GpuLights {
             count: room,
             nodes,
             clusters: cells,
-            tree_nodes: room + 1,
+            tree_nodes: Self::tree_room(room),
         })
+    }
+
+    /// Nodes of the tree the GPU builds over at most `room` texels
+    /// (`crate::math::light_tree::LightTree::implicit`): 2·⌈room / LEAF_TEXELS⌉ − 1, and the
+    /// end node.
+    pub fn tree_room(room: u32) -> u32 {
+        2 * room.div_ceil(crate::abi::lights::LEAF_TEXELS)
     }
 
     /// Nodes of the light texels' tree.

@@ -505,19 +505,19 @@ impl Means {
 }
 
 /// Most light texels the resident path's chain extraction keeps where the scene sets no
-/// `light_texels` (the host path's default keeps 16384 in a light tree). Its texels are
-/// walked one by one (a flat tree: `LightTree::flat`), so a pixel's cost grows with this
-/// room; a map with more texels above the ratio keeps the brightest, the rest stay in the
-/// residual, counted.
-pub const CHAIN_GPU_MAX: u32 = 256;
+/// `light_texels`: the host path's default (`crate::abi::lights::CHAIN_MAX_TEXELS`). A map
+/// with more texels above the ratio keeps the brightest; the rest stay in the residual,
+/// counted.
+pub const CHAIN_GPU_MAX: u32 = crate::abi::lights::CHAIN_MAX_TEXELS;
 
 /// The resident path's chain lights: each frame the extraction by the scene's ratio (the
 /// residual clamped at the threshold: the host's default fills it from around the lights,
-/// which the GPU does not), its records prepared for the shade pass's walk
-/// (`Extractor::record_prepare`), and the residual, which the paraboloid converts and
-/// prefiltered Phong maps filter where the lights are added per pixel. What the host path
-/// decides from the texels found (whether their quadratures resolve each lobe, and how fine
-/// they are) is decided here from the map's largest texel, since no frame is read back.
+/// which the GPU does not), its records sorted by a spatial key, prepared for the shade
+/// pass's walk and built into a light tree (`Extractor::record_prepare`), and the residual,
+/// which the paraboloid converts and prefiltered Phong maps filter where the lights are added
+/// per pixel. What the host path decides from the texels found (whether their quadratures
+/// resolve each lobe, and how fine they are) is decided here from the map's largest texel,
+/// since no frame is read back.
 struct ChainLights {
     extractor: Extractor,
     extraction: GpuExtraction,
