@@ -1,6 +1,7 @@
 //! `envlight report --quick` end to end on the real probes: the three files, a row per
 //! technique × parameters × probe × material with the technique named, errors that are
-//! finite and ordered as their sample counts promise, and a chart of the stated size; and
+//! finite and ordered as their sample counts promise, each row's frame when the environment
+//! changes every frame (the resident path), and a chart of the stated size; and
 //! `envlight bench dynamic`'s section with its errors.
 
 mod common;
@@ -88,18 +89,47 @@ fn quick_report_writes_its_three_files() {
                     && r[col("probe")] == "spiaggia_di_mondello_1k"
                     && r[col("material")] == "ggx 0.3"
             })
-            .map(rms)
             .unwrap()
     };
-    let (on, off) = (fis64("N=64"), fis64("N=64 (no lights)"));
+    let (on, off) = (rms(fis64("N=64")), rms(fis64("N=64 (no lights)")));
     eprintln!("spiaggia ggx 0.3 fis N=64: {on:.3e} with lights extracted, {off:.3e} without");
     assert!(
         off > 2.0 * on,
         "extraction gains too little: {on} against {off}"
     );
+    // The changing environment's frame: every row timed; the resident path's FIS 64 gains
+    // from its lights, extracted on the GPU, as the host path's does; a peer's cube costs
+    // split-sum's shading per frame, not nothing.
+    let changing = |r: &Vec<&str>| {
+        let ms = r[col("changing_frame_gpu_ms")].parse::<f64>().unwrap();
+        let e = r[col("changing_frame_relative_rms")]
+            .parse::<f64>()
+            .unwrap();
+        assert!(
+            ms.is_finite() && ms > 0.0 && e.is_finite() && e >= 0.0,
+            "{r:?}"
+        );
+        e
+    };
+    for r in &rows {
+        changing(r);
+        if r[0] == "gltf-ibl-sampler" {
+            let ms = |c: &str| r[col(c)].parse::<f64>().unwrap();
+            assert!(ms("gpu_ms") > ms("precompute_gpu_ms"), "{r:?}");
+        }
+    }
+    let (on, off) = (changing(fis64("N=64")), changing(fis64("N=64 (no lights)")));
+    eprintln!("resident path: {on:.3e} with lights extracted on the GPU, {off:.3e} without");
+    assert!(
+        off > 2.0 * on,
+        "the resident path's extraction gains too little: {on} against {off}"
+    );
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(
-        md.contains("## Headline") && md.contains("llvmpipe"),
+        md.contains("## Headline")
+            && md.contains("llvmpipe")
+            && md.contains("**The environment changes every frame**")
+            && md.contains("**One environment, many frames**"),
         "{md}"
     );
     let png = image::open(out.join("report.png")).unwrap();

@@ -56,6 +56,10 @@ pub struct ReportArgs {
     /// on the GPU, its lights extracted there) instead of the host path
     #[arg(long)]
     resident: bool,
+    /// With --table: the scenes' light_texels (the most light texels FIS, split-sum and
+    /// footprint lookups extract; default 16384)
+    #[arg(long)]
+    light_texels: Option<u32>,
     /// Instead: the specular recipes (split-sum with and without extracted lights, lobe taps
     /// 4, 8, 16), FIS and SH-BRDF against the reference on every probe of the folder at GGX
     /// α 0.05 to 0.6, with their per-frame GPU time (split_sum.md, split_sum.csv)
@@ -111,6 +115,13 @@ struct Row {
     wall_s: f64,
     process_s: f64,
     noise: f64,
+    /// GPU ms of a frame when the environment changes every frame: the resident path's
+    /// whole frame (projection, extraction, chains, shading); Monte Carlo's host render
+    /// (its sampling tables, rebuilt on the host at each change, not counted); a peer's
+    /// bake (its whole process) plus split-sum's shading.
+    frame_ms: f64,
+    /// Relative RMS of that path's render.
+    frame_rms: f64,
 }
 
 impl Row {
@@ -268,19 +279,113 @@ fn process_seconds(g: &Global, sc: &Scene, dir: &Path) -> Result<f64> {
     Ok(s)
 }
 
-/// The rows of glTF-IBL-Sampler's cubes of `file` for a GGX `brdf`: each shaded by split-sum
-/// in float64 and scored against `truth`; their time is the sampler's whole process (it has
-/// no timestamps, so its wall time bounds its GPU time).
-#[allow(clippy::too_many_arguments)]
+/// What a case is measured against: a probe (file, kind; on disk at `absolute`, in memory
+/// and on the GPU), a material and its reference (with its noise).
+struct Against<'a> {
+    g: &'a Global,
+    renderer: &'a Renderer,
+    probe: (&'a str, &'static str),
+    material: &'a str,
+    absolute: &'a Path,
+    env: &'a EnvMap,
+    gpu: &'a crate::passes::GpuEnvMap,
+    truth: (&'a EnvMap, f64),
+    pixels: &'a [(usize, u32)],
+    scratch: &'a Path,
+}
+
+/// One case's row: the host path's render timed and scored, the whole process timed, and
+/// the frame of a changing environment (the resident path, except Monte Carlo's).
+fn measure(a: &Against<'_>, sc: &Scene, t: Technique, params: String) -> Result<Row> {
+    let truth = a.truth.0;
+    // One untimed render first: pipelines are built on first use.
+    a.renderer.render(sc, a.env)?;
+    let t0 = Instant::now();
+    let r = a.renderer.render(sc, a.env)?;
+    let wall_s = t0.elapsed().as_secs_f64();
+    let (rms, bias, tile) = errors(&r.frame, truth, a.pixels);
+    let mut on_disk = sc.clone();
+    on_disk.environment.file = a.absolute.to_path_buf();
+    let process_s = process_seconds(a.g, &on_disk, a.scratch)?;
+    let per_frame = |k: PassKind| {
+        matches!(
+            k,
+            PassKind::GBuffer | PassKind::Shade | PassKind::MonteCarlo
+        )
+    };
+    let gpu_ms: f64 = r.records.iter().map(|p| p.ms()).sum();
+    // (+ 0.0: an empty float sum is −0.)
+    let pre_ms: f64 = r
+        .records
+        .iter()
+        .filter(|p| !per_frame(p.kind))
+        .map(|p| p.ms())
+        .sum::<f64>()
+        + 0.0;
+    let (frame_ms, frame_rms) = match t {
+        Technique::Mc { .. } => (gpu_ms, rms),
+        _ => changing_frame(a.renderer, sc, a.gpu, truth, a.pixels)?,
+    };
+    let row = Row {
+        probe: a.probe.0.trim_end_matches(".hdr").to_string(),
+        kind: a.probe.1,
+        material: a.material.to_string(),
+        technique: t.name(),
+        params,
+        rms,
+        bias,
+        tile,
+        gpu_ms,
+        pre_ms,
+        wall_s,
+        process_s,
+        noise: a.truth.1,
+        frame_ms,
+        frame_rms,
+    };
+    eprintln!(
+        "{:>28} {:>9} {:<16} rms {:>8.2e} bias {:>+9.2e} tile {:>8.2e} gpu {:>9.2} ms (pre {:>8.2}) wall {:.3} s; changing: {:>9.2} ms rms {:>8.2e}",
+        row.probe, row.material, row.label(), rms, bias, tile, gpu_ms, pre_ms, wall_s, frame_ms, frame_rms
+    );
+    Ok(row)
+}
+
+/// The resident path's frame of `sc` from `gpu` (`Renderer::resident`, one untimed frame
+/// first: pipelines are built on first use): its GPU ms and its relative RMS against `truth`.
+fn changing_frame(
+    renderer: &Renderer,
+    sc: &Scene,
+    gpu: &crate::passes::GpuEnvMap,
+    truth: &EnvMap,
+    pixels: &[(usize, u32)],
+) -> Result<(f64, f64)> {
+    let prepared = renderer.resident(
+        sc,
+        crate::render::MapShape {
+            mapping: gpu.mapping,
+            width: gpu.width,
+            height: gpu.height,
+        },
+    )?;
+    renderer.render_resident(&prepared, gpu)?;
+    let r = renderer.render_resident(&prepared, gpu)?;
+    let ms = r.records.iter().map(|p| p.ms()).sum();
+    Ok((ms, errors(&r.frame, truth, pixels).0))
+}
+
+/// The rows of glTF-IBL-Sampler's cubes of `file` (`at`: file, probe kind, material) for a
+/// GGX `brdf`: each shaded by split-sum in float64 and scored against `truth`. Its bake is
+/// precomputation, timed as its whole process (it has no timestamps, so its wall time bounds
+/// its GPU time): with one environment a frame costs split-sum's `shading` ms, and when the
+/// environment changes every frame, the bake as well.
 fn peer_rows(
     peers: &[super::cubes::PeerCube],
-    file: &str,
-    kind: &'static str,
-    material: &str,
+    (file, kind, material): (&str, &'static str, &str),
     brdf: Brdf,
     cam: &Camera,
     truth: &EnvMap,
     noise: f64,
+    shading: f64,
 ) -> Vec<Row> {
     let Brdf::Ggx { alpha, .. } = brdf else {
         return Vec::new();
@@ -301,11 +406,13 @@ fn peer_rows(
                 rms,
                 bias,
                 tile,
-                gpu_ms: 1e3 * p.seconds,
+                gpu_ms: 1e3 * p.seconds + shading,
                 pre_ms: 1e3 * p.seconds,
                 wall_s: p.seconds,
                 process_s: p.seconds,
                 noise,
+                frame_ms: 1e3 * p.seconds + shading,
+                frame_rms: rms,
             }
         })
         .collect()
@@ -357,6 +464,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
             materials: args.materials.clone(),
             probes: args.only.clone(),
             resident: args.resident,
+            light_texels: args.light_texels,
         };
         let dir = probes_dir(args)?;
         return super::table::table(&renderer, &dir, size, reference, &args.out, &device, &pick);
@@ -400,6 +508,10 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
             )?,
             None => Vec::new(),
         };
+        // The map on the GPU once, for the resident path's frames (the paraboloid sized by
+        // the source there: the resident path follows the scene, and quick runs' 256² is
+        // the host path's setting).
+        let gpu = crate::passes::GpuEnvMap::upload(&ctx, &env)?;
         for (name, brdf) in materials(quick) {
             let (truth, noise) = truth(&renderer, cam, brdf, dp, split, reference, &env)?;
             for (t, params, taps, extract) in cases(&brdf, quick) {
@@ -407,54 +519,33 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
                 if !extract {
                     sc.environment.lights = LightsMode::None;
                 }
-                // One untimed render first: pipelines are built on first use.
-                renderer.render(&sc, &env)?;
-                let t0 = Instant::now();
-                let r = renderer.render(&sc, &env)?;
-                let wall_s = t0.elapsed().as_secs_f64();
-                let (rms, bias, tile) = errors(&r.frame, &truth, &pixels);
-                let mut on_disk = sc.clone();
-                on_disk.environment.file = absolute.clone();
-                let process_s = process_seconds(g, &on_disk, &scratch)?;
-                let per_frame = |k: PassKind| {
-                    matches!(
-                        k,
-                        PassKind::GBuffer | PassKind::Shade | PassKind::MonteCarlo
-                    )
+                let at = Against {
+                    g,
+                    renderer: &renderer,
+                    probe: (file, kind),
+                    material: name,
+                    absolute: &absolute,
+                    env: &env,
+                    gpu: &gpu,
+                    truth: (&truth, noise),
+                    pixels: &pixels,
+                    scratch: &scratch,
                 };
-                let gpu_ms: f64 = r.records.iter().map(|p| p.ms()).sum();
-                // (+ 0.0: an empty float sum is −0.)
-                let pre_ms: f64 = r
-                    .records
-                    .iter()
-                    .filter(|p| !per_frame(p.kind))
-                    .map(|p| p.ms())
-                    .sum::<f64>()
-                    + 0.0;
-                let row = Row {
-                    probe: file.trim_end_matches(".hdr").to_string(),
-                    kind,
-                    material: name.to_string(),
-                    technique: t.name(),
-                    params,
-                    rms,
-                    bias,
-                    tile,
-                    gpu_ms,
-                    pre_ms,
-                    wall_s,
-                    process_s,
-                    noise,
-                };
-                eprintln!(
-                    "{:>28} {:>9} {:<16} rms {:>8.2e} bias {:>+9.2e} tile {:>8.2e} gpu {:>9.2} ms (pre {:>8.2}) wall {:.3} s",
-                    row.probe, row.material, row.label(), rms, bias, tile, gpu_ms, pre_ms, wall_s
-                );
+                let row = measure(&at, &sc, t, params)?;
                 rows.push(row);
             }
-            rows.extend(peer_rows(
-                &peers, file, kind, name, brdf, &cam, &truth, noise,
-            ));
+            // The peers' cubes are shaded by split-sum: its per-frame shading cost here.
+            let shading = rows
+                .iter()
+                .find(|r| {
+                    r.probe == file.trim_end_matches(".hdr")
+                        && r.material == name
+                        && r.technique == "split_sum"
+                        && r.params.is_empty()
+                })
+                .map_or(0.0, |r| r.gpu_ms - r.pre_ms);
+            let at = (file, kind, name);
+            rows.extend(peer_rows(&peers, at, brdf, &cam, &truth, noise, shading));
         }
     }
     let _ = std::fs::remove_dir_all(&scratch);
@@ -486,12 +577,12 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
 
 fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
     let mut s = String::from(
-        "technique,params,probe,probe_kind,material,relative_rms,mean_bias,worst_tile,gpu_ms,precompute_gpu_ms,render_wall_s,process_s,reference_noise\n",
+        "technique,params,probe,probe_kind,material,relative_rms,mean_bias,worst_tile,gpu_ms,precompute_gpu_ms,render_wall_s,process_s,reference_noise,changing_frame_gpu_ms,changing_frame_relative_rms\n",
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.4},{:.4},{:.4},{:.4},{:.3e}",
+            "{},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.4},{:.4},{:.4},{:.4},{:.3e},{:.4},{:.6e}",
             r.technique,
             r.params,
             r.probe,
@@ -504,7 +595,9 @@ fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
             r.pre_ms,
             r.wall_s,
             r.process_s,
-            r.noise
+            r.noise,
+            r.frame_ms,
+            r.frame_rms
         );
     }
     std::fs::write(path, s).with_context(|| path.display().to_string())
@@ -522,6 +615,9 @@ struct Point {
     tile: f64,
     pre: f64,
     process: f64,
+    /// Mean per-frame GPU ms when the environment changes every frame, and its mean error.
+    frame: f64,
+    frame_rms: f64,
 }
 
 fn points(rows: &[Row], material: &str) -> Vec<Point> {
@@ -547,6 +643,8 @@ fn points(rows: &[Row], material: &str) -> Vec<Point> {
                 tile: v.iter().map(|r| r.tile).fold(0.0, f64::max),
                 pre: v.iter().map(|r| r.pre_ms).sum::<f64>() / n,
                 process: v.iter().map(|r| r.process_s).sum::<f64>() / n,
+                frame: v.iter().map(|r| r.frame_ms).sum::<f64>() / n,
+                frame_rms: v.iter().map(|r| r.frame_rms).sum::<f64>() / n,
                 label,
                 technique,
             }
@@ -603,20 +701,27 @@ fn markdown(rows: &[Row], settings: &str) -> String {
     let _ = writeln!(md, "{settings}\n");
     md.push_str("## Headline: what to use at which time budget\n\n");
     md.push_str(
-        "The Pareto front per material (mean over the probes of GPU time for the whole \
-         render, precomputation included, and of relative RMS against the reference): at a \
-         budget of at least the time listed, the technique beside it is the most accurate \
-         envlight has.\n\n",
+        "**The environment changes every frame** (a time of day, a moving sun, a probe the \
+         engine renders): the Pareto front per material by the GPU time of a whole frame \
+         through the resident path (`Renderer::record_resident`: SH projection, light \
+         extraction, the paraboloid and its chains, prefiltered maps and the shading, all on \
+         the GPU, one submission, nothing read back), mean over the probes, against its mean \
+         relative RMS. Monte Carlo counts its host render's GPU time (its sampling tables, \
+         rebuilt on the host at each change, are not counted); a peer's bake counts its whole \
+         process, since a changed environment must be baked again, plus split-sum's shading.\n\n",
     );
     let mats = material_names(rows);
     for m in &mats {
-        let p = points(rows, m);
+        let mut p = points(rows, m);
+        for q in &mut p {
+            (q.ms, q.rms) = (q.frame, q.frame_rms);
+        }
         let _ = writeln!(md, "- **{m}**: {}", front_line(&p));
     }
     md.push_str(
-        "\nWhen the precomputation is amortised (an engine shades many frames from one \
-         environment), the front by the per-frame GPU time alone (G-buffer, shading, Monte \
-         Carlo frames):\n\n",
+        "\n**One environment, many frames** (the precomputation amortised): the front by the \
+         per-frame GPU time alone (G-buffer, shading, Monte Carlo frames) of the host path's \
+         render; a peer's cube costs split-sum's shading.\n\n",
     );
     for m in &mats {
         let mut p = points(rows, m);
@@ -627,23 +732,25 @@ fn markdown(rows: &[Row], settings: &str) -> String {
     }
     md.push_str(
         "\nRows marked \"(no lights)\" leave the probe's lights in the map; the others extract \
-         them (the default) and add them exactly where the technique can. split_sum taps=8 is \
-         the lobe taps recipe. gltf-ibl-sampler rows are glTF-IBL-Sampler's GGX cube of the probe \
-         (its defaults, N samples) shaded by split-sum in float64; their time is its whole \
-         process (it has no timestamps), so they sit on the per-frame front at the \
-         split_sum row's cost.\n\n![Pareto chart](report.png)\n",
+         them (the default) and add them exactly where the technique can (the resident path \
+         clamps the chain's residual where the host path fills it). \
+         split_sum taps=8 is the lobe taps recipe. gltf-ibl-sampler rows are \
+         glTF-IBL-Sampler's GGX cube of the probe (its defaults, N samples) shaded by \
+         split-sum in float64. \"GPU ms\" below is the host path's whole render, \
+         precomputation included (\"of it precompute\"), as the chart plots it.\n\n\
+         ![Pareto chart](report.png)\n",
     );
     for m in &mats {
         let p = points(rows, m);
         let f = front(&p);
         let _ = writeln!(
             md,
-            "\n## {m}\n\n| technique | mean rel. RMS | worst probe | mean abs bias | worst tile | GPU ms | of it precompute | whole process s | front |\n|---|---|---|---|---|---|---|---|---|"
+            "\n## {m}\n\n| technique | mean rel. RMS | worst probe | mean abs bias | worst tile | GPU ms | of it precompute | whole process s | changing env: frame ms | its rel. RMS | front |\n|---|---|---|---|---|---|---|---|---|---|---|"
         );
         for (i, q) in p.iter().enumerate() {
             let _ = writeln!(
                 md,
-                "| {} | {:.2}% | {:.2}% | {:.2}% | {:.2}% | {:.2} | {:.2} | {:.3} | {} |",
+                "| {} | {:.2}% | {:.2}% | {:.2}% | {:.2}% | {:.2} | {:.2} | {:.3} | {:.2} | {:.2}% | {} |",
                 q.label,
                 100.0 * q.rms,
                 100.0 * q.worst,
@@ -652,6 +759,8 @@ fn markdown(rows: &[Row], settings: &str) -> String {
                 q.ms,
                 q.pre,
                 q.process,
+                q.frame,
+                100.0 * q.frame_rms,
                 if f.contains(&i) { "yes" } else { "" }
             );
         }
@@ -934,6 +1043,8 @@ mod tests {
             tile: 0.0,
             pre: 0.0,
             process: 0.0,
+            frame: ms,
+            frame_rms: rms,
         }
     }
 

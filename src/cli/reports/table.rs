@@ -43,6 +43,8 @@ pub struct Pick {
     /// Render through the resident path (`Renderer::resident`, the map on the GPU, its
     /// lights extracted there) instead of the host path.
     pub resident: bool,
+    /// The scenes' `light_texels` (the chain's most light texels), where given.
+    pub light_texels: Option<u32>,
 }
 
 /// One measured case.
@@ -284,6 +286,9 @@ pub fn table(
             for c in all.iter().filter(|c| c.material == material) {
                 let mut sc = scene(cam, brdf, c.technique, None, 7, split);
                 with_case(&mut sc, c);
+                if pick.light_texels.is_some() {
+                    sc.environment.light_texels = pick.light_texels;
+                }
                 let r = match &gpu {
                     Some(gpu) => {
                         let prepared = renderer.resident(&sc, MapShape::of(&env))?;
@@ -337,14 +342,15 @@ pub fn table(
                 "Rendered through the resident path (the map on the GPU, its lights extracted \
                  there each frame: at most {} texels for the chain's techniques, the residual \
                  clamped, not filled). ",
-                crate::render::CHAIN_GPU_MAX
+                pick.light_texels.unwrap_or(crate::render::CHAIN_GPU_MAX)
             ),
             false => String::new(),
         },
         crate::scene::DEFAULT_FIS_BIAS,
         crate::scene::DEFAULT_FIS_BIAS_RESIDUAL,
         crate::abi::lights::CHAIN_RATIO,
-        crate::abi::lights::CHAIN_MAX_TEXELS,
+        pick.light_texels
+            .unwrap_or(crate::abi::lights::CHAIN_MAX_TEXELS),
         crate::abi::lights::CHAIN_FILL,
         crate::math::lights::DIFFUSE_RATIO,
         started.elapsed().as_secs_f64()
