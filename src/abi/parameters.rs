@@ -299,7 +299,7 @@ pub mod lights {
     pub const CLUSTER_SORT_RECORD_ARRAYS: u32 = 2;
     /// Bits of the spatial key's top that bucket `glsl/extract_prepare.comp`'s counting sort
     /// (its key: 30 bits of a Morton code over the octahedral map of the world direction).
-    pub const TREE_BUCKET_BITS: u32 = 12;
+    pub const TREE_BUCKET_BITS: u32 = 16;
     /// Arrays of one u32 per bucket at the start of `glsl/extract_prepare.comp`'s sort
     /// buffer: counts, first slots, cursors; then two of one u32 per record: each record's
     /// key, the records in bucket order.
