@@ -535,7 +535,9 @@ fn the_resident_path_refuses_what_it_cannot_render() {
 /// An engine's frame holding NaN, infinite and negative texels: the resident path reads them
 /// as zero and counts them (`Resident::zeroed_texels`), so the frame is finite and equals the
 /// host path's render of the map with those texels zeroed (`EnvMap::sanitized`, to 1e-6); the
-/// next frame, written into the same image, renders the clean map as the host path does.
+/// next frame, written into the same image, renders the clean map as the host path does. The
+/// same with every technique's lights extracted on the GPU (within the bounds of
+/// `the_resident_path_extracts_chain_lights_on_the_gpu`): no NaN reaches the light tree.
 #[test]
 fn a_broken_frame_shades_finite_pixels_and_the_next_recovers() {
     use envlight::render::{MapShape, Renderer};
@@ -552,26 +554,41 @@ fn a_broken_frame_shades_finite_pixels_and_the_next_recovers() {
             broken.texels[2 * n / 3] = [1.0, -2.0, f32::NAN];
             let (zeroed_map, zeroed) = broken.sanitized();
             assert_eq!(zeroed, 3);
-            let sc = resident_scene(true);
-            let prepared = renderer.resident(&sc, MapShape::of(&clean)).unwrap();
-            let gpu = map_twin::raw_gpu_map(&ctx, &broken);
-            for (map, want_zeroed) in [(&zeroed_map, 3u32), (&clean, 0)] {
-                if want_zeroed == 0 {
-                    // The next frame, into the same image.
-                    map_twin::write_raw(&ctx, &gpu, &clean);
+            for lit in [false, true] {
+                let mut sc = resident_scene(true);
+                // (worst, mean) bounds: the lights extracted on the GPU agree with the host's
+                // within the trees' budgets (the_resident_path_extracts_chain_lights_on_the_gpu).
+                let (top, mean) = match lit {
+                    false => (1e-6, 1e-6),
+                    true => {
+                        sc.environment.lights = envlight::scene::LightsMode::Extract;
+                        sc.environment.light_texels = Some(24);
+                        sc.environment.light_fill = Some(0);
+                        (4e-2, 2e-4)
+                    }
+                };
+                let prepared = renderer.resident(&sc, MapShape::of(&clean)).unwrap();
+                let gpu = map_twin::raw_gpu_map(&ctx, &broken);
+                for (map, want_zeroed) in [(&zeroed_map, 3u32), (&clean, 0)] {
+                    if want_zeroed == 0 {
+                        // The next frame, into the same image.
+                        map_twin::write_raw(&ctx, &gpu, &clean);
+                    }
+                    let got = renderer.render_resident(&prepared, &gpu).unwrap();
+                    let host = renderer.render(&sc, map).unwrap();
+                    // A non-finite pixel fails here, at its place.
+                    let errors = common::compare::frame_errors(&got.frame, &host.frame);
+                    assert!(
+                        errors.worst() <= top && errors.mean() <= mean,
+                        "{mapping:?} lights {lit} ({want_zeroed} zeroed): {:e} at {:?}, {:e} \
+                         on average",
+                        errors.worst(),
+                        errors.at(),
+                        errors.mean()
+                    );
+                    let counted = map_twin::read_u32(&ctx, prepared.zeroed_texels());
+                    assert_eq!(counted, want_zeroed, "{mapping:?}");
                 }
-                let got = renderer.render_resident(&prepared, &gpu).unwrap();
-                let host = renderer.render(&sc, map).unwrap();
-                // A non-finite pixel fails here, at its place.
-                let errors = common::compare::frame_errors(&got.frame, &host.frame);
-                assert!(
-                    errors.worst() <= 1e-6,
-                    "{mapping:?} ({want_zeroed} zeroed): {:e} at {:?}",
-                    errors.worst(),
-                    errors.at()
-                );
-                let counted = map_twin::read_u32(&ctx, prepared.zeroed_texels());
-                assert_eq!(counted, want_zeroed, "{mapping:?}");
             }
         }
     }
