@@ -557,11 +557,11 @@ impl ChainLights {
             .filter_map(|(o, _)| o.lobe)
             .fold(1.0, f64::min);
         let cells = cells_for_rho(rho, finest);
-        let room = scene
-            .environment
-            .light_texels
-            .unwrap_or(CHAIN_GPU_MAX)
-            .max(1);
+        // No more room than the map has texels (a small map's buffers stay small).
+        let texels = env.width as u64 * env.height as u64 * env.mapping.layers() as u64;
+        let room = (scene.environment.light_texels.unwrap_or(CHAIN_GPU_MAX) as u64)
+            .min(texels)
+            .max(1) as u32;
         Ok(Some(ChainLights {
             extractor: Extractor::new(ctx)?,
             extraction: GpuExtraction::new(ctx, env.mapping, env.width, env.height, room)?,
