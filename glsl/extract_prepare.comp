@@ -42,9 +42,12 @@ uint texel_key(uvec4 t) {
     return (t.x * pc.map_size.y + t.z) * pc.map_size.x + t.y;
 }
 
-// The low 15 bits of v spread to the even bits.
+// The key's bits: TREE_KEY_AXIS_BITS a side, interleaved.
+const uint KEY_BITS = 2u * TREE_KEY_AXIS_BITS;
+
+// The low TREE_KEY_AXIS_BITS (at most 16) bits of v spread to the even bits.
 uint spread(uint v) {
-    v &= 0x7fffu;
+    v &= (1u << TREE_KEY_AXIS_BITS) - 1u;
     v = (v | (v << 8u)) & 0x00ff00ffu;
     v = (v | (v << 4u)) & 0x0f0f0f0fu;
     v = (v | (v << 2u)) & 0x33333333u;
@@ -52,14 +55,15 @@ uint spread(uint v) {
     return v;
 }
 
-// 30-bit Morton code of world direction d on the octahedral map (z folded).
+// Morton code of world direction d on the octahedral map (z folded), KEY_BITS bits.
 uint spatial_key(vec3 d) {
     vec2 p = d.xy / (abs(d.x) + abs(d.y) + abs(d.z));
     if (d.z < 0.0) {
         vec2 s = vec2(p.x >= 0.0 ? 1.0 : -1.0, p.y >= 0.0 ? 1.0 : -1.0);
         p = (1.0 - abs(p.yx)) * s;
     }
-    uvec2 q = uvec2(clamp((p * 0.5 + 0.5) * 32768.0, vec2(0.0), vec2(32767.0)));
+    float side = float(1u << TREE_KEY_AXIS_BITS);
+    uvec2 q = uvec2(clamp((p * 0.5 + 0.5) * side, vec2(0.0), vec2(side - 1.0)));
     return spread(q.x) | (spread(q.y) << 1u);
 }
 
@@ -110,7 +114,7 @@ void scan() {
 void write_texel(uint i, uint n) {
     Record r = records[i];
     uint keys = TREE_SORT_BUCKET_ARRAYS * BUCKETS, members = keys + pc.max;
-    uint key = sorted[keys + i], bucket = key >> (30u - TREE_BUCKET_BITS);
+    uint key = sorted[keys + i], bucket = key >> (KEY_BITS - TREE_BUCKET_BITS);
     uint own = texel_key(r.texel);
     uint first = sorted[BUCKETS + bucket], count = sorted[bucket];
     uint place = first;
@@ -242,9 +246,9 @@ void main() {
     if (pc.mode == PREPARE_MODE_KEYS) {
         uint key = spatial_key(to_world(records[i].dir_omega.xyz));
         sorted[keys + i] = key;
-        atomicAdd(sorted[key >> (30u - TREE_BUCKET_BITS)], 1u);
+        atomicAdd(sorted[key >> (KEY_BITS - TREE_BUCKET_BITS)], 1u);
     } else if (pc.mode == PREPARE_MODE_SCATTER) {
-        uint bucket = sorted[keys + i] >> (30u - TREE_BUCKET_BITS);
+        uint bucket = sorted[keys + i] >> (KEY_BITS - TREE_BUCKET_BITS);
         uint slot = atomicAdd(sorted[2u * BUCKETS + bucket], 1u);
         sorted[keys + pc.max + slot] = i;
     } else {

@@ -415,8 +415,8 @@ fn gpu_prepared_lights_match_the_float64_twin_on_every_mapping() {
     common::finish(ctx);
 }
 
-/// The spatial key of `glsl/extract_prepare.comp` in float64: 30 bits of a Morton code over
-/// the octahedral map of `d` (z folded).
+/// The spatial key of `glsl/extract_prepare.comp` in float64: a Morton code over the
+/// octahedral map of `d` (z folded), `TREE_KEY_AXIS_BITS` bits a side.
 fn spatial_key(d: glam::DVec3) -> u32 {
     let n = d.x.abs() + d.y.abs() + d.z.abs();
     let (mut px, mut py) = (d.x / n, d.y / n);
@@ -427,7 +427,9 @@ fn spatial_key(d: glam::DVec3) -> u32 {
         );
         (px, py) = ((1.0 - py.abs()) * sx, (1.0 - px.abs()) * sy);
     }
-    let q = |p: f64| ((p * 0.5 + 0.5) * 32768.0).clamp(0.0, 32767.0) as u32;
-    let spread = |v: u32| (0..15).map(|b| ((v >> b) & 1) << (2 * b)).sum::<u32>();
+    use envlight::math::light_tree::TREE_KEY_AXIS_BITS as BITS;
+    let side = (1u32 << BITS) as f64;
+    let q = |p: f64| ((p * 0.5 + 0.5) * side).clamp(0.0, side - 1.0) as u32;
+    let spread = |v: u32| (0..BITS).map(|b| ((v >> b) & 1) << (2 * b)).sum::<u32>();
     spread(q(px)) | (spread(q(py)) << 1)
 }

@@ -595,6 +595,29 @@ fn a_broken_frame_shades_finite_pixels_and_the_next_recovers() {
     common::finish(ctx);
 }
 
+/// Asserts that `lit`, the resident frame of `sc` (which extracts lights) from `gpu` (`env`
+/// on the GPU), differs by more than 5% from the frame of the same scene with the lights
+/// left in the map: the lights matter.
+fn lights_matter(
+    renderer: &envlight::render::Renderer,
+    sc: &envlight::scene::Scene,
+    env: &EnvMap,
+    gpu: &GpuEnvMap,
+    lit: &EnvMap,
+) {
+    let mut unlit = sc.clone();
+    unlit.environment.lights = envlight::scene::LightsMode::None;
+    let shape = envlight::render::MapShape::of(env);
+    let prepared = renderer.resident(&unlit, shape).unwrap();
+    let plain = renderer.render_resident(&prepared, gpu).unwrap();
+    let apart = common::compare::frame_errors(&plain.frame, lit).worst();
+    assert!(
+        apart > 5e-2,
+        "{:?}: lights change nothing ({apart:e})",
+        env.mapping
+    );
+}
+
 /// Diffuse lights on the resident path: a scene that extracts lights (`lights = "extract"`)
 /// for SH irradiance and a prefiltered irradiance map (beside SH-BRDF and a mirror, which take
 /// none) renders from a GPU image with the lights found on the GPU each frame: their
@@ -630,19 +653,7 @@ fn the_resident_path_extracts_diffuse_lights_on_the_gpu() {
                 errors.at()
             );
             assert!(got.records.iter().any(|r| r.kind == PassKind::Lights));
-            let mut unlit = sc.clone();
-            unlit.environment.lights = LightsMode::None;
-            let plain = renderer
-                .render_resident(
-                    &renderer.resident(&unlit, MapShape::of(&env)).unwrap(),
-                    &gpu,
-                )
-                .unwrap();
-            let apart = common::compare::frame_errors(&plain.frame, &got.frame).worst();
-            assert!(
-                apart > 5e-2,
-                "{mapping:?}: lights change nothing ({apart:e})"
-            );
+            lights_matter(&renderer, &sc, &env, &gpu, &got.frame);
         }
     }
     common::finish(ctx);
@@ -693,19 +704,7 @@ fn the_resident_path_extracts_chain_lights_on_the_gpu() {
                 .flat_map(|r| r.timings.iter().map(|t| t.label.as_str()))
                 .collect();
             assert!(spans.contains(&"prepare lights (gpu)"), "{spans:?}");
-            let mut unlit = sc.clone();
-            unlit.environment.lights = LightsMode::None;
-            let plain = renderer
-                .render_resident(
-                    &renderer.resident(&unlit, MapShape::of(&env)).unwrap(),
-                    &gpu,
-                )
-                .unwrap();
-            let apart = common::compare::frame_errors(&plain.frame, &got.frame).worst();
-            assert!(
-                apart > 5e-2,
-                "{mapping:?}: lights change nothing ({apart:e})"
-            );
+            lights_matter(&renderer, &sc, &env, &gpu, &got.frame);
         }
     }
     common::finish(ctx);

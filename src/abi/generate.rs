@@ -131,6 +131,11 @@ fn define_sizes_and_lights(s: &mut String) {
     let _ = writeln!(s, "#define TREE_BUCKET_BITS {}u", lights::TREE_BUCKET_BITS);
     let _ = writeln!(
         s,
+        "#define TREE_KEY_AXIS_BITS {}u",
+        lights::TREE_KEY_AXIS_BITS
+    );
+    let _ = writeln!(
+        s,
         "#define TREE_SORT_BUCKET_ARRAYS {}u",
         lights::TREE_SORT_BUCKET_ARRAYS
     );

@@ -298,8 +298,14 @@ pub mod lights {
     /// Arrays of one u32 per record after them: each record's cell, the records in cell order.
     pub const CLUSTER_SORT_RECORD_ARRAYS: u32 = 2;
     /// Bits of the spatial key's top that bucket `glsl/extract_prepare.comp`'s counting sort
-    /// (its key: 30 bits of a Morton code over the octahedral map of the world direction).
+    /// (its key: a Morton code over the octahedral map of the world direction,
+    /// 2 · [`TREE_KEY_AXIS_BITS`] bits).
     pub const TREE_BUCKET_BITS: u32 = 16;
+    /// Bits a side of the octahedral grid that spatial key interleaves (the key has twice
+    /// as many).
+    pub const TREE_KEY_AXIS_BITS: u32 = 15;
+    // The key fits a u32 and spreads by 16-bit steps; the buckets are its top bits.
+    const _: () = assert!(TREE_KEY_AXIS_BITS <= 16 && TREE_BUCKET_BITS <= 2 * TREE_KEY_AXIS_BITS);
     /// Arrays of one u32 per bucket at the start of `glsl/extract_prepare.comp`'s sort
     /// buffer: counts, first slots, cursors; then two of one u32 per record: each record's
     /// key, the records in bucket order.

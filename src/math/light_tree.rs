@@ -20,7 +20,8 @@ use crate::math::envmap::luminance;
 use glam::DVec3;
 
 pub use crate::abi::lights::{
-    KERNEL_FADE, LEAF_TEXELS, TREE_BELOW, TREE_BUDGET, TREE_BUDGET_REACH, TREE_TAIL, TREE_VEC4S,
+    KERNEL_FADE, LEAF_TEXELS, TREE_BELOW, TREE_BUDGET, TREE_BUDGET_REACH, TREE_KEY_AXIS_BITS,
+    TREE_TAIL, TREE_VEC4S,
 };
 
 /// A node of a [`LightTree`].

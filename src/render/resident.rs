@@ -48,7 +48,7 @@ pub struct Resident {
     diffuse: Option<DiffuseLights>,
     /// The chain's lights, extracted on the GPU every frame, where the scene extracts them.
     chain: Option<ChainLights>,
-    /// The maps' means the extractions read, where there are any.
+    /// The extraction pass and the maps' means the extractions read, where there are any.
     means: Option<Means>,
     /// The split-sum chain's rough levels dealt into time slices (one: no slicing).
     slices: Vec<Vec<LevelLayers>>,
@@ -343,11 +343,12 @@ impl Renderer {
             if let (Some(means), Some(lights)) = (&r.means, &r.lit.gpu) {
                 marks.record(rec, PassKind::Lights, |rec| {
                     let mean = means.record(rec, &job, env, sh)?;
+                    let ex = &means.extractor;
                     if let Some(d) = &r.diffuse {
-                        d.record(rec, &job, env, lights, mean, sh)?;
+                        d.record(rec, ex, &job, env, lights, mean, sh)?;
                     }
                     match &r.chain {
-                        Some(c) => c.record(rec, &job, env, lights, mean),
+                        Some(c) => c.record(rec, ex, &job, env, lights, mean),
                         None => Ok(()),
                     }
                 })?;
@@ -386,7 +387,6 @@ pub const DIFFUSE_GPU_MAX: u32 = 1 << 20;
 /// those objects shade with instead of the map's (the host path subtracts the light texels'
 /// coefficients instead: the same sum).
 struct DiffuseLights {
-    extractor: Extractor,
     extraction: GpuExtraction,
     /// The residual's projection, copied after the map's in the SH output (where SH objects
     /// add the lights).
@@ -412,7 +412,6 @@ impl DiffuseLights {
             )
         };
         Ok(DiffuseLights {
-            extractor: Extractor::new(ctx)?,
             extraction: GpuExtraction::new(ctx, env.mapping, env.width, env.height, texels)?,
             sh_residual: match plan.lights.sh {
                 true => Some(buffer("resident residual sh", plan.lmax)?),
@@ -425,9 +424,11 @@ impl DiffuseLights {
     /// Records the frame's extraction from `env` by its mean luminance (`mean`'s band 0),
     /// its clusters into `lights` and, with `sh` (the frame's projector and SH output, where
     /// the plan projects), the residual's projection into the output's second half.
+    #[allow(clippy::too_many_arguments)]
     fn record(
         &self,
         rec: &mut Recorder,
+        extractor: &Extractor,
         job: &Job<'_>,
         env: &GpuEnvMap,
         lights: &GpuLights,
@@ -437,10 +438,9 @@ impl DiffuseLights {
         let orientation = &job.orientation;
         let file_to_world = orientation.checked_world_to_file()?.transpose();
         let lmax = job.plan.lmax;
-        self.extractor
-            .record(rec, env, mean, self.ratio, &self.extraction)?;
+        extractor.record(rec, env, mean, self.ratio, &self.extraction)?;
         let at = lights.cluster_at();
-        self.extractor.record_clusters(
+        extractor.record_clusters(
             rec,
             &self.extraction,
             file_to_world,
@@ -458,10 +458,11 @@ impl DiffuseLights {
     }
 }
 
-/// The maps' mean luminance the extractions read: band 0 of the frame's own SH projection
-/// where the plan projects (`inputs::record` then only packs it), else a band-0 projection
-/// of its own.
+/// What the diffuse and chain extractions share: the extraction pass, and the maps' mean
+/// luminance they read, band 0 of the frame's own SH projection where the plan projects
+/// (`inputs::record` then only packs it), else a band-0 projection of its own.
 struct Means {
+    extractor: Extractor,
     projector: ShProjector,
     l00: Buffer,
 }
@@ -469,6 +470,7 @@ struct Means {
 impl Means {
     fn new(ctx: &crate::gpu::Context) -> Result<Means> {
         Ok(Means {
+            extractor: Extractor::new(ctx)?,
             projector: ShProjector::new(ctx, Subgroups::Auto)?,
             l00: Buffer::new(
                 ctx,
@@ -519,7 +521,6 @@ pub const CHAIN_GPU_MAX: u32 = crate::abi::lights::CHAIN_MAX_TEXELS;
 /// resolve each lobe, and how fine they are) is decided here from the map's largest texel,
 /// since no frame is read back.
 struct ChainLights {
-    extractor: Extractor,
     extraction: GpuExtraction,
     /// Quadrature nodes per light texel.
     nodes: u32,
@@ -563,7 +564,6 @@ impl ChainLights {
             .min(texels)
             .max(1) as u32;
         Ok(Some(ChainLights {
-            extractor: Extractor::new(ctx)?,
             extraction: GpuExtraction::new(ctx, env.mapping, env.width, env.height, room)?,
             nodes: 4 * cells * cells,
             ratio: opts.ratio,
@@ -575,15 +575,14 @@ impl ChainLights {
     fn record(
         &self,
         rec: &mut Recorder,
+        extractor: &Extractor,
         job: &Job<'_>,
         env: &GpuEnvMap,
         lights: &GpuLights,
         mean: &Buffer,
     ) -> Result<()> {
         let file_to_world = job.orientation.checked_world_to_file()?.transpose();
-        self.extractor
-            .record(rec, env, mean, self.ratio, &self.extraction)?;
-        self.extractor
-            .record_prepare(rec, &self.extraction, file_to_world, lights)
+        extractor.record(rec, env, mean, self.ratio, &self.extraction)?;
+        extractor.record_prepare(rec, &self.extraction, file_to_world, lights)
     }
 }
