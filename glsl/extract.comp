@@ -1,5 +1,5 @@
 #version 460
-// Light texels found on the GPU (twin: math::lights::extract without fill; passes::extract).
+// Light texels found on the GPU (twin: math::lights::extract; passes::extract).
 // The rule is the host's: a texel position holding part of the sphere (its integration
 // source's value standing for it) is a light texel when its luminance Y exceeds
 // τ = ratio × the mean luminance, raised where needed so that at most `max` pass: the
@@ -7,11 +7,19 @@
 // over the float bits of Y (positive floats order as their bits): a histogram of the top 16
 // bits, the bin the cap falls in, a histogram of that bin's low 16 bits (an indirect dispatch
 // of no workgroups where the cap does not bind), the exact key. The mean comes from the SH
-// projection's L00 (mean = L00 · Y00), so nothing is read back. A light keeps L·(1 − thr/Y),
-// the residual L·thr/Y; texels with a NaN or infinite channel are zero in the residual and
-// counted. Records are in no particular order (atomic compaction). Built twice: the per-texel
-// steps, and with EXTRACT_SELECT the one-workgroup selects (their barriers and shared memory
-// kept out of the per-texel steps).
+// projection's L00 (mean = L00 · Y00), so nothing is read back. Clamped (pc.fill 0), a light
+// keeps L·(1 − thr/Y), the residual L·thr/Y. Filled (pc.fill 1, the host's `fill`), the texels
+// above the threshold that are their own source form ring 0 of a light set, which grows by
+// rings of their 8 neighbours (positive, holding the sphere, same layer, a lat-long wrapping in
+// u) while the cap has room for each ring's records whole; the residual luminance under the
+// set is filled round by round from its edge inwards (each texel the mean of its settled edge
+// neighbours; texels no round reaches take the threshold), at most the texel's own and the
+// threshold, chroma kept; every position reading a member whose value exceeds that residual
+// is a light holding the excess. Texels with a NaN or infinite channel are zero in the
+// residual and counted. Records are in no particular order (atomic compaction). Built twice:
+// the per-texel steps, and with EXTRACT_SELECT the one-workgroup ones (the selects, the
+// decision on the rings, the fill's rounds: their barriers and shared memory kept out of the
+// per-texel steps).
 #extension GL_GOOGLE_include_directive : require
 #include "generated.glsl"
 #include "mappings.glsl"
@@ -26,6 +34,10 @@ layout(std430, set = 0, binding = BINDING_EXTRACT_SH) readonly buffer Sh { float
 layout(std430, set = 0, binding = BINDING_EXTRACT_STATE) buffer State { uint state[]; };
 layout(std430, set = 0, binding = BINDING_EXTRACT_LIGHTS) writeonly buffer Lights { Record records[]; };
 layout(set = 0, binding = BINDING_EXTRACT_RESIDUAL, rgba32f) uniform writeonly image2DArray residual;
+// A filled extraction's light set: a label per texel (NONE, or its ring << 24 | its slot),
+// then per slot its texel's index, its filled luminance's bits (UNSET until a round settles
+// it) and the round's next value.
+layout(std430, set = 0, binding = BINDING_EXTRACT_FILL) coherent buffer Fill { uint fill_[]; };
 
 // The push block, generated from src/abi/push.rs.
 PUSH_ExtractPush
@@ -33,6 +45,17 @@ PUSH_ExtractPush
 const uint TOP = EXTRACT_HEADER_WORDS;
 const uint LOW = EXTRACT_HEADER_WORDS + EXTRACT_TOP_BINS;
 const uint NO_BIN = 0xffffffffu;
+const uint NONE = 0xffffffffu;
+const uint UNSET = 0xffffffffu;
+// A member's slot where its ring ran past the cap and stopped being listed.
+const uint UNLISTED = 0xffffffu;
+
+// The mapping: specialised in the per-texel steps, from the push block in the selects.
+#ifdef EXTRACT_SELECT
+#define MAP_ID pc.mapping
+#else
+#define MAP_ID MAPPING
+#endif
 // Y00 = K00 (the generated SH_K table).
 
 
@@ -58,7 +81,85 @@ float lum(vec3 l) {
     return finite3(l) ? dot(LUMINANCE, l) : 0.0;
 }
 
-// Per texel: the histograms (HISTOGRAM, HISTOGRAM_LOW) or the records and residual (COMPACT).
+// Texels of the map, and the fill buffer's arrays after the labels.
+uint map_texels() {
+    return pc.size.x * pc.size.y * mapping_layers(MAP_ID);
+}
+uint slot_texel_at() { return map_texels(); }
+uint value_at() { return map_texels() + pc.max; }
+uint next_at() { return map_texels() + 2u * pc.max; }
+
+uint index_of(ivec2 p, uint layer) {
+    return (layer * pc.size.y + uint(p.y)) * pc.size.x + uint(p.x);
+}
+
+// (i, j, layer) of texel index k.
+ivec3 texel_of(uint k) {
+    uint w = pc.size.x, h = pc.size.y;
+    return ivec3(int(k % w), int(k / w % h), int(k / (w * h)));
+}
+
+// The neighbour of t at d in its layer (a lat-long wraps in u); false outside the layer.
+bool step_to(ivec3 t, ivec2 d, out ivec2 q) {
+    q = t.xy + d;
+    int w = int(pc.size.x);
+    if (MAP_ID == MAPPING_LATLONG) q.x = (q.x + w) % w;
+    return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(pc.size)));
+}
+
+// The luminance of stored texel q where it is its own integration source and finite (the
+// host's y; false elsewhere).
+bool own_luminance(ivec2 q, uint layer, out float y) {
+    y = 0.0;
+    if (integration_source(MAP_ID, pc.size, q) != q) return false;
+    vec3 l = texelFetch(map_, ivec3(q, layer), 0).rgb;
+    y = dot(LUMINANCE, l);
+    return finite3(l);
+}
+
+// The slot of an accepted member's label (ring at most `grown`, listed), or NONE.
+uint accepted_slot(uint label, uint grown) {
+    if (label == NONE || (label >> 24) > grown) return NONE;
+    uint slot = label & UNLISTED;
+    return slot == UNLISTED ? NONE : slot;
+}
+
+// Lists texel k as a member of ring `ring` (claimed by the caller) in the next slot.
+void list_member(uint k, uint ring) {
+    uint slot = atomicAdd(state[EXTRACT_WORD_MEMBERS], 1u);
+    atomicAdd(state[EXTRACT_WORD_RING_COUNT + ring], 1u);
+    if (slot >= pc.max) return;
+    fill_[slot_texel_at() + slot] = k;
+    fill_[value_at() + slot] = UNSET;
+    fill_[k] = (ring << 24) | slot;
+}
+
+// RING: a member of ring pc.grow − 1 (a slot of its run) lists its neighbours in ring pc.grow.
+void grow_ring() {
+    uint ring = pc.grow;
+    uint id = gl_WorkGroupID.x * (gl_WorkGroupSize.x * gl_WorkGroupSize.y) + gl_LocalInvocationIndex;
+    uint before = 0u;
+    for (uint r = 0u; r + 1u < ring; r++) before += state[EXTRACT_WORD_RING_COUNT + r];
+    uint n = state[EXTRACT_WORD_RING_COUNT + ring - 1u];
+    // A ring listed only in part ran past the cap: no ring grows from it.
+    if (before + n > pc.max || id >= n) return;
+    ivec3 t = texel_of(fill_[slot_texel_at() + before + id]);
+    for (int dj = -1; dj <= 1; dj++) {
+        for (int di = -1; di <= 1; di++) {
+            ivec2 q;
+            float y;
+            if ((di == 0 && dj == 0) || !step_to(t, ivec2(di, dj), q)) continue;
+            if (!own_luminance(q, uint(t.z), y) || !(y > 0.0)) continue;
+            uint k = index_of(q, uint(t.z));
+            if (atomicCompSwap(fill_[k], NONE, (ring << 24) | UNLISTED) == NONE) {
+                list_member(k, ring);
+            }
+        }
+    }
+}
+
+// Per texel: the histograms (HISTOGRAM, HISTOGRAM_LOW), ring 0 (MARK), the rims (RIMS) or the
+// records and residual (COMPACT).
 void per_texel() {
     uvec3 id = gl_GlobalInvocationID;
     if (any(greaterThanEqual(id.xy, pc.size)) || id.z >= mapping_layers(MAPPING)) return;
@@ -86,11 +187,43 @@ void per_texel() {
         return;
     }
     float thr = uintBitsToFloat(state[EXTRACT_WORD_THRESHOLD]);
+    if (pc.mode == EXTRACT_MODE_MARK) {
+        if (counted && own && y > thr && y > t) list_member(index_of(p, id.z), 0u);
+        return;
+    }
+    if (pc.mode == EXTRACT_MODE_RIMS) {
+        ivec2 s = integration_source(MAPPING, pc.size, p);
+        if (s.x < 0 || own) return;
+        uint label = fill_[index_of(s, id.z)];
+        if (label != NONE) atomicAdd(state[EXTRACT_WORD_RIMS + (label >> 24)], 1u);
+        return;
+    }
     vec3 kept = good ? l : vec3(0.0);
-    if (y > thr && y > t) {
-        vec3 r = l * (thr / y);
+    bool light = y > thr && y > t;
+    vec3 r = l * (thr / y);
+    if (pc.fill != 0u) {
+        // A member's residual: its filled luminance, at most the threshold and its own.
+        uint slot = NONE;
+        if (counted && y > 0.0) {
+            ivec2 s = integration_source(MAPPING, pc.size, p);
+            slot = accepted_slot(fill_[index_of(s, id.z)], state[EXTRACT_WORD_GROWN]);
+        }
+        light = false;
+        if (slot != NONE) {
+            uint v = fill_[value_at() + slot];
+            float c = v == UNSET ? thr : min(uintBitsToFloat(v), thr);
+            r = l * (min(c, y) / y);
+            light = any(notEqual(l - r, vec3(0.0)));
+        }
+    }
+    if (light) {
         if (own) kept = r;
         uint k = atomicAdd(state[EXTRACT_WORD_COUNTER], 1u);
+        if (k < pc.max && pc.fill != 0u) {
+            // The count and the records' indirect arguments, as records are written.
+            atomicAdd(state[EXTRACT_WORD_KEPT], 1u);
+            atomicMax(state[EXTRACT_WORD_LIGHT_ARGS], k / EXTRACT_LIGHT_GROUP + 1u);
+        }
         if (k < pc.max) {
             vec2 uv = (vec2(p) + 0.5) / vec2(pc.size);
             vec3 dir = coord_to_dir(MAPPING, Coord(id.z, uv));
@@ -186,16 +319,109 @@ void select_low() {
     write_light_args(state[EXTRACT_WORD_KEPT] + above);
 }
 
+// DECIDE: the rings (up to pc.grow) whose records, with those before them, the cap has room
+// for; the members they hold; the record count and its arguments restarted for the
+// compaction to count.
+void decide() {
+    if (gl_LocalInvocationIndex != 0u) return;
+    uint total = state[EXTRACT_WORD_RING_COUNT] + state[EXTRACT_WORD_RIMS];
+    uint grown = 0u;
+    for (uint k = 1u; k <= pc.grow; k++) {
+        uint add = state[EXTRACT_WORD_RING_COUNT + k] + state[EXTRACT_WORD_RIMS + k];
+        if (total + add > pc.max) break;
+        total += add;
+        grown = k;
+    }
+    uint members = 0u;
+    for (uint k = 0u; k <= grown; k++) members += state[EXTRACT_WORD_RING_COUNT + k];
+    state[EXTRACT_WORD_GROWN] = grown;
+    state[EXTRACT_WORD_ACCEPTED] = members;
+    write_light_args(0u);
+    state[EXTRACT_WORD_LIGHT_ARGS] = 0u;
+}
+
+// The value a fill round reads at q: an accepted member's filled luminance once settled, a
+// texel outside the set its own luminance; false where there is none.
+bool fill_value(ivec2 q, uint layer, uint grown, out float v) {
+    v = 0.0;
+    uint slot = accepted_slot(fill_[index_of(q, layer)], grown);
+    if (slot == NONE) return own_luminance(q, layer, v);
+    uint bits = fill_[value_at() + slot];
+    v = uintBitsToFloat(bits);
+    return bits != UNSET;
+}
+
+shared uint settled_any;
+
+// FILL: rounds until none settles; in each, every unsettled member with a settled edge
+// neighbour takes their mean (all read before any is written), as the host's `fill`.
+void fill_rounds() {
+    uint n = state[EXTRACT_WORD_ACCEPTED];
+    uint grown = state[EXTRACT_WORD_GROWN];
+    uint t = gl_LocalInvocationIndex;
+    uint stride = gl_WorkGroupSize.x * gl_WorkGroupSize.y;
+    const ivec2 EDGE[4] = ivec2[4](ivec2(0, -1), ivec2(-1, 0), ivec2(1, 0), ivec2(0, 1));
+    uint rounds = 0u;
+    // At most one round per member, plus the last that settles none.
+    for (uint round = 0u; round <= n; round++) {
+        if (t == 0u) settled_any = 0u;
+        for (uint s = t; s < n; s += stride) {
+            uint next = UNSET;
+            if (fill_[value_at() + s] == UNSET) {
+                ivec3 tx = texel_of(fill_[slot_texel_at() + s]);
+                float sum = 0.0;
+                uint count = 0u;
+                for (int e = 0; e < 4; e++) {
+                    ivec2 q;
+                    float v;
+                    if (step_to(tx, EDGE[e], q) && fill_value(q, uint(tx.z), grown, v)) {
+                        sum += v;
+                        count++;
+                    }
+                }
+                if (count > 0u) next = floatBitsToUint(sum / float(count));
+            }
+            fill_[next_at() + s] = next;
+        }
+        memoryBarrierBuffer();
+        memoryBarrierShared();
+        barrier();
+        for (uint s = t; s < n; s += stride) {
+            uint next = fill_[next_at() + s];
+            if (next != UNSET) {
+                fill_[value_at() + s] = next;
+                settled_any = 1u;
+            }
+        }
+        memoryBarrierBuffer();
+        memoryBarrierShared();
+        barrier();
+        rounds++;
+        bool done = settled_any == 0u;
+        barrier();
+        if (done) break;
+    }
+    if (t == 0u) state[EXTRACT_WORD_ROUNDS] = rounds;
+}
+
 #endif
 
 void main() {
 #ifdef EXTRACT_SELECT
     if (pc.mode == EXTRACT_MODE_SELECT_TOP) {
         select_top();
-    } else {
+    } else if (pc.mode == EXTRACT_MODE_SELECT_LOW) {
         select_low();
+    } else if (pc.mode == EXTRACT_MODE_DECIDE) {
+        decide();
+    } else {
+        fill_rounds();
     }
 #else
-    per_texel();
+    if (pc.mode == EXTRACT_MODE_RING) {
+        grow_ring();
+    } else {
+        per_texel();
+    }
 #endif
 }

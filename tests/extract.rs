@@ -22,6 +22,16 @@ fn extraction_matches_the_float64_twin_on_every_mapping() {
     common::finish(ctx);
 }
 
+/// The residual filled under grown lights, as renders extract for FIS, split-sum and footprint
+/// lookups: every mapping, rings that fit and rings that do not, the lat-long seam, a layer
+/// no fill round reaches (see the twin).
+#[test]
+fn filled_extraction_matches_the_float64_twin_on_every_mapping() {
+    let ctx = common::ctx();
+    twin::check_fill(&ctx);
+    common::finish(ctx);
+}
+
 /// A lat-long map with 900 distinct bright texels and a plateau of 41 equal ones where the cap
 /// falls: the GPU keeps exactly the host's texels (all brighter than the plateau, none of it,
 /// as the host's strict rule does), its threshold is the plateau's luminance, the texels the

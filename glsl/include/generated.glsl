@@ -87,6 +87,7 @@
 #define BINDING_EXTRACT_STATE 2
 #define BINDING_EXTRACT_LIGHTS 3
 #define BINDING_EXTRACT_RESIDUAL 4
+#define BINDING_EXTRACT_FILL 5
 #define BINDING_EXTRACT_ADD_STATE 0
 #define BINDING_EXTRACT_ADD_LIGHTS 1
 #define BINDING_EXTRACT_ADD_DST 2
@@ -119,16 +120,22 @@
 #define LIGHT_LEAF_TEXELS 4u
 #define LIGHT_TREE_TAIL 0.25
 #define LIGHT_TREE_VEC4S 5u
-#define EXTRACT_HEADER_WORDS 16u
+#define EXTRACT_HEADER_WORDS 48u
 #define EXTRACT_TOP_BINS 32768u
 #define EXTRACT_LOW_BINS 65536u
+#define FILL_MAX_RINGS 8u
 #define EXTRACT_RECORD_VEC4S 3u
 #define EXTRACT_LIGHT_GROUP 64u
 #define EXTRACT_MODE_HISTOGRAM 0u
 #define EXTRACT_MODE_SELECT_TOP 1u
 #define EXTRACT_MODE_HISTOGRAM_LOW 2u
 #define EXTRACT_MODE_SELECT_LOW 3u
-#define EXTRACT_MODE_COMPACT 4u
+#define EXTRACT_MODE_MARK 4u
+#define EXTRACT_MODE_RING 5u
+#define EXTRACT_MODE_RIMS 6u
+#define EXTRACT_MODE_DECIDE 7u
+#define EXTRACT_MODE_FILL 8u
+#define EXTRACT_MODE_COMPACT 9u
 #define CLUSTERS_MODE_COUNT 0u
 #define CLUSTERS_MODE_SCAN 1u
 #define CLUSTERS_MODE_SCATTER 2u
@@ -152,6 +159,12 @@
 #define EXTRACT_WORD_NONFINITE 13u
 #define EXTRACT_WORD_TAU 14u
 #define EXTRACT_WORD_COUNTER 15u
+#define EXTRACT_WORD_MEMBERS 16u
+#define EXTRACT_WORD_ACCEPTED 17u
+#define EXTRACT_WORD_GROWN 18u
+#define EXTRACT_WORD_ROUNDS 19u
+#define EXTRACT_WORD_RING_COUNT 20u
+#define EXTRACT_WORD_RIMS 29u
 #define AREA_EDGE_STEPS 2u
 #define AREA_POLE_STEPS 8u
 #define AREA_POLE_NEAR 8.0
@@ -239,7 +252,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_ShBrdfPush layout(push_constant) uniform Push { uint grid; float p0; float p1; uint offset; uint panel; uint[3] pad; } pc;
 #define PUSH_DfgPush layout(push_constant) uniform Push { uint size; uint correlated; uint offset; uint panel; uint centres; } pc;
 #define PUSH_PrefilterGgxPush layout(push_constant) uniform Push { uint size; uint src_size; float src_max_lod; float alpha; uint samples; float bias; uint dst_mapping; uint layer; } pc;
-#define PUSH_ExtractPush layout(push_constant) uniform Push { uvec2 size; uint mapping; uint mode; uint max; float ratio; uint[2] pad; } pc;
+#define PUSH_ExtractPush layout(push_constant) uniform Push { uvec2 size; uint mapping; uint mode; uint max; float ratio; uint fill; uint grow; } pc;
 #define PUSH_ExtractAddPush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 map_size; uint mapping; uint size; uint kernel; float alpha; float inv_norm; uint layer; } pc;
 #define PUSH_ExtractClustersPush layout(push_constant) uniform Push { vec4[3] file_to_world; uint mode; uint grid; uint at; uint max; } pc;
 #define PUSH_ExtractPreparePush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 map_size; uint mapping; uint cells; uint stride; uint tree_at; uint max; uint mode; uint tree_room; uint[3] pad; } pc;

@@ -193,6 +193,9 @@ bindings! {
     EXTRACT_LIGHTS = 3;
     /// extract: the residual map (rgba32f image2DArray).
     EXTRACT_RESIDUAL = 4;
+    /// extract: a filled extraction's light set (uint storage buffer: a label per texel,
+    /// then per member slot its texel, its filled luminance and the next round's).
+    EXTRACT_FILL = 5;
     /// extract_add: the extraction's state (its count and largest solid angle).
     EXTRACT_ADD_STATE = 0;
     /// extract_add: the extraction's light records.

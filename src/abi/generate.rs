@@ -89,6 +89,7 @@ fn define_sizes_and_lights(s: &mut String) {
     );
     let _ = writeln!(s, "#define EXTRACT_TOP_BINS {}u", lights::EXTRACT_TOP_BINS);
     let _ = writeln!(s, "#define EXTRACT_LOW_BINS {}u", lights::EXTRACT_LOW_BINS);
+    let _ = writeln!(s, "#define FILL_MAX_RINGS {}u", lights::FILL_MAX_RINGS);
     let _ = writeln!(
         s,
         "#define EXTRACT_RECORD_VEC4S {}u",
@@ -105,6 +106,11 @@ fn define_sizes_and_lights(s: &mut String) {
         ("SELECT_TOP", m::SELECT_TOP),
         ("HISTOGRAM_LOW", m::HISTOGRAM_LOW),
         ("SELECT_LOW", m::SELECT_LOW),
+        ("MARK", m::MARK),
+        ("RING", m::RING),
+        ("RIMS", m::RIMS),
+        ("DECIDE", m::DECIDE),
+        ("FILL", m::FILL),
         ("COMPACT", m::COMPACT),
     ] {
         let _ = writeln!(s, "#define EXTRACT_MODE_{name} {v}u");
@@ -152,6 +158,12 @@ fn define_sizes_and_lights(s: &mut String) {
         ("NONFINITE", w::NONFINITE),
         ("TAU", w::TAU),
         ("COUNTER", w::COUNTER),
+        ("MEMBERS", w::MEMBERS),
+        ("ACCEPTED", w::ACCEPTED),
+        ("GROWN", w::GROWN),
+        ("ROUNDS", w::ROUNDS),
+        ("RING_COUNT", w::RING_COUNT),
+        ("RIMS", w::RIMS),
     ] {
         let _ = writeln!(s, "#define EXTRACT_WORD_{name} {v}u");
     }

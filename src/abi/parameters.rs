@@ -267,7 +267,10 @@ pub mod lights {
     /// vec4s per light tree node in the GPU's list (math::light_tree::LightTree::gpu_nodes).
     pub const TREE_VEC4S: u32 = 5;
     /// The GPU extraction's state buffer (`passes::extract`): words before its histograms.
-    pub const EXTRACT_HEADER_WORDS: u32 = 16;
+    pub const EXTRACT_HEADER_WORDS: u32 = 48;
+    /// Most rings of texels a filled extraction's light set grows by (a scene's
+    /// `light_fill`): the state buffer holds a count per ring, the set's own ring 0 first.
+    pub const FILL_MAX_RINGS: u32 = 8;
     /// Bins of the first histogram: the top 16 bits of a positive float luminance's bits
     /// (sign clear, so 2¹⁵ of them).
     pub const EXTRACT_TOP_BINS: u32 = 32768;
@@ -289,8 +292,25 @@ pub mod lights {
         pub const HISTOGRAM_LOW: u32 = 2;
         /// One workgroup: the exact threshold from the low histogram.
         pub const SELECT_LOW: u32 = 3;
-        /// Per texel: light records above the threshold, the residual everywhere.
-        pub const COMPACT: u32 = 4;
+        /// Filled extractions only, per texel: the texels above the threshold that are their
+        /// own integration source, ring 0 of the light set, listed and labelled.
+        pub const MARK: u32 = 4;
+        /// Filled extractions only, per member of ring `grow − 1` (a dispatch per ring): its
+        /// 8 neighbours in its layer that hold the sphere, are positive and are no member
+        /// yet join ring `grow`.
+        pub const RING: u32 = 5;
+        /// Filled extractions of angular and paraboloid maps only, per texel: the positions
+        /// that read another texel (a rim's) counted by the ring of the texel they read, so
+        /// that the cap counts light records, not members.
+        pub const RIMS: u32 = 6;
+        /// Filled extractions only, one invocation: the rings the cap has room for, whole.
+        pub const DECIDE: u32 = 7;
+        /// Filled extractions only, one workgroup: the residual luminance under the light
+        /// set, round by round from its edge inwards (`math::lights` `fill`).
+        pub const FILL: u32 = 8;
+        /// Per texel: light records above the threshold (with a fill: wherever the texel
+        /// read exceeds its filled residual), the residual everywhere.
+        pub const COMPACT: u32 = 9;
     }
     /// Arrays of one u32 per cell at the start of `glsl/extract_clusters.comp`'s sort buffer:
     /// counts, first slots, cursors, places among the non-empty cells.
@@ -364,6 +384,22 @@ pub mod lights {
         pub const TAU: u32 = 14;
         /// The records written so far (the compaction's counter).
         pub const COUNTER: u32 = 15;
+        /// Filled extractions: members of the light set listed so far, all rings (their
+        /// slots; beyond the cap a ring stops being listed and is refused).
+        pub const MEMBERS: u32 = 16;
+        /// Filled extractions: the members the cap accepted (rings 0 to `GROWN`), the first
+        /// slots of the list.
+        pub const ACCEPTED: u32 = 17;
+        /// Filled extractions: the rings the light set grew by.
+        pub const GROWN: u32 = 18;
+        /// Filled extractions: the fill's rounds (its depth from the set's edge, plus one).
+        pub const ROUNDS: u32 = 19;
+        /// Filled extractions: members per ring, `FILL_MAX_RINGS` + 1 words from ring 0.
+        pub const RING_COUNT: u32 = 20;
+        /// Filled extractions: rim positions reading a member, per ring (as `RING_COUNT`).
+        pub const RIMS: u32 = 29;
+        // The header holds them all.
+        const _: () = assert!(RIMS + super::FILL_MAX_RINGS < super::EXTRACT_HEADER_WORDS);
     }
 }
 

@@ -330,8 +330,10 @@ push_blocks! {
         max: u32 = "uint",
         /// Threshold over the mean luminance.
         ratio: f32 = "float",
-        /// Padding.
-        pad: [u32; 2] = "uint[2]",
+        /// 1 where the residual is filled under grown lights, 0 where it is clamped.
+        fill: u32 = "uint",
+        /// Filled extractions: the ring a RING step lists; the most rings elsewhere.
+        grow: u32 = "uint",
     }
     /// `glsl/extract_add.comp`.
     ExtractAddPush {

@@ -364,14 +364,14 @@ macro_rules! shader_table {
             Extract = "extract", "extract.comp", Compute, [], ExtractPush,
                 [(EXTRACT_MAP, Sampled, Read), (EXTRACT_SH, StorageBuffer, Read),
                  (EXTRACT_STATE, StorageBuffer, ReadWrite), (EXTRACT_LIGHTS, StorageBuffer, Write),
-                 (EXTRACT_RESIDUAL, StorageImage, Write)];
+                 (EXTRACT_RESIDUAL, StorageImage, Write), (EXTRACT_FILL, StorageBuffer, ReadWrite)];
             /// The same, the one-workgroup selects of the cap's threshold (their shared memory
             /// and barriers kept out of the per-texel steps).
             ExtractSelect = "extract_select", "extract.comp", Compute, [("EXTRACT_SELECT", "1")],
                 ExtractPush,
                 [(EXTRACT_MAP, Sampled, Read), (EXTRACT_SH, StorageBuffer, Read),
                  (EXTRACT_STATE, StorageBuffer, ReadWrite), (EXTRACT_LIGHTS, StorageBuffer, Write),
-                 (EXTRACT_RESIDUAL, StorageImage, Write)];
+                 (EXTRACT_RESIDUAL, StorageImage, Write), (EXTRACT_FILL, StorageBuffer, ReadWrite)];
             /// The GPU extraction's light records filtered by a kernel into a cube level.
             ExtractAdd = "extract_add", "extract_add.comp", Compute, [], ExtractAddPush,
                 [(EXTRACT_ADD_STATE, StorageBuffer, Read), (EXTRACT_ADD_LIGHTS, StorageBuffer, Read),

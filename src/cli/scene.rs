@@ -19,8 +19,7 @@ pub struct RenderArgs {
     output: PathBuf,
     /// Render through the resident path, as an engine does with a map on the GPU: the map is
     /// uploaded once, then one frame is recorded from the GPU image with nothing read back
-    /// before the frame (no Monte Carlo; lights extracted on the GPU, the residual clamped
-    /// where the host path fills it)
+    /// before the frame (no Monte Carlo; lights extracted on the GPU by the host path's rule)
     #[arg(long)]
     resident: bool,
 }

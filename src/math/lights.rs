@@ -196,7 +196,8 @@ fn split(map: &EnvMap, mean: f64, y_at: &[f64], opts: &ExtractOptions) -> Extrac
 
 /// [`split`] with a filled residual ([`ExtractOptions::fill`]): the stored texels under
 /// `candidates` (their sources), grown by up to `grow` rings of their 8-neighbours in the same
-/// layer (a ring only while the cap `max` has room for all of it), form the light set. Each
+/// layer (a ring only while the cap `max` has room for all the light texels it adds, the
+/// positions reading it), form the light set. Each
 /// gets the residual luminance [`fill`] finds for it, at most its own and τ, chroma kept;
 /// every texel reading a texel of the set is a light texel holding its excess over that
 /// residual. Texels are not joined across cube faces or paraboloid halves.
@@ -226,13 +227,26 @@ fn filled(
         std::borrow::Cow::Owned(y)
     };
     let mut set = vec![false; map.texels.len()];
-    let mut count = 0;
     for &(_, layer, i, j) in candidates {
         let (si, sj) = source(i, j).unwrap_or((i, j));
-        let k = map.index(layer, si, sj);
-        count += usize::from(!set[k]);
-        set[k] = true;
+        set[map.index(layer, si, sj)] = true;
     }
+    // The cap counts light texels, the positions reading the set: the candidates, and for
+    // each texel a ring adds, the positions reading it (more than itself at an angular rim).
+    let mut count = candidates.len();
+    let readers: Vec<u32> = if own {
+        Vec::new()
+    } else {
+        let mut r = vec![0u32; y_at.len()];
+        for k in (0..y_at.len()).filter(|&k| !y_at[k].is_nan()) {
+            let (layer, i, j) = position(map, k);
+            if let Some((si, sj)) = source(i, j) {
+                r[map.index(layer, si, sj)] += 1;
+            }
+        }
+        r
+    };
+    let reading = |k: usize| readers.get(k).map_or(1, |&r| r as usize);
     let wrap = map.mapping == super::mapping::Mapping::LatLong;
     // A texel's neighbour at (di, dj) in its layer, wrapping in u on a lat-long; positions
     // carry their coordinates, so a step divides nothing (dividing the index back into
@@ -264,13 +278,14 @@ fn filled(
                 }
             }
         }
-        if count + ring.len() > max {
+        let added: usize = ring.iter().map(|p| reading(p.k)).sum();
+        if count + added > max {
             for p in &ring {
                 set[p.k] = false;
             }
             break;
         }
-        count += ring.len();
+        count += added;
         members.extend_from_slice(&ring);
         edge = ring;
     }

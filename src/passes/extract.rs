@@ -1,8 +1,8 @@
 //! Light extraction on the GPU (`glsl/extract.comp`, float64 twin
-//! [`crate::math::lights::extract`] without `fill`): the light texels of a map that lives on the
-//! GPU — an engine's own image that changes every frame — found, capped and compacted into a
-//! bounded record buffer with an indirect-dispatch count, and the residual map written beside
-//! them, with nothing read back and nothing waited for.
+//! [`crate::math::lights::extract`]): the light texels of a map that lives on the GPU — an
+//! engine's own image that changes every frame — found, capped and compacted into a bounded
+//! record buffer with an indirect-dispatch count, and the residual map written beside them,
+//! with nothing read back and nothing waited for.
 //!
 //! The rule is the host's: a texel position holding part of the sphere is a light texel when its
 //! luminance Y exceeds τ = `ratio` × the map's mean luminance, the threshold raised where needed
@@ -15,10 +15,17 @@
 //! channel are zero in the residual and counted, so a broken frame leaves finite lights and a
 //! finite residual, and the next frame starts afresh.
 //!
+//! The residual is clamped at the threshold ([`GpuExtraction::new`]) or, as the host's chain
+//! extraction does by default, filled ([`GpuExtraction::with_fill`]): the light set grows by
+//! rings of neighbours while the cap has room for each ring's records, and the residual under
+//! it continues its surroundings, settled round by round from the set's edge inwards.
+//!
 //! Light records are in no particular order (an atomic compaction). Steps, one pipeline:
 //! histogram of the top 16 bits of Y above τ; one workgroup selects the bin the cap falls in;
 //! an indirect dispatch (no workgroups unless the cap binds) histograms that bin's low bits; one
-//! workgroup selects the exact threshold; the compaction writes records and residual.
+//! workgroup selects the exact threshold; where filled, the set's ring 0 is listed, each ring
+//! grows from the last, one invocation decides which rings fit and one workgroup runs the
+//! fill's rounds; the compaction writes records and residual.
 
 use crate::abi::lights::{
     clusters_mode, prepare_mode, CLUSTER_SORT_CELL_ARRAYS, CLUSTER_SORT_RECORD_ARRAYS,
@@ -27,7 +34,7 @@ use crate::abi::lights::{
 };
 use crate::abi::lights::{
     extract_mode as mode, extract_word as word, EXTRACT_HEADER_WORDS, EXTRACT_LOW_BINS,
-    EXTRACT_RECORD_VEC4S, EXTRACT_TOP_BINS,
+    EXTRACT_RECORD_VEC4S, EXTRACT_TOP_BINS, FILL_MAX_RINGS,
 };
 use crate::abi::push::{ExtractAddPush, ExtractClustersPush, ExtractPreparePush};
 use crate::abi::{binding, push::ExtractPush, ShaderId, WORKGROUP_1D, WORKGROUP_2D};
@@ -55,6 +62,13 @@ pub struct ExtractStats {
     pub kept: u32,
     /// Texels with a NaN or infinite channel, zero in the residual.
     pub nonfinite: u32,
+    /// Filled extractions: the rings the light set grew by (0 otherwise).
+    pub grown: u32,
+    /// Filled extractions: the light set's texels (0 otherwise).
+    pub members: u32,
+    /// Filled extractions: the fill's rounds, the set's depth from its edge plus one (0
+    /// otherwise).
+    pub rounds: u32,
     /// The indirect arguments for a pass over the records ([`GpuExtraction::light_args`]):
     /// workgroups of `EXTRACT_LIGHT_GROUP` (64) invocations covering `kept`, then 1, 1.
     pub light_groups: [u32; 3],
@@ -107,10 +121,16 @@ pub struct GpuExtraction {
     lights: Buffer,
     residual: GpuEnvMap,
     max: u32,
+    /// Rings the light set grows by where the residual is filled (`None`: clamped).
+    fill: Option<u32>,
+    /// The light set of a filled extraction (a word per texel, three per member slot), a
+    /// placeholder otherwise.
+    set: Buffer,
 }
 
 impl GpuExtraction {
-    /// Resources for maps of `mapping`, `width` × `height`, keeping at most `max` light texels.
+    /// Resources for maps of `mapping`, `width` × `height`, keeping at most `max` light texels,
+    /// the residual clamped at the threshold.
     pub fn new(
         ctx: &Context,
         mapping: Mapping,
@@ -118,11 +138,46 @@ impl GpuExtraction {
         height: u32,
         max: u32,
     ) -> Result<GpuExtraction> {
+        Self::with_fill(ctx, mapping, width, height, max, None)
+    }
+
+    /// [`GpuExtraction::new`] with the residual under the lights filled from around them
+    /// where `fill` is given, the light set grown by up to that many rings of texels
+    /// (`crate::math::lights::ExtractOptions::fill`, at most
+    /// `crate::abi::lights::FILL_MAX_RINGS`).
+    pub fn with_fill(
+        ctx: &Context,
+        mapping: Mapping,
+        width: u32,
+        height: u32,
+        max: u32,
+        fill: Option<u32>,
+    ) -> Result<GpuExtraction> {
         if max == 0 {
             return Err(Error::Invalid(
                 "a GPU light extraction needs room for at least one light texel".into(),
             ));
         }
+        if let Some(rings) = fill {
+            if rings > FILL_MAX_RINGS || max >= 1 << 24 {
+                return Err(Error::Invalid(format!(
+                    "a filled GPU light extraction grows by at most {FILL_MAX_RINGS} rings and \
+                     keeps fewer than 2^24 light texels (asked: {rings} rings, {max} texels)"
+                )));
+            }
+        }
+        let texels = width as u64 * height as u64 * mapping.layers() as u64;
+        let set_words = match fill {
+            Some(_) => texels + 3 * max as u64,
+            None => 4,
+        };
+        let set = Buffer::new(
+            ctx,
+            "extraction light set",
+            set_words * 4,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
         let words = (EXTRACT_HEADER_WORDS + EXTRACT_TOP_BINS + EXTRACT_LOW_BINS) as u64;
         let state = Buffer::new(
             ctx,
@@ -147,7 +202,14 @@ impl GpuExtraction {
             lights,
             residual,
             max,
+            fill,
+            set,
         })
+    }
+
+    /// Rings the light set grows by where the residual is filled; `None` where it is clamped.
+    pub fn fill(&self) -> Option<u32> {
+        self.fill
     }
 
     /// Bytes of `max` light records.
@@ -246,14 +308,16 @@ impl Extractor {
                 binding::EXTRACT_RESIDUAL,
                 Bind::Storage(&out.residual.image),
             ),
+            (binding::EXTRACT_FILL, Bind::Buffer(&out.set)),
         ];
-        let push = |m| ExtractPush {
+        let push = |m, grow| ExtractPush {
             size,
             mapping: map.mapping.id(),
             mode: m,
             max: out.max,
             ratio: ratio as f32,
-            pad: [0; 2],
+            fill: u32::from(out.fill.is_some()),
+            grow,
         };
         let per_texel = [
             groups(map.width, WORKGROUP_2D[0]),
@@ -270,12 +334,27 @@ impl Extractor {
         rec.span("extract lights", |rec| {
             rec.fill_buffer(&out.state, out.state.size(), 0);
             rec.discard(&out.residual.image);
-            rec.dispatch(pipeline, &binds, &push(mode::HISTOGRAM), per_texel)?;
-            rec.dispatch(&self.select, &binds, &push(mode::SELECT_TOP), [1, 1, 1])?;
+            rec.dispatch(pipeline, &binds, &push(mode::HISTOGRAM, 0), per_texel)?;
+            rec.dispatch(&self.select, &binds, &push(mode::SELECT_TOP, 0), [1, 1, 1])?;
             let low = (&out.state, word::LOW_ARGS as u64 * 4);
-            rec.dispatch_indirect(pipeline, &binds, &push(mode::HISTOGRAM_LOW), low)?;
-            rec.dispatch(&self.select, &binds, &push(mode::SELECT_LOW), [1, 1, 1])?;
-            rec.dispatch(pipeline, &binds, &push(mode::COMPACT), per_texel)
+            rec.dispatch_indirect(pipeline, &binds, &push(mode::HISTOGRAM_LOW, 0), low)?;
+            rec.dispatch(&self.select, &binds, &push(mode::SELECT_LOW, 0), [1, 1, 1])?;
+            if let Some(rings) = out.fill {
+                let labels = map.width as u64 * map.height as u64 * map.mapping.layers() as u64;
+                rec.fill_buffer(&out.set, labels * 4, u32::MAX);
+                rec.dispatch(pipeline, &binds, &push(mode::MARK, 0), per_texel)?;
+                let slots = [out.max.div_ceil(WORKGROUP_2D[0] * WORKGROUP_2D[1]), 1, 1];
+                for ring in 1..=rings {
+                    rec.dispatch(pipeline, &binds, &push(mode::RING, ring), slots)?;
+                }
+                // Only an angular map's rim positions read another texel.
+                if map.mapping == Mapping::Angular {
+                    rec.dispatch(pipeline, &binds, &push(mode::RIMS, 0), per_texel)?;
+                }
+                rec.dispatch(&self.select, &binds, &push(mode::DECIDE, rings), [1, 1, 1])?;
+                rec.dispatch(&self.select, &binds, &push(mode::FILL, rings), [1, 1, 1])?;
+            }
+            rec.dispatch(pipeline, &binds, &push(mode::COMPACT, 0), per_texel)
         })?;
         poison::image(rec, PassId::Extract, &out.residual.image, 0..1)?;
         // Excess radiance scaled; the direction's x and the excess's red negated by the mirror.
@@ -554,7 +633,7 @@ impl Extractor {
             .collect())
     }
 
-    /// Uploads `map`, projects its band 0, extracts by `opts` (no `fill`) and reads everything
+    /// Uploads `map`, projects its band 0, extracts by `opts` and reads everything
     /// back, waiting (for tests and one-off jobs).
     pub fn run(&self, map: &EnvMap, opts: &ExtractOptions) -> Result<(Extracted, Vec<Timing>)> {
         let gpu = GpuEnvMap::upload(&self.ctx, map)?;
@@ -605,14 +684,16 @@ impl Extractor {
         opts: &ExtractOptions,
         then: impl FnOnce(&mut Recorder, &GpuExtraction) -> Result<()>,
     ) -> Result<(Extracted, Vec<Timing>)> {
-        if opts.fill.is_some() {
-            return Err(Error::Invalid(
-                "the GPU light extraction clamps the residual; it has no fill".into(),
-            ));
-        }
         let max = u32::try_from(opts.max_texels)
             .map_err(|_| Error::Invalid(format!("{} light texels", opts.max_texels)))?;
-        let out = GpuExtraction::new(&self.ctx, gpu.mapping, gpu.width, gpu.height, max)?;
+        let out = GpuExtraction::with_fill(
+            &self.ctx,
+            gpu.mapping,
+            gpu.width,
+            gpu.height,
+            max,
+            opts.fill,
+        )?;
         let projector = ShProjector::new(&self.ctx, crate::passes::Subgroups::Auto)?;
         let sh = Buffer::new(
             &self.ctx,
@@ -650,6 +731,9 @@ impl Extractor {
             candidates: h[word::CANDIDATES as usize],
             kept: h[word::KEPT as usize],
             nonfinite: h[word::NONFINITE as usize],
+            grown: h[word::GROWN as usize],
+            members: h[word::ACCEPTED as usize],
+            rounds: h[word::ROUNDS as usize],
             light_groups: {
                 let a = word::LIGHT_ARGS as usize;
                 [h[a], h[a + 1], h[a + 2]]

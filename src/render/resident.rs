@@ -513,9 +513,10 @@ impl Means {
 pub const CHAIN_GPU_MAX: u32 = crate::abi::lights::CHAIN_MAX_TEXELS;
 
 /// The resident path's chain lights: each frame the extraction by the scene's ratio (the
-/// residual clamped at the threshold: the host's default fills it from around the lights,
-/// which the GPU does not), its records sorted by a spatial key, prepared for the shade
-/// pass's walk and built into a light tree (`Extractor::record_prepare`), and the residual,
+/// residual filled from around the lights grown by the scene's `light_fill` rings, or
+/// clamped at the threshold, as the host's), its records sorted by a spatial key, prepared
+/// for the shade pass's walk and built into a light tree (`Extractor::record_prepare`), and
+/// the residual,
 /// which the paraboloid converts and prefiltered Phong maps filter where the lights are added
 /// per pixel. What the host path decides from the texels found (whether their quadratures
 /// resolve each lobe, and how fine they are) is decided here from the map's largest texel,
@@ -564,7 +565,14 @@ impl ChainLights {
             .min(texels)
             .max(1) as u32;
         Ok(Some(ChainLights {
-            extraction: GpuExtraction::new(ctx, env.mapping, env.width, env.height, room)?,
+            extraction: GpuExtraction::with_fill(
+                ctx,
+                env.mapping,
+                env.width,
+                env.height,
+                room,
+                opts.fill,
+            )?,
             nodes: 4 * cells * cells,
             ratio: opts.ratio,
         }))

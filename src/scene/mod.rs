@@ -91,8 +91,8 @@ pub struct Environment {
     pub light_texels: Option<u32>,
     /// FIS, split-sum and footprint lookups: rings of texels the light set grows by, the
     /// residual under the lights filled from around them (default 2,
-    /// `crate::abi::lights::CHAIN_FILL`); 0 clamps the residual at the threshold instead,
-    /// as the resident path's GPU extraction always does.
+    /// `crate::abi::lights::CHAIN_FILL`, at most `crate::abi::lights::FILL_MAX_RINGS`); 0
+    /// clamps the residual at the threshold instead.
     #[serde(default)]
     pub light_fill: Option<u32>,
     /// Diffuse techniques (SH and prefiltered irradiance) extract texels above this many

@@ -41,9 +41,11 @@ impl Scene {
             }
         }
         if let Some(n) = self.environment.light_fill {
-            if n > 8 {
+            let most = crate::abi::lights::FILL_MAX_RINGS;
+            if n > most {
                 return Err(format!(
-                    "environment light_fill {n} is outside 0 to 8 (rings of texels around the lights)"
+                    "environment light_fill {n} is outside 0 to {most} (rings of texels around \
+                     the lights)"
                 ));
             }
         }
