@@ -340,8 +340,8 @@ pub fn table(
         match pick.resident {
             true => format!(
                 "Rendered through the resident path (the map on the GPU, its lights extracted \
-                 there each frame: at most {} texels for the chain's techniques, the residual \
-                 clamped, not filled). ",
+                 there each frame by the host path's rule: at most {} texels for the chain's \
+                 techniques). ",
                 pick.light_texels.unwrap_or(crate::render::CHAIN_GPU_MAX)
             ),
             false => String::new(),
@@ -470,6 +470,11 @@ fn goals(md: &mut String, rows: &[Row]) {
     let goal =
         |md: &mut String, name: &str, pick: &dyn Fn(&Case) -> bool, max: f64, bias: Option<f64>| {
             let v = by_probe(rows, pick);
+            if v.is_empty() {
+                // A goal whose cases this run left out (`--materials`, `--only`) is not met.
+                let _ = writeln!(md, "- {name}: not measured in this run");
+                return;
+            }
             let ok = v
                 .iter()
                 .all(|r| r.rms <= max && bias.is_none_or(|b| (r.ratio - 1.0).abs() <= b));
