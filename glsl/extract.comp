@@ -88,6 +88,7 @@ uint map_texels() {
 uint slot_texel_at() { return map_texels(); }
 uint value_at() { return map_texels() + pc.max; }
 uint next_at() { return map_texels() + 2u * pc.max; }
+uint candidates_at() { return map_texels() + 3u * pc.max; }
 
 uint index_of(ivec2 p, uint layer) {
     return (layer * pc.size.y + uint(p.y)) * pc.size.x + uint(p.x);
@@ -134,7 +135,10 @@ void list_member(uint k, uint ring) {
     fill_[k] = (ring << 24) | slot;
 }
 
-// RING: a member of ring pc.grow − 1 (a slot of its run) lists its neighbours in ring pc.grow.
+// RING: the members of ring pc.grow − 1 (its run of slots, a grid-stride loop over a few
+// workgroups) list their neighbours in ring pc.grow.
+void grow_from(uint k0, uint ring);
+
 void grow_ring() {
     uint ring = pc.grow;
     uint id = gl_WorkGroupID.x * (gl_WorkGroupSize.x * gl_WorkGroupSize.y) + gl_LocalInvocationIndex;
@@ -142,8 +146,29 @@ void grow_ring() {
     for (uint r = 0u; r + 1u < ring; r++) before += state[EXTRACT_WORD_RING_COUNT + r];
     uint n = state[EXTRACT_WORD_RING_COUNT + ring - 1u];
     // A ring listed only in part ran past the cap: no ring grows from it.
-    if (before + n > pc.max || id >= n) return;
-    ivec3 t = texel_of(fill_[slot_texel_at() + before + id]);
+    if (before + n > pc.max) return;
+    uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x * gl_WorkGroupSize.y;
+    for (uint slot = id; slot < n; slot += stride) grow_from(fill_[slot_texel_at() + before + slot], ring);
+}
+
+// MARK_LIST: candidate `id` (listed by HISTOGRAM where the cap does not bind) joins ring 0
+// where it is its own source and above the threshold.
+void mark_listed() {
+    uint id = gl_WorkGroupID.x * (gl_WorkGroupSize.x * gl_WorkGroupSize.y) + gl_LocalInvocationIndex;
+    if (id >= min(state[EXTRACT_WORD_CANDIDATES], pc.max)) return;
+    uint k = fill_[candidates_at() + id];
+    ivec3 t = texel_of(k);
+    vec3 l = vec3(0.0);
+    bool own;
+    bool counted = source_value(t.xy, uint(t.z), l, own);
+    float y = counted ? lum(l) : 0.0;
+    float thr = uintBitsToFloat(state[EXTRACT_WORD_THRESHOLD]);
+    if (counted && own && y > thr && y > tau()) list_member(k, 0u);
+}
+
+// Lists the neighbours of texel k that join ring `ring`.
+void grow_from(uint k0, uint ring) {
+    ivec3 t = texel_of(k0);
     for (int dj = -1; dj <= 1; dj++) {
         for (int di = -1; di <= 1; di++) {
             ivec2 q;
@@ -174,8 +199,11 @@ void per_texel() {
         if (id == uvec3(0u)) state[EXTRACT_WORD_TAU] = floatBitsToUint(t);
         if (counted && own && !good) atomicAdd(state[EXTRACT_WORD_NONFINITE], 1u);
         if (y > t) {
-            atomicAdd(state[EXTRACT_WORD_CANDIDATES], 1u);
+            uint k = atomicAdd(state[EXTRACT_WORD_CANDIDATES], 1u);
             atomicAdd(state[TOP + (floatBitsToUint(y) >> 16)], 1u);
+            // A filled extraction lists the candidates while they fit the cap, so that ring 0
+            // is found among them, not by another pass over the map.
+            if (pc.fill != 0u && k < pc.max) fill_[candidates_at() + k] = index_of(p, id.z);
         }
         return;
     }
@@ -299,6 +327,15 @@ void select_top() {
     state[EXTRACT_WORD_LOW_ARGS] = binds ? groups.x : 0u;
     state[EXTRACT_WORD_LOW_ARGS + 1u] = groups.y;
     state[EXTRACT_WORD_LOW_ARGS + 2u] = groups.z;
+    // Ring 0 of a filled extraction: from the listed candidates where the cap does not bind
+    // (all of them listed), else from every texel.
+    uint listed = (total + gl_WorkGroupSize.x * gl_WorkGroupSize.y - 1u) / (gl_WorkGroupSize.x * gl_WorkGroupSize.y);
+    state[EXTRACT_WORD_MARK_LIST_ARGS] = binds ? 0u : listed;
+    state[EXTRACT_WORD_MARK_LIST_ARGS + 1u] = 1u;
+    state[EXTRACT_WORD_MARK_LIST_ARGS + 2u] = 1u;
+    state[EXTRACT_WORD_MARK_ARGS] = binds ? groups.x : 0u;
+    state[EXTRACT_WORD_MARK_ARGS + 1u] = groups.y;
+    state[EXTRACT_WORD_MARK_ARGS + 2u] = groups.z;
     if (binds) {
         state[EXTRACT_WORD_RANK] = pc.max - above;
         // Texels of the bins above; the low select adds those above the threshold in b.
@@ -420,6 +457,8 @@ void main() {
 #else
     if (pc.mode == EXTRACT_MODE_RING) {
         grow_ring();
+    } else if (pc.mode == EXTRACT_MODE_MARK_LIST) {
+        mark_listed();
     } else {
         per_texel();
     }

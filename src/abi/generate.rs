@@ -106,6 +106,7 @@ fn define_sizes_and_lights(s: &mut String) {
         ("SELECT_TOP", m::SELECT_TOP),
         ("HISTOGRAM_LOW", m::HISTOGRAM_LOW),
         ("SELECT_LOW", m::SELECT_LOW),
+        ("MARK_LIST", m::MARK_LIST),
         ("MARK", m::MARK),
         ("RING", m::RING),
         ("RIMS", m::RIMS),
@@ -164,6 +165,8 @@ fn define_sizes_and_lights(s: &mut String) {
         ("ROUNDS", w::ROUNDS),
         ("RING_COUNT", w::RING_COUNT),
         ("RIMS", w::RIMS),
+        ("MARK_LIST_ARGS", w::MARK_LIST_ARGS),
+        ("MARK_ARGS", w::MARK_ARGS),
     ] {
         let _ = writeln!(s, "#define EXTRACT_WORD_{name} {v}u");
     }

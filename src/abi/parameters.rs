@@ -271,6 +271,10 @@ pub mod lights {
     /// Most rings of texels a filled extraction's light set grows by (a scene's
     /// `light_fill`): the state buffer holds a count per ring, the set's own ring 0 first.
     pub const FILL_MAX_RINGS: u32 = 8;
+    /// Workgroups of a filled extraction's RING step, whose invocations loop over the last
+    /// ring's members (a few hundred to thousands: a dispatch sized by the cap would start
+    /// hundreds of workgroups with nothing to do).
+    pub const FILL_RING_GROUPS: u32 = 16;
     /// Bins of the first histogram: the top 16 bits of a positive float luminance's bits
     /// (sign clear, so 2¹⁵ of them).
     pub const EXTRACT_TOP_BINS: u32 = 32768;
@@ -292,25 +296,30 @@ pub mod lights {
         pub const HISTOGRAM_LOW: u32 = 2;
         /// One workgroup: the exact threshold from the low histogram.
         pub const SELECT_LOW: u32 = 3;
-        /// Filled extractions only, per texel: the texels above the threshold that are their
+        /// Filled extractions only, per candidate HISTOGRAM listed (indirect: none where the
+        /// cap binds and the list is incomplete): those above the threshold that are their
         /// own integration source, ring 0 of the light set, listed and labelled.
-        pub const MARK: u32 = 4;
-        /// Filled extractions only, per member of ring `grow − 1` (a dispatch per ring): its
-        /// 8 neighbours in its layer that hold the sphere, are positive and are no member
-        /// yet join ring `grow`.
-        pub const RING: u32 = 5;
-        /// Filled extractions of angular and paraboloid maps only, per texel: the positions
-        /// that read another texel (a rim's) counted by the ring of the texel they read, so
-        /// that the cap counts light records, not members.
-        pub const RIMS: u32 = 6;
+        pub const MARK_LIST: u32 = 4;
+        /// Filled extractions only, per texel (indirect: none unless the cap binds): ring 0
+        /// as MARK_LIST finds it, from every texel.
+        pub const MARK: u32 = 5;
+        /// Filled extractions only, over the members of ring `grow − 1` (a dispatch per ring
+        /// of [`super::FILL_RING_GROUPS`] workgroups, each invocation looping): their 8
+        /// neighbours in their layer that hold the sphere, are positive and are no member yet
+        /// join ring `grow`.
+        pub const RING: u32 = 6;
+        /// Filled extractions of angular maps only, per texel: the positions that read
+        /// another texel (a rim's) counted by the ring of the texel they read, so that the
+        /// cap counts light records, not members.
+        pub const RIMS: u32 = 7;
         /// Filled extractions only, one invocation: the rings the cap has room for, whole.
-        pub const DECIDE: u32 = 7;
+        pub const DECIDE: u32 = 8;
         /// Filled extractions only, one workgroup: the residual luminance under the light
         /// set, round by round from its edge inwards (`math::lights` `fill`).
-        pub const FILL: u32 = 8;
+        pub const FILL: u32 = 9;
         /// Per texel: light records above the threshold (with a fill: wherever the texel
         /// read exceeds its filled residual), the residual everywhere.
-        pub const COMPACT: u32 = 9;
+        pub const COMPACT: u32 = 10;
     }
     /// Arrays of one u32 per cell at the start of `glsl/extract_clusters.comp`'s sort buffer:
     /// counts, first slots, cursors, places among the non-empty cells.
@@ -398,8 +407,14 @@ pub mod lights {
         pub const RING_COUNT: u32 = 20;
         /// Filled extractions: rim positions reading a member, per ring (as `RING_COUNT`).
         pub const RIMS: u32 = 29;
+        /// Filled extractions: workgroups (x, 1, 1) of MARK_LIST, none where the cap binds.
+        pub const MARK_LIST_ARGS: u32 = 38;
+        /// Filled extractions: workgroups (x, y, z) of the per-texel MARK, none unless the
+        /// cap binds.
+        pub const MARK_ARGS: u32 = 41;
         // The header holds them all.
-        const _: () = assert!(RIMS + super::FILL_MAX_RINGS < super::EXTRACT_HEADER_WORDS);
+        const _: () = assert!(RIMS + super::FILL_MAX_RINGS < MARK_LIST_ARGS);
+        const _: () = assert!(MARK_ARGS + 3 <= super::EXTRACT_HEADER_WORDS);
     }
 }
 

@@ -34,7 +34,7 @@ use crate::abi::lights::{
 };
 use crate::abi::lights::{
     extract_mode as mode, extract_word as word, EXTRACT_HEADER_WORDS, EXTRACT_LOW_BINS,
-    EXTRACT_RECORD_VEC4S, EXTRACT_TOP_BINS, FILL_MAX_RINGS,
+    EXTRACT_RECORD_VEC4S, EXTRACT_TOP_BINS, FILL_MAX_RINGS, FILL_RING_GROUPS,
 };
 use crate::abi::push::{ExtractAddPush, ExtractClustersPush, ExtractPreparePush};
 use crate::abi::{binding, push::ExtractPush, ShaderId, WORKGROUP_1D, WORKGROUP_2D};
@@ -123,7 +123,7 @@ pub struct GpuExtraction {
     max: u32,
     /// Rings the light set grows by where the residual is filled (`None`: clamped).
     fill: Option<u32>,
-    /// The light set of a filled extraction (a word per texel, three per member slot), a
+    /// The light set of a filled extraction (a word per texel, four per slot), a
     /// placeholder otherwise.
     set: Buffer,
 }
@@ -168,7 +168,7 @@ impl GpuExtraction {
         }
         let texels = width as u64 * height as u64 * mapping.layers() as u64;
         let set_words = match fill {
-            Some(_) => texels + 3 * max as u64,
+            Some(_) => texels + 4 * max as u64,
             None => 4,
         };
         let set = Buffer::new(
@@ -342,10 +342,14 @@ impl Extractor {
             if let Some(rings) = out.fill {
                 let labels = map.width as u64 * map.height as u64 * map.mapping.layers() as u64;
                 rec.fill_buffer(&out.set, labels * 4, u32::MAX);
-                rec.dispatch(pipeline, &binds, &push(mode::MARK, 0), per_texel)?;
-                let slots = [out.max.div_ceil(WORKGROUP_2D[0] * WORKGROUP_2D[1]), 1, 1];
+                let args = |w: u32| (&out.state, w as u64 * 4);
+                let list = push(mode::MARK_LIST, 0);
+                rec.dispatch_indirect(pipeline, &binds, &list, args(word::MARK_LIST_ARGS))?;
+                let every = push(mode::MARK, 0);
+                rec.dispatch_indirect(pipeline, &binds, &every, args(word::MARK_ARGS))?;
                 for ring in 1..=rings {
-                    rec.dispatch(pipeline, &binds, &push(mode::RING, ring), slots)?;
+                    let groups = [FILL_RING_GROUPS, 1, 1];
+                    rec.dispatch(pipeline, &binds, &push(mode::RING, ring), groups)?;
                 }
                 // Only an angular map's rim positions read another texel.
                 if map.mapping == Mapping::Angular {
