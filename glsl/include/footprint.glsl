@@ -33,10 +33,11 @@ vec3 spread(ivec2 q, ivec2 step, float index, vec3 c) {
 // background): the ray's reflection off that object, or the ray itself where it meets nothing
 // (background pixels: always); false where it meets another object (twin of
 // math::footprint::camera_tap).
-bool tap_dir(vec2 px, float index, out vec3 dir) {
+bool tap_dir(vec2 px, float index, out vec3 dir, out bool past) {
     vec3 o, d;
     camera_ray(cam[0], cam[1].xyz, cam[2].xyz, cam[3].xyz, cam[4].xy, px, o, d);
     dir = d;
+    past = false;
     if (index < 0.0) return true;
     float best = 1e30;
     int hit = -1;
@@ -50,31 +51,43 @@ bool tap_dir(vec2 px, float index, out vec3 dir) {
             hn = n;
         }
     }
+    // Past the edge of the shape the pixel sees: the background (math::footprint::camera_tap_seen).
+    past = hit < 0;
     if (hit < 0) return true;
     if (float(hit) != index) return false;
     dir = d - 2.0 * dot(hn, d) * hn;
     return true;
 }
 
-// Twin of math::footprint::lookup: the mean over pixel q's footprint from the chain, by a
-// grid of sub-pixel rays (na along x, nb along y from the differentials a, b), each read at
-// the lod whose texel is the taps' spacing.
-vec3 footprint_lookup(ivec2 q, float index, vec3 r, vec3 a, vec3 b) {
-    float la = length(a), lb = length(b);
+// Twin of math::footprint::taps: taps along a and b.
+uvec2 footprint_taps(float la, float lb) {
     float s = max(max(la, lb) / float(FOOTPRINT_MAX_TAPS), min(la, lb) / float(FOOTPRINT_MIN_TAPS));
     uint na = 1u, nb = 1u;
     if (s > 0.0) {
         na = clamp(uint(max(ceil(la / s - FOOTPRINT_TAP_SLACK), 0.0)), 1u, FOOTPRINT_MAX_TAPS);
         nb = clamp(uint(max(ceil(lb / s - FOOTPRINT_TAP_SLACK), 0.0)), 1u, FOOTPRINT_MAX_TAPS);
     }
+    return uvec2(na, nb);
+}
+
+// Twin of math::footprint::lookup: the mean over pixel q's footprint from the chain, by a
+// grid of sub-pixel rays (na along x, nb along y from the differentials a, b), each read at
+// the lod whose texel is the taps' spacing; `past`: some tap saw past the shape's edge.
+vec3 footprint_lookup(ivec2 q, float index, vec3 r, vec3 a, vec3 b, out bool past) {
+    float la = length(a), lb = length(b);
+    uvec2 nt = footprint_taps(la, lb);
+    uint na = nt.x, nb = nt.y;
     float spacing = max(max(la / float(na), lb / float(nb)), FOOTPRINT_MIN_SPREAD);
     vec3 acc = vec3(0.0);
     uint n = 0u;
+    past = false;
     for (uint j = 0u; j < nb; j++) {
         for (uint i = 0u; i < na; i++) {
             vec2 f = (vec2(i, j) + 0.5) / vec2(na, nb) - 0.5;
             vec3 d;
-            if (!tap_dir(vec2(q) + 0.5 + f, index, d)) continue;
+            bool p;
+            if (!tap_dir(vec2(q) + 0.5 + f, index, d, p)) continue;
+            past = past || p;
             float lod = 0.5 * log2(spacing * spacing / dp_texel_solid_angle(d, pc.dp_size));
             acc += dp_lookup(d, clamp(lod + FOOTPRINT_LOD_BIAS, 0.0, pc.max_lod));
             n++;
@@ -172,11 +185,45 @@ vec3 footprint_lights(vec3 r, vec3 a, vec3 b) {
     return total > 1.0 ? sum / total : sum;
 }
 
+// Twin of math::footprint::silhouette_lights: on a silhouette pixel, the light texels per tap
+// over a square about the tap's direction as wide as the taps' spacing, averaged.
+vec3 silhouette_lights(ivec2 q, float index, vec3 a, vec3 b) {
+    float la = length(a), lb = length(b);
+    uvec2 nt = footprint_taps(la, lb);
+    float spacing = max(max(la / float(nt.x), lb / float(nt.y)), FOOTPRINT_MIN_SPREAD);
+    vec3 acc = vec3(0.0);
+    uint n = 0u;
+    for (uint j = 0u; j < nt.y; j++) {
+        for (uint i = 0u; i < nt.x; i++) {
+            vec2 f = (vec2(i, j) + 0.5) / vec2(nt) - 0.5;
+            vec3 d, t, bt;
+            bool past;
+            if (!tap_dir(vec2(q) + 0.5 + f, index, d, past)) continue;
+            shading_frame(d, t, bt);
+            acc += footprint_lights(d, spacing * t, spacing * bt);
+            n++;
+        }
+    }
+    return acc / float(max(n, 1u));
+}
+
+// Twin of math::footprint::beside_other: one of q's four neighbours sees something else or
+// lies outside the image.
+bool beside_other(ivec2 q, float index) {
+    vec3 d;
+    return !looked_up(q + ivec2(-1, 0), index, d) || !looked_up(q + ivec2(1, 0), index, d)
+        || !looked_up(q + ivec2(0, -1), index, d) || !looked_up(q + ivec2(0, 1), index, d);
+}
+
 // The pixel's mean radiance about r seen where `index` is seen (footprint filtering).
 vec3 footprint_radiance(ivec2 q, float index, vec3 r) {
     vec3 a = spread(q, ivec2(1, 0), index, r);
     vec3 b = spread(q, ivec2(0, 1), index, r);
-    vec3 l = footprint_lookup(q, index, r, a, b);
-    if ((pc.footprint & FOOTPRINT_LIGHTS) != 0u) l += footprint_lights(r, a, b);
+    bool past;
+    vec3 l = footprint_lookup(q, index, r, a, b, past);
+    if ((pc.footprint & FOOTPRINT_LIGHTS) != 0u) {
+        l += past || beside_other(q, index) ? silhouette_lights(q, index, a, b)
+                                            : footprint_lights(r, a, b);
+    }
     return l;
 }

@@ -141,20 +141,81 @@ pub fn camera_tap(
     fa: f64,
     fb: f64,
 ) -> Option<DVec3> {
+    camera_tap_seen(cam, shapes, what, i, j, fa, fb).map(|t| t.0)
+}
+
+/// [`camera_tap`], with whether the tap saw the background though the pixel sees a shape (a
+/// silhouette's tap past the shape's edge).
+pub fn camera_tap_seen(
+    cam: &Camera,
+    shapes: &[Shape],
+    what: Option<usize>,
+    i: u32,
+    j: u32,
+    fa: f64,
+    fb: f64,
+) -> Option<(DVec3, bool)> {
     let (o, d) = cam.ray_at(i as f64 + 0.5 + fa, j as f64 + 0.5 + fb);
     if what.is_none() {
-        return Some(d);
+        return Some((d, false));
     }
     match trace(shapes, o, d) {
-        None => Some(d),
-        Some(h) if Some(h.index) == what => Some(d - 2.0 * h.normal.dot(d) * h.normal),
+        None => Some((d, true)),
+        Some(h) if Some(h.index) == what => Some((d - 2.0 * h.normal.dot(d) * h.normal, false)),
         Some(_) => None,
     }
 }
 
+/// The light texels' excess over pixel (i, j) of a shape's silhouette (some of its taps see
+/// the background, or a neighbour sees something else): per tap of [`lookup`]'s grid, [`light_overlap`] over a square about the
+/// tap's direction as wide as the taps' spacing — the box each tap's read of the chain
+/// filters — averaged over the taps. One overlap over the whole pixel would spread the
+/// reflection's linearised footprint over the part of the pixel that sees the background,
+/// and a grazing reflection's footprint bends within the pixel.
+pub fn silhouette_lights(
+    cam: &Camera,
+    shapes: &[Shape],
+    lights: &[PreparedLight],
+    (i, j): (u32, u32),
+    what: Option<usize>,
+    a: DVec3,
+    b: DVec3,
+) -> [f64; 3] {
+    let (la, lb) = (a.length(), b.length());
+    let (na, nb) = taps(la, lb);
+    let spacing = (la / na as f64).max(lb / nb as f64).max(MIN_SPREAD);
+    let (mut acc, mut n) = ([0.0; 3], 0);
+    for jj in 0..nb {
+        for ii in 0..na {
+            let fa = (ii as f64 + 0.5) / na as f64 - 0.5;
+            let fb = (jj as f64 + 0.5) / nb as f64 - 0.5;
+            let Some(d) = camera_tap(cam, shapes, what, i, j, fa, fb) else {
+                continue;
+            };
+            let f = Frame::new(d);
+            let e = light_overlap(lights, d, spacing * f.t, spacing * f.b);
+            for (x, y) in acc.iter_mut().zip(e) {
+                *x += y;
+            }
+            n += 1;
+        }
+    }
+    acc.map(|x| x / n.max(1) as f64)
+}
+
+/// Whether one of pixel (i, j)'s four neighbours sees something other than `what` (or lies
+/// outside the image): its footprint's differentials are one-sided there.
+pub fn beside_other(cam: &Camera, shapes: &[Shape], what: Option<usize>, i: u32, j: u32) -> bool {
+    let (i, j) = (i as i64, j as i64);
+    [(i - 1, j), (i + 1, j), (i, j - 1), (i, j + 1)]
+        .into_iter()
+        .any(|(x, y)| looked_up(cam, shapes, x, y).is_none_or(|(w, _)| w != what))
+}
+
 /// Pixel (i, j)'s footprint-filtered radiance, as `shade.frag` computes it for a mirror (of
 /// albedo 1) or the background: [`lookup`] with [`camera_tap`]s, plus [`light_overlap`] of
-/// `lights` where the chain holds the residual.
+/// `lights` where the chain holds the residual ([`silhouette_lights`] where a tap sees past
+/// the shape's edge or a neighbour sees something else).
 pub fn pixel(
     chain: &[Level],
     cam: &Camera,
@@ -164,10 +225,16 @@ pub fn pixel(
     j: u32,
 ) -> [f64; 3] {
     let (what, r, a, b) = pixel_footprint(cam, shapes, i, j);
+    let past = std::cell::Cell::new(false);
     let mut l = lookup(chain, r, a, b, |fa, fb| {
-        camera_tap(cam, shapes, what, i, j, fa, fb)
+        let t = camera_tap_seen(cam, shapes, what, i, j, fa, fb)?;
+        past.set(past.get() || t.1);
+        Some(t.0)
     });
-    let e = light_overlap(lights, r, a, b);
+    let e = match past.get() || beside_other(cam, shapes, what, i, j) {
+        true => silhouette_lights(cam, shapes, lights, (i, j), what, a, b),
+        false => light_overlap(lights, r, a, b),
+    };
     for (x, y) in l.iter_mut().zip(e) {
         *x += y;
     }
