@@ -25,6 +25,10 @@ const GROUP: u32 = crate::common::abi::lights::EXTRACT_LIGHT_GROUP;
 /// projection's float32 L00 (within ~1e-6 of the float64 sum) and its luminances are float32.
 pub const BOUND: f64 = 1e-5;
 
+/// The bound on each light's solid angle, relative (to at least 1% of the map's mean
+/// texel's): float32 texel rules, the clipped one at an angular rim measured at 1.0e-5.
+pub const OMEGA_BOUND: f64 = 3e-5;
+
 /// Texels whose luminance lies this close (relative) to the threshold may fall on either side
 /// of it in float32 and float64; they are left out of the set comparison and counted.
 pub const NEAR: f64 = 1e-5;
@@ -95,6 +99,11 @@ pub fn compare(ex: &Extractor, map: &EnvMap, opts: &ExtractOptions) -> (Extracte
         .map(|l| ([l.layer, l.i, l.j], l))
         .collect();
     let near = |y: f64| ((y - thr) / thr).abs() < NEAR;
+    let texels = map.width as f64 * map.height as f64 * map.mapping.layers() as f64;
+    let mean_omega = 4.0 * std::f64::consts::PI / texels;
+    // Solid angles apart: a texel at an angular map's rim takes the clipped rule, whose
+    // float32 sum errs by up to ~1e-5 of it (a sliver's, of 1% of the mean texel's).
+    let mut omegas = Errors::new();
     // With a fill, a grown texel whose filled residual all but equals its own value holds an
     // excess of float32 rounding that either side may keep or not.
     let slight = |excess: [f32; 3], y: f64| {
@@ -122,7 +131,7 @@ pub fn compare(ex: &Extractor, map: &EnvMap, opts: &ExtractOptions) -> (Extracte
             );
             errors.abs(g.dir[c], h.dir[c], ("dir", layer, i, j));
         }
-        errors.rel(g.omega, h.omega, 0.0, ("omega", layer, i, j));
+        omegas.rel(g.omega, h.omega, 0.01 * mean_omega, ("omega", layer, i, j));
     }
     let gpu_set: std::collections::HashSet<_> = got.lights.iter().map(|g| g.texel).collect();
     for h in &want.lights {
@@ -173,6 +182,7 @@ pub fn compare(ex: &Extractor, map: &EnvMap, opts: &ExtractOptions) -> (Extracte
         errors.at()
     );
     errors.assert_within(BOUND, "GPU light extraction");
+    omegas.assert_within(OMEGA_BOUND, "GPU light extraction's solid angles");
     let worst = errors.worst();
     (got, worst)
 }
@@ -314,6 +324,20 @@ pub fn seam_sky(w: u32, h: u32) -> EnvMap {
     })
 }
 
+/// An angular map (`side` a side) with a broad glow (peak 200, about 18° wide) straight
+/// behind, the direction the disc's rim stands for, on a graded sky.
+pub fn rim_glow(side: u32) -> EnvMap {
+    let behind = Mapping::Angular.coord_to_dir(envlight::math::Coord {
+        layer: 0,
+        u: 0.5,
+        v: 0.999,
+    });
+    EnvMap::from_fn(Mapping::Angular, side, side, 2, move |d| {
+        let g = 200.0 * (12.0 * (d.dot(behind) - 1.0)).exp();
+        [0.5 + 0.3 * d.y + g, 0.6 + 0.2 * d.x + g, 0.7 + g]
+    })
+}
+
 /// A cube whose face 2 is bright throughout (graded, 40–60× the others): its light set fills
 /// the face, so no fill round reaches it and its residual is the threshold.
 pub fn bright_face(side: u32) -> EnvMap {
@@ -378,6 +402,30 @@ pub fn check_fill(ctx: &Context) {
             && seam.lights.iter().any(|l| l.texel[1] == w - 1),
         "the light spans the seam"
     );
+    // An angular map's light at its rim: positions outside the disc read texels inside it,
+    // so the rings' records outnumber their members and the cap counts the records.
+    let rim = rim_glow(48);
+    let (rims, _) = compare(&ex, &rim, &opts(8192, 2));
+    let reads_another = |t: &[u32; 3]| {
+        Mapping::Angular.integration_source(48, 48, t[1], t[2]) != Some((t[1], t[2]))
+    };
+    let readers = rims
+        .lights
+        .iter()
+        .filter(|l| reads_another(&l.texel))
+        .count();
+    assert!(readers > 0, "rim positions among the lights");
+    // Room for the members of ring 1 but not for their rim records: the host's rule grows
+    // by fewer rings than the members alone would allow.
+    let (one, _) = ex.run(&rim, &opts(8192, 1)).unwrap();
+    let (tight, _) = compare(&ex, &rim, &opts(one.stats.members as usize, 2));
+    eprintln!(
+        "angular rim: {readers} of {} lights read another texel; room for ring 1's members: \
+         grown {}",
+        rims.lights.len(),
+        tight.stats.grown
+    );
+    assert_eq!(tight.stats.grown, 0, "ring 1's rim records do not fit");
     let (face, _) = compare(&ex, &bright_face(8), &opts(8192, 2));
     let thr = face.stats.threshold;
     let y = luminance(face.residual.texel(2, 3, 4).map(f64::from));
