@@ -34,9 +34,10 @@ layout(std430, set = 0, binding = BINDING_EXTRACT_SH) readonly buffer Sh { float
 layout(std430, set = 0, binding = BINDING_EXTRACT_STATE) buffer State { uint state[]; };
 layout(std430, set = 0, binding = BINDING_EXTRACT_LIGHTS) writeonly buffer Lights { Record records[]; };
 layout(set = 0, binding = BINDING_EXTRACT_RESIDUAL, rgba32f) uniform writeonly image2DArray residual;
-// A filled extraction's light set: a label per texel (NONE, or its ring << 24 | its slot),
-// then per slot its texel's index, its filled luminance's bits (UNSET until a round settles
-// it) and the round's next value.
+// A filled extraction's light set: a label per texel (NONE, or its ring above its slot in the
+// low FILL_SLOT_BITS), then FILL_SLOT_ARRAYS arrays of a word per slot: its texel's index,
+// its filled luminance's bits (UNSET until a round settles it), the round's next value, and
+// the candidate HISTOGRAM listed there.
 layout(std430, set = 0, binding = BINDING_EXTRACT_FILL) coherent buffer Fill { uint fill_[]; };
 
 // The push block, generated from src/abi/push.rs.
@@ -48,7 +49,7 @@ const uint NO_BIN = 0xffffffffu;
 const uint NONE = 0xffffffffu;
 const uint UNSET = 0xffffffffu;
 // A member's slot where its ring ran past the cap and stopped being listed.
-const uint UNLISTED = 0xffffffu;
+const uint UNLISTED = (1u << FILL_SLOT_BITS) - 1u;
 
 // The mapping: specialised in the per-texel steps, from the push block in the selects.
 #ifdef EXTRACT_SELECT
@@ -120,7 +121,7 @@ bool own_luminance(ivec2 q, uint layer, out float y) {
 
 // The slot of an accepted member's label (ring at most `grown`, listed), or NONE.
 uint accepted_slot(uint label, uint grown) {
-    if (label == NONE || (label >> 24) > grown) return NONE;
+    if (label == NONE || (label >> FILL_SLOT_BITS) > grown) return NONE;
     uint slot = label & UNLISTED;
     return slot == UNLISTED ? NONE : slot;
 }
@@ -132,7 +133,7 @@ void list_member(uint k, uint ring) {
     if (slot >= pc.max) return;
     fill_[slot_texel_at() + slot] = k;
     fill_[value_at() + slot] = UNSET;
-    fill_[k] = (ring << 24) | slot;
+    fill_[k] = (ring << FILL_SLOT_BITS) | slot;
 }
 
 // RING: the members of ring pc.grow − 1 (its run of slots, a grid-stride loop over a few
@@ -176,7 +177,7 @@ void grow_from(uint k0, uint ring) {
             if ((di == 0 && dj == 0) || !step_to(t, ivec2(di, dj), q)) continue;
             if (!own_luminance(q, uint(t.z), y) || !(y > 0.0)) continue;
             uint k = index_of(q, uint(t.z));
-            if (atomicCompSwap(fill_[k], NONE, (ring << 24) | UNLISTED) == NONE) {
+            if (atomicCompSwap(fill_[k], NONE, (ring << FILL_SLOT_BITS) | UNLISTED) == NONE) {
                 list_member(k, ring);
             }
         }
@@ -223,7 +224,7 @@ void per_texel() {
         ivec2 s = integration_source(MAPPING, pc.size, p);
         if (s.x < 0 || own) return;
         uint label = fill_[index_of(s, id.z)];
-        if (label != NONE) atomicAdd(state[EXTRACT_WORD_RIMS + (label >> 24)], 1u);
+        if (label != NONE) atomicAdd(state[EXTRACT_WORD_RIMS + (label >> FILL_SLOT_BITS)], 1u);
         return;
     }
     vec3 kept = good ? l : vec3(0.0);

@@ -20,11 +20,13 @@ bool looked_up(ivec2 q, float index, out vec3 d) {
 }
 
 // Twin of math::footprint::spread: the differential of the looked-up direction c along
-// `step`, from the neighbours that see the same.
-vec3 spread(ivec2 q, ivec2 step, float index, vec3 c) {
+// `step`, from the neighbours that see the same; `both`: both do (else it is one-sided, or
+// zero).
+vec3 spread(ivec2 q, ivec2 step, float index, vec3 c, out bool both) {
     vec3 m, p;
     bool hm = looked_up(q - step, index, m);
     bool hp = looked_up(q + step, index, p);
+    both = hm && hp;
     vec3 d = hm && hp ? 0.5 * (p - m) : (hp ? p - c : (hm ? c - m : vec3(0.0)));
     return d - c * dot(c, d);
 }
@@ -207,23 +209,17 @@ vec3 silhouette_lights(ivec2 q, float index, vec3 a, vec3 b) {
     return acc / float(max(n, 1u));
 }
 
-// Twin of math::footprint::beside_other: one of q's four neighbours sees something else or
-// lies outside the image.
-bool beside_other(ivec2 q, float index) {
-    vec3 d;
-    return !looked_up(q + ivec2(-1, 0), index, d) || !looked_up(q + ivec2(1, 0), index, d)
-        || !looked_up(q + ivec2(0, -1), index, d) || !looked_up(q + ivec2(0, 1), index, d);
-}
-
 // The pixel's mean radiance about r seen where `index` is seen (footprint filtering).
 vec3 footprint_radiance(ivec2 q, float index, vec3 r) {
-    vec3 a = spread(q, ivec2(1, 0), index, r);
-    vec3 b = spread(q, ivec2(0, 1), index, r);
-    bool past;
+    bool along_a, along_b, past;
+    vec3 a = spread(q, ivec2(1, 0), index, r, along_a);
+    vec3 b = spread(q, ivec2(0, 1), index, r, along_b);
     vec3 l = footprint_lookup(q, index, r, a, b, past);
+    // A silhouette (math::footprint::beside_other: a neighbour sees something else or lies
+    // outside the image, or a tap sees past the shape's edge) takes its lights per tap.
     if ((pc.footprint & FOOTPRINT_LIGHTS) != 0u) {
-        l += past || beside_other(q, index) ? silhouette_lights(q, index, a, b)
-                                            : footprint_lights(r, a, b);
+        l += past || !(along_a && along_b) ? silhouette_lights(q, index, a, b)
+                                           : footprint_lights(r, a, b);
     }
     return l;
 }

@@ -90,6 +90,8 @@ fn define_sizes_and_lights(s: &mut String) {
     let _ = writeln!(s, "#define EXTRACT_TOP_BINS {}u", lights::EXTRACT_TOP_BINS);
     let _ = writeln!(s, "#define EXTRACT_LOW_BINS {}u", lights::EXTRACT_LOW_BINS);
     let _ = writeln!(s, "#define FILL_MAX_RINGS {}u", lights::FILL_MAX_RINGS);
+    let _ = writeln!(s, "#define FILL_SLOT_BITS {}u", lights::FILL_SLOT_BITS);
+    let _ = writeln!(s, "#define FILL_SLOT_ARRAYS {}u", lights::FILL_SLOT_ARRAYS);
     let _ = writeln!(
         s,
         "#define EXTRACT_RECORD_VEC4S {}u",

@@ -271,6 +271,13 @@ pub mod lights {
     /// Most rings of texels a filled extraction's light set grows by (a scene's
     /// `light_fill`): the state buffer holds a count per ring, the set's own ring 0 first.
     pub const FILL_MAX_RINGS: u32 = 8;
+    /// Low bits of a filled extraction's per-texel label that hold the member's slot (its
+    /// ring above them): the cap must stay below 2^this.
+    pub const FILL_SLOT_BITS: u32 = 24;
+    /// Words per slot of a filled extraction's light set after its per-texel labels: each
+    /// member's texel, its filled luminance, the fill round's next value, and the candidate
+    /// listed in that slot.
+    pub const FILL_SLOT_ARRAYS: u32 = 4;
     /// Workgroups of a filled extraction's RING step, whose invocations loop over the last
     /// ring's members (a few hundred to thousands: a dispatch sized by the cap would start
     /// hundreds of workgroups with nothing to do).

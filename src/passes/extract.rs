@@ -34,7 +34,8 @@ use crate::abi::lights::{
 };
 use crate::abi::lights::{
     extract_mode as mode, extract_word as word, EXTRACT_HEADER_WORDS, EXTRACT_LOW_BINS,
-    EXTRACT_RECORD_VEC4S, EXTRACT_TOP_BINS, FILL_MAX_RINGS, FILL_RING_GROUPS,
+    EXTRACT_RECORD_VEC4S, EXTRACT_TOP_BINS, FILL_MAX_RINGS, FILL_RING_GROUPS, FILL_SLOT_ARRAYS,
+    FILL_SLOT_BITS,
 };
 use crate::abi::push::{ExtractAddPush, ExtractClustersPush, ExtractPreparePush};
 use crate::abi::{binding, push::ExtractPush, ShaderId, WORKGROUP_1D, WORKGROUP_2D};
@@ -159,16 +160,17 @@ impl GpuExtraction {
             ));
         }
         if let Some(rings) = fill {
-            if rings > FILL_MAX_RINGS || max >= 1 << 24 {
+            if rings > FILL_MAX_RINGS || max >= 1 << FILL_SLOT_BITS {
                 return Err(Error::Invalid(format!(
                     "a filled GPU light extraction grows by at most {FILL_MAX_RINGS} rings and \
-                     keeps fewer than 2^24 light texels (asked: {rings} rings, {max} texels)"
+                     keeps fewer than 2^{FILL_SLOT_BITS} light texels (asked: {rings} rings, \
+                     {max} texels)"
                 )));
             }
         }
         let texels = width as u64 * height as u64 * mapping.layers() as u64;
         let set_words = match fill {
-            Some(_) => texels + 4 * max as u64,
+            Some(_) => texels + FILL_SLOT_ARRAYS as u64 * max as u64,
             None => 4,
         };
         let set = Buffer::new(
