@@ -730,3 +730,92 @@ fn area_conversion_conserves_power() {
     }
     common::finish(ctx);
 }
+
+/// A planned conversion (`Converter::plan`, then `record_planned`) against the float64 twin
+/// of the unplanned one (`math::convert::latlong_area_points`): the plan holds the float64
+/// walk's weights, so what differs is their rounding to float32 and the GPU's float32 slopes
+/// and sums: ~1e-7 of the largest term per term, so most where a footprint holds a sun and
+/// many sky texels (measured 2.7e-6 at paraboloid 13, 3e-7 at cube 40; the unplanned
+/// conversion's bound is 5e-5); tolerance 5e-6 relative, on a smooth map with suns
+/// 10⁵ × the sky at the poles, on the seam and mid-sky, to cube and paraboloid at tiny, odd
+/// and fast-path sizes, turned and flipped, at 2 and 8 points per paraboloid edge. The same
+/// map converted again with the same plan (already on the GPU) is the same bit for bit; its
+/// power is the unplanned conversion's; a plan is refused a map or output of another size,
+/// and a conversion that does not take areas has none.
+#[test]
+fn planned_conversion_matches_its_float64_twin() {
+    use envlight::math::convert::latlong_area_points;
+    let ctx = common::ctx();
+    {
+        let conv = Converter::new(&ctx).unwrap();
+        let src = suns_at_poles_and_seam(96);
+        let g = GpuEnvMap::upload(&ctx, &src).unwrap();
+        let turned = Orientation {
+            flip_u: true,
+            flip_v: false,
+            rotate_y_degrees: 33.0,
+        };
+        let mut worst = 0.0f64;
+        for (to, size, o, points) in [
+            (Mapping::Cube, 1, Orientation::default(), 8),
+            (Mapping::Cube, 7, Orientation::default(), 8),
+            (Mapping::Cube, 40, Orientation::default(), 8),
+            (Mapping::Cube, 33, turned, 8),
+            (Mapping::DualParaboloid, 2, Orientation::default(), 8),
+            (Mapping::DualParaboloid, 13, turned, 8),
+            (Mapping::DualParaboloid, 48, Orientation::default(), 2),
+            (Mapping::DualParaboloid, 33, Orientation::default(), 8),
+        ] {
+            let opts = default_opts(to, size, o).with_edge_points(Some(points));
+            let plan = conv.plan((Mapping::LatLong, 96, 48), &opts).unwrap();
+            assert!(plan.serves((Mapping::LatLong, 96, 48), &opts));
+            let gpu = conv
+                .run_planned(&g, &plan)
+                .unwrap()
+                .0
+                .download(&ctx)
+                .unwrap();
+            let again = conv
+                .run_planned(&g, &plan)
+                .unwrap()
+                .0
+                .download(&ctx)
+                .unwrap();
+            assert!(
+                gpu.texels == again.texels,
+                "{to:?} {size}: a second run differs"
+            );
+            let cpu = latlong_area_points(&src, to, size, o.world_to_file(), points);
+            let mut errors = Errors::new();
+            for (t, (a, b)) in gpu.texels.iter().zip(&cpu.texels).enumerate() {
+                for k in 0..3 {
+                    errors.rel(a[k], b[k], 0.0, t);
+                }
+            }
+            let e = errors.worst();
+            eprintln!("planned, {to:?} {size}, {points} points: GPU vs f64 worst {e:.2e}");
+            assert!(e <= 5e-6, "{to:?} {size}: planned GPU vs f64 {e:e}");
+            worst = worst.max(e);
+            let live = conv.run(&g, &opts).unwrap().0.download(&ctx).unwrap();
+            let (p, q) = (gpu.power(), live.power());
+            for c in 0..3 {
+                let e = rel_err(p[c], q[c], 0.0, c);
+                assert!(e <= 1e-5, "{to:?} {size}: planned power vs unplanned {e:e}");
+            }
+        }
+        eprintln!("planned conversions: worst {worst:.2e}");
+        let opts = ConvertOptions::new(Mapping::Cube, 8);
+        let plan = conv.plan((Mapping::LatLong, 96, 48), &opts).unwrap();
+        let other = GpuEnvMap::upload(&ctx, &suns_at_poles_and_seam(64)).unwrap();
+        let e = conv.run_planned(&other, &plan).err().expect("refused");
+        assert!(e.to_string().contains("was given latlong 64x32"), "{e}");
+        assert!(!plan.serves((Mapping::LatLong, 64, 32), &opts));
+        let sampled = opts.with_supersample(Some(2));
+        let e = conv
+            .plan((Mapping::LatLong, 96, 48), &sampled)
+            .err()
+            .expect("refused");
+        assert!(e.to_string().contains("no plan"), "{e}");
+    }
+    common::finish(ctx);
+}

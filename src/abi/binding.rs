@@ -19,6 +19,12 @@ bindings! {
     /// convert_area (LIST): the texels the general walk takes, (i, j, layer, 0) each
     /// (uvec4 storage buffer).
     CONVERT_LIST = 3;
+    /// convert_planned: per output texel its first plan entry, then the entry count (uint
+    /// storage buffer).
+    CONVERT_PLAN_OFFSETS = 4;
+    /// convert_planned: the plan's entries, (col | row << 16, area, mu, mz as float bits)
+    /// each (uvec4 storage buffer).
+    CONVERT_PLAN_ENTRIES = 5;
     /// mapping_probe: input directions (vec4 storage buffer).
     PROBE_IN = 0;
     /// mapping_probe: results (vec4 storage buffer).

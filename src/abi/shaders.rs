@@ -116,6 +116,12 @@ macro_rules! shader_table {
                 [("DST", "MAPPING_CUBE")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
                  (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
+            /// Lat-long to cube or dual paraboloid by exact footprint areas from a plan: a
+            /// gather of each output texel's source texels with their weights.
+            ConvertPlanned = "convert_planned", "convert_planned.comp", Compute, [], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
+                 (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_PLAN_OFFSETS, StorageBuffer, Read),
+                 (CONVERT_PLAN_ENTRIES, StorageBuffer, Read)];
             /// The limited slopes of a lat-long source that ConvertArea integrates.
             ConvertSlopes = "convert_slopes", "convert_slopes.comp", Compute, [], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_SLOPES, StorageBuffer, Write)];

@@ -8,6 +8,9 @@ use crate::math::envmap::EnvMap;
 use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
 
+mod plan;
+pub use plan::{apply_area_plan, area_plan, AreaPlan, PlanEntry};
+
 /// Polar angle of the solid-angle centroid of lat-long row `j` of height `h` (rows −1 and H are
 /// rows 0 and H−1 seen across the pole).
 pub fn row_centroid(j: i64, h: f64) -> f64 {
@@ -548,10 +551,48 @@ fn area_polygon(
 }
 
 /// The mean of the reconstructed source `cell(row, col)` over polygon `poly` in the (U, z)
-/// plane of a `w` × `h` lat-long map (U may run past [0, w): columns wrap). Per band and
-/// column, each clipped edge adds its piece of ∫∫ 1, ∫∫ (U − Uc) and ∫∫ (z − zc) over the
-/// overlap (Green's theorem; Simpson's rule, exact for these quadratics).
+/// plane of a `w` × `h` lat-long map (U may run past [0, w): columns wrap): the pieces
+/// [`area_walk`] finds, summed.
 fn area_mean(poly: &[[f64; 2]], w: i64, h: i64, cell: impl Fn(i64, i64) -> Cell) -> [f32; 3] {
+    // Sums of (L − L0), as the GLSL (where a constant map then comes out exact). L0 is the
+    // least, per channel, of the texels under the polygon's points: a texel that merely
+    // touches the footprint may be a sun 1e5 × the mean, whose cancellation would cost float32
+    // (the GLSL) its digits; the least is at most the mean.
+    let mut l0 = [f64::MAX; 3];
+    for (row, col) in point_cells(poly, w, h) {
+        let t = cell(row, col).l;
+        for ch in 0..3 {
+            l0[ch] = l0[ch].min(t[ch]);
+        }
+    }
+    let (mut num, mut den) = ([0.0f64; 3], 0.0f64);
+    area_walk(poly, w, h, |row, col, [area, mu, mz]| {
+        let t = cell(row, col);
+        for ch in 0..3 {
+            num[ch] += (t.l[ch] - l0[ch]) * area + t.slopes[0][ch] * mu + t.slopes[1][ch] * mz;
+        }
+        den += area;
+    });
+    if den == 0.0 {
+        return l0.map(|x| x as f32);
+    }
+    std::array::from_fn(|ch| ((l0[ch] + num[ch] / den) as f32).max(0.0))
+}
+
+/// The (row, column) of the source texel under each point of `poly`.
+fn point_cells(poly: &[[f64; 2]], w: i64, h: i64) -> impl Iterator<Item = (i64, i64)> + '_ {
+    let hf = h as f64;
+    poly.iter().map(move |p| {
+        let row = ((p[1].clamp(-1.0, 1.0).acos() / PI * hf).floor() as i64).clamp(0, h - 1);
+        (row, (p[0].floor() as i64).rem_euclid(w))
+    })
+}
+
+/// Polygon `poly`'s overlap with each source texel of a `w` × `h` lat-long map in the (U, z)
+/// plane, piece by piece: per band and column, each clipped edge's piece of ∫∫ 1, ∫∫ (U − Uc)
+/// and ∫∫ (z − zc) over the overlap (Green's theorem; Simpson's rule, exact for these
+/// quadratics), handed to `piece(row, col, [area, mu, mz])` (col wrapped into [0, w)).
+fn area_walk(poly: &[[f64; 2]], w: i64, h: i64, mut piece: impl FnMut(i64, i64, [f64; 3])) {
     let (mut zmin, mut zmax) = (f64::MAX, f64::MIN);
     for p in poly {
         zmin = zmin.min(p[1]);
@@ -574,19 +615,6 @@ fn area_mean(poly: &[[f64; 2]], w: i64, h: i64, cell: impl Fn(i64, i64) -> Cell)
     while r1 > r0 && band_edge(r1, h) <= zmin {
         r1 -= 1;
     }
-    // Sums of (L − L0), as the GLSL (where a constant map then comes out exact). L0 is the
-    // least, per channel, of the texels under the polygon's points: a texel that merely
-    // touches the footprint may be a sun 1e5 × the mean, whose cancellation would cost float32
-    // (the GLSL) its digits; the least is at most the mean.
-    let row_at = |z: f64| ((z.clamp(-1.0, 1.0).acos() / PI * hf).floor() as i64).clamp(0, h - 1);
-    let mut l0 = [f64::MAX; 3];
-    for p in poly {
-        let t = cell(row_at(p[1]), (p[0].floor() as i64).rem_euclid(w)).l;
-        for ch in 0..3 {
-            l0[ch] = l0[ch].min(t[ch]);
-        }
-    }
-    let (mut num, mut den) = ([0.0f64; 3], 0.0f64);
     for row in r0..=r1 {
         let zhi = band_edge(row, h);
         let zlo = band_edge(row + 1, h);
@@ -620,12 +648,7 @@ fn area_mean(poly: &[[f64; 2]], w: i64, h: i64, cell: impl Fn(i64, i64) -> Cell)
                     let base = (zlo - zc) * (zlo - zc);
                     let fz = |zz: f64| 0.5 * ((zz - zc) * (zz - zc) - base);
                     let mz = d / 6.0 * (fz(z0) + 4.0 * fz(zm) + fz(z1));
-                    let t = cell(row, c.rem_euclid(w));
-                    for ch in 0..3 {
-                        num[ch] +=
-                            (t.l[ch] - l0[ch]) * area + t.slopes[0][ch] * mu + t.slopes[1][ch] * mz;
-                    }
-                    den += area;
+                    piece(row, c.rem_euclid(w), [area, mu, mz]);
                 }
                 c += 1;
                 if c as f64 >= q[0] {
@@ -634,10 +657,6 @@ fn area_mean(poly: &[[f64; 2]], w: i64, h: i64, cell: impl Fn(i64, i64) -> Cell)
             }
         }
     }
-    if den == 0.0 {
-        return l0.map(|x| x as f32);
-    }
-    std::array::from_fn(|ch| ((l0[ch] + num[ch] / den) as f32).max(0.0))
 }
 
 /// z = cos θ at the top of lat-long row `row` of `h` (row `h`: the south pole).

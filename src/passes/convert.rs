@@ -10,6 +10,9 @@ use crate::passes::testing::poison::{self, PassId};
 use ash::vk;
 use std::sync::OnceLock;
 
+mod planned;
+pub use planned::ConvertPlan;
+
 /// Per-call options of [`Converter::run`] and [`Converter::record`]: start from
 /// [`ConvertOptions::new`] (or [`Default`]) and change what differs with the `with_*` methods
 /// or the fields; new options arrive with defaults that keep today's output.
@@ -149,6 +152,8 @@ pub struct Converter {
     area_fast_paraboloid: [OnceLock<Pipeline>; area::POLE_STEPS as usize],
     area_list_paraboloid: [OnceLock<Pipeline>; area::POLE_STEPS as usize],
     slopes: OnceLock<Pipeline>,
+    /// The gather of a [`ConvertPlan`].
+    planned: OnceLock<Pipeline>,
     sampler: Sampler,
 }
 
@@ -165,6 +170,7 @@ impl Converter {
             area_fast_paraboloid: Default::default(),
             area_list_paraboloid: Default::default(),
             slopes: OnceLock::new(),
+            planned: OnceLock::new(),
             sampler: Sampler::linear_clamp(ctx, "convert sampler")?,
         })
     }

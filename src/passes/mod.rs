@@ -26,7 +26,7 @@ pub mod testing;
 pub(crate) mod testing;
 
 pub use brute::{BruteFilter, FilterTarget};
-pub use convert::{ConvertOptions, Converter};
+pub use convert::{ConvertOptions, ConvertPlan, Converter};
 pub use extract::{Extractor, GpuExtraction};
 pub use gbuffer::{GBuffer, GBufferPass};
 pub use lights::{GpuLights, LightsPass};

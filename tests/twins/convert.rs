@@ -122,6 +122,35 @@ pub fn check(ctx: &Context) {
                 errors.count() > 0 && worst <= tol,
                 "{from:?} -> {to:?}: GPU vs f64 {worst:e} > {tol:e} at {at:?}"
             );
+            if area {
+                check_planned(ctx, &conv, &src, &opts);
+            } else if from == Mapping::LatLong && to == Mapping::DualParaboloid {
+                // Turned upside down it is sampled; upright it takes areas, and a plan.
+                check_planned(ctx, &conv, &src, &ConvertOptions::new(to, size));
+            }
         }
     }
+}
+
+/// The same conversion from a plan (`Converter::plan`, `run_planned`) against the same twin:
+/// the plan's float64 weights, rounded to float32, and float32 sums (3e-7 seen); BOUND.
+fn check_planned(ctx: &Context, conv: &Converter, src: &EnvMap, opts: &ConvertOptions) {
+    let g = GpuEnvMap::upload(ctx, src).unwrap();
+    let plan = conv.plan((src.mapping, src.width, src.height), opts).unwrap();
+    let gpu = conv.run_planned(&g, &plan).unwrap().0.download(ctx).unwrap();
+    let w2f = opts.orientation.world_to_file();
+    let cpu = envlight::math::convert::latlong_area(src, opts.to, opts.size, w2f);
+    let mut errors = Errors::new();
+    for (t, (a, b)) in gpu.texels.iter().zip(&cpu.texels).enumerate() {
+        for k in 0..3 {
+            errors.rel(a[k], b[k], 1.0, t);
+        }
+    }
+    let (worst, at) = (errors.worst(), errors.at().copied());
+    eprintln!("latlong -> {:?} (planned): GPU vs f64 worst {worst:.2e}", opts.to);
+    assert!(
+        errors.count() > 0 && worst <= BOUND,
+        "latlong -> {:?} planned: GPU vs f64 {worst:e} > {BOUND:e} at {at:?}",
+        opts.to
+    );
 }

@@ -1,0 +1,43 @@
+#version 460
+// Lat-long to cube or dual paraboloid by exact footprint areas, from a plan
+// (math::convert::area_plan): per output texel, the source texels its footprint overlaps with
+// the overlap's ∫∫ 1, ∫∫ (U − Uc) and ∫∫ (z − zc) over the footprint's area, so that the mean
+// of the source's reconstruction (each texel's value plus its limited slopes,
+// convert_slopes.comp) over the footprint is a sum of a few terms. convert_area.comp has the
+// geometry; the plan holds its float64 result for a source size, an output mapping and size
+// and an orientation. Twin: math::convert::apply_area_plan.
+#extension GL_GOOGLE_include_directive : require
+#include "mappings.glsl"
+
+layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
+
+layout(set = 0, binding = BINDING_CONVERT_SRC) uniform sampler2DArray src;
+layout(set = 0, binding = BINDING_CONVERT_DST, rgba32f) uniform writeonly image2DArray dst;
+// (dL/dU rgb, 0), (dL/dz rgb, 0) per source texel, through the buffer's texel view.
+layout(set = 0, binding = BINDING_CONVERT_SLOPES) uniform samplerBuffer slopes;
+layout(std430, set = 0, binding = BINDING_CONVERT_PLAN_OFFSETS) readonly buffer Offsets {
+    uint offsets[];  // per output texel its first entry, then the entry count
+};
+layout(std430, set = 0, binding = BINDING_CONVERT_PLAN_ENTRIES) readonly buffer Entries {
+    uvec4 entries[];  // (col | row << 16, area, mu, mz as float bits)
+};
+
+// The push block, generated from src/abi/push.rs.
+PUSH_ConvertPush
+
+void main() {
+    uvec3 id = gl_GlobalInvocationID;
+    if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
+    uint t = (id.z * pc.dst_size.y + id.y) * pc.dst_size.x + id.x;
+    uint w = pc.src_size.x;
+    vec3 sum = vec3(0.0);
+    for (uint k = offsets[t]; k < offsets[t + 1u]; k++) {
+        uvec4 e = entries[k];
+        ivec2 cell = ivec2(e.x & 0xffffu, e.x >> 16u);
+        int o = int(AREA_SLOPE_VEC4S * (uint(cell.y) * w + uint(cell.x)));
+        sum += uintBitsToFloat(e.y) * texelFetch(src, ivec3(cell, 0), 0).rgb +
+               uintBitsToFloat(e.z) * texelFetch(slopes, o).xyz +
+               uintBitsToFloat(e.w) * texelFetch(slopes, o + 1).xyz;
+    }
+    imageStore(dst, ivec3(id), vec4(max(sum, vec3(0.0)), 1.0));
+}

@@ -1,0 +1,220 @@
+//! The exact-area conversion from a plan ([`ConvertPlan`]): the geometry worked out once, in
+//! float64, for a source size, an output mapping and size and an orientation; each conversion
+//! then a gather of a few source texels and their slopes per output texel
+//! (`glsl/convert_planned.comp`, twin `math::convert::apply_area_plan`).
+
+use super::{edge_points, slopes_bytes, ConvertOptions, Converter};
+use crate::abi::{binding, push::ConvertPush, ShaderId, WORKGROUP_2D};
+use crate::error::{Error, Result};
+use crate::gpu::{groups, mat3_rows, Bind, Buffer, Pipeline, Recorder, Timing};
+use crate::math::convert::{area_plan, AreaPlan};
+use crate::math::Mapping;
+use crate::passes::map::GpuEnvMap;
+use crate::passes::testing::poison::{self, PassId};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+use std::sync::Mutex;
+
+/// An exact-area conversion (lat-long to cube or dual paraboloid) planned for one source
+/// size and one [`ConvertOptions`]: per output texel, the source texels its footprint
+/// overlaps and their weights, on the GPU. [`Converter::record_planned`] converts any map of
+/// that size with it as [`Converter::record`] does, but in a fraction of the time, which
+/// suits an environment that changes every frame at a fixed size, or many probes of one size.
+/// Made by [`Converter::plan`]; [`ConvertPlan::bytes`] says what it holds (about 16 bytes per
+/// source texel an output texel overlaps).
+pub struct ConvertPlan {
+    src: (u32, u32),
+    opts: ConvertOptions,
+    texels: u32,
+    offsets: Buffer,
+    entries: Buffer,
+    /// The host's copies, until the first recording that uses the plan copies them over.
+    staging: Mutex<Option<(Buffer, Buffer)>>,
+}
+
+impl ConvertPlan {
+    /// Bytes the plan holds on the GPU.
+    pub fn bytes(&self) -> u64 {
+        self.offsets.size() + self.entries.size()
+    }
+
+    /// Whether the plan converts a `src` map (mapping, width, height) as `opts` asks.
+    pub fn serves(&self, src: (Mapping, u32, u32), opts: &ConvertOptions) -> bool {
+        let same = |a: &ConvertOptions, b: &ConvertOptions| {
+            (a.to, a.size, a.orientation) == (b.to, b.size, b.orientation)
+                && edge_points(a).ok() == edge_points(b).ok()
+        };
+        src == (Mapping::LatLong, self.src.0, self.src.1) && same(&self.opts, opts)
+    }
+}
+
+/// A GPU-only storage buffer holding `data` and the host-visible buffer to copy it from.
+fn staged(ctx: &crate::gpu::Context, name: &str, data: &[u8]) -> Result<(Buffer, Buffer)> {
+    let size = (data.len() as u64).max(16);
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    let gpu = Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?;
+    let src = vk::BufferUsageFlags::TRANSFER_SRC;
+    let mut host = Buffer::new(ctx, name, size, src, MemoryLocation::CpuToGpu)?;
+    host.write(data);
+    Ok((gpu, host))
+}
+
+impl Converter {
+    /// Plans the conversion of a `src` map (mapping, width, height) with `opts` (on the host,
+    /// in float64, on every core: about as long as one unplanned conversion on lavapipe).
+    /// Only conversions that take exact areas ([`Converter::uses_area`]) have a plan.
+    pub fn plan(&self, src: (Mapping, u32, u32), opts: &ConvertOptions) -> Result<ConvertPlan> {
+        if !self.uses_area(src, opts) {
+            return Err(Error::Invalid(format!(
+                "no plan for a {} {}x{} map to {} {}: only lat-long to cube or dual \
+                 paraboloid by exact areas has one",
+                src.0.name(),
+                src.1,
+                src.2,
+                opts.to.name(),
+                opts.size
+            )));
+        }
+        let w2f = opts.orientation.checked_world_to_file()?;
+        let points = edge_points(opts)?;
+        let plan: AreaPlan = area_plan((src.1, src.2), opts.to, opts.size, w2f, points);
+        let (offsets, staged_offsets) = staged(
+            &self.ctx,
+            "convert plan offsets",
+            bytemuck::cast_slice(&plan.offsets),
+        )?;
+        let (entries, staged_entries) = staged(
+            &self.ctx,
+            "convert plan entries",
+            bytemuck::cast_slice(&plan.entries),
+        )?;
+        Ok(ConvertPlan {
+            src: (src.1, src.2),
+            opts: *opts,
+            texels: plan.offsets.len() as u32 - 1,
+            offsets,
+            entries,
+            staging: Mutex::new(Some((staged_offsets, staged_entries))),
+        })
+    }
+
+    fn planned_pipeline(&self) -> Result<&Pipeline> {
+        Pipeline::compute_once(
+            &self.planned,
+            &self.ctx,
+            ShaderId::ConvertPlanned,
+            &WORKGROUP_2D,
+        )
+    }
+
+    /// Records the conversion of `src` into `dst` with `plan`, which must serve `src` and
+    /// `dst`'s mapping and size: the source's slopes, then each output texel's sum over its
+    /// plan's entries. The first recording that uses a plan also copies it to the GPU:
+    /// submit that one first (or alone).
+    pub fn record_planned(
+        &self,
+        rec: &mut Recorder,
+        src: &GpuEnvMap,
+        dst: &GpuEnvMap,
+        plan: &ConvertPlan,
+    ) -> Result<()> {
+        let (w, h) = plan.opts.to.extent_for_size(plan.opts.size);
+        if (src.mapping, src.width, src.height) != (Mapping::LatLong, plan.src.0, plan.src.1)
+            || (dst.mapping, dst.width, dst.height) != (plan.opts.to, w, h)
+        {
+            return Err(Error::Invalid(format!(
+                "a conversion plan for lat-long {}x{} to {} {w}x{h} was given {} {}x{} to {} \
+                 {}x{}",
+                plan.src.0,
+                plan.src.1,
+                plan.opts.to.name(),
+                src.mapping.name(),
+                src.width,
+                src.height,
+                dst.mapping.name(),
+                dst.width,
+                dst.height
+            )));
+        }
+        let staging = plan.staging.lock().map(|mut s| s.take()).unwrap_or(None);
+        if let Some((offsets, entries)) = staging {
+            rec.copy_buffer(&offsets, &plan.offsets, offsets.size());
+            rec.copy_buffer(&entries, &plan.entries, entries.size());
+            rec.keep(offsets);
+            rec.keep(entries);
+        }
+        let push = ConvertPush {
+            world_to_file: mat3_rows(plan.opts.orientation.checked_world_to_file()?),
+            src_size: [src.width, src.height],
+            dst_size: [w, h],
+            src_mapping: src.mapping.id(),
+            dst_mapping: plan.opts.to.id(),
+            ss: 1,
+            nearest: 0,
+        };
+        debug_assert_eq!(plan.texels, w * h * plan.opts.to.layers());
+        let slopes = rec.scratch(
+            "convert slopes",
+            slopes_bytes(src.width, src.height),
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
+        )?;
+        let source = || {
+            (
+                binding::CONVERT_SRC,
+                Bind::Sampled(&src.image, &self.sampler, false),
+            )
+        };
+        let (slopes_pipeline, planned) = (self.slopes_pipeline()?, self.planned_pipeline()?);
+        rec.discard(&dst.image);
+        rec.span("convert slopes", |rec| {
+            rec.dispatch(
+                slopes_pipeline,
+                &[source(), (binding::CONVERT_SLOPES, Bind::Buffer(&slopes))],
+                &push,
+                [
+                    groups(src.width, WORKGROUP_2D[0]),
+                    groups(src.height, WORKGROUP_2D[1]),
+                    1,
+                ],
+            )
+        })?;
+        let label = format!(
+            "convert latlong -> {} {w}x{h} (planned)",
+            dst.mapping.name()
+        );
+        rec.span(&label, |rec| {
+            rec.dispatch(
+                planned,
+                &[
+                    source(),
+                    (binding::CONVERT_DST, Bind::Storage(&dst.image)),
+                    (binding::CONVERT_SLOPES, Bind::Texels(&slopes)),
+                    (binding::CONVERT_PLAN_OFFSETS, Bind::Buffer(&plan.offsets)),
+                    (binding::CONVERT_PLAN_ENTRIES, Bind::Buffer(&plan.entries)),
+                ],
+                &push,
+                [
+                    groups(w, WORKGROUP_2D[0]),
+                    groups(h, WORKGROUP_2D[1]),
+                    plan.opts.to.layers(),
+                ],
+            )
+        })?;
+        poison::image(rec, PassId::Convert, &dst.image, 0..1)
+    }
+
+    /// Converts `src` with `plan` into a new map; returns it and the GPU time.
+    pub fn run_planned(
+        &self,
+        src: &GpuEnvMap,
+        plan: &ConvertPlan,
+    ) -> Result<(GpuEnvMap, Vec<Timing>)> {
+        let (to, size) = (plan.opts.to, plan.opts.size);
+        let (w, h) = to.extent_for_size(size);
+        let dst = GpuEnvMap::new(&self.ctx, &format!("{} {size}", to.name()), to, w, h)?;
+        let ((), t) = self.ctx.run("converting a map by its plan", |rec| {
+            self.record_planned(rec, src, &dst, plan)
+        })?;
+        Ok((dst, t))
+    }
+}
