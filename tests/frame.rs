@@ -45,8 +45,12 @@ fn an_engine_frame_matches_the_cli_render() {
 }
 
 /// `envlight render --resident` (the map uploaded once, the frame recorded from the GPU image)
-/// makes the CLI's host render of the same scene: the same passes on the same map (1e-6) for
-/// assets/scenes/dynamic.toml (lights left in the map), and within 1e-4 for diffuse.toml, whose
+/// makes the CLI's host render of the same scene: the same passes on the same map for
+/// assets/scenes/dynamic.toml (lights left in the map), but for its FIS paraboloid, which the
+/// resident path converts from a plan (float64 weights, within 3e-6 of the conversion's twin)
+/// and the host path without (float32 geometry, within 5e-5): 1e-4 at the worst pixel, 5e-6
+/// on average, 1.5e-5 RMS (measured 3.3e-5, 2.0e-6, 5.0e-6; 0 with the plan left out); within
+/// 1e-4 for diffuse.toml, whose
 /// SH objects take lights extracted on the GPU (its clusters, the residual's SH) where the host
 /// subtracts the light texels' coefficients. split_sum.toml's split-sum and FIS take the
 /// chain's lights, which the resident path extracts on the GPU (its light tree over a spatial
@@ -62,7 +66,7 @@ fn render_resident_matches_render() {
     // (worst, mean, RMS) bounds. split_sum.toml's split-sum and FIS take the chain's lights,
     // whose trees differ by their budgets (see above).
     let cases = [
-        ("dynamic", [1e-6; 3]),
+        ("dynamic", [1e-4, 5e-6, 1.5e-5]),
         ("diffuse", [1e-4; 3]),
         ("split_sum", [1e-2, 1e-5, 1e-4]),
     ];

@@ -415,7 +415,10 @@ fn resident_scene(footprint: bool) -> envlight::scene::Scene {
 /// on the GPU, one frame recorded from the image) against `Renderer::render` (the host path):
 /// the same passes on the same inputs, only the environment's image is the caller's, so the
 /// frames agree to f32 rounding (1e-6 relative, floor 1e-3) on a lat-long and a cube map, with
-/// point and footprint-filtered lookups. The frames are no constant image: the spheres differ.
+/// point and footprint-filtered lookups; but for the lat-long's paraboloid, which the resident
+/// path converts from a plan (float64 weights; within 3e-6 of the twin) and the host path
+/// without (float32 geometry; within 5e-5 of it): 2e-5 there (measured 4.0e-6; 1e-6 with the
+/// plan left out). The frames are no constant image: the spheres differ.
 /// The tables no environment changes (SH-BRDF, DFG) are made with the prepared scene, so a
 /// frame records none of them.
 #[test]
@@ -432,6 +435,9 @@ fn the_resident_path_renders_what_the_host_path_does() {
                 let sc = resident_scene(footprint);
                 let host = renderer.render(&sc, &env).unwrap();
                 let prepared = renderer.resident(&sc, MapShape::of(&env)).unwrap();
+                let planned = prepared.conversion_plan().is_some();
+                // (Footprint lookups read the paraboloid's texel means: no areas, no plan.)
+                assert_eq!(planned, mapping == Mapping::LatLong && !footprint);
                 let before = ctx.submissions();
                 let got = renderer.render_resident(&prepared, &gpu).unwrap();
                 assert_eq!(ctx.submissions() - before, 1);
@@ -448,8 +454,13 @@ fn the_resident_path_renders_what_the_host_path_does() {
                     "a resident frame recomputed its tables: {spans:?}"
                 );
                 let errors = common::compare::frame_errors(&got.frame, &host.frame);
+                let bound = if planned { 2e-5 } else { 1e-6 };
+                eprintln!(
+                    "{mapping:?} footprint {footprint}: resident differs by {:.1e}",
+                    errors.worst()
+                );
                 assert!(
-                    errors.worst() <= 1e-6,
+                    errors.worst() <= bound,
                     "{mapping:?} footprint {footprint}: resident differs by {:e} at {:?}",
                     errors.worst(),
                     errors.at()

@@ -11,7 +11,7 @@ use ash::vk;
 use std::sync::OnceLock;
 
 mod planned;
-pub use planned::ConvertPlan;
+pub use planned::{ConvertPlan, PLAN_BUDGET_BYTES};
 
 /// Per-call options of [`Converter::run`] and [`Converter::record`]: start from
 /// [`ConvertOptions::new`] (or [`Default`]) and change what differs with the `with_*` methods

@@ -16,8 +16,8 @@ use crate::math::Mapping;
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::sh_pack::{irradiance_entries, windowed_entries, PackEntry};
 use crate::passes::{
-    BruteFilter, Converter, GBufferPass, GpuEnvMap, LevelLayers, MipChain, PrefilterOptions,
-    ShBrdfProjector, ShPacker, ShProjector, SplitSum,
+    BruteFilter, ConvertOptions, ConvertPlan, Converter, GBufferPass, GpuEnvMap, LevelLayers,
+    MipChain, PrefilterOptions, ShBrdfProjector, ShPacker, ShProjector, SplitSum,
 };
 use crate::scene::{Technique, DEFAULT_FIS_BIAS};
 use ash::vk;
@@ -291,6 +291,9 @@ pub(super) struct Work<'a> {
     /// The chain's residual on the GPU (the resident path's extraction), which the paraboloid
     /// converts where it holds the residual and prefiltered Phong maps of a residual filter.
     pub chain_residual: Option<&'a GpuEnvMap>,
+    /// The paraboloid's conversion planned for the source it converts (the resident path's,
+    /// made once); where it does not serve that source, the conversion runs unplanned.
+    pub dp_plan: Option<&'a ConvertPlan>,
     /// The SH output already holds this frame's projection of the map (the resident path's
     /// lights read its band 0 first): only the packing is recorded.
     pub sh_projected: bool,
@@ -303,6 +306,7 @@ impl Work<'static> {
         split: None,
         diffuse_residual: None,
         chain_residual: None,
+        dp_plan: None,
         sh_projected: false,
     };
 }
@@ -378,6 +382,13 @@ pub(super) fn record(
     })
 }
 
+/// The paraboloid's conversion options as `lit` leaves them: a residual holds no sun for the
+/// rim's chords to misplace, so fewer points (as predicted for the pipeline built meanwhile,
+/// unless the lobes were too narrow for the lights found, which leaves them in the chain).
+pub(super) fn dp_convert_options(opts: &ConvertOptions, lit: &Lit) -> ConvertOptions {
+    opts.with_edge_points((lit.dp || lit.below_threshold).then(|| residual_edge_points(opts.size)))
+}
+
 /// Records the paraboloid's conversion (from `env` or its residual), its MIP chain and the
 /// split-sum chain filtered from it.
 fn record_chain(
@@ -398,13 +409,13 @@ fn record_chain(
         (None, None) if lit.dp => work.chain_residual.unwrap_or(env),
         _ => env,
     };
-    // A residual holds no sun for the rim's chords to misplace: fewer points (as predicted
-    // for the pipeline built meanwhile, unless the lobes were too narrow for the lights
-    // found, which leaves them in the chain).
-    let opts = opts
-        .with_edge_points((lit.dp || lit.below_threshold).then(|| residual_edge_points(opts.size)));
+    let opts = dp_convert_options(opts, lit);
+    let shape = (source.mapping, source.width, source.height);
     marks.record(rec, PassKind::DualParaboloid, |rec| {
-        conv.record(rec, source, map, &opts)
+        match work.dp_plan.filter(|p| p.serves(shape, &opts)) {
+            Some(plan) => conv.record_planned(rec, source, map, plan),
+            None => conv.record(rec, source, map, &opts),
+        }
     })?;
     marks.record(rec, PassKind::MipChain, |rec| mip.record(rec, map))?;
     let (Some(p), Some((chain, _))) = (passes.split, &inputs.split) else {

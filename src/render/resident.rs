@@ -22,8 +22,8 @@ use crate::math::Mapping;
 use crate::passes::gbuffer::{target, GBuffer};
 use crate::passes::map::Sanitizer;
 use crate::passes::{
-    time_slices, Extractor, GpuEnvMap, GpuExtraction, GpuLights, LevelLayers, ShProjector,
-    Subgroups,
+    time_slices, ConvertPlan, Extractor, GpuEnvMap, GpuExtraction, GpuLights, LevelLayers,
+    ShProjector, Subgroups,
 };
 use crate::scene::{LightsMode, Scene};
 use ash::vk;
@@ -54,6 +54,9 @@ pub struct Resident {
     slices: Vec<Vec<LevelLayers>>,
     /// Frames recorded since the last whole refilter.
     frames: AtomicU64,
+    /// The paraboloid's conversion, planned once where it takes areas and its plan is small
+    /// enough (`Converter::plan_pays`).
+    dp_plan: Option<ConvertPlan>,
 }
 
 impl Resident {
@@ -66,6 +69,12 @@ impl Resident {
     /// The plan every frame follows.
     pub fn plan(&self) -> &Plan {
         &self.plan
+    }
+
+    /// The paraboloid's conversion plan, where every frame converts it from one (a lat-long
+    /// map whose plan is small enough: `Converter::plan_pays`).
+    pub fn conversion_plan(&self) -> Option<&ConvertPlan> {
+        self.dp_plan.as_ref()
     }
 
     /// The shape of the environments it renders from.
@@ -228,6 +237,17 @@ impl Renderer {
             env.width,
             env.height,
         )?;
+        let dp_plan = match &plan.dp {
+            Some(opts) => {
+                let (conv, shape) = (self.converter()?, (env.mapping, env.width, env.height));
+                let opts = inputs::dp_convert_options(opts, &lit);
+                match conv.plan_pays(shape, &opts) {
+                    true => Some(conv.plan(shape, &opts)?),
+                    false => None,
+                }
+            }
+            None => None,
+        };
         let zeroed = Buffer::new(
             ctx,
             "resident zeroed texels",
@@ -254,6 +274,7 @@ impl Renderer {
             means,
             slices: Vec::new(),
             frames: AtomicU64::new(0),
+            dp_plan,
         })
     }
 
@@ -358,6 +379,7 @@ impl Renderer {
                 split: r.next_split(),
                 diffuse_residual: r.diffuse.as_ref().map(|d| d.extraction.residual()),
                 chain_residual: r.chain.as_ref().map(|c| c.extraction.residual()),
+                dp_plan: r.dp_plan.as_ref(),
                 sh_projected: sh.is_some(),
             };
             inputs::record(rec, marks, &job, &passes, ins, env, &work, || Ok(()))?;

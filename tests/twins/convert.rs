@@ -136,8 +136,15 @@ pub fn check(ctx: &Context) {
 /// the plan's float64 weights, rounded to float32, and float32 sums (3e-7 seen); BOUND.
 fn check_planned(ctx: &Context, conv: &Converter, src: &EnvMap, opts: &ConvertOptions) {
     let g = GpuEnvMap::upload(ctx, src).unwrap();
-    let plan = conv.plan((src.mapping, src.width, src.height), opts).unwrap();
-    let gpu = conv.run_planned(&g, &plan).unwrap().0.download(ctx).unwrap();
+    let plan = conv
+        .plan((src.mapping, src.width, src.height), opts)
+        .unwrap();
+    let gpu = conv
+        .run_planned(&g, &plan)
+        .unwrap()
+        .0
+        .download(ctx)
+        .unwrap();
     let w2f = opts.orientation.world_to_file();
     let cpu = envlight::math::convert::latlong_area(src, opts.to, opts.size, w2f);
     let mut errors = Errors::new();
@@ -147,7 +154,10 @@ fn check_planned(ctx: &Context, conv: &Converter, src: &EnvMap, opts: &ConvertOp
         }
     }
     let (worst, at) = (errors.worst(), errors.at().copied());
-    eprintln!("latlong -> {:?} (planned): GPU vs f64 worst {worst:.2e}", opts.to);
+    eprintln!(
+        "latlong -> {:?} (planned): GPU vs f64 worst {worst:.2e}",
+        opts.to
+    );
     assert!(
         errors.count() > 0 && worst <= BOUND,
         "latlong -> {:?} planned: GPU vs f64 {worst:e} > {BOUND:e} at {at:?}",

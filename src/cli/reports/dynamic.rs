@@ -20,8 +20,8 @@ use crate::math::{Mapping, Orientation};
 use crate::passes::extract::Extracted;
 use crate::passes::testing::copy::CopyPass;
 use crate::passes::{
-    time_slices, ConvertOptions, Converter, Extractor, GpuExtraction, LevelLayers, MipChain,
-    PrefilterOptions, ShEvaluator, ShProjector, SplitSum, Subgroups,
+    time_slices, ConvertOptions, ConvertPlan, Converter, Extractor, GpuExtraction, LevelLayers,
+    MipChain, PrefilterOptions, ShEvaluator, ShProjector, SplitSum, Subgroups,
 };
 use crate::{EnvMap, GpuEnvMap};
 use anyhow::Result;
@@ -68,6 +68,9 @@ struct Frame {
     lights: GpuExtraction,
     dp: GpuEnvMap,
     chain: GpuEnvMap,
+    /// The residual's conversion to the paraboloid, planned once where it takes areas
+    /// (`Converter::plan_pays`).
+    plan: Option<ConvertPlan>,
 }
 
 /// The passes, built once.
@@ -145,7 +148,10 @@ fn record_frame(
         let opts = ConvertOptions::new(Mapping::DualParaboloid, s.paraboloid)
             .with_edge_points(Some(residual_edge_points(s.paraboloid)));
         rec.span(PARABOLOID_SPAN, |rec| {
-            p.conv.record(rec, residual, &f.dp, &opts)?;
+            match &f.plan {
+                Some(plan) => p.conv.record_planned(rec, residual, &f.dp, plan)?,
+                None => p.conv.record(rec, residual, &f.dp, &opts)?,
+            }
             p.mip.record(rec, &f.dp)
         })?;
         let mut chain = PrefilterOptions::new(s.levels);
@@ -199,7 +205,8 @@ fn stage_ms(t: &[Timing]) -> [f64; 3] {
 }
 
 /// One input's rows: `frames` maps (the sun moving), each refiltered `reps` times after an
-/// untimed frame; the median per stage; errors from the last frame.
+/// untimed frame; the median per stage; errors from the last frame. Also the chain's
+/// conversion plan, where it has one: the host's time to make it and its size.
 fn input_rows(
     ctx: &Context,
     p: &Passes,
@@ -207,7 +214,7 @@ fn input_rows(
     size: u32,
     s: &FrameSettings,
     reps: usize,
-) -> Result<(String, [f64; 3], String)> {
+) -> Result<(String, [f64; 3], String, Option<String>)> {
     let frames: Vec<EnvMap> = (0..3)
         .map(|k| sky_at(mapping, size, 40.0 + 25.0 * k as f64))
         .collect();
@@ -249,7 +256,26 @@ fn input_rows(
             s.paraboloid,
         )?,
         chain: SplitSum::cube_chain(ctx, s.chain, s.levels)?,
+        plan: None,
     };
+    let dp_opts = ConvertOptions::new(Mapping::DualParaboloid, s.paraboloid)
+        .with_edge_points(Some(residual_edge_points(s.paraboloid)));
+    let started = std::time::Instant::now();
+    let frame = Frame {
+        plan: match p.conv.plan_pays((mapping, w, h), &dp_opts) {
+            true => Some(p.conv.plan((mapping, w, h), &dp_opts)?),
+            false => None,
+        },
+        ..frame
+    };
+    let plan_note = frame.plan.as_ref().map(|plan| {
+        format!(
+            "{} {w}x{h}: {:.0} ms, {:.1} MB",
+            mapping.name(),
+            started.elapsed().as_secs_f64() * 1e3,
+            plan.bytes() as f64 / 1e6
+        )
+    });
     let mut index = 0;
     let timed = time_frames(ctx, p, &gpu, &frame, s, reps, &mut index)?;
     let copy = CopyPass::new(ctx)?;
@@ -335,7 +361,7 @@ fn input_rows(
         })
         .collect();
     let level_row = format!("| {input} | {:.1} | {} |\n", parts[0], levels.join(" | "));
-    Ok((rows, stage.map(|m| m / total), level_row))
+    Ok((rows, stage.map(|m| m / total), level_row, plan_note))
 }
 
 /// The GPU milliseconds of timed frames: per stage, whole, and per part of the chain (the
@@ -491,6 +517,7 @@ pub fn bench_dynamic(
         .chain(widths.iter().map(|&w| (Mapping::LatLong, w)))
         .collect();
     let mut shares = Vec::new();
+    let mut plans = Vec::new();
     let mut level_rows = String::new();
     for (&c, &(mapping, size)) in chains
         .iter()
@@ -501,7 +528,8 @@ pub fn bench_dynamic(
             paraboloid: 2 * c,
             ..*s
         };
-        let (rows, share, level_row) = input_rows(ctx, &passes, mapping, size, s, reps)?;
+        let (rows, share, level_row, plan) = input_rows(ctx, &passes, mapping, size, s, reps)?;
+        plans.extend(plan);
         body.push_str(&rows);
         level_rows.push_str(&level_row);
         shares.push(format!(
@@ -540,6 +568,15 @@ pub fn bench_dynamic(
             false => String::new(),
         }
     ));
+    if !plans.is_empty() {
+        body.push_str(&format!(
+            "\nA lat-long residual's conversion to the paraboloid is planned once per input \
+             before its frames (`Converter::plan`: the exact areas' geometry in float64 on the \
+             host; each frame then gathers its texels' weights), host time and size: {}. Cube \
+             inputs convert by samples, unplanned.\n",
+            plans.join("; ")
+        ));
+    }
     let method = format!(
         "Three frames, the sun 25° further round each, as images already on the GPU; each \
          frame's refilter recorded into one command buffer and submitted once, nothing read \

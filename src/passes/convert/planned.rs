@@ -48,6 +48,11 @@ impl ConvertPlan {
     }
 }
 
+/// The most bytes a plan a frame loop makes may take ([`Converter::plan_pays`]): beyond it
+/// the source is much finer than the output (a 4k map to a 256² paraboloid), the host's build
+/// takes seconds (about 1 s per 40 MB on two cores) and the memory outweighs a frame's saving.
+pub const PLAN_BUDGET_BYTES: u64 = 64 << 20;
+
 /// A GPU-only storage buffer holding `data` and the host-visible buffer to copy it from.
 fn staged(ctx: &crate::gpu::Context, name: &str, data: &[u8]) -> Result<(Buffer, Buffer)> {
     let size = (data.len() as u64).max(16);
@@ -96,6 +101,28 @@ impl Converter {
             entries,
             staging: Mutex::new(Some((staged_offsets, staged_entries))),
         })
+    }
+
+    /// About the bytes a plan of a `src` map (mapping, width, height) with `opts` takes:
+    /// per output texel an offset and (r + 1)² entries, r the source texel spacings per
+    /// output texel spacing (measured 4.1 entries at r = 1.1, 9.3 at r = 2.3).
+    pub fn plan_bytes(src: (Mapping, u32, u32), opts: &ConvertOptions) -> u64 {
+        let (w, h) = opts.to.extent_for_size(opts.size);
+        let texels = (w * h * opts.to.layers()) as f64;
+        let r = Converter::ratio(src, (opts.to, w, h));
+        (texels * (4.0 + 16.0 * (r + 1.0) * (r + 1.0))) as u64
+    }
+
+    /// Whether a frame loop should convert a `src` map with `opts` from a plan: the conversion
+    /// takes areas, and its plan is estimated ([`Converter::plan_bytes`]) within
+    /// [`PLAN_BUDGET_BYTES`] and the device's largest storage buffer.
+    pub fn plan_pays(&self, src: (Mapping, u32, u32), opts: &ConvertOptions) -> bool {
+        let max = self
+            .ctx
+            .info()
+            .max_storage_buffer_range
+            .min(PLAN_BUDGET_BYTES);
+        self.uses_area(src, opts) && Converter::plan_bytes(src, opts) <= max
     }
 
     fn planned_pipeline(&self) -> Result<&Pipeline> {
