@@ -372,6 +372,13 @@ macro_rules! shader_table {
                  (EXTRACT_STATE, StorageBuffer, ReadWrite), (EXTRACT_LIGHTS, StorageBuffer, Write),
                  (EXTRACT_RESIDUAL, StorageImage, Write), (EXTRACT_FILL, StorageBuffer, ReadWrite)];
             /// The same, the one-workgroup selects of the cap's threshold (their shared memory
+            /// The same, the steps over lists of a filled extraction (ring 0 from the listed
+            /// candidates, the rings grown), specialised per mapping.
+            ExtractGrow = "extract_grow", "extract.comp", Compute, [("EXTRACT_GROW", "1")],
+                ExtractPush,
+                [(EXTRACT_MAP, Sampled, Read), (EXTRACT_SH, StorageBuffer, Read),
+                 (EXTRACT_STATE, StorageBuffer, ReadWrite), (EXTRACT_LIGHTS, StorageBuffer, Write),
+                 (EXTRACT_RESIDUAL, StorageImage, Write), (EXTRACT_FILL, StorageBuffer, ReadWrite)];
             /// and barriers kept out of the per-texel steps).
             ExtractSelect = "extract_select", "extract.comp", Compute, [("EXTRACT_SELECT", "1")],
                 ExtractPush,

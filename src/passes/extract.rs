@@ -263,6 +263,8 @@ pub struct Extractor {
     ctx: Context,
     /// The per-texel steps, one pipeline per mapping (specialised), built on first use.
     pipelines: [std::sync::OnceLock<Pipeline>; 4],
+    /// A filled extraction's steps over lists, one pipeline per mapping, built on first use.
+    grow: [std::sync::OnceLock<Pipeline>; 4],
     select: Pipeline,
     add: Pipeline,
     clusters: Pipeline,
@@ -276,6 +278,7 @@ impl Extractor {
         Ok(Extractor {
             ctx: ctx.clone(),
             pipelines: Default::default(),
+            grow: Default::default(),
             select: Pipeline::compute(ctx, ShaderId::ExtractSelect, &WORKGROUP_2D)?,
             add: Pipeline::compute(ctx, ShaderId::ExtractAdd, &WORKGROUP_2D)?,
             clusters: Pipeline::compute(ctx, ShaderId::ExtractClusters, &[WORKGROUP_1D])?,
@@ -342,16 +345,22 @@ impl Extractor {
             rec.dispatch_indirect(pipeline, &binds, &push(mode::HISTOGRAM_LOW, 0), low)?;
             rec.dispatch(&self.select, &binds, &push(mode::SELECT_LOW, 0), [1, 1, 1])?;
             if let Some(rings) = out.fill {
+                let grow = Pipeline::compute_once(
+                    &self.grow[id as usize],
+                    &self.ctx,
+                    ShaderId::ExtractGrow,
+                    &[WORKGROUP_2D[0], WORKGROUP_2D[1], id],
+                )?;
                 let labels = map.width as u64 * map.height as u64 * map.mapping.layers() as u64;
                 rec.fill_buffer(&out.set, labels * 4, u32::MAX);
                 let args = |w: u32| (&out.state, w as u64 * 4);
                 let list = push(mode::MARK_LIST, 0);
-                rec.dispatch_indirect(pipeline, &binds, &list, args(word::MARK_LIST_ARGS))?;
+                rec.dispatch_indirect(grow, &binds, &list, args(word::MARK_LIST_ARGS))?;
                 let every = push(mode::MARK, 0);
                 rec.dispatch_indirect(pipeline, &binds, &every, args(word::MARK_ARGS))?;
                 for ring in 1..=rings {
                     let groups = [FILL_RING_GROUPS, 1, 1];
-                    rec.dispatch(pipeline, &binds, &push(mode::RING, ring), groups)?;
+                    rec.dispatch(grow, &binds, &push(mode::RING, ring), groups)?;
                 }
                 // Only an angular map's rim positions read another texel.
                 if map.mapping == Mapping::Angular {

@@ -642,6 +642,7 @@ impl PassKind {
                 ConvertAreaParaboloid,
                 ConvertAreaFastParaboloid,
                 ConvertAreaListParaboloid,
+                ConvertPlanned,
             ],
             PassKind::LatLong => &[Convert2d, ConvertCube],
             PassKind::MipChain => &[Mip],
@@ -662,7 +663,13 @@ impl PassKind {
             PassKind::SplitSum => &[Dfg, PrefilterGgx],
             PassKind::Prefilter => &[BrutePrepare, BruteTiles, Brute, BruteResolve],
             PassKind::MonteCarlo => &[Mc],
-            PassKind::Lights => &[Extract, ExtractSelect, ExtractClusters, ExtractPrepare],
+            PassKind::Lights => &[
+                Extract,
+                ExtractGrow,
+                ExtractSelect,
+                ExtractClusters,
+                ExtractPrepare,
+            ],
             PassKind::Shade => &crate::passes::shade::MODULES,
         }
     }
