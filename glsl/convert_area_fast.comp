@@ -20,36 +20,54 @@ const uint SIDE_POINTS = AREA_EDGE_STEPS;
 #endif
 const uint FAST_POINTS = 4u * SIDE_POINTS;
 
-// (area, ∫∫(U − uc), ∫∫(z − zc)) of the polygon edge a → b within column [c, c + 1] and the
-// band [zlo, zhi] (zc its centre, uc the column's), signed by the edge's direction, computed
-// from the canonical endpoint order so that neighbours sharing the edge cancel exactly.
-vec3 edge_cell(vec2 a, vec2 b, float c, float uc, float zlo, float zhi, float zc) {
+// A polygon edge in canonical order (neighbours sharing it take the same pieces): its ends
+// p, q (p before q), the sign of a → b against that order, dz/dU and dU/dz (0 where level or
+// upright: an upright edge bounds no area).
+struct Edge {
+    vec2 p, q;
+    float sgn, k, ik;
+    bool level;
+};
+
+Edge edge_of(vec2 a, vec2 b) {
+    Edge e;
     bool fwd = before(a, b);
-    vec2 p = fwd ? a : b, q = fwd ? b : a;
-    float u0 = max(p.x, c), u1 = min(q.x, c + 1.0);
+    e.p = fwd ? a : b;
+    e.q = fwd ? b : a;
+    e.sgn = fwd ? 1.0 : -1.0;
+    float du = e.q.x - e.p.x, dz = e.q.y - e.p.y;
+    // Slopes below 1e-20 count as level: dU/dz would overflow, and z moves by nothing.
+    e.level = abs(dz) <= 1e-20 * abs(du);
+    e.k = du != 0.0 ? dz / du : 0.0;
+    e.ik = e.level ? 0.0 : du / dz;
+    return e;
+}
+
+// (area, ∫∫(U − uc), ∫∫(z − zc)) of edge e within column [c, c + 1] and the band [zlo, zhi]
+// (zc its centre, uc the column's), signed by the edge's direction. Divisions are the edge's
+// (edge_of), once per texel, not once per cell.
+vec3 edge_cell(Edge e, float c, float uc, float zlo, float zhi, float zc) {
+    float u0 = max(e.p.x, c), u1 = min(e.q.x, c + 1.0);
     if (!(u1 > u0)) return vec3(0.0);
-    float sgn = fwd ? 1.0 : -1.0;
-    float z0 = p.y + (q.y - p.y) * ((u0 - p.x) / (q.x - p.x));
-    float z1 = p.y + (q.y - p.y) * ((u1 - p.x) / (q.x - p.x));
-    float dz = z1 - z0;
-    // Where the piece crosses the band's edges (as fractions of it), in order.
-    // (A level piece is all middle: its z may lie inside the band.)
-    float ta = dz != 0.0 ? clamp((zlo - z0) / dz, 0.0, 1.0) : 0.0;
-    float tb = dz != 0.0 ? clamp((zhi - z0) / dz, 0.0, 1.0) : 1.0;
-    float t1 = min(ta, tb), t2 = max(ta, tb);
+    float z0 = e.p.y + e.k * (u0 - e.p.x);
+    float z1 = e.p.y + e.k * (u1 - e.p.x);
+    // Where the piece crosses the band's edges, in U, in order. (A level piece is all
+    // middle: its z may lie inside the band.)
+    float ulo = clamp(e.p.x + (zlo - e.p.y) * e.ik, u0, u1);
+    float uhi = clamp(e.p.x + (zhi - e.p.y) * e.ik, u0, u1);
+    float ua = e.level ? u0 : min(ulo, uhi), ub = e.level ? u1 : max(ulo, uhi);
     float base = (zlo - zc) * (zlo - zc);
-    // Outside [t1, t2] the clamped z is constant, at zlo or zhi: ∫∫(z − zc) vanishes there, and
+    // Outside [ua, ub] the clamped z is constant, at zlo or zhi: ∫∫(z − zc) vanishes there, and
     // the area and ∫∫(U − uc) are a rectangle's.
-    float du = sgn * (u1 - u0);
     float ga = clamp(z0, zlo, zhi), gb = clamp(z1, zlo, zhi);
-    float ha = du * t1 * (ga - zlo), hb = du * (1.0 - t2) * (gb - zlo);
-    vec3 acc = vec3(ha + hb, ha * (u0 + 0.5 * (u1 - u0) * t1 - uc) + hb * (u1 - 0.5 * (u1 - u0) * (1.0 - t2) - uc),
-                    0.0);
-    // Within [t1, t2], z itself: Simpson's rule, exact for these quadratics.
-    float ua = u0 + (u1 - u0) * t1, ub = u0 + (u1 - u0) * t2, um = 0.5 * (ua + ub);
-    float za = clamp(z0 + dz * t1, zlo, zhi), zb = clamp(z0 + dz * t2, zlo, zhi),
-          zm = clamp(z0 + dz * (0.5 * (t1 + t2)), zlo, zhi);
-    float d = sgn * (ub - ua);
+    float ha = e.sgn * (ua - u0) * (ga - zlo), hb = e.sgn * (u1 - ub) * (gb - zlo);
+    vec3 acc = vec3(ha + hb, ha * (0.5 * (u0 + ua) - uc) + hb * (0.5 * (ub + u1) - uc), 0.0);
+    // Within [ua, ub], z itself: Simpson's rule, exact for these quadratics.
+    float um = 0.5 * (ua + ub);
+    float za = clamp(e.p.y + e.k * (ua - e.p.x), zlo, zhi);
+    float zb = clamp(e.p.y + e.k * (ub - e.p.x), zlo, zhi);
+    float zm = clamp(e.p.y + e.k * (um - e.p.x), zlo, zhi);
+    float d = e.sgn * (ub - ua);
     acc.x += d * (0.5 * (za + zb) - zlo);
     acc.y += d / 6.0 * ((ua - uc) * (za - zlo) + 4.0 * (um - uc) * (zm - zlo) + (ub - uc) * (zb - zlo));
     acc.z += d / 12.0 * (((za - zc) * (za - zc) - base) + 4.0 * ((zm - zc) * (zm - zc) - base) +
@@ -90,6 +108,9 @@ void main() {
     vec3 l0 = vec3(3.4e38);
     [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) l0 = min(l0, texel_under(v[k], w, h));
 
+    Edge edges[FAST_POINTS];
+    [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) edges[k] = edge_of(v[k], v[(k + 1u) % FAST_POINTS]);
+
     vec3 num = vec3(0.0);
     float den = 0.0;
     // The box's cells row by row in one loop (llvmpipe runs a loop as long as the SIMD group's
@@ -101,7 +122,7 @@ void main() {
         float cf = float(c), uc = cf + 0.5;
         vec3 m = vec3(0.0);
         [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
-            m += edge_cell(v[k], v[(k + 1u) % FAST_POINTS], cf, uc, zlo, zhi, zc);
+            m += edge_cell(edges[k], cf, uc, zlo, zhi, zc);
         }
         int col = wrap_column(c, w);
         uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
