@@ -748,9 +748,11 @@ fn the_resident_path_extracts_chain_lights_on_the_gpu() {
 /// over 3 frames, the first frame refilters everything (= the host path's frame of its map);
 /// after the map changes, the frames before the last slice still show some levels of the old
 /// map (the split-sum sphere differs from the host's frame of the new map by more than 1e-2)
-/// and the third frame equals it to f32 rounding (1e-6): every (level, half) was refiltered
-/// exactly once. `refilter_all` makes the next frame whole again; one slice is no slicing.
-/// Refused: 0 slices, a scene without split-sum.
+/// and the third frame equals it: every (level, half) was refiltered exactly once. Equal is
+/// within 2e-5, as in `the_resident_path_renders_what_the_host_path_does`: the resident path
+/// converts the paraboloid from a plan, the host path without (measured 3.9e-6; 1e-6 before
+/// plans). `refilter_all` makes the next frame whole again; one slice is no slicing. Refused:
+/// 0 slices, a scene without split-sum.
 #[test]
 fn a_time_sliced_chain_catches_up_with_its_map() {
     use envlight::math::synth::Sky;
@@ -785,22 +787,24 @@ fn a_time_sliced_chain_catches_up_with_its_map() {
             renderer.render_resident(p, g).unwrap().frame
         };
         let worst = |got: &EnvMap, want: &EnvMap| common::compare::frame_errors(got, want).worst();
+        assert!(prepared.conversion_plan().is_some());
+        let equal = 2e-5;
         let first = worst(&frame(&prepared, &ga), &host_a);
-        assert!(first <= 1e-6, "the first frame differs by {first:e}");
+        assert!(first <= equal, "the first frame differs by {first:e}");
         let behind: Vec<f64> = (0..2)
             .map(|_| worst(&frame(&prepared, &gb), &host_b))
             .collect();
         let caught = worst(&frame(&prepared, &gb), &host_b);
         assert!(
-            behind.iter().all(|&e| e > 1e-2) && caught <= 1e-6,
+            behind.iter().all(|&e| e > 1e-2) && caught <= equal,
             "frames after the change: {behind:?}, then {caught:e}"
         );
         prepared.refilter_all();
         let again = worst(&frame(&prepared, &ga), &host_a);
-        assert!(again <= 1e-6, "a whole refilter differs by {again:e}");
+        assert!(again <= equal, "a whole refilter differs by {again:e}");
         prepared.set_time_slices(1).unwrap();
         let whole = worst(&frame(&prepared, &gb), &host_b);
-        assert!(whole <= 1e-6, "one slice differs by {whole:e}");
+        assert!(whole <= equal, "one slice differs by {whole:e}");
         let mut no_split = resident_scene(false);
         no_split.objects.retain(|o| {
             !matches!(
