@@ -7,8 +7,8 @@
 // over the float bits of Y (positive floats order as their bits): a histogram of the top 16
 // bits, the bin the cap falls in, a histogram of that bin's low 16 bits (an indirect dispatch
 // of no workgroups where the cap does not bind), the exact key. The mean comes from the SH
-// projection's L00 (mean = L00 · Y00), so nothing is read back. Clamped (pc.fill 0), a light
-// keeps L·(1 − thr/Y), the residual L·thr/Y. Filled (pc.fill 1, the host's `fill`), the texels
+// projection's L00 (mean = L00 · Y00), so nothing is read back. Clamped (FILLED 0), a light
+// keeps L·(1 − thr/Y), the residual L·thr/Y. Filled (FILLED 1, the host's `fill`), the texels
 // above the threshold that are their own source form ring 0 of a light set, which grows by
 // rings of their 8 neighbours (positive, holding the sphere, same layer, a lat-long wrapping in
 // u) while the cap has room for each ring's records whole; the residual luminance under the
@@ -31,6 +31,9 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 // The map's mapping, specialised per pipeline (the per-texel steps then compile one mapping's
 // branches, not four; pc.mapping holds the same id).
 layout(constant_id = 2) const uint MAPPING = 0u;
+// Whether the extraction is filled, specialised per pipeline too, so that a clamped one's
+// per-texel steps carry none of the fill's branches (pc.fill holds the same).
+layout(constant_id = 3) const uint FILLED = 0u;
 layout(set = 0, binding = BINDING_EXTRACT_MAP) uniform sampler2DArray map_;
 layout(std430, set = 0, binding = BINDING_EXTRACT_SH) readonly buffer Sh { float sh[]; };
 layout(std430, set = 0, binding = BINDING_EXTRACT_STATE) buffer State { uint state[]; };
@@ -206,7 +209,7 @@ void per_texel() {
             atomicAdd(state[TOP + (floatBitsToUint(y) >> 16)], 1u);
             // A filled extraction lists the candidates while they fit the cap, so that ring 0
             // is found among them, not by another pass over the map.
-            if (pc.fill != 0u && k < pc.max) fill_[candidates_at() + k] = index_of(p, id.z);
+            if (FILLED != 0u && k < pc.max) fill_[candidates_at() + k] = index_of(p, id.z);
         }
         return;
     }
@@ -232,7 +235,7 @@ void per_texel() {
     vec3 kept = good ? l : vec3(0.0);
     bool light = y > thr && y > t;
     vec3 r = l * (thr / y);
-    if (pc.fill != 0u) {
+    if (FILLED != 0u) {
         // A member's residual: its filled luminance, at most the threshold and its own.
         uint slot = NONE;
         if (counted && y > 0.0) {
@@ -250,7 +253,7 @@ void per_texel() {
     if (light) {
         if (own) kept = r;
         uint k = atomicAdd(state[EXTRACT_WORD_COUNTER], 1u);
-        if (k < pc.max && pc.fill != 0u) {
+        if (k < pc.max && FILLED != 0u) {
             // The count and the records' indirect arguments, as records are written.
             atomicAdd(state[EXTRACT_WORD_KEPT], 1u);
             atomicMax(state[EXTRACT_WORD_LIGHT_ARGS], k / EXTRACT_LIGHT_GROUP + 1u);

@@ -261,8 +261,9 @@ impl GpuExtraction {
 /// The extraction pass, and the addition of its lights to a cube level.
 pub struct Extractor {
     ctx: Context,
-    /// The per-texel steps, one pipeline per mapping (specialised), built on first use.
-    pipelines: [std::sync::OnceLock<Pipeline>; 4],
+    /// The per-texel steps, one pipeline per mapping and per clamped or filled extraction
+    /// (specialised: index 2 × mapping + filled), built on first use.
+    pipelines: [std::sync::OnceLock<Pipeline>; 8],
     /// A filled extraction's steps over lists, one pipeline per mapping, built on first use.
     grow: [std::sync::OnceLock<Pipeline>; 4],
     select: Pipeline,
@@ -330,11 +331,12 @@ impl Extractor {
             map.mapping.layers(),
         ];
         let id = map.mapping.id();
+        let filled = u32::from(out.fill.is_some());
         let pipeline = Pipeline::compute_once(
-            &self.pipelines[id as usize],
+            &self.pipelines[(2 * id + filled) as usize],
             &self.ctx,
             ShaderId::Extract,
-            &[WORKGROUP_2D[0], WORKGROUP_2D[1], id],
+            &[WORKGROUP_2D[0], WORKGROUP_2D[1], id, filled],
         )?;
         rec.span("extract lights", |rec| {
             rec.fill_buffer(&out.state, out.state.size(), 0);
