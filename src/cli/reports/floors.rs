@@ -21,7 +21,7 @@ use crate::passes::{
     PrefilterOptions, ShEvaluator, ShProjector, SplitSum,
 };
 use crate::render::{PassKind, Renderer};
-use crate::scene::{SplitSumSettings, Technique};
+use crate::scene::{LookupFilter, SplitSumSettings, Technique};
 use crate::{EnvMap, GpuEnvMap, Mapping, Orientation};
 use anyhow::Result;
 use glam::{DMat3, DVec3};
@@ -492,7 +492,16 @@ fn shade_rows(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Vec<Row>> {
         rotate: true,
     };
     let cases = [
-        (Brdf::Mirror, Technique::Lookup, "mirror, lookup"),
+        (
+            Brdf::Mirror,
+            Technique::Lookup,
+            "mirror, lookup (one texel a pixel)",
+        ),
+        (
+            Brdf::Mirror,
+            Technique::Lookup,
+            "mirror, lookup filtered over each pixel's footprint",
+        ),
         (
             Brdf::Lambert,
             Technique::Sh { order: 2 },
@@ -522,8 +531,17 @@ fn shade_rows(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Vec<Row>> {
     let mut references: Vec<(Brdf, (EnvMap, f64))> = Vec::new();
     let mut rows = Vec::new();
     for (brdf, t, name) in cases {
+        // The mirror twice: point lookups, then the footprint filter (`auto`'s choice for a
+        // mirror); the other techniques under the default.
+        let filter = match (brdf, name.contains("footprint")) {
+            (Brdf::Mirror, true) => LookupFilter::Footprint,
+            (Brdf::Mirror, false) => LookupFilter::Point,
+            _ => LookupFilter::default(),
+        };
         let shade_ms = |cam| -> Result<Vec<Timing>> {
-            let r = renderer.render(&scene(cam, brdf, t, None, 1, split), map)?;
+            let mut sc = scene(cam, brdf, t, None, 1, split);
+            sc.environment.filter = filter;
+            let r = renderer.render(&sc, map)?;
             Ok(r.records
                 .into_iter()
                 .filter(|p| p.kind == PassKind::Shade)
@@ -531,8 +549,10 @@ fn shade_rows(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Vec<Row>> {
                 .collect())
         };
         let ms = time(reps, || shade_ms(big))?;
-        let error = if brdf == Brdf::Mirror {
+        let error = if brdf == Brdf::Mirror && filter == LookupFilter::Point {
             "— (a lookup: no integral to err)".to_string()
+        } else if brdf == Brdf::Mirror {
+            "— (each pixel's footprint mean: docs/accuracy.md's mirror rows)".to_string()
         } else {
             if !references.iter().any(|r| r.0 == brdf) {
                 let r = truth(&renderer, small, brdf, None, split, 1024, map)?;
