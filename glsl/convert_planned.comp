@@ -19,7 +19,7 @@ layout(std430, set = 0, binding = BINDING_CONVERT_PLAN_OFFSETS) readonly buffer 
     uint offsets[];  // per output texel its first entry, then the entry count
 };
 layout(std430, set = 0, binding = BINDING_CONVERT_PLAN_ENTRIES) readonly buffer Entries {
-    uvec4 entries[];  // (col | row << 16, area, mu, mz as float bits)
+    uvec4 entries[];  // (col | row << AREA_PLAN_ROW_SHIFT, area, mu, mz as float bits)
 };
 
 // The push block, generated from src/abi/push.rs.
@@ -33,7 +33,7 @@ void main() {
     vec3 sum = vec3(0.0);
     for (uint k = offsets[t]; k < offsets[t + 1u]; k++) {
         uvec4 e = entries[k];
-        ivec2 cell = ivec2(e.x & 0xffffu, e.x >> 16u);
+        ivec2 cell = ivec2(e.x & ((1u << AREA_PLAN_ROW_SHIFT) - 1u), e.x >> AREA_PLAN_ROW_SHIFT);
         int o = int(AREA_SLOPE_VEC4S * (uint(cell.y) * w + uint(cell.x)));
         sum += uintBitsToFloat(e.y) * texelFetch(src, ivec3(cell, 0), 0).rgb +
                uintBitsToFloat(e.z) * texelFetch(slopes, o).xyz +

@@ -20,8 +20,8 @@
 // times: the per-texel steps; with EXTRACT_SELECT the one-workgroup ones (the selects, the
 // decision on the rings, the fill's rounds: their barriers and shared memory kept out of the
 // per-texel steps); with EXTRACT_GROW the steps over lists (ring 0 from the listed candidates,
-// the rings grown), whose loops kept in the per-texel module made llvmpipe run its per-texel
-// passes 2.5–3.5× slower.
+// the rings grown), kept out of the per-texel module: llvmpipe compiles a module's every
+// branch into each dispatch, and the loops slow the per-texel passes several times over.
 #extension GL_GOOGLE_include_directive : require
 #include "generated.glsl"
 #include "mappings.glsl"

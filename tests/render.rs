@@ -750,9 +750,9 @@ fn the_resident_path_extracts_chain_lights_on_the_gpu() {
 /// map (the split-sum sphere differs from the host's frame of the new map by more than 1e-2)
 /// and the third frame equals it: every (level, half) was refiltered exactly once. Equal is
 /// within 2e-5, as in `the_resident_path_renders_what_the_host_path_does`: the resident path
-/// converts the paraboloid from a plan, the host path without (measured 3.9e-6; 1e-6 before
-/// plans). `refilter_all` makes the next frame whole again; one slice is no slicing. Refused:
-/// 0 slices, a scene without split-sum.
+/// converts the paraboloid from a plan, the host path without (measured 3.9e-6; within 1e-6
+/// with the plan left out). `refilter_all` makes the next frame whole again; one slice is no
+/// slicing. Refused: 0 slices, a scene without split-sum.
 #[test]
 fn a_time_sliced_chain_catches_up_with_its_map() {
     use envlight::math::synth::Sky;

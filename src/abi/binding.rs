@@ -22,7 +22,8 @@ bindings! {
     /// convert_planned: per output texel its first plan entry, then the entry count (uint
     /// storage buffer).
     CONVERT_PLAN_OFFSETS = 4;
-    /// convert_planned: the plan's entries, (col | row << 16, area, mu, mz as float bits)
+    /// convert_planned: the plan's entries, (col | row << area::PLAN_ROW_SHIFT, area, mu, mz as
+    /// float bits)
     /// each (uvec4 storage buffer).
     CONVERT_PLAN_ENTRIES = 5;
     /// mapping_probe: input directions (vec4 storage buffer).

@@ -518,6 +518,10 @@ pub mod area {
     /// vec4s of limited slopes per source texel (dL/dU rgb, then dL/dz rgb), the layout of
     /// the buffer convert_slopes.comp writes and convert_area.comp reads.
     pub const SLOPE_VEC4S: u32 = 2;
+    /// A conversion plan entry's source texel: its column in the low bits, its row shifted
+    /// up by this many (math::convert::area_plan writes it, glsl/convert_planned.comp reads
+    /// it); sources up to 2^PLAN_ROW_SHIFT texels wide and tall.
+    pub const PLAN_ROW_SHIFT: u32 = 16;
     /// Cube outputs at least this large take the fast path (glsl/convert_area.comp, FAST)
     /// away from the poles; smaller ones take the general walk everywhere.
     pub const FAST_MIN_SIZE: u32 = 32;

@@ -11,7 +11,8 @@ use crate::abi::area;
 use crate::math::envmap::EnvMap;
 use glam::DMat3;
 
-/// One source texel's share of an output texel: its column and row packed `col | row << 16`,
+/// One source texel's share of an output texel: its column and row packed
+/// `col | row << area::PLAN_ROW_SHIFT`,
 /// then the overlap's ∫∫ 1, ∫∫ (U − Uc) and ∫∫ (z − zc) over the footprint's ∫∫ 1 (bit patterns
 /// of float32), the layout `glsl/convert_planned.comp` reads as a `uvec4`.
 pub type PlanEntry = [u32; 4];
@@ -41,7 +42,7 @@ impl AreaPlan {
 
 /// The entry of source texel (row, col) with weights `w`.
 fn entry(row: i64, col: i64, w: [f64; 3]) -> PlanEntry {
-    let cell = col as u32 | (row as u32) << 16;
+    let cell = col as u32 | (row as u32) << area::PLAN_ROW_SHIFT;
     [
         cell,
         (w[0] as f32).to_bits(),
@@ -107,7 +108,7 @@ fn texel_entries(
 /// oriented by `world_to_file`, with `edge_points` points per paraboloid texel edge (see
 /// [`super::latlong_area_points`], which it reproduces to float32 weights), on every core.
 /// Panics where [`super::area_serves`] refuses the conversion, or the source is wider or
-/// taller than 65536 texels.
+/// taller than 2^[`area::PLAN_ROW_SHIFT`] texels.
 pub fn area_plan(
     (width, height): (u32, u32),
     to: Mapping,
@@ -116,8 +117,9 @@ pub fn area_plan(
     edge_points: u32,
 ) -> AreaPlan {
     assert!((1..=area::POLE_STEPS).contains(&edge_points));
+    let most = 1 << area::PLAN_ROW_SHIFT;
     assert!(
-        width <= 1 << 16 && height <= 1 << 16,
+        width <= most && height <= most,
         "source too large for a plan"
     );
     assert!(
@@ -198,7 +200,11 @@ pub fn apply_area_plan(plan: &AreaPlan, map: &EnvMap) -> EnvMap {
         .map(|o| {
             let mut sum = [0.0f64; 3];
             for e in &plan.entries[o[0] as usize..o[1] as usize] {
-                let (col, row) = ((e[0] & 0xffff) as usize, (e[0] >> 16) as usize);
+                let low = (1 << area::PLAN_ROW_SHIFT) - 1;
+                let (col, row) = (
+                    (e[0] & low) as usize,
+                    (e[0] >> area::PLAN_ROW_SHIFT) as usize,
+                );
                 let [a, mu, mz] = [e[1], e[2], e[3]].map(|b| f32::from_bits(b) as f64);
                 let (l, g) = (map.texels[row * w + col], slopes[row * w + col]);
                 for k in 0..3 {
