@@ -7,7 +7,8 @@
 // of θ and T_m(φ): the projection separates into these sums and a sum over rows
 // (sh_latlong.comp), 2·LMAX + 1 multiply-adds a texel and channel instead of the basis at
 // four nodes. One workgroup a row; its invocations stride over the columns and the workgroup
-// sums them (subgroup adds, or a shared-memory tree).
+// sums them (subgroup adds, the workgroup one subgroup wide where the device has them; or a
+// shared-memory tree).
 #extension GL_GOOGLE_include_directive : require
 #ifdef USE_SUBGROUPS
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -41,7 +42,7 @@ void main() {
     vec3 f[NM];
     for (uint k = 0u; k < NM; k++) f[k] = vec3(0.0);
     float step = 6.28318530717958647692 / float(pc.size.x);
-    for (uint i = tid; i < pc.size.x; i += SH_WORKGROUP) {
+    for (uint i = tid; i < pc.size.x; i += gl_WorkGroupSize.x) {
         vec3 l = finite_or_zero(texelFetch(src, ivec3(int(i), int(row), 0), 0).rgb);
         float phi = step * (float(i) + 0.5);
         float c1 = cos(phi), s1 = sin(phi);
@@ -72,7 +73,7 @@ void main() {
 #else
         tree[tid] = f[k];
         barrier();
-        for (uint stride = SH_WORKGROUP / 2u; stride > 0u; stride /= 2u) {
+        for (uint stride = gl_WorkGroupSize.x / 2u; stride > 0u; stride /= 2u) {
             if (tid < stride) tree[tid] += tree[tid + stride];
             barrier();
         }

@@ -194,6 +194,16 @@ impl ShProjector {
         )
     }
 
+    /// Invocations a row in the rows' pass: one subgroup where subgroups sum the row (each of
+    /// its 2·lmax + 1 sums is then one subgroup add, with no shared memory to wait on), else
+    /// SH_WORKGROUP.
+    fn rows_workgroup(&self) -> u32 {
+        match self.subgroups {
+            true => self.ctx.info().subgroup_size.clamp(1, SH_WORKGROUP),
+            false => SH_WORKGROUP,
+        }
+    }
+
     /// The lat-long path's pipelines for band `lmax`: the rows' sums, and their sum.
     fn latlong_pipelines(&self, lmax: u32) -> Result<(&Pipeline, &Pipeline)> {
         let spec = [SH_WORKGROUP, lmax];
@@ -202,7 +212,7 @@ impl ShProjector {
                 &self.rows[lmax as usize],
                 &self.ctx,
                 self.rows_shader,
-                &spec,
+                &[self.rows_workgroup(), lmax],
             )?,
             Pipeline::compute_once(
                 &self.latlong[lmax as usize],
