@@ -190,6 +190,12 @@ pub mod lights {
     /// Most light texels kept (the threshold rises to keep to it): what the per-texel light
     /// sums of the bake cost.
     pub const MAX_TEXELS: u32 = 256;
+    /// A bake's light records are never finer than the texels of a lat-long map this many
+    /// columns wide (a cube's: a quarter of it a face): on a larger map each record gathers
+    /// the light of a block of texels (`crate::math::lights::record_block`), so that the same
+    /// light makes the same records, and costs the same, at any resolution, and
+    /// [`MAX_TEXELS`] keeps its meaning (an 8k map's sun is 64 times a 1k map's texels).
+    pub const RECORD_WIDTH: u32 = 1024;
     /// Diffuse techniques (SH irradiance, prefiltered irradiance) extract above this many
     /// times the mean luminance, uncapped, and sum the light texels by clusters: a deep
     /// extraction leaves SH 2 only the smooth residual, so the sharp softboxes of a studio

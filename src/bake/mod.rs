@@ -18,7 +18,8 @@ use crate::math::envmap::luminance;
 use crate::math::exact::ExactFilter;
 use crate::math::fis::default_dp_size;
 use crate::math::lights::{
-    diffuse_options, extract_each, light_sh, resolves, ExtractOptions, LightKernel, DIFFUSE_RATIO,
+    diffuse_options, extract, extract_blocks, light_sh, record_block, resolves, ExtractOptions,
+    LightKernel, DIFFUSE_RATIO,
 };
 use crate::math::sh;
 use crate::math::split_sum::{level_alpha, DfgAxes};
@@ -60,6 +61,11 @@ pub struct BakeOptions {
     /// irradiance cube and the specular levels ≥ 1, which then see only the residual
     /// through SH and FIS.
     pub lights: bool,
+    /// The finest light records of the specular levels, as a lat-long map's width (a cube's
+    /// faces: a quarter of it): on a larger map each record gathers a block of texels
+    /// (`crate::math::lights::record_block`), so that the same light bakes the same, at the
+    /// same cost, at any resolution.
+    pub light_record_width: u32,
 }
 
 impl BakeOptions {
@@ -84,6 +90,7 @@ impl Default for BakeOptions {
             dfg_size: crate::abi::split_sum::DEFAULT_DFG_SIZE,
             chain: false,
             lights: true,
+            light_record_width: crate::abi::lights::RECORD_WIDTH,
         }
     }
 }
@@ -119,6 +126,12 @@ impl BakeOptions {
         }
         if !(self.bias.is_finite() && self.bias.abs() <= 16.0) {
             return bad("bias must be within ±16".into());
+        }
+        if !(4..=1 << 20).contains(&self.light_record_width) {
+            return bad(format!(
+                "light_record_width {} outside 4 to 1048576",
+                self.light_record_width
+            ));
         }
         if !(2..=crate::abi::split_sum::MAX_DFG_SIZE).contains(&self.dfg_size) {
             return bad(format!("dfg_size {} outside 2 to 256", self.dfg_size));
@@ -414,24 +427,25 @@ impl Baker {
         let finest = level_alpha(1, opts.specular_levels.max(2));
         // The irradiance cube: the whole map's SH less its diffuse light texels' (a deeper
         // extraction), plus those texels' clusters, as SH objects render.
-        let (extraction, diffuse) = match opts.lights {
+        // The specular levels' records gather blocks of texels on maps finer than
+        // `light_record_width` (`record_block`), so that a map bakes as the same content at
+        // that size does.
+        let (extraction, grid, diffuse) = match opts.lights {
             true => {
-                let mut each = extract_each(
-                    env,
-                    &[ExtractOptions::default(), diffuse_options(DIFFUSE_RATIO)],
-                );
-                let diffuse = each.pop().filter(|e| !e.lights.is_empty());
-                let extraction = each
-                    .pop()
+                let diffuse = extract(env, &diffuse_options(DIFFUSE_RATIO));
+                let block = record_block(env, opts.light_record_width);
+                let blocked = extract_blocks(env, &ExtractOptions::default(), block);
+                let extraction = Some(blocked.extraction)
                     .filter(|e| !e.lights.is_empty() && resolves(e, finest));
-                (extraction, diffuse)
+                let diffuse = Some(diffuse).filter(|e| !e.lights.is_empty());
+                (extraction, blocked.grid, diffuse)
             }
-            false => (None, None),
+            false => (None, None, None),
         };
         let file_to_world = orientation.checked_world_to_file()?.transpose();
         let lights = GpuLights::of_extractions(
             ctx,
-            env,
+            grid.as_ref().unwrap_or(env),
             extraction.as_ref(),
             diffuse.as_ref(),
             file_to_world,

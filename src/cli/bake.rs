@@ -10,7 +10,7 @@ use crate::bake::output::{
 use crate::bake::{spot_check, BakeOptions, Baked, Baker, PendingBake, SpotCheck};
 use crate::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
 use crate::io::{write_atomic, LoadOptions};
-use crate::math::lights::extract;
+use crate::math::lights::{extract_blocks, record_block};
 use crate::math::split_sum::DfgAxes;
 use crate::{EnvMap, Mapping, Orientation};
 use anyhow::{anyhow, bail, Context as _, Result};
@@ -1051,7 +1051,9 @@ impl Run<'_> {
             // Separate lights: the cubes see the residual, lights.json the lights.
             let (source, lights) = match plan.lights {
                 LightsMode::Separate => {
-                    let ex = extract(&map, &separate_options(&map, plan.texels));
+                    let block = record_block(&map, plan.options.light_record_width);
+                    let ex = extract_blocks(&map, &separate_options(&map, plan.texels), block)
+                        .extraction;
                     let l = SeparateLights::new(&map, &ex, &plan.orientation, plan.cube_to_world)?;
                     (ex.residual, Some(l))
                 }

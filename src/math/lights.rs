@@ -17,6 +17,10 @@
 //! it (the glow at a softbox's rim, below τ), and the residual under it continues its
 //! surroundings (`fill`) instead of the clamp; lights plus residual still equal the map.
 
+mod blocks;
+
+pub use blocks::{extract_blocks, record_block, BlockExtraction};
+
 use super::brdf::{local_view, Brdf, Frame};
 use super::mapping::Coord;
 use crate::math::envmap::luminance;
