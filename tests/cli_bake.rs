@@ -365,7 +365,8 @@ fn reruns_resume_skip_and_fail_alone() {
     )
     .unwrap();
     let r = bake(&[dir.to_str().unwrap(), "-o", o]);
-    assert!(!r.status.success());
+    // Only a bad input failed: retrying cannot help, and the code says so (EX_DATAERR).
+    assert_eq!(r.status.code(), Some(65));
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(
         err.contains("broken.hdr") && err.contains("1 of 4 probes failed"),
@@ -407,4 +408,109 @@ fn reruns_resume_skip_and_fail_alone() {
 fn with_chain(mut opts: BakeOptions) -> BakeOptions {
     opts.chain = true;
     opts
+}
+
+/// Runs `envlight bake` as a job array's task: [`SMALL`] sizes, the scheduler's variables in
+/// its environment (none of the others).
+fn bake_as_task(args: &[&str], vars: &[(&str, &str)]) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_envlight"));
+    c.args(["--validation", "--device", "cpu", "bake"])
+        .args(SMALL)
+        .args(args);
+    for v in [
+        "SLURM_ARRAY_TASK_ID",
+        "SLURM_ARRAY_TASK_COUNT",
+        "SLURM_ARRAY_TASK_MIN",
+        "SLURM_ARRAY_TASK_MAX",
+        "SLURM_ARRAY_TASK_STEP",
+        "JOB_COMPLETION_INDEX",
+        "AWS_BATCH_JOB_ARRAY_INDEX",
+        "AWS_BATCH_JOB_ARRAY_SIZE",
+        "BATCH_TASK_INDEX",
+        "BATCH_TASK_COUNT",
+    ] {
+        c.env_remove(v);
+    }
+    c.envs(vars.iter().copied()).output().unwrap()
+}
+
+fn merge_into(out: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .args(["bake", "--merge", "-o", out.to_str().unwrap()])
+        .output()
+        .unwrap()
+}
+
+/// What a scheduler sees: `--shard auto` takes the task from Slurm's variables, then from a
+/// Kubernetes index with the split the first shard recorded; a merge before the second shard
+/// names the probe it lacks and exits 75 (retry), after it 0; a shard of another split into
+/// the same folder is refused; a set whose only failure is a truncated input merges with 65
+/// (retrying cannot help) and names it.
+#[test]
+fn scheduled_shards_merge_and_say_what_is_missing() {
+    let dir = temp("sched-in");
+    probes(&dir);
+    let out = temp("sched-out");
+    let (d, o) = (dir.to_str().unwrap(), out.to_str().unwrap());
+    let slurm = [
+        ("SLURM_ARRAY_TASK_ID", "0"),
+        ("SLURM_ARRAY_TASK_COUNT", "2"),
+    ];
+    ok(&bake_as_task(&[d, "-o", o, "--shard", "auto"], &slurm));
+    assert_eq!(statuses(&out, "manifest-shard-1-of-2.json").len(), 2);
+    let early = merge_into(&out);
+    let said = String::from_utf8_lossy(&early.stdout);
+    assert_eq!(early.status.code(), Some(75), "{said}");
+    assert!(
+        said.contains("missing: ") && said.contains("p1.exr (shard 2"),
+        "{said}"
+    );
+    // Another split into the same folder is refused, naming the one there.
+    let other = bake_as_task(&[d, "-o", o, "--shard", "1/3"], &[]);
+    let err = String::from_utf8_lossy(&other.stderr);
+    assert_eq!(other.status.code(), Some(1), "{err}");
+    assert!(err.contains("split into 2"), "{err}");
+    // Kubernetes gives only the index: n comes from the shard manifest already there.
+    ok(&bake_as_task(
+        &[d, "-o", o, "--shard", "auto"],
+        &[("JOB_COMPLETION_INDEX", "1")],
+    ));
+    ok(&merge_into(&out));
+    assert_eq!(statuses(&out, "manifest.json").len(), 3);
+
+    // A set with a truncated probe, sharded by AWS Batch's variables.
+    let bad = temp("sched-bad-in");
+    std::fs::copy(dir.join("p0.exr"), bad.join("p0.exr")).unwrap();
+    std::fs::write(
+        bad.join("broken.hdr"),
+        b"#?RADIANCE\n\n-Y 8 +X 16\n\x02\x02",
+    )
+    .unwrap();
+    let bad_out = temp("sched-bad-out");
+    let (bd, bo) = (bad.to_str().unwrap(), bad_out.to_str().unwrap());
+    for index in ["0", "1"] {
+        let aws = [
+            ("AWS_BATCH_JOB_ARRAY_INDEX", index),
+            ("AWS_BATCH_JOB_ARRAY_SIZE", "2"),
+        ];
+        let r = bake_as_task(&[bd, "-o", bo, "--shard", "auto"], &aws);
+        // broken.hdr sorts first: shard 1 holds it alone.
+        let want = if index == "0" { Some(65) } else { Some(0) };
+        assert_eq!(
+            r.status.code(),
+            want,
+            "{}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+    }
+    let m = merge_into(&bad_out);
+    let said = String::from_utf8_lossy(&m.stdout);
+    assert_eq!(m.status.code(), Some(65), "{said}");
+    assert!(
+        said.contains("failed: ") && said.contains("broken.hdr (bad input)"),
+        "{said}"
+    );
+    for p in [&dir, &out, &bad, &bad_out] {
+        let _ = std::fs::remove_dir_all(p);
+    }
 }

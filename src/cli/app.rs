@@ -74,7 +74,11 @@ pub fn main() {
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
-        std::process::exit(1);
+        // A bake's own codes (schedule::EXIT_*) tell schedulers whether to retry.
+        let code = e
+            .downcast_ref::<super::schedule::Exit>()
+            .map_or(1, |x| x.code);
+        std::process::exit(code);
     }
     let messages = validation_messages();
     if !messages.is_empty() {

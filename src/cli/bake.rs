@@ -2,6 +2,7 @@
 //! irradiance cube, specular cube with a level per roughness), with a manifest that makes
 //! re-runs skip what is done, deterministic shards, and a merge of the shards' manifests.
 
+use super::schedule::{classify, exit_for, shard_auto, Exit, Failure, EXIT_RETRY};
 use super::{context, Global};
 use crate::bake::output::{
     clamp_cube, compose, needs_clamp, separate_options, CubeClamp, Irradiance, Preset,
@@ -72,7 +73,9 @@ pub struct BakeArgs {
     /// [default: endpoints; khronos: centres]
     #[arg(long)]
     dfg_samples: Option<String>,
-    /// Bake only the i-th of n deterministic subsets (1-based), e.g. 2/8
+    /// Bake only the i-th of n deterministic subsets (1-based), e.g. 2/8; or `auto`: the
+    /// task of a job array (Slurm, AWS Batch, Google Batch; Kubernetes Indexed Jobs with
+    /// `auto/N`), from the scheduler's variables
     #[arg(long)]
     shard: Option<String>,
     /// Bake again probes whose inputs and options are unchanged
@@ -212,6 +215,9 @@ struct Entry {
     status: String,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     error: Option<String>,
+    /// A failed probe's cause: its input (retrying cannot help) or the system (retry).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    failure: Option<Failure>,
     outputs: Vec<Output>,
     /// The run's wall time from the previous probe's end to this one's (they add up).
     seconds: f64,
@@ -255,6 +261,10 @@ struct Manifest {
     settings: Settings,
     settings_sha256: String,
     shard: Option<String>,
+    /// Every input of the set a shard belongs to, in the order shards split it (a merge
+    /// names the probes no shard has baked).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    inputs: Vec<String>,
     probes: Vec<Entry>,
 }
 
@@ -285,11 +295,13 @@ fn failed(
     read_seconds: f64,
 ) -> Entry {
     pb.suspend(|| eprintln!("error: {e:#}"));
+    let failure = classify(&e, Path::new(&input));
     Entry {
         input,
         input_sha256,
         status: "failed".into(),
         error: Some(format!("{e:#}")),
+        failure: Some(failure),
         outputs: Vec::new(),
         seconds: 0.0,
         read_seconds,
@@ -727,6 +739,10 @@ fn outputs_intact(root: &Path, e: &Entry) -> bool {
         })
 }
 
+/// `bake --merge`: joins the shard manifests in `out` into `out/manifest.json` and lists
+/// what the set still lacks (the probes of shards that left no manifest, and failed probes);
+/// exits non-zero while it lacks any (`schedule`'s codes: only bad inputs failed, or some
+/// probe is missing or failed for the system's sake).
 fn merge(out: &Path) -> Result<()> {
     let shards: Vec<Manifest> = read_manifests(out)
         .into_iter()
@@ -749,21 +765,33 @@ fn merge(out: &Path) -> Result<()> {
         if ni != n {
             bail!("shard {i}/{ni} does not belong to a split into {n}");
         }
+        if m.inputs != first.inputs {
+            bail!("shard {i}/{n} split another list of inputs than the other shards");
+        }
         seen[i - 1] = true;
         probes.extend(m.probes.iter().cloned());
     }
-    if let Some(missing) = seen.iter().position(|s| !s) {
-        bail!(
-            "shard {}/{n} has no manifest in {}",
-            missing + 1,
-            out.display()
-        );
+    let absent: Vec<usize> = (1..=n).filter(|i| !seen[i - 1]).collect();
+    if first.inputs.is_empty() {
+        // Manifests from before inputs were recorded: a missing shard is all one can say.
+        if let Some(i) = absent.first() {
+            bail!("shard {i}/{n} has no manifest in {}", out.display());
+        }
     }
     probes.sort_by(|a, b| a.input.cmp(&b.input));
+    // Probes no shard baked: those of absent shards (the split is k mod n).
+    let missing: Vec<(String, usize)> = first
+        .inputs
+        .iter()
+        .enumerate()
+        .map(|(k, name)| (name.clone(), k % n + 1))
+        .filter(|(name, _)| !probes.iter().any(|e| &e.input == name))
+        .collect();
     let merged = Manifest {
         settings: first.settings.clone(),
         settings_sha256: first.settings_sha256.clone(),
         shard: None,
+        inputs: first.inputs.clone(),
         probes,
     };
     write_atomic(
@@ -771,11 +799,53 @@ fn merge(out: &Path) -> Result<()> {
         serde_json::to_string_pretty(&merged)?.as_bytes(),
     )?;
     println!(
-        "merged {n} shard manifests ({} probes) into {}",
+        "merged {} of {n} shard manifests ({} probes) into {}",
+        n - absent.len(),
         merged.probes.len(),
         out.join("manifest.json").display()
     );
-    Ok(())
+    merge_verdict(&merged, &missing)
+}
+
+/// Lists what the merged set lacks and ends `bake --merge` accordingly.
+fn merge_verdict(merged: &Manifest, missing: &[(String, usize)]) -> Result<()> {
+    let n = merged.inputs.len().max(merged.probes.len());
+    for (name, shard) in missing {
+        println!("missing: {name} (shard {shard}, no manifest or not reached)");
+    }
+    let failed: Vec<&Entry> = merged
+        .probes
+        .iter()
+        .filter(|e| e.status == "failed")
+        .collect();
+    for e in &failed {
+        let why = match e.failure {
+            Some(Failure::Input) => "bad input",
+            _ => "device or system",
+        };
+        let error = e.error.as_deref().unwrap_or("");
+        println!("failed: {} ({why}): {error}", e.input);
+    }
+    let message = format!(
+        "the set is incomplete: {} of {n} probes missing, {} failed",
+        missing.len(),
+        failed.len()
+    );
+    if !missing.is_empty() {
+        return Err(Exit {
+            code: EXIT_RETRY,
+            message,
+        }
+        .into());
+    }
+    let failures: Vec<Failure> = failed
+        .iter()
+        .map(|e| e.failure.unwrap_or(Failure::System))
+        .collect();
+    match exit_for(&failures, message) {
+        Some(exit) => Err(exit.into()),
+        None => Ok(()),
+    }
 }
 
 /// Runs `envlight bake`.
@@ -791,7 +861,6 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
         None => BakeFile::default(),
     };
     let plan = Plan::new(a, file)?;
-    let shard = a.shard.as_deref().map(parse_shard).transpose()?;
     let inputs = collect(&a.inputs)?;
     if inputs.is_empty() {
         bail!("no probes among the inputs");
@@ -806,6 +875,19 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
             );
         }
     }
+    let settings = plan.settings();
+    let settings_sha256 = sha256(serde_json::to_string(&settings)?.as_bytes());
+    let out = &a.out;
+    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
+    let manifests: Vec<Manifest> = read_manifests(out)
+        .into_iter()
+        .filter(|m| m.settings_sha256 == settings_sha256)
+        .collect();
+    let names: Vec<String> = inputs.iter().map(|p| input_name(p)).collect();
+    let shard = match a.shard.as_deref() {
+        Some(s) => Some(resolve_shard(s, &manifests, &names)?),
+        None => None,
+    };
     let mine: Vec<PathBuf> = match shard {
         Some((i, n)) => inputs
             .iter()
@@ -815,18 +897,17 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
             .collect(),
         None => inputs.clone(),
     };
-    let settings = plan.settings();
-    let settings_sha256 = sha256(serde_json::to_string(&settings)?.as_bytes());
-    let out = &a.out;
-    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
-    let previous: Vec<Entry> = read_manifests(out)
+    let previous: Vec<Entry> = manifests
         .into_iter()
-        .filter(|m| m.settings_sha256 == settings_sha256)
         .flat_map(|m| m.probes)
         .filter(|e| e.status != "failed")
         .collect();
 
-    let ctx = context(g)?;
+    // No device, or none that starts: a system failure, worth retrying elsewhere.
+    let ctx = context(g).map_err(|e| Exit {
+        code: EXIT_RETRY,
+        message: format!("{e:#}"),
+    })?;
     let baker = Baker::new(&ctx)?;
     if plan.dfg {
         write_dfg(&baker, &plan, out)?;
@@ -843,24 +924,68 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
         settings,
         settings_sha256,
         shard: shard.map(|(i, n)| format!("{i}/{n}")),
+        inputs: if shard.is_some() { names } else { Vec::new() },
         probes: entries,
     };
     let mpath = out.join(manifest_name(shard));
     write_atomic(&mpath, serde_json::to_string_pretty(&manifest)?.as_bytes())?;
     summary(&manifest, &plan);
-    let failed = manifest
+    println!("wrote {}", mpath.display());
+    let failures: Vec<Failure> = manifest
         .probes
         .iter()
         .filter(|e| e.status == "failed")
-        .count();
-    println!("wrote {}", mpath.display());
-    if failed > 0 {
-        bail!(
-            "{failed} of {} probes failed (see above and the manifest)",
-            manifest.probes.len()
-        );
+        .map(|e| e.failure.unwrap_or(Failure::System))
+        .collect();
+    let message = format!(
+        "{} of {} probes failed (see above and the manifest)",
+        failures.len(),
+        manifest.probes.len()
+    );
+    match exit_for(&failures, message) {
+        Some(exit) => Err(exit.into()),
+        None => Ok(()),
     }
-    Ok(())
+}
+
+/// An input's name in the manifests.
+fn input_name(path: &Path) -> String {
+    path.to_string_lossy().replace('\\', "/")
+}
+
+/// The shard `spec` names (i/n, auto or auto/N: `schedule::shard_auto`), checked against
+/// the shard manifests already in the output folder with these settings (`recorded`): a
+/// split into another n, or of another input list, is refused.
+fn resolve_shard(spec: &str, recorded: &[Manifest], inputs: &[String]) -> Result<(usize, usize)> {
+    let splits: Vec<(usize, &Manifest)> = recorded
+        .iter()
+        .filter_map(|m| {
+            let (_, n) = parse_shard(m.shard.as_deref()?).ok()?;
+            Some((n, m))
+        })
+        .collect();
+    let (i, n) = match spec.starts_with("auto") {
+        true => shard_auto(spec, |k| std::env::var(k).ok(), splits.first().map(|s| s.0))?,
+        false => parse_shard(spec)?,
+    };
+    for (rn, m) in &splits {
+        let shard = m.shard.as_deref().unwrap_or_default();
+        if *rn != n {
+            bail!(
+                "--shard {i}/{n}: the output folder holds shard {shard} of a split into {rn} \
+                 with these settings; bake every shard with one n (or into another folder)"
+            );
+        }
+        if !m.inputs.is_empty() && m.inputs != inputs {
+            bail!(
+                "--shard {i}/{n}: shard {shard} in the output folder split another list of \
+                 inputs ({} against these {}); give every shard the same inputs",
+                m.inputs.len(),
+                inputs.len()
+            );
+        }
+    }
+    Ok((i, n))
 }
 
 /// Writes the split-sum table once: `dfg.ktx2` (RGBA32F, A and B in R and G, row √α after
@@ -1109,6 +1234,7 @@ impl Run<'_> {
                 input_sha256: w.input_sha256,
                 status: "baked".into(),
                 error: None,
+                failure: None,
                 outputs,
                 seconds: 0.0,
                 read_seconds: w.read_s,
@@ -1146,7 +1272,7 @@ fn read_probes(
 ) {
     for path in mine {
         let t0 = Instant::now();
-        let input = path.to_string_lossy().replace('\\', "/");
+        let input = input_name(path);
         let bytes = std::fs::read(path);
         let input_sha256 = bytes.as_ref().map(|b| sha256(b)).unwrap_or_default();
         let done = previous
@@ -1160,7 +1286,12 @@ fn read_probes(
             }),
             _ => {
                 let map = bytes
-                    .map_err(anyhow::Error::from)
+                    .map_err(|source| {
+                        anyhow::Error::from(crate::Error::Io {
+                            path: path.clone(),
+                            source,
+                        })
+                    })
                     .and_then(|b| Ok(crate::io::load_bytes(path, &b, &LoadOptions::default())?));
                 Prepared::Bake {
                     path: path.clone(),

@@ -9,6 +9,7 @@ pub mod maps;
 pub mod preview;
 pub mod reports;
 pub mod scene;
+pub mod schedule;
 
 pub use app::main;
 
