@@ -514,3 +514,56 @@ fn scheduled_shards_merge_and_say_what_is_missing() {
         let _ = std::fs::remove_dir_all(p);
     }
 }
+
+/// A bake that lands on a CPU implementation without being asked (a farm's container
+/// without the GPU's graphics driver) says so and why; `--require-gpu` refuses it with 75,
+/// as for a missing device. On a machine whose loader sees a GPU, both bake on the GPU.
+#[test]
+fn a_cpu_device_is_named_or_refused() {
+    let dir = temp("gpu-in");
+    probes(&dir);
+    let out = temp("gpu-out");
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_envlight"))
+            .env_remove("ENVLIGHT_DEVICE")
+            .args(["--validation", "bake"])
+            .args(SMALL)
+            .args([
+                dir.join("p0.exr").to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ])
+            .args(["--force"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let devices = Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .env_remove("ENVLIGHT_DEVICE")
+        .arg("devices")
+        .output()
+        .unwrap();
+    let on_cpu = String::from_utf8_lossy(&devices.stdout).contains("(CPU)");
+    let plain = run(&[]);
+    let required = run(&["--require-gpu"]);
+    let (warned, refused) = (
+        String::from_utf8_lossy(&plain.stderr).to_string(),
+        String::from_utf8_lossy(&required.stderr).to_string(),
+    );
+    if on_cpu {
+        ok(&plain);
+        assert!(
+            warned.contains("CPU implementation") && warned.contains("NVIDIA_DRIVER_CAPABILITIES"),
+            "{warned}"
+        );
+        assert_eq!(required.status.code(), Some(75), "{refused}");
+        assert!(refused.contains("--require-gpu"), "{refused}");
+    } else {
+        ok(&plain);
+        ok(&required);
+        assert!(!warned.contains("CPU implementation"), "{warned}");
+    }
+    for p in [&dir, &out] {
+        let _ = std::fs::remove_dir_all(p);
+    }
+}

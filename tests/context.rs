@@ -47,6 +47,23 @@ fn cpu_device_can_be_forced() {
     let missing = Context::new(&validated(DeviceSelector::Name("no such gpu".into())));
     let e = missing.err().unwrap().to_string();
     assert!(e.contains("no such gpu") && e.contains("devices:"), "{e}");
+    // By its UUID, as `envlight devices` prints it (nvidia-smi's form, GPU- prefix and all).
+    let uuid = envlight::gpu::uuid_text(&ctx.info().uuid);
+    let sel = DeviceSelector::parse(&format!("GPU-{uuid}"));
+    assert_eq!(sel, DeviceSelector::Uuid(ctx.info().uuid));
+    let by_uuid = Context::new(&validated(sel)).unwrap();
+    assert_eq!(by_uuid.info().uuid, ctx.info().uuid);
+    common::finish(by_uuid);
+    let mut other = ctx.info().uuid;
+    other[15] ^= 1;
+    let e = Context::new(&validated(DeviceSelector::Uuid(other)))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains(&envlight::gpu::uuid_text(&other)) && e.contains("UUID"),
+        "{e}"
+    );
     common::finish(ctx);
 }
 
@@ -59,6 +76,25 @@ fn selector_parses_env_syntax() {
         DeviceSelector::parse("H100"),
         DeviceSelector::Name("H100".into())
     );
+    let u = [
+        0x6d, 0x65, 0x73, 0x61, 0x32, 0x32, 0x2e, 0x33, 0x2e, 0x36, 0, 0, 0, 0, 0, 0xab,
+    ];
+    for s in [
+        "GPU-6d657361-3232-2e33-2e36-0000000000ab",
+        "gpu-6D657361-3232-2E33-2E36-0000000000AB",
+        "6d65736132322e332e360000000000ab",
+    ] {
+        assert_eq!(DeviceSelector::parse(s), DeviceSelector::Uuid(u), "{s}");
+    }
+    assert_eq!(
+        envlight::gpu::uuid_text(&u),
+        "6d657361-3232-2e33-2e36-0000000000ab"
+    );
+    // One digit short is a name.
+    assert!(matches!(
+        DeviceSelector::parse("GPU-6d657361-3232-2e33-2e36-0000000000a"),
+        DeviceSelector::Name(_)
+    ));
 }
 
 #[test]

@@ -81,6 +81,10 @@ pub struct BakeArgs {
     /// Bake again probes whose inputs and options are unchanged
     #[arg(long)]
     force: bool,
+    /// Refuse to bake on a CPU implementation of Vulkan (lavapipe, SwiftShader), exiting 75 as
+    /// for a missing device, instead of warning and baking ~100× slower
+    #[arg(long)]
+    require_gpu: bool,
     /// Merge the shards' manifests found in OUT into OUT/manifest.json, and bake nothing
     #[arg(long)]
     merge: bool,
@@ -908,6 +912,7 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
         code: EXIT_RETRY,
         message: format!("{e:#}"),
     })?;
+    check_gpu(g, &ctx, a.require_gpu)?;
     let baker = Baker::new(&ctx)?;
     if plan.dfg {
         write_dfg(&baker, &plan, out)?;
@@ -946,6 +951,39 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
         Some(exit) => Err(exit.into()),
         None => Ok(()),
     }
+}
+
+/// Warns (or with `require_gpu` refuses, exiting 75) when `ctx` is a CPU implementation the
+/// user did not ask for: on a farm that is a container without the GPU's graphics driver.
+fn check_gpu(g: &Global, ctx: &crate::gpu::Context, require_gpu: bool) -> Result<()> {
+    use crate::gpu::DeviceSelector;
+    let info = ctx.info();
+    if info.device_type != ash::vk::PhysicalDeviceType::CPU {
+        return Ok(());
+    }
+    let asked = match g.device.as_deref() {
+        Some(d) => DeviceSelector::parse(d),
+        None => DeviceSelector::from_env(),
+    };
+    let why = format!(
+        "{} is a CPU implementation of Vulkan: bakes run about 100 times slower than on a \
+         GPU. If this machine has a GPU, the Vulkan loader does not see its driver: in a \
+         container, the NVIDIA runtime must expose the graphics capability \
+         (NVIDIA_DRIVER_CAPABILITIES=all, or one listing graphics) and its ICD \
+         (nvidia_icd.json); `envlight devices` shows what the loader sees",
+        info.name
+    );
+    if require_gpu {
+        return Err(Exit {
+            code: EXIT_RETRY,
+            message: format!("--require-gpu: {why}"),
+        }
+        .into());
+    }
+    if asked == DeviceSelector::Auto {
+        eprintln!("warning: {why} (`--device cpu` silences this, `--require-gpu` refuses)");
+    }
+    Ok(())
 }
 
 /// An input's name in the manifests.

@@ -149,6 +149,8 @@ pub fn devices(g: &Global) -> Result<()> {
         "envlight uses: {} ({:?}), driver {}",
         i.name, i.device_type, i.driver
     );
+    // What `--device` takes to pin this device (on NVIDIA, as `nvidia-smi -L` prints it).
+    println!("UUID {}", crate::gpu::uuid_text(&i.uuid));
     println!(
         "timestamp period {} ns, {} valid bits",
         i.timestamp_period, i.timestamp_valid_bits

@@ -26,7 +26,8 @@ use std::time::{Duration, Instant};
 /// Options every subcommand takes.
 #[derive(Args, Clone)]
 pub struct Global {
-    /// Vulkan device: auto, cpu (lavapipe), an index, or part of a name [env: ENVLIGHT_DEVICE]
+    /// Vulkan device: auto, cpu (lavapipe), an index, part of a name, or its UUID (as `nvidia-smi
+    /// -L` or `envlight devices` prints it) [env: ENVLIGHT_DEVICE]
     #[arg(long, global = true)]
     pub device: Option<String>,
     /// Enable the Vulkan validation layer

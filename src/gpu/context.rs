@@ -32,6 +32,9 @@ pub enum DeviceSelector {
     Index(usize),
     /// The first device whose name contains this text (case-insensitive).
     Name(String),
+    /// The device with this UUID (`VkPhysicalDeviceIDProperties::deviceUUID`; on NVIDIA the
+    /// UUID `nvidia-smi -L` prints, as farms pin GPUs).
+    Uuid([u8; 16]),
 }
 
 impl DeviceSelector {
@@ -50,12 +53,45 @@ impl DeviceSelector {
         match t.to_ascii_lowercase().as_str() {
             "" | "auto" => DeviceSelector::Auto,
             "cpu" | "lavapipe" | "llvmpipe" => DeviceSelector::Cpu,
-            _ => match t.parse() {
-                Ok(i) => DeviceSelector::Index(i),
-                Err(_) => DeviceSelector::Name(t.to_string()),
+            _ => match (t.parse(), parse_uuid(t)) {
+                (Ok(i), _) => DeviceSelector::Index(i),
+                (_, Some(u)) => DeviceSelector::Uuid(u),
+                _ => DeviceSelector::Name(t.to_string()),
             },
         }
     }
+}
+
+/// A device UUID as `nvidia-smi -L` prints it (`GPU-` and 32 hex digits in 8-4-4-4-12
+/// groups), or the same without the prefix or dashes; `None` for anything else.
+pub fn parse_uuid(s: &str) -> Option<[u8; 16]> {
+    let t = s.trim();
+    let t = match t.get(..4) {
+        Some(p) if p.eq_ignore_ascii_case("gpu-") => &t[4..],
+        _ => t,
+    };
+    let hex: String = t.chars().filter(|&c| c != '-').collect();
+    if hex.len() != 32 || !hex.chars().all(|c| c.is_ascii_hexdigit()) {
+        return None;
+    }
+    let mut u = [0u8; 16];
+    for (k, b) in u.iter_mut().enumerate() {
+        *b = u8::from_str_radix(&hex[2 * k..2 * k + 2], 16).ok()?;
+    }
+    Some(u)
+}
+
+/// `uuid` as `nvidia-smi -L` prints it (without its `GPU-`): 8-4-4-4-12 lowercase hex.
+pub fn uuid_text(uuid: &[u8; 16]) -> String {
+    let h: String = uuid.iter().map(|b| format!("{b:02x}")).collect();
+    format!(
+        "{}-{}-{}-{}-{}",
+        &h[..8],
+        &h[8..12],
+        &h[12..16],
+        &h[16..20],
+        &h[20..]
+    )
 }
 
 /// Options for [`Context::new`]: [`ContextOptions::new`] or [`Default`].
@@ -190,6 +226,8 @@ pub struct DeviceInfo {
     pub max_texel_buffer_elements: u64,
     /// Driver name and version text.
     pub driver: String,
+    /// `VkPhysicalDeviceIDProperties::deviceUUID` (what `--device` takes as a UUID).
+    pub uuid: [u8; 16],
     /// Subgroup size of compute shaders.
     pub subgroup_size: u32,
     /// Whether compute shaders have subgroup arithmetic (subgroupAdd).
@@ -461,9 +499,11 @@ impl Context {
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
         let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
         let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+        let mut id = vk::PhysicalDeviceIDProperties::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default()
             .push_next(&mut driver_props)
-            .push_next(&mut subgroup);
+            .push_next(&mut subgroup)
+            .push_next(&mut id);
         // SAFETY: valid physical device; props2 chain lives across the call.
         unsafe { instance.get_physical_device_properties2(physical, &mut props2) };
         let info = DeviceInfo {
@@ -472,6 +512,7 @@ impl Context {
                 .map(|c| c.to_string_lossy().into_owned())
                 .unwrap_or_default(),
             device_type: props.device_type,
+            uuid: id.device_uuid,
             timestamp_period: props.limits.timestamp_period as f64,
             timestamp_valid_bits: families
                 .get(family as usize)
@@ -810,7 +851,12 @@ fn pick_device(
             .device_name_as_c_str()
             .map(|c| c.to_string_lossy().into_owned())
             .unwrap_or_default();
-        names.push(format!("{index}: {name}"));
+        let mut id = vk::PhysicalDeviceIDProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut id);
+        // SAFETY: as above; the chain lives across the call.
+        unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
+        let uuid = id.device_uuid;
+        names.push(format!("{index}: {name} (UUID {})", uuid_text(&uuid)));
         if props.api_version < vk::API_VERSION_1_3 {
             continue;
         }
@@ -831,6 +877,7 @@ fn pick_device(
             DeviceSelector::Cpu => props.device_type == vk::PhysicalDeviceType::CPU,
             DeviceSelector::Index(i) => *i == index,
             DeviceSelector::Name(n) => name.to_lowercase().contains(&n.to_lowercase()),
+            DeviceSelector::Uuid(u) => *u == uuid,
         };
         if ok {
             candidates.push((rank, index, pd, family as u32));
@@ -838,8 +885,12 @@ fn pick_device(
     }
     candidates.sort_by_key(|c| (c.0, c.1));
     candidates.first().map(|c| (c.2, c.3)).ok_or_else(|| {
+        let wanted = match selector {
+            DeviceSelector::Uuid(u) => format!("UUID {}", uuid_text(u)),
+            other => format!("{other:?}"),
+        };
         Error::NoDevice(format!(
-            "no Vulkan 1.3 device with a graphics+compute queue matches {selector:?} \
+            "no Vulkan 1.3 device with a graphics+compute queue matches {wanted} \
                  (devices: {}); {}",
             names.join(", "),
             no_device_help()

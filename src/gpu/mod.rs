@@ -12,7 +12,8 @@ pub(crate) mod timing;
 
 pub use barrier::Usage;
 pub use context::{
-    AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSelector, Startup, ValidationLog,
+    parse_uuid, uuid_text, AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSelector, Startup,
+    ValidationLog,
 };
 pub use pipeline::FrameCache;
 pub(crate) use pipeline::{Bind, Pipeline};
