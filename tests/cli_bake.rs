@@ -567,3 +567,34 @@ fn a_cpu_device_is_named_or_refused() {
         let _ = std::fs::remove_dir_all(p);
     }
 }
+
+/// Frame-range schedulers (Deadline, OpenCue, OpenJD) hand out `--items A-B`: a range past
+/// the inputs is refused; after 1-2 a merge names the third probe as missing (75); after
+/// 3 as well the set is complete (0), each probe once.
+#[test]
+fn item_ranges_bake_parts_that_merge() {
+    let dir = temp("items-in");
+    probes(&dir);
+    let out = temp("items-out");
+    let (d, o) = (dir.to_str().unwrap(), out.to_str().unwrap());
+    let past = bake(&[d, "-o", o, "--items", "2-4"]);
+    let err = String::from_utf8_lossy(&past.stderr);
+    assert_eq!(past.status.code(), Some(1), "{err}");
+    assert!(err.contains("only 3 inputs"), "{err}");
+    ok(&bake(&[d, "-o", o, "--items", "1-2"]));
+    assert_eq!(statuses(&out, "manifest-items-1-2.json").len(), 2);
+    let early = merge_into(&out);
+    let said = String::from_utf8_lossy(&early.stdout);
+    assert_eq!(early.status.code(), Some(75), "{said}");
+    assert!(said.contains("p2.exr (item 3"), "{said}");
+    ok(&bake(&[d, "-o", o, "--items", "3"]));
+    ok(&merge_into(&out));
+    let merged = statuses(&out, "manifest.json");
+    assert_eq!(
+        merged.iter().map(|m| m.0.as_str()).collect::<Vec<_>>(),
+        ["p0.exr", "p1.exr", "p2.exr"]
+    );
+    for p in [&dir, &out] {
+        let _ = std::fs::remove_dir_all(p);
+    }
+}

@@ -2,7 +2,7 @@
 //! irradiance cube, specular cube with a level per roughness), with a manifest that makes
 //! re-runs skip what is done, deterministic shards, and a merge of the shards' manifests.
 
-use super::schedule::{classify, exit_for, shard_auto, Exit, Failure, EXIT_RETRY};
+use super::schedule::{classify, exit_for, parse_items, shard_auto, Exit, Failure, EXIT_RETRY};
 use super::{context, Global};
 use crate::bake::output::{
     clamp_cube, compose, needs_clamp, separate_options, CubeClamp, Irradiance, Preset,
@@ -78,6 +78,10 @@ pub struct BakeArgs {
     /// `auto/N`), from the scheduler's variables
     #[arg(long)]
     shard: Option<String>,
+    /// Bake only inputs A to B of the sorted list (1-based, inclusive): a frame range, for
+    /// schedulers that hand out ranges (Deadline, OpenCue, OpenJD)
+    #[arg(long, conflicts_with = "shard")]
+    items: Option<String>,
     /// Bake again probes whose inputs and options are unchanged
     #[arg(long)]
     force: bool,
@@ -265,8 +269,11 @@ struct Manifest {
     settings: Settings,
     settings_sha256: String,
     shard: Option<String>,
-    /// Every input of the set a shard belongs to, in the order shards split it (a merge
-    /// names the probes no shard has baked).
+    /// With `--items`: the range of inputs baked, A-B.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    items: Option<String>,
+    /// Every input of the set a shard or range belongs to, in the order shards split it (a
+    /// merge names the probes no part has baked).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     inputs: Vec<String>,
     probes: Vec<Entry>,
@@ -385,10 +392,11 @@ fn read_manifests(out: &Path) -> Vec<Manifest> {
         .collect()
 }
 
-fn manifest_name(shard: Option<(usize, usize)>) -> String {
-    match shard {
-        Some((i, n)) => format!("manifest-shard-{i}-of-{n}.json"),
-        None => "manifest.json".into(),
+fn manifest_name(shard: Option<(usize, usize)>, items: Option<(usize, usize)>) -> String {
+    match (shard, items) {
+        (Some((i, n)), _) => format!("manifest-shard-{i}-of-{n}.json"),
+        (None, Some((a, b))) => format!("manifest-items-{a}-{b}.json"),
+        (None, None) => "manifest.json".into(),
     }
 }
 
@@ -748,53 +756,68 @@ fn outputs_intact(root: &Path, e: &Entry) -> bool {
 /// exits non-zero while it lacks any (`schedule`'s codes: only bad inputs failed, or some
 /// probe is missing or failed for the system's sake).
 fn merge(out: &Path) -> Result<()> {
-    let shards: Vec<Manifest> = read_manifests(out)
+    let parts: Vec<Manifest> = read_manifests(out)
         .into_iter()
-        .filter(|m| m.shard.is_some())
+        .filter(|m| m.shard.is_some() || m.items.is_some())
         .collect();
-    let Some(first) = shards.first() else {
+    let Some(first) = parts.first() else {
         bail!(
-            "{}: no shard manifests (manifest-shard-I-of-N.json) to merge",
+            "{}: no shard or range manifests (manifest-shard-I-of-N.json, \
+             manifest-items-A-B.json) to merge",
             out.display()
         );
     };
-    let n = parse_shard(first.shard.as_deref().unwrap_or("1/1"))?.1;
-    let mut seen = vec![false; n];
+    // Shards' split: n, and which shards left a manifest.
+    let mut n = None;
+    let mut seen = Vec::new();
     let mut probes: Vec<Entry> = Vec::new();
-    for m in &shards {
+    for m in &parts {
         if m.settings_sha256 != first.settings_sha256 {
-            bail!("the shards were baked with different settings; bake them again alike");
-        }
-        let (i, ni) = parse_shard(m.shard.as_deref().unwrap_or("1/1"))?;
-        if ni != n {
-            bail!("shard {i}/{ni} does not belong to a split into {n}");
+            bail!("the parts were baked with different settings; bake them again alike");
         }
         if m.inputs != first.inputs {
-            bail!("shard {i}/{n} split another list of inputs than the other shards");
+            bail!("the parts split different lists of inputs; bake them again alike");
         }
-        seen[i - 1] = true;
+        if let Some(s) = m.shard.as_deref() {
+            let (i, ni) = parse_shard(s)?;
+            let n = *n.get_or_insert(ni);
+            if ni != n {
+                bail!("shard {i}/{ni} does not belong to a split into {n}");
+            }
+            seen.resize(n, false);
+            seen[i - 1] = true;
+        }
         probes.extend(m.probes.iter().cloned());
     }
-    let absent: Vec<usize> = (1..=n).filter(|i| !seen[i - 1]).collect();
+    let absent: Vec<usize> = (1..=seen.len()).filter(|i| !seen[i - 1]).collect();
     if first.inputs.is_empty() {
         // Manifests from before inputs were recorded: a missing shard is all one can say.
-        if let Some(i) = absent.first() {
+        if let (Some(i), Some(n)) = (absent.first(), n) {
             bail!("shard {i}/{n} has no manifest in {}", out.display());
         }
     }
-    probes.sort_by(|a, b| a.input.cmp(&b.input));
-    // Probes no shard baked: those of absent shards (the split is k mod n).
-    let missing: Vec<(String, usize)> = first
+    // One entry a probe (ranges may overlap), a baked one before a failed one.
+    probes.sort_by(|a, b| (&a.input, a.status == "failed").cmp(&(&b.input, b.status == "failed")));
+    probes.dedup_by(|later, kept| later.input == kept.input);
+    // Probes no part baked, with the shard (k mod n) or item (k + 1) that holds them.
+    let missing: Vec<(String, String)> = first
         .inputs
         .iter()
         .enumerate()
-        .map(|(k, name)| (name.clone(), k % n + 1))
-        .filter(|(name, _)| !probes.iter().any(|e| &e.input == name))
+        .filter(|(_, name)| !probes.iter().any(|e| &e.input == *name))
+        .map(|(k, name)| {
+            let part = match n {
+                Some(n) => format!("shard {}", k % n + 1),
+                None => format!("item {}", k + 1),
+            };
+            (name.clone(), part)
+        })
         .collect();
     let merged = Manifest {
         settings: first.settings.clone(),
         settings_sha256: first.settings_sha256.clone(),
         shard: None,
+        items: None,
         inputs: first.inputs.clone(),
         probes,
     };
@@ -803,8 +826,8 @@ fn merge(out: &Path) -> Result<()> {
         serde_json::to_string_pretty(&merged)?.as_bytes(),
     )?;
     println!(
-        "merged {} of {n} shard manifests ({} probes) into {}",
-        n - absent.len(),
+        "merged {} manifests ({} probes) into {}",
+        parts.len(),
         merged.probes.len(),
         out.join("manifest.json").display()
     );
@@ -812,10 +835,10 @@ fn merge(out: &Path) -> Result<()> {
 }
 
 /// Lists what the merged set lacks and ends `bake --merge` accordingly.
-fn merge_verdict(merged: &Manifest, missing: &[(String, usize)]) -> Result<()> {
+fn merge_verdict(merged: &Manifest, missing: &[(String, String)]) -> Result<()> {
     let n = merged.inputs.len().max(merged.probes.len());
-    for (name, shard) in missing {
-        println!("missing: {name} (shard {shard}, no manifest or not reached)");
+    for (name, part) in missing {
+        println!("missing: {name} ({part}, no manifest or not reached)");
     }
     let failed: Vec<&Entry> = merged
         .probes
@@ -892,14 +915,23 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
         Some(s) => Some(resolve_shard(s, &manifests, &names)?),
         None => None,
     };
-    let mine: Vec<PathBuf> = match shard {
-        Some((i, n)) => inputs
+    let items = match a.items.as_deref() {
+        Some(s) => {
+            let r = parse_items(s, names.len())?;
+            same_inputs(&format!("--items {s}"), &manifests, &names)?;
+            Some(r)
+        }
+        None => None,
+    };
+    let mine: Vec<PathBuf> = match (shard, items) {
+        (Some((i, n)), _) => inputs
             .iter()
             .enumerate()
             .filter(|(k, _)| k % n == i - 1)
             .map(|(_, p)| p.clone())
             .collect(),
-        None => inputs.clone(),
+        (None, Some((first, last))) => inputs[first - 1..last].to_vec(),
+        (None, None) => inputs.clone(),
     };
     let previous: Vec<Entry> = manifests
         .into_iter()
@@ -929,10 +961,14 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
         settings,
         settings_sha256,
         shard: shard.map(|(i, n)| format!("{i}/{n}")),
-        inputs: if shard.is_some() { names } else { Vec::new() },
+        items: items.map(|(first, last)| format!("{first}-{last}")),
+        inputs: match shard.is_some() || items.is_some() {
+            true => names,
+            false => Vec::new(),
+        },
         probes: entries,
     };
-    let mpath = out.join(manifest_name(shard));
+    let mpath = out.join(manifest_name(shard, items));
     write_atomic(&mpath, serde_json::to_string_pretty(&manifest)?.as_bytes())?;
     summary(&manifest, &plan);
     println!("wrote {}", mpath.display());
@@ -1014,16 +1050,30 @@ fn resolve_shard(spec: &str, recorded: &[Manifest], inputs: &[String]) -> Result
                  with these settings; bake every shard with one n (or into another folder)"
             );
         }
+    }
+    same_inputs(&format!("--shard {i}/{n}"), recorded, inputs)?;
+    Ok((i, n))
+}
+
+/// Refuses a part (`what`: a shard or a range) of a set whose other parts in the output
+/// folder (`recorded`, these settings) split another list of inputs.
+fn same_inputs(what: &str, recorded: &[Manifest], inputs: &[String]) -> Result<()> {
+    for m in recorded {
         if !m.inputs.is_empty() && m.inputs != inputs {
+            let part = match (&m.shard, &m.items) {
+                (Some(s), _) => format!("shard {s}"),
+                (None, Some(r)) => format!("items {r}"),
+                (None, None) => "a bake".to_string(),
+            };
             bail!(
-                "--shard {i}/{n}: shard {shard} in the output folder split another list of \
-                 inputs ({} against these {}); give every shard the same inputs",
+                "{what}: {part} in the output folder split another list of inputs ({} \
+                 against these {}); give every part the same inputs",
                 m.inputs.len(),
                 inputs.len()
             );
         }
     }
-    Ok((i, n))
+    Ok(())
 }
 
 /// Writes the split-sum table once: `dfg.ktx2` (RGBA32F, A and B in R and G, row √α after

@@ -156,6 +156,23 @@ pub fn shard_auto(
     Ok((position + 1, n))
 }
 
+/// The inputs `--items A-B` names, for frame-range schedulers (Deadline's
+/// `<STARTFRAME>-<ENDFRAME>`, OpenCue's `#FRAME_START#-#FRAME_END#`, an OpenJD range): 1-based
+/// and inclusive in the sorted list of `count` inputs; `A` alone is `A-A`.
+pub fn parse_items(spec: &str, count: usize) -> Result<(usize, usize)> {
+    let bad = || anyhow!("--items {spec}: expected A-B, 1-based and inclusive, e.g. 1-10");
+    let (a, b) = spec.split_once('-').unwrap_or((spec, spec));
+    let a: usize = a.trim().parse().map_err(|_| bad())?;
+    let b: usize = b.trim().parse().map_err(|_| bad())?;
+    if a == 0 || b < a {
+        return Err(bad());
+    }
+    if b > count {
+        bail!("--items {spec}: there are only {count} inputs");
+    }
+    Ok((a, b))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -221,6 +238,18 @@ mod tests {
             ("SLURM_ARRAY_TASK_COUNT", "4"),
         ];
         assert!(msg("auto", &off_step, None).contains("not in the array"));
+    }
+
+    #[test]
+    fn item_ranges_are_read_and_bounded() {
+        assert_eq!(parse_items("1-10", 12).unwrap(), (1, 10));
+        assert_eq!(parse_items(" 4 ", 12).unwrap(), (4, 4));
+        assert_eq!(parse_items("11-12", 12).unwrap(), (11, 12));
+        let msg = |s: &str| format!("{:#}", parse_items(s, 12).unwrap_err());
+        assert!(msg("12-13").contains("only 12 inputs"));
+        assert!(msg("0-3").contains("expected A-B"));
+        assert!(msg("5-3").contains("expected A-B"));
+        assert!(msg("a-b").contains("expected A-B"));
     }
 
     #[test]
