@@ -385,3 +385,59 @@ fn upsampled_maps_bake_the_same_cubes() {
     }
     common::finish(ctx);
 }
+
+/// The DFG table kept between runs (`Baker::dfg_cached`): the first call writes it, the
+/// second reads it back bit for bit as computed; a damaged file (a flipped byte, a cut) is
+/// not read but computed again and rewritten; another size or axes has its own file; a
+/// folder that cannot be written still gives the table.
+#[test]
+fn dfg_tables_are_cached_between_runs_and_never_read_damaged() {
+    use envlight::math::split_sum::DfgAxes;
+    let ctx = common::ctx();
+    {
+        let baker = Baker::new(&ctx).unwrap();
+        let dir = temp("dfg-cache");
+        let want = baker.dfg_at(32, true, DfgAxes::Centres).unwrap();
+        let bits = |t: &[[f32; 2]]| t.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
+        let first = baker
+            .dfg_cached(32, true, DfgAxes::Centres, Some(&dir))
+            .unwrap();
+        assert_eq!(bits(&first), bits(&want));
+        let files = common::bake::walk(&dir);
+        assert_eq!(files.len(), 1, "{files:?}");
+        let file = &files[0];
+        let again = baker
+            .dfg_cached(32, true, DfgAxes::Centres, Some(&dir))
+            .unwrap();
+        assert_eq!(bits(&again), bits(&want));
+        // A flipped byte in an entry, then a cut: recomputed, and the file made whole again.
+        let good = std::fs::read(file).unwrap();
+        let mut flipped = good.clone();
+        flipped[100] ^= 0x40;
+        let cut = good[..good.len() - 8].to_vec();
+        for damaged in [flipped, cut] {
+            std::fs::write(file, &damaged).unwrap();
+            let t = baker
+                .dfg_cached(32, true, DfgAxes::Centres, Some(&dir))
+                .unwrap();
+            assert_eq!(bits(&t), bits(&want));
+            assert_eq!(std::fs::read(file).unwrap(), good);
+        }
+        let other = baker
+            .dfg_cached(16, true, DfgAxes::Endpoints, Some(&dir))
+            .unwrap();
+        assert_eq!(
+            bits(&other),
+            bits(&baker.dfg_at(16, true, DfgAxes::Endpoints).unwrap())
+        );
+        assert_eq!(common::bake::walk(&dir).len(), 2);
+        // Under a file, no folder can be made: the table all the same.
+        let blocked = file.join("below");
+        let t = baker
+            .dfg_cached(32, true, DfgAxes::Centres, Some(&blocked))
+            .unwrap();
+        assert_eq!(bits(&t), bits(&want));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    common::finish(ctx);
+}

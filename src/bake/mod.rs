@@ -10,6 +10,7 @@
 //!
 //! [`output`] says what the files hold for each engine: frames, presets, clamping, lights.
 
+pub mod dfg_cache;
 pub mod output;
 
 use crate::error::{Error, Result};

@@ -1081,7 +1081,9 @@ fn same_inputs(what: &str, recorded: &[Manifest], inputs: &[String]) -> Result<(
 /// smallest roughness: glTF-IBL-Sampler's `outputLUT.png`).
 fn write_dfg(baker: &Baker, plan: &Plan, out: &Path) -> Result<()> {
     let size = plan.options.dfg_size;
-    let t = baker.dfg_at(size, true, plan.dfg_axes)?;
+    // Kept between runs (`bake::dfg_cache`): it depends on no probe.
+    let cache = crate::bake::dfg_cache::default_dir();
+    let t = baker.dfg_cached(size, true, plan.dfg_axes, cache.as_deref())?;
     let level: Vec<[f32; 4]> = t.iter().map(|v| [v[0], v[1], 0.0, 1.0]).collect();
     let img = Ktx2Image {
         width: size,
