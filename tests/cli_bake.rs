@@ -598,3 +598,98 @@ fn item_ranges_bake_parts_that_merge() {
         let _ = std::fs::remove_dir_all(p);
     }
 }
+
+/// The farm recipes docs/bake.md points to, run as their schedulers would run them on this
+/// machine: docs/farm/slurm.sbatch once per task of its `#SBATCH --array` (the task's
+/// SLURM_ARRAY_* variables set as Slurm sets them, small sizes through ENVLIGHT_BAKE_FLAGS in
+/// place of its default --require-gpu: this machine's device is a CPU), then the merge; and
+/// docs/farm/indexed-job.yaml's container command once per completion index (its paths mapped
+/// to folders here, --require-gpu dropped for the same reason). Both sets merge complete
+/// (exit 0) and their files are byte-identical. (A real Slurm or Kubernetes is not run.)
+#[test]
+fn farm_recipes_in_the_docs_bake_a_set() {
+    let dir = temp("farm-in");
+    probes(&dir);
+    let bin = Path::new(env!("CARGO_BIN_EXE_envlight"));
+    let path = format!(
+        "{}:{}",
+        bin.parent().unwrap().display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let docs = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/farm");
+    let script = std::fs::read_to_string(docs.join("slurm.sbatch")).unwrap();
+    let array = script
+        .lines()
+        .find_map(|l| l.strip_prefix("#SBATCH --array="))
+        .expect("an #SBATCH --array line");
+    let (lo, hi) = array.split_once('-').unwrap();
+    let (lo, hi): (u32, u32) = (lo.parse().unwrap(), hi.parse().unwrap());
+    let slurm_out = temp("farm-slurm");
+    for task in lo..=hi {
+        let o = Command::new("bash")
+            .arg(docs.join("slurm.sbatch"))
+            .env("PATH", &path)
+            .env("ENVLIGHT_DEVICE", "cpu")
+            .env("ENVLIGHT_BAKE_FLAGS", SMALL.join(" "))
+            .env("PROBES", &dir)
+            .env("OUT", &slurm_out)
+            .env("SLURM_ARRAY_TASK_ID", task.to_string())
+            .env("SLURM_ARRAY_TASK_MIN", lo.to_string())
+            .env("SLURM_ARRAY_TASK_MAX", hi.to_string())
+            .env("SLURM_ARRAY_TASK_COUNT", (hi - lo + 1).to_string())
+            .output()
+            .unwrap();
+        ok(&o);
+    }
+    ok(&merge_into(&slurm_out));
+    assert_eq!(statuses(&slurm_out, "manifest.json").len(), 3);
+
+    let job = std::fs::read_to_string(docs.join("indexed-job.yaml")).unwrap();
+    let completions: u32 = job
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("completions:"))
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    let command: Vec<String> = job
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("command:"))
+        .map(|c| serde_json::from_str(c.trim()).unwrap())
+        .expect("a container command");
+    assert!(
+        command.contains(&format!("auto/{completions}")),
+        "{command:?}"
+    );
+    let k8s_out = temp("farm-k8s");
+    for index in 0..completions {
+        let args: Vec<String> = command[1..]
+            .iter()
+            .filter(|a| *a != "--require-gpu")
+            .map(|a| match a.as_str() {
+                "/probes" => dir.display().to_string(),
+                "/out" => k8s_out.display().to_string(),
+                _ => a.clone(),
+            })
+            .collect();
+        let o = Command::new(bin)
+            .args(["--device", "cpu"])
+            .args(&args)
+            .args(SMALL)
+            .env("JOB_COMPLETION_INDEX", index.to_string())
+            .output()
+            .unwrap();
+        ok(&o);
+    }
+    ok(&merge_into(&k8s_out));
+    for k in 0..3 {
+        for f in ["sh.json", "irradiance.ktx2", "specular.ktx2"] {
+            let p = format!("p{k}.exr/{f}");
+            let a = std::fs::read(slurm_out.join(&p)).unwrap();
+            assert!(a == std::fs::read(k8s_out.join(&p)).unwrap(), "{p} differs");
+        }
+    }
+    for p in [&dir, &slurm_out, &k8s_out] {
+        let _ = std::fs::remove_dir_all(p);
+    }
+}
