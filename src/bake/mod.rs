@@ -20,7 +20,7 @@ use crate::math::exact::ExactFilter;
 use crate::math::fis::default_dp_size;
 use crate::math::lights::{
     diffuse_options, extract, extract_blocks, light_sh, record_block, resolves, ExtractOptions,
-    LightKernel, DIFFUSE_RATIO,
+    Extraction, LightKernel, DIFFUSE_RATIO,
 };
 use crate::math::sh;
 use crate::math::split_sum::{level_alpha, DfgAxes};
@@ -350,6 +350,25 @@ pub fn supersample(env: &EnvMap, dp_size: u32) -> u32 {
     ((1.5 * r).ceil() as u32).clamp(2, 64)
 }
 
+/// A bake's light extractions of `env`: the specular levels' (records in blocks of texels on
+/// maps finer than `light_record_width`, `record_block`, so that a map bakes as the same
+/// content at that size does; none where its texels are too coarse for level 1's lobe,
+/// `finest`), the grid their records index (`None`: `env`'s texels), and the irradiance
+/// cube's (a deeper extraction whose texels' SH the cube takes out of the whole map's and
+/// adds back as clusters, as SH objects render). Each `None` where nothing was extracted.
+fn bake_extractions(
+    env: &EnvMap,
+    opts: &BakeOptions,
+    finest: f64,
+) -> (Option<Extraction>, Option<EnvMap>, Option<Extraction>) {
+    let diffuse = extract(env, &diffuse_options(DIFFUSE_RATIO));
+    let block = record_block(env, opts.light_record_width);
+    let blocked = extract_blocks(env, &ExtractOptions::default(), block);
+    let specular = Some(blocked.extraction).filter(|e| !e.lights.is_empty() && resolves(e, finest));
+    let diffuse = Some(diffuse).filter(|e| !e.lights.is_empty());
+    (specular, blocked.grid, diffuse)
+}
+
 /// The passes of a bake, built once.
 pub struct Baker {
     ctx: Context,
@@ -426,21 +445,8 @@ impl Baker {
         // 1's (a source too coarse for it bakes its specular levels without lights, as
         // `resolves` says).
         let finest = level_alpha(1, opts.specular_levels.max(2));
-        // The irradiance cube: the whole map's SH less its diffuse light texels' (a deeper
-        // extraction), plus those texels' clusters, as SH objects render.
-        // The specular levels' records gather blocks of texels on maps finer than
-        // `light_record_width` (`record_block`), so that a map bakes as the same content at
-        // that size does.
         let (extraction, grid, diffuse) = match opts.lights {
-            true => {
-                let diffuse = extract(env, &diffuse_options(DIFFUSE_RATIO));
-                let block = record_block(env, opts.light_record_width);
-                let blocked = extract_blocks(env, &ExtractOptions::default(), block);
-                let extraction = Some(blocked.extraction)
-                    .filter(|e| !e.lights.is_empty() && resolves(e, finest));
-                let diffuse = Some(diffuse).filter(|e| !e.lights.is_empty());
-                (extraction, blocked.grid, diffuse)
-            }
+            true => bake_extractions(env, opts, finest),
             false => (None, None, None),
         };
         let file_to_world = orientation.checked_world_to_file()?.transpose();

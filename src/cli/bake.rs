@@ -800,11 +800,12 @@ fn merge(out: &Path) -> Result<()> {
     probes.sort_by(|a, b| (&a.input, a.status == "failed").cmp(&(&b.input, b.status == "failed")));
     probes.dedup_by(|later, kept| later.input == kept.input);
     // Probes no part baked, with the shard (k mod n) or item (k + 1) that holds them.
+    let baked: std::collections::HashSet<&str> = probes.iter().map(|e| e.input.as_str()).collect();
     let missing: Vec<(String, String)> = first
         .inputs
         .iter()
         .enumerate()
-        .filter(|(_, name)| !probes.iter().any(|e| &e.input == *name))
+        .filter(|(_, name)| !baked.contains(name.as_str()))
         .map(|(k, name)| {
             let part = match n {
                 Some(n) => format!("shard {}", k % n + 1),
@@ -865,14 +866,7 @@ fn merge_verdict(merged: &Manifest, missing: &[(String, String)]) -> Result<()> 
         }
         .into());
     }
-    let failures: Vec<Failure> = failed
-        .iter()
-        .map(|e| e.failure.unwrap_or(Failure::System))
-        .collect();
-    match exit_for(&failures, message) {
-        Some(exit) => Err(exit.into()),
-        None => Ok(()),
-    }
+    failures_exit(&merged.probes, message)
 }
 
 /// Runs `envlight bake`.
@@ -972,17 +966,26 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
     write_atomic(&mpath, serde_json::to_string_pretty(&manifest)?.as_bytes())?;
     summary(&manifest, &plan);
     println!("wrote {}", mpath.display());
-    let failures: Vec<Failure> = manifest
+    let failed = manifest
         .probes
+        .iter()
+        .filter(|e| e.status == "failed")
+        .count();
+    let message = format!(
+        "{failed} of {} probes failed (see above and the manifest)",
+        manifest.probes.len()
+    );
+    failures_exit(&manifest.probes, message)
+}
+
+/// Ends a run whose entries are `probes` by their failures (`schedule::exit_for`: none, only
+/// bad inputs, or some system failure), with `message`.
+fn failures_exit(probes: &[Entry], message: String) -> Result<()> {
+    let failures: Vec<Failure> = probes
         .iter()
         .filter(|e| e.status == "failed")
         .map(|e| e.failure.unwrap_or(Failure::System))
         .collect();
-    let message = format!(
-        "{} of {} probes failed (see above and the manifest)",
-        failures.len(),
-        manifest.probes.len()
-    );
     match exit_for(&failures, message) {
         Some(exit) => Err(exit.into()),
         None => Ok(()),
