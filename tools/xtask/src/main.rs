@@ -7,7 +7,9 @@
 use std::process::{Command, ExitCode};
 
 /// Debian packages: Vulkan loader, Mesa's lavapipe, validation layers; cmake, ninja and g++
-/// for building shaderc from source (only `cargo xtask shaders` needs those).
+/// for building shaderc from source (only `cargo xtask shaders` needs those); Slurm and munge
+/// for the test that runs the farm script on a real single-node cluster (tests/slurm.rs starts
+/// its own daemons, not the system's).
 const PACKAGES: &[&str] = &[
     "libvulkan1",
     "mesa-vulkan-drivers",
@@ -16,6 +18,8 @@ const PACKAGES: &[&str] = &[
     "ninja-build",
     "g++",
     "python3",
+    "slurm-wlm",
+    "munge",
 ];
 
 fn installed(pkg: &str) -> bool {
