@@ -14,6 +14,7 @@
 #define BINDING_SANITIZE_SRC 0
 #define BINDING_SANITIZE_DST 1
 #define BINDING_SANITIZE_COUNT 2
+#define BINDING_CLAMP_MAP 0
 #define BINDING_BUSY_OUT 0
 #define BINDING_POISON_IMAGE 0
 #define BINDING_POISON_BUFFER 0
@@ -246,6 +247,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_ConvertPush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint ss; uint nearest; } pc;
 #define PUSH_ProbePush layout(push_constant) uniform Push { uint mode; uint mapping; uint count; uint width; uint height; uint[3] pad; } pc;
 #define PUSH_SanitizePush layout(push_constant) uniform Push { uvec2 size; uint[2] pad; } pc;
+#define PUSH_ClampPush layout(push_constant) uniform Push { uvec2 size; uint mapping; float threshold; } pc;
 #define PUSH_CopyPush layout(push_constant) uniform Push { uvec2 size; uint[2] pad; } pc;
 #define PUSH_BusyPush layout(push_constant) uniform Push { uint iterations; uint count; uint[2] pad; } pc;
 #define PUSH_PoisonPush layout(push_constant) uniform Push { uint mode; float factor; uint width; uint height; uint layers; uint nan_at; uint first; uint stride; uint scale_mask; uint mirror_mask; uint sh_channels; uint sh_count; } pc;

@@ -40,6 +40,8 @@ bindings! {
     SANITIZE_DST = 1;
     /// sanitize: the count of texels zeroed (uint storage buffer).
     SANITIZE_COUNT = 2;
+    /// clamp: the map clamped in place (rgba32f image2DArray).
+    CLAMP_MAP = 0;
     /// busy: the buffer the costly loop writes to.
     BUSY_OUT = 0;
     /// poison_image: the level a pass wrote, corrupted in place (rgba32f image2DArray).

@@ -92,6 +92,15 @@ push_blocks! {
         /// Padding.
         pad: [u32; 2] = "uint[2]",
     }
+    /// `glsl/clamp.comp`.
+    ClampPush {
+        /// Layer size.
+        size: [u32; 2] = "uvec2",
+        /// The map's mapping id.
+        mapping: u32 = "uint",
+        /// Luminance τ above which a texel is scaled down to it.
+        threshold: f32 = "float",
+    }
     /// `glsl/copy.comp`.
     CopyPush {
         /// Layer size.

@@ -133,6 +133,9 @@ macro_rules! shader_table {
             Sanitize = "sanitize", "sanitize.comp", Compute, [], SanitizePush,
                 [(SANITIZE_SRC, Sampled, Read), (SANITIZE_DST, StorageImage, Write),
                  (SANITIZE_COUNT, StorageBuffer, ReadWrite)];
+            /// A map clamped in place at a luminance (a bake's residual, made on the GPU).
+            Clamp = "clamp", "clamp.comp", Compute, [], ClampPush,
+                [(CLAMP_MAP, StorageImage, ReadWrite)];
             /// A plain texel copy (the benchmark floor).
             Copy = "copy", "copy.comp", Compute, [], CopyPush,
                 [(COPY_SRC, Sampled, Read), (COPY_DST, StorageImage, Write)];

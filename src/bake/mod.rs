@@ -16,16 +16,16 @@ pub mod output;
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, InFlight, Timing, Usage};
 use crate::math::envmap::luminance;
-use crate::math::exact::ExactFilter;
+use crate::math::exact::{ExactFilter, Query};
 use crate::math::fis::default_dp_size;
 use crate::math::lights::{
-    diffuse_options, extract, extract_blocks, light_sh, record_block, resolves, ExtractOptions,
-    Extraction, LightKernel, DIFFUSE_RATIO,
+    diffuse_options, extract_block_lights, extract_lights, largest_light_rho, light_sh_of,
+    record_block, resolves_rho, ExtractOptions, LightKernel, LightSet, DIFFUSE_RATIO,
 };
 use crate::math::sh;
 use crate::math::split_sum::{level_alpha, DfgAxes};
 use crate::math::Orientation;
-use crate::passes::map::Readback;
+use crate::passes::map::{LuminanceClamp, Readback};
 use crate::passes::sh_project::{ShCoefficients, Subgroups};
 use crate::passes::{
     ConvertOptions, Converter, GpuEnvMap, GpuLights, LightsPass, MipChain, PrefilterOptions,
@@ -225,8 +225,7 @@ pub fn spot_check(
             g.abs()
         }
     };
-    // (level, or None for the irradiance cube; texel centre; baked value), then the exact
-    // filters on every core: they cost as much as the bake's GPU work on a CPU device.
+    // (level, or None for the irradiance cube; texel centre; baked value).
     let mut jobs: Vec<(Option<u32>, glam::DVec3, [f32; 4])> = Vec::new();
     let s = opts.irradiance_size;
     for q in 0..texels {
@@ -242,31 +241,24 @@ pub fn spot_check(
             jobs.push((Some(k), centre(s, t), got));
         }
     }
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let errors: Vec<f64> = std::thread::scope(|scope| {
-        let exact = &exact;
-        let handles: Vec<_> = jobs
-            .chunks(jobs.len().div_ceil(threads).max(1))
-            .map(|chunk| {
-                scope.spawn(move || {
-                    chunk
-                        .iter()
-                        .map(|&(level, d, got)| {
-                            let want = match level {
-                                None => exact.irradiance(d),
-                                Some(k) => exact.ggx(d, level_alpha(k, opts.specular_levels)),
-                            };
-                            rel(got, want)
-                        })
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().unwrap_or_default())
-            .collect()
-    });
+    // The exact filters, every query in one pass over the map on every core: they cost as
+    // much as the bake's GPU work on a CPU device.
+    let queries: Vec<Query> = jobs
+        .iter()
+        .map(|&(level, d, _)| match level {
+            None => Query::Irradiance { n: d },
+            Some(k) => Query::Ggx {
+                r: d,
+                alpha: level_alpha(k, opts.specular_levels),
+            },
+        })
+        .collect();
+    let errors: Vec<f64> = exact
+        .evaluate(&queries)
+        .into_iter()
+        .zip(&jobs)
+        .map(|(want, &(_, _, got))| rel(got, want))
+        .collect();
     let mut irradiance: f64 = 0.0;
     let mut specular = vec![0.0f64; opts.specular_levels as usize];
     for (&(level, _, _), e) in jobs.iter().zip(errors) {
@@ -360,13 +352,17 @@ fn bake_extractions(
     env: &EnvMap,
     opts: &BakeOptions,
     finest: f64,
-) -> (Option<Extraction>, Option<EnvMap>, Option<Extraction>) {
-    let diffuse = extract(env, &diffuse_options(DIFFUSE_RATIO));
+) -> (Option<LightSet>, Option<EnvMap>, Option<LightSet>) {
+    // Neither residual map is built: the cubes need the specular one's only on the GPU,
+    // where the source is clamped in place (`LuminanceClamp`), and the diffuse one's not at
+    // all (its SH is the whole map's less the lights').
+    let diffuse = extract_lights(env, &diffuse_options(DIFFUSE_RATIO));
     let block = record_block(env, opts.light_record_width);
-    let blocked = extract_blocks(env, &ExtractOptions::default(), block);
-    let specular = Some(blocked.extraction).filter(|e| !e.lights.is_empty() && resolves(e, finest));
+    let (grid, specular) = extract_block_lights(env, &ExtractOptions::default(), block);
+    let specular = Some(specular)
+        .filter(|e| !e.lights.is_empty() && resolves_rho(largest_light_rho(&e.lights), finest));
     let diffuse = Some(diffuse).filter(|e| !e.lights.is_empty());
-    (specular, blocked.grid, diffuse)
+    (specular, grid, diffuse)
 }
 
 /// The passes of a bake, built once.
@@ -378,6 +374,7 @@ pub struct Baker {
     mip: MipChain,
     split: SplitSum,
     lights: LightsPass,
+    clamp: LuminanceClamp,
 }
 
 impl Baker {
@@ -391,6 +388,7 @@ impl Baker {
             mip: MipChain::new(ctx)?,
             split: SplitSum::new(ctx)?,
             lights: LightsPass::new(ctx)?,
+            clamp: LuminanceClamp::new(ctx)?,
         })
     }
 
@@ -450,21 +448,21 @@ impl Baker {
             false => (None, None, None),
         };
         let file_to_world = orientation.checked_world_to_file()?.transpose();
-        let lights = GpuLights::of_extractions(
+        let lights = GpuLights::of_lights(
             ctx,
             grid.as_ref().unwrap_or(env),
-            extraction.as_ref(),
-            diffuse.as_ref(),
+            extraction.as_ref().map(|e| e.lights.as_slice()),
+            diffuse.as_ref().map(|e| e.lights.as_slice()),
             file_to_world,
             finest,
         )?;
         let minus = diffuse
             .as_ref()
-            .map(|ex| sh::irradiance_coeffs(&light_sh(env, ex, file_to_world, lmax)));
+            .map(|ex| sh::irradiance_coeffs(&light_sh_of(env, &ex.lights, file_to_world, lmax)));
+        // The residual's paraboloid, from the source clamped in place at the threshold once
+        // the passes reading the whole map have read it.
         let residual = match &extraction {
             Some(ex) => {
-                let map =
-                    GpuEnvMap::new(ctx, "bake: residual", env.mapping, env.width, env.height)?;
                 let dp = GpuEnvMap::with_mips(
                     ctx,
                     "bake: residual paraboloid",
@@ -472,7 +470,7 @@ impl Baker {
                     w,
                     h,
                 )?;
-                Some((ex, map, dp))
+                Some((ex.threshold, dp))
             }
             None => None,
         };
@@ -510,10 +508,10 @@ impl Baker {
                 }
             }
             match (&residual, &lights) {
-                (Some((ex, map, rdp)), Some(lights)) => {
+                (Some((threshold, rdp)), Some(lights)) => {
                     // The mirror from the whole map; the rest from the residual plus lights.
-                    map.record_upload(rec, &ex.residual)?;
-                    self.convert.record(rec, map, rdp, &c)?;
+                    self.clamp.record(rec, &src, *threshold)?;
+                    self.convert.record(rec, &src, rdp, &c)?;
                     self.mip.record(rec, rdp)?;
                     self.split
                         .record_prefilter_levels(rec, &dp, &cube, &p, 0..1)?;
@@ -545,8 +543,8 @@ impl Baker {
                 Vec::new()
             };
             rec.keep((src, irradiance_map, dp, cube));
-            if let Some((_, map, rdp)) = residual {
-                rec.keep((map, rdp));
+            if let Some((_, rdp)) = residual {
+                rec.keep(rdp);
             }
             if let Some(lights) = lights {
                 rec.keep(lights);

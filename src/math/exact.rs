@@ -3,6 +3,10 @@
 //! (irradiance). The map is taken as what it stores, constant radiance over each texel, as in
 //! [`super::filter`]; unlike that module's per-texel rules these sums never skip a texel, as
 //! GGX's tail (∝ θ⁻⁴) reaches the whole sphere.
+//!
+//! Nothing is stored per texel: each texel's direction and solid angle are found as the sums
+//! visit it, rows at a time on every core, and [`ExactFilter::evaluate`] takes every query of
+//! a check in one pass over the map (a bake's check of an 8k map holds no copy of it).
 
 use super::mapping::{Coord, Mapping};
 use super::split_sum::chain_kernel;
@@ -24,48 +28,172 @@ struct Texel {
     radiance: [f64; 3],
 }
 
-/// A map prepared for exact filters: its texels' world directions, solid angles and values.
+/// One filter value [`ExactFilter::evaluate`] finds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Query {
+    /// [`ExactFilter::ggx`] at world direction `r`.
+    Ggx {
+        /// The lobe's axis (world).
+        r: DVec3,
+        /// GGX α.
+        alpha: f64,
+    },
+    /// [`ExactFilter::irradiance`] at world normal `n`.
+    Irradiance {
+        /// The normal (world).
+        n: DVec3,
+    },
+}
+
+/// Rows (of all layers, in order) a unit of work sums; partial sums join in row order, so
+/// the results do not depend on the number of threads.
+const ROWS_PER_CHUNK: usize = 8;
+
+/// A map prepared for exact filters: its texels' world directions, solid angles and values,
+/// found as the sums visit them.
 pub struct ExactFilter<'a> {
     map: &'a EnvMap,
     file_to_world: DMat3,
-    texels: Vec<Texel>,
 }
 
 impl<'a> ExactFilter<'a> {
     /// Prepares `map`, whose file directions reach the world through `file_to_world`.
     pub fn new(map: &'a EnvMap, file_to_world: DMat3) -> ExactFilter<'a> {
+        ExactFilter { map, file_to_world }
+    }
+
+    /// The texels of row `j` of `layer` that hold part of the sphere, into `out`.
+    fn row(&self, layer: u32, j: u32, out: &mut Vec<Texel>) {
+        out.clear();
+        let map = self.map;
         let (w, h) = (map.width, map.height);
-        let mut texels = Vec::new();
-        map.for_each_texel(|layer, i, j, t, omega| {
+        for i in 0..w {
+            let src = if map.mapping == Mapping::LatLong {
+                Some((i, j))
+            } else {
+                map.mapping.integration_source(w, h, i, j)
+            };
+            let Some((si, sj)) = src else { continue };
+            let omega = map.mapping.texel_solid_angle(w, h, i, j);
             let c = map
                 .mapping
                 .coord_to_dir(Mapping::texel_center(w, h, layer, i, j));
-            texels.push(Texel {
+            out.push(Texel {
                 layer,
                 i,
                 j,
-                dir: file_to_world * c,
+                dir: self.file_to_world * c,
                 omega,
                 rho: omega.sqrt(),
-                radiance: t.map(f64::from),
+                radiance: map.texel(layer, si, sj).map(f64::from),
             });
-        });
-        ExactFilter {
-            map,
-            file_to_world,
-            texels,
         }
     }
 
-    /// The world direction of the brightest texel (by luminance).
+    /// `f(chunk's texels, state)` over the map's rows in chunks of [`ROWS_PER_CHUNK`] on
+    /// every core, each chunk from a fresh `init()`; the chunks' states in row order.
+    fn chunks<S: Send>(
+        &self,
+        init: impl Fn() -> S + Sync,
+        f: impl Fn(&[Texel], &mut S) + Sync,
+    ) -> Vec<S> {
+        let map = self.map;
+        let rows = (map.layers() * map.height) as usize;
+        let count = rows.div_ceil(ROWS_PER_CHUNK);
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .min(count.max(1));
+        let mut done: Vec<(usize, S)> = std::thread::scope(|scope| {
+            let handles: Vec<_> = (0..threads)
+                .map(|_| {
+                    scope.spawn(|| {
+                        let mut mine = Vec::new();
+                        let mut texels = Vec::new();
+                        loop {
+                            let c = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                            if c >= count {
+                                return mine;
+                            }
+                            let mut state = init();
+                            for r in c * ROWS_PER_CHUNK..((c + 1) * ROWS_PER_CHUNK).min(rows) {
+                                let (layer, j) = (
+                                    (r / map.height as usize) as u32,
+                                    (r % map.height as usize) as u32,
+                                );
+                                self.row(layer, j, &mut texels);
+                                f(&texels, &mut state);
+                            }
+                            mine.push((c, state));
+                        }
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                .collect()
+        });
+        done.sort_by_key(|(c, _)| *c);
+        done.into_iter().map(|(_, s)| s).collect()
+    }
+
+    /// The world direction of the brightest texel (by luminance; the last in row order of
+    /// equals).
     pub fn brightest(&self) -> DVec3 {
-        self.texels
+        let lum = crate::math::envmap::luminance;
+        self.chunks(
+            || (f64::NEG_INFINITY, DVec3::Z),
+            |texels, best| {
+                for t in texels {
+                    let y = lum(t.radiance);
+                    if y >= best.0 {
+                        *best = (y, t.dir);
+                    }
+                }
+            },
+        )
+        .into_iter()
+        .fold(
+            (f64::NEG_INFINITY, DVec3::Z),
+            |a, b| if b.0 > a.0 { b } else { a },
+        )
+        .1
+    }
+
+    /// Every query's value ([`ExactFilter::ggx`], [`ExactFilter::irradiance`]) in one pass
+    /// over the map, in the queries' order.
+    pub fn evaluate(&self, queries: &[Query]) -> Vec<[f64; 3]> {
+        // Per query: Σ K·L per channel and Σ K.
+        let n = queries.len();
+        let parts = self.chunks(
+            || vec![[0.0f64; 4]; n],
+            |texels, sums| {
+                for (q, s) in queries.iter().zip(sums.iter_mut()) {
+                    match *q {
+                        Query::Ggx { r, alpha } => self.ggx_sum(texels, r, alpha, 4.0, s),
+                        Query::Irradiance { n } => irradiance_sum(texels, n, s),
+                    }
+                }
+            },
+        );
+        let mut total = vec![[0.0f64; 4]; n];
+        for p in parts {
+            for (t, s) in total.iter_mut().zip(p) {
+                for c in 0..4 {
+                    t[c] += s[c];
+                }
+            }
+        }
+        queries
             .iter()
-            .max_by(|a, b| {
-                crate::math::envmap::luminance(a.radiance)
-                    .total_cmp(&crate::math::envmap::luminance(b.radiance))
+            .zip(total)
+            .map(|(q, t)| match q {
+                Query::Ggx { .. } if t[3] > 0.0 => [t[0] / t[3], t[1] / t[3], t[2] / t[3]],
+                Query::Ggx { .. } => [0.0; 3],
+                Query::Irradiance { .. } => [t[0], t[1], t[2]],
             })
-            .map_or(DVec3::Z, |t| t.dir)
+            .collect()
     }
 
     /// P(r, α) = ∫ L·K / ∫ K, K = [`chain_kernel`], `r` a world direction: what level α of
@@ -82,6 +210,25 @@ impl<'a> ExactFilter<'a> {
 
     /// [`ExactFilter::ggx`] with `per_width` cells per lobe scale (the tests refine it).
     fn ggx_with(&self, r: DVec3, alpha: f64, per_width: f64) -> [f64; 3] {
+        let parts = self.chunks(
+            || [0.0f64; 4],
+            |texels, s| self.ggx_sum(texels, r, alpha, per_width, s),
+        );
+        let mut t = [0.0f64; 4];
+        for p in parts {
+            for c in 0..4 {
+                t[c] += p[c];
+            }
+        }
+        if t[3] > 0.0 {
+            [t[0] / t[3], t[1] / t[3], t[2] / t[3]]
+        } else {
+            [0.0; 3]
+        }
+    }
+
+    /// Adds `texels`' Σ K·L (per channel) and Σ K for [`ExactFilter::ggx_with`] to `sum`.
+    fn ggx_sum(&self, texels: &[Texel], r: DVec3, alpha: f64, per_width: f64, sum: &mut [f64; 4]) {
         let map = self.map;
         let (w, h) = (map.width, map.height);
         let a = alpha.max(super::brdf::GGX_ALPHA_MIN);
@@ -89,9 +236,7 @@ impl<'a> ExactFilter<'a> {
         let r_file = self.file_to_world.transpose() * r;
         let g = 0.5 / 3f64.sqrt();
         let node = |n: u32| (n / 2) as f64 + 0.5 + if n.is_multiple_of(2) { -g } else { g };
-        let mut num = [0.0f64; 3];
-        let mut den = 0.0f64;
-        for t in &self.texels {
+        for t in texels {
             let chord2 = (t.dir - r).length_squared();
             let gap = 0.5 * chord2;
             // The chord, below the angle θ, stands for it (more cells, never fewer).
@@ -124,29 +269,27 @@ impl<'a> ExactFilter<'a> {
                     chain_kernel(a, gap) * t.omega
                 }
             };
-            for (n, v) in num.iter_mut().zip(t.radiance) {
-                *n += k * v;
+            for (s, l) in sum.iter_mut().zip(t.radiance) {
+                *s += k * l;
             }
-            den += k;
-        }
-        if den > 0.0 {
-            num.map(|v| v / den)
-        } else {
-            [0.0; 3]
+            sum[3] += k;
         }
     }
 
     /// Irradiance E(n) = ∫ L·max(0, n·ω) dω, one node per texel: the cosine's scale is a
     /// radian, so a texel of angular size ρ errs by about ρ²/24 of its term (4·10⁻⁷ at 1k).
     pub fn irradiance(&self, n: DVec3) -> [f64; 3] {
-        let mut e = [0.0; 3];
-        for t in &self.texels {
-            let k = n.dot(t.dir).max(0.0) * t.omega;
-            for (o, v) in e.iter_mut().zip(t.radiance) {
-                *o += k * v;
-            }
+        self.evaluate(&[Query::Irradiance { n }])[0]
+    }
+}
+
+/// Adds `texels`' Σ L·max(0, n·ω)·Ω per channel to `sum`.
+fn irradiance_sum(texels: &[Texel], n: DVec3, sum: &mut [f64; 4]) {
+    for t in texels {
+        let k = n.dot(t.dir).max(0.0) * t.omega;
+        for (s, l) in sum.iter_mut().zip(t.radiance) {
+            *s += k * l;
         }
-        e
     }
 }
 

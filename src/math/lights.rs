@@ -19,7 +19,7 @@
 
 mod blocks;
 
-pub use blocks::{extract_blocks, record_block, BlockExtraction};
+pub use blocks::{extract_block_lights, extract_blocks, record_block, BlockExtraction};
 
 use super::brdf::{local_view, Brdf, Frame};
 use super::mapping::Coord;
@@ -95,6 +95,65 @@ pub struct Extraction {
     pub residual: EnvMap,
 }
 
+/// An extraction's threshold and light texels without its residual map: what a caller that
+/// makes the residual itself needs (the clamp rule's residual is [`clamp_residual`] of the
+/// map at `threshold`, which a bake applies on the GPU, `passes::map::LuminanceClamp`).
+#[derive(Clone, Debug)]
+pub struct LightSet {
+    /// The luminance threshold τ (infinite when nothing was extracted).
+    pub threshold: f64,
+    /// The light texels, brightest first (ties by position).
+    pub lights: Vec<LightTexel>,
+}
+
+/// The clamp rule's residual: `map` with every texel of its domain whose luminance Y exceeds
+/// `threshold` scaled by τ/Y (in float32, as [`extract`] makes it; texels outside the domain,
+/// which no integral reads as their own, keep their values). [`extract`]'s residual, with
+/// [`ExtractOptions::fill`] `None`, is this at its threshold. Float64-rule twin of
+/// glsl/clamp.comp.
+pub fn clamp_residual(map: &EnvMap, threshold: f64) -> EnvMap {
+    let mut residual = map.clone();
+    if threshold.is_finite() {
+        clamp_texels(&mut residual, threshold);
+    }
+    residual
+}
+
+/// [`clamp_residual`] in place.
+fn clamp_texels(map: &mut EnvMap, threshold: f64) {
+    let (w, h) = (map.width, map.height);
+    for layer in 0..map.layers() {
+        for j in 0..h {
+            for i in 0..w {
+                if !map.mapping.texel_in_domain(w, h, i, j) {
+                    continue;
+                }
+                let k = map.index(layer, i, j);
+                let l = map.texels[k];
+                let y = luminance(l.map(f64::from));
+                if y > threshold {
+                    let keep = (threshold / y) as f32;
+                    map.texels[k] = l.map(|c| c * keep);
+                }
+            }
+        }
+    }
+}
+
+/// [`extract`]'s threshold and light texels without building its residual (with
+/// [`ExtractOptions::fill`] `None`, the residual is [`clamp_residual`] at the threshold).
+pub fn extract_lights(map: &EnvMap, opts: &ExtractOptions) -> LightSet {
+    if opts.fill.is_some() {
+        let ex = extract(map, opts);
+        return LightSet {
+            threshold: ex.threshold,
+            lights: ex.lights,
+        };
+    }
+    let (mean, y_at) = luminances(map);
+    split_lights(map, mean, &y_at, opts)
+}
+
 /// Extracts the lights of `map`.
 pub fn extract(map: &EnvMap, opts: &ExtractOptions) -> Extraction {
     extract_each(map, &[*opts])
@@ -108,9 +167,15 @@ pub fn extract_each(map: &EnvMap, opts: &[ExtractOptions]) -> Vec<Extraction> {
     if opts.is_empty() {
         return Vec::new();
     }
-    // The luminance of the value standing for each texel position that holds part of the
-    // sphere (NaN elsewhere), by index: one array instead of a list of every texel, which on
-    // a 1k map would be 17 MB to fault in; solid angles are found again for the few candidates.
+    let (mean, y_at) = luminances(map);
+    opts.iter().map(|o| split(map, mean, &y_at, o)).collect()
+}
+
+/// The map's mean luminance (power / 4π) and the luminance of the value standing for each
+/// texel position that holds part of the sphere (NaN elsewhere), by index: one array instead
+/// of a list of every texel, which on a 1k map would be 17 MB to fault in; solid angles are
+/// found again for the few candidates.
+fn luminances(map: &EnvMap) -> (f64, Vec<f64>) {
     let mut power = 0.0;
     let mut y_at = vec![f64::NAN; map.texels.len()];
     map.for_each_texel(|layer, i, j, t, omega| {
@@ -118,8 +183,7 @@ pub fn extract_each(map: &EnvMap, opts: &[ExtractOptions]) -> Vec<Extraction> {
         power += y * omega;
         y_at[map.index(layer, i, j)] = y;
     });
-    let mean = power / (4.0 * std::f64::consts::PI);
-    opts.iter().map(|o| split(map, mean, &y_at, o)).collect()
+    (power / (4.0 * std::f64::consts::PI), y_at)
 }
 
 /// A texel position of `map` from its index: (layer, i, j).
@@ -138,7 +202,28 @@ fn every_texel_its_own(map: &EnvMap) -> bool {
 
 /// One extraction of `map` (mean luminance `mean`, `y_at` the luminance at each position).
 fn split(map: &EnvMap, mean: f64, y_at: &[f64], opts: &ExtractOptions) -> Extraction {
-    let (w, h) = (map.width, map.height);
+    if let Some(d) = opts.fill {
+        let (threshold, candidates) = candidates(map, mean, y_at, opts);
+        if !candidates.is_empty() {
+            return filled(map, y_at, threshold, &candidates, d, opts.max_texels);
+        }
+    }
+    let set = split_lights(map, mean, y_at, opts);
+    Extraction {
+        residual: clamp_residual(map, set.threshold),
+        threshold: set.threshold,
+        lights: set.lights,
+    }
+}
+
+/// The threshold and the positions above it, brightest first, (Y, layer, i, j); none where
+/// the map is black or nothing exceeds it.
+fn candidates(
+    map: &EnvMap,
+    mean: f64,
+    y_at: &[f64],
+    opts: &ExtractOptions,
+) -> (f64, Vec<(f64, u32, u32, u32)>) {
     let mut threshold = opts.ratio * mean;
     let mut candidates: Vec<(f64, u32, u32, u32)> = y_at
         .iter()
@@ -160,16 +245,16 @@ fn split(map: &EnvMap, mean: f64, y_at: &[f64], opts: &ExtractOptions) -> Extrac
         candidates.retain(|c| c.0 > threshold);
     }
     if mean.is_nan() || mean <= 0.0 || candidates.is_empty() {
-        return Extraction {
-            threshold: f64::INFINITY,
-            lights: Vec::new(),
-            residual: map.clone(),
-        };
+        return (f64::INFINITY, Vec::new());
     }
-    if let Some(d) = opts.fill {
-        return filled(map, y_at, threshold, &candidates, d, opts.max_texels);
-    }
-    let mut residual = map.clone();
+    (threshold, candidates)
+}
+
+/// The clamp rule's light texels of `map` ([`split`] without the residual): each candidate's
+/// excess over L·τ/Y.
+fn split_lights(map: &EnvMap, mean: f64, y_at: &[f64], opts: &ExtractOptions) -> LightSet {
+    let (w, h) = (map.width, map.height);
+    let (threshold, candidates) = candidates(map, mean, y_at, opts);
     let mut lights = Vec::with_capacity(candidates.len());
     for &(y, layer, i, j) in &candidates {
         // The stored texel this one reads (itself, or the texel inside an angular rim).
@@ -177,25 +262,16 @@ fn split(map: &EnvMap, mean: f64, y_at: &[f64], opts: &ExtractOptions) -> Extrac
         let l = map.texel(layer, si, sj);
         let keep = (threshold / y) as f32;
         let r = l.map(|c| c * keep);
-        let excess = [l[0] - r[0], l[1] - r[1], l[2] - r[2]];
-        if (si, sj) == (i, j) {
-            let k = residual.index(layer, i, j);
-            residual.texels[k] = r;
-        }
         lights.push(LightTexel {
             layer,
             i,
             j,
             dir: map.texel_dir(layer, i, j),
             omega: map.mapping.texel_solid_angle(w, h, i, j),
-            radiance: excess,
+            radiance: [l[0] - r[0], l[1] - r[1], l[2] - r[2]],
         });
     }
-    Extraction {
-        threshold,
-        lights,
-        residual,
-    }
+    LightSet { threshold, lights }
 }
 
 /// [`split`] with a filled residual ([`ExtractOptions::fill`]): the stored texels under
@@ -469,8 +545,12 @@ pub fn nodes(map: &EnvMap, t: &LightTexel, cells: u32) -> Vec<(DVec3, f64)> {
 /// needed, [`cells_for`]'s cap): a narrower lobe (a Phong n of 10⁶, GGX near the mirror)
 /// would fall between the nodes, so techniques read the whole map instead.
 pub fn resolves(ex: &Extraction, scale: f64) -> bool {
-    let rho = ex.lights.iter().map(|t| t.omega.sqrt()).fold(0.0, f64::max);
-    resolves_rho(rho, scale)
+    resolves_rho(largest_light_rho(&ex.lights), scale)
+}
+
+/// ρ = √Ω of the largest of `lights` (0 for none).
+pub fn largest_light_rho(lights: &[LightTexel]) -> f64 {
+    lights.iter().map(|t| t.omega.sqrt()).fold(0.0, f64::max)
 }
 
 /// [`resolves`] for texels up to ρ = `rho`.
@@ -494,8 +574,7 @@ pub fn largest_rho(mapping: super::Mapping, width: u32, height: u32) -> f64 {
 /// ⌈[`PER_WIDTH`]·ρ/α⌉ for the largest texel, 1 to 8 (the exact oracle's rule,
 /// [`super::exact::ExactFilter::ggx`], at the lobe's peak).
 pub fn cells_for(ex: &Extraction, alpha: f64) -> u32 {
-    let rho = ex.lights.iter().map(|t| t.omega.sqrt()).fold(0.0, f64::max);
-    cells_for_rho(rho, alpha)
+    cells_for_rho(largest_light_rho(&ex.lights), alpha)
 }
 
 /// [`cells_for`] for texels up to ρ = `rho`.
@@ -750,9 +829,14 @@ pub fn diffuse_options(ratio: f64) -> ExtractOptions {
 /// their file directions ([`Cluster`]), turned to the world by `file_to_world`; cells in
 /// row-major order, each summed in the extraction's order (deterministic).
 pub fn clusters(ex: &Extraction, file_to_world: glam::DMat3, grid: u32) -> Vec<Cluster> {
+    clusters_of(&ex.lights, file_to_world, grid)
+}
+
+/// [`clusters`] of a list of light texels.
+pub fn clusters_of(lights: &[LightTexel], file_to_world: glam::DMat3, grid: u32) -> Vec<Cluster> {
     let rows = (grid / 2).max(1);
     let mut cells: std::collections::BTreeMap<(u32, u32), [DVec3; 3]> = Default::default();
-    for t in &ex.lights {
+    for t in lights {
         let c = super::mapping::Mapping::LatLong.dir_to_coord(t.dir);
         let at = |x: f64, n: u32| ((x * n as f64).floor().max(0.0) as u32).min(n - 1);
         let v = cells
@@ -789,9 +873,19 @@ pub fn light_sh(
     file_to_world: glam::DMat3,
     lmax: u32,
 ) -> Vec<[f64; 3]> {
+    light_sh_of(map, &ex.lights, file_to_world, lmax)
+}
+
+/// [`light_sh`] of a list of light texels of `map`.
+pub fn light_sh_of(
+    map: &EnvMap,
+    lights: &[LightTexel],
+    file_to_world: glam::DMat3,
+    lmax: u32,
+) -> Vec<[f64; 3]> {
     let mut c = vec![[0.0; 3]; super::sh::count(lmax)];
     let mut y = vec![0.0; c.len()];
-    for t in &ex.lights {
+    for t in lights {
         for (d, w) in nodes(map, t, 1) {
             super::sh::basis_into(lmax, file_to_world * d, &mut y);
             for (ck, yk) in c.iter_mut().zip(&y) {

@@ -8,7 +8,10 @@ use crate::abi::{binding, push::LightsPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder};
 use crate::math::light_tree::LightTree;
-use crate::math::lights::{cluster_list, clusters, gpu_list, prepare, CLUSTER_GRID};
+use crate::math::lights::{
+    cells_for_rho, cluster_list, clusters, clusters_of, gpu_list, largest_light_rho, prepare,
+    prepare_cells, CLUSTER_GRID,
+};
 pub use crate::math::lights::{
     Cluster, ExtractOptions, Extraction, LightKernel, LightTexel, PreparedLight,
 };
@@ -169,6 +172,26 @@ impl GpuLights {
         }
         let t = texels.map(|ex| prepare(map, ex, file_to_world, finest));
         let c = diffuse.map(|ex| clusters(ex, file_to_world, CLUSTER_GRID));
+        Self::upload_owned(ctx, t.unwrap_or_default(), &c.unwrap_or_default()).map(Some)
+    }
+
+    /// [`GpuLights::of_extractions`] of light texel lists (the extractions' `lights`).
+    pub fn of_lights(
+        ctx: &Context,
+        map: &EnvMap,
+        texels: Option<&[LightTexel]>,
+        diffuse: Option<&[LightTexel]>,
+        file_to_world: glam::DMat3,
+        finest: f64,
+    ) -> Result<Option<GpuLights>> {
+        if texels.is_none() && diffuse.is_none() {
+            return Ok(None);
+        }
+        let t = texels.map(|l| {
+            let cells = cells_for_rho(largest_light_rho(l), finest);
+            prepare_cells(map, l, file_to_world, cells)
+        });
+        let c = diffuse.map(|l| clusters_of(l, file_to_world, CLUSTER_GRID));
         Self::upload_owned(ctx, t.unwrap_or_default(), &c.unwrap_or_default()).map(Some)
     }
 

@@ -311,3 +311,57 @@ impl Sanitizer {
         poison::image(rec, PassId::Map, &dst.image, 0..1)
     }
 }
+
+/// A map clamped in place at a luminance (glsl/clamp.comp): every texel of the mapping's
+/// domain whose luminance Y exceeds τ keeps L·τ/Y, so that a bake makes the clamp rule's
+/// residual of a light extraction from the source it already uploaded (float64-rule twin:
+/// [`crate::math::lights::clamp_residual`]).
+pub struct LuminanceClamp {
+    pipeline: crate::gpu::Pipeline,
+}
+
+impl LuminanceClamp {
+    /// Builds the pipeline.
+    pub fn new(ctx: &Context) -> Result<LuminanceClamp> {
+        Ok(LuminanceClamp {
+            pipeline: crate::gpu::Pipeline::compute(
+                ctx,
+                crate::abi::ShaderId::Clamp,
+                &crate::abi::WORKGROUP_2D,
+            )?,
+        })
+    }
+
+    /// Records the clamp of level 0 of `map` at luminance `threshold` (a finite, positive
+    /// τ; an infinite one clamps nothing and records nothing).
+    pub fn record(&self, rec: &mut Recorder, map: &GpuEnvMap, threshold: f64) -> Result<()> {
+        use crate::abi::{binding, push::ClampPush, WORKGROUP_2D};
+        use crate::gpu::{groups, Bind};
+        if threshold == f64::INFINITY {
+            return Ok(());
+        }
+        if !(threshold.is_finite() && threshold > 0.0) {
+            return Err(Error::Invalid(format!(
+                "image '{}': a luminance clamp at {threshold}; it must be positive",
+                map.image.name()
+            )));
+        }
+        rec.span("clamp", |rec| {
+            rec.dispatch(
+                &self.pipeline,
+                &[(binding::CLAMP_MAP, Bind::Storage(&map.image))],
+                &ClampPush {
+                    size: [map.width, map.height],
+                    mapping: map.mapping.id(),
+                    threshold: threshold as f32,
+                },
+                [
+                    groups(map.width, WORKGROUP_2D[0]),
+                    groups(map.height, WORKGROUP_2D[1]),
+                    map.mapping.layers(),
+                ],
+            )
+        })?;
+        poison::image(rec, PassId::Map, &map.image, 0..1)
+    }
+}

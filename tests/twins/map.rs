@@ -28,9 +28,11 @@ pub fn varied(mapping: Mapping, size: u32) -> EnvMap {
 
 /// Every mapping at sizes 1, 5 and 16 (odd, and a cube's six layers): what comes back is what
 /// went up, bit for bit, with alpha 1; downloading level 0 of a mipped map the same; and the
-/// sanitizing copy of an engine's frame ([`check_sanitize`]).
+/// sanitizing copy of an engine's frame ([`check_sanitize`]); the luminance clamp
+/// ([`check_clamp`]).
 pub fn check(ctx: &Context) {
     check_sanitize(ctx);
+    check_clamp(ctx);
     for mapping in Mapping::ALL {
         for size in [1, 5, 16] {
             let map = varied(mapping, size);
@@ -139,5 +141,76 @@ pub fn check_sanitize(ctx: &Context) {
             );
         }
         assert_eq!(read_u32(ctx, &count), 4, "{}", mapping.name());
+    }
+}
+
+/// Float32 against the float64 rule's float32 result: the luminance (a dot of three terms,
+/// 2 ε), τ's rounding, the ratio and the product (ε/2 each) differ by at most ~4 ε; a texel
+/// within that of τ may be clamped by one and not the other, by as little.
+pub const CLAMP_BOUND: f64 = 5.0 * f32::EPSILON as f64;
+
+/// The bake's residual on the GPU (`passes::map::LuminanceClamp`) against
+/// `math::lights::clamp_residual`, every mapping at sizes 5 and 16 (rims, a cube's six
+/// layers), at the light extraction's threshold at 16 (the sun's texel clamped) and at the
+/// texels' median luminance (half the sky clamped), within [`CLAMP_BOUND`]; the texels
+/// outside an angular or paraboloid domain untouched.
+pub fn check_clamp(ctx: &Context) {
+    use crate::common::compare::Errors;
+    use envlight::math::envmap::luminance;
+    use envlight::math::lights::{clamp_residual, extract_lights, ExtractOptions};
+    let pass = envlight::passes::map::LuminanceClamp::new(ctx).unwrap();
+    for mapping in Mapping::ALL {
+        for size in [5, 16] {
+            let mut map = varied(mapping, size);
+            // A bright texel outside an angular or paraboloid domain (a file's corner), which
+            // the clamp must leave as it is.
+            let outside = !mapping.texel_in_domain(map.width, map.height, 0, 0);
+            if outside {
+                map.texels[0] = [5e4, 5e4, 5e4];
+            }
+            let mut lum: Vec<f64> = map
+                .texels
+                .iter()
+                .map(|t| luminance(t.map(f64::from)))
+                .collect();
+            lum.sort_by(f64::total_cmp);
+            let median = lum[lum.len() / 2];
+            let lights = extract_lights(&map, &ExtractOptions::default()).threshold;
+            // A 5-texel-wide map's sun holds most of its power: nothing passes ratio × mean.
+            let taus = match size {
+                16 => vec![lights, median],
+                _ => vec![median],
+            };
+            for tau in taus {
+                let what = format!("{} at {size}, τ = {tau:.3e}", mapping.name());
+                let want = clamp_residual(&map, tau);
+                let clamped = want
+                    .texels
+                    .iter()
+                    .zip(&map.texels)
+                    .filter(|(a, b)| a != b)
+                    .count();
+                assert!(
+                    clamped > 0 && clamped < map.texels.len(),
+                    "{what}: {clamped} clamped"
+                );
+                let gpu = raw_gpu_map(ctx, &map);
+                ctx.run("clamping", |rec| pass.record(rec, &gpu, tau))
+                    .unwrap();
+                let back = gpu.download_level(ctx, 0).unwrap();
+                assert_eq!(back.len(), want.texels.len(), "{what}");
+                let mut errors = Errors::new();
+                for (k, (b, t)) in back.iter().zip(&want.texels).enumerate() {
+                    for c in 0..3 {
+                        errors.rel(b[c], t[c], f32::MIN_POSITIVE as f64, (k, c));
+                    }
+                    errors.abs(b[3], 1.0, (k, 3));
+                }
+                errors.assert_within(CLAMP_BOUND, &what);
+                if outside {
+                    assert_eq!(back[0], [5e4, 5e4, 5e4, 1.0], "{what}: outside the domain");
+                }
+            }
+        }
     }
 }

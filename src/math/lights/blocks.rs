@@ -3,7 +3,7 @@
 //! [`extract_blocks`] extracts by the clamp rule texel by texel and gathers each block's
 //! excess into one record.
 
-use super::{ExtractOptions, Extraction, LightTexel};
+use super::{clamp_residual, ExtractOptions, Extraction, LightSet, LightTexel};
 #[cfg(doc)]
 use crate::abi::lights::RECORD_WIDTH;
 use crate::math::envmap::luminance;
@@ -52,15 +52,47 @@ pub struct BlockExtraction {
 /// [`super::extract`] (`grid` `None`) for a block of 1, a block not dividing both sides, a
 /// mapping other than lat-long or cube, and a filled residual (`fill`).
 pub fn extract_blocks(map: &EnvMap, opts: &ExtractOptions, block: u32) -> BlockExtraction {
-    let plain = || BlockExtraction {
-        grid: None,
-        extraction: super::extract(map, opts),
-    };
-    let (w, h) = (map.width, map.height);
-    let fits = block > 1 && w.is_multiple_of(block) && h.is_multiple_of(block);
-    if !fits || opts.fill.is_some() || !matches!(map.mapping, Mapping::LatLong | Mapping::Cube) {
-        return plain();
+    if !blocks_apply(map, opts, block) {
+        return BlockExtraction {
+            grid: None,
+            extraction: super::extract(map, opts),
+        };
     }
+    let (grid, set) = block_lights(map, opts, block);
+    BlockExtraction {
+        grid: Some(grid),
+        extraction: Extraction {
+            residual: clamp_residual(map, set.threshold),
+            threshold: set.threshold,
+            lights: set.lights,
+        },
+    }
+}
+
+/// [`extract_blocks`]' grid (`None`: the map's own texels) and records without building its
+/// residual, which is [`clamp_residual`] of `map` at the threshold (every fallback's too, as
+/// the bake's options have no `fill`; with one, [`super::extract_lights`]' rule holds).
+pub fn extract_block_lights(
+    map: &EnvMap,
+    opts: &ExtractOptions,
+    block: u32,
+) -> (Option<EnvMap>, LightSet) {
+    if !blocks_apply(map, opts, block) {
+        return (None, super::extract_lights(map, opts));
+    }
+    let (grid, set) = block_lights(map, opts, block);
+    (Some(grid), set)
+}
+
+/// Whether [`extract_blocks`] gathers blocks (else it falls back to [`super::extract`]).
+fn blocks_apply(map: &EnvMap, opts: &ExtractOptions, block: u32) -> bool {
+    let fits = block > 1 && map.width.is_multiple_of(block) && map.height.is_multiple_of(block);
+    fits && opts.fill.is_none() && matches!(map.mapping, Mapping::LatLong | Mapping::Cube)
+}
+
+/// The grid of blocks and the records of [`extract_blocks`].
+fn block_lights(map: &EnvMap, opts: &ExtractOptions, block: u32) -> (EnvMap, LightSet) {
+    let (w, h) = (map.width, map.height);
     let (gw, gh) = (w / block, h / block);
     let block_of =
         |layer: u32, i: u32, j: u32| ((layer * gh + j / block) * gw + i / block) as usize;
@@ -95,21 +127,14 @@ pub fn extract_blocks(map: &EnvMap, opts: &ExtractOptions, block: u32) -> BlockE
         })
         .collect();
     let grid = EnvMap::new(map.mapping, gw, gh, grid_texels);
-    let threshold = match block_threshold(map, mean, opts, &block_of) {
-        Some(t) => t,
-        None => {
-            return BlockExtraction {
-                grid: Some(grid),
-                extraction: Extraction {
-                    threshold: f64::INFINITY,
-                    lights: Vec::new(),
-                    residual: map.clone(),
-                },
-            }
-        }
+    let Some(threshold) = block_threshold(map, mean, opts, &block_of) else {
+        let none = LightSet {
+            threshold: f64::INFINITY,
+            lights: Vec::new(),
+        };
+        return (grid, none);
     };
     // The clamp, texel by texel; each block's excess power.
-    let mut residual = map.clone();
     let mut excess = vec![[0.0f64; 3]; sums.len()];
     let mut lit = vec![false; sums.len()];
     for layer in 0..map.layers() {
@@ -121,7 +146,6 @@ pub fn extract_blocks(map: &EnvMap, opts: &ExtractOptions, block: u32) -> BlockE
                 if y > threshold {
                     let keep = (threshold / y) as f32;
                     let r = l.map(|c| c * keep);
-                    residual.texels[k] = r;
                     let omega = map.mapping.texel_solid_angle(w, h, i, j);
                     let b = block_of(layer, i, j);
                     lit[b] = true;
@@ -154,14 +178,8 @@ pub fn extract_blocks(map: &EnvMap, opts: &ExtractOptions, block: u32) -> BlockE
         b.0.total_cmp(&a.0)
             .then((a.1.layer, a.1.j, a.1.i).cmp(&(b.1.layer, b.1.j, b.1.i)))
     });
-    BlockExtraction {
-        grid: Some(grid),
-        extraction: Extraction {
-            threshold,
-            lights: lights.into_iter().map(|(_, t)| t).collect(),
-            residual,
-        },
-    }
+    let lights = lights.into_iter().map(|(_, t)| t).collect();
+    (grid, LightSet { threshold, lights })
 }
 
 /// τ for [`extract_blocks`]: `ratio` × `mean`, raised to the luminance of the brightest
