@@ -328,10 +328,11 @@ fn cube_power(level: &[[f32; 4]], side: u32) -> f64 {
 /// bake extracts, the threshold rose and left most of the sun in the residual for 16 FIS
 /// samples: the broken variant (`light_record_width` 1 << 20, no blocks) errs 8.5e-2 to
 /// 3.9e-1 at levels 1–3 and fails. Bounds, the issue's: specular levels ≥ 1 and the
-/// irradiance cube within 1% relative RMS of luminance of the 1× bake's (measured 3.5e-4 to
-/// 5.3e-4, irradiance 1.9e-4: the paraboloid's supersampling follows the source's
-/// resolution), level 0's power within 0.1% (measured 2.8e-5). A 64² cube: at 16² the
-/// mirror level's sampled conversion of this sun errs 2–3e-3 in power at every resolution.
+/// irradiance cube within 1% relative RMS of luminance of the 1× bake's (measured 3.0e-4 to
+/// 4.4e-4, irradiance 1.8e-4: ×4 and ×8 convert the same 256-column grid of block means,
+/// the 1× map its own 128 columns), level 0's power within 0.1% (measured 1.4e-5). A 64²
+/// cube: at 16² the mirror level's sampled conversion of this sun errs 2–3e-3 in power at
+/// every resolution.
 #[test]
 fn upsampled_maps_bake_the_same_cubes() {
     let ctx = common::ctx();

@@ -14,13 +14,13 @@ pub mod dfg_cache;
 pub mod output;
 
 use crate::error::{Error, Result};
-use crate::gpu::{Buffer, Context, InFlight, Timing, Usage};
+use crate::gpu::{Buffer, Context, InFlight, Recorder, Timing, Usage};
 use crate::math::envmap::luminance;
 use crate::math::exact::{ExactFilter, Query};
 use crate::math::fis::default_dp_size;
 use crate::math::lights::{
-    diffuse_options, extract_block_lights, extract_lights, largest_light_rho, light_sh_of,
-    record_block, resolves_rho, ExtractOptions, LightKernel, LightSet, DIFFUSE_RATIO,
+    block_means, diffuse_options, extract_block_lights, extract_lights, largest_light_rho,
+    light_sh_of, record_block, resolves_rho, ExtractOptions, LightKernel, LightSet, DIFFUSE_RATIO,
 };
 use crate::math::sh;
 use crate::math::split_sum::{level_alpha, DfgAxes};
@@ -342,27 +342,119 @@ pub fn supersample(env: &EnvMap, dp_size: u32) -> u32 {
     ((1.5 * r).ceil() as u32).clamp(2, 64)
 }
 
-/// A bake's light extractions of `env`: the specular levels' (records in blocks of texels on
-/// maps finer than `light_record_width`, `record_block`, so that a map bakes as the same
-/// content at that size does; none where its texels are too coarse for level 1's lobe,
-/// `finest`), the grid their records index (`None`: `env`'s texels), and the irradiance
-/// cube's (a deeper extraction whose texels' SH the cube takes out of the whole map's and
-/// adds back as clusters, as SH objects render). Each `None` where nothing was extracted.
-fn bake_extractions(
-    env: &EnvMap,
-    opts: &BakeOptions,
-    finest: f64,
-) -> (Option<LightSet>, Option<EnvMap>, Option<LightSet>) {
-    // Neither residual map is built: the cubes need the specular one's only on the GPU,
-    // where the source is clamped in place (`LuminanceClamp`), and the diffuse one's not at
-    // all (its SH is the whole map's less the lights').
-    let diffuse = extract_lights(env, &diffuse_options(DIFFUSE_RATIO));
+/// The host side of a bake before its recording: its light extractions, and the grids of
+/// block means that a map finer than the light records' grid converts from.
+struct Prepared {
+    /// The specular levels' records (in blocks of texels on maps finer than
+    /// `light_record_width`, `record_block`, so that a map bakes as the same content at that
+    /// size does); `None` without lights, or where its texels are too coarse for level 1's
+    /// lobe (`finest`).
+    specular: Option<LightSet>,
+    /// The grid of block means the records index (`None`: `env`'s own texels).
+    records_grid: Option<EnvMap>,
+    /// The grid of block means the paraboloids are converted from (`None`: `env` itself).
+    grid: Option<EnvMap>,
+    /// The residual's block means, beside `grid` where there are specular records.
+    residual_grid: Option<EnvMap>,
+    /// The irradiance cube's lights: a deeper extraction whose texels' SH the cube takes out
+    /// of the whole map's and adds back as clusters, as SH objects render.
+    diffuse: Option<LightSet>,
+}
+
+/// [`Prepared`] for `env`. No residual map is built at `env`'s resolution: the specular
+/// levels convert the residual's block means where there is a grid, else the source clamped
+/// in place on the GPU (`LuminanceClamp`); the irradiance needs none (its SH is the whole
+/// map's less the lights'). The paraboloids' grid is at least as fine as the records' and 4
+/// × the cube's face wide (lat-long; a face as wide as the cube's on a cube), finer than
+/// the mirror level holds the sphere: the records' own where that is as fine, else its own.
+fn prepare(env: &EnvMap, opts: &BakeOptions, finest: f64) -> Prepared {
     let block = record_block(env, opts.light_record_width);
-    let (grid, specular) = extract_block_lights(env, &ExtractOptions::default(), block);
-    let specular = Some(specular)
+    let converted = record_block(env, (4 * opts.specular_size).max(opts.light_record_width));
+    let means = |threshold: f64| {
+        let (grid, residual_grid) = block_means(env, converted, threshold).unzip();
+        (grid, residual_grid.flatten())
+    };
+    if !opts.lights {
+        let (grid, _) = means(f64::INFINITY);
+        return Prepared {
+            specular: None,
+            records_grid: None,
+            grid,
+            residual_grid: None,
+            diffuse: None,
+        };
+    }
+    let diffuse = extract_lights(env, &diffuse_options(DIFFUSE_RATIO));
+    let b = extract_block_lights(env, &ExtractOptions::default(), block);
+    let specular = Some(b.set)
         .filter(|e| !e.lights.is_empty() && resolves_rho(largest_light_rho(&e.lights), finest));
-    let diffuse = Some(diffuse).filter(|e| !e.lights.is_empty());
-    (specular, grid, diffuse)
+    let (grid, residual_grid) = match converted == block {
+        true => (b.grid.clone(), b.residual_grid),
+        false => means(specular.as_ref().map_or(f64::INFINITY, |s| s.threshold)),
+    };
+    Prepared {
+        residual_grid: residual_grid.filter(|_| specular.is_some()),
+        specular,
+        records_grid: b.grid,
+        grid,
+        diffuse: Some(diffuse).filter(|e| !e.lights.is_empty()),
+    }
+}
+
+/// Where the residual's paraboloid is converted from.
+enum ResidualFrom {
+    /// The source, clamped in place at this luminance once the passes reading the whole
+    /// map have read it.
+    Clamp(f64),
+    /// The residual's block means ([`Prepared::residual_grid`]), uploaded into this image.
+    Grid(Box<GpuEnvMap>),
+}
+
+/// A bake's images besides its source.
+struct Images {
+    irradiance: GpuEnvMap,
+    /// The whole map's paraboloid (its MIP chain FIS reads).
+    dp: GpuEnvMap,
+    cube: GpuEnvMap,
+    /// The grid of block means the paraboloids convert from, where there is one.
+    reduced: Option<GpuEnvMap>,
+    /// The residual's source and paraboloid, where the specular levels take lights.
+    residual: Option<(ResidualFrom, GpuEnvMap)>,
+}
+
+impl Images {
+    fn new(ctx: &Context, env: &EnvMap, opts: &BakeOptions, prep: &Prepared) -> Result<Images> {
+        let size = opts.irradiance_size;
+        let irradiance = GpuEnvMap::new(ctx, "bake: irradiance cube", Mapping::Cube, size, size)?;
+        let (w, h) = Mapping::DualParaboloid.extent_for_size(dp_size(env, opts));
+        let paraboloid = |name| GpuEnvMap::with_mips(ctx, name, Mapping::DualParaboloid, w, h);
+        let dp = paraboloid("bake: paraboloid")?;
+        let cube = SplitSum::cube_chain(ctx, opts.specular_size, opts.specular_levels)?;
+        let image = |name, m: &EnvMap| GpuEnvMap::new(ctx, name, m.mapping, m.width, m.height);
+        let reduced = match &prep.grid {
+            Some(g) => Some(image("bake: block means", g)?),
+            None => None,
+        };
+        let residual = match (&prep.specular, &prep.residual_grid) {
+            (Some(_), Some(g)) => Some(ResidualFrom::Grid(Box::new(image(
+                "bake: residual block means",
+                g,
+            )?))),
+            (Some(set), None) => Some(ResidualFrom::Clamp(set.threshold)),
+            (None, _) => None,
+        };
+        let residual = match residual {
+            Some(from) => Some((from, paraboloid("bake: residual paraboloid")?)),
+            None => None,
+        };
+        Ok(Images {
+            irradiance,
+            dp,
+            cube,
+            reduced,
+            residual,
+        })
+    }
 }
 
 /// The passes of a bake, built once.
@@ -410,6 +502,11 @@ impl Baker {
     /// this one overlaps that probe's upload and recording (and the caller's work on this
     /// probe's results) with this probe's GPU work; on a device with one queue the GPU itself
     /// runs the submissions one after the other, without idling between them.
+    ///
+    /// A map finer than the light records' grid (`BakeOptions::light_record_width`) is
+    /// projected onto SH at its own resolution, and its paraboloids are converted from its
+    /// block means (and the residual's), which hold the same power in every block: the same
+    /// content at any size converts the same, at the grid's cost.
     pub fn submit(
         &self,
         env: &EnvMap,
@@ -427,125 +524,63 @@ impl Baker {
             vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::GpuToCpu,
         )?;
-        let irradiance_map = GpuEnvMap::new(
-            ctx,
-            "bake: irradiance cube",
-            Mapping::Cube,
-            opts.irradiance_size,
-            opts.irradiance_size,
-        )?;
-        let dp_size = dp_size(env, opts);
-        let (w, h) = Mapping::DualParaboloid.extent_for_size(dp_size);
-        let dp = GpuEnvMap::with_mips(ctx, "bake: paraboloid", Mapping::DualParaboloid, w, h)?;
-        let cube = SplitSum::cube_chain(ctx, opts.specular_size, opts.specular_levels)?;
-        // With lights: the residual's own upload and paraboloid, and the light texels, for the
-        // specular levels. The finest lobe the light texels' quadrature must resolve: level
-        // 1's (a source too coarse for it bakes its specular levels without lights, as
-        // `resolves` says).
+        // The finest lobe the light texels' quadrature must resolve: level 1's (a source too
+        // coarse for it bakes its specular levels without lights, as `resolves` says).
         let finest = level_alpha(1, opts.specular_levels.max(2));
-        let (extraction, grid, diffuse) = match opts.lights {
-            true => bake_extractions(env, opts, finest),
-            false => (None, None, None),
-        };
+        let prep = prepare(env, opts, finest);
+        let images = Images::new(ctx, env, opts, &prep)?;
         let file_to_world = orientation.checked_world_to_file()?.transpose();
         let lights = GpuLights::of_lights(
             ctx,
-            grid.as_ref().unwrap_or(env),
-            extraction.as_ref().map(|e| e.lights.as_slice()),
-            diffuse.as_ref().map(|e| e.lights.as_slice()),
+            prep.records_grid.as_ref().unwrap_or(env),
+            prep.specular.as_ref().map(|e| e.lights.as_slice()),
+            prep.diffuse.as_ref().map(|e| e.lights.as_slice()),
             file_to_world,
             finest,
         )?;
-        let minus = diffuse
+        let minus = prep
+            .diffuse
             .as_ref()
             .map(|ex| sh::irradiance_coeffs(&light_sh_of(env, &ex.lights, file_to_world, lmax)));
-        // The residual's paraboloid, from the source clamped in place at the threshold once
-        // the passes reading the whole map have read it.
-        let residual = match &extraction {
-            Some(ex) => {
-                let dp = GpuEnvMap::with_mips(
-                    ctx,
-                    "bake: residual paraboloid",
-                    Mapping::DualParaboloid,
-                    w,
-                    h,
-                )?;
-                Some((ex.threshold, dp))
-            }
-            None => None,
-        };
         let orientation = *orientation;
         let opts = *opts;
         let inflight = ctx.submit("baking a probe", move |rec| {
             src.record_upload(rec, env)?;
             self.sh
                 .record_into(rec, &src, lmax, &orientation, &sh_out)?;
-            let c = ConvertOptions::new(Mapping::DualParaboloid, dp_size)
-                .with_orientation(orientation)
-                .with_supersample(Some(supersample(env, dp_size)));
-            self.convert.record(rec, &src, &dp, &c)?;
-            self.mip.record(rec, &dp)?;
-            let p = PrefilterOptions {
-                levels: opts.specular_levels,
-                samples: opts.samples,
-                bias: opts.bias,
-            };
+            let i = &images;
             match (&minus, &lights) {
                 (Some(minus), Some(lights)) => {
-                    self.eval.record_irradiance_minus(
-                        rec,
-                        &sh_out,
-                        lmax,
-                        minus,
-                        &irradiance_map,
-                    )?;
-                    self.lights
-                        .record_clusters(rec, lights, &irradiance_map, 0)?;
-                }
-                _ => {
                     self.eval
-                        .record_irradiance(rec, &sh_out, lmax, &irradiance_map)?;
+                        .record_irradiance_minus(rec, &sh_out, lmax, minus, &i.irradiance)?;
+                    self.lights.record_clusters(rec, lights, &i.irradiance, 0)?;
                 }
+                _ => self
+                    .eval
+                    .record_irradiance(rec, &sh_out, lmax, &i.irradiance)?,
             }
-            match (&residual, &lights) {
-                (Some((threshold, rdp)), Some(lights)) => {
-                    // The mirror from the whole map; the rest from the residual plus lights.
-                    self.clamp.record(rec, &src, *threshold)?;
-                    self.convert.record(rec, &src, rdp, &c)?;
-                    self.mip.record(rec, rdp)?;
-                    self.split
-                        .record_prefilter_levels(rec, &dp, &cube, &p, 0..1)?;
-                    self.split.record_prefilter_levels(
-                        rec,
-                        rdp,
-                        &cube,
-                        &p,
-                        1..opts.specular_levels,
-                    )?;
-                    for k in 1..opts.specular_levels {
-                        let alpha = level_alpha(k, opts.specular_levels);
-                        self.lights
-                            .record(rec, lights, LightKernel::Ggx { alpha }, &cube, k)?;
-                    }
-                }
-                _ => self.split.record_prefilter(rec, &dp, &cube, &p)?,
-            }
+            self.record_specular(
+                rec,
+                env,
+                &src,
+                &prep,
+                i,
+                lights.as_ref(),
+                &orientation,
+                &opts,
+            )?;
             rec.use_buffer(&sh_out, Usage::HostRead);
-            let irradiance = irradiance_map.record_download(rec, 0)?;
+            let irradiance = i.irradiance.record_download(rec, 0)?;
             let specular = (0..opts.specular_levels)
-                .map(|k| cube.record_download(rec, k))
+                .map(|k| i.cube.record_download(rec, k))
                 .collect::<Result<Vec<_>>>()?;
-            let chain = if opts.chain {
-                (0..dp.mips())
-                    .map(|k| dp.record_download(rec, k))
-                    .collect::<Result<Vec<_>>>()?
-            } else {
-                Vec::new()
+            let chain = match opts.chain {
+                true => (0..i.dp.mips())
+                    .map(|k| i.dp.record_download(rec, k))
+                    .collect::<Result<Vec<_>>>()?,
+                false => Vec::new(),
             };
-            rec.keep((src, irradiance_map, dp, cube));
-            if let Some((_, rdp)) = residual {
-                rec.keep(rdp);
-            }
+            rec.keep((src, images));
             if let Some(lights) = lights {
                 rec.keep(lights);
             }
@@ -557,6 +592,71 @@ impl Baker {
             })
         })?;
         Ok(PendingBake { inflight, lmax })
+    }
+
+    /// Records the specular cube: the whole map's paraboloid (from `src`, or from the grid of
+    /// block means) and its chain, level 0 (the mirror) from it; with lights, levels 1 and up
+    /// from the residual's paraboloid plus the light records.
+    #[allow(clippy::too_many_arguments)]
+    fn record_specular(
+        &self,
+        rec: &mut Recorder,
+        env: &EnvMap,
+        src: &GpuEnvMap,
+        prep: &Prepared,
+        i: &Images,
+        lights: Option<&GpuLights>,
+        orientation: &Orientation,
+        opts: &BakeOptions,
+    ) -> Result<()> {
+        let dp_size = dp_size(env, opts);
+        let (from, from_map) = match (&i.reduced, &prep.grid) {
+            (Some(r), Some(g)) => {
+                r.record_upload(rec, g)?;
+                (r, g)
+            }
+            _ => (src, env),
+        };
+        let c = ConvertOptions::new(Mapping::DualParaboloid, dp_size)
+            .with_orientation(*orientation)
+            .with_supersample(Some(supersample(from_map, dp_size)));
+        self.convert.record(rec, from, &i.dp, &c)?;
+        self.mip.record(rec, &i.dp)?;
+        let p = PrefilterOptions {
+            levels: opts.specular_levels,
+            samples: opts.samples,
+            bias: opts.bias,
+        };
+        let (Some((residual, rdp)), Some(lights)) = (&i.residual, lights) else {
+            return self.split.record_prefilter(rec, &i.dp, &i.cube, &p);
+        };
+        // The mirror from the whole map; the rest from the residual plus lights.
+        match (residual, &prep.residual_grid) {
+            (ResidualFrom::Grid(r), Some(g)) => {
+                r.record_upload(rec, g)?;
+                self.convert.record(rec, r, rdp, &c)?;
+            }
+            (ResidualFrom::Clamp(threshold), _) => {
+                self.clamp.record(rec, src, *threshold)?;
+                self.convert.record(rec, src, rdp, &c)?;
+            }
+            (ResidualFrom::Grid(_), None) => {
+                return Err(Error::Invalid(
+                    "bake: a residual image without its grid".into(),
+                ))
+            }
+        }
+        self.mip.record(rec, rdp)?;
+        self.split
+            .record_prefilter_levels(rec, &i.dp, &i.cube, &p, 0..1)?;
+        self.split
+            .record_prefilter_levels(rec, rdp, &i.cube, &p, 1..opts.specular_levels)?;
+        for k in 1..opts.specular_levels {
+            let alpha = level_alpha(k, opts.specular_levels);
+            self.lights
+                .record(rec, lights, LightKernel::Ggx { alpha }, &i.cube, k)?;
+        }
+        Ok(())
     }
 
     /// The split-sum DFG table (height-correlated Smith unless `correlated` is false), row

@@ -19,7 +19,9 @@
 
 mod blocks;
 
-pub use blocks::{extract_block_lights, extract_blocks, record_block, BlockExtraction};
+pub use blocks::{
+    block_means, extract_block_lights, extract_blocks, record_block, BlockExtraction, BlockLights,
+};
 
 use super::brdf::{local_view, Brdf, Frame};
 use super::mapping::Coord;

@@ -58,7 +58,7 @@ pub fn extract_blocks(map: &EnvMap, opts: &ExtractOptions, block: u32) -> BlockE
             extraction: super::extract(map, opts),
         };
     }
-    let (grid, set) = block_lights(map, opts, block);
+    let (grid, _, set) = block_lights(map, opts, block);
     BlockExtraction {
         grid: Some(grid),
         extraction: Extraction {
@@ -69,34 +69,75 @@ pub fn extract_blocks(map: &EnvMap, opts: &ExtractOptions, block: u32) -> BlockE
     }
 }
 
-/// [`extract_blocks`]' grid (`None`: the map's own texels) and records without building its
-/// residual, which is [`clamp_residual`] of `map` at the threshold (every fallback's too, as
-/// the bake's options have no `fill`; with one, [`super::extract_lights`]' rule holds).
-pub fn extract_block_lights(
-    map: &EnvMap,
-    opts: &ExtractOptions,
-    block: u32,
-) -> (Option<EnvMap>, LightSet) {
+/// [`extract_block_lights`]' result: the records and the grids they go with.
+#[derive(Clone, Debug)]
+pub struct BlockLights {
+    /// The grid of block means the records index ([`BlockExtraction::grid`]); `None`: the
+    /// records are the map's own texels.
+    pub grid: Option<EnvMap>,
+    /// The residual's block means (Σ residual·Ω / Ω of each block: the grid less the
+    /// records), beside `grid`.
+    pub residual_grid: Option<EnvMap>,
+    /// The threshold and the records.
+    pub set: LightSet,
+}
+
+/// [`extract_blocks`]' grid and records without building its residual at the map's
+/// resolution, which is [`clamp_residual`] of `map` at the threshold (every fallback's too,
+/// as the bake's options have no `fill`; with one, [`super::extract_lights`]' rule holds),
+/// and the residual's block means, which a bake converts instead of the residual.
+pub fn extract_block_lights(map: &EnvMap, opts: &ExtractOptions, block: u32) -> BlockLights {
     if !blocks_apply(map, opts, block) {
-        return (None, super::extract_lights(map, opts));
+        return BlockLights {
+            grid: None,
+            residual_grid: None,
+            set: super::extract_lights(map, opts),
+        };
     }
-    let (grid, set) = block_lights(map, opts, block);
-    (Some(grid), set)
+    let (grid, residual, set) = block_lights(map, opts, block);
+    BlockLights {
+        grid: Some(grid),
+        residual_grid: Some(residual),
+        set,
+    }
 }
 
-/// Whether [`extract_blocks`] gathers blocks (else it falls back to [`super::extract`]).
-fn blocks_apply(map: &EnvMap, opts: &ExtractOptions, block: u32) -> bool {
-    let fits = block > 1 && map.width.is_multiple_of(block) && map.height.is_multiple_of(block);
-    fits && opts.fill.is_none() && matches!(map.mapping, Mapping::LatLong | Mapping::Cube)
+/// The means of `map` over `block` × `block` blocks of texels (Σ L·Ω / Ω of each block, the
+/// grid's texel's Ω being the block's exactly): the map at a lower resolution with the same
+/// power in every block; and, for a finite `threshold`, the same of the map clamped at that
+/// luminance ([`clamp_residual`], not built). `None` where [`extract_blocks`] would not
+/// gather blocks (a block of 1, one not dividing both sides, a mapping other than lat-long
+/// or cube).
+pub fn block_means(map: &EnvMap, block: u32, threshold: f64) -> Option<(EnvMap, Option<EnvMap>)> {
+    if !blocks_apply(map, &ExtractOptions::default(), block) {
+        return None;
+    }
+    let (_, sums) = block_sums(map, block);
+    let whole = grid_of(map, block, &sums);
+    if !threshold.is_finite() {
+        return Some((whole, None));
+    }
+    let (gw, gh) = (map.width / block, map.height / block);
+    let mut kept = vec![[0.0f64; 3]; sums.len()];
+    map.for_each_texel(|layer, i, j, t, omega| {
+        let y = luminance(t.map(f64::from));
+        let r = match y > threshold {
+            true => t.map(|c| c * (threshold / y) as f32),
+            false => t,
+        };
+        let s = &mut kept[((layer * gh + j / block) * gw + i / block) as usize];
+        for c in 0..3 {
+            s[c] += r[c] as f64 * omega;
+        }
+    });
+    Some((whole, Some(grid_of(map, block, &kept))))
 }
 
-/// The grid of blocks and the records of [`extract_blocks`].
-fn block_lights(map: &EnvMap, opts: &ExtractOptions, block: u32) -> (EnvMap, LightSet) {
-    let (w, h) = (map.width, map.height);
-    let (gw, gh) = (w / block, h / block);
+/// The map's luminance power and each block's Σ L·Ω, blocks in grid order.
+fn block_sums(map: &EnvMap, block: u32) -> (f64, Vec<[f64; 3]>) {
+    let (gw, gh) = (map.width / block, map.height / block);
     let block_of =
         |layer: u32, i: u32, j: u32| ((layer * gh + j / block) * gw + i / block) as usize;
-    // Power, and each block's Σ L·Ω.
     let mut power = 0.0;
     let mut sums = vec![[0.0f64; 3]; (gw * gh * map.layers()) as usize];
     map.for_each_texel(|layer, i, j, t, omega| {
@@ -106,6 +147,40 @@ fn block_lights(map: &EnvMap, opts: &ExtractOptions, block: u32) -> (EnvMap, Lig
             s[c] += t[c] as f64 * omega;
         }
     });
+    (power, sums)
+}
+
+/// The grid map of block sums `sums`: each divided by its block's solid angle.
+fn grid_of(map: &EnvMap, block: u32, sums: &[[f64; 3]]) -> EnvMap {
+    let (gw, gh) = (map.width / block, map.height / block);
+    let texels = sums
+        .iter()
+        .enumerate()
+        .map(|(b, s)| {
+            let (bi, bj) = (
+                (b % gw as usize) as u32,
+                (b / gw as usize % gh as usize) as u32,
+            );
+            let o = map.mapping.texel_solid_angle(gw, gh, bi, bj);
+            s.map(|v| (v / o) as f32)
+        })
+        .collect();
+    EnvMap::new(map.mapping, gw, gh, texels)
+}
+
+/// Whether [`extract_blocks`] gathers blocks (else it falls back to [`super::extract`]).
+fn blocks_apply(map: &EnvMap, opts: &ExtractOptions, block: u32) -> bool {
+    let fits = block > 1 && map.width.is_multiple_of(block) && map.height.is_multiple_of(block);
+    fits && opts.fill.is_none() && matches!(map.mapping, Mapping::LatLong | Mapping::Cube)
+}
+
+/// The grid of blocks, the residual's block means and the records of [`extract_blocks`].
+fn block_lights(map: &EnvMap, opts: &ExtractOptions, block: u32) -> (EnvMap, EnvMap, LightSet) {
+    let (w, h) = (map.width, map.height);
+    let (gw, gh) = (w / block, h / block);
+    let block_of =
+        |layer: u32, i: u32, j: u32| ((layer * gh + j / block) * gw + i / block) as usize;
+    let (power, sums) = block_sums(map, block);
     let mean = power / (4.0 * std::f64::consts::PI);
     // A block's (i, j) in its layer, and its solid angle (the grid's texel's).
     let cell = |b: usize| {
@@ -118,21 +193,13 @@ fn block_lights(map: &EnvMap, opts: &ExtractOptions, block: u32) -> (EnvMap, Lig
         let (bi, bj) = cell(b);
         map.mapping.texel_solid_angle(gw, gh, bi, bj)
     };
-    let grid_texels: Vec<[f32; 3]> = sums
-        .iter()
-        .enumerate()
-        .map(|(b, s)| {
-            let o = grid_omega(b);
-            s.map(|v| (v / o) as f32)
-        })
-        .collect();
-    let grid = EnvMap::new(map.mapping, gw, gh, grid_texels);
+    let grid = grid_of(map, block, &sums);
     let Some(threshold) = block_threshold(map, mean, opts, &block_of) else {
         let none = LightSet {
             threshold: f64::INFINITY,
             lights: Vec::new(),
         };
-        return (grid, none);
+        return (grid.clone(), grid, none);
     };
     // The clamp, texel by texel; each block's excess power.
     let mut excess = vec![[0.0f64; 3]; sums.len()];
@@ -179,7 +246,13 @@ fn block_lights(map: &EnvMap, opts: &ExtractOptions, block: u32) -> (EnvMap, Lig
             .then((a.1.layer, a.1.j, a.1.i).cmp(&(b.1.layer, b.1.j, b.1.i)))
     });
     let lights = lights.into_iter().map(|(_, t)| t).collect();
-    (grid, LightSet { threshold, lights })
+    let kept: Vec<[f64; 3]> = sums
+        .iter()
+        .zip(&excess)
+        .map(|(s, e)| [s[0] - e[0], s[1] - e[1], s[2] - e[2]])
+        .collect();
+    let residual = grid_of(map, block, &kept);
+    (grid, residual, LightSet { threshold, lights })
 }
 
 /// τ for [`extract_blocks`]: `ratio` × `mean`, raised to the luminance of the brightest
@@ -396,5 +469,80 @@ mod tests {
         assert_eq!(record_block(&cube, 1024), 4);
         let angular = EnvMap::new(Mapping::Angular, 64, 64, vec![[0.0; 3]; 4096]);
         assert_eq!(record_block(&angular, 16), 1);
+    }
+
+    /// Block means keep each block's power (Σ L·Ω over its texels against the grid texel's
+    /// L·Ω, every channel, to 1e-6: the grid's texels are float32); the residual's are the
+    /// block means of [`clamp_residual`] at the threshold, and [`extract_block_lights`]'
+    /// residual grid (the grid less the records) the same to 1e-6; a map upsampled ×4 has
+    /// the original map as its ×4 block means; a block that does not divide gives none.
+    #[test]
+    fn block_means_keep_every_blocks_power() {
+        for mapping in [Mapping::LatLong, Mapping::Cube] {
+            let map = sun_sky(mapping, 64);
+            let block = 4;
+            let ex = extract_block_lights(&map, &ExtractOptions::default(), block);
+            let tau = ex.set.threshold;
+            assert!(tau.is_finite(), "{mapping:?}: no lights");
+            let (whole, residual) = block_means(&map, block, tau).unwrap();
+            let (gw, gh) = (map.width / block, map.height / block);
+            let mut sums = vec![[0.0f64; 3]; whole.texels.len()];
+            map.for_each_texel(|layer, i, j, t, o| {
+                add(
+                    &mut sums[((layer * gh + j / block) * gw + i / block) as usize],
+                    t,
+                    o,
+                )
+            });
+            whole.for_each_texel(|layer, i, j, t, o| {
+                let s = sums[whole.index(layer, i, j)];
+                for c in 0..3 {
+                    let e = rel(t[c] as f64 * o, s[c]);
+                    assert!(
+                        e < 1e-6,
+                        "{mapping:?}: block ({layer}, {i}, {j}) errs {e:e}"
+                    );
+                }
+            });
+            let residual = residual.unwrap();
+            let (want, _) = block_means(&clamp_residual(&map, tau), block, f64::INFINITY).unwrap();
+            let from_lights = ex.residual_grid.unwrap();
+            for ((r, w), l) in residual
+                .texels
+                .iter()
+                .zip(&want.texels)
+                .zip(&from_lights.texels)
+            {
+                for c in 0..3 {
+                    assert!(
+                        rel(r[c] as f64, w[c] as f64) < 1e-6,
+                        "{mapping:?}: {r:?} {w:?}"
+                    );
+                    assert!(
+                        rel(l[c] as f64, w[c] as f64) < 1e-6,
+                        "{mapping:?}: {l:?} {w:?}"
+                    );
+                }
+            }
+            let differs = residual
+                .texels
+                .iter()
+                .zip(&whole.texels)
+                .filter(|(a, b)| a != b);
+            assert!(
+                differs.count() > 0,
+                "{mapping:?}: the residual's means are the map's"
+            );
+            let (back, _) = block_means(&upsample(&map, 4), 4, f64::INFINITY).unwrap();
+            for (b, t) in back.texels.iter().zip(&map.texels) {
+                for c in 0..3 {
+                    assert!(
+                        rel(b[c] as f64, t[c] as f64) < 1e-6,
+                        "{mapping:?}: {b:?} {t:?}"
+                    );
+                }
+            }
+            assert!(block_means(&map, 3, tau).is_none());
+        }
     }
 }
