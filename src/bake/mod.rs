@@ -342,6 +342,11 @@ pub fn supersample(env: &EnvMap, dp_size: u32) -> u32 {
     ((1.5 * r).ceil() as u32).clamp(2, 64)
 }
 
+/// The most staging a bake's upload of its source takes (64 MiB, 4 Mi texels: a 2896 × 1448
+/// lat-long); a larger map is uploaded in bands of rows ([`GpuEnvMap::upload_banded`]) so
+/// that the host holds no second copy of it (16 bytes a texel on top of its own 12).
+const UPLOAD_BAND_BYTES: u64 = 64 << 20;
+
 /// The host side of a bake before its recording: its light extractions, and the grids of
 /// block means that a map finer than the light records' grid converts from.
 struct Prepared {
@@ -542,10 +547,18 @@ impl Baker {
             .diffuse
             .as_ref()
             .map(|ex| sh::irradiance_coeffs(&light_sh_of(env, &ex.lights, file_to_world, lmax)));
+        // A large map goes up in bands through bounded staging before the bake's submission
+        // (which then waits for the work queued before it); a small one with the bake.
+        let banded = env.texels.len() as u64 * 16 > UPLOAD_BAND_BYTES;
+        if banded {
+            src.upload_banded(ctx, env, UPLOAD_BAND_BYTES)?;
+        }
         let orientation = *orientation;
         let opts = *opts;
         let inflight = ctx.submit("baking a probe", move |rec| {
-            src.record_upload(rec, env)?;
+            if !banded {
+                src.record_upload(rec, env)?;
+            }
             self.sh
                 .record_into(rec, &src, lmax, &orientation, &sh_out)?;
             let i = &images;

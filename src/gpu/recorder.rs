@@ -432,6 +432,55 @@ impl Recorder {
         };
     }
 
+    /// Copies `src` (tightly packed texels from its start) into rows `rows` of layer `layer`
+    /// of level 0 of `dst`, whose earlier contents are discarded when `discard` (the first
+    /// band of an upload in bands).
+    pub fn copy_buffer_to_image_rows(
+        &mut self,
+        src: &Buffer,
+        dst: &Image,
+        layer: u32,
+        rows: std::ops::Range<u32>,
+        discard: bool,
+    ) {
+        let d = dst.desc();
+        assert!(layer < d.layers && rows.start < rows.end && rows.end <= d.height);
+        self.use_buffer(src, Usage::TransferSrc);
+        if discard {
+            self.discard(dst);
+        }
+        self.use_image(dst, Usage::TransferDst);
+        let region = vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .base_array_layer(layer)
+                    .layer_count(1),
+            )
+            .image_offset(vk::Offset3D {
+                x: 0,
+                y: rows.start as i32,
+                z: 0,
+            })
+            .image_extent(vk::Extent3D {
+                width: d.width,
+                height: rows.end - rows.start,
+                depth: 1,
+            });
+        // SAFETY: cmd is recording; buffer and image are live, the image is in
+        // TRANSFER_DST_OPTIMAL, the region lies in level 0 (asserted) and the caller sized
+        // the buffer for it.
+        unsafe {
+            self.ctx.device().cmd_copy_buffer_to_image(
+                self.cmd,
+                src.raw,
+                dst.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            )
+        };
+    }
+
     /// Copies MIP level `level` of `src` into `dst` (tightly packed, layer after layer).
     pub fn copy_image_to_buffer(&mut self, src: &Image, level: u32, dst: &Buffer, offset: u64) {
         self.use_image(src, Usage::TransferSrc);

@@ -162,6 +162,56 @@ impl GpuEnvMap {
         poison::image(rec, PassId::Map, &self.image, 0..1)
     }
 
+    /// Uploads `map` into level 0 of this map (same mapping and size) in bands of rows
+    /// through one staging buffer of at most `band_bytes` (at least a row), submitting and
+    /// waiting for each band: the host memory an upload stages stays bounded, where
+    /// [`GpuEnvMap::record_upload`] stages the whole map at once (16 bytes a texel). The
+    /// queue runs the bands after the work submitted before them. Texels are checked as
+    /// [`GpuEnvMap::record_upload`] checks them.
+    pub fn upload_banded(&self, ctx: &Context, map: &EnvMap, band_bytes: u64) -> Result<()> {
+        assert_eq!(
+            (map.mapping, map.width, map.height),
+            (self.mapping, self.width, self.height)
+        );
+        let (w, h) = (self.width, self.height);
+        let rows = ((band_bytes / (w as u64 * 16)) as u32).clamp(1, h);
+        let mut staging = Buffer::new(
+            ctx,
+            "banded upload staging",
+            rows as u64 * w as u64 * 16,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let layers = self.mapping.layers();
+        for layer in 0..layers {
+            for j0 in (0..h).step_by(rows as usize) {
+                let j1 = (j0 + rows).min(h);
+                let first = map.index(layer, 0, j0);
+                let n = ((j1 - j0) * w) as usize;
+                staging.write_with(n, |rgba: &mut [[f32; 4]]| {
+                    let texels = &map.texels[first..first + n];
+                    for (k, (d, t)) in rgba.iter_mut().zip(texels).enumerate() {
+                        if t.iter().any(|c| !(c.is_finite() && *c >= 0.0)) {
+                            return Err(bad_texel(map, first + k));
+                        }
+                        *d = [t[0], t[1], t[2], 1.0];
+                    }
+                    Ok(())
+                })?;
+                let last = layer + 1 == layers && j1 == h;
+                ctx.run("uploading a band of rows", |rec| {
+                    let discard = layer == 0 && j0 == 0;
+                    rec.copy_buffer_to_image_rows(&staging, &self.image, layer, j0..j1, discard);
+                    match last {
+                        true => poison::image(rec, PassId::Map, &self.image, 0..1),
+                        false => Ok(()),
+                    }
+                })?;
+            }
+        }
+        Ok(())
+    }
+
     /// Uploads a map into a new GPU map and waits (see [`GpuEnvMap::record_upload`]).
     pub fn upload(ctx: &Context, map: &EnvMap) -> Result<GpuEnvMap> {
         let g = GpuEnvMap::new(ctx, "uploaded map", map.mapping, map.width, map.height)?;

@@ -27,7 +27,8 @@ pub fn varied(mapping: Mapping, size: u32) -> EnvMap {
 }
 
 /// Every mapping at sizes 1, 5 and 16 (odd, and a cube's six layers): what comes back is what
-/// went up, bit for bit, with alpha 1; downloading level 0 of a mipped map the same; and the
+/// went up, bit for bit, with alpha 1, whole or in bands of rows; downloading level 0 of a
+/// mipped map the same; and the
 /// sanitizing copy of an engine's frame ([`check_sanitize`]); the luminance clamp
 /// ([`check_clamp`]).
 pub fn check(ctx: &Context) {
@@ -48,6 +49,22 @@ pub fn check(ctx: &Context) {
                     b.iter().zip(&want).all(|(x, y)| x.to_bits() == y.to_bits()),
                     "{what}: texel {k} came back {b:?}, went up {want:?}"
                 );
+            }
+            // In bands of one and three rows, and of more rows than the map has.
+            for rows in [1, 3, 64] {
+                let banded = GpuEnvMap::new(ctx, "banded", mapping, map.width, map.height).unwrap();
+                banded
+                    .upload_banded(ctx, &map, rows * map.width as u64 * 16)
+                    .unwrap();
+                let back = banded.download_level(ctx, 0).unwrap();
+                assert_eq!(back.len(), map.texels.len(), "{what}");
+                for (k, (b, t)) in back.iter().zip(&map.texels).enumerate() {
+                    let want = [t[0], t[1], t[2], 1.0];
+                    assert!(
+                        b.iter().zip(&want).all(|(x, y)| x.to_bits() == y.to_bits()),
+                        "{what}, bands of {rows} rows: texel {k} came back {b:?}, went up {want:?}"
+                    );
+                }
             }
             let mipped = GpuEnvMap::upload_mipped(ctx, &map).unwrap();
             let (w, h) = mapping.extent_for_size(size);
