@@ -45,6 +45,13 @@ pub enum Query {
     },
 }
 
+/// A [`Query`] with what its sums use at every texel found once.
+#[derive(Clone, Copy)]
+enum Prepared {
+    Ggx { r: DVec3, r_file: DVec3, a: f64 },
+    Irradiance { n: DVec3 },
+}
+
 /// Rows (of all layers, in order) a unit of work sums; partial sums join in row order, so
 /// the results do not depend on the number of threads.
 const ROWS_PER_CHUNK: usize = 8;
@@ -54,12 +61,29 @@ const ROWS_PER_CHUNK: usize = 8;
 pub struct ExactFilter<'a> {
     map: &'a EnvMap,
     file_to_world: DMat3,
+    /// A lat-long map's (sin, cos) of each column's azimuth 2π·u at its centre (empty for
+    /// other mappings): a texel's direction is then its row's and its column's, as
+    /// [`Mapping::coord_to_dir`] finds it, without a sine per texel.
+    columns: Vec<(f64, f64)>,
 }
 
 impl<'a> ExactFilter<'a> {
     /// Prepares `map`, whose file directions reach the world through `file_to_world`.
     pub fn new(map: &'a EnvMap, file_to_world: DMat3) -> ExactFilter<'a> {
-        ExactFilter { map, file_to_world }
+        let columns = match map.mapping {
+            Mapping::LatLong => (0..map.width)
+                .map(|i| {
+                    let u = Mapping::texel_center(map.width, map.height, 0, i, 0).u;
+                    (std::f64::consts::TAU * u).sin_cos()
+                })
+                .collect(),
+            _ => Vec::new(),
+        };
+        ExactFilter {
+            map,
+            file_to_world,
+            columns,
+        }
     }
 
     /// The texels of row `j` of `layer` that hold part of the sphere, into `out`.
@@ -67,13 +91,28 @@ impl<'a> ExactFilter<'a> {
         out.clear();
         let map = self.map;
         let (w, h) = (map.width, map.height);
+        if map.mapping == Mapping::LatLong {
+            // coord_to_dir's lat-long rule, the row's polar angle and solid angle found once.
+            let v = Mapping::texel_center(w, h, 0, 0, j).v;
+            let (st, ct) = (std::f64::consts::PI * v).sin_cos();
+            let omega = map.mapping.texel_solid_angle(w, h, 0, j);
+            for (i, &(sp, cp)) in (0..w).zip(&self.columns) {
+                out.push(Texel {
+                    layer,
+                    i,
+                    j,
+                    dir: self.file_to_world * DVec3::new(st * sp, ct, -st * cp),
+                    omega,
+                    rho: omega.sqrt(),
+                    radiance: map.texel(layer, i, j).map(f64::from),
+                });
+            }
+            return;
+        }
         for i in 0..w {
-            let src = if map.mapping == Mapping::LatLong {
-                Some((i, j))
-            } else {
-                map.mapping.integration_source(w, h, i, j)
+            let Some((si, sj)) = map.mapping.integration_source(w, h, i, j) else {
+                continue;
             };
-            let Some((si, sj)) = src else { continue };
             let omega = map.mapping.texel_solid_angle(w, h, i, j);
             let c = map
                 .mapping
@@ -164,15 +203,49 @@ impl<'a> ExactFilter<'a> {
     /// Every query's value ([`ExactFilter::ggx`], [`ExactFilter::irradiance`]) in one pass
     /// over the map, in the queries' order.
     pub fn evaluate(&self, queries: &[Query]) -> Vec<[f64; 3]> {
-        // Per query: Σ K·L per channel and Σ K.
+        self.evaluate_with(queries, 4.0)
+    }
+
+    /// [`ExactFilter::evaluate`] with `per_width` cells per lobe scale in the GGX sums.
+    fn evaluate_with(&self, queries: &[Query], per_width: f64) -> Vec<[f64; 3]> {
+        let prepared: Vec<Prepared> = queries
+            .iter()
+            .map(|q| match *q {
+                Query::Ggx { r, alpha } => {
+                    let a = alpha.max(super::brdf::GGX_ALPHA_MIN);
+                    Prepared::Ggx {
+                        r,
+                        // Sub-cell directions are found in the file frame.
+                        r_file: self.file_to_world.transpose() * r,
+                        a,
+                    }
+                }
+                Query::Irradiance { n } => Prepared::Irradiance { n },
+            })
+            .collect();
+        // Per query: Σ K·L per channel and Σ K, over a chunk's texels query by query.
         let n = queries.len();
+        let add = |s: &mut [f64; 4], k: f64, t: &Texel| {
+            for (s, l) in s.iter_mut().zip(t.radiance) {
+                *s += k * l;
+            }
+            s[3] += k;
+        };
         let parts = self.chunks(
             || vec![[0.0f64; 4]; n],
             |texels, sums| {
-                for (q, s) in queries.iter().zip(sums.iter_mut()) {
+                for (q, s) in prepared.iter().zip(sums.iter_mut()) {
                     match *q {
-                        Query::Ggx { r, alpha } => self.ggx_sum(texels, r, alpha, 4.0, s),
-                        Query::Irradiance { n } => irradiance_sum(texels, n, s),
+                        Prepared::Ggx { r, r_file, a } => {
+                            for t in texels {
+                                add(s, self.ggx_weight(t, r, r_file, a, per_width), t);
+                            }
+                        }
+                        Prepared::Irradiance { n } => {
+                            for t in texels {
+                                add(s, n.dot(t.dir).max(0.0) * t.omega, t);
+                            }
+                        }
                     }
                 }
             },
@@ -180,8 +253,8 @@ impl<'a> ExactFilter<'a> {
         let mut total = vec![[0.0f64; 4]; n];
         for p in parts {
             for (t, s) in total.iter_mut().zip(p) {
-                for c in 0..4 {
-                    t[c] += s[c];
+                for (a, b) in t.iter_mut().zip(s) {
+                    *a += b;
                 }
             }
         }
@@ -210,69 +283,48 @@ impl<'a> ExactFilter<'a> {
 
     /// [`ExactFilter::ggx`] with `per_width` cells per lobe scale (the tests refine it).
     fn ggx_with(&self, r: DVec3, alpha: f64, per_width: f64) -> [f64; 3] {
-        let parts = self.chunks(
-            || [0.0f64; 4],
-            |texels, s| self.ggx_sum(texels, r, alpha, per_width, s),
-        );
-        let mut t = [0.0f64; 4];
-        for p in parts {
-            for c in 0..4 {
-                t[c] += p[c];
-            }
-        }
-        if t[3] > 0.0 {
-            [t[0] / t[3], t[1] / t[3], t[2] / t[3]]
-        } else {
-            [0.0; 3]
-        }
+        self.evaluate_with(&[Query::Ggx { r, alpha }], per_width)[0]
     }
 
-    /// Adds `texels`' Σ K·L (per channel) and Σ K for [`ExactFilter::ggx_with`] to `sum`.
-    fn ggx_sum(&self, texels: &[Texel], r: DVec3, alpha: f64, per_width: f64, sum: &mut [f64; 4]) {
+    /// Texel `t`'s weight ∫_t K dω in [`ExactFilter::ggx_with`]'s sum for the lobe about `r`
+    /// (world; `r_file` in the file frame) at α = `a`.
+    fn ggx_weight(&self, t: &Texel, r: DVec3, r_file: DVec3, a: f64, per_width: f64) -> f64 {
+        let chord2 = (t.dir - r).length_squared();
+        let gap = 0.5 * chord2;
+        // The lobe's scale there, w = max(α, chord/8): the chord, below the angle θ, stands
+        // for it (more cells, never fewer). One node at the centre where 4ρ < 0.2·w, the
+        // texel small next to the scale (its error is about (ρ/w)²/24 of the texel's term),
+        // compared in squares so that most texels take no root; Gauss cells elsewhere, whose
+        // error falls as the fourth power of the cell's size against the lobe's.
+        let w2 = (a * a).max(TAIL_FRACTION * TAIL_FRACTION * chord2);
+        let size = per_width * t.rho;
+        if size * size < CENTRE_BELOW * CENTRE_BELOW * w2 {
+            return chain_kernel(a, gap) * t.omega;
+        }
         let map = self.map;
         let (w, h) = (map.width, map.height);
-        let a = alpha.max(super::brdf::GGX_ALPHA_MIN);
-        // Sub-cell directions are found in the file frame.
-        let r_file = self.file_to_world.transpose() * r;
         let g = 0.5 / 3f64.sqrt();
         let node = |n: u32| (n / 2) as f64 + 0.5 + if n.is_multiple_of(2) { -g } else { g };
-        for t in texels {
-            let chord2 = (t.dir - r).length_squared();
-            let gap = 0.5 * chord2;
-            // The chord, below the angle θ, stands for it (more cells, never fewer).
-            let width = a.max(TAIL_FRACTION * chord2.sqrt());
-            let cells = per_width * t.rho / width;
-            // One node at the centre where the texel is small next to the lobe's scale (its
-            // error is about (ρ/w)²/24 of the texel's term); Gauss cells elsewhere, whose
-            // error falls as the fourth power of the cell's size against the lobe's.
-            let k = if cells < CENTRE_BELOW {
-                chain_kernel(a, gap) * t.omega
-            } else {
-                let s = cells.ceil().min(8.0 * per_width) as u32;
-                let (mut kw, mut ww) = (0.0, 0.0);
-                for b in 0..2 * s {
-                    for q in 0..2 * s {
-                        let cc = Coord {
-                            layer: t.layer,
-                            u: (t.i as f64 + node(q) / s as f64) / w as f64,
-                            v: (t.j as f64 + node(b) / s as f64) / h as f64,
-                        };
-                        let wt = map.mapping.footprint_weight(cc);
-                        let d = map.mapping.coord_to_dir(cc);
-                        kw += wt * chain_kernel(a, 0.5 * (d - r_file).length_squared());
-                        ww += wt;
-                    }
-                }
-                if ww > 0.0 {
-                    kw / ww * t.omega
-                } else {
-                    chain_kernel(a, gap) * t.omega
-                }
-            };
-            for (s, l) in sum.iter_mut().zip(t.radiance) {
-                *s += k * l;
+        let cells = size / w2.sqrt();
+        let s = cells.ceil().min(8.0 * per_width) as u32;
+        let (mut kw, mut ww) = (0.0, 0.0);
+        for b in 0..2 * s {
+            for q in 0..2 * s {
+                let cc = Coord {
+                    layer: t.layer,
+                    u: (t.i as f64 + node(q) / s as f64) / w as f64,
+                    v: (t.j as f64 + node(b) / s as f64) / h as f64,
+                };
+                let wt = map.mapping.footprint_weight(cc);
+                let d = map.mapping.coord_to_dir(cc);
+                kw += wt * chain_kernel(a, 0.5 * (d - r_file).length_squared());
+                ww += wt;
             }
-            sum[3] += k;
+        }
+        if ww > 0.0 {
+            kw / ww * t.omega
+        } else {
+            chain_kernel(a, gap) * t.omega
         }
     }
 
@@ -280,16 +332,6 @@ impl<'a> ExactFilter<'a> {
     /// radian, so a texel of angular size ρ errs by about ρ²/24 of its term (4·10⁻⁷ at 1k).
     pub fn irradiance(&self, n: DVec3) -> [f64; 3] {
         self.evaluate(&[Query::Irradiance { n }])[0]
-    }
-}
-
-/// Adds `texels`' Σ L·max(0, n·ω)·Ω per channel to `sum`.
-fn irradiance_sum(texels: &[Texel], n: DVec3, sum: &mut [f64; 4]) {
-    for t in texels {
-        let k = n.dot(t.dir).max(0.0) * t.omega;
-        for (s, l) in sum.iter_mut().zip(t.radiance) {
-            *s += k * l;
-        }
     }
 }
 
