@@ -332,6 +332,31 @@ fn shards_are_byte_identical_to_one_run_and_merge() {
     }
 }
 
+/// Each baked probe's `stages` in the manifest: every host stage a finite, non-negative
+/// number of seconds, at least one of them positive, the GPU's two parts adding up to its
+/// `gpu_ms` (to 1e-9 relative: the same timestamps summed two ways); a skipped probe has
+/// none.
+fn check_stages(out: &Path) {
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("manifest.json")).unwrap()).unwrap();
+    for e in m["probes"].as_array().unwrap() {
+        let st = &e["stages"];
+        if e["status"] != "baked" {
+            assert!(st.is_null(), "{e}");
+            continue;
+        }
+        let secs = ["read", "lights", "upload", "gpu_wait", "check", "write"]
+            .map(|k| st[k].as_f64().unwrap_or(f64::NAN));
+        assert!(secs.iter().all(|s| s.is_finite() && *s >= 0.0), "{st}");
+        assert!(secs.iter().any(|s| *s > 0.0), "{st}");
+        let parts = st["gpu_convert_ms"].as_f64().unwrap() + st["gpu_filter_ms"].as_f64().unwrap();
+        let whole = e["gpu_ms"].as_f64().unwrap();
+        assert!(whole > 0.0, "{e}");
+        let err = common::compare::rel_err(parts, whole, 1e-300, "gpu_ms");
+        assert!(err < 1e-9, "{st}: {parts} ms against gpu_ms {whole}");
+    }
+}
+
 /// An interrupted bake (here: one that only reached p0) resumes without redoing p0; a re-run
 /// skips everything; a corrupt probe fails alone, named, with a failing exit status; --force
 /// bakes again; no temporary file is left behind.
@@ -351,6 +376,7 @@ fn reruns_resume_skip_and_fail_alone() {
     let s = statuses(&out, "manifest.json");
     assert_eq!(s[0], ("p0.exr".into(), "skipped".into()));
     assert!(s[1..].iter().all(|e| e.1 == "baked"), "{s:?}");
+    check_stages(&out);
     assert_eq!(
         std::fs::metadata(out.join("p0.exr/specular.ktx2"))
             .unwrap()

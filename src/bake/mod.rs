@@ -287,9 +287,25 @@ struct Downloads {
 pub struct PendingBake {
     inflight: InFlight<Downloads>,
     lmax: u32,
+    host: HostSeconds,
+}
+
+/// Where [`Baker::submit`] spent its own (host) time.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HostSeconds {
+    /// Statistics and light extraction, and the grids of block means.
+    pub lights: f64,
+    /// Writing the source into staging memory (and, for a large map, its banded upload,
+    /// which waits for the GPU) and recording the submission.
+    pub upload: f64,
 }
 
 impl PendingBake {
+    /// Where the submission spent its host time.
+    pub fn host_seconds(&self) -> HostSeconds {
+        self.host
+    }
+
     /// Waits for the GPU and reads the results back; refuses a non-finite texel.
     pub fn wait(self) -> Result<Baked> {
         let (d, timings) = self.inflight.wait()?;
@@ -532,7 +548,9 @@ impl Baker {
         // The finest lobe the light texels' quadrature must resolve: level 1's (a source too
         // coarse for it bakes its specular levels without lights, as `resolves` says).
         let finest = level_alpha(1, opts.specular_levels.max(2));
+        let t0 = std::time::Instant::now();
         let prep = prepare(env, opts, finest);
+        let lights_s = t0.elapsed().as_secs_f64();
         let images = Images::new(ctx, env, opts, &prep)?;
         let file_to_world = orientation.checked_world_to_file()?.transpose();
         let lights = GpuLights::of_lights(
@@ -604,7 +622,15 @@ impl Baker {
                 chain,
             })
         })?;
-        Ok(PendingBake { inflight, lmax })
+        let host = HostSeconds {
+            lights: lights_s,
+            upload: t0.elapsed().as_secs_f64() - lights_s,
+        };
+        Ok(PendingBake {
+            inflight,
+            lmax,
+            host,
+        })
     }
 
     /// Records the specular cube: the whole map's paraboloid (from `src`, or from the grid of

@@ -203,7 +203,7 @@ struct Output {
 /// A probe as the reader thread hands it over.
 enum Prepared {
     /// Unchanged since a previous run: its entry, marked skipped.
-    Skip(Entry),
+    Skip(Box<Entry>),
     /// To bake: the decoded map, or why it could not be read.
     Bake {
         path: PathBuf,
@@ -249,6 +249,44 @@ struct Entry {
     /// where the lock was free: a killed holder's lock is dropped with its process).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     lock_wait_seconds: Option<f64>,
+    /// Where a baked probe's time went (absent for skipped and failed probes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    stages: Option<Stages>,
+}
+
+/// Where a baked probe's time went: host seconds per stage, and the GPU's time per kind
+/// of pass (timestamps). Reading runs on its own thread, beside the previous probe's work.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+struct Stages {
+    /// Reading, hashing and decoding the input.
+    read: f64,
+    /// Statistics, light extraction and the grids of block means.
+    lights: f64,
+    /// Staging the source (a large map's banded upload) and recording the submission.
+    upload: f64,
+    /// Waiting for the GPU's work and reading the cubes back.
+    gpu_wait: f64,
+    /// GPU milliseconds of the conversions: paraboloids, the clamp, their MIP chains.
+    gpu_convert_ms: f64,
+    /// GPU milliseconds of the filters: SH, the irradiance cube, the specular levels, lights.
+    gpu_filter_ms: f64,
+    /// The spot check against float64 exact filters.
+    check: f64,
+    /// Encoding and writing the files and the record.
+    write: f64,
+}
+
+impl Stages {
+    /// The GPU milliseconds of `timings` split into conversions and filters.
+    fn gpu(timings: &[crate::gpu::Timing]) -> (f64, f64) {
+        let convert = |l: &str| ["convert", "mip", "clamp"].iter().any(|p| l.starts_with(p));
+        timings
+            .iter()
+            .fold((0.0, 0.0), |(c, f), t| match convert(&t.label) {
+                true => (c + t.ms, f),
+                false => (c, f + t.ms),
+            })
+    }
 }
 
 /// What clamping took from one probe's cubes.
@@ -321,6 +359,7 @@ fn failed(
         clamped: None,
         separated: None,
         lock_wait_seconds: None,
+        stages: None,
     }
 }
 
@@ -1211,7 +1250,7 @@ impl Run<'_> {
         let mut in_gpu: Option<Box<InGpu>> = None;
         for job in rx {
             let next = match job {
-                Prepared::Skip(e) => Started::Done(Box::new(e)),
+                Prepared::Skip(e) => Started::Done(e),
                 Prepared::Bake {
                     path,
                     input,
@@ -1260,6 +1299,7 @@ impl Run<'_> {
                 return Started::Done(Box::new(Entry {
                     status: "skipped".into(),
                     lock_wait_seconds: lock_wait,
+                    stages: None,
                     ..e
                 }));
             }
@@ -1306,17 +1346,31 @@ impl Run<'_> {
     fn finish(&self, w: Box<InGpu>, pb: &ProgressBar) -> Entry {
         let w = *w;
         let plan = self.plan;
+        let host = w.pending.host_seconds();
+        let mut stages = Stages {
+            read: w.read_s,
+            lights: host.lights,
+            upload: host.upload,
+            ..Stages::default()
+        };
+        let t0 = Instant::now();
         let result = w
             .pending
             .wait()
             .map_err(anyhow::Error::from)
             .and_then(|baked| {
+                stages.gpu_wait = t0.elapsed().as_secs_f64();
+                (stages.gpu_convert_ms, stages.gpu_filter_ms) = Stages::gpu(&baked.timings);
                 let dir = self.out.join(&w.name);
+                let t1 = Instant::now();
                 let (outputs, clamped) =
                     write_probe(self.out, &dir, &baked, plan, w.lights.as_ref())?;
+                stages.write = t1.elapsed().as_secs_f64();
+                let t2 = Instant::now();
                 let checked = (plan.check > 0).then(|| {
                     spot_check(&w.map, &plan.orientation, &plan.options, &baked, plan.check)
                 });
+                stages.check = t2.elapsed().as_secs_f64();
                 let gpu_ms = baked.timings.iter().map(|t| t.ms).sum::<f64>();
                 Ok((outputs, gpu_ms, checked, clamped))
             })
@@ -1336,6 +1390,7 @@ impl Run<'_> {
                 clamped,
                 separated: w.lights.as_ref().map(|l| l.share),
                 lock_wait_seconds: w.lock_wait,
+                stages: Some(stages),
             },
             Err(e) => return failed(pb, w.input, w.input_sha256, e, w.read_s),
         };
@@ -1372,11 +1427,12 @@ fn read_probes(
             .iter()
             .find(|e| e.input == input && e.input_sha256 == input_sha256 && outputs_intact(out, e));
         let job = match (done, force) {
-            (Some(e), false) => Prepared::Skip(Entry {
+            (Some(e), false) => Prepared::Skip(Box::new(Entry {
                 status: "skipped".into(),
                 lock_wait_seconds: None,
+                stages: None,
                 ..e.clone()
-            }),
+            })),
             _ => {
                 let map = bytes
                     .map_err(|source| {
