@@ -719,3 +719,63 @@ fn farm_recipes_in_the_docs_bake_a_set() {
         let _ = std::fs::remove_dir_all(p);
     }
 }
+
+/// A source past `--max-source-side` (or the device's largest image) is reduced before its
+/// bake, never refused: with a limit of 32, the two 64 × 32 probes bake at 32 × 16 and the
+/// 48 × 24 one at 24 × 12 (the means of 2 × 2 blocks), each noted in the manifest and the
+/// summary, and their files are byte-identical to bakes of those block means written as
+/// float32 EXR; the limit is a setting, so a run without it bakes them again.
+#[test]
+fn sources_past_the_largest_side_are_reduced_not_refused() {
+    let dir = temp("reduce-in");
+    let maps = probes(&dir);
+    let out = temp("reduce-out");
+    let o = bake(&[
+        dir.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--max-source-side",
+        "32",
+    ]);
+    ok(&o);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("manifest.json")).unwrap()).unwrap();
+    let want = [
+        ([64, 32], [32, 16]),
+        ([64, 32], [32, 16]),
+        ([48, 24], [24, 12]),
+    ];
+    let means = temp("reduce-means");
+    for (k, (e, (from, to))) in m["probes"].as_array().unwrap().iter().zip(want).enumerate() {
+        let r = &e["reduced"];
+        assert_eq!(r["from"], serde_json::json!(from), "{e}");
+        assert_eq!(r["to"], serde_json::json!(to), "{e}");
+        assert_eq!(r["how"], "blocks 2", "{e}");
+        assert!(
+            stdout.contains(&format!("p{k}.exr baked at {} × {}", to[0], to[1])),
+            "{stdout}"
+        );
+        let (small, _) = envlight::math::lights::block_means(&maps[k], 2, f64::INFINITY).unwrap();
+        envlight::io::save_exr(&small, means.join(format!("p{k}.exr"))).unwrap();
+    }
+    let direct = temp("reduce-direct");
+    ok(&bake(&[
+        means.to_str().unwrap(),
+        "-o",
+        direct.to_str().unwrap(),
+    ]));
+    for k in 0..3 {
+        for f in ["sh.json", "irradiance.ktx2", "specular.ktx2"] {
+            let p = format!("p{k}.exr/{f}");
+            let a = std::fs::read(out.join(&p)).unwrap();
+            assert!(a == std::fs::read(direct.join(&p)).unwrap(), "{p} differs");
+        }
+    }
+    ok(&bake(&[dir.to_str().unwrap(), "-o", out.to_str().unwrap()]));
+    let s = statuses(&out, "manifest.json");
+    assert!(s.iter().all(|e| e.1 == "baked"), "{s:?}");
+    for p in [&dir, &out, &means, &direct] {
+        let _ = std::fs::remove_dir_all(p);
+    }
+}

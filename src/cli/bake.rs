@@ -11,6 +11,7 @@ use crate::bake::output::{
 use crate::bake::{spot_check, BakeOptions, Baked, Baker, PendingBake, SpotCheck};
 use crate::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
 use crate::io::{write_atomic, LoadOptions};
+use crate::math::convert::{reduce_to_fit, Reduction};
 use crate::math::lights::{extract_blocks, record_block};
 use crate::math::split_sum::DfgAxes;
 use crate::{EnvMap, Mapping, Orientation};
@@ -89,6 +90,11 @@ pub struct BakeArgs {
     /// for a missing device, instead of warning and baking ~100× slower
     #[arg(long)]
     require_gpu: bool,
+    /// Reduce a source wider or taller than this many texels before baking it (the means of
+    /// blocks of texels, its power kept; noted in the summary and the manifest) [default:
+    /// the device's largest image side, or cube face]
+    #[arg(long, value_name = "TEXELS")]
+    max_source_side: Option<u32>,
     /// Merge the shards' manifests found in OUT into OUT/manifest.json, and bake nothing
     #[arg(long)]
     merge: bool,
@@ -190,6 +196,9 @@ struct Settings {
     irradiance: Irradiance,
     lights: LightsMode,
     zstd: bool,
+    /// `--max-source-side`, where given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    max_source_side: Option<u32>,
 }
 
 /// One output file in the manifest.
@@ -252,6 +261,44 @@ struct Entry {
     /// Where a baked probe's time went (absent for skipped and failed probes).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     stages: Option<Stages>,
+    /// How a source larger than `--max-source-side` or the device's largest image was
+    /// reduced before baking (absent where it was baked as read).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    reduced: Option<Reduced>,
+}
+
+/// A source reduced before its bake.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct Reduced {
+    /// Its size as read, (width, height).
+    from: [u32; 2],
+    /// The size baked.
+    to: [u32; 2],
+    /// The largest side allowed.
+    limit: u32,
+    /// `blocks K` (the means of K × K blocks) or `resampled` (a conversion scaled to the
+    /// source's power).
+    how: String,
+}
+
+/// `map` reduced to fit `limit` texels a side ([`reduce_to_fit`]), and how; as it is where
+/// it fits.
+fn fit(map: EnvMap, limit: u32) -> (EnvMap, Option<Reduced>) {
+    match reduce_to_fit(&map, limit) {
+        None => (map, None),
+        Some((small, how)) => {
+            let r = Reduced {
+                from: [map.width, map.height],
+                to: [small.width, small.height],
+                limit,
+                how: match how {
+                    Reduction::Blocks(k) => format!("blocks {k}"),
+                    Reduction::Resampled => "resampled".into(),
+                },
+            };
+            (small, Some(r))
+        }
+    }
 }
 
 /// Where a baked probe's time went: host seconds per stage, and the GPU's time per kind
@@ -333,6 +380,8 @@ struct InGpu {
     _lock: std::fs::File,
     /// Seconds spent waiting for the lock (None: it was free).
     lock_wait: Option<f64>,
+    /// How the source was reduced to fit, where it was.
+    reduced: Option<Reduced>,
 }
 
 /// The manifest entry of a probe that failed, reported above the progress bar.
@@ -360,6 +409,7 @@ fn failed(
         separated: None,
         lock_wait_seconds: None,
         stages: None,
+        reduced: None,
     }
 }
 
@@ -464,6 +514,7 @@ struct Plan {
     check: u32,
     dfg: bool,
     dfg_axes: DfgAxes,
+    max_source_side: Option<u32>,
 }
 
 impl Plan {
@@ -566,6 +617,7 @@ impl Plan {
             check: a.check.or(file.check).unwrap_or(2),
             dfg: a.dfg || file.dfg == Some(true) || preset.is_some_and(|p| p.lut()),
             dfg_axes,
+            max_source_side: a.max_source_side,
         })
     }
 
@@ -581,6 +633,7 @@ impl Plan {
             irradiance: self.irradiance,
             lights: self.lights,
             zstd: self.sc == Supercompression::Zstd,
+            max_source_side: self.max_source_side,
         }
     }
 }
@@ -982,12 +1035,18 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
     if plan.dfg {
         write_dfg(&baker, &plan, out)?;
     }
+    let info = ctx.info();
+    let user = a.max_source_side.unwrap_or(u32::MAX).max(1);
     let run = Run {
         plan: &plan,
         baker: &baker,
         out,
         settings_sha256: &settings_sha256,
         force: a.force,
+        max_side: (
+            info.max_image_dimension_2d.min(user),
+            info.max_image_dimension_cube.min(user),
+        ),
     };
     let entries = run.probes(&mine, &previous);
     let manifest = Manifest {
@@ -1195,6 +1254,14 @@ fn summary(manifest: &Manifest, plan: &Plan) {
          {} removed (texels brighter than the format holds; --lights separate or rgba32f keep it)",
         plan.texels.name()
     );
+    for e in &manifest.probes {
+        if let Some(r) = &e.reduced {
+            println!(
+                "reduced: {} baked at {} × {} from {} × {} ({}, power kept; largest side {})",
+                e.input, r.to[0], r.to[1], r.from[0], r.from[1], r.how, r.limit
+            );
+        }
+    }
 }
 
 /// A probe the main loop took up: on the GPU, or done (skipped or failed) with its entry.
@@ -1210,6 +1277,10 @@ struct Run<'a> {
     out: &'a Path,
     settings_sha256: &'a str,
     force: bool,
+    /// The largest side a source is baked at: a lat-long's, an angular's or a paraboloid's
+    /// (the device's largest 2D image), a cube's face (its largest cube), either no more
+    /// than `--max-source-side`.
+    max_side: (u32, u32),
 }
 
 impl Run<'_> {
@@ -1300,11 +1371,30 @@ impl Run<'_> {
                     status: "skipped".into(),
                     lock_wait_seconds: lock_wait,
                     stages: None,
+                    reduced: None,
                     ..e
                 }));
             }
         }
         let plan = self.plan;
+        let mut reduced = None;
+        let map = map.map(|m| {
+            let limit = match m.mapping {
+                Mapping::Cube => self.max_side.1,
+                _ => self.max_side.0,
+            };
+            let (m, r) = fit(m, limit);
+            if let Some(r) = &r {
+                pb.suspend(|| {
+                    eprintln!(
+                        "{name}: {} × {} reduced to {} × {} ({}; largest side {})",
+                        r.from[0], r.from[1], r.to[0], r.to[1], r.how, r.limit
+                    )
+                });
+            }
+            reduced = r;
+            m
+        });
         let submitted = map.and_then(|map| {
             // Separate lights: the cubes see the residual, lights.json the lights.
             let (source, lights) = match plan.lights {
@@ -1334,6 +1424,7 @@ impl Run<'_> {
                 lights,
                 _lock: lock,
                 lock_wait,
+                reduced,
             })),
             Err(e) => {
                 let e = e.context(path.display().to_string());
@@ -1391,6 +1482,7 @@ impl Run<'_> {
                 separated: w.lights.as_ref().map(|l| l.share),
                 lock_wait_seconds: w.lock_wait,
                 stages: Some(stages),
+                reduced: w.reduced,
             },
             Err(e) => return failed(pb, w.input, w.input_sha256, e, w.read_s),
         };
@@ -1431,6 +1523,7 @@ fn read_probes(
                 status: "skipped".into(),
                 lock_wait_seconds: None,
                 stages: None,
+                reduced: None,
                 ..e.clone()
             })),
             _ => {

@@ -1108,3 +1108,118 @@ mod tests {
         }
     }
 }
+
+/// How [`reduce_to_fit`] reduced a map.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reduction {
+    /// The means of k × k blocks of texels (each block's power kept exactly).
+    Blocks(u32),
+    /// A supersampled conversion to the same mapping, scaled to the map's power per channel
+    /// (no block size near enough divides both sides).
+    Resampled,
+}
+
+/// `map` reduced so that no side exceeds `max_side` (a device's largest image side, or a
+/// cube's face), its power kept: the means of k × k blocks for the smallest k that brings it
+/// within `max_side` and divides both sides (lat-long and cube, k at most twice the least
+/// reduction), else a conversion to the same mapping at `max_side` with one sample per
+/// source texel spacing and one more per axis, scaled to the map's power per channel.
+/// `None` where it fits.
+pub fn reduce_to_fit(map: &EnvMap, max_side: u32) -> Option<(EnvMap, Reduction)> {
+    let side = map.width.max(map.height);
+    if side <= max_side || max_side == 0 {
+        return None;
+    }
+    let need = side.div_ceil(max_side);
+    let blocks = (need..=2 * need)
+        .find(|k| map.width.is_multiple_of(*k) && map.height.is_multiple_of(*k))
+        .and_then(|k| {
+            let (m, _) = super::lights::block_means(map, k, f64::INFINITY)?;
+            Some((m, Reduction::Blocks(k)))
+        });
+    if blocks.is_some() {
+        return blocks;
+    }
+    // A lat-long's size is its width (its height half of it); the others' their side.
+    let (w, _) = map.mapping.extent_for_size(max_side);
+    let ss = (map.width.div_ceil(w) + 1).clamp(2, 16);
+    let mut out = convert(map, map.mapping, max_side, DMat3::IDENTITY, ss);
+    let (want, got) = (map.power(), out.power());
+    let scale = [0, 1, 2].map(|c| {
+        if got[c] > 0.0 {
+            (want[c] / got[c]) as f32
+        } else {
+            1.0
+        }
+    });
+    for t in &mut out.texels {
+        for c in 0..3 {
+            t[c] *= scale[c];
+        }
+    }
+    Some((out, Reduction::Resampled))
+}
+
+#[cfg(test)]
+mod reduce_tests {
+    use super::*;
+    use crate::math::synth::Sky;
+
+    fn rel(a: f64, b: f64) -> f64 {
+        (a - b).abs() / b.abs().max(1e-300)
+    }
+
+    /// Blocks where a block size near the least reduction divides both sides (64 × 32 to
+    /// 20: k = 4, 16 × 8; a 48² cube face to 20: k = 3), a resampling where none does (46 ×
+    /// 23 to 20: no k from 3 to 6 divides 23): the sides within the limit, the power per
+    /// channel kept to 1e-6, the sun's texel still the brightest within 1.5 texels of its
+    /// direction; nothing where the map fits.
+    #[test]
+    fn reduced_maps_fit_and_keep_their_power() {
+        let sky = Sky::default();
+        let cases = [
+            (Mapping::LatLong, 64, 32, 20, Some(Reduction::Blocks(4))),
+            (Mapping::Cube, 48, 48, 20, Some(Reduction::Blocks(3))),
+            (Mapping::LatLong, 46, 23, 20, Some(Reduction::Resampled)),
+            (Mapping::LatLong, 64, 32, 64, None),
+        ];
+        for (mapping, w, h, max, how) in cases {
+            let map = EnvMap::from_fn(mapping, w, h, 2, move |d| sky.radiance(d));
+            let got = reduce_to_fit(&map, max);
+            assert_eq!(
+                got.as_ref().map(|g| g.1),
+                how,
+                "{mapping:?} {w}x{h} to {max}"
+            );
+            let Some((small, _)) = got else { continue };
+            assert!(small.width <= max && small.height <= max, "{mapping:?}");
+            assert_eq!(small.mapping, mapping);
+            let (a, b) = (small.power(), map.power());
+            for c in 0..3 {
+                assert!(
+                    rel(a[c], b[c]) < 1e-6,
+                    "{mapping:?} {w}x{h}: power {a:?} against {b:?}"
+                );
+            }
+            let brightest = |m: &EnvMap| {
+                let k = (0..m.texels.len())
+                    .max_by(|&x, &y| {
+                        let l = |t: [f32; 3]| t[0] as f64 + t[1] as f64 + t[2] as f64;
+                        l(m.texels[x]).total_cmp(&l(m.texels[y]))
+                    })
+                    .unwrap();
+                let (w, h) = (m.width as usize, m.height as usize);
+                m.texel_dir((k / (w * h)) as u32, (k % w) as u32, (k / w % h) as u32)
+            };
+            let angle = brightest(&small)
+                .dot(brightest(&map))
+                .clamp(-1.0, 1.0)
+                .acos();
+            let texel = std::f64::consts::PI / small.height as f64;
+            assert!(
+                angle < 1.5 * texel,
+                "{mapping:?} {w}x{h}: the sun moved {angle} rad"
+            );
+        }
+    }
+}
