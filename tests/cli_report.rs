@@ -409,3 +409,47 @@ fn bench_dynamic_page(tag: &str, more: &[&str]) -> String {
     let _ = std::fs::remove_file(&page);
     text
 }
+
+/// `bench scale` on the bundled sky at ×1 and ×2 writes its page section: a row per factor
+/// with the source's size, and every figure in it a finite number (seconds, peak RSS and
+/// bytes a texel positive: the child's `wait4` figures were read).
+#[test]
+fn bench_scale_writes_a_row_per_factor() {
+    let page = std::env::temp_dir().join(format!("envlight-scale-{}.md", std::process::id()));
+    let _ = std::fs::remove_file(&page);
+    let sky = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/sky_latlong.exr");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .args(["--device", "cpu", "bench", "scale"])
+        .arg(&sky)
+        .args(["--factors", "1,2", "--out"])
+        .arg(&page)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&page).unwrap();
+    let _ = std::fs::remove_file(&page);
+    assert!(text.contains("<!-- bench:bake-scale -->"), "{text}");
+    for size in ["512 × 256", "1024 × 512"] {
+        let row = text
+            .lines()
+            .find(|l| l.starts_with(&format!("| {size} |")))
+            .unwrap_or_else(|| panic!("no row for {size}: {text}"));
+        let cells: Vec<&str> = row
+            .split('|')
+            .map(str::trim)
+            .filter(|c| !c.is_empty())
+            .collect();
+        assert_eq!(cells.len(), 12, "{row}");
+        let number = |c: &str| c.split_whitespace().next().unwrap().parse::<f64>().unwrap();
+        for c in &cells[1..4] {
+            let v = number(c);
+            assert!(v.is_finite() && v > 0.0, "{row}: {c}");
+        }
+        for c in &cells[4..] {
+            for part in c.split('/') {
+                let v = number(part.trim());
+                assert!(v.is_finite() && v >= 0.0, "{row}: {c}");
+            }
+        }
+    }
+}

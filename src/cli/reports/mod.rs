@@ -14,6 +14,7 @@ pub mod page;
 pub mod peers;
 mod recipes;
 pub mod report;
+pub mod scale;
 mod scoring;
 pub mod table;
 
@@ -192,6 +193,19 @@ pub enum Bench {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// What a bake costs against the source's resolution: a lat-long probe upsampled ×k (the
+    /// same picture), baked in its own process: seconds, peak RSS, stages and errors
+    /// (markdown)
+    Scale {
+        /// A lat-long probe
+        input: PathBuf,
+        /// Upsampling factors
+        #[arg(long, value_delimiter = ',', default_value = "1,4,8,16")]
+        factors: Vec<u32>,
+        /// The performance page (docs/performance/DEVICE.md) to write this job's section into
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// What each KTX2 texel format and Zstandard cost and keep: per probe the bytes of its
     /// cubes and each specular level's error against rgba32f (markdown)
     Formats {
@@ -283,6 +297,11 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
                 out: out.clone(),
             },
         ),
+        Bench::Scale {
+            input,
+            factors,
+            out,
+        } => scale::bench_scale(g, input, factors, out.as_ref()),
         Bench::Formats {
             inputs,
             specular_size,
