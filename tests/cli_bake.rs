@@ -779,3 +779,46 @@ fn sources_past_the_largest_side_are_reduced_not_refused() {
         let _ = std::fs::remove_dir_all(p);
     }
 }
+
+/// Large probes (over 4 Mi texels) bake one at a time, the next read only once the last is
+/// finished, and small ones between them still overlap: a set of a large, a small and a
+/// large map bakes all three, and the first's files are byte-identical to its bake alone.
+#[test]
+fn large_probes_bake_alone_in_a_set() {
+    use envlight::math::synth::Sky;
+    use envlight::{EnvMap, Mapping};
+    let dir = temp("large-in");
+    let sky = Sky::default();
+    for (name, w) in [("a.exr", 2900), ("b.exr", 64), ("c.exr", 2900)] {
+        let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 1, move |d| sky.radiance(d));
+        envlight::io::save_exr(&map, dir.join(name)).unwrap();
+    }
+    let out = temp("large-out");
+    ok(&bake(&[
+        dir.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--check",
+        "0",
+    ]));
+    let s = statuses(&out, "manifest.json");
+    assert_eq!(s.len(), 3, "{s:?}");
+    assert!(s.iter().all(|e| e.1 == "baked"), "{s:?}");
+    let alone = temp("large-alone");
+    let a = dir.join("a.exr");
+    ok(&bake(&[
+        a.to_str().unwrap(),
+        "-o",
+        alone.to_str().unwrap(),
+        "--check",
+        "0",
+    ]));
+    for f in ["sh.json", "irradiance.ktx2", "specular.ktx2"] {
+        let p = format!("a.exr/{f}");
+        let x = std::fs::read(out.join(&p)).unwrap();
+        assert!(x == std::fs::read(alone.join(&p)).unwrap(), "{p} differs");
+    }
+    for p in [&dir, &out, &alone] {
+        let _ = std::fs::remove_dir_all(p);
+    }
+}

@@ -1270,6 +1270,11 @@ enum Started {
     Done(Box<Entry>),
 }
 
+/// Texels past which a probe is large (4 Mi, a 2896 × 1448 lat-long: 64 MiB of RGBA32F): its
+/// bake overlaps no other probe's, and the next probe is read only once it is finished, so
+/// that a set of large maps holds one at a time.
+const LARGE_TEXELS: usize = 1 << 22;
+
 /// One run's fixed parts, shared by its probes.
 struct Run<'a> {
     plan: &'a Plan,
@@ -1293,13 +1298,17 @@ impl Run<'_> {
                 .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
         // A reader thread reads, hashes, checks and decodes the next probe while this one
-        // bakes and its files are written; the channel holds one probe, so memory stays
-        // bounded.
+        // bakes and its files are written. It reads a probe only with a permit, which the
+        // baking side hands back as soon as it takes a small probe, but only once it has
+        // finished a large one ([`LARGE_TEXELS`]): small probes overlap, a large map is alone
+        // in memory (its bake not overlapping another's, and the next not read meanwhile).
         let (tx, rx) = std::sync::mpsc::sync_channel::<Prepared>(1);
+        let (permit, permits) = std::sync::mpsc::channel::<()>();
+        let _ = permit.send(());
         let (out, force) = (self.out, self.force);
         let entries = std::thread::scope(|scope| {
-            scope.spawn(move || read_probes(mine, previous, out, force, tx));
-            self.bake_all(rx, &pb)
+            scope.spawn(move || read_probes(mine, previous, out, force, tx, permits));
+            self.bake_all(rx, permit, &pb)
         });
         pb.finish_and_clear();
         entries
@@ -1307,7 +1316,12 @@ impl Run<'_> {
 
     /// The main loop: one probe on the GPU while the previous one is read back, written and
     /// checked, so its upload and recording overlap that work and the GPU does not idle.
-    fn bake_all(&self, rx: std::sync::mpsc::Receiver<Prepared>, pb: &ProgressBar) -> Vec<Entry> {
+    fn bake_all(
+        &self,
+        rx: std::sync::mpsc::Receiver<Prepared>,
+        permit: std::sync::mpsc::Sender<()>,
+        pb: &ProgressBar,
+    ) -> Vec<Entry> {
         // Each probe's seconds: the run's wall time from the previous probe's end to its own,
         // so that they add up to the run's (reading happens alongside, on the reader thread).
         let mut entries = Vec::new();
@@ -1320,6 +1334,15 @@ impl Run<'_> {
         };
         let mut in_gpu: Option<Box<InGpu>> = None;
         for job in rx {
+            let large =
+                matches!(&job, Prepared::Bake { map: Ok(m), .. } if m.texels.len() > LARGE_TEXELS);
+            if large {
+                if let Some(w) = in_gpu.take() {
+                    push(&mut entries, self.finish(w, pb));
+                }
+            } else {
+                let _ = permit.send(());
+            }
             let next = match job {
                 Prepared::Skip(e) => Started::Done(e),
                 Prepared::Bake {
@@ -1335,8 +1358,12 @@ impl Run<'_> {
                 push(&mut entries, self.finish(w, pb));
             }
             match next {
+                Started::Gpu(w) if large => push(&mut entries, self.finish(w, pb)),
                 Started::Gpu(w) => in_gpu = Some(w),
                 Started::Done(e) => push(&mut entries, *e),
+            }
+            if large {
+                let _ = permit.send(());
             }
         }
         if let Some(w) = in_gpu.take() {
@@ -1502,15 +1529,20 @@ impl Run<'_> {
 }
 
 /// The reader thread: each probe of `mine` read, hashed and decoded, or marked skipped when a
-/// previous manifest with these settings holds it intact.
+/// previous manifest with these settings holds it intact; each read only with a permit from
+/// `permits` (see `Run::probes`).
 fn read_probes(
     mine: &[PathBuf],
     previous: &[Entry],
     out: &Path,
     force: bool,
     tx: std::sync::mpsc::SyncSender<Prepared>,
+    permits: std::sync::mpsc::Receiver<()>,
 ) {
     for path in mine {
+        if permits.recv().is_err() {
+            return;
+        }
         let t0 = Instant::now();
         let input = input_name(path);
         let bytes = std::fs::read(path);
