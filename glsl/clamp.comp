@@ -2,7 +2,7 @@
 // A map clamped in place at luminance τ: every texel of the mapping's domain whose luminance
 // Y exceeds τ keeps L·τ/Y, chroma kept: the residual of a light extraction by the clamp rule,
 // whose excess over τ the light records hold. A bake clamps its source this way after the
-// passes that read the whole map, instead of uploading a residual copy. Float64 twin:
+// passes that read the whole map. Float64 twin:
 // math::lights::clamp_residual.
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"

@@ -413,14 +413,25 @@ impl Recorder {
     /// Copies `src` (tightly packed texels, layer after layer) into MIP level `level` of
     /// `dst`, whose earlier contents are discarded when `discard`.
     pub fn copy_buffer_to_image(&mut self, src: &Buffer, dst: &Image, level: u32, discard: bool) {
+        self.copy_region(src, dst, discard, level_region(dst, level));
+    }
+
+    /// Copies `src` into `region` of `dst` (discarding its earlier contents when `discard`).
+    fn copy_region(
+        &mut self,
+        src: &Buffer,
+        dst: &Image,
+        discard: bool,
+        region: vk::BufferImageCopy,
+    ) {
         self.use_buffer(src, Usage::TransferSrc);
         if discard {
             self.discard(dst);
         }
         self.use_image(dst, Usage::TransferDst);
-        let region = level_region(dst, level);
         // SAFETY: cmd is recording; buffer and image are live, the image is in
-        // TRANSFER_DST_OPTIMAL and the caller sized the buffer for the level.
+        // TRANSFER_DST_OPTIMAL, and the callers keep the region inside the image and size
+        // the buffer for it.
         unsafe {
             self.ctx.device().cmd_copy_buffer_to_image(
                 self.cmd,
@@ -445,11 +456,6 @@ impl Recorder {
     ) {
         let d = dst.desc();
         assert!(layer < d.layers && rows.start < rows.end && rows.end <= d.height);
-        self.use_buffer(src, Usage::TransferSrc);
-        if discard {
-            self.discard(dst);
-        }
-        self.use_image(dst, Usage::TransferDst);
         let region = vk::BufferImageCopy::default()
             .image_subresource(
                 vk::ImageSubresourceLayers::default()
@@ -467,18 +473,7 @@ impl Recorder {
                 height: rows.end - rows.start,
                 depth: 1,
             });
-        // SAFETY: cmd is recording; buffer and image are live, the image is in
-        // TRANSFER_DST_OPTIMAL, the region lies in level 0 (asserted) and the caller sized
-        // the buffer for it.
-        unsafe {
-            self.ctx.device().cmd_copy_buffer_to_image(
-                self.cmd,
-                src.raw,
-                dst.raw,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[region],
-            )
-        };
+        self.copy_region(src, dst, discard, region);
     }
 
     /// Copies MIP level `level` of `src` into `dst` (tightly packed, layer after layer).
