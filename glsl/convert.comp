@@ -4,7 +4,10 @@
 // of aliasing (see footprint_weight for the angular and paraboloid rims). Built twice: with SRC_CUBE
 // the source is a cube view (hardware filtering crosses faces), otherwise a 2D array read with
 // masked bilinear filtering that never touches texels outside the source's domain. With
-// `nearest` each sample reads the texel it falls in.
+// `nearest` each sample reads the texel it falls in. Built a third time with SPLIT (2D sources,
+// to a dual paraboloid): one read of the source writes the whole map and its residual clamped
+// at luminance pc.threshold texel by texel (glsl/clamp.comp's rule), both premultiplied as
+// glsl/mip.comp keeps level 0, so that both MIP chains start from level 1.
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
 
@@ -20,6 +23,9 @@ layout(set = 0, binding = BINDING_CONVERT_SRC) uniform samplerCube src_cube;
 layout(set = 0, binding = BINDING_CONVERT_SRC) uniform sampler2DArray src;
 #endif
 layout(set = 0, binding = BINDING_CONVERT_DST, rgba32f) uniform writeonly image2DArray dst;
+#ifdef SPLIT
+layout(set = 0, binding = BINDING_CONVERT_RESIDUAL, rgba32f) uniform writeonly image2DArray residual;
+#endif
 
 // The push block, generated from src/abi/push.rs.
 PUSH_ConvertPush
@@ -34,7 +40,19 @@ float row_centroid(int j, float h) {
     return tm + cos(tm) / sin(tm) * k;
 }
 
-vec3 sample_src(vec3 d) {
+// A source texel clamped at luminance pc.threshold, chroma kept (glsl/clamp.comp's rule).
+vec3 clamped(vec3 v) {
+    float y = dot(LUMINANCE, v);
+    return y > pc.threshold ? v * (pc.threshold / y) : v;
+}
+
+// One sample of the source: the map's radiance, and (SPLIT) its residual's.
+struct Sample {
+    vec3 whole;
+    vec3 residual;
+};
+
+Sample sample_src(vec3 d) {
     vec3 f = vec3(dot(pc.world_to_file[0].xyz, d), dot(pc.world_to_file[1].xyz, d),
                   dot(pc.world_to_file[2].xyz, d));
 #ifdef SRC_CUBE
@@ -46,13 +64,19 @@ vec3 sample_src(vec3 d) {
         c.uv = (min(floor(c.uv * size), size - 1.0) + 0.5) / size;
         f = coord_to_dir(MAPPING_CUBE, c);
     }
-    return textureLod(src_cube, f, 0.0).rgb;
+    vec3 v = textureLod(src_cube, f, 0.0).rgb;
+    return Sample(v, v);
 #else
     Coord c = dir_to_coord(SRC_MAPPING, f);
     ivec2 size = ivec2(pc.src_size);
     if (pc.nearest != 0u) {
         ivec2 q = clamp(ivec2(floor(c.uv * vec2(size))), ivec2(0), size - 1);
-        return texelFetch(src, ivec3(q, int(c.layer)), 0).rgb;
+        vec3 v = texelFetch(src, ivec3(q, int(c.layer)), 0).rgb;
+#ifdef SPLIT
+        return Sample(v, clamped(v));
+#else
+        return Sample(v, v);
+#endif
     }
     vec2 p = c.uv * vec2(size) - 0.5;
     ivec2 i0 = ivec2(floor(p));
@@ -74,7 +98,7 @@ vec3 sample_src(vec3 d) {
         }
         t.y = clamp((theta - c0) / (c1 - c0), 0.0, 1.0);
     }
-    vec3 acc = vec3(0.0);
+    vec3 acc = vec3(0.0), acc_r = vec3(0.0);
     float wsum = 0.0;
     vec3 nearest = vec3(0.0);
     for (int k = 0; k < 4; k++) {
@@ -94,20 +118,28 @@ vec3 sample_src(vec3 d) {
         if (k == 0 || w > 0.25) nearest = v;
         if (!texel_in_domain(SRC_MAPPING, pc.src_size, q)) continue;
         acc += w * v;
+#ifdef SPLIT
+        acc_r += w * clamped(v);
+#endif
         wsum += w;
     }
     // Only at the very rim can every neighbour be outside the domain.
-    return wsum > 0.0 ? acc / wsum : nearest;
+    if (wsum > 0.0) return Sample(acc / wsum, acc_r / wsum);
+#ifdef SPLIT
+    return Sample(nearest, clamped(nearest));
+#else
+    return Sample(nearest, nearest);
+#endif
 #endif
 }
 
 void main() {
     uvec3 id = gl_GlobalInvocationID;
     if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
-    vec3 result = vec3(0.0);
+    Sample result = Sample(vec3(0.0), vec3(0.0));
     // Angular texels centred outside the disc are never read: they stay black.
     if (texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy)) || DST_MAPPING != MAPPING_ANGULAR) {
-        vec3 acc = vec3(0.0);
+        vec3 acc = vec3(0.0), acc_r = vec3(0.0);
         float wsum = 0.0;
         float inv = 1.0 / float(pc.ss);
         for (uint b = 0u; b < pc.ss; b++) {
@@ -117,12 +149,16 @@ void main() {
                 c.uv = (vec2(id.xy) + (vec2(a, b) + 0.5) * inv) / vec2(pc.dst_size);
                 float w = footprint_weight(DST_MAPPING, c.uv);
                 if (w <= 0.0) continue;
-                acc += w * sample_src(coord_to_dir(DST_MAPPING, c));
+                Sample v = sample_src(coord_to_dir(DST_MAPPING, c));
+                acc += w * v.whole;
+#ifdef SPLIT
+                acc_r += w * v.residual;
+#endif
                 wsum += w;
             }
         }
         if (wsum > 0.0) {
-            result = acc / wsum;
+            result = Sample(acc / wsum, acc_r / wsum);
         } else {
             // A paraboloid texel whose samples all fall outside its disc holds its own half's
             // rim nearest its centre (not the other half, which the centre's continuation
@@ -136,5 +172,11 @@ void main() {
             result = sample_src(coord_to_dir(DST_MAPPING, c));
         }
     }
-    imageStore(dst, ivec3(id), vec4(result, 1.0));
+#ifdef SPLIT
+    float w = paraboloid_weight(id.xy, pc.dst_size.x);
+    imageStore(dst, ivec3(id), vec4(result.whole * w, w));
+    imageStore(residual, ivec3(id), vec4(result.residual * w, w));
+#else
+    imageStore(dst, ivec3(id), vec4(result.whole, 1.0));
+#endif
 }

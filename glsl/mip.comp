@@ -22,15 +22,7 @@ void main() {
     if (any(greaterThanEqual(id.xy, uvec2(pc.dst_size)))) return;
     if (pc.mode == 0u) {
         vec4 t = imageLoad(src, ivec3(id));
-        // Twin of math::mip::weight.
-        vec2 lo = 2.0 * vec2(id.xy) / float(pc.src_size) - 1.0;
-        vec2 hi = 2.0 * vec2(id.xy + 1u) / float(pc.src_size) - 1.0;
-        vec2 far_ = max(abs(lo), abs(hi));
-        float w = 1.0;
-        if (dot(far_, far_) > 1.0) {
-            float inside = clipped_square(MAPPING_DUAL_PARABOLOID, lo, hi);
-            w = inside > 0.0 ? min(inside / gl8_square(MAPPING_DUAL_PARABOLOID, lo, hi), 1.0) : 0.0;
-        }
+        float w = paraboloid_weight(id.xy, pc.src_size);
         imageStore(dst, ivec3(id), vec4(t.rgb * w, w));
         return;
     }

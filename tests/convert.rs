@@ -199,6 +199,16 @@ fn gpu_matches_the_float64_reference_conversion() {
     common::finish(ctx);
 }
 
+/// One read of a 2D source into the whole map's and its residual's paraboloids
+/// (`Converter::record_split`, the bake's path) against its float64 twin; a cube source
+/// refused. Tolerances in `twins::convert::check_split`.
+#[test]
+fn split_conversion_matches_its_float64_twin() {
+    let ctx = common::ctx();
+    twin::check_split(&ctx);
+    common::finish(ctx);
+}
+
 /// lat-long → cube → dual paraboloid → angular → lat-long returns the original.
 ///
 /// Each step is a resampling of a smooth map at comparable resolution, so the error is the sum

@@ -44,10 +44,11 @@ use std::sync::{Arc, Mutex};
 type Row = (PassId, fn(&Context), f64);
 
 /// Each pass with its twin test and that test's bound.
-fn rows() -> [Row; 14] {
+fn rows() -> [Row; 15] {
     [
         (PassId::Brute, brute::check, brute::BOUND),
         (PassId::Convert, convert::check, convert::BOUND),
+        (PassId::Convert, convert::check_split, convert::BOUND),
         (PassId::Extract, extract::check, extract::BOUND),
         (PassId::GBuffer, gbuffer::check, gbuffer::BOUND),
         (PassId::Lights, lights::check, lights::BOUND),

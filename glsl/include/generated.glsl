@@ -7,6 +7,7 @@
 #define BINDING_CONVERT_LIST 3
 #define BINDING_CONVERT_PLAN_OFFSETS 4
 #define BINDING_CONVERT_PLAN_ENTRIES 5
+#define BINDING_CONVERT_RESIDUAL 6
 #define BINDING_PROBE_IN 0
 #define BINDING_PROBE_OUT 1
 #define BINDING_COPY_SRC 0
@@ -244,7 +245,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define MAPPING_ANGULAR 1u
 #define MAPPING_CUBE 2u
 #define MAPPING_DUAL_PARABOLOID 3u
-#define PUSH_ConvertPush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint ss; uint nearest; } pc;
+#define PUSH_ConvertPush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 src_size; uvec2 dst_size; uint src_mapping; uint dst_mapping; uint ss; uint nearest; float threshold; } pc;
 #define PUSH_ProbePush layout(push_constant) uniform Push { uint mode; uint mapping; uint count; uint width; uint height; uint[3] pad; } pc;
 #define PUSH_SanitizePush layout(push_constant) uniform Push { uvec2 size; uint[2] pad; } pc;
 #define PUSH_ClampPush layout(push_constant) uniform Push { uvec2 size; uint mapping; float threshold; } pc;

@@ -344,6 +344,18 @@ float texel_solid_angle(uint m, uvec2 size, ivec2 p) {
     return clipped_square(m, lo, hi);
 }
 
+// The premultiplication weight of level-0 texel `id` of a `size`-texel paraboloid half: 1
+// wholly inside the disc, 0 wholly outside, on the rim the share of its (continued) solid
+// angle inside the disc (glsl/mip.comp, convert.comp's SPLIT; twin: math::mip::weight).
+float paraboloid_weight(uvec2 id, uint size) {
+    vec2 lo = 2.0 * vec2(id) / float(size) - 1.0;
+    vec2 hi = 2.0 * vec2(id + 1u) / float(size) - 1.0;
+    vec2 far_ = max(abs(lo), abs(hi));
+    if (dot(far_, far_) <= 1.0) return 1.0;
+    float inside = clipped_square(MAPPING_DUAL_PARABOLOID, lo, hi);
+    return inside > 0.0 ? min(inside / gl8_square(MAPPING_DUAL_PARABOLOID, lo, hi), 1.0) : 0.0;
+}
+
 // z = cos θ at the top of lat-long row `row` of `h` (row h: the south pole), the band edges of
 // the area conversion (convert_slopes.comp, convert_area.comp; math::convert::band_edge).
 float latlong_band_edge(int row, int h) {

@@ -26,6 +26,8 @@ bindings! {
     /// float bits)
     /// each (uvec4 storage buffer).
     CONVERT_PLAN_ENTRIES = 5;
+    /// convert (SPLIT): the residual's paraboloid (rgba32f image2DArray).
+    CONVERT_RESIDUAL = 6;
     /// mapping_probe: input directions (vec4 storage buffer).
     PROBE_IN = 0;
     /// mapping_probe: results (vec4 storage buffer).

@@ -69,6 +69,8 @@ push_blocks! {
         ss: u32 = "uint",
         /// 1: each sample reads the source's nearest texel (box reconstruction).
         nearest: u32 = "uint",
+        /// SPLIT: the luminance the residual's source texels are clamped at.
+        threshold: f32 = "float",
     }
     /// `glsl/mapping_probe.comp`.
     ProbePush {

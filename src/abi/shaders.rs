@@ -83,6 +83,11 @@ macro_rules! shader_table {
             /// Resampling between mappings from a 2D-array source.
             Convert2d = "convert_2d", "convert.comp", Compute, [], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write)];
+            /// A 2D source resampled into two dual paraboloids at once, the map's and its
+            /// residual's (clamped at a luminance), both premultiplied.
+            ConvertSplit = "convert_split", "convert.comp", Compute, [("SPLIT", "1")], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
+                 (CONVERT_RESIDUAL, StorageImage, Write)];
             /// Resampling between mappings from a cube source.
             ConvertCube = "convert_cube", "convert.comp", Compute, [("SRC_CUBE", "1")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write)];

@@ -384,7 +384,8 @@ struct Prepared {
 
 /// [`Prepared`] for `env`. No residual map is built at `env`'s resolution: the specular
 /// levels convert the residual's block means where there is a grid, else the source clamped
-/// in place on the GPU (`LuminanceClamp`); the irradiance needs none (its SH is the whole
+/// texel by texel on the GPU as it is converted (`Converter::record_split`; a cube source is
+/// clamped in place first, `LuminanceClamp`); the irradiance needs none (its SH is the whole
 /// map's less the lights'). The paraboloids' grid is at least as fine as the records' and 4
 /// × the cube's face wide (lat-long; a face as wide as the cube's on a cube), finer than
 /// the mirror level holds the sphere: the records' own where that is as fine, else its own.
@@ -424,8 +425,8 @@ fn prepare(env: &EnvMap, opts: &BakeOptions, finest: f64) -> Prepared {
 
 /// Where the residual's paraboloid is converted from.
 enum ResidualFrom {
-    /// The source, clamped in place at this luminance once the passes reading the whole
-    /// map have read it.
+    /// The source clamped at this luminance: as one conversion writes both paraboloids
+    /// (2D sources), or in place once the passes reading the whole map have read it (cubes).
     Clamp(f64),
     /// The residual's block means ([`Prepared::residual_grid`]), uploaded into this image.
     Grid(Box<GpuEnvMap>),
@@ -659,25 +660,38 @@ impl Baker {
         let c = ConvertOptions::new(Mapping::DualParaboloid, dp_size)
             .with_orientation(*orientation)
             .with_supersample(Some(supersample(from_map, dp_size)));
-        self.convert.record(rec, from, &i.dp, &c)?;
-        self.mip.record(rec, &i.dp)?;
         let p = PrefilterOptions {
             levels: opts.specular_levels,
             samples: opts.samples,
             bias: opts.bias,
         };
         let (Some((residual, rdp)), Some(lights)) = (&i.residual, lights) else {
+            self.convert.record(rec, from, &i.dp, &c)?;
+            self.mip.record(rec, &i.dp)?;
             return self.split.record_prefilter(rec, &i.dp, &i.cube, &p);
         };
         // The mirror from the whole map; the rest from the residual plus lights.
         match (residual, &prep.residual_grid) {
-            (ResidualFrom::Grid(r), Some(g)) => {
-                r.record_upload(rec, g)?;
-                self.convert.record(rec, r, rdp, &c)?;
+            (ResidualFrom::Clamp(threshold), _) if from.mapping != Mapping::Cube => {
+                // One read of the source for both paraboloids, premultiplied.
+                self.convert
+                    .record_split(rec, from, (&i.dp, rdp), *threshold, &c)?;
+                self.mip.record_premultiplied(rec, &i.dp)?;
+                self.mip.record_premultiplied(rec, rdp)?;
             }
             (ResidualFrom::Clamp(threshold), _) => {
+                self.convert.record(rec, from, &i.dp, &c)?;
+                self.mip.record(rec, &i.dp)?;
                 self.clamp.record(rec, src, *threshold)?;
                 self.convert.record(rec, src, rdp, &c)?;
+                self.mip.record(rec, rdp)?;
+            }
+            (ResidualFrom::Grid(r), Some(g)) => {
+                self.convert.record(rec, from, &i.dp, &c)?;
+                self.mip.record(rec, &i.dp)?;
+                r.record_upload(rec, g)?;
+                self.convert.record(rec, r, rdp, &c)?;
+                self.mip.record(rec, rdp)?;
             }
             (ResidualFrom::Grid(_), None) => {
                 return Err(Error::Invalid(
@@ -685,7 +699,6 @@ impl Baker {
                 ))
             }
         }
-        self.mip.record(rec, rdp)?;
         self.split
             .record_prefilter_levels(rec, &i.dp, &i.cube, &p, 0..1)?;
         self.split

@@ -99,7 +99,8 @@ pub struct Extraction {
 
 /// An extraction's threshold and light texels without its residual map: what a caller that
 /// makes the residual itself needs (the clamp rule's residual is [`clamp_residual`] of the
-/// map at `threshold`, which a bake applies on the GPU, `passes::map::LuminanceClamp`).
+/// map at `threshold`, which a bake applies on the GPU as it converts the source,
+/// `passes::Converter::record_split`, or in place, `passes::map::LuminanceClamp`).
 #[derive(Clone, Debug)]
 pub struct LightSet {
     /// The luminance threshold τ (infinite when nothing was extracted).

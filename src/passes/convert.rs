@@ -133,6 +133,29 @@ fn split_area(opts: &ConvertOptions) -> Result<bool> {
         && opts.orientation.checked_world_to_file()?.y_axis.abs() == glam::DVec3::Y)
 }
 
+/// The push block of a conversion of `src` with `opts` (its sample count picked from the
+/// resolutions where `opts` gives none), clamping the residual's texels at `threshold` where
+/// the conversion is split.
+fn sampled_push(src: &GpuEnvMap, opts: &ConvertOptions, threshold: f64) -> Result<ConvertPush> {
+    let (w, h) = opts.to.extent_for_size(opts.size);
+    let ss = opts
+        .supersample
+        .unwrap_or_else(|| {
+            Converter::supersampling((src.mapping, src.width, src.height), (opts.to, w, h))
+        })
+        .max(1);
+    Ok(ConvertPush {
+        world_to_file: mat3_rows(opts.orientation.checked_world_to_file()?),
+        src_size: [src.width, src.height],
+        dst_size: [w, h],
+        src_mapping: src.mapping.id(),
+        dst_mapping: opts.to.id(),
+        ss,
+        nearest: opts.nearest as u32,
+        threshold: threshold as f32,
+    })
+}
+
 /// The conversion pass. Pipelines are built on first use, one per source kind.
 pub struct Converter {
     ctx: Context,
@@ -154,6 +177,8 @@ pub struct Converter {
     slopes: OnceLock<Pipeline>,
     /// The gather of a [`ConvertPlan`].
     planned: OnceLock<Pipeline>,
+    /// [`Converter::record_split`]'s, one per 2D source mapping.
+    split: [OnceLock<Pipeline>; 4],
     sampler: Sampler,
 }
 
@@ -171,6 +196,7 @@ impl Converter {
             area_list_paraboloid: Default::default(),
             slopes: OnceLock::new(),
             planned: OnceLock::new(),
+            split: Default::default(),
             sampler: Sampler::linear_clamp(ctx, "convert sampler")?,
         })
     }
@@ -330,23 +356,8 @@ impl Converter {
             (opts.to, w, h),
             "the output does not match the options"
         );
-        let ss = opts
-            .supersample
-            .unwrap_or_else(|| {
-                Converter::supersampling((src.mapping, src.width, src.height), (opts.to, w, h))
-            })
-            .max(1);
-        let push = ConvertPush {
-            world_to_file: mat3_rows(opts.orientation.checked_world_to_file()?),
-            src_size: [src.width, src.height],
-            dst_size: [w, h],
-            src_mapping: src.mapping.id(),
-            dst_mapping: opts.to.id(),
-            ss,
-            nearest: opts.nearest as u32,
-        };
+        let push = sampled_push(src, opts, 0.0)?;
         let points = edge_points(opts)?;
-        let cube = src.mapping == Mapping::Cube;
         if self.uses_area((src.mapping, src.width, src.height), opts) {
             let split = split_area(opts)?;
             self.record_area(rec, src, dst, &push, (w, h), (split, points))?;
@@ -358,26 +369,101 @@ impl Converter {
             src.mapping.name(),
             opts.to.name()
         );
-        rec.discard(&dst.image);
-        rec.span(&label, |rec| {
+        self.record_sampled(rec, pipeline, src, &[dst], &push, &label)
+    }
+
+    /// Records the sampled conversion of a 2D `src` (lat-long, angular or paraboloid) into
+    /// two dual paraboloids at once, reading the source once: into `whole` the map, into
+    /// `residual` its residual, each source texel clamped at luminance `threshold` first (as
+    /// [`crate::passes::map::LuminanceClamp`] would leave it). Both are written premultiplied
+    /// as [`crate::passes::mip::MipChain`] keeps level 0, for
+    /// [`crate::passes::mip::MipChain::record_premultiplied`] to finish. `opts` must convert
+    /// to a dual paraboloid; its sample count is taken as [`Converter::record`] takes it, but
+    /// never the area rule. Span: "convert {from} -> dual-paraboloid WxH, whole and residual".
+    pub fn record_split(
+        &self,
+        rec: &mut Recorder,
+        src: &GpuEnvMap,
+        (whole, residual): (&GpuEnvMap, &GpuEnvMap),
+        threshold: f64,
+        opts: &ConvertOptions,
+    ) -> Result<()> {
+        let (w, h) = opts.to.extent_for_size(opts.size);
+        if opts.to != Mapping::DualParaboloid || src.mapping == Mapping::Cube {
+            return Err(Error::Invalid(format!(
+                "a split conversion reads a 2D map into dual paraboloids, not {} into {}",
+                src.mapping.name(),
+                opts.to.name()
+            )));
+        }
+        for dst in [whole, residual] {
+            if (dst.mapping, dst.width, dst.height) != (opts.to, w, h) {
+                return Err(Error::Invalid(format!(
+                    "a split conversion's outputs are {w} x {h} dual paraboloids, not {} x {} {}",
+                    dst.width,
+                    dst.height,
+                    dst.mapping.name()
+                )));
+            }
+        }
+        let push = sampled_push(src, opts, threshold)?;
+        let pipeline = Pipeline::compute_once(
+            &self.split[src.mapping.id() as usize],
+            &self.ctx,
+            ShaderId::ConvertSplit,
+            &[
+                WORKGROUP_2D[0],
+                WORKGROUP_2D[1],
+                src.mapping.id(),
+                opts.to.id(),
+            ],
+        )?;
+        let label = format!(
+            "convert {} -> {} {w}x{h}, whole and residual",
+            src.mapping.name(),
+            opts.to.name()
+        );
+        self.record_sampled(rec, pipeline, src, &[whole, residual], &push, &label)
+    }
+
+    /// One dispatch of the sampled conversion into `dsts` (the destination, then, split, the
+    /// residual's), level 0 of each.
+    fn record_sampled(
+        &self,
+        rec: &mut Recorder,
+        pipeline: &Pipeline,
+        src: &GpuEnvMap,
+        dsts: &[&GpuEnvMap],
+        push: &ConvertPush,
+        label: &str,
+    ) -> Result<()> {
+        let cube = src.mapping == Mapping::Cube;
+        let mut binds = vec![(
+            binding::CONVERT_SRC,
+            Bind::Sampled(&src.image, &self.sampler, cube),
+        )];
+        let outputs = [binding::CONVERT_DST, binding::CONVERT_RESIDUAL];
+        for (b, dst) in outputs.into_iter().zip(dsts) {
+            rec.discard(&dst.image);
+            binds.push((b, Bind::Storage(&dst.image)));
+        }
+        let [w, h] = push.dst_size;
+        rec.span(label, |rec| {
             rec.dispatch(
                 pipeline,
-                &[
-                    (
-                        binding::CONVERT_SRC,
-                        Bind::Sampled(&src.image, &self.sampler, cube),
-                    ),
-                    (binding::CONVERT_DST, Bind::Storage(&dst.image)),
-                ],
-                &push,
+                &binds,
+                push,
                 [
                     groups(w, WORKGROUP_2D[0]),
                     groups(h, WORKGROUP_2D[1]),
-                    opts.to.layers(),
+                    dsts[0].mapping.layers(),
                 ],
             )
         })?;
-        poison::image(rec, PassId::Convert, &dst.image, 0..1)
+        for dst in dsts {
+            poison::image(rec, PassId::Convert, &dst.image, 0..1)?;
+        }
+        Ok(())
     }
 
     /// The lat-long to cube or dual-paraboloid conversion by exact footprint areas: the

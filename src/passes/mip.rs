@@ -28,12 +28,23 @@ impl MipChain {
     /// chain whose level 0 holds radiance (as [`crate::passes::Converter::record`] leaves it).
     /// Spans: "mip premultiply", then "mip level k".
     pub fn record(&self, rec: &mut Recorder, dp: &GpuEnvMap) -> Result<()> {
+        self.record_from(rec, dp, 0)
+    }
+
+    /// [`MipChain::record`] of a map whose level 0 is already premultiplied (as
+    /// [`crate::passes::Converter::record_split`] writes it): levels 1 and up.
+    /// Spans: "mip level k".
+    pub fn record_premultiplied(&self, rec: &mut Recorder, dp: &GpuEnvMap) -> Result<()> {
+        self.record_from(rec, dp, 1)
+    }
+
+    fn record_from(&self, rec: &mut Recorder, dp: &GpuEnvMap, first: u32) -> Result<()> {
         if dp.mapping != Mapping::DualParaboloid || dp.width != dp.height {
             return Err(Error::Invalid(
                 "a MIP chain is built on a square dual-paraboloid map".into(),
             ));
         }
-        for k in 0..dp.mips() {
+        for k in first..dp.mips() {
             let size = (dp.width >> k).max(1);
             let push = MipPush {
                 src_size: (dp.width >> k.saturating_sub(1)).max(1),

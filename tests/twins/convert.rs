@@ -164,3 +164,97 @@ fn check_planned(ctx: &Context, conv: &Converter, src: &EnvMap, opts: &ConvertOp
         opts.to
     );
 }
+
+/// `Converter::record_split` against its twin: the float64 conversion (the same sample
+/// positions) of the map and of its residual (`math::lights::clamp_residual`), each
+/// premultiplied as the MIP chain keeps level 0 (`math::mip::level0`). From lat-long, angular
+/// and paraboloid sources with a sun 10⁵× the sky, turned and mirrored; the threshold at the
+/// texels' median luminance, so that half of the sky and the sun are clamped; into a
+/// paraboloid whose rim texels take fractional weights. What remains is the 2D conversion's
+/// float32 error (BOUND) and the clamp's ~4 ε (`map::CLAMP_BOUND`), relative to the map's
+/// scale (about 1); the weights (clipped Gauss–Legendre in float32) within 1e-6.
+pub fn check_split(ctx: &Context) {
+    use envlight::math::envmap::luminance;
+    use envlight::math::lights::clamp_residual;
+    use envlight::math::mip::level0;
+    let conv = Converter::new(ctx).unwrap();
+    let o = Orientation {
+        flip_u: true,
+        flip_v: false,
+        rotate_y_degrees: -31.0,
+    };
+    let to = Mapping::DualParaboloid;
+    for from in [Mapping::LatLong, Mapping::Angular, Mapping::DualParaboloid] {
+        let n = src_size(from) / 2;
+        let (w, h) = from.extent_for_size(n);
+        // The sun, 10⁵× the sky, a Gaussian 1.5 texels wide: sharp enough that the clamp
+        // changes it and its rim, smooth enough that float32 sample positions (~1e-6 of a
+        // texel) move no texel by more than the bound.
+        let sun = glam::DVec3::new(0.5, 0.4, -0.3).normalize();
+        let width = 1.5 * texel_angle(from, n);
+        let src = EnvMap::from_fn(from, w, h, 4, |d| {
+            let l = smooth_env(d);
+            let s = 1.0e5 * ((d.dot(sun) - 1.0) / (width * width)).exp();
+            [l[0] + s, 0.5 * l[1] + 0.25 + 0.9 * s, l[2] + 0.7 * s]
+        });
+        let mut lum: Vec<f64> = src
+            .texels
+            .iter()
+            .map(|t| luminance(t.map(f64::from)))
+            .collect();
+        lum.sort_by(f64::total_cmp);
+        let tau = lum[lum.len() / 2];
+        let size = src_size(to) / 4;
+        let (ow, oh) = to.extent_for_size(size);
+        let opts = ConvertOptions::new(to, size).with_orientation(o);
+        let g = GpuEnvMap::upload(ctx, &src).unwrap();
+        let whole = GpuEnvMap::new(ctx, "split: whole", to, ow, oh).unwrap();
+        let residual = GpuEnvMap::new(ctx, "split: residual", to, ow, oh).unwrap();
+        ctx.run("a split conversion", |rec| {
+            conv.record_split(rec, &g, (&whole, &residual), tau, &opts)
+        })
+        .unwrap();
+        let ss = Converter::supersampling((from, w, h), (to, ow, oh));
+        let w2f = o.world_to_file();
+        let twin = |m: &EnvMap| level0(&envlight::math::convert::convert(m, to, size, w2f, ss));
+        let clamped = clamp_residual(&src, tau);
+        let changed = clamped
+            .texels
+            .iter()
+            .zip(&src.texels)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(changed > 0, "{from:?}: the threshold clamps nothing");
+        for (name, gpu, cpu) in [
+            ("whole", &whole, twin(&src)),
+            ("residual", &residual, twin(&clamped)),
+        ] {
+            let back = gpu.download_level(ctx, 0).unwrap();
+            assert_eq!(back.len(), cpu.texels.len(), "{from:?} {name}");
+            let mut errors = Errors::new();
+            let mut weights = Errors::new();
+            for (t, (a, b)) in back.iter().zip(&cpu.texels).enumerate() {
+                for k in 0..3 {
+                    errors.rel(a[k], b[k], 1.0, (t, k));
+                }
+                weights.abs(a[3], b[3], t);
+            }
+            let (worst, at) = (errors.worst(), errors.at().copied());
+            eprintln!("{from:?} -> split {name}: GPU vs f64 worst {worst:.2e} at {at:?}");
+            assert!(
+                errors.count() > 0 && worst <= BOUND,
+                "{from:?} -> split {name}: GPU vs f64 {worst:e} > {BOUND:e} at {at:?}"
+            );
+            weights.assert_within(1e-6, &format!("{from:?} -> split {name}: weights"));
+        }
+    }
+    // A cube source is refused by name (its hardware filtering cannot clamp texel by texel).
+    let cube = EnvMap::from_fn(Mapping::Cube, 8, 8, 1, smooth_env);
+    let g = GpuEnvMap::upload(ctx, &cube).unwrap();
+    let out = GpuEnvMap::new(ctx, "split: refused", to, 16, 16).unwrap();
+    let refused = ctx.run("a refused split", |rec| {
+        conv.record_split(rec, &g, (&out, &out), 1.0, &ConvertOptions::new(to, 16))
+    });
+    let msg = format!("{:#}", refused.expect_err("a cube source is refused"));
+    assert!(msg.contains("cube"), "{msg}");
+}

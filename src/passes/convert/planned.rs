@@ -178,6 +178,7 @@ impl Converter {
             dst_mapping: plan.opts.to.id(),
             ss: 1,
             nearest: 0,
+            threshold: 0.0,
         };
         debug_assert_eq!(plan.texels, w * h * plan.opts.to.layers());
         let slopes = rec.scratch(
