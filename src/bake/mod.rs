@@ -296,7 +296,8 @@ pub struct HostSeconds {
     /// Statistics and light extraction, and the grids of block means.
     pub lights: f64,
     /// Writing the source into staging memory (and, for a large map, its banded upload,
-    /// which waits for the GPU) and recording the submission.
+    /// which waits for the GPU) and recording the submission, with whatever of the
+    /// pipelines' compilation ([`Baker::prepare`]) outlasted the light extraction.
     pub upload: f64,
 }
 
@@ -492,17 +493,50 @@ pub struct Baker {
 }
 
 impl Baker {
-    /// Builds every pass.
+    /// Builds every pass, on two threads (a pipeline costs llvmpipe milliseconds of
+    /// compilation; the pipelines that depend on a probe's mapping and options are built by
+    /// [`Baker::prepare`]).
     pub fn new(ctx: &Context) -> Result<Baker> {
-        Ok(Baker {
-            ctx: ctx.clone(),
-            sh: ShProjector::new(ctx, Subgroups::Auto)?,
-            eval: ShEvaluator::new(ctx)?,
-            convert: Converter::new(ctx)?,
-            mip: MipChain::new(ctx)?,
-            split: SplitSum::new(ctx)?,
-            lights: LightsPass::new(ctx)?,
-            clamp: LuminanceClamp::new(ctx)?,
+        std::thread::scope(|s| {
+            let other = s.spawn(|| -> Result<_> {
+                Ok((
+                    ShProjector::new(ctx, Subgroups::Auto)?,
+                    ShEvaluator::new(ctx)?,
+                    LightsPass::new(ctx)?,
+                    LuminanceClamp::new(ctx)?,
+                ))
+            });
+            let (convert, mip, split) = (
+                Converter::new(ctx)?,
+                MipChain::new(ctx)?,
+                SplitSum::new(ctx)?,
+            );
+            let (sh, eval, lights, clamp) = join(other)?;
+            Ok(Baker {
+                ctx: ctx.clone(),
+                sh,
+                eval,
+                convert,
+                mip,
+                split,
+                lights,
+                clamp,
+            })
+        })
+    }
+
+    /// Builds the pipelines that a bake of a `mapping` map with `opts` records and that
+    /// [`Baker::new`] leaves (the SH projection's for the map's mapping and order, the
+    /// paraboloids' conversion), on two threads, now rather than as it records.
+    /// [`Baker::submit`] calls it beside its host work; they are built once.
+    pub fn prepare(&self, mapping: Mapping, opts: &BakeOptions) -> Result<()> {
+        std::thread::scope(|s| {
+            let sh = s.spawn(|| self.sh.prepare(opts.sh_order, mapping));
+            match mapping {
+                Mapping::Cube => self.convert.prepare(mapping, Mapping::DualParaboloid)?,
+                _ => self.convert.prepare_split(mapping)?,
+            }
+            join(sh)
         })
     }
 
@@ -550,8 +584,13 @@ impl Baker {
         // coarse for it bakes its specular levels without lights, as `resolves` says).
         let finest = level_alpha(1, opts.specular_levels.max(2));
         let t0 = std::time::Instant::now();
-        let prep = prepare(env, opts, finest);
-        let lights_s = t0.elapsed().as_secs_f64();
+        // The host's light extraction beside the pipelines' compilation.
+        let (prep, lights_s) = std::thread::scope(|s| {
+            let pipelines = s.spawn(|| self.prepare(env.mapping, opts));
+            let prep = prepare(env, opts, finest);
+            let lights_s = t0.elapsed().as_secs_f64();
+            join(pipelines).map(|()| (prep, lights_s))
+        })?;
         let images = Images::new(ctx, env, opts, &prep)?;
         let file_to_world = orientation.checked_world_to_file()?.transpose();
         let lights = GpuLights::of_lights(
@@ -721,4 +760,9 @@ impl Baker {
     pub fn dfg_at(&self, size: u32, correlated: bool, axes: DfgAxes) -> Result<Vec<[f32; 2]>> {
         Ok(self.split.run_dfg_at(size, correlated, axes)?.0)
     }
+}
+
+/// A scoped thread's result, its panic resumed on this thread.
+fn join<T>(h: std::thread::ScopedJoinHandle<'_, Result<T>>) -> Result<T> {
+    h.join().unwrap_or_else(|p| std::panic::resume_unwind(p))
 }

@@ -224,6 +224,22 @@ impl Converter {
         self.pipeline(from, to).map(|_| ())
     }
 
+    /// Builds the pipeline that [`Converter::record_split`] of a `from` map (not a cube)
+    /// takes now rather than at that record.
+    pub fn prepare_split(&self, from: Mapping) -> Result<()> {
+        self.split_pipeline(from).map(|_| ())
+    }
+
+    fn split_pipeline(&self, from: Mapping) -> Result<&Pipeline> {
+        let to = Mapping::DualParaboloid;
+        Pipeline::compute_once(
+            &self.split[from.id() as usize],
+            &self.ctx,
+            ShaderId::ConvertSplit,
+            &[WORKGROUP_2D[0], WORKGROUP_2D[1], from.id(), to.id()],
+        )
+    }
+
     /// Builds the pipelines that [`Converter::record`] of a `src` map (mapping, width,
     /// height) with `opts` takes, and no other, now rather than at that record.
     pub fn prepare_for(&self, src: (Mapping, u32, u32), opts: &ConvertOptions) -> Result<()> {
@@ -407,17 +423,7 @@ impl Converter {
             }
         }
         let push = sampled_push(src, opts, threshold)?;
-        let pipeline = Pipeline::compute_once(
-            &self.split[src.mapping.id() as usize],
-            &self.ctx,
-            ShaderId::ConvertSplit,
-            &[
-                WORKGROUP_2D[0],
-                WORKGROUP_2D[1],
-                src.mapping.id(),
-                opts.to.id(),
-            ],
-        )?;
+        let pipeline = self.split_pipeline(src.mapping)?;
         let label = format!(
             "convert {} -> {} {w}x{h}, whole and residual",
             src.mapping.name(),

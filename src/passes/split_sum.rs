@@ -104,17 +104,19 @@ pub fn time_slices(size: u32, layers: u32, levels: u32, slices: u32) -> Vec<Vec<
 /// The split-sum passes.
 pub struct SplitSum {
     ctx: Context,
-    dfg: Pipeline,
+    /// Built at the first DFG table (a bake that reads its table from a cache needs none).
+    dfg: std::sync::OnceLock<Pipeline>,
     prefilter: Pipeline,
     trilinear: Sampler,
 }
 
 impl SplitSum {
-    /// Builds the pipelines.
+    /// Builds the prefilter's pipeline (the DFG table's is built when a table is first
+    /// recorded).
     pub fn new(ctx: &Context) -> Result<SplitSum> {
         Ok(SplitSum {
             ctx: ctx.clone(),
-            dfg: Pipeline::compute(ctx, ShaderId::Dfg, &[WORKGROUP_1D])?,
+            dfg: std::sync::OnceLock::new(),
             prefilter: Pipeline::compute(ctx, ShaderId::PrefilterGgx, &WORKGROUP_2D)?,
             trilinear: Sampler::trilinear_border(ctx, "split-sum source sampler")?,
         })
@@ -157,6 +159,8 @@ impl SplitSum {
         }
         let need = (offset as u64 + Self::dfg_floats(size) as u64) * 4;
         assert!(need <= out.size(), "split-sum: the DFG buffer is too small");
+        let pipeline =
+            Pipeline::compute_once(&self.dfg, &self.ctx, ShaderId::Dfg, &[WORKGROUP_1D])?;
         rec.span("dfg table", |rec| {
             // One dispatch per panel of the first uniform (llvmpipe's loop limit).
             for panel in 0..2 * sh_brdf::GRADED_LEVELS {
@@ -168,7 +172,7 @@ impl SplitSum {
                     centres: (axes == DfgAxes::Centres) as u32,
                 };
                 rec.dispatch(
-                    &self.dfg,
+                    pipeline,
                     &[(binding::DFG_TABLE, Bind::Buffer(out))],
                     &push,
                     [groups(size * size, WORKGROUP_1D), 1, 1],
