@@ -165,3 +165,74 @@ fn validated(device: DeviceSelector) -> ContextOptions {
     o.validation = true;
     o
 }
+
+/// The one file a pipeline cache folder holds, and its bytes.
+fn cache_file(dir: &std::path::Path) -> (std::path::PathBuf, Vec<u8>) {
+    let files: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(files.len(), 1, "{files:?}");
+    let name = files[0].file_name().unwrap().to_string_lossy().into_owned();
+    assert!(
+        name.starts_with("pipelines-") && name.ends_with(".bin"),
+        "{name}"
+    );
+    let bytes = std::fs::read(&files[0]).unwrap();
+    (files[0].clone(), bytes)
+}
+
+/// A context with validation and its pipelines cached in `dir`, one pipeline built (the
+/// MIP chain's); how many cached bytes it started from.
+fn context_with_cache(dir: &std::path::Path) -> usize {
+    let mut o = validated(DeviceSelector::Cpu);
+    o.pipeline_cache = Some(dir.to_path_buf());
+    let ctx = Context::new(&o).unwrap();
+    let loaded = ctx.pipeline_cache_loaded();
+    drop(envlight::passes::MipChain::new(&ctx).unwrap());
+    common::finish(ctx);
+    loaded
+}
+
+/// Compiled pipelines kept between runs (`ContextOptions::pipeline_cache`): the first context
+/// writes one file named for the device, holding the header `vkGetPipelineCacheData` writes
+/// (its length, version one); the next starts from all of it. A file from another driver (the
+/// pipelineCacheUUID changed) or a truncated one is not handed to the driver — the context
+/// starts empty, with no validation message — and is replaced by this device's; a folder
+/// that cannot be written leaves pipelines working.
+#[test]
+fn compiled_pipelines_are_kept_between_contexts() {
+    let dir = std::env::temp_dir().join(format!("envlight-pipelines-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(context_with_cache(&dir), 0, "a new folder holds nothing");
+    let (file, first) = cache_file(&dir);
+    let word = |b: &[u8], k: usize| u32::from_le_bytes(b[k..k + 4].try_into().unwrap());
+    assert!(
+        first.len() >= 32 && word(&first, 0) >= 32,
+        "{} bytes",
+        first.len()
+    );
+    assert_eq!(word(&first, 4), 1, "header version one");
+    assert_eq!(
+        context_with_cache(&dir),
+        first.len(),
+        "the second run reads it whole"
+    );
+    let mut other = first.clone();
+    other[31] ^= 0x5a;
+    for (what, bytes) in [
+        ("another driver's", other),
+        ("a truncated", first[..20].to_vec()),
+    ] {
+        std::fs::write(&file, &bytes).unwrap();
+        assert_eq!(context_with_cache(&dir), 0, "{what} file was read");
+        let (_, now) = cache_file(&dir);
+        assert_eq!(now[..32], first[..32], "{what} file was not replaced");
+    }
+    // A file where the folder should be: nothing written, nothing fails.
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::write(&dir, b"not a folder").unwrap();
+    assert_eq!(context_with_cache(&dir), 0);
+    assert_eq!(std::fs::read(&dir).unwrap(), b"not a folder");
+    std::fs::remove_file(&dir).unwrap();
+}

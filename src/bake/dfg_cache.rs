@@ -8,21 +8,9 @@ use super::Baker;
 use crate::abi::{sh_brdf, ShaderId};
 use crate::error::Result;
 use crate::math::split_sum::DfgAxes;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// The cache folder: `ENVLIGHT_CACHE_DIR` (empty: no cache), else `$XDG_CACHE_HOME/envlight`,
-/// else `~/.cache/envlight`; `None` where none of these is set.
-pub fn default_dir() -> Option<PathBuf> {
-    let var = |k: &str| std::env::var_os(k).map(PathBuf::from);
-    match var("ENVLIGHT_CACHE_DIR") {
-        Some(d) if d.as_os_str().is_empty() => None,
-        Some(d) => Some(d),
-        None => var("XDG_CACHE_HOME")
-            .filter(|d| d.is_absolute())
-            .map(|d| d.join("envlight"))
-            .or_else(|| var("HOME").map(|h| h.join(".cache").join("envlight"))),
-    }
-}
+pub use crate::gpu::pipeline_cache::default_dir;
 
 /// FNV-1a, 64 bits: a key and a checksum that stay the same across Rust versions.
 fn fnv(bytes: &[u8], mut h: u64) -> u64 {

@@ -179,6 +179,8 @@ pub fn context(g: &Global) -> Result<Context> {
         opts.device = DeviceSelector::parse(d);
     }
     opts.validation |= g.validation;
+    // Compiled pipelines kept between runs, beside the DFG tables (`bake::dfg_cache`).
+    opts.pipeline_cache = crate::gpu::pipeline_cache::default_dir();
     let ctx = Context::new(&opts)?;
     if opts.validation {
         if let Ok(mut logs) = VALIDATION_LOGS.lock() {

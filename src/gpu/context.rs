@@ -103,6 +103,10 @@ pub struct ContextOptions {
     pub validation: bool,
     /// Which device.
     pub device: DeviceSelector,
+    /// A folder where the driver's compiled pipelines are kept between runs (a file per
+    /// device and driver version, `super::pipeline_cache`; the command line uses
+    /// [`super::pipeline_cache::default_dir`]). `None`: nothing read or written.
+    pub pipeline_cache: Option<std::path::PathBuf>,
 }
 
 impl ContextOptions {
@@ -122,6 +126,7 @@ impl Default for ContextOptions {
             validation: cfg!(debug_assertions)
                 || std::env::var("ENVLIGHT_VALIDATION").is_ok_and(|v| v == "1"),
             device: DeviceSelector::from_env(),
+            pipeline_cache: None,
         }
     }
 }
@@ -262,6 +267,8 @@ pub(crate) struct Shared {
     sink: Arc<MessageSink>,
     /// The shader of every pipeline created, in order (what `envlight plan` is checked by).
     pub(crate) pipelines: Mutex<Vec<&'static str>>,
+    /// The cache every pipeline is created through, and its file.
+    pub(crate) pipeline_cache: super::pipeline_cache::DiskCache,
     /// Submissions made so far ([`Context::submissions`]).
     submissions: AtomicU64,
     /// What a test hook set on this context (feature `test-hooks`: `passes::testing`), opaque
@@ -437,7 +444,7 @@ impl Context {
             family,
             debug_instance,
             debug_utils,
-            true,
+            (true, opts.pipeline_cache.as_deref()),
             sink,
         )?;
         ctx.startup = Some(Startup {
@@ -476,7 +483,7 @@ impl Context {
             queue_family_index,
             None,
             debug_utils,
-            false,
+            (false, None),
             Arc::default(),
         )
     }
@@ -491,7 +498,7 @@ impl Context {
         family: u32,
         debug_instance: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
         debug_utils: bool,
-        owns_device: bool,
+        (owns_device, cache_dir): (bool, Option<&std::path::Path>),
         sink: Arc<MessageSink>,
     ) -> Result<Context> {
         // SAFETY: valid physical device of this instance.
@@ -574,6 +581,7 @@ impl Context {
             .vk("creating a command pool")?;
         let debug_device =
             debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let pipeline_cache = super::pipeline_cache::DiskCache::open(&device, &props, cache_dir)?;
         let shared = Shared {
             entry,
             instance,
@@ -589,6 +597,7 @@ impl Context {
             live: AtomicI64::new(0),
             created: AtomicU64::new(0),
             pipelines: Mutex::new(Vec::new()),
+            pipeline_cache,
             submissions: AtomicU64::new(0),
             #[cfg(feature = "test-hooks")]
             test_hook: Mutex::new(None),
@@ -600,6 +609,12 @@ impl Context {
             shared: Arc::new(shared),
             startup: None,
         })
+    }
+
+    /// Bytes of compiled pipelines this context's cache started from
+    /// ([`ContextOptions::pipeline_cache`]; 0: none there, or none asked for).
+    pub fn pipeline_cache_loaded(&self) -> usize {
+        self.shared.pipeline_cache.loaded
     }
 
     /// What creating this context cost, where envlight created it (None where it adopted
@@ -798,6 +813,7 @@ impl Drop for Shared {
         // no work is pending. Destruction runs in reverse order of creation.
         unsafe {
             let _ = self.device.device_wait_idle();
+            self.pipeline_cache.close(&self.device);
             let pool = *self
                 .command_pool
                 .get_mut()

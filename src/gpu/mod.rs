@@ -5,6 +5,7 @@
 pub(crate) mod barrier;
 pub(crate) mod context;
 pub(crate) mod pipeline;
+pub mod pipeline_cache;
 pub(crate) mod recorder;
 pub(crate) mod resources;
 pub(crate) mod shaders;

@@ -119,7 +119,7 @@ impl Pipeline {
         let result = unsafe {
             shared
                 .device
-                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+                .create_compute_pipelines(shared.pipeline_cache.cache, &[info], None)
         };
         unsafe { shared.device.destroy_shader_module(module, None) };
         p.pipeline = result
@@ -222,7 +222,7 @@ impl Pipeline {
         let result = unsafe {
             shared
                 .device
-                .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+                .create_graphics_pipelines(shared.pipeline_cache.cache, &[info], None)
         };
         unsafe {
             shared.device.destroy_shader_module(vm, None);
