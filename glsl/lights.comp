@@ -3,7 +3,8 @@
 // centre r, (1/∫K)·Σ_t L_t·∫_t K(r·ω) dω over the light texels t, each integral by one node
 // at t's centre where t is small next to the kernel's scale there (light_centre_only: α at
 // the peak, a fraction of the chord in GGX's θ⁻⁴ tail, a radian for the cosine), else by t's
-// quadrature nodes. The kernel is the clamped cosine (irradiance) or split-sum's GGX at
+// quadrature nodes: where the buffer keeps coarser quadratures (pc.coarse_at), those of
+// ⌈PER_WIDTH·ρ/w⌉ cells where that is fewer than t's own (4 nodes in GGX's tail). The kernel is the clamped cosine (irradiance) or split-sum's GGX at
 // n = v = r. Float64 twin: math::lights::light_sum. LIGHTS_KERNEL_CLUSTERS adds light clusters'
 // irradiance instead (math::lights::cluster_irradiance).
 #extension GL_GOOGLE_include_directive : require
@@ -16,6 +17,12 @@ layout(set = 0, binding = BINDING_LIGHTS_DST, rgba32f) uniform image2DArray dst;
 
 // The push block, generated from src/abi/push.rs.
 PUSH_LightsPush
+
+// Where the quadrature of c cells starts among a texel's coarser ones: Σ (2k)², k < c
+// (math::lights::coarse_offset).
+uint coarse_offset(uint c) {
+    return 2u * (c - 1u) * c * (2u * c - 1u) / 3u;
+}
 
 float kern(float a2, vec3 r, vec3 w) {
     vec3 e = r - w;
@@ -55,8 +62,17 @@ void main() {
         if (light_centre_only(light.w, w2, stride)) {
             k = kern(a2, r, centre.xyz) * centre.w;
         } else {
-            for (uint n = 0u; n < pc.nodes; n++) {
-                vec4 q = lt[t * stride + LIGHT_HEADER_VEC4S + n];
+            // math::lights::local_nodes
+            uint first = t * stride + LIGHT_HEADER_VEC4S, count = pc.nodes;
+            if (pc.coarse_at != 0u) {
+                uint c = uint(clamp(ceil(LIGHT_PER_WIDTH * light.w / sqrt(w2)), 1.0, 8.0));
+                if (c < pc.cells) {
+                    first = pc.coarse_at + t * coarse_offset(pc.cells) + coarse_offset(c);
+                    count = 4u * c * c;
+                }
+            }
+            for (uint n = 0u; n < count; n++) {
+                vec4 q = lt[first + n];
                 k += kern(a2, r, q.xyz) * q.w;
             }
         }

@@ -36,14 +36,33 @@ fn lights_pass_matches_its_float64_twin() {
 /// the split is exact, and the light sum's quadrature (2 × 2 Gauss cells per lobe width at
 /// the finest α) integrates the light texels as the exact filter's adaptive cells do. At the
 /// sun, beside it and 53° from it, α 0.02 to 1, on a 512 × 256 sky whose sun is 5·10⁴ × the
-/// zenith (96 light texels): bound 1e-4 of the filtered value (measured: printed).
+/// zenith (96 light texels): bound 1e-4 of the filtered value (measured: printed). The same
+/// with the local rule (`prepare_local`: each texel only as many cells as the kernel's scale
+/// at it asks, a bake's lights), whose sum equals `light_sum_local`'s (the extraction twin's
+/// rule) to rounding.
 #[test]
 fn extraction_keeps_the_exact_filter() {
     let map = sky(Mapping::LatLong, 512);
     let ex = extract(&map, &ExtractOptions::default());
+    let fixed = prepare(&map, &ex, glam::DMat3::IDENTITY, 0.02);
+    let local = envlight::math::lights::prepare_local(
+        &map,
+        &ex.lights,
+        glam::DMat3::IDENTITY,
+        envlight::math::lights::cells_for(&ex, 0.02),
+    );
+    keeps_the_exact_filter(&map, &ex, &fixed, "fixed");
+    keeps_the_exact_filter(&map, &ex, &local, "local");
+}
+
+fn keeps_the_exact_filter(
+    map: &EnvMap,
+    ex: &envlight::math::lights::Extraction,
+    prepared: &[envlight::math::lights::PreparedLight],
+    rule: &str,
+) {
     let sun = Sky::default().sun_dir;
-    let prepared = prepare(&map, &ex, glam::DMat3::IDENTITY, 0.02);
-    let full = ExactFilter::new(&map, glam::DMat3::IDENTITY);
+    let full = ExactFilter::new(map, glam::DMat3::IDENTITY);
     let res = ExactFilter::new(&ex.residual, glam::DMat3::IDENTITY);
     for alpha in [0.02, 0.1, 0.4, 1.0] {
         let dirs = [
@@ -54,15 +73,29 @@ fn extraction_keeps_the_exact_filter() {
         for r in dirs {
             let want = full.ggx(r, alpha);
             let split = res.ggx(r, alpha);
-            let l = light_sum(&prepared, r, LightKernel::Ggx { alpha });
+            let kernel = LightKernel::Ggx { alpha };
+            let l = light_sum(prepared, r, kernel);
             let n = chain_norm(alpha);
+            if rule == "local" {
+                let twin = envlight::math::lights::light_sum_local(
+                    map,
+                    ex,
+                    glam::DMat3::IDENTITY,
+                    r,
+                    kernel,
+                );
+                for c in 0..3 {
+                    let e = (l[c] - twin[c]).abs() / twin[c];
+                    assert!(e < 1e-12, "{rule} α {alpha} r {r}: {} vs {}", l[c], twin[c]);
+                }
+            }
             for c in 0..3 {
                 let got = split[c] + l[c] / n;
                 let e = (got - want[c]).abs() / want[c];
                 if c == 1 {
-                    eprintln!("α {alpha} r {r:.3}: {e:.1e}");
+                    eprintln!("{rule}: α {alpha} r {r:.3}: {e:.1e}");
                 }
-                assert!(e < 1e-4, "α {alpha} r {r}: {got} vs {}", want[c]);
+                assert!(e < 1e-4, "{rule} α {alpha} r {r}: {got} vs {}", want[c]);
             }
         }
     }

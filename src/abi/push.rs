@@ -418,8 +418,11 @@ push_blocks! {
         inv_norm: f32 = "float",
         /// Where the clusters start in the buffer, in vec4s.
         at: u32 = "uint",
-        /// Padding.
-        pad: u32 = "uint",
+        /// Where the texels' coarser quadratures start in the buffer, in vec4s (0: none kept;
+        /// `math::lights::PreparedLight::coarse`).
+        coarse_at: u32 = "uint",
+        /// Cells per side of the texels' own quadrature (`nodes` = (2·cells)²).
+        cells: u32 = "uint",
     }
     /// `glsl/sh_rotate.comp`.
     ShRotatePush {

@@ -445,6 +445,7 @@ mod tests {
             radiance: [1.0, 2.0, 3.0],
             rho,
             nodes: Vec::new(),
+            coarse: Vec::new(),
         };
         let inside = light(r + 0.01 * f.t, 0.01);
         let s = light_overlap(std::slice::from_ref(&inside), r, a, b);

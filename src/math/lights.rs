@@ -590,7 +590,7 @@ pub use crate::abi::lights::{CENTRE_BELOW, PER_WIDTH, TAIL_FRACTION};
 
 /// A kernel's scale at a light texel `chord` from the lobe's axis: the lobe's own `scale`,
 /// or [`TAIL_FRACTION`] of the chord in the tail.
-fn scale_at(scale: f64, chord: f64) -> f64 {
+pub fn scale_at(scale: f64, chord: f64) -> f64 {
     scale.max(TAIL_FRACTION * chord)
 }
 
@@ -626,6 +626,53 @@ pub struct PreparedLight {
     pub rho: f64,
     /// `nodes`, turned to the world.
     pub nodes: Vec<(DVec3, f64)>,
+    /// The quadratures of fewer cells, 1 to those of `nodes` less one ((2c)² nodes each,
+    /// coarsest first, set c from [`coarse_offset`]`(c)`), turned to the world: where they
+    /// are kept ([`prepare_local`]) a texel's integral takes only as many cells as the
+    /// kernel's scale at it asks ([`local_nodes`]); empty: always `nodes`.
+    pub coarse: Vec<(DVec3, f64)>,
+}
+
+/// Where the quadrature of `cells` cells starts in [`PreparedLight::coarse`]: Σ (2c)² over
+/// c = 1 … cells − 1.
+pub fn coarse_offset(cells: u32) -> usize {
+    let c = cells.max(1) as usize;
+    2 * (c - 1) * c * (2 * c - 1) / 3
+}
+
+/// [`prepare_cells`] with every coarser quadrature kept ([`PreparedLight::coarse`]), for the
+/// local rule ([`local_nodes`]; a bake's `glsl/lights.comp`): in GGX's tail, where the
+/// kernel is wider than at its peak, a texel takes 4 nodes instead of (2·cells)², by the same
+/// rule per node ([`light_sum_local`]'s).
+pub fn prepare_local(
+    map: &EnvMap,
+    lights: &[LightTexel],
+    file_to_world: glam::DMat3,
+    cells: u32,
+) -> Vec<PreparedLight> {
+    let mut prepared = prepare_cells(map, lights, file_to_world, cells);
+    for (p, t) in prepared.iter_mut().zip(lights) {
+        p.coarse = (1..cells)
+            .flat_map(|c| nodes(map, t, c))
+            .map(|(d, w)| (file_to_world * d, w))
+            .collect();
+    }
+    prepared
+}
+
+/// The nodes light texel `t`'s integral takes where the kernel's scale at it is `width`:
+/// with coarser quadratures kept, those of ⌈[`PER_WIDTH`]·ρ/w⌉ cells (1 to 8) where that is
+/// fewer than `t.nodes` has, else `t.nodes`.
+pub fn local_nodes(t: &PreparedLight, width: f64) -> &[(DVec3, f64)] {
+    if t.coarse.is_empty() {
+        return &t.nodes;
+    }
+    let fine = ((t.nodes.len() as f64).sqrt().round() as u32 / 2).max(1);
+    let c = ((PER_WIDTH * t.rho / width).ceil() as u32).clamp(1, 8);
+    match c < fine {
+        true => &t.coarse[coarse_offset(c)..coarse_offset(c + 1)],
+        false => &t.nodes,
+    }
 }
 
 /// The light texels of `ex` (of `map`, whose file directions reach the world through
@@ -660,6 +707,7 @@ pub fn prepare_cells(
                 .into_iter()
                 .map(|(d, w)| (file_to_world * d, w))
                 .collect(),
+            coarse: Vec::new(),
         })
         .collect()
 }
@@ -732,12 +780,16 @@ pub(crate) fn kernel_of(kernel: LightKernel, r: DVec3) -> (f64, impl Fn(DVec3) -
 
 /// ∫_t K dω over light texel `t` (radiance not applied) for a kernel `kern` of scale `scale`
 /// about `r`: by its centre where [`PER_WIDTH`]·ρ < [`CENTRE_BELOW`]·w (w the scale, or
-/// [`TAIL_FRACTION`] of the chord to `r` in the tail), else by its nodes.
+/// [`TAIL_FRACTION`] of the chord to `r` in the tail), else by its nodes ([`local_nodes`]).
 pub fn texel_integral(t: &PreparedLight, scale: f64, r: DVec3, kern: impl Fn(DVec3) -> f64) -> f64 {
-    if centre_only(t, scale_at(scale, (r - t.dir).length())) {
+    let width = scale_at(scale, (r - t.dir).length());
+    if centre_only(t, width) {
         kern(t.dir) * t.omega
     } else {
-        t.nodes.iter().map(|&(d, w)| kern(d) * w).sum()
+        local_nodes(t, width)
+            .iter()
+            .map(|&(d, w)| kern(d) * w)
+            .sum()
     }
 }
 

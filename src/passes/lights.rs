@@ -10,7 +10,7 @@ use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder};
 use crate::math::light_tree::LightTree;
 use crate::math::lights::{
     cells_for_rho, cluster_list, clusters, clusters_of, gpu_list, largest_light_rho, prepare,
-    prepare_cells, CLUSTER_GRID,
+    prepare_local, CLUSTER_GRID,
 };
 pub use crate::math::lights::{
     Cluster, ExtractOptions, Extraction, LightKernel, LightTexel, PreparedLight,
@@ -28,6 +28,8 @@ pub struct GpuLights {
     nodes: u32,
     clusters: u32,
     tree_nodes: u32,
+    /// Where the texels' coarser quadratures start, in vec4s (0: none kept).
+    coarse_at: u32,
 }
 
 impl GpuLights {
@@ -58,6 +60,12 @@ impl GpuLights {
                 "light texels with different node counts".into(),
             ));
         }
+        let coarse = lights.first().map_or(0, |t| t.coarse.len());
+        if lights.iter().any(|t| t.coarse.len() != coarse) {
+            return Err(Error::Invalid(
+                "light texels with different coarser quadratures".into(),
+            ));
+        }
         let count = lights.len() as u32;
         let tree = LightTree::new(lights);
         let mut list = gpu_list(&tree.lights);
@@ -72,12 +80,25 @@ impl GpuLights {
             .saturating_sub(TREE_VEC4S)
             .max(1);
         list.extend(std::iter::repeat_n([0.0; 4], pad as usize));
+        // The coarser quadratures last, in the texels' (tree) order: only the lights pass
+        // reads them.
+        let coarse_at = match coarse {
+            0 => 0,
+            _ => list.len() as u32,
+        };
+        for t in &tree.lights {
+            list.extend(t.coarse.iter().map(|&(d, w)| {
+                let d = d.as_vec3();
+                [d.x, d.y, d.z, w as f32]
+            }));
+        }
         Ok(GpuLights {
             buffer: Buffer::storage(ctx, "light texels", &list)?,
             count,
             nodes,
             clusters: clusters.len() as u32,
             tree_nodes: tree.nodes.len() as u32,
+            coarse_at,
         })
     }
 
@@ -99,6 +120,7 @@ impl GpuLights {
             nodes: 0,
             clusters: cells,
             tree_nodes: 0,
+            coarse_at: 0,
         })
     }
 
@@ -134,6 +156,7 @@ impl GpuLights {
             nodes,
             clusters: cells,
             tree_nodes: Self::tree_room(room),
+            coarse_at: 0,
         })
     }
 
@@ -175,7 +198,9 @@ impl GpuLights {
         Self::upload_owned(ctx, t.unwrap_or_default(), &c.unwrap_or_default()).map(Some)
     }
 
-    /// [`GpuLights::of_extractions`] of light texel lists (the extractions' `lights`).
+    /// [`GpuLights::of_extractions`] of light texel lists (the extractions' `lights`), each
+    /// texel with its coarser quadratures ([`crate::math::lights::prepare_local`]): the
+    /// lights pass then gives each texel only as many nodes as the kernel's scale at it asks.
     pub fn of_lights(
         ctx: &Context,
         map: &EnvMap,
@@ -189,7 +214,7 @@ impl GpuLights {
         }
         let t = texels.map(|l| {
             let cells = cells_for_rho(largest_light_rho(l), finest);
-            prepare_cells(map, l, file_to_world, cells)
+            prepare_local(map, l, file_to_world, cells)
         });
         let c = diffuse.map(|l| clusters_of(l, file_to_world, CLUSTER_GRID));
         Self::upload_owned(ctx, t.unwrap_or_default(), &c.unwrap_or_default()).map(Some)
@@ -219,6 +244,11 @@ impl GpuLights {
     pub fn buffer(&self) -> &Buffer {
         &self.buffer
     }
+}
+
+/// Cells per side of a quadrature of `nodes` = (2·cells)² nodes.
+fn cells_of(nodes: u32) -> u32 {
+    ((nodes as f64).sqrt().round() as u32 / 2).max(1)
 }
 
 // shade.frag's walk step hands its kernel the STEP_NODES directions as one mat4x3.
@@ -260,7 +290,8 @@ impl LightsPass {
             alpha: alpha as f32,
             inv_norm: inv_norm as f32,
             at: 0,
-            pad: 0,
+            coarse_at: lights.coarse_at,
+            cells: cells_of(lights.nodes),
         };
         self.dispatch(rec, "lights", lights, push, dst, level)
     }
@@ -283,7 +314,8 @@ impl LightsPass {
             alpha: 0.0,
             inv_norm: 1.0,
             at: lights.cluster_at(),
-            pad: 0,
+            coarse_at: 0,
+            cells: 0,
         };
         self.dispatch(rec, "light clusters", lights, push, dst, level)
     }
