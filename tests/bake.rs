@@ -19,16 +19,17 @@ use envlight::EnvMap;
 ///   (converted in float64 as the GPU converts);
 /// - with lights (the default): the irradiance cube is SH of the diffuse extraction's
 ///   residual plus its light clusters (`math::lights::cluster_irradiance`), and levels ≥ 1
-///   are the residual's FIS plus the light sum with GGX over `chain_norm` (level 0, the
-///   mirror, from the whole map).
+///   are the residual's FIS plus the light sum with GGX over `chain_norm`, each light texel
+///   by as many cells as the lobe's width at it asks (`prepare_local`; level 0, the mirror,
+///   from the whole map).
 ///
 /// Errors relative to the texel, or to the level's mean where the texel is darker. Bound
 /// 1e-4: float32 conversion and sums (measured: printed).
 #[test]
 fn specular_cube_matches_its_float64_twin() {
     use envlight::math::lights::{
-        cluster_irradiance, clusters, diffuse_options, extract, light_sum, prepare, ExtractOptions,
-        LightKernel, CLUSTER_GRID, DIFFUSE_RATIO,
+        cells_for, cluster_irradiance, clusters, diffuse_options, extract, light_sum,
+        prepare_local, ExtractOptions, LightKernel, CLUSTER_GRID, DIFFUSE_RATIO,
     };
     use envlight::math::sh;
     use envlight::math::split_sum::{chain_norm, level_alpha};
@@ -47,7 +48,12 @@ fn specular_cube_matches_its_float64_twin() {
             let (filtered, light_list) = if lights {
                 (
                     &ex.residual,
-                    prepare(&env, &ex, DMat3::IDENTITY, level_alpha(1, 4)),
+                    prepare_local(
+                        &env,
+                        &ex.lights,
+                        DMat3::IDENTITY,
+                        cells_for(&ex, level_alpha(1, 4)),
+                    ),
                 )
             } else {
                 (&env, Vec::new())
