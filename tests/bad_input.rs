@@ -343,8 +343,8 @@ fn saved_cube_and_paraboloid_load_back_with_their_mapping() {
 }
 
 /// A scene a renderer cannot draw is refused with the field named: a camera without a view
-/// direction or with up along it, angles and sizes out of range, degenerate shapes and
-/// non-finite numbers (TOML writes them as `nan` and `inf`).
+/// direction or with up along it, angles and sizes out of range, degenerate shapes,
+/// non-finite numbers (TOML writes them as `nan` and `inf`) and misspelt keys.
 #[test]
 fn degenerate_scenes_are_refused() {
     let good = std::fs::read_to_string(
@@ -414,6 +414,17 @@ fn degenerate_scenes_are_refused() {
             "rotate_y = 30.0",
             "rotate_y = 30.0\nlights = \"some\"",
             "lights",
+        ),
+        // A misspelt key is refused where it stands: in an object as in a material.
+        (
+            "center = [-1.1, 0.0, 0.0]",
+            "center = [-1.1, 0.0, 0.0]\ncolour = [1.0, 0.0, 0.0]",
+            "colour",
+        ),
+        (
+            "alpha = 0.3",
+            "alpha = 0.3, albedoo = [1.0, 1.0, 1.0]",
+            "albedoo",
         ),
     ];
     for (from, to, word) in cases {

@@ -172,3 +172,78 @@ fn sh_command_writes_the_documented_json() {
         }
     }
 }
+
+/// The output's extension picks its format (`io::save_map`): `envlight convert` to `.hdr`
+/// writes Radiance RGBE, to `.pfm` a PFM, to `.exr` OpenEXR, and each loads back as the
+/// same map — a cube through its 1:6 strip, by aspect ratio alone for Radiance and PFM —
+/// within the format's precision (RGBE: an 8-bit mantissa per channel under the exponent of
+/// the texel's largest, so at most one step, 2⁻⁷ of the largest; float32 formats exactly). An extension envlight does not write, or
+/// none, is refused by name before any work, and no file appears.
+#[test]
+fn convert_writes_the_format_its_output_names() {
+    let exe = env!("CARGO_BIN_EXE_envlight");
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("convert_formats");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let input = dir.join("smooth.exr");
+    let map = EnvMap::from_fn(Mapping::LatLong, 48, 24, 2, smooth_env);
+    envlight::io::save_exr(&map, &input).unwrap();
+    let convert = |out: &std::path::Path| {
+        std::process::Command::new(exe)
+            .arg("--validation")
+            .args([
+                "convert",
+                input.to_str().unwrap(),
+                "--to",
+                "cube",
+                "--size",
+                "8",
+            ])
+            .arg("-o")
+            .arg(out)
+            .output()
+            .unwrap()
+    };
+    let opts = envlight::io::LoadOptions::default();
+    let exr = dir.join("cube.exr");
+    let o = convert(&exr);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let want = envlight::io::load(&exr, &opts).unwrap();
+    assert_eq!(
+        (want.mapping, want.width, want.height),
+        (Mapping::Cube, 8, 8)
+    );
+    for (name, magic, tolerance) in [
+        ("cube.hdr", &b"#?RADIANCE"[..], 2f64.powi(-7)),
+        ("cube.pfm", &b"PF\n"[..], 0.0),
+    ] {
+        let path = dir.join(name);
+        let o = convert(&path);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let bytes = std::fs::read(&path).unwrap();
+        assert!(bytes.starts_with(magic), "{name}: {:?}", &bytes[..12]);
+        let back = envlight::io::load(&path, &opts).unwrap();
+        assert_eq!(
+            (back.mapping, back.width, back.height),
+            (Mapping::Cube, 8, 8)
+        );
+        // Each texel's largest channel error over its largest channel.
+        let mut errors = common::compare::Errors::new();
+        for (k, (b, w)) in back.texels.iter().zip(&want.texels).enumerate() {
+            let top = common::compare::max_of(*w);
+            assert!(top > 0.0, "{name} texel {k}");
+            let e = common::compare::max_of((0..3).map(|c| (b[c] as f64 - w[c] as f64).abs()));
+            errors.add(e / top, k);
+        }
+        assert_eq!(errors.count(), want.texels.len(), "{name}");
+        errors.assert_within(tolerance, name);
+    }
+    for name in ["cube.png", "cube.tiff", "cube"] {
+        let path = dir.join(name);
+        let o = convert(&path);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{name} accepted");
+        assert!(err.contains(name) && err.contains(".exr"), "{name}: {err}");
+        assert!(!path.exists(), "{name} was written");
+    }
+}

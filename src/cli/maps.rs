@@ -24,8 +24,9 @@ pub struct ConvertArgs {
     input: Input,
     #[command(flatten)]
     orient: Orient,
-    /// Output EXR (float32; a cube is six faces stacked vertically, a dual paraboloid its
-    /// upper half above its lower half)
+    /// Output map, in the format its extension names: .exr (float32 OpenEXR), .hdr (Radiance
+    /// RGBE) or .pfm (a cube is six faces stacked vertically, a dual paraboloid its upper half
+    /// above its lower half)
     #[arg(short, long)]
     output: PathBuf,
     /// Output mapping
@@ -37,7 +38,7 @@ pub struct ConvertArgs {
     /// Samples per axis per output texel (default: chosen from the resolutions)
     #[arg(long)]
     supersample: Option<u32>,
-    /// Also write a tone-mapped PNG preview beside the EXR
+    /// Also write a tone-mapped PNG preview beside the output
     #[arg(long)]
     png: bool,
     /// Exposure of the PNG preview, in stops
@@ -154,6 +155,7 @@ pub fn convert(g: &Global, a: &ConvertArgs) -> Result<()> {
     if a.size == 0 || a.size > 16384 {
         bail!("--size must be between 1 and 16384 (got {})", a.size);
     }
+    crate::io::check_map_path(&a.output)?;
     let mut clock = HostClock::start();
     let (map, ctx) = load_with_context(g, &a.input)?;
     clock.lap(LOAD);
@@ -206,6 +208,7 @@ pub fn sh(g: &Global, a: &ShArgs) -> Result<()> {
 
 /// `envlight irradiance`.
 pub fn irradiance(g: &Global, a: &IrradianceArgs) -> Result<()> {
+    crate::io::check_map_path(&a.out.output)?;
     let mut clock = HostClock::start();
     let (map, ctx) = load_with_context(g, &a.input)?;
     clock.lap(LOAD);
@@ -292,6 +295,7 @@ pub fn irradiance(g: &Global, a: &IrradianceArgs) -> Result<()> {
 
 /// `envlight prefilter`.
 pub fn prefilter(g: &Global, a: &PrefilterArgs) -> Result<()> {
+    crate::io::check_map_path(&a.out.output)?;
     let mut clock = HostClock::start();
     let (map, ctx) = load_with_context(g, &a.input)?;
     clock.lap(LOAD);
@@ -321,9 +325,15 @@ pub fn prefilter(g: &Global, a: &PrefilterArgs) -> Result<()> {
     clock.lap(RUN);
     pb.finish_and_clear();
     let stem = a.out.output.with_extension("");
+    let ext = a
+        .out
+        .output
+        .extension()
+        .unwrap_or_default()
+        .to_string_lossy();
     let mut listing = Vec::new();
     for (k, (map, source)) in maps.iter().zip(&sources).enumerate() {
-        let path = PathBuf::from(format!("{}.level{k}.exr", stem.display()));
+        let path = PathBuf::from(format!("{}.level{k}.{ext}", stem.display()));
         write_map(&ctx, map, &path, a.out.png)?;
         listing.push(serde_json::json!({
             "level": k,

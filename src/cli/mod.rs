@@ -116,10 +116,10 @@ pub struct FilterOut {
     /// Output size: lat-long width, angular side, cube face, paraboloid half
     #[arg(long, default_value_t = 32)]
     pub size: u32,
-    /// Output EXR (float32)
+    /// Output map: .exr (float32 OpenEXR), .hdr (Radiance RGBE) or .pfm, as its extension says
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Also write a tone-mapped PNG preview beside the EXR
+    /// Also write a tone-mapped PNG preview beside the output
     #[arg(long)]
     pub png: bool,
 }
@@ -276,14 +276,15 @@ pub fn upload_while<T: Send>(
     })
 }
 
-/// Writes a map as EXR, and a tone-mapped PNG beside it when asked.
+/// Writes a map ([`save`]), and a tone-mapped PNG beside it when asked.
 pub fn write_map(ctx: &Context, map: &GpuEnvMap, output: &Path, png: bool) -> Result<()> {
     save(&map.download(ctx)?, output, png.then(ToneMap::default))
 }
 
-/// Writes `map` as EXR, and with `png` a PNG preview beside it.
+/// Writes `map` in the format `output`'s extension names (`io::save_map`: .exr, .hdr or
+/// .pfm), and with `png` a PNG preview beside it.
 pub fn save(map: &EnvMap, output: &Path, png: Option<ToneMap>) -> Result<()> {
-    io::save_exr(map, output)?;
+    io::save_map(map, output)?;
     println!("wrote {}", output.display());
     if let Some(tm) = png {
         let p = output.with_extension("png");

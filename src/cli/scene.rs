@@ -9,12 +9,13 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 
-/// Render a scene file: an HDR EXR, a tone-mapped PNG beside it, and a per-pass timing table
+/// Render a scene file: an HDR image, a tone-mapped PNG beside it, and a per-pass timing table
 #[derive(Args)]
 pub struct RenderArgs {
     /// The scene (TOML)
     scene: PathBuf,
-    /// Output EXR (the PNG gets the same name with .png)
+    /// Output image: .exr, .hdr or .pfm, as its extension says (the PNG gets the same name
+    /// with .png)
     #[arg(short, long)]
     output: PathBuf,
     /// Render through the resident path, as an engine does with a map on the GPU: the map is
@@ -161,6 +162,7 @@ fn demo_scene(cli: &Global, out: &Path) -> Result<()> {
 }
 
 fn render_scene(cli: &Global, scene: &Path, output: &Path, resident: bool) -> Result<()> {
+    crate::io::check_map_path(output)?;
     let mut clock = HostClock::start();
     let sc = crate::scene::Scene::load(scene)?;
     let base = scene.parent().unwrap_or(Path::new("."));
@@ -183,13 +185,13 @@ fn render_scene(cli: &Global, scene: &Path, output: &Path, resident: bool) -> Re
     if let Some(dir) = output.parent() {
         std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
     }
-    crate::io::save_exr(&r.frame, output)?;
+    crate::io::save_map(&r.frame, output)?;
     let png = output.with_extension("png");
     let tm = ToneMap::default();
     preview::preview(&r.frame, tm)
         .save(&png)
         .with_context(|| png.display().to_string())?;
-    clock.lap("write EXR and PNG");
+    clock.lap("write the image and its PNG");
     println!("{}  {}", output.display(), png.display());
     println!("{:<16} {:>11}  spans", "pass", "GPU ms");
     let mut total = 0.0;

@@ -32,6 +32,75 @@ pub use exr_io::{save_exr, write_half_channels as write_exr_half_channels};
 pub use pfm::write as write_pfm;
 pub use png_io::{save_png, tone_map, ToneMap};
 
+/// The map formats [`save_map`] writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum MapFormat {
+    Exr,
+    Radiance,
+    Pfm,
+}
+
+/// The format `path`'s extension names, or the refusal that names the file.
+fn map_format(path: &Path) -> Result<MapFormat> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("exr") => Ok(MapFormat::Exr),
+        Some("hdr") => Ok(MapFormat::Radiance),
+        Some("pfm") => Ok(MapFormat::Pfm),
+        other => Err(Error::bad_file(
+            path,
+            format!(
+                "cannot write {}: envlight writes OpenEXR (.exr), Radiance (.hdr) and PFM (.pfm) \
+                 maps; name the output with one of those extensions",
+                match other {
+                    Some(e) => format!("a .{e} file"),
+                    None => "a file without an extension".to_string(),
+                }
+            ),
+        )),
+    }
+}
+
+/// Whether [`save_map`] can write `path` (its extension names a format it writes): what a
+/// command checks before its work, so that a misnamed output is refused at once.
+pub fn check_map_path(path: &Path) -> Result<()> {
+    map_format(path).map(|_| ())
+}
+
+/// Writes `map` in the format its path's extension names: `.exr` float32 OpenEXR (with the
+/// mapping recorded, [`save_exr`]), `.hdr` Radiance RGBE, `.pfm` float32 PFM; cubes and dual
+/// paraboloids as the single image [`strip_extent`] describes, which loads back by its
+/// aspect ratio. Any other extension, or none, is refused by name before anything is
+/// written: a file never holds a format its name does not say. Radiance and PFM files are
+/// written atomically ([`write_atomic`]).
+pub fn save_map(map: &EnvMap, path: &Path) -> Result<()> {
+    match map_format(path)? {
+        MapFormat::Exr => save_exr(map, path),
+        MapFormat::Radiance => write_atomic(path, &radiance_bytes(map, path)?),
+        MapFormat::Pfm => {
+            let (w, h) = strip_extent(map);
+            write_atomic(path, &pfm::bytes(w, h, &map.texels))
+        }
+    }
+}
+
+/// `map` as a Radiance RGBE file (negative channels, which RGBE cannot hold, written as 0).
+fn radiance_bytes(map: &EnvMap, path: &Path) -> Result<Vec<u8>> {
+    let (w, h) = strip_extent(map);
+    let texels: Vec<image::Rgb<f32>> = map
+        .texels
+        .iter()
+        .map(|t| image::Rgb(t.map(|c| c.max(0.0))))
+        .collect();
+    let mut bytes = Vec::new();
+    image::codecs::hdr::HdrEncoder::new(&mut bytes)
+        .encode(&texels, w as usize, h as usize)
+        .map_err(|e| Error::bad_file(path, format!("cannot encode Radiance RGBE: {e}")))?;
+    Ok(bytes)
+}
+
 /// Writes `bytes` to `path` atomically: into a temporary file in the same folder, then renamed
 /// over `path`, so an interrupted run leaves either the old file or the new one, never half.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {

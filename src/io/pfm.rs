@@ -81,6 +81,12 @@ pub(crate) fn read(path: &Path, bytes: &[u8], max_texels: u64) -> Result<Raster>
 
 /// Writes a little-endian RGB PFM (used by tests to make inputs).
 pub fn write(path: &Path, w: u32, h: u32, rgb: &[[f32; 3]]) -> std::io::Result<()> {
+    std::fs::write(path, bytes(w, h, rgb))
+}
+
+/// A little-endian RGB PFM of `w` × `h` texels, top row first in `rgb` (PFM stores the
+/// bottom row first).
+pub(crate) fn bytes(w: u32, h: u32, rgb: &[[f32; 3]]) -> Vec<u8> {
     let mut out = format!("PF\n{w} {h}\n-1.0\n").into_bytes();
     for y in (0..h as usize).rev() {
         for x in 0..w as usize {
@@ -89,5 +95,5 @@ pub fn write(path: &Path, w: u32, h: u32, rgb: &[[f32; 3]]) -> std::io::Result<(
             }
         }
     }
-    std::fs::write(path, out)
+    out
 }

@@ -157,7 +157,7 @@ impl Camera {
 
 /// A shape of the scene.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(tag = "shape", rename_all = "lowercase")]
+#[serde(tag = "shape", rename_all = "lowercase", deny_unknown_fields)]
 pub enum Shape {
     /// A sphere.
     Sphere {
