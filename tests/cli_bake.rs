@@ -81,6 +81,8 @@ fn ktx2_files_load_in_an_independent_reader_with_the_gpu_images() {
         "--dfg",
         "--chain",
     ]));
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("manifest.json")).unwrap()).unwrap();
     let ctx = common::ctx();
     {
         let baker = Baker::new(&ctx).unwrap();
@@ -91,6 +93,7 @@ fn ktx2_files_load_in_an_independent_reader_with_the_gpu_images() {
                 baked.chain.is_empty(),
                 "a chain nobody asked for was read back"
             );
+            same_check(&manifest, &format!("p{k}.exr"), map, &baked);
             // The paraboloid chain: a 2-layer array, every level, premultiplied RGBA32F as
             // the GPU holds it.
             let chained = baker
@@ -428,6 +431,41 @@ fn reruns_resume_skip_and_fail_alone() {
     for p in [&dir, &out] {
         let _ = std::fs::remove_dir_all(p);
     }
+}
+
+/// The spot check `envlight bake` recorded for `name` (its exact filters computed while the
+/// GPU baked) is the library's `spot_check` of the same bake in this process: the same texels,
+/// filters and cubes (a bake is deterministic), so equal but for the order in which the
+/// exact filters' threads add their sums (1e-12 relative).
+fn same_check(
+    manifest: &serde_json::Value,
+    name: &str,
+    map: &envlight::EnvMap,
+    baked: &envlight::bake::Baked,
+) {
+    let entry = manifest["probes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["input"].as_str().unwrap().ends_with(name))
+        .unwrap_or_else(|| panic!("{name} is not in the manifest"));
+    let got = &entry["check"];
+    let want = envlight::bake::spot_check(map, &Orientation::default(), &small_options(), baked, 2);
+    assert_eq!(got["texels"], 2, "{name}");
+    let mut errors = Errors::new();
+    let pairs = std::iter::once((&got["irradiance"], want.irradiance)).chain(
+        got["specular"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(want.specular.iter().copied()),
+    );
+    for (k, (g, w)) in pairs.enumerate() {
+        let g = g.as_f64().unwrap();
+        errors.add(abs_err(g, w, k) / w.abs().max(1e-300), k);
+    }
+    assert_eq!(errors.count(), 1 + want.specular.len(), "{name}");
+    errors.assert_within(1e-12, &format!("{name}: the manifest's spot check"));
 }
 
 /// `opts` with the paraboloid chain written too.

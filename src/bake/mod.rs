@@ -196,7 +196,8 @@ fn cube_texel(size: u32, d: glam::DVec3) -> (u32, u32, u32) {
 /// Checks `baked` (of `env` seen with `orientation`) against float64 exact filters at
 /// `texels` texels of the irradiance cube and of each specular level ≥ 1: first the texel
 /// holding the source's brightest texel (a sun, where filtering errs most), then texels spread
-/// over the faces by a fixed rule, so that the same bake checks the same texels.
+/// over the faces by a fixed rule, so that the same bake checks the same texels
+/// ([`SpotCheckPlan::new`], then [`SpotCheckPlan::compare`]).
 pub fn spot_check(
     env: &EnvMap,
     orientation: &Orientation,
@@ -204,73 +205,123 @@ pub fn spot_check(
     baked: &Baked,
     texels: u32,
 ) -> SpotCheck {
-    let exact = ExactFilter::new(env, orientation.world_to_file().transpose());
-    let sun = exact.brightest();
-    let pick = |size: u32, q: u32| -> (u32, u32, u32) {
-        if q == 0 {
-            cube_texel(size, sun)
-        } else {
-            (q % 6, (q * 37 + 11) % size, (q * 23 + 5) % size)
-        }
-    };
-    let centre = |size: u32, (layer, i, j): (u32, u32, u32)| {
-        Mapping::Cube.coord_to_dir(Mapping::texel_center(size, size, layer, i, j))
-    };
-    let rel = |got: [f32; 4], want: [f64; 3]| {
-        let g = luminance([got[0] as f64, got[1] as f64, got[2] as f64]);
-        let w = luminance(want);
-        if w > 0.0 {
-            (g - w).abs() / w
-        } else {
-            g.abs()
-        }
-    };
-    // (level, or None for the irradiance cube; texel centre; baked value).
-    let mut jobs: Vec<(Option<u32>, glam::DVec3, [f32; 4])> = Vec::new();
-    let s = opts.irradiance_size;
-    for q in 0..texels {
-        let t = pick(s, q);
-        let got = baked.irradiance[((t.0 * s + t.2) * s + t.1) as usize];
-        jobs.push((None, centre(s, t), got));
-    }
-    for k in 1..opts.specular_levels {
-        let s = (opts.specular_size >> k).max(1);
+    SpotCheckPlan::new(env, orientation, opts, texels).compare(baked)
+}
+
+/// A spot check's exact values, which depend on the source alone: a caller computes them
+/// while the GPU bakes (on a CPU device they cost as much as the bake's GPU work), then
+/// compares the bake with them.
+#[derive(Clone, Debug)]
+pub struct SpotCheckPlan {
+    texels: u32,
+    levels: u32,
+    jobs: Vec<CheckedTexel>,
+}
+
+/// One texel a spot check compares.
+#[derive(Clone, Copy, Debug)]
+struct CheckedTexel {
+    /// The specular level, or None for the irradiance cube.
+    level: Option<u32>,
+    /// Its face side.
+    side: u32,
+    /// (layer, i, j).
+    texel: (u32, u32, u32),
+    /// The exact filter there.
+    want: [f64; 3],
+}
+
+impl SpotCheckPlan {
+    /// The texels [`spot_check`] checks in a bake of `env` with `opts`, and the exact filters
+    /// of `env` there: every query in one pass over the map on every core.
+    pub fn new(
+        env: &EnvMap,
+        orientation: &Orientation,
+        opts: &BakeOptions,
+        texels: u32,
+    ) -> SpotCheckPlan {
+        let exact = ExactFilter::new(env, orientation.world_to_file().transpose());
+        let sun = exact.brightest();
+        let pick = |size: u32, q: u32| -> (u32, u32, u32) {
+            if q == 0 {
+                cube_texel(size, sun)
+            } else {
+                (q % 6, (q * 37 + 11) % size, (q * 23 + 5) % size)
+            }
+        };
+        let mut jobs = Vec::new();
         for q in 0..texels {
-            let t = pick(s, q);
-            let got = baked.specular[k as usize][((t.0 * s + t.2) * s + t.1) as usize];
-            jobs.push((Some(k), centre(s, t), got));
+            jobs.push((None, opts.irradiance_size, pick(opts.irradiance_size, q)));
+        }
+        for k in 1..opts.specular_levels {
+            let s = (opts.specular_size >> k).max(1);
+            jobs.extend((0..texels).map(|q| (Some(k), s, pick(s, q))));
+        }
+        let queries: Vec<Query> = jobs
+            .iter()
+            .map(|&(level, s, (layer, i, j))| {
+                let d = Mapping::Cube.coord_to_dir(Mapping::texel_center(s, s, layer, i, j));
+                match level {
+                    None => Query::Irradiance { n: d },
+                    Some(k) => Query::Ggx {
+                        r: d,
+                        alpha: level_alpha(k, opts.specular_levels),
+                    },
+                }
+            })
+            .collect();
+        let want = exact.evaluate(&queries);
+        SpotCheckPlan {
+            texels,
+            levels: opts.specular_levels,
+            jobs: jobs
+                .into_iter()
+                .zip(want)
+                .map(|((level, side, texel), want)| CheckedTexel {
+                    level,
+                    side,
+                    texel,
+                    want,
+                })
+                .collect(),
         }
     }
-    // The exact filters, every query in one pass over the map on every core: they cost as
-    // much as the bake's GPU work on a CPU device.
-    let queries: Vec<Query> = jobs
-        .iter()
-        .map(|&(level, d, _)| match level {
-            None => Query::Irradiance { n: d },
-            Some(k) => Query::Ggx {
-                r: d,
-                alpha: level_alpha(k, opts.specular_levels),
-            },
-        })
-        .collect();
-    let errors: Vec<f64> = exact
-        .evaluate(&queries)
-        .into_iter()
-        .zip(&jobs)
-        .map(|(want, &(_, _, got))| rel(got, want))
-        .collect();
-    let mut irradiance: f64 = 0.0;
-    let mut specular = vec![0.0f64; opts.specular_levels as usize];
-    for (&(level, _, _), e) in jobs.iter().zip(errors) {
-        match level {
-            None => irradiance = worse(irradiance, e),
-            Some(k) => specular[k as usize] = worse(specular[k as usize], e),
+
+    /// The worst relative luminance error of `baked` (a bake with the options this plan was
+    /// made for) at the plan's texels, per cube level.
+    pub fn compare(&self, baked: &Baked) -> SpotCheck {
+        let rel = |got: [f32; 4], want: [f64; 3]| {
+            let g = luminance([got[0] as f64, got[1] as f64, got[2] as f64]);
+            let w = luminance(want);
+            if w > 0.0 {
+                (g - w).abs() / w
+            } else {
+                g.abs()
+            }
+        };
+        let mut irradiance: f64 = 0.0;
+        let mut specular = vec![0.0f64; self.levels as usize];
+        for &CheckedTexel {
+            level,
+            side: s,
+            texel: (layer, i, j),
+            want,
+        } in &self.jobs
+        {
+            let at = ((layer * s + j) * s + i) as usize;
+            match level {
+                None => irradiance = worse(irradiance, rel(baked.irradiance[at], want)),
+                Some(k) => {
+                    let e = rel(baked.specular[k as usize][at], want);
+                    specular[k as usize] = worse(specular[k as usize], e);
+                }
+            }
         }
-    }
-    SpotCheck {
-        texels,
-        irradiance,
-        specular,
+        SpotCheck {
+            texels: self.texels,
+            irradiance,
+            specular,
+        }
     }
 }
 

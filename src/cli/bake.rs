@@ -8,7 +8,7 @@ use crate::bake::output::{
     clamp_cube, compose, needs_clamp, separate_options, CubeClamp, Irradiance, Preset,
     SeparateLights,
 };
-use crate::bake::{spot_check, BakeOptions, Baked, Baker, PendingBake, SpotCheck};
+use crate::bake::{BakeOptions, Baked, Baker, PendingBake, SpotCheck, SpotCheckPlan};
 use crate::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
 use crate::io::{write_atomic, LoadOptions};
 use crate::math::convert::{reduce_to_fit, Reduction};
@@ -317,7 +317,8 @@ struct Stages {
     gpu_convert_ms: f64,
     /// GPU milliseconds of the filters: SH, the irradiance cube, the specular levels, lights.
     gpu_filter_ms: f64,
-    /// The spot check against float64 exact filters.
+    /// The spot check's float64 exact filters, which run beside the GPU wait and the writes
+    /// (on a CPU device, on the same cores as the bake).
     check: f64,
     /// Encoding and writing the files and the record.
     write: f64,
@@ -370,7 +371,8 @@ struct InGpu {
     name: String,
     input: String,
     input_sha256: String,
-    map: EnvMap,
+    /// The source, until the spot check takes it.
+    map: Option<EnvMap>,
     /// Seconds spent reading, hashing and decoding it.
     read_s: f64,
     pending: PendingBake,
@@ -1445,7 +1447,7 @@ impl Run<'_> {
                 name,
                 input,
                 input_sha256,
-                map,
+                map: Some(map),
                 read_s,
                 pending,
                 lights,
@@ -1462,15 +1464,39 @@ impl Run<'_> {
 
     /// Waits for a probe's bake, writes its files and record, checks it; its entry.
     fn finish(&self, w: Box<InGpu>, pb: &ProgressBar) -> Entry {
-        let w = *w;
+        let mut w = *w;
         let plan = self.plan;
         let host = w.pending.host_seconds();
-        let mut stages = Stages {
+        let stages = Stages {
             read: w.read_s,
             lights: host.lights,
             upload: host.upload,
             ..Stages::default()
         };
+        // The spot check's exact filters need the source alone: they run while the GPU bakes.
+        let map = w.map.take().filter(|_| plan.check > 0);
+        std::thread::scope(|s| {
+            let checking = map.map(|map| {
+                s.spawn(move || {
+                    let t = Instant::now();
+                    let o = &plan.options;
+                    let c = SpotCheckPlan::new(&map, &plan.orientation, o, plan.check);
+                    (c, t.elapsed().as_secs_f64())
+                })
+            });
+            self.finish_with(w, pb, stages, checking)
+        })
+    }
+
+    /// [`Run::finish`] once the spot check's exact filters are under way (`checking`).
+    fn finish_with(
+        &self,
+        w: InGpu,
+        pb: &ProgressBar,
+        mut stages: Stages,
+        checking: Option<std::thread::ScopedJoinHandle<'_, (SpotCheckPlan, f64)>>,
+    ) -> Entry {
+        let plan = self.plan;
         let t0 = Instant::now();
         let result = w
             .pending
@@ -1484,11 +1510,11 @@ impl Run<'_> {
                 let (outputs, clamped) =
                     write_probe(self.out, &dir, &baked, plan, w.lights.as_ref())?;
                 stages.write = t1.elapsed().as_secs_f64();
-                let t2 = Instant::now();
-                let checked = (plan.check > 0).then(|| {
-                    spot_check(&w.map, &plan.orientation, &plan.options, &baked, plan.check)
+                let checked = checking.map(|h| {
+                    let (c, seconds) = h.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
+                    stages.check = seconds;
+                    c.compare(&baked)
                 });
-                stages.check = t2.elapsed().as_secs_f64();
                 let gpu_ms = baked.timings.iter().map(|t| t.ms).sum::<f64>();
                 Ok((outputs, gpu_ms, checked, clamped))
             })
