@@ -12,7 +12,16 @@
 #include "lights.glsl"
 
 layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
+// Built twice: with TEXEL_VIEW the list is read through its rgba32f texel view (llvmpipe loads
+// a storage buffer lane by lane, a texel view as one gather), else as a storage buffer (for
+// lists longer than the device's maxTexelBufferElements).
+#ifdef TEXEL_VIEW
+layout(set = 0, binding = BINDING_LIGHTS_TEXELS) uniform samplerBuffer lt_view;
+#define LT(i) texelFetch(lt_view, int(i))
+#else
 layout(std430, set = 0, binding = BINDING_LIGHTS_TEXELS) readonly buffer Texels { vec4 lt[]; };
+#define LT(i) lt[i]
+#endif
 layout(set = 0, binding = BINDING_LIGHTS_DST, rgba32f) uniform image2DArray dst;
 
 // The push block, generated from src/abi/push.rs.
@@ -43,7 +52,7 @@ void main() {
         vec3 e = vec3(0.0);
         for (uint k = 0u; k < pc.count; k++) {
             uint at = pc.at + k * LIGHT_CLUSTER_VEC4S;
-            e += max(vec3(dot(r, lt[at].xyz), dot(r, lt[at + 1u].xyz), dot(r, lt[at + 2u].xyz)), vec3(0.0));
+            e += max(vec3(dot(r, LT(at).xyz), dot(r, LT(at + 1u).xyz), dot(r, LT(at + 2u).xyz)), vec3(0.0));
         }
         vec4 prev = imageLoad(dst, ivec3(id));
         imageStore(dst, ivec3(id), vec4(prev.rgb + e, prev.a));
@@ -54,8 +63,8 @@ void main() {
     uint stride = LIGHT_HEADER_VEC4S + pc.nodes;
     vec3 sum = vec3(0.0);
     for (uint t = 0u; t < pc.count; t++) {
-        vec4 centre = lt[t * stride];
-        vec4 light = lt[t * stride + 1u];
+        vec4 centre = LT(t * stride);
+        vec4 light = LT(t * stride + 1u);
         vec3 e = r - centre.xyz;
         float w2 = light_scale2(pc.kernel == LIGHTS_KERNEL_COSINE ? 1.0 : a, e);
         float k = 0.0;
@@ -72,7 +81,7 @@ void main() {
                 }
             }
             for (uint n = 0u; n < count; n++) {
-                vec4 q = lt[first + n];
+                vec4 q = LT(first + n);
                 k += kern(a2, r, q.xyz) * q.w;
             }
         }

@@ -374,6 +374,9 @@ macro_rules! shader_table {
             /// Light texels (extracted from a map) added exactly to a cube level.
             Lights = "lights", "lights.comp", Compute, [], LightsPush,
                 [(LIGHTS_TEXELS, StorageBuffer, Read), (LIGHTS_DST, StorageImage, ReadWrite)];
+            /// The same, reading the light list through its texel view.
+            LightsView = "lights_view", "lights.comp", Compute, [("TEXEL_VIEW", "1")], LightsPush,
+                [(LIGHTS_TEXELS, TexelBuffer, Read), (LIGHTS_DST, StorageImage, ReadWrite)];
             /// Light texels found on the GPU, the per-texel steps: histograms, compaction.
             Extract = "extract", "extract.comp", Compute, [], ExtractPush,
                 [(EXTRACT_MAP, Sampled, Read), (EXTRACT_SH, StorageBuffer, Read),

@@ -30,6 +30,30 @@ pub struct GpuLights {
     tree_nodes: u32,
     /// Where the texels' coarser quadratures start, in vec4s (0: none kept).
     coarse_at: u32,
+    /// Whether the lights pass reads the buffer through its texel view (it has one).
+    view: bool,
+}
+
+/// A light buffer of `vec4s` vec4s: storage, and a texel view where the device's
+/// maxTexelBufferElements allows (the lights pass reads it so, faster on llvmpipe).
+fn light_buffer(
+    ctx: &Context,
+    name: &str,
+    vec4s: u64,
+    extra: ash::vk::BufferUsageFlags,
+    location: gpu_allocator::MemoryLocation,
+) -> Result<(Buffer, bool)> {
+    use ash::vk::BufferUsageFlags as U;
+    let view = vec4s.max(1) <= ctx.info().max_texel_buffer_elements;
+    let usage = U::STORAGE_BUFFER | extra;
+    let usage = match view {
+        true => usage | U::UNIFORM_TEXEL_BUFFER,
+        false => usage,
+    };
+    Ok((
+        Buffer::new(ctx, name, vec4s.max(1) * 16, usage, location)?,
+        view,
+    ))
 }
 
 impl GpuLights {
@@ -92,13 +116,22 @@ impl GpuLights {
                 [d.x, d.y, d.z, w as f32]
             }));
         }
+        let (mut buffer, view) = light_buffer(
+            ctx,
+            "light texels",
+            list.len() as u64,
+            ash::vk::BufferUsageFlags::empty(),
+            gpu_allocator::MemoryLocation::CpuToGpu,
+        )?;
+        buffer.write(&list);
         Ok(GpuLights {
-            buffer: Buffer::storage(ctx, "light texels", &list)?,
+            buffer,
             count,
             nodes,
             clusters: clusters.len() as u32,
             tree_nodes: tree.nodes.len() as u32,
             coarse_at,
+            view,
         })
     }
 
@@ -107,20 +140,22 @@ impl GpuLights {
     /// [`GpuLights::cluster_at`]): no light texels, no tree. The resident path's diffuse
     /// lights.
     pub fn clusters_on_gpu(ctx: &Context, cells: u32) -> Result<GpuLights> {
-        let bytes = (cells * crate::abi::lights::CLUSTER_VEC4S + 1) as u64 * 16;
+        let vec4s = (cells * crate::abi::lights::CLUSTER_VEC4S + 1) as u64;
+        let (buffer, view) = light_buffer(
+            ctx,
+            "light clusters",
+            vec4s,
+            ash::vk::BufferUsageFlags::empty(),
+            gpu_allocator::MemoryLocation::GpuOnly,
+        )?;
         Ok(GpuLights {
-            buffer: Buffer::new(
-                ctx,
-                "light clusters",
-                bytes,
-                ash::vk::BufferUsageFlags::STORAGE_BUFFER,
-                gpu_allocator::MemoryLocation::GpuOnly,
-            )?,
+            buffer,
             count: 0,
             nodes: 0,
             clusters: cells,
             tree_nodes: 0,
             coarse_at: 0,
+            view,
         })
     }
 
@@ -142,21 +177,21 @@ impl GpuLights {
             + 1
             + Self::tree_room(room) as u64 * TREE_VEC4S as u64
             + pad;
+        let (buffer, view) = light_buffer(
+            ctx,
+            "light texels and clusters",
+            vec4s,
+            ash::vk::BufferUsageFlags::TRANSFER_SRC | ash::vk::BufferUsageFlags::TRANSFER_DST,
+            gpu_allocator::MemoryLocation::GpuOnly,
+        )?;
         Ok(GpuLights {
-            buffer: Buffer::new(
-                ctx,
-                "light texels and clusters",
-                vec4s * 16,
-                ash::vk::BufferUsageFlags::STORAGE_BUFFER
-                    | ash::vk::BufferUsageFlags::TRANSFER_SRC
-                    | ash::vk::BufferUsageFlags::TRANSFER_DST,
-                gpu_allocator::MemoryLocation::GpuOnly,
-            )?,
+            buffer,
             count: room,
             nodes,
             clusters: cells,
             tree_nodes: Self::tree_room(room),
             coarse_at: 0,
+            view,
         })
     }
 
@@ -244,6 +279,14 @@ impl GpuLights {
     pub fn buffer(&self) -> &Buffer {
         &self.buffer
     }
+
+    /// The same lights, which the lights pass reads as a storage buffer (as it does lists
+    /// beyond the device's maxTexelBufferElements): what tests of that path take.
+    #[cfg(feature = "test-hooks")]
+    pub fn read_as_storage(mut self) -> GpuLights {
+        self.view = false;
+        self
+    }
 }
 
 /// Cells per side of a quadrature of `nodes` = (2·cells)² nodes.
@@ -256,14 +299,21 @@ const _: () = assert!(crate::abi::lights::STEP_NODES == 4, "walk_step's mat4x3")
 
 /// The lights pass.
 pub struct LightsPass {
-    pipeline: Pipeline,
+    ctx: Context,
+    /// Reading the light list through its texel view.
+    view: Pipeline,
+    /// Reading it as a storage buffer (built at its first use).
+    storage: std::sync::OnceLock<Pipeline>,
 }
 
 impl LightsPass {
-    /// Builds the pipeline.
+    /// Builds the pipeline that reads light lists through their texel views (the one that
+    /// reads them as storage buffers is built when a list without a view first needs it).
     pub fn new(ctx: &Context) -> Result<LightsPass> {
         Ok(LightsPass {
-            pipeline: Pipeline::compute(ctx, ShaderId::Lights, &WORKGROUP_2D)?,
+            ctx: ctx.clone(),
+            view: Pipeline::compute(ctx, ShaderId::LightsView, &WORKGROUP_2D)?,
+            storage: std::sync::OnceLock::new(),
         })
     }
 
@@ -342,11 +392,18 @@ impl LightsPass {
         }
         let size = dst.level_size(level).0;
         push.size = size;
+        let (pipeline, list) = match lights.view {
+            true => (&self.view, Bind::Texels(&lights.buffer)),
+            false => (
+                Pipeline::compute_once(&self.storage, &self.ctx, ShaderId::Lights, &WORKGROUP_2D)?,
+                Bind::Buffer(&lights.buffer),
+            ),
+        };
         rec.span(span, |rec| {
             rec.dispatch(
-                &self.pipeline,
+                pipeline,
                 &[
-                    (binding::LIGHTS_TEXELS, Bind::Buffer(&lights.buffer)),
+                    (binding::LIGHTS_TEXELS, list),
                     (binding::LIGHTS_DST, Bind::StorageLevel(&dst.image, level)),
                 ],
                 &push,

@@ -29,7 +29,9 @@ pub fn sky(mapping: Mapping, size: u32) -> EnvMap {
 /// α 0.02 (a lobe far narrower than the 64-wide maps' texels: every node counts) and 0.3, the
 /// map (a sun and three lamps) turned 30° and mirrored; the texels prepared with one
 /// quadrature for all kernels and with the coarser ones kept (`prepare_local`, a bake's:
-/// cells from the kernel's scale at each texel, which must pick some coarser set here). Bound
+/// cells from the kernel's scale at each texel, which must pick some coarser set here); the
+/// list read through its texel view and, once, as a storage buffer (`read_as_storage`: the
+/// path for lists beyond maxTexelBufferElements). Bound
 /// 1e-5 of the level's largest texel: float32 sums of a few hundred terms (measured: printed).
 pub fn check(ctx: &Context) {
     let pass = LightsPass::new(ctx).unwrap();
@@ -55,9 +57,10 @@ pub fn check(ctx: &Context) {
             f2w,
             envlight::math::lights::cells_for(&ex, 0.02),
         );
-        for prepared in [prepare(&map, &ex, f2w, 0.02), local] {
-            check_prepared(ctx, &pass, mapping, &prepared);
-        }
+        // The list through its texel view, and (the local one) as a storage buffer too.
+        check_prepared(ctx, &pass, mapping, &prepare(&map, &ex, f2w, 0.02), false);
+        check_prepared(ctx, &pass, mapping, &local, false);
+        check_prepared(ctx, &pass, mapping, &local, true);
     }
 }
 
@@ -66,12 +69,18 @@ fn check_prepared(
     pass: &LightsPass,
     mapping: Mapping,
     prepared: &[envlight::math::lights::PreparedLight],
+    storage: bool,
 ) {
-    let rule = match prepared[0].coarse.is_empty() {
-        true => "fixed",
-        false => "local",
+    let rule = match (prepared[0].coarse.is_empty(), storage) {
+        (true, _) => "fixed",
+        (false, false) => "local",
+        (false, true) => "local, as storage",
     };
     let gpu = GpuLights::upload(ctx, prepared).unwrap();
+    let gpu = match storage {
+        true => gpu.read_as_storage(),
+        false => gpu,
+    };
     let mut coarser = 0;
     for kernel in [
         LightKernel::Cosine,
