@@ -392,14 +392,21 @@ fn bench_dynamic_time_slices_the_chain() {
 /// The page `bench dynamic` writes, validation on, for a 16² cube and a 64 × 32 lat-long map
 /// with a 64² chain, one round, and `more` arguments (the command must succeed).
 fn bench_dynamic_page(tag: &str, more: &[&str]) -> String {
+    let mut args = vec!["--validation", "--device", "cpu", "bench", "dynamic"];
+    args.extend([
+        "--cubes", "16", "--widths", "64", "--chain", "64", "--reps", "1",
+    ]);
+    args.extend(more);
+    bench_page(tag, &args)
+}
+
+/// The page section `envlight ARGS --out PAGE` writes into a fresh page (the command must
+/// succeed).
+fn bench_page(tag: &str, args: &[&str]) -> String {
     let page = std::env::temp_dir().join(format!("envlight-{tag}-{}.md", std::process::id()));
     let _ = std::fs::remove_file(&page);
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
-        .args(["--validation", "--device", "cpu", "bench", "dynamic"])
-        .args([
-            "--cubes", "16", "--widths", "64", "--chain", "64", "--reps", "1",
-        ])
-        .args(more)
+        .args(args)
         .arg("--out")
         .arg(&page)
         .output()
@@ -415,19 +422,12 @@ fn bench_dynamic_page(tag: &str, more: &[&str]) -> String {
 /// bytes a texel positive: the child's `wait4` figures were read).
 #[test]
 fn bench_scale_writes_a_row_per_factor() {
-    let page = std::env::temp_dir().join(format!("envlight-scale-{}.md", std::process::id()));
-    let _ = std::fs::remove_file(&page);
     let sky = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/sky_latlong.exr");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
-        .args(["--device", "cpu", "bench", "scale"])
-        .arg(&sky)
-        .args(["--factors", "1,2", "--out"])
-        .arg(&page)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let text = std::fs::read_to_string(&page).unwrap();
-    let _ = std::fs::remove_file(&page);
+    let sky = sky.to_str().unwrap();
+    let text = bench_page(
+        "scale",
+        &["--device", "cpu", "bench", "scale", sky, "--factors", "1,2"],
+    );
     assert!(text.contains("<!-- bench:bake-scale -->"), "{text}");
     for size in ["512 × 256", "1024 × 512"] {
         let row = text

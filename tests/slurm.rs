@@ -260,8 +260,7 @@ fn wait_for(what: &str, secs: u64, mut done: impl FnMut() -> bool) {
 
 /// Eight probes; the sixth (p5, the second of task 1's shard: shards take every fourth
 /// probe) is 4096×2048, a large probe (over 4 Mi texels: read, reduced to the light records'
-/// grid and uploaded in bands), so that its bake lasts long enough to be interrupted (at
-/// 2048×1024 it took under 0.2 s once the bake had got faster, and the requeue came late).
+/// grid and uploaded in bands), so that its bake lasts long enough to be interrupted.
 fn eight_probes(dir: &Path) {
     for k in 0..8u32 {
         let angle = f64::from(k) * 0.7;

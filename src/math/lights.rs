@@ -660,6 +660,11 @@ pub fn prepare_local(
     prepared
 }
 
+/// Cells per side of a quadrature of `nodes` = (2·cells)² nodes (1 for none).
+pub fn cells_of_nodes(nodes: u32) -> u32 {
+    ((nodes as f64).sqrt().round() as u32 / 2).max(1)
+}
+
 /// The nodes light texel `t`'s integral takes where the kernel's scale at it is `width`:
 /// with coarser quadratures kept, those of ⌈[`PER_WIDTH`]·ρ/w⌉ cells (1 to 8) where that is
 /// fewer than `t.nodes` has, else `t.nodes`.
@@ -667,7 +672,7 @@ pub fn local_nodes(t: &PreparedLight, width: f64) -> &[(DVec3, f64)] {
     if t.coarse.is_empty() {
         return &t.nodes;
     }
-    let fine = ((t.nodes.len() as f64).sqrt().round() as u32 / 2).max(1);
+    let fine = cells_of_nodes(t.nodes.len() as u32);
     let c = ((PER_WIDTH * t.rho / width).ceil() as u32).clamp(1, 8);
     match c < fine {
         true => &t.coarse[coarse_offset(c)..coarse_offset(c + 1)],

@@ -289,11 +289,6 @@ impl GpuLights {
     }
 }
 
-/// Cells per side of a quadrature of `nodes` = (2·cells)² nodes.
-fn cells_of(nodes: u32) -> u32 {
-    ((nodes as f64).sqrt().round() as u32 / 2).max(1)
-}
-
 // shade.frag's walk step hands its kernel the STEP_NODES directions as one mat4x3.
 const _: () = assert!(crate::abi::lights::STEP_NODES == 4, "walk_step's mat4x3");
 
@@ -341,7 +336,7 @@ impl LightsPass {
             inv_norm: inv_norm as f32,
             at: 0,
             coarse_at: lights.coarse_at,
-            cells: cells_of(lights.nodes),
+            cells: crate::math::lights::cells_of_nodes(lights.nodes),
         };
         self.dispatch(rec, "lights", lights, push, dst, level)
     }
