@@ -2,8 +2,8 @@
 //! lookups extract deeply (thousands of texels: a studio's softboxes) at a per-pixel cost
 //! that grows with the lobe's reach, not with the texel count.
 //!
-//! Nodes split their texels at the median along the widest axis of their centres, down to
-//! [`LEAF_TEXELS`]; texels are stored in the tree's order, so every node holds a contiguous
+//! Nodes split their texels along the widest axis of their centres where the halves' counts
+//! times their extents sum least (`split_at`), down to [`LEAF_TEXELS`]; texels are stored in the tree's order, so every node holds a contiguous
 //! range. A smooth kernel (a BRDF's lobe, split-sum's GGX) takes a node whole where it is
 //! small against the kernel's scale there ([`TREE_BELOW`]) and no cut (the horizon) crosses
 //! it: its power times the kernel's mean over four sigma points, which match the node's
@@ -71,7 +71,7 @@ impl LightTree {
         let mut order: Vec<usize> = (0..lights.len()).collect();
         let mut nodes = Vec::new();
         if !lights.is_empty() {
-            build(&lights, &mut order, 0, &mut nodes);
+            build(&lights, &mut order, 0, 0, &mut nodes);
         }
         // Moved into tree order, not cloned (each texel owns its quadrature's list).
         let mut rank = vec![0; order.len()];
@@ -130,11 +130,12 @@ impl LightTree {
             .collect()
     }
 
-    /// Walks the tree: a node that `whole` accepts by its power times `node`'s kernel mean;
-    /// other leaves' texels by `texel` (its kernel integral, times its radiance); other nodes
-    /// descend.
+    /// Walks the tree: a node that `none` accepts adds nothing; one that `whole` accepts,
+    /// its power times `node`'s kernel mean; other leaves' texels by `texel` (its kernel
+    /// integral, times its radiance); other nodes descend.
     fn walk(
         &self,
+        none: impl Fn(&TreeNode) -> bool,
         whole: impl Fn(&TreeNode) -> bool,
         node: impl Fn(&TreeNode) -> f64,
         texel: impl Fn(&PreparedLight) -> f64,
@@ -143,7 +144,9 @@ impl LightTree {
         let mut i = 0;
         while i < self.nodes.len() {
             let n = &self.nodes[i];
-            if whole(n) {
+            if none(n) {
+                i = n.skip as usize;
+            } else if whole(n) {
                 let k = node(n);
                 for (s, p) in sum.iter_mut().zip(n.power) {
                     *s += k * p;
@@ -168,11 +171,13 @@ impl LightTree {
     /// [`super::lights::light_sum`] through the tree: the texels under `kernel` about `r`.
     /// `estimate` is the luminance of the rest of the pixel's sum in the same units (the
     /// residual's), which sets the error a node may make ([`TREE_BUDGET`] of it); 0 keeps the
-    /// geometric rule alone.
+    /// geometric rule alone. Both kernels vanish behind the plane normal to `r`, and a node
+    /// wholly behind it ([`behind`]) is skipped: that rule is exact.
     pub fn sum(&self, r: DVec3, kernel: LightKernel, estimate: f64) -> [f64; 3] {
         let (scale, kern) = kernel_of(kernel, r);
         let allowance = TREE_BUDGET * estimate;
         self.walk(
+            |n| behind(n, r),
             |n| takes_whole(n, r, scale, r, allowance, KERNEL_FADE),
             |n| 0.25 * n.sigma().iter().map(|&d| kern(d)).sum::<f64>(),
             |t| texel_integral(t, scale, r, &kern),
@@ -190,6 +195,7 @@ impl LightTree {
         let allowance = TREE_BUDGET * estimate * brdf_slack(wo.z, scale);
         let fade = brdf.horizon_fade();
         self.walk(
+            |_| false,
             |node| takes_whole(node, r, scale, n, allowance, fade),
             |node| 0.25 * node.sigma().iter().map(|&d| eval(d)).sum::<f64>(),
             |t| texel_integral(t, scale, r, eval),
@@ -223,6 +229,13 @@ impl LightTree {
         }
         super::footprint::OverlapShape::normalised(sum, total)
     }
+}
+
+/// Whether every point of node `n` lies behind the plane through the origin of normal `cut`
+/// (cut·ω ≤ cut·centre + |ω − centre| ≤ cut·centre + reach ≤ 0), where the light sums'
+/// kernels vanish.
+pub fn behind(n: &TreeNode, cut: DVec3) -> bool {
+    cut.dot(n.centre) + n.reach <= 0.0
 }
 
 /// Whether node `n` is taken whole by a kernel of scale `scale` about `r` whose cut plane has
@@ -284,9 +297,54 @@ pub fn brdf_slack(cos_o: f64, scale: f64) -> f64 {
     cos_o.max(scale)
 }
 
+/// Where to split `order` (sorted along an axis) in two: where the children's texel counts
+/// times their boxes' diagonals sum least (a split where a cluster of lights ends, so that
+/// nodes stay compact and walks take them whole sooner: a median split of a sky's scattered
+/// groups makes nodes of 8 texels half a radian wide), the most even such split among equals;
+/// `order` holds at least two texels.
+fn split_at(lights: &[PreparedLight], order: &[usize]) -> usize {
+    let n = order.len();
+    let grow = |b: (DVec3, DVec3), d: DVec3| (b.0.min(d), b.1.max(d));
+    let empty = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+    // Diagonals of the boxes of order[..m] (prefix) and order[m..] (suffix), m = 1..n.
+    let mut prefix = Vec::with_capacity(n);
+    let mut b = empty;
+    for &k in order {
+        b = grow(b, lights[k].dir);
+        prefix.push((b.1 - b.0).length());
+    }
+    let mut suffix = vec![0.0; n + 1];
+    let mut b = empty;
+    for (m, &k) in order.iter().enumerate().rev() {
+        b = grow(b, lights[k].dir);
+        suffix[m] = (b.1 - b.0).length();
+    }
+    let mut best = (f64::MAX, usize::MAX, n / 2);
+    for m in 1..n {
+        let cost = m as f64 * prefix[m - 1] + (n - m) as f64 * suffix[m];
+        let key = (cost, m.abs_diff(n / 2));
+        if key.0 < best.0 || (key.0 == best.0 && key.1 < best.1) {
+            best = (key.0, key.1, m);
+        }
+    }
+    best.2
+}
+
+/// Nodes deeper than this split at the median ([`split_at`] may peel one texel off a node at
+/// each level): the tree's depth stays below this plus log₂ of its texels, its build
+/// O(n log² n).
+const FREE_SPLIT_DEPTH: u32 = 32;
+
 /// Builds the subtree over `order[..]` (indices into `lights`), its texels starting at
-/// `first` in tree order; returns nothing, pushing nodes depth first.
-fn build(lights: &[PreparedLight], order: &mut [usize], first: u32, nodes: &mut Vec<TreeNode>) {
+/// `first` in tree order, its root `depth` below the tree's; returns nothing, pushing nodes
+/// depth first.
+fn build(
+    lights: &[PreparedLight],
+    order: &mut [usize],
+    first: u32,
+    depth: u32,
+    nodes: &mut Vec<TreeNode>,
+) {
     let at = nodes.len();
     nodes.push(node_of(lights, order, first));
     if order.len() as u32 > LEAF_TEXELS {
@@ -303,18 +361,18 @@ fn build(lights: &[PreparedLight], order: &mut [usize], first: u32, nodes: &mut 
         } else {
             2
         };
-        // A median split needs the halves, not their order: selection keeps the build at
-        // O(n log n) where a sort would make it O(n log² n). The order is total, so the halves
-        // are those a sort gives.
-        let m = order.len() / 2;
-        order.select_nth_unstable_by(m, |&a, &b| {
+        order.sort_unstable_by(|&a, &b| {
             lights[a].dir[axis]
                 .total_cmp(&lights[b].dir[axis])
                 .then(a.cmp(&b))
         });
+        let m = match depth < FREE_SPLIT_DEPTH {
+            true => split_at(lights, order),
+            false => order.len() / 2,
+        };
         let (left, right) = order.split_at_mut(m);
-        build(lights, left, first, nodes);
-        build(lights, right, first + m as u32, nodes);
+        build(lights, left, first, depth + 1, nodes);
+        build(lights, right, first + m as u32, depth + 1, nodes);
     }
     nodes[at].skip = nodes.len() as u32;
 }
@@ -490,6 +548,7 @@ mod tests {
                 }
                 // The same walk with nodes at their centres instead of sigma points.
                 let centre = tree.walk(
+                    |node| behind(node, r),
                     |node| takes_whole(node, r, alpha, r, 0.0, KERNEL_FADE),
                     |node| {
                         super::super::split_sum::chain_kernel(
@@ -558,6 +617,7 @@ mod tests {
                     let allowance = TREE_BUDGET * e * brdf_slack(wo.z, alpha);
                     let eval = |d: DVec3| brdf.eval_cos(wo, frame.to_local(d));
                     let got = tree.walk(
+                        |_| false,
                         |node| {
                             count.set(count.get() + 1);
                             takes_whole(node, r, alpha, n, allowance, brdf.horizon_fade())
