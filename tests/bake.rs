@@ -19,17 +19,19 @@ use envlight::EnvMap;
 ///   (converted in float64 as the GPU converts);
 /// - with lights (the default): the irradiance cube is SH of the diffuse extraction's
 ///   residual plus its light clusters (`math::lights::cluster_irradiance`), and levels ≥ 1
-///   are the residual's FIS plus the light sum with GGX over `chain_norm`, each light texel
-///   by as many cells as the lobe's width at it asks (`prepare_local`; level 0, the mirror,
-///   from the whole map).
+///   are the residual's FIS plus the light sum with GGX over `chain_norm` through the light
+///   tree (`LightTree::sum`, each node's allowed error set by the residual's FIS there), each
+///   light texel by as many cells as the lobe's width at it asks (`prepare_local`; level 0,
+///   the mirror, from the whole map).
 ///
 /// Errors relative to the texel, or to the level's mean where the texel is darker. Bound
 /// 1e-4: float32 conversion and sums (measured: printed).
 #[test]
 fn specular_cube_matches_its_float64_twin() {
+    use envlight::math::light_tree::LightTree;
     use envlight::math::lights::{
-        cells_for, cluster_irradiance, clusters, diffuse_options, extract, light_sum,
-        prepare_local, ExtractOptions, LightKernel, CLUSTER_GRID, DIFFUSE_RATIO,
+        cells_for, cluster_irradiance, clusters, diffuse_options, extract, prepare_local,
+        ExtractOptions, LightKernel, CLUSTER_GRID, DIFFUSE_RATIO,
     };
     use envlight::math::sh;
     use envlight::math::split_sum::{chain_norm, level_alpha};
@@ -108,6 +110,7 @@ fn specular_cube_matches_its_float64_twin() {
             let levels = opts.specular_levels;
             let from_full = prefiltered_cube(&full, 16, levels, 16, opts.bias);
             let from_res = prefiltered_cube(&res, 16, levels, 16, opts.bias);
+            let tree = LightTree::new(light_list.clone());
             for (k, res_level) in from_res.iter().enumerate() {
                 let s = (16u32 >> k).max(1);
                 let want: Vec<[f64; 3]> = if k == 0 {
@@ -119,7 +122,10 @@ fn specular_cube_matches_its_float64_twin() {
                         .iter()
                         .zip(dirs(s))
                         .map(|(f, d)| {
-                            let l = light_sum(&light_list, d, LightKernel::Ggx { alpha });
+                            // The estimate each node's allowed error scales with: the
+                            // residual's FIS, in the sum's units.
+                            let estimate = envlight::math::envmap::luminance(*f) * n;
+                            let l = tree.sum(d, LightKernel::Ggx { alpha }, estimate);
                             [0, 1, 2].map(|c| f[c] + l[c] / n)
                         })
                         .collect()

@@ -1,9 +1,9 @@
-//! Extracted light texels added exactly to a cube level (`glsl/lights.comp`, float64 twin
-//! `crate::math::lights::light_sum`): the bake's irradiance (cosine) and specular (GGX at
+//! Extracted light texels added to a cube level (`glsl/lights.comp`, float64 twin
+//! `crate::math::light_tree::LightTree::sum`): the bake's irradiance (cosine) and specular (GGX at
 //! n = v = r) cubes get their lights this way, on top of what the residual map gives.
 
 use super::map::GpuEnvMap;
-use crate::abi::lights::{KERNEL_CLUSTERS, KERNEL_COSINE, KERNEL_GGX};
+use crate::abi::lights::{KERNEL_CLUSTERS, KERNEL_COSINE, KERNEL_GGX, TREE_BUDGET};
 use crate::abi::{binding, push::LightsPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder};
@@ -314,7 +314,8 @@ impl LightsPass {
 
     /// Records the addition of `lights` filtered by `kernel` — divided by ∫K dω for GGX
     /// (`chain_norm`), as is for the cosine (irradiance) — to level `level` of the cube
-    /// `dst`. Span: "lights".
+    /// `dst`, summed through the lights' tree (`crate::math::light_tree::LightTree::sum`,
+    /// each texel's estimate what `dst` holds before the lights). Span: "lights".
     pub fn record(
         &self,
         rec: &mut Recorder,
@@ -337,6 +338,9 @@ impl LightsPass {
             at: 0,
             coarse_at: lights.coarse_at,
             cells: crate::math::lights::cells_of_nodes(lights.nodes),
+            tree_at: lights.tree_at(),
+            tree_nodes: lights.tree_nodes,
+            budget: (TREE_BUDGET / inv_norm) as f32,
         };
         self.dispatch(rec, "lights", lights, push, dst, level)
     }
@@ -361,6 +365,9 @@ impl LightsPass {
             at: lights.cluster_at(),
             coarse_at: 0,
             cells: 0,
+            tree_at: 0,
+            tree_nodes: 0,
+            budget: 0.0,
         };
         self.dispatch(rec, "light clusters", lights, push, dst, level)
     }
