@@ -187,8 +187,8 @@ pub mod lights {
     /// A texel is a light texel above this many times the map's mean luminance by default
     /// in bakes and reports (renders extract deeper: [`CHAIN_RATIO`]).
     pub const DEFAULT_RATIO: f64 = 32.0;
-    /// Most light texels kept (the threshold rises to keep to it): what the per-texel light
-    /// sums of the bake cost.
+    /// Most light texels kept (the threshold rises to keep to it): what the bake's light
+    /// sums cost.
     pub const MAX_TEXELS: u32 = 256;
     /// A bake's light records are never finer than the texels of a lat-long map this many
     /// columns wide (a cube's: a quarter of it a face): on a larger map each record gathers

@@ -58,7 +58,7 @@ impl ExtractOptions {
     /// The renderer's default for the chain that FIS, split-sum and footprint lookups read
     /// (`crate::abi::lights::CHAIN_RATIO`, `crate::abi::lights::CHAIN_MAX_TEXELS`, the
     /// residual filled under lights grown by `crate::abi::lights::CHAIN_FILL`):
-    /// deeper than [`Default`] (the bake's, whose per-texel sums have no tree), the texels
+    /// deeper than [`Default`] (the bake's), the texels
     /// summed through a `super::light_tree::LightTree`.
     pub fn chain() -> ExtractOptions {
         ExtractOptions {
