@@ -401,9 +401,63 @@ fn markdown(o: &IblOptions, results: &[(String, Vec<Measured>)]) -> (String, Str
         }
         md.push('\n');
     }
-    let _ = writeln!(
-        md,
-        "glTF-IBL-Sampler configurations dominated by an envlight one: {beaten} of {total}.\n"
-    );
+    let _ = match total {
+        0 => writeln!(
+            md,
+            "No glTF-IBL-Sampler ran (--sampler or ENVLIGHT_IBLSAMPLER): envlight's rows alone, \
+             nothing to dominate.\n"
+        ),
+        _ => writeln!(
+            md,
+            "glTF-IBL-Sampler configurations dominated by an envlight one: {beaten} of {total}.\n"
+        ),
+    };
     (method, md)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn options() -> IblOptions {
+        IblOptions {
+            inputs: Vec::new(),
+            sampler: None,
+            size: 256,
+            runs: 3,
+            ours: vec![16],
+            theirs: vec![16],
+            texels: 192,
+            out: None,
+        }
+    }
+
+    fn row(tool: Tool, seconds: f64, error: f64) -> Measured {
+        Measured {
+            tool,
+            seconds: vec![seconds; 3],
+            errors: vec![error; 8],
+        }
+    }
+
+    /// The page's summary counts the sampler's rows an envlight row dominates, and says so
+    /// where no sampler ran instead of "0 of 0".
+    #[test]
+    fn the_summary_names_a_missing_sampler() {
+        let ours = row(Tool::Envlight(16), 0.3, 0.01);
+        let alone = vec![("a.hdr".to_string(), vec![ours])];
+        let (_, md) = markdown(&options(), &alone);
+        assert!(md.contains("No glTF-IBL-Sampler ran"), "{md}");
+        assert!(!md.contains("0 of 0"), "{md}");
+        let pair = vec![(
+            "a.hdr".to_string(),
+            vec![
+                row(Tool::Envlight(16), 0.3, 0.01),
+                row(Tool::Sampler(16), 0.4, 0.5),
+                row(Tool::Sampler(64), 0.2, 0.5),
+            ],
+        )];
+        let (_, md) = markdown(&options(), &pair);
+        assert!(md.contains("dominated by an envlight one: 1 of 2."), "{md}");
+    }
 }
