@@ -27,6 +27,13 @@ pub(crate) fn groups(n: u32, size: u32) -> u32 {
     n.div_ceil(size)
 }
 
+/// Workgroups of `crate::abi::WORKGROUP_2D` covering `w` × `h` items on each of `layers`
+/// layers: a 2D pass's dispatch.
+pub(crate) fn groups_2d(w: u32, h: u32, layers: u32) -> [u32; 3] {
+    let [x, y] = crate::abi::WORKGROUP_2D;
+    [groups(w, x), groups(h, y), layers]
+}
+
 /// A 3×3 matrix as the three rows of `vec4 m[3]` in a push-constant block (w unused).
 pub(crate) fn mat3_rows(m: glam::DMat3) -> [[f32; 4]; 3] {
     [0, 1, 2].map(|r| {

@@ -4,7 +4,9 @@
 use super::map::GpuEnvMap;
 use crate::abi::{area, binding, push::ConvertPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
-use crate::gpu::{groups, mat3_rows, Bind, Context, Pipeline, Recorder, Sampler, Timing};
+use crate::gpu::{
+    groups, groups_2d, mat3_rows, Bind, Context, Pipeline, Recorder, Sampler, Timing,
+};
 use crate::math::{Mapping, Orientation};
 use crate::passes::testing::poison::{self, PassId};
 use ash::vk;
@@ -459,11 +461,7 @@ impl Converter {
                 pipeline,
                 &binds,
                 push,
-                [
-                    groups(w, WORKGROUP_2D[0]),
-                    groups(h, WORKGROUP_2D[1]),
-                    dsts[0].mapping.layers(),
-                ],
+                groups_2d(w, h, dsts[0].mapping.layers()),
             )
         })?;
         for dst in dsts {
@@ -504,11 +502,7 @@ impl Converter {
                 slopes_pipeline,
                 &[source(), (binding::CONVERT_SLOPES, Bind::Buffer(&slopes))],
                 push,
-                [
-                    groups(src.width, WORKGROUP_2D[0]),
-                    groups(src.height, WORKGROUP_2D[1]),
-                    1,
-                ],
+                groups_2d(src.width, src.height, 1),
             )
         })?;
         let label = format!("convert latlong -> {} {w}x{h} (areas)", to.name());
@@ -522,11 +516,7 @@ impl Converter {
                     (binding::CONVERT_SLOPES, Bind::Texels(&slopes)),
                 ],
                 push,
-                [
-                    groups(w, WORKGROUP_2D[0]),
-                    groups(h, WORKGROUP_2D[1]),
-                    to.layers(),
-                ],
+                groups_2d(w, h, to.layers()),
             )
         };
         if !split {

@@ -40,7 +40,9 @@ use crate::abi::lights::{
 use crate::abi::push::{ExtractAddPush, ExtractClustersPush, ExtractPreparePush};
 use crate::abi::{binding, push::ExtractPush, ShaderId, WORKGROUP_1D, WORKGROUP_2D};
 use crate::error::{Error, Result};
-use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
+use crate::gpu::{
+    groups, groups_2d, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage,
+};
 use crate::math::envmap::{luminance, EnvMap};
 use crate::math::lights::{ExtractOptions, LightKernel};
 use crate::math::{Mapping, Orientation};
@@ -325,11 +327,7 @@ impl Extractor {
             fill: u32::from(out.fill.is_some()),
             grow,
         };
-        let per_texel = [
-            groups(map.width, WORKGROUP_2D[0]),
-            groups(map.height, WORKGROUP_2D[1]),
-            map.mapping.layers(),
-        ];
+        let per_texel = groups_2d(map.width, map.height, map.mapping.layers());
         let id = map.mapping.id();
         let filled = u32::from(out.fill.is_some());
         let pipeline = Pipeline::compute_once(
@@ -464,11 +462,7 @@ impl Extractor {
                     ),
                 ],
                 &push,
-                [
-                    groups(size, WORKGROUP_2D[0]),
-                    groups(size, WORKGROUP_2D[1]),
-                    faces.len() as u32,
-                ],
+                groups_2d(size, size, faces.len() as u32),
             )
         })?;
         poison::image(rec, PassId::Extract, &dst.image, level..level + 1)

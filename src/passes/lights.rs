@@ -6,7 +6,7 @@ use super::map::GpuEnvMap;
 use crate::abi::lights::{KERNEL_CLUSTERS, KERNEL_COSINE, KERNEL_GGX, TREE_BUDGET};
 use crate::abi::{binding, push::LightsPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
-use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder};
+use crate::gpu::{groups_2d, Bind, Buffer, Context, Pipeline, Recorder};
 use crate::math::light_tree::LightTree;
 use crate::math::lights::{
     cells_for_rho, cluster_list, clusters, clusters_of, gpu_list, largest_light_rho, prepare,
@@ -409,11 +409,7 @@ impl LightsPass {
                     (binding::LIGHTS_DST, Bind::StorageLevel(&dst.image, level)),
                 ],
                 &push,
-                [
-                    groups(size, WORKGROUP_2D[0]),
-                    groups(size, WORKGROUP_2D[1]),
-                    6,
-                ],
+                groups_2d(size, size, 6),
             )
         })?;
         poison::image(rec, PassId::Lights, &dst.image, level..level + 1)

@@ -319,8 +319,8 @@ impl Sanitizer {
         dst: &GpuEnvMap,
         count: &Buffer,
     ) -> Result<()> {
-        use crate::abi::{binding, push::SanitizePush, WORKGROUP_2D};
-        use crate::gpu::{groups, Bind};
+        use crate::abi::{binding, push::SanitizePush};
+        use crate::gpu::{groups_2d, Bind};
         if (src.mapping, src.width, src.height) != (dst.mapping, dst.width, dst.height) {
             return Err(Error::Invalid(format!(
                 "image '{}': a {} {}x{} map, copied into '{}', a {} {}x{} one",
@@ -351,11 +351,7 @@ impl Sanitizer {
                     size: [src.width, src.height],
                     pad: [0; 2],
                 },
-                [
-                    groups(src.width, WORKGROUP_2D[0]),
-                    groups(src.height, WORKGROUP_2D[1]),
-                    src.mapping.layers(),
-                ],
+                groups_2d(src.width, src.height, src.mapping.layers()),
             )
         })?;
         poison::image(rec, PassId::Map, &dst.image, 0..1)
@@ -385,8 +381,8 @@ impl LuminanceClamp {
     /// Records the clamp of level 0 of `map` at luminance `threshold` (a finite, positive
     /// τ; an infinite one clamps nothing and records nothing).
     pub fn record(&self, rec: &mut Recorder, map: &GpuEnvMap, threshold: f64) -> Result<()> {
-        use crate::abi::{binding, push::ClampPush, WORKGROUP_2D};
-        use crate::gpu::{groups, Bind};
+        use crate::abi::{binding, push::ClampPush};
+        use crate::gpu::{groups_2d, Bind};
         if threshold == f64::INFINITY {
             return Ok(());
         }
@@ -405,11 +401,7 @@ impl LuminanceClamp {
                     mapping: map.mapping.id(),
                     threshold: threshold as f32,
                 },
-                [
-                    groups(map.width, WORKGROUP_2D[0]),
-                    groups(map.height, WORKGROUP_2D[1]),
-                    map.mapping.layers(),
-                ],
+                groups_2d(map.width, map.height, map.mapping.layers()),
             )
         })?;
         poison::image(rec, PassId::Map, &map.image, 0..1)

@@ -7,7 +7,9 @@ use super::map::GpuEnvMap;
 use super::{ConvertOptions, Converter};
 use crate::abi::{binding, push::McPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
-use crate::gpu::{groups, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing};
+use crate::gpu::{
+    groups_2d, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing,
+};
 use crate::math::envmap::luminance;
 pub use crate::math::envsample::EnvSampler;
 use crate::math::{Mapping, Orientation};
@@ -254,11 +256,7 @@ impl MonteCarlo {
                         (binding::MC_ACCUM, Bind::Storage(&accum.image)),
                     ],
                     &push,
-                    [
-                        groups(gbuf.width, WORKGROUP_2D[0]),
-                        groups(gbuf.height, WORKGROUP_2D[1]),
-                        1,
-                    ],
+                    groups_2d(gbuf.width, gbuf.height, 1),
                 )
             })?;
             done += n;

@@ -5,7 +5,7 @@
 use super::map::GpuEnvMap;
 use crate::abi::{binding, push::MipPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
-use crate::gpu::{groups, Bind, Context, Pipeline, Recorder, Timing};
+use crate::gpu::{groups_2d, Bind, Context, Pipeline, Recorder, Timing};
 use crate::math::Mapping;
 use crate::passes::testing::poison::{self, PassId};
 
@@ -68,11 +68,7 @@ impl MipChain {
                         (binding::MIP_DST, Bind::StorageLevel(&dp.image, k)),
                     ],
                     &push,
-                    [
-                        groups(size, WORKGROUP_2D[0]),
-                        groups(size, WORKGROUP_2D[1]),
-                        2,
-                    ],
+                    groups_2d(size, size, 2),
                 )
             })?;
         }

@@ -5,7 +5,7 @@ use super::brute::FilterTarget;
 use super::map::GpuEnvMap;
 use crate::abi::{binding, push::ShEvalPush, ShaderId, SH_MAX_LMAX, WORKGROUP_2D};
 use crate::error::{Error, Result};
-use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Timing};
+use crate::gpu::{groups_2d, Bind, Buffer, Context, Pipeline, Recorder, Timing};
 use crate::math::sh;
 use crate::passes::testing::poison::{self, PassId};
 use ash::vk;
@@ -126,11 +126,7 @@ impl ShEvaluator {
                     (binding::SH_EVAL_DST, Bind::Storage(&dst.image)),
                 ],
                 &push,
-                [
-                    groups(dst.width, WORKGROUP_2D[0]),
-                    groups(dst.height, WORKGROUP_2D[1]),
-                    dst.mapping.layers(),
-                ],
+                groups_2d(dst.width, dst.height, dst.mapping.layers()),
             )
         })?;
         rec.keep(buf);

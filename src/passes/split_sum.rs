@@ -7,7 +7,9 @@ use super::map::{map_desc, GpuEnvMap};
 use crate::abi::push::{DfgPush, PrefilterGgxPush};
 use crate::abi::{binding, sh_brdf, split_sum, ShaderId, WORKGROUP_1D, WORKGROUP_2D};
 use crate::error::{Error, Result};
-use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
+use crate::gpu::{
+    groups, groups_2d, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage,
+};
 pub use crate::math::split_sum::DfgAxes;
 use crate::math::split_sum::{level_alpha, level_size};
 use crate::math::Mapping;
@@ -339,11 +341,7 @@ impl SplitSum {
                         ),
                     ],
                     &push,
-                    [
-                        groups(size, WORKGROUP_2D[0]),
-                        groups(size, WORKGROUP_2D[1]),
-                        u.layers.len() as u32,
-                    ],
+                    groups_2d(size, size, u.layers.len() as u32),
                 )
             })?;
         }

@@ -7,7 +7,7 @@ use super::variants::pipeline_slot;
 use super::{check_kernel, BruteFilter};
 use crate::abi::{binding, push::BrutePush, ShaderId, BRUTE_TILE, WORKGROUP_2D};
 use crate::error::Result;
-use crate::gpu::{groups, Bind, Pipeline, Recorder};
+use crate::gpu::{groups_2d, Bind, Pipeline, Recorder};
 use crate::math::filter::{self, Kernel};
 use crate::math::Mapping;
 
@@ -129,11 +129,11 @@ impl BruteFilter {
                         chunk_end: end,
                         ..push
                     },
-                    [
-                        groups(w * split.grid[0] * lanes, WORKGROUP_2D[0]),
-                        groups(h * split.grid[1], WORKGROUP_2D[1]),
+                    groups_2d(
+                        w * split.grid[0] * lanes,
+                        h * split.grid[1],
                         dst.mapping.layers(),
-                    ],
+                    ),
                 )?;
                 begin = end;
             }
@@ -148,11 +148,7 @@ impl BruteFilter {
                     parts: [split.grid[0] * lanes, split.grid[1]],
                     ..push
                 },
-                [
-                    groups(w, WORKGROUP_2D[0]),
-                    groups(h, WORKGROUP_2D[1]),
-                    dst.mapping.layers(),
-                ],
+                groups_2d(w, h, dst.mapping.layers()),
             )
         })?;
         rec.keep(partials);

@@ -6,7 +6,7 @@
 use super::{edge_points, slopes_bytes, ConvertOptions, Converter};
 use crate::abi::{binding, push::ConvertPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
-use crate::gpu::{groups, mat3_rows, Bind, Buffer, Pipeline, Recorder, Timing};
+use crate::gpu::{groups_2d, mat3_rows, Bind, Buffer, Pipeline, Recorder, Timing};
 use crate::math::convert::{area_plan, AreaPlan};
 use crate::math::Mapping;
 use crate::passes::map::GpuEnvMap;
@@ -199,11 +199,7 @@ impl Converter {
                 slopes_pipeline,
                 &[source(), (binding::CONVERT_SLOPES, Bind::Buffer(&slopes))],
                 &push,
-                [
-                    groups(src.width, WORKGROUP_2D[0]),
-                    groups(src.height, WORKGROUP_2D[1]),
-                    1,
-                ],
+                groups_2d(src.width, src.height, 1),
             )
         })?;
         let label = format!(
@@ -221,11 +217,7 @@ impl Converter {
                     (binding::CONVERT_PLAN_ENTRIES, Bind::Buffer(&plan.entries)),
                 ],
                 &push,
-                [
-                    groups(w, WORKGROUP_2D[0]),
-                    groups(h, WORKGROUP_2D[1]),
-                    plan.opts.to.layers(),
-                ],
+                groups_2d(w, h, plan.opts.to.layers()),
             )
         })?;
         poison::image(rec, PassId::Convert, &dst.image, 0..1)

@@ -3,7 +3,7 @@
 
 use crate::abi::{binding, push::CopyPush, ShaderId, WORKGROUP_2D};
 use crate::error::Result;
-use crate::gpu::{groups, Bind, Context, Pipeline, Recorder, Sampler, Timing};
+use crate::gpu::{groups_2d, Bind, Context, Pipeline, Recorder, Sampler, Timing};
 use crate::passes::map::GpuEnvMap;
 
 /// The copy pass.
@@ -44,11 +44,7 @@ impl CopyPass {
                     size: [src.width, src.height],
                     pad: [0; 2],
                 },
-                [
-                    groups(src.width, WORKGROUP_2D[0]),
-                    groups(src.height, WORKGROUP_2D[1]),
-                    src.mapping.layers(),
-                ],
+                groups_2d(src.width, src.height, src.mapping.layers()),
             )
         })
     }
