@@ -1,16 +1,15 @@
 #version 460
 // Light texels (src/math/lights.rs) added to one level of a cube: at each texel centre r,
-// (1/∫K)·Σ_t L_t·∫_t K(r·ω) dω over the light texels t, summed through the texels' tree where
-// the list has one (math::light_tree::LightTree::sum: a node wholly behind the plane normal
-// to r skipped, one small against the kernel's scale there, or whose bound error is within
-// pc.budget of the level's luminance before the lights, taken whole by its four sigma
-// points; leaves' texels one by one), else texel by texel. Each texel's integral by one node
-// at its centre where it is small next to the kernel's scale there (light_centre_only: α at
-// the peak, a fraction of the chord in GGX's θ⁻⁴ tail, a radian for the cosine), else by its
-// quadrature nodes: where the buffer keeps coarser quadratures (pc.coarse_at), those of
-// ⌈PER_WIDTH·ρ/w⌉ cells where that is fewer than its own (4 nodes in GGX's tail). The kernel
-// is the clamped cosine (irradiance) or split-sum's GGX at n = v = r. Float64 twins:
-// math::light_tree::LightTree::sum and, without a tree, math::lights::light_sum.
+// (1/∫K)·Σ_t L_t·∫_t K(r·ω) dω over the light texels t, summed through the texels' tree
+// (math::light_tree::LightTree::sum: a node wholly behind the plane normal to r skipped, one
+// small against the kernel's scale there, or whose bound error is within pc.budget of the
+// level's luminance before the lights, taken whole by its four sigma points; leaves' texels
+// one by one). Each texel's integral by one node at its centre where it is small next to the
+// kernel's scale there (light_centre_only: α at the peak, a fraction of the chord in GGX's
+// θ⁻⁴ tail, a radian for the cosine), else by its quadrature nodes: where the buffer keeps
+// coarser quadratures (pc.coarse_at), those of ⌈PER_WIDTH·ρ/w⌉ cells where that is fewer
+// than its own (4 nodes in GGX's tail). The kernel is the clamped cosine (irradiance) or
+// split-sum's GGX at n = v = r. Float64 twin: math::light_tree::LightTree::sum.
 // LIGHTS_KERNEL_CLUSTERS adds light clusters' irradiance instead
 // (math::lights::cluster_irradiance).
 #extension GL_GOOGLE_include_directive : require
@@ -60,35 +59,18 @@ uvec2 texel_nodes(uint t, float rho, float w2) {
     return uvec2(first, count);
 }
 
-// Light texel t's radiance times ∫_t K about r (math::lights::texel_integral): by its centre
-// where it is small against the kernel's scale `a` there, else by its quadrature nodes.
-vec3 texel_term(uint t, vec3 r, float a, float a2) {
-    uint stride = LIGHT_HEADER_VEC4S + pc.nodes;
-    vec4 centre = LT(t * stride);
-    vec4 light = LT(t * stride + 1u);
-    float w2 = light_scale2(a, r - centre.xyz);
-    if (light_centre_only(light.w, w2, stride)) return kern(a2, r, centre.xyz) * centre.w * light.rgb;
-    uvec2 nodes = texel_nodes(t, light.w, w2);
-    float k = 0.0;
-    for (uint n = 0u; n < nodes.y; n++) {
-        vec4 q = LT(nodes.x + n);
-        k += kern(a2, r, q.xyz) * q.w;
-    }
-    return k * light.rgb;
-}
-
 // The light texels through their tree (math::light_tree::LightTree::sum), a node allowed an
-// error `allowance` in the sum's units. One item a step, each at most four kernel values (a
-// node's sigma points, a texel's centre, or four of its quadrature nodes), since llvmpipe
-// runs every branch of a step for its lanes' different items: i is the next node, j..end the
-// current leaf's texels, and c which four of texel j's nodes come next. The bound counts
-// every node and every texel's nodes in fours (quadratures of (2·cells)² nodes, so a
-// multiple of four).
+// error `allowance` in the sum's units. One item a step, each at most LIGHT_STEP_NODES (4)
+// kernel values (a node's sigma points, a texel's centre, or that many of its quadrature
+// nodes), since llvmpipe runs every branch of a step for its lanes' different items: i is
+// the next node, j..end the current leaf's texels, and c which step of texel j's nodes comes
+// next. The bound counts every node and every texel's nodes in steps (quadratures of
+// (2·cells)² nodes, a multiple of the step).
 vec3 tree_sum(vec3 r, float a, float a2, float allowance) {
     vec3 sum = vec3(0.0);
     uint stride = LIGHT_HEADER_VEC4S + pc.nodes;
     uint i = 0u, j = 0u, end = 0u, c = 0u;
-    uint bound = pc.tree_nodes + pc.count * max(pc.nodes / 4u, 1u);
+    uint bound = pc.tree_nodes + pc.count * max(pc.nodes / LIGHT_STEP_NODES, 1u);
     for (uint step = 0u; step < bound; step++) {
         if (j >= end && i >= pc.tree_nodes) break;
         mat4x3 d = mat4x3(0.0);
@@ -105,12 +87,12 @@ vec3 tree_sum(vec3 r, float a, float a2, float allowance) {
                 j++;
             } else {
                 uvec2 q = texel_nodes(j, l.w, w2);
-                uint at = q.x + 4u * c;
+                uint at = q.x + LIGHT_STEP_NODES * c;
                 vec4 q0 = LT(at), q1 = LT(at + 1u), q2 = LT(at + 2u), q3 = LT(at + 3u);
                 d = mat4x3(q0.xyz, q1.xyz, q2.xyz, q3.xyz);
                 w = vec4(q0.w, q1.w, q2.w, q3.w);
                 c++;
-                if (4u * c >= q.y) {
+                if (LIGHT_STEP_NODES * c >= q.y) {
                     c = 0u;
                     j++;
                 }
@@ -166,11 +148,6 @@ void main() {
     float a = pc.kernel == LIGHTS_KERNEL_COSINE ? 1.0 : max(pc.alpha, GGX_ALPHA_MIN);
     float a2 = a * a;
     vec4 prev = imageLoad(dst, ivec3(id));
-    vec3 sum = vec3(0.0);
-    if (pc.tree_nodes == 0u) {
-        for (uint t = 0u; t < pc.count; t++) sum += texel_term(t, r, a, a2);
-    } else {
-        sum = tree_sum(r, a, a2, pc.budget * dot(LUMINANCE, prev.rgb));
-    }
+    vec3 sum = tree_sum(r, a, a2, pc.budget * dot(LUMINANCE, prev.rgb));
     imageStore(dst, ivec3(id), vec4(prev.rgb + sum * pc.inv_norm, prev.a));
 }

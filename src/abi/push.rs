@@ -425,7 +425,7 @@ push_blocks! {
         cells: u32 = "uint",
         /// Where the light tree's nodes start in the buffer, in vec4s.
         tree_at: u32 = "uint",
-        /// The tree's nodes (`math::light_tree::LightTree`): 0 sums every texel one by one.
+        /// The tree's nodes (`math::light_tree::LightTree`).
         tree_nodes: u32 = "uint",
         /// A tree node's allowed error per unit of the level's luminance before the lights
         /// are added, in the sum's units: `lights::TREE_BUDGET` · ∫ K dω (0: the geometric

@@ -3,10 +3,10 @@
 //! that grows with the lobe's reach, not with the texel count.
 //!
 //! Nodes split their texels along the widest axis of their centres where the halves' counts
-//! times their extents sum least (`split_at`), down to [`LEAF_TEXELS`]; texels are stored in the tree's order, so every node holds a contiguous
-//! range. A smooth kernel (a BRDF's lobe, split-sum's GGX) takes a node whole where it is
-//! small against the kernel's scale there ([`TREE_BELOW`]) and no cut (the horizon) crosses
-//! it: its power times the kernel's mean over four sigma points, which match the node's
+//! times their extents sum least (`split_at`), down to [`LEAF_TEXELS`]; texels are stored in
+//! the tree's order, so every node holds a contiguous range. A smooth kernel (a BRDF's lobe,
+//! split-sum's GGX) takes a node whole where it is small against the kernel's scale there
+//! ([`TREE_BELOW`]) and no cut (the horizon) crosses it: its power times the kernel's mean over four sigma points, which match the node's
 //! luminance-weighted mean and covariance of direction, so the error is of fourth order in
 //! the node's size. A node up to the kernel's scale wide, or one the horizon crosses, is
 //! also taken whole where the error it can make is below [`TREE_BUDGET`] of the pixel's

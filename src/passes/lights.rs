@@ -289,7 +289,8 @@ impl GpuLights {
     }
 }
 
-// shade.frag's walk step hands its kernel the STEP_NODES directions as one mat4x3.
+// shade.frag's walk step and lights.comp's tree walk hand their kernels the STEP_NODES
+// directions as one mat4x3.
 const _: () = assert!(crate::abi::lights::STEP_NODES == 4, "walk_step's mat4x3");
 
 /// The lights pass.
