@@ -13,11 +13,11 @@ mod engine;
 
 use ash::vk;
 use envlight::gpu::{Context, Image, ImageDesc, Recorder, Usage};
-use envlight::passes::gbuffer::{GBuffer, GpuObject};
+use envlight::passes::gbuffer::{GBuffer, ObjectRecord};
 use envlight::passes::map::{full_mips, map_desc};
 use envlight::passes::shade::ShadeInputs;
 use envlight::passes::{ConvertOptions, Converter, GBufferPass, GpuEnvMap, MipChain, Shade};
-use envlight::render::{fis_dp_size, load_environment, object_record};
+use envlight::render::{fis_dp_size, load_environment};
 use envlight::scene::{Scene, Technique};
 use envlight::{EnvMap, Mapping};
 use std::path::Path;
@@ -112,7 +112,7 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
         let shade = Shade::new(&ctx)?;
         let orientation = scene.environment.orientation();
         let env_gpu = GpuEnvMap::new(&ctx, "environment", env.mapping, env.width, env.height)?;
-        let objects: Vec<GpuObject> = scene.objects.iter().map(|o| object_record(o, 0)).collect();
+        let objects: Vec<ObjectRecord> = scene.objects.iter().map(|o| o.record(0)).collect();
         let mut gbuf = GBuffer::new(&ctx, fw, fh, &objects)?;
         // Footprint-filtered mirrors cast sub-pixel rays of this camera.
         gbuf.camera = Some(scene.camera);

@@ -72,8 +72,8 @@ void main() {
     vec4 nrm = texelFetch(gbuf_normal, q, 0);
     if (nrm.w < 0.0) return;
     Object ob = objects[uint(nrm.w)];
-    if (uint(ob.albedo.w) != TECH_MC) return;
-    Brdf b = Brdf(uint(ob.brdf.x), ob.brdf.y, ob.brdf.z);
+    if (ob.technique != TECH_MC) return;
+    Brdf b = Brdf(ob.brdf, ob.params[0], ob.params[1]);
     vec3 n = normalize(nrm.xyz);
     vec3 v = texelFetch(gbuf_view, q, 0).xyz;
     vec3 origin = shadow_origin(texelFetch(gbuf_position, q, 0).xyz, n);

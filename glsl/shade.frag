@@ -177,12 +177,12 @@ vec3 fis_lights(Brdf b, vec3 wo, vec3 t, vec3 bt, vec3 n, vec3 r, float scale, v
 }
 
 vec3 fis(Object ob, vec3 n, vec3 v, vec3 p, uvec2 pix) {
-    Brdf b = Brdf(uint(ob.brdf.x), ob.brdf.y, ob.brdf.z);
-    uint count = uint(ob.brdf.w);
+    Brdf b = Brdf(ob.brdf, ob.params[0], ob.params[1]);
+    uint count = ob.samples;
     vec3 t, bt;
     shading_frame(n, t, bt);
     vec3 wo = local_view(v, t, bt, n);
-    vec2 offset = (uint(ob.extra.w) & 1u) != 0u ? pixel_offset(pix) : vec2(0.0);
+    vec2 offset = (ob.flags & OBJECT_ROTATE) != 0u ? pixel_offset(pix) : vec2(0.0);
     vec3 origin = shadow_origin(p, n);
     vec3 sum = vec3(0.0);
     for (uint i = 0u; i < count; i++) {
@@ -191,26 +191,26 @@ vec3 fis(Object ob, vec3 n, vec3 v, vec3 p, uvec2 pix) {
         float w = brdf_weight(b, wo, wi);
         float pdf = brdf_pdf(b, wo, wi);
         vec3 d = normalize(t * wi.x + bt * wi.y + n * wi.z);
-        float lod = fis_lod(pdf, count, d, pc.dp_size, ob.extra.x, pc.max_lod);
+        float lod = fis_lod(pdf, count, d, pc.dp_size, ob.lod_bias, pc.max_lod);
         if (shadows_on() && occluded(origin, d)) continue;
         sum += w * dp_lookup(d, lod);
     }
     sum /= float(count);
     // With lights extracted the chain holds the residual; the light texels are added by the
-    // BRDF itself (math::lights::light_sum_brdf's rule; extra.z the lobe's scale).
+    // BRDF itself (math::lights::light_sum_brdf's rule; ob.lobe the lobe's scale).
     // A tree node may err by TREE_BUDGET of the estimate so far (math::light_tree::brdf_slack).
-    if (ob.extra.y > 0.5) {
-        float allowance = LIGHT_TREE_BUDGET * dot(sum, LUMINANCE) * max(wo.z, ob.extra.z);
-        sum += fis_lights(b, wo, t, bt, n, 2.0 * dot(v, n) * n - v, ob.extra.z, origin, allowance,
+    if ((ob.flags & OBJECT_LIGHTS) != 0u) {
+        float allowance = LIGHT_TREE_BUDGET * dot(sum, LUMINANCE) * max(wo.z, ob.lobe);
+        sum += fis_lights(b, wo, t, bt, n, 2.0 * dot(v, n) * n - v, ob.lobe, origin, allowance,
                           shadows_on());
     }
     return sum;
 }
 
-// Twin of math::sh_brdf::shade. extra = (grid, environment coefficients' offset, band, table offset).
+// Twin of math::sh_brdf::shade.
 vec3 sh_brdf(Object ob, vec3 n, vec3 v) {
-    uint grid = uint(ob.extra.x), env_off = uint(ob.extra.y), lmax = uint(ob.extra.z);
-    uint table = uint(ob.extra.w), nc = (lmax + 1u) * (lmax + 1u);
+    uint grid = ob.grid, env_off = ob.data_offset, lmax = ob.size;
+    uint table = ob.table_offset, nc = (lmax + 1u) * (lmax + 1u);
     vec3 t, bt;
     shading_frame(n, t, bt);
     vec3 wo = local_view(v, t, bt, n);
@@ -238,17 +238,17 @@ vec3 sh_brdf(Object ob, vec3 n, vec3 v) {
     return max(sum, vec3(0.0));
 }
 
-// The chain along d at GGX α: lod √α·(levels − 1), extra.x = levels − 1.
+// The chain along d at GGX α: lod √α·(levels − 1), ob.last_lod = levels − 1.
 vec3 split_chain_read(Object ob, vec3 d, float alpha) {
     Coord c = dir_to_coord(MAPPING_DUAL_PARABOLOID, d);
-    return textureLod(split_chain, vec3(c.uv, float(c.layer)), sqrt(clamp(alpha, 0.0, 1.0)) * ob.extra.x).rgb;
+    return textureLod(split_chain, vec3(c.uv, float(c.layer)), sqrt(clamp(alpha, 0.0, 1.0)) * ob.last_lod).rgb;
 }
 
 // Twin of math::split_sum::taps_mean: the chain read by `taps` points of the real GGX lobe
 // for (n, v), Hammersley points through the visible-normal sampler, each at
 // math::split_sum::tap_alpha, weighted by f·cos/pdf; their weighted mean.
 vec3 split_taps(Object ob, vec3 wo, vec3 t, vec3 bt, vec3 n, uint taps) {
-    Brdf b = Brdf(uint(ob.brdf.x), ob.brdf.y, ob.brdf.z);
+    Brdf b = Brdf(ob.brdf, ob.params[0], ob.params[1]);
     vec3 sum = vec3(0.0);
     float total = 0.0;
     for (uint i = 0u; i < taps; i++) {
@@ -265,17 +265,17 @@ vec3 split_taps(Object ob, vec3 wo, vec3 t, vec3 bt, vec3 n, uint taps) {
 }
 
 // Twin of math::split_sum::shade (one tap) and shade_taps: the prefiltered chain at lod
-// √α·(levels − 1) along r, or by the lobe's taps (brdf.w = taps), times A + B (F = 1) read
-// bilinearly at (n·v, √α). extra = (levels − 1, table offset in entries, table size, 1/∫K
-// with lights extracted, else 0); brdf.y = α.
+// √α·(levels − 1) along r, or by the lobe's taps (ob.samples), times A + B (F = 1) read
+// bilinearly at (n·v, √α) from the DFG table at ob.data_offset (entries), ob.size a side;
+// with lights extracted, the light texels times ob.light_norm = 1/∫K; ob.params[0] = α.
 vec3 split_sum(Object ob, vec3 n, vec3 v, vec3 r) {
-    float ra = sqrt(clamp(ob.brdf.y, 0.0, 1.0));
+    float ra = sqrt(clamp(ob.params[0], 0.0, 1.0));
     vec3 t, bt;
     shading_frame(n, t, bt);
     vec3 wo = local_view(v, t, bt, n);
-    uint taps = uint(ob.brdf.w);
+    uint taps = ob.samples;
     float mu = clamp(wo.z, 0.0, 1.0);
-    uint off = uint(ob.extra.y), size = uint(ob.extra.z);
+    uint off = ob.data_offset, size = ob.size;
     vec2 q = vec2(mu, ra) * float(size - 1u);
     uvec2 i0 = min(uvec2(floor(q)), uvec2(max(size, 2u) - 2u));
     vec2 f = q - vec2(i0);
@@ -285,21 +285,21 @@ vec3 split_sum(Object ob, vec3 n, vec3 v, vec3 r) {
     if (taps >= 2u) {
         vec3 e = split_taps(ob, wo, t, bt, n, taps) * (ab.x + ab.y);
         // Extracted lights under the BRDF itself, as FIS adds them (its allowance rule).
-        if (ob.extra.w > 0.0) {
-            Brdf b = Brdf(uint(ob.brdf.x), ob.brdf.y, ob.brdf.z);
-            float scale = max(ob.brdf.y, GGX_ALPHA_MIN);
+        if ((ob.flags & OBJECT_LIGHTS) != 0u) {
+            Brdf b = Brdf(ob.brdf, ob.params[0], ob.params[1]);
+            float scale = max(ob.params[0], GGX_ALPHA_MIN);
             float allowance = LIGHT_TREE_BUDGET * dot(e, LUMINANCE) * max(wo.z, scale);
             e += fis_lights(b, wo, t, bt, n, r, scale, vec3(0.0), allowance, false);
         }
         return e;
     }
-    vec3 p = split_chain_read(ob, r, ob.brdf.y);
-    if (ob.extra.w > 0.0) {
-        float a = max(ob.brdf.y, GGX_ALPHA_MIN);
+    vec3 p = split_chain_read(ob, r, ob.params[0]);
+    if ((ob.flags & OBJECT_LIGHTS) != 0u) {
+        float a = max(ob.params[0], GGX_ALPHA_MIN);
         float a2 = a * a;
         vec3 sum = vec3(0.0);
         // The error a node may make, in the light sum's units: TREE_BUDGET of the chain's.
-        float allowance = LIGHT_TREE_BUDGET * dot(p, LUMINANCE) / ob.extra.w;
+        float allowance = LIGHT_TREE_BUDGET * dot(p, LUMINANCE) / ob.light_norm;
         Walk k = Walk(0u, 0u, 0u, 0u);
         for (uint step = 0u; step < walk_bound(); step++) {
             bool done = walk_over(k);
@@ -314,7 +314,7 @@ vec3 split_sum(Object ob, vec3 n, vec3 v, vec3 r) {
                           chain_kernel(a2, 0.5 * dot(e2, e2)), chain_kernel(a2, 0.5 * dot(e3, e3)));
             sum += dot(f, w) * light;
         }
-        p += sum * ob.extra.w;
+        p += sum * ob.light_norm;
     }
     return p * (ab.x + ab.y);
 }
@@ -343,7 +343,7 @@ void main() {
         return;
     }
     Object ob = objects[uint(nrm.w)];
-    uint tech = uint(ob.albedo.w);
+    uint tech = ob.technique;
     vec3 n = normalize(nrm.xyz);
     vec3 p = texelFetch(gbuf_position, q, 0).xyz;
     vec3 r = 2.0 * dot(v, n) * n - v;
@@ -352,31 +352,31 @@ void main() {
         color = texelFetch(mc_accum, q, 0).rgb / float(max(pc.mc_samples, 1u));
     } else if (has_tech(TECH_SH) && tech == TECH_SH) {
         float y[SH_MAX_COEFFS];
-        uint lmax = uint(ob.extra.z), off = uint(ob.extra.y);
+        uint lmax = ob.size, off = ob.data_offset;
         sh_basis(lmax, n, y);
         vec3 e = vec3(0.0);
         for (uint k = 0u; k < (lmax + 1u) * (lmax + 1u); k++) e += coeffs[off + k].rgb * y[k];
         e = max(e, vec3(0.0));
         // The residual's SH plus the light clusters' irradiance.
-        if (ob.extra.w > 0.5) e += lights_irradiance(n);
+        if ((ob.flags & OBJECT_LIGHTS) != 0u) e += lights_irradiance(n);
         color = ob.albedo.rgb * e / PI;
     } else if (has_tech(TECH_PREFILTERED) && tech == TECH_PREFILTERED) {
-        bool diffuse = uint(ob.brdf.x) == BRDF_LAMBERT;
-        vec3 l = prefiltered_lookup(uint(ob.extra.y), int(ob.extra.z), diffuse ? n : r);
-        if (ob.extra.w > 0.5) {
+        bool diffuse = ob.brdf == BRDF_LAMBERT;
+        vec3 l = prefiltered_lookup(ob.data_offset, int(ob.size), diffuse ? n : r);
+        if ((ob.flags & OBJECT_LIGHTS) != 0u) {
             if (diffuse) {
                 // The residual's irradiance map plus the light clusters' irradiance.
                 l += lights_irradiance(n);
             } else {
                 // The residual's Phong map plus the light texels under the Phong BRDF itself
                 // (its horizon clipped, unshadowed as the map is), a node allowed
-                // TREE_BUDGET of the map's value (extra.x: the lobe's scale, 1/√n).
-                Brdf b = Brdf(uint(ob.brdf.x), ob.brdf.y, ob.brdf.z);
+                // TREE_BUDGET of the map's value (ob.lobe: the lobe's scale, 1/√n).
+                Brdf b = Brdf(ob.brdf, ob.params[0], ob.params[1]);
                 vec3 t, bt;
                 shading_frame(n, t, bt);
                 vec3 wo = local_view(v, t, bt, n);
-                float allowance = LIGHT_TREE_BUDGET * dot(l, LUMINANCE) * max(wo.z, ob.extra.x);
-                l += fis_lights(b, wo, t, bt, n, r, ob.extra.x, p, allowance, false);
+                float allowance = LIGHT_TREE_BUDGET * dot(l, LUMINANCE) * max(wo.z, ob.lobe);
+                l += fis_lights(b, wo, t, bt, n, r, ob.lobe, p, allowance, false);
             }
         }
         color = ob.albedo.rgb * (diffuse ? l / PI : l);

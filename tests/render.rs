@@ -6,11 +6,12 @@ mod common;
 mod map_twin;
 
 use common::compare::Errors;
+use envlight::math::brdf::Brdf;
 use envlight::math::camera::{trace, Camera, Projection, Shape};
 use envlight::math::sh;
 use envlight::math::synth::smooth_env;
 use envlight::math::{Mapping, Orientation};
-use envlight::passes::gbuffer::{GBufferPass, Object};
+use envlight::passes::gbuffer::{object_record, GBufferPass, Object, Shading};
 use envlight::passes::sh_project::{ShProjector, Subgroups};
 use envlight::passes::shade::{Shade, ShadeInputs};
 use envlight::render::PassKind;
@@ -221,10 +222,16 @@ fn diffuse_with_lights_matches_float64() {
             width: 40,
             height: 40,
         };
-        let mut records: Vec<_> = objects.iter().map(|o| o.gpu(lmax)).collect();
-        for r in &mut records {
-            r.extra[3] = 1.0;
-        }
+        // SH of the residual, the light clusters added by the shader.
+        let residual = Shading::Sh {
+            offset: 0,
+            order: lmax,
+            lights: true,
+        };
+        let records: Vec<_> = objects
+            .iter()
+            .map(|o| object_record(&o.shape, o.albedo, &Brdf::Lambert, residual))
+            .collect();
         let (gbuf, _) = gpass.run(&cam, &records).unwrap();
         let mut frames = Vec::new();
         for lights in [Some(&gpu_lights), None] {

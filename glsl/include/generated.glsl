@@ -232,6 +232,10 @@ const float SH_K[45] = float[45](2.820947918e-1, 4.886025119e-1, 3.454941495e-1,
 #define TECH_MC 4u
 #define TECH_SH_BRDF 5u
 #define TECH_SPLIT_SUM 6u
+#define OBJECT_SPHERE 0u
+#define OBJECT_PLANE 1u
+#define OBJECT_ROTATE 1u
+#define OBJECT_LIGHTS 2u
 #define SH_ROTATION_ZXZXZ 0u
 #define SH_ROTATION_IVANIC 1u
 #define SH_ROTATE_HEADER 12u
@@ -271,4 +275,23 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_ShRotatePush layout(push_constant) uniform Push { uint count; uint lmax; uint method; uint pad; } pc;
 #define PUSH_MipPush layout(push_constant) uniform Push { uint src_size; uint dst_size; uint mode; uint pad; } pc;
 #define PUSH_McPush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint count; uint shadows; uvec2 size; uint first; uint samples; uint seed; uint mis; uint[2] pad; } pc;
+struct Object {
+    vec4 shape;
+    vec4 albedo;
+    uint kind;
+    float extent;
+    uint technique;
+    uint brdf;
+    float[2] params;
+    uint samples;
+    float lod_bias;
+    float last_lod;
+    float lobe;
+    float light_norm;
+    uint data_offset;
+    uint size;
+    uint table_offset;
+    uint grid;
+    uint flags;
+};
 #endif

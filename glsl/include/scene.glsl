@@ -1,38 +1,29 @@
-// Scene objects, their materials, and ray casting (twin of src/math/camera.rs and
-// src/render/records.rs's GPU records).
+// Ray casting against the scene's objects (twin of src/math/camera.rs). Their records,
+// `Object`, are generated from src/abi/record.rs.
 #ifndef ENVLIGHT_SCENE_GLSL
 #define ENVLIGHT_SCENE_GLSL
-
-struct Object {
-    vec4 a;       // sphere: centre, radius; plane: unit normal, offset
-    vec4 b;       // x: 0 sphere, 1 plane; y: plane extent (0: unbounded)
-    vec4 albedo;  // rgb: albedo (diffuse) or specular colour; w: technique id
-    vec4 brdf;    // x: BRDF id; y, z: its parameters; w: FIS sample count
-    vec4 extra;   // x: FIS lod bias; y: offset of its data (SH, prefiltered); z: SH lmax or
-                  // prefiltered width; w: flags (bit 0: rotate FIS samples per pixel)
-};
 
 // Distance along unit d from o to object ob, or -1 when the ray misses it; n gets the normal.
 float object_hit(Object ob, vec3 o, vec3 d, out vec3 n) {
     n = vec3(0.0);
-    if (ob.b.x == 0.0) {
-        vec3 oc = o - ob.a.xyz;
+    if (ob.kind == OBJECT_SPHERE) {
+        vec3 oc = o - ob.shape.xyz;
         float b = dot(oc, d);
         vec3 h = oc - b * d;
-        float disc = ob.a.w * ob.a.w - dot(h, h);
+        float disc = ob.shape.w * ob.shape.w - dot(h, h);
         if (disc < 0.0) return -1.0;
         float s = sqrt(disc);
         float t = -b - s > 0.0 ? -b - s : -b + s;
-        n = (o + t * d - ob.a.xyz) / ob.a.w;
+        n = (o + t * d - ob.shape.xyz) / ob.shape.w;
         return t;
     }
-    float dn = dot(d, ob.a.xyz);
+    float dn = dot(d, ob.shape.xyz);
     if (dn >= 0.0) return -1.0;
-    float t = (ob.a.w - dot(o, ob.a.xyz)) / dn;
-    n = ob.a.xyz;
-    if (ob.b.y > 0.0) {
-        vec3 p = o + t * d - ob.a.w * ob.a.xyz;
-        if (dot(p, p) > ob.b.y * ob.b.y) return -1.0;
+    float t = (ob.shape.w - dot(o, ob.shape.xyz)) / dn;
+    n = ob.shape.xyz;
+    if (ob.extent > 0.0) {
+        vec3 p = o + t * d - ob.shape.w * ob.shape.xyz;
+        if (dot(p, p) > ob.extent * ob.extent) return -1.0;
     }
     return t;
 }

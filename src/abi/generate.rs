@@ -3,13 +3,13 @@
 
 use super::parameters::*;
 use super::shaders::{ShaderSource, OPTIMIZATION, SHADER_SOURCES, TARGET_ENV};
-use super::{binding, push};
+use super::{binding, push, record};
 use std::fmt::Write as _;
 use std::path::Path;
 
 /// The GLSL header carrying the shared numbers: bindings, sizes, the lights' and the area
-/// conversion's parameters, the filter rule and other floats, SH constants, ids, and the push
-/// blocks.
+/// conversion's parameters, the filter rule and other floats, SH constants, ids, the push
+/// blocks and the records.
 pub fn generated_header() -> String {
     let mut s = String::from(
         "// Generated from src/abi by `cargo xtask shaders`; do not edit.\n\
@@ -19,6 +19,7 @@ pub fn generated_header() -> String {
     define_area_footprint_and_floats(&mut s);
     define_sh_and_ids(&mut s);
     define_push_blocks(&mut s);
+    define_records(&mut s);
     s.push_str("#endif\n");
     s
 }
@@ -275,6 +276,10 @@ fn define_sh_and_ids(s: &mut String) {
         ("TECH_MC", brdf::technique::MC),
         ("TECH_SH_BRDF", brdf::technique::SH_BRDF),
         ("TECH_SPLIT_SUM", brdf::technique::SPLIT_SUM),
+        ("OBJECT_SPHERE", object::SPHERE),
+        ("OBJECT_PLANE", object::PLANE),
+        ("OBJECT_ROTATE", object::ROTATE),
+        ("OBJECT_LIGHTS", object::LIGHTS),
         ("SH_ROTATION_ZXZXZ", sh_brdf::ROTATION_ZXZXZ),
         ("SH_ROTATION_IVANIC", sh_brdf::ROTATION_IVANIC),
         ("SH_ROTATE_HEADER", sh_brdf::ROTATE_HEADER),
@@ -315,6 +320,18 @@ fn define_push_blocks(s: &mut String) {
             "#define PUSH_{name} layout(push_constant) uniform Push {{ {} }} pc;",
             decl.join(" ")
         );
+    }
+}
+
+/// The storage-buffer records (std430: vec4s at multiples of 16, checked where they are
+/// declared), generated from the Rust structs' field lists.
+fn define_records(s: &mut String) {
+    for (name, fields) in record::RECORDS {
+        let _ = writeln!(s, "struct {name} {{");
+        for (field, ty, _) in fields.iter() {
+            let _ = writeln!(s, "    {ty} {field};");
+        }
+        let _ = writeln!(s, "}};");
     }
 }
 

@@ -1,7 +1,8 @@
 //! The shared ABI: everything GLSL and Rust must agree on, written once, a file per kind of
 //! declaration: binding numbers ([`binding`]), the numbers both sides use ([`parameters`]:
 //! ids, tuning parameters, workgroup sizes), the push-constant blocks ([`push`]: Rust structs
-//! and the GLSL blocks generated from the same list), the shader table ([`shaders`]: every
+//! and the GLSL blocks generated from the same list), the per-object record ([`record`], the
+//! same way), the shader table ([`shaders`]: every
 //! module with its source, bindings and access), and the generator of the GLSL header
 //! ([`generate`]).
 //!
@@ -13,6 +14,7 @@ pub mod binding;
 pub mod generate;
 pub mod parameters;
 pub mod push;
+pub mod record;
 pub mod shaders;
 
 pub use generate::{
@@ -53,10 +55,19 @@ mod tests {
     }
 
     #[test]
-    fn the_header_defines_every_push_block_and_binding() {
+    fn the_header_defines_every_push_block_record_and_binding() {
         let h = generated_header();
         for (name, _) in push::PUSH_BLOCKS {
             assert!(h.contains(&format!("#define PUSH_{name} ")), "{name}");
+        }
+        for (name, fields) in record::RECORDS {
+            assert!(h.contains(&format!("struct {name} {{\n")), "{name}");
+            for (field, ty, _) in fields.iter() {
+                assert!(
+                    h.contains(&format!("    {ty} {field};\n")),
+                    "{name}.{field}"
+                );
+            }
         }
         for (name, v) in binding::ALL {
             assert!(

@@ -18,7 +18,7 @@ pub mod brdf {
         /// Ward anisotropic.
         pub const WARD: u32 = 5;
     }
-    /// Technique ids (`Object.albedo.w`).
+    /// Technique ids (`record::ObjectRecord::technique`).
     pub mod technique {
         /// One lookup of the reflected direction (mirrors).
         pub const LOOKUP: u32 = 0;
@@ -45,6 +45,18 @@ pub mod brdf {
     pub const GGX_ALPHA_MIN: f64 = 1e-4;
     /// Smallest Ward roughness accepted.
     pub const WARD_ALPHA_MIN: f64 = 1e-3;
+}
+
+/// What an object record's kind and flags hold (`record::ObjectRecord`).
+pub mod object {
+    /// A sphere: `shape` holds its centre and radius.
+    pub const SPHERE: u32 = 0;
+    /// A plane: `shape` holds its unit normal and offset.
+    pub const PLANE: u32 = 1;
+    /// Flag: FIS rotates its sample set per pixel.
+    pub const ROTATE: u32 = 1;
+    /// Flag: the shader adds the extracted lights (the technique reads the residual).
+    pub const LIGHTS: u32 = 2;
 }
 
 /// The per-texel quadrature rule of the brute-force convolution, shared by

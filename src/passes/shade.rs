@@ -476,7 +476,7 @@ impl Shade {
 
 #[cfg(test)]
 mod tests {
-    use super::super::gbuffer::{brdf_bits, GpuObject};
+    use super::super::gbuffer::{brdf_bits, ObjectRecord};
     use super::*;
     use crate::abi::brdf::{ids, technique};
     use crate::abi::shade_code::{BRDF_SHIFT, SHADOWS};
@@ -485,12 +485,14 @@ mod tests {
     /// objects use, in bits no technique or footprint bit shares.
     #[test]
     fn code_mask_keeps_shadows_and_the_objects_brdfs() {
-        let object = |id: u32| GpuObject {
-            brdf: [id as f32, 0.3, 1.0, 64.0],
+        let object = |id: u32| ObjectRecord {
+            brdf: id,
+            params: [0.3, 1.0],
+            samples: 64,
             ..Default::default()
         };
         let objects = [object(ids::GGX), object(ids::LAMBERT), object(ids::GGX)];
-        let brdfs = brdf_bits(objects.iter().map(|o| o.brdf[0] as u32));
+        let brdfs = brdf_bits(objects.iter().map(|o| o.brdf));
         assert_eq!(brdfs, (1 << ids::GGX) | (1 << ids::LAMBERT));
         let code = ShadeCode {
             fis: true,

@@ -13,7 +13,6 @@ pub use plan::{
     chain_of_texel_means, fis_dp_size, fis_dp_size_for, footprint_of, plan, plan_for, split_size,
     LightsPlan, MapShape, ObjectPlan, PassKind, Plan, PlannedPass, SplitPlan, TablePlan,
 };
-pub use records::{object_record, object_record_with, split_record};
 pub use resident::{Resident, CHAIN_GPU_MAX, DIFFUSE_GPU_MAX};
 
 use crate::error::{Error, Result};

@@ -6,6 +6,7 @@ use crate::error::{Error, Result};
 pub use crate::math::brdf::Brdf;
 pub use crate::math::camera::{Camera, Frame, Projection, Shape};
 use crate::math::Orientation;
+use crate::passes::gbuffer::{object_record, ObjectRecord, Shading};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -418,6 +419,58 @@ impl Material {
                 rotate: false,
             },
         })
+    }
+
+    /// How the shade pass shades it, its data (SH coefficients, a prefiltered map) at
+    /// `data_offset` and an SH-BRDF table at `table_offset`, before a render adds extracted
+    /// lights and split-sum's chain and DFG table.
+    pub fn shading(&self, data_offset: u32, table_offset: u32) -> Shading {
+        match self.technique() {
+            Technique::Lookup => Shading::Lookup,
+            Technique::Fis {
+                samples,
+                bias,
+                rotate,
+            } => Shading::Fis {
+                samples,
+                lod_bias: bias.unwrap_or(DEFAULT_FIS_BIAS) as f32,
+                rotate,
+                lights: None,
+            },
+            Technique::Sh { order } => Shading::Sh {
+                offset: data_offset,
+                order,
+                lights: false,
+            },
+            Technique::Prefiltered { size } => Shading::Prefiltered {
+                offset: data_offset,
+                width: size,
+                lights: None,
+            },
+            Technique::Mc { .. } => Shading::Mc,
+            Technique::SplitSum => Shading::SplitSum {
+                last_lod: 0.0,
+                dfg_offset: 0,
+                dfg_size: 0,
+                taps: 0,
+                lights: None,
+            },
+            Technique::ShBrdf { order, grid, .. } => Shading::ShBrdf {
+                grid,
+                offset: data_offset,
+                order,
+                table: table_offset,
+            },
+        }
+    }
+}
+
+impl SceneObject {
+    /// Its record for the G-buffer, shade and Monte Carlo passes, shaded as
+    /// [`Material::shading`] says with its data at `data_offset`.
+    pub fn record(&self, data_offset: u32) -> ObjectRecord {
+        let m = &self.material;
+        object_record(&self.shape, m.albedo, &m.kind, m.shading(data_offset, 0))
     }
 }
 

@@ -12,7 +12,7 @@ use envlight::math::mc::{estimate, McPoint, McSetup};
 use envlight::math::{Mapping, Orientation};
 use envlight::passes::gbuffer::GBufferPass;
 use envlight::passes::mc::{pixel_stats, McEnv, McOptions, MonteCarlo};
-use envlight::render::{object_record, render};
+use envlight::render::render;
 use envlight::scene::Technique;
 use envlight::EnvMap;
 
@@ -86,7 +86,7 @@ pub fn check(ctx: &Context) {
         width: 14,
         height: 10,
     };
-    let records: Vec<_> = objs.iter().map(|o| object_record(o, 0)).collect();
+    let records: Vec<_> = objs.iter().map(|o| o.record(0)).collect();
     let (gbuf, _) = GBufferPass::new(ctx).unwrap().run(&cam, &records).unwrap();
     let mc_env = McEnv::new(ctx, &env, &orientation).unwrap();
     let (res, t) = MonteCarlo::new(ctx)

@@ -15,7 +15,6 @@ use crate::passes::mc::{pixel_stats, McEnv, McOptions, MonteCarlo};
 use crate::passes::mip::MipChain;
 use crate::passes::shade::{Shade, ShadeInputs};
 use crate::passes::{ConvertOptions, Converter};
-use crate::render::object_record;
 use crate::scene::{Material, SceneObject, Technique};
 use crate::EnvMap;
 use crate::GpuEnvMap;
@@ -133,7 +132,7 @@ pub fn run(
             let cam = sphere_camera(size);
             for (mname, kind) in materials() {
                 let gbuf = |t: Technique| -> Result<GBuffer> {
-                    Ok(gpass.run(&cam, &[object_record(&object(kind, t), 0)])?.0)
+                    Ok(gpass.run(&cam, &[object(kind, t).record(0)])?.0)
                 };
                 let mc_g = gbuf(Technique::Mc {
                     samples: 1,
