@@ -249,122 +249,6 @@ macro_rules! shader_table {
             /// shade.frag's walk_done), where fragment shaders have vote operations.
             ShadeVote = "shade_vote", "shade.frag", Fragment, [("USE_VOTE", "1")], ShadePush,
                 SHADE_BINDINGS;
-            /// [`ShaderId::Shade`] for scenes of mirrors and the background
-            /// alone (shade.frag's ONLY_TECHS).
-            ShadeLookup = "shade_lookup", "shade.frag", Fragment,
-                [("ONLY_TECHS", "0u")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::Shade`] for scenes of filtered importance
-            /// sampling alone (shade.frag's ONLY_TECHS).
-            ShadeFis = "shade_fis", "shade.frag", Fragment,
-                [("ONLY_TECHS", "1u << TECH_FIS")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::Shade`] for scenes of SH irradiance alone (shade.frag's ONLY_TECHS).
-            ShadeSh = "shade_sh", "shade.frag", Fragment,
-                [("ONLY_TECHS", "1u << TECH_SH")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::Shade`] for scenes of prefiltered maps alone (shade.frag's ONLY_TECHS).
-            ShadePrefiltered = "shade_prefiltered", "shade.frag", Fragment,
-                [("ONLY_TECHS", "1u << TECH_PREFILTERED")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::Shade`] for scenes of Monte Carlo alone (shade.frag's ONLY_TECHS).
-            ShadeMc = "shade_mc", "shade.frag", Fragment,
-                [("ONLY_TECHS", "1u << TECH_MC")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::Shade`] for scenes of SH-BRDF (with SH, whose
-            /// projection it reads) alone (shade.frag's ONLY_TECHS).
-            ShadeShBrdf = "shade_sh_brdf", "shade.frag", Fragment,
-                [("ONLY_TECHS", "(1u << TECH_SH) | (1u << TECH_SH_BRDF)")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::Shade`] for scenes of split-sum (with FIS, whose
-            /// chain it reads) alone (shade.frag's ONLY_TECHS).
-            ShadeSplitSum = "shade_split_sum", "shade.frag", Fragment,
-                [("ONLY_TECHS", "(1u << TECH_FIS) | (1u << TECH_SPLIT_SUM)")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVote`] for scenes of mirrors and the background alone.
-            ShadeVoteLookup = "shade_vote_lookup", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "0u")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVote`] for scenes of filtered importance sampling alone.
-            ShadeVoteFis = "shade_vote_fis", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_FIS")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVote`] for scenes of SH irradiance alone.
-            ShadeVoteSh = "shade_vote_sh", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_SH")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVote`] for scenes of prefiltered maps alone.
-            ShadeVotePrefiltered = "shade_vote_prefiltered", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_PREFILTERED")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVote`] for scenes of Monte Carlo alone.
-            ShadeVoteMc = "shade_vote_mc", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_MC")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVote`] for scenes of SH-BRDF (with SH) alone.
-            ShadeVoteShBrdf = "shade_vote_sh_brdf", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "(1u << TECH_SH) | (1u << TECH_SH_BRDF)")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVote`] for scenes of split-sum (with FIS) alone.
-            ShadeVoteSplitSum = "shade_vote_split_sum", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "(1u << TECH_FIS) | (1u << TECH_SPLIT_SUM)")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeLookup`] less footprint and shadow code (LEAN).
-            ShadeLeanLookup = "shade_lean_lookup", "shade.frag", Fragment,
-                [("ONLY_TECHS", "0u"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeFis`] less footprint and shadow code (LEAN).
-            ShadeLeanFis = "shade_lean_fis", "shade.frag", Fragment,
-                [("ONLY_TECHS", "1u << TECH_FIS"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeSh`] less footprint and shadow code (LEAN).
-            ShadeLeanSh = "shade_lean_sh", "shade.frag", Fragment,
-                [("ONLY_TECHS", "1u << TECH_SH"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadePrefiltered`] less footprint and shadow code (LEAN).
-            ShadeLeanPrefiltered = "shade_lean_prefiltered", "shade.frag", Fragment,
-                [("ONLY_TECHS", "1u << TECH_PREFILTERED"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeMc`] less footprint and shadow code (LEAN).
-            ShadeLeanMc = "shade_lean_mc", "shade.frag", Fragment,
-                [("ONLY_TECHS", "1u << TECH_MC"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeShBrdf`] less footprint and shadow code (LEAN).
-            ShadeLeanShBrdf = "shade_lean_sh_brdf", "shade.frag", Fragment,
-                [("ONLY_TECHS", "(1u << TECH_SH) | (1u << TECH_SH_BRDF)"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeSplitSum`] less footprint and shadow code (LEAN).
-            ShadeLeanSplitSum = "shade_lean_split_sum", "shade.frag", Fragment,
-                [("ONLY_TECHS", "(1u << TECH_FIS) | (1u << TECH_SPLIT_SUM)"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVoteLookup`] less footprint and shadow code.
-            ShadeVoteLeanLookup = "shade_vote_lean_lookup", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "0u"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVoteFis`] less footprint and shadow code.
-            ShadeVoteLeanFis = "shade_vote_lean_fis", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_FIS"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVoteSh`] less footprint and shadow code.
-            ShadeVoteLeanSh = "shade_vote_lean_sh", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_SH"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVotePrefiltered`] less footprint and shadow code.
-            ShadeVoteLeanPrefiltered = "shade_vote_lean_prefiltered", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_PREFILTERED"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVoteMc`] less footprint and shadow code.
-            ShadeVoteLeanMc = "shade_vote_lean_mc", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "1u << TECH_MC"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVoteShBrdf`] less footprint and shadow code.
-            ShadeVoteLeanShBrdf = "shade_vote_lean_sh_brdf", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "(1u << TECH_SH) | (1u << TECH_SH_BRDF)"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
-            /// [`ShaderId::ShadeVoteSplitSum`] less footprint and shadow code.
-            ShadeVoteLeanSplitSum = "shade_vote_lean_split_sum", "shade.frag", Fragment,
-                [("USE_VOTE", "1"), ("ONLY_TECHS", "(1u << TECH_FIS) | (1u << TECH_SPLIT_SUM)"), ("LEAN", "1")],
-                ShadePush, SHADE_BINDINGS;
             /// The split-sum DFG table (A, B) per n·v and √α.
             Dfg = "dfg", "dfg.comp", Compute, [], DfgPush,
                 [(DFG_TABLE, StorageBuffer, ReadWrite)];
@@ -427,6 +311,26 @@ macro_rules! shader_table {
                  (MC_POSITION, Sampled, Read), (MC_OBJECTS, StorageBuffer, Read),
                  (MC_ENV, Sampled, Read), (MC_TABLES, StorageBuffer, Read),
                  (MC_ACCUM, StorageImage, ReadWrite)];
+            // shade.frag's variants (below, `shade_variants`) follow the entries above.
+            @shade_variants {
+                /// mirrors and the background alone
+                (ShadeLookup, ShadeVoteLookup, ShadeLeanLookup, ShadeVoteLeanLookup) = "lookup", [];
+                /// filtered importance sampling alone
+                (ShadeFis, ShadeVoteFis, ShadeLeanFis, ShadeVoteLeanFis) = "fis", [FIS];
+                /// SH irradiance alone
+                (ShadeSh, ShadeVoteSh, ShadeLeanSh, ShadeVoteLeanSh) = "sh", [SH];
+                /// prefiltered maps alone
+                (ShadePrefiltered, ShadeVotePrefiltered, ShadeLeanPrefiltered,
+                 ShadeVoteLeanPrefiltered) = "prefiltered", [PREFILTERED];
+                /// Monte Carlo alone
+                (ShadeMc, ShadeVoteMc, ShadeLeanMc, ShadeVoteLeanMc) = "mc", [MC];
+                /// SH-BRDF (with SH, whose projection it reads) alone
+                (ShadeShBrdf, ShadeVoteShBrdf, ShadeLeanShBrdf, ShadeVoteLeanShBrdf) = "sh_brdf",
+                    [SH, SH_BRDF];
+                /// split-sum (with FIS, whose chain it reads) alone
+                (ShadeSplitSum, ShadeVoteSplitSum, ShadeLeanSplitSum, ShadeVoteLeanSplitSum) =
+                    "split_sum", [FIS, SPLIT_SUM];
+            }
         }
     };
 }
@@ -463,21 +367,83 @@ const SHADE_BINDINGS: &[(u32, Kind, Access)] = binding_list!([
     (SHADE_CAMERA, StorageBuffer, Read)
 ]);
 
+/// One of shade.frag's variants for scenes of one technique, built with ONLY_TECHS.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ShadeVariant {
+    /// The techniques kept besides the lookup, as mask bits.
+    pub techs: u32,
+    /// Its modules: plain and with vote, then both LEAN (no footprint or shadow code).
+    pub modules: [ShaderId; 4],
+}
+
+/// The ONLY_TECHS define of a shade.frag variant keeping techniques `$tech`.
+macro_rules! only_techs {
+    ($($tech:ident),*) => {
+        concat!("0u" $(, " | (1u << TECH_", stringify!($tech), ")")*)
+    };
+}
+
 macro_rules! define_shaders {
     ($( $(#[$m:meta])* $id:ident = $name:literal, $file:literal, $stage:ident,
-        [$(($k:literal, $v:literal)),*], $push:ty, $binds:tt; )*) => {
+        [$(($k:literal, $v:literal)),*], $push:ty, $binds:tt; )*
+     @shade_variants {
+        $( $(#[$vm:meta])* ($plain:ident, $vote:ident, $lean:ident, $vote_lean:ident) =
+            $short:literal, [$($tech:ident),*]; )*
+     }) => {
         /// A shader module envlight uses.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-        pub enum ShaderId { $( $(#[$m])* $id, )* }
+        pub enum ShaderId {
+            $( $(#[$m])* $id, )*
+            $(
+                #[doc = "shade.frag for scenes of"] $(#[$vm])* #[doc = "(its ONLY_TECHS variant)."]
+                $plain,
+                #[doc = "shade.frag with vote for scenes of"] $(#[$vm])*
+                $vote,
+                #[doc = "shade.frag, LEAN (no footprint or shadow code), for scenes of"] $(#[$vm])*
+                $lean,
+                #[doc = "shade.frag with vote, LEAN, for scenes of"] $(#[$vm])*
+                $vote_lean,
+            )*
+        }
 
         /// Every module's build recipe, in table order.
-        pub const SHADER_SOURCES: &[ShaderSource] = &[$(
-            ShaderSource { name: $name, file: $file, stage: Stage::$stage, defines: &[$(($k, $v)),*] },
+        pub const SHADER_SOURCES: &[ShaderSource] = &[
+            $( ShaderSource { name: $name, file: $file, stage: Stage::$stage, defines: &[$(($k, $v)),*] }, )*
+            $(
+                ShaderSource {
+                    name: concat!("shade_", $short), file: "shade.frag", stage: Stage::Fragment,
+                    defines: &[("ONLY_TECHS", only_techs!($($tech),*))],
+                },
+                ShaderSource {
+                    name: concat!("shade_vote_", $short), file: "shade.frag", stage: Stage::Fragment,
+                    defines: &[("USE_VOTE", "1"), ("ONLY_TECHS", only_techs!($($tech),*))],
+                },
+                ShaderSource {
+                    name: concat!("shade_lean_", $short), file: "shade.frag", stage: Stage::Fragment,
+                    defines: &[("ONLY_TECHS", only_techs!($($tech),*)), ("LEAN", "1")],
+                },
+                ShaderSource {
+                    name: concat!("shade_vote_lean_", $short), file: "shade.frag",
+                    stage: Stage::Fragment,
+                    defines: &[("USE_VOTE", "1"), ("ONLY_TECHS", only_techs!($($tech),*)), ("LEAN", "1")],
+                },
+            )*
+        ];
+
+        /// shade.frag's variants for scenes of one technique, from the table's one list.
+        pub const SHADE_VARIANTS: &[ShadeVariant] = &[$(
+            ShadeVariant {
+                techs: 0 $(| 1 << super::parameters::brdf::technique::$tech)*,
+                modules: [ShaderId::$plain, ShaderId::$vote, ShaderId::$lean, ShaderId::$vote_lean],
+            },
         )*];
 
         impl ShaderId {
             /// Every module, in table order.
-            pub const ALL: &'static [ShaderId] = &[$(ShaderId::$id),*];
+            pub const ALL: &'static [ShaderId] = &[
+                $(ShaderId::$id,)*
+                $(ShaderId::$plain, ShaderId::$vote, ShaderId::$lean, ShaderId::$vote_lean,)*
+            ];
 
             /// The build recipe of this module.
             pub fn source(self) -> &'static ShaderSource {
@@ -491,23 +457,37 @@ macro_rules! define_shaders {
 
             /// What the pipeline built on this module binds and pushes.
             pub fn interface(self) -> Interface {
-                match self {$(
-                    ShaderId::$id => Interface {
-                        bindings: binding_list!($binds),
-                        push_size: std::mem::size_of::<$push>() as u32,
-                        push_fields: <$push as PushBlock>::FIELDS,
-                    },
-                )*}
+                match self {
+                    $(
+                        ShaderId::$id => Interface {
+                            bindings: binding_list!($binds),
+                            push_size: std::mem::size_of::<$push>() as u32,
+                            push_fields: <$push as PushBlock>::FIELDS,
+                        },
+                    )*
+                    $(ShaderId::$plain | ShaderId::$vote | ShaderId::$lean | ShaderId::$vote_lean)|* => {
+                        Interface {
+                            bindings: SHADE_BINDINGS,
+                            push_size: std::mem::size_of::<ShadePush>() as u32,
+                            push_fields: <ShadePush as PushBlock>::FIELDS,
+                        }
+                    }
+                }
             }
 
             /// The push block's name in the generated header (`PUSH_<name>`), if any.
             pub fn push_block(self) -> Option<&'static str> {
-                match self {$(
-                    ShaderId::$id => {
-                        let n = stringify!($push);
-                        (n != "()").then_some(n)
+                match self {
+                    $(
+                        ShaderId::$id => {
+                            let n = stringify!($push);
+                            (n != "()").then_some(n)
+                        }
+                    )*
+                    $(ShaderId::$plain | ShaderId::$vote | ShaderId::$lean | ShaderId::$vote_lean)|* => {
+                        Some("ShadePush")
                     }
-                )*}
+                }
             }
         }
     };

@@ -6,14 +6,27 @@ use ash::vk;
 
 macro_rules! define_spirv {
     ($( $(#[$m:meta])* $id:ident = $name:literal, $file:literal, $stage:ident, [$($d:tt)*],
-        $push:ty, $binds:tt; )*) => {
+        $push:ty, $binds:tt; )*
+     @shade_variants {
+        $( $(#[$vm:meta])* ($plain:ident, $vote:ident, $lean:ident, $vote_lean:ident) =
+            $short:literal, [$($tech:ident),*]; )*
+     }) => {
         /// The committed SPIR-V of `id`.
         pub fn spirv(id: ShaderId) -> &'static [u8] {
-            match id {$(
-                ShaderId::$id => include_bytes!(concat!(
-                    env!("CARGO_MANIFEST_DIR"), "/spirv/", $name, ".spv"
-                )),
-            )*}
+            macro_rules! spv {
+                ($stem:expr) => {
+                    include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/spirv/", $stem, ".spv"))
+                };
+            }
+            match id {
+                $(ShaderId::$id => spv!($name),)*
+                $(
+                    ShaderId::$plain => spv!(concat!("shade_", $short)),
+                    ShaderId::$vote => spv!(concat!("shade_vote_", $short)),
+                    ShaderId::$lean => spv!(concat!("shade_lean_", $short)),
+                    ShaderId::$vote_lean => spv!(concat!("shade_vote_lean_", $short)),
+                )*
+            }
         }
     };
 }

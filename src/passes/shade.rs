@@ -8,7 +8,7 @@ use super::lights::GpuLights;
 use super::map::GpuEnvMap;
 pub use super::sh_brdf::Rotation;
 pub use super::sh_project::Subgroups;
-use crate::abi::{binding, push::ShadePush, ShaderId};
+use crate::abi::{binding, push::ShadePush, ShadeVariant, ShaderId};
 use crate::error::Result;
 use crate::gpu::{mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
 use crate::math::{Mapping, Orientation};
@@ -155,70 +155,10 @@ const _: () = assert!(
     "a BRDF id past the mask"
 );
 
-/// One of shade.frag's variants for scenes of one technique, built with ONLY_TECHS.
-struct Variant {
-    /// The techniques kept besides the lookup, as mask bits.
-    techs: u32,
-    /// Its modules: plain and with vote, then both LEAN (no footprint or shadow code).
-    modules: [ShaderId; 4],
-}
-
-/// shade.frag's variants for scenes of one technique. SH-BRDF keeps SH, whose projection it
-/// reads, and split-sum FIS, whose chain it reads: their masks hold both.
-const VARIANTS: [Variant; 7] = {
-    use crate::abi::brdf::technique as t;
-    use ShaderId::*;
-    [
-        Variant {
-            techs: 0,
-            modules: [
-                ShadeLookup,
-                ShadeVoteLookup,
-                ShadeLeanLookup,
-                ShadeVoteLeanLookup,
-            ],
-        },
-        Variant {
-            techs: 1 << t::FIS,
-            modules: [ShadeFis, ShadeVoteFis, ShadeLeanFis, ShadeVoteLeanFis],
-        },
-        Variant {
-            techs: 1 << t::SH,
-            modules: [ShadeSh, ShadeVoteSh, ShadeLeanSh, ShadeVoteLeanSh],
-        },
-        Variant {
-            techs: 1 << t::PREFILTERED,
-            modules: [
-                ShadePrefiltered,
-                ShadeVotePrefiltered,
-                ShadeLeanPrefiltered,
-                ShadeVoteLeanPrefiltered,
-            ],
-        },
-        Variant {
-            techs: 1 << t::MC,
-            modules: [ShadeMc, ShadeVoteMc, ShadeLeanMc, ShadeVoteLeanMc],
-        },
-        Variant {
-            techs: 1 << t::SH | 1 << t::SH_BRDF,
-            modules: [
-                ShadeShBrdf,
-                ShadeVoteShBrdf,
-                ShadeLeanShBrdf,
-                ShadeVoteLeanShBrdf,
-            ],
-        },
-        Variant {
-            techs: 1 << t::FIS | 1 << t::SPLIT_SUM,
-            modules: [
-                ShadeSplitSum,
-                ShadeVoteSplitSum,
-                ShadeLeanSplitSum,
-                ShadeVoteLeanSplitSum,
-            ],
-        },
-    ]
-};
+/// shade.frag's variants for scenes of one technique (the shader table's `shade_variants`
+/// list). SH-BRDF keeps SH, whose projection it reads, and split-sum FIS, whose chain it
+/// reads: their masks hold both.
+const VARIANTS: &[ShadeVariant] = crate::abi::SHADE_VARIANTS;
 
 /// Every fragment module the shading pass may build: the whole shader and its variants,
 /// plain and with vote, whole and lean (what a render's plan allows it to create).
@@ -515,8 +455,8 @@ mod tests {
         assert_eq!(techniques & (crate::abi::footprint::CODE | SHADOWS), 0);
     }
 
-    /// Each variant's ONLY_TECHS define names exactly the techniques its VARIANTS entry
-    /// keeps (read through the generated header's TECH_ constants), in its four modules, which
+    /// Each variant's ONLY_TECHS define evaluates to exactly the techniques its VARIANTS
+    /// entry keeps (through the generated header's TECH_ constants), in its four modules, which
     /// define USE_VOTE and LEAN as their places say; a mask of those techniques takes it, its
     /// LEAN modules unless the mask has footprint or shadow bits; a mask of two variants'
     /// techniques, and the whole mask, take the whole shader.
@@ -535,7 +475,7 @@ mod tests {
                 .parse()
                 .unwrap()
         };
-        for v in &VARIANTS {
+        for v in VARIANTS {
             for (k, &id) in v.modules.iter().enumerate() {
                 let define = id
                     .source()
@@ -544,15 +484,16 @@ mod tests {
                     .find(|(k, _)| *k == "ONLY_TECHS")
                     .map(|d| d.1)
                     .unwrap_or_else(|| panic!("{id:?} has no ONLY_TECHS"));
+                // The define's value, evaluated: terms "0u" or "(Nu << TECH_NAME)", or'ed.
+                let number = |t: &str| t.trim().trim_end_matches('u').parse::<u32>().unwrap();
                 let named = define
-                    .split("TECH_")
-                    .skip(1)
-                    .map(|rest| {
-                        let name: String = rest
-                            .chars()
-                            .take_while(|c| c.is_ascii_uppercase() || *c == '_')
-                            .collect();
-                        1u32 << value(&format!("TECH_{name}"))
+                    .split('|')
+                    .map(|term| {
+                        let term = term.trim().trim_start_matches('(').trim_end_matches(')');
+                        match term.split_once("<<") {
+                            Some((n, tech)) => number(n) << value(tech.trim()),
+                            None => number(term),
+                        }
                     })
                     .fold(0, |m, b| m | b);
                 assert_eq!(named, v.techs, "{id:?}: {define}");
