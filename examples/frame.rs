@@ -17,8 +17,7 @@ use envlight::passes::gbuffer::{GBuffer, ObjectRecord};
 use envlight::passes::map::{full_mips, map_desc};
 use envlight::passes::shade::ShadeInputs;
 use envlight::passes::{ConvertOptions, Converter, GBufferPass, GpuEnvMap, MipChain, Shade};
-use envlight::render::{fis_dp_size, load_environment};
-use envlight::scene::{Scene, Technique};
+use envlight::scene::{MapShape, Scene, Technique};
 use envlight::{EnvMap, Mapping};
 use std::path::Path;
 
@@ -39,7 +38,7 @@ pub struct Frame {
 /// Renders `scene` (lookup and FIS materials only) in one command buffer of the engine's.
 pub fn run(scene_path: &Path) -> Result<Frame, Error> {
     let scene = Scene::load(scene_path)?;
-    let env = load_environment(&scene, scene_path.parent().unwrap_or(Path::new(".")))?;
+    let env = scene.load_environment(scene_path.parent().unwrap_or(Path::new(".")))?;
     if let Some(o) = scene.objects.iter().find(|o| {
         !matches!(
             o.material.technique(),
@@ -58,7 +57,7 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
     let (pool, cmd) = engine.command_buffer()?;
 
     // The engine's images: the dual-paraboloid chain and the frame.
-    let dp_size = fis_dp_size(&scene, &env);
+    let dp_size = scene.fis_dp_size(MapShape::of(&env));
     let (dw, dh) = Mapping::DualParaboloid.extent_for_size(dp_size);
     let dp_desc = map_desc(Mapping::DualParaboloid, dw, dh, full_mips(dw, dh));
     let (fw, fh) = (scene.camera.width, scene.camera.height);
@@ -127,7 +126,7 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
         env_gpu.record_upload(&mut rec, &env)?;
         let opts = ConvertOptions::new(Mapping::DualParaboloid, dp_size)
             .with_orientation(orientation)
-            .with_nearest(envlight::render::chain_of_texel_means(&scene));
+            .with_nearest(scene.chain_of_texel_means());
         converter.record(&mut rec, &env_gpu, &dp, &opts)?;
         mip.record(&mut rec, &dp)?;
         gbuffer.record(&mut rec, &scene.camera, &gbuf)?;
@@ -143,7 +142,7 @@ pub fn run(scene_path: &Path) -> Result<Frame, Error> {
             split: None,
             shadows: scene.shadows,
             lights: None,
-            footprint: envlight::render::footprint_of(&scene, true, false),
+            footprint: scene.footprint(true, false),
         };
         shade.record(&mut rec, &gbuf, &inputs, &target)?;
         let readback = target.record_download(&mut rec, 0)?;

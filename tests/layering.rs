@@ -406,3 +406,13 @@ fn each_shader_file_has_one_main() {
         );
     }
 }
+
+/// examples/frame.rs is an engine driving the passes itself: it names nothing of `render`
+/// (its scene's choices come from `scene`, its object records from the G-buffer pass).
+#[test]
+fn the_engine_frame_example_drives_the_passes_without_render() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/frame.rs");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let named: Vec<&str> = code(&text).filter(|l| l.contains("render::")).collect();
+    assert!(named.is_empty(), "examples/frame.rs names render: {named:?}");
+}

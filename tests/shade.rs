@@ -457,7 +457,7 @@ fn the_paraboloid_pipeline_built_early_is_the_one_recorded() {
             sc.fis.size = None;
             sc.environment.lights = lights;
             // A size the residual's 2 points serve.
-            let size = envlight::render::fis_dp_size(&sc, env);
+            let size = sc.fis_dp_size(envlight::scene::MapShape::of(env));
             assert!(size >= common::abi::area::RESIDUAL_EDGE_MIN_SIZE, "{size}");
             let r = render(&ctx, &sc, env).unwrap();
             assert!(r.frame.texels.iter().flatten().all(|v| v.is_finite()));
@@ -562,7 +562,7 @@ fn walks_ending_by_vote_match_walks_ending_alone() {
     common::finish(ctx);
 }
 
-/// FIS builds its paraboloid only as fine as its lobes read (`render::fis_dp_size`): on the
+/// FIS builds its paraboloid only as fine as its lobes read (`Scene::fis_dp_size`): on the
 /// sky with a sun 5·10⁴ × the zenith (512 × 256), GGX α 0.3 and 0.6 with 64 samples read a
 /// paraboloid 4× and 8× coarser than the source-sized one. With lights extracted (the
 /// default) the render is the source-sized render's to float rounding (relative RMS over the
@@ -580,8 +580,8 @@ fn lobe_sized_paraboloid_reads_as_the_source_sized_one() {
     use common::scenes::{rel_rms, sphere_pixels};
     use envlight::math::camera::Projection;
     use envlight::math::fis::default_dp_size;
-    use envlight::render::fis_dp_size;
     use envlight::scene::LightsMode;
+    use envlight::scene::MapShape;
     let ctx = common::ctx();
     {
         let sky = envlight::math::synth::Sky::default();
@@ -603,7 +603,7 @@ fn lobe_sized_paraboloid_reads_as_the_source_sized_one() {
                 );
                 sc.fis.size = None;
                 sc.environment.lights = lights;
-                assert_eq!(fis_dp_size(&sc, &env), want, "α {alpha}");
+                assert_eq!(sc.fis_dp_size(MapShape::of(&env)), want, "α {alpha}");
                 let lobe = render(&ctx, &sc, &env).unwrap();
                 sc.fis.size = Some(full);
                 let whole = render(&ctx, &sc, &env).unwrap();
@@ -628,23 +628,26 @@ fn lobe_sized_paraboloid_reads_as_the_source_sized_one() {
         let mut perspective = base.clone();
         perspective.fis.size = None;
         perspective.camera.projection = Projection::Perspective { fov_y: 40.0 };
-        assert_eq!(fis_dp_size(&perspective, &env), full);
+        assert_eq!(perspective.fis_dp_size(MapShape::of(&env)), full);
         let mut split = perspective.clone();
         split.camera = cam;
         split
             .objects
             .push(object(unit_sphere(), ggx, [1.0; 3], Technique::SplitSum));
-        assert_eq!(fis_dp_size(&split, &env), full);
+        assert_eq!(split.fis_dp_size(MapShape::of(&env)), full);
         let mut mirror = split.clone();
         mirror.objects[1] = object(unit_sphere(), Brdf::Mirror, [1.0; 3], Technique::Lookup);
-        assert_eq!(fis_dp_size(&mirror, &env), full);
+        assert_eq!(mirror.fis_dp_size(MapShape::of(&env)), full);
         mirror.objects.pop();
-        assert_eq!(fis_dp_size(&mirror, &env), full / 4);
+        assert_eq!(mirror.fis_dp_size(MapShape::of(&env)), full / 4);
         mirror.fis.size = Some(64);
-        assert_eq!(fis_dp_size(&mirror, &env), 64);
+        assert_eq!(mirror.fis_dp_size(MapShape::of(&env)), 64);
         let cube = EnvMap::from_fn(Mapping::Cube, 128, 128, 2, |d| sky.radiance(d));
         mirror.fis.size = None;
-        assert_eq!(fis_dp_size(&mirror, &cube), default_dp_size(&cube));
+        assert_eq!(
+            mirror.fis_dp_size(MapShape::of(&cube)),
+            default_dp_size(&cube)
+        );
     }
     common::finish(ctx);
 }

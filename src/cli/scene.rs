@@ -58,7 +58,7 @@ pub fn plan(a: &PlanArgs) -> Result<()> {
     let sc = crate::scene::Scene::load(scene)?;
     let base = scene.parent().unwrap_or(Path::new("."));
     let path = base.join(&sc.environment.file);
-    let env = crate::render::load_environment(&sc, base)?;
+    let env = sc.load_environment(base)?;
     let plan = crate::render::plan(&sc, &env);
     println!(
         "{} ({}, {} {}×{})",
@@ -168,7 +168,7 @@ fn render_scene(cli: &Global, scene: &Path, output: &Path, resident: bool) -> Re
     let base = scene.parent().unwrap_or(Path::new("."));
     // The environment loads on a second thread while the device is created (as the map
     // commands do); a bad file is reported before a missing driver.
-    let (env, ctx) = context_while(cli, || Ok(crate::render::load_environment(&sc, base)?))?;
+    let (env, ctx) = context_while(cli, || Ok(sc.load_environment(base)?))?;
     clock.lap("load scene and map ∥ create device");
     let t0 = std::time::Instant::now();
     let r = match resident {

@@ -9,16 +9,17 @@ mod records;
 mod resident;
 mod shading;
 
+pub use crate::scene::MapShape;
 pub use plan::{
-    chain_of_texel_means, fis_dp_size, fis_dp_size_for, footprint_of, plan, plan_for, split_size,
-    LightsPlan, MapShape, ObjectPlan, PassKind, Plan, PlannedPass, SplitPlan, TablePlan,
+    plan, plan_for, split_size, LightsPlan, ObjectPlan, PassKind, Plan, PlannedPass, SplitPlan,
+    TablePlan,
 };
 pub use resident::{Resident, CHAIN_GPU_MAX, DIFFUSE_GPU_MAX};
 
 use crate::error::{Error, Result};
 use crate::gpu::{Context, Timing};
 use crate::math::envmap::EnvMap;
-use crate::math::{Mapping, Orientation};
+use crate::math::Orientation;
 use crate::passes::gbuffer::GBuffer;
 use crate::passes::sh_project::Subgroups;
 use crate::passes::shade::Rotation;
@@ -31,7 +32,6 @@ use inputs::{Inputs, Passes, Work};
 use records::{gpu_objects, Marks};
 use shading::Shading;
 use std::cell::OnceCell;
-use std::path::Path;
 
 /// The GPU time of one pass of a render.
 #[derive(Clone, Debug)]
@@ -76,34 +76,6 @@ impl Rendered {
         }
         v
     }
-}
-
-/// Loads the scene's environment (relative to `base`), with its intensity applied.
-pub fn load_environment(scene: &Scene, base: &Path) -> Result<EnvMap> {
-    let env = &scene.environment;
-    let mapping = match &env.mapping {
-        Some(m) => Some(Mapping::parse(m).ok_or_else(|| {
-            Error::Invalid(format!(
-                "environment mapping '{m}' is not one of latlong, angular, cube, dual-paraboloid"
-            ))
-        })?),
-        None => None,
-    };
-    let path = base.join(&env.file);
-    let mut map = crate::io::load(
-        &path,
-        &crate::io::LoadOptions {
-            mapping,
-            ..Default::default()
-        },
-    )?;
-    if env.intensity != 1.0 {
-        let k = env.intensity as f32;
-        for t in &mut map.texels {
-            *t = t.map(|c| c * k);
-        }
-    }
-    Ok(map)
 }
 
 /// Renders scenes: holds each pass, built the first time a scene needs it and reused by

@@ -8,16 +8,14 @@ use crate::abi::{split_sum, ShaderId};
 use crate::math::brdf::Brdf;
 use crate::math::convert::residual_edge_points;
 use crate::math::envmap::EnvMap;
-use crate::math::fis::default_dp_size_of;
 use crate::math::lights::{lobe_scale, ExtractOptions};
 use crate::math::sh_brdf::ViewGrid;
 use crate::math::Mapping;
 use crate::passes::gbuffer::brdf_bits;
-use crate::passes::shade::{Footprint, ShadeCode};
+use crate::passes::shade::ShadeCode;
 use crate::passes::{ConvertOptions, ShBrdfProjector};
 use crate::scene::{
-    LightsMode, LookupFilter, Scene, SceneObject, SplitSumSettings, Technique, DEFAULT_FIS_BIAS,
-    DEFAULT_FIS_BIAS_RESIDUAL,
+    LightsMode, LookupFilter, MapShape, Scene, SceneObject, SplitSumSettings, Technique,
 };
 
 /// What a render will run, resolved from a scene and its environment once.
@@ -206,29 +204,6 @@ impl Plan {
             .iter()
             .map(|t| ShBrdfProjector::table_floats(t.order, t.grid))
             .sum()
-    }
-}
-
-/// What a plan reads of its environment: its mapping and size, never its texels (the
-/// resident path plans for an image on the GPU).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct MapShape {
-    /// The mapping.
-    pub mapping: Mapping,
-    /// Width in texels (of one face or half where there are several).
-    pub width: u32,
-    /// Height in texels.
-    pub height: u32,
-}
-
-impl MapShape {
-    /// The shape of `env`.
-    pub fn of(env: &EnvMap) -> MapShape {
-        MapShape {
-            mapping: env.mapping,
-            width: env.width,
-            height: env.height,
-        }
     }
 }
 
@@ -686,67 +661,6 @@ fn kind_name(k: &Brdf) -> &'static str {
     }
 }
 
-/// Side of `scene`'s FIS dual paraboloid: the scene's `[fis] size`; else only as fine as its
-/// lobes read (`crate::math::fis::dp_size_for`, at most `default_dp_size`) where nothing
-/// else reads the chain's fine levels (no split-sum, no footprint-filtered mirror, no
-/// background filtered by request or seen through a perspective camera) and the lat-long
-/// source converts to that size by exact footprint areas, so that its power is kept; else
-/// `default_dp_size`.
-pub fn fis_dp_size(scene: &Scene, env: &EnvMap) -> u32 {
-    fis_dp_size_for(scene, MapShape::of(env))
-}
-
-/// [`fis_dp_size`] for an environment of shape `env`.
-pub fn fis_dp_size_for(scene: &Scene, env: MapShape) -> u32 {
-    if let Some(s) = scene.fis.size {
-        return s;
-    }
-    let full = default_dp_size_of(env.width, env.height, env.mapping.layers());
-    // The footprint lookups a chain would serve (mirrors, the background) read its finest levels.
-    let footprint = footprint_of(scene, true, false);
-    let split_sum = scene
-        .objects
-        .iter()
-        .any(|o| matches!(o.material.technique(), Technique::SplitSum));
-    let Ok(world_to_file) = scene.environment.orientation().checked_world_to_file() else {
-        return full;
-    };
-    if split_sum || footprint.mirror || footprint.background || env.mapping != Mapping::LatLong {
-        return full;
-    }
-    let lobes = scene
-        .objects
-        .iter()
-        .filter_map(|o| match o.material.technique() {
-            Technique::Fis { samples, bias, .. } => {
-                // The residual's default bias reads finer than the whole map's.
-                let bias = bias.unwrap_or(DEFAULT_FIS_BIAS.min(DEFAULT_FIS_BIAS_RESIDUAL));
-                Some(crate::math::fis::dp_size_for(
-                    &o.material.kind,
-                    samples,
-                    bias,
-                ))
-            }
-            _ => None,
-        })
-        .max();
-    let Some(mut size) = lobes else {
-        return full;
-    };
-    while size < full
-        && !crate::math::convert::area_serves(
-            env.width,
-            env.height,
-            Mapping::DualParaboloid,
-            size,
-            world_to_file,
-        )
-    {
-        size *= 2;
-    }
-    size.min(full)
-}
-
 /// Side of the split-sum chain: the scene's, or the FIS paraboloid's up to
 /// `split_sum::DEFAULT_SIZE`, but at least enough that the coarsest of `levels` keeps
 /// `split_sum::MIN_LEVEL_SIZE` texels a side.
@@ -763,10 +677,10 @@ pub fn split_size(settings: &SplitSumSettings, dp_size: u32) -> u32 {
 /// take the lights ([`chain_takes_lights`]; the record takes the default's where the lights
 /// found are too small for its lobes' quadrature and so stay in the chain).
 fn dp_convert_options(scene: &Scene, env: MapShape) -> ConvertOptions {
-    let size = fis_dp_size_for(scene, env);
+    let size = scene.fis_dp_size(env);
     ConvertOptions::new(Mapping::DualParaboloid, size)
         .with_orientation(scene.environment.orientation())
-        .with_nearest(chain_of_texel_means(scene))
+        .with_nearest(scene.chain_of_texel_means())
         .with_edge_points(chain_takes_lights(scene).then(|| residual_edge_points(size)))
 }
 
@@ -804,47 +718,11 @@ fn shade_code(scene: &Scene, plan: &Plan) -> ShadeCode {
         sh_brdf: needs(PassKind::ShBrdfTable),
         split_sum: needs(PassKind::SplitSum),
         footprint: {
-            let f = footprint_of(scene, fis, false);
+            let f = scene.footprint(fis, false);
             f.mirror || f.background
         },
         shadows: scene.shadows,
         brdfs: brdf_bits(scene.objects.iter().map(|o| o.material.kind.id())),
-    }
-}
-
-/// Whether `scene`'s dual paraboloid is converted with nearest-texel reads (the means of the
-/// source's texels): where footprint-filtered mirrors read it, or the background is asked to
-/// be; a bilinear reconstruction spreads a bright texel into its neighbours' pixels.
-pub fn chain_of_texel_means(scene: &Scene) -> bool {
-    let filter = scene.environment.filter;
-    filter == LookupFilter::Footprint
-        || (filter == LookupFilter::Auto
-            && scene
-                .objects
-                .iter()
-                .any(|o| matches!(o.material.technique(), Technique::Lookup)))
-}
-
-/// Which lookups of `scene` are footprint-filtered, given whether the render builds the
-/// dual-paraboloid chain and whether that chain holds the residual of extracted lights (the
-/// mirror flag only where a mirror is drawn, so that the shade pipeline keeps no footprint
-/// code it would not run). Under `filter = "auto"` an orthographic camera's background reads
-/// the map itself: each of its pixels sees one direction, so there is no footprint to filter.
-pub fn footprint_of(scene: &Scene, chain: bool, residual: bool) -> Footprint {
-    let filter = scene.environment.filter;
-    let ortho = matches!(
-        scene.camera.projection,
-        crate::math::camera::Projection::Orthographic { .. }
-    );
-    let mirrors = scene
-        .objects
-        .iter()
-        .any(|o| matches!(o.material.technique(), Technique::Lookup));
-    Footprint {
-        mirror: chain && mirrors && filter != LookupFilter::Point,
-        background: chain
-            && (filter == LookupFilter::Footprint || (filter == LookupFilter::Auto && !ortho)),
-        lights: chain && residual,
     }
 }
 
@@ -871,7 +749,10 @@ mod tests {
         assert_eq!(p.lmax, 2);
         assert!(p.objects[0].on_chain && !p.objects[1].on_chain);
         assert_eq!(p.objects[1].technique, Technique::Sh { order: 2 });
-        assert_eq!(p.dp.map(|d| d.size), Some(fis_dp_size(&s, &env)));
+        assert_eq!(
+            p.dp.map(|d| d.size),
+            Some(s.fis_dp_size(MapShape::of(&env)))
+        );
         assert!(p.code.fis && p.code.sh && !p.code.mc);
         assert!(p.split.is_none() && p.mc.is_none() && p.tables.is_empty());
     }

@@ -11,7 +11,7 @@
 
 use super::inputs::{self, Inputs, Work};
 use super::lights::Lit;
-use super::plan::{plan_for, MapShape, PassKind, Plan};
+use super::plan::{plan_for, PassKind, Plan};
 use super::records::{gpu_objects, Marks};
 use super::shading::{self, Shading};
 use super::{Job, Rendered, Renderer};
@@ -25,6 +25,7 @@ use crate::passes::{
     time_slices, ConvertPlan, Extractor, GpuEnvMap, GpuExtraction, GpuLights, LevelLayers,
     ShProjector, Subgroups,
 };
+use crate::scene::MapShape;
 use crate::scene::{LightsMode, Scene};
 use ash::vk;
 use std::sync::atomic::{AtomicU64, Ordering};

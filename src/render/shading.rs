@@ -125,7 +125,7 @@ pub(super) fn draw<'a>(
         split: inputs.split.as_ref().map(|s| (&s.0, &s.1)),
         shadows: job.scene.shadows,
         lights: lit.gpu.as_ref(),
-        footprint: super::plan::footprint_of(job.scene, inputs.dp.is_some(), lit.dp),
+        footprint: job.scene.footprint(inputs.dp.is_some(), lit.dp),
     };
     // The pipeline built from the plan's code is the one the draw takes.
     debug_assert_eq!(

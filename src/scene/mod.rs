@@ -10,7 +10,10 @@ use crate::passes::gbuffer::{object_record, ObjectRecord, Shading};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
+mod needs;
 mod validate;
+
+pub use needs::MapShape;
 
 /// Defaults of a scene's settings and of the command line's options, each where it lives.
 pub mod defaults {
