@@ -9,7 +9,7 @@
 pub mod engine;
 
 use ash::vk;
-use envlight::gpu::{AdoptInfo, Context};
+use envlight::gpu::{total_ms, AdoptInfo, Context, Timed};
 use envlight::passes::{ConvertOptions, Converter};
 use envlight::GpuEnvMap;
 use envlight::{EnvMap, Mapping};
@@ -47,12 +47,15 @@ pub fn run() -> Result<usize, Box<dyn std::error::Error>> {
         let gpu = GpuEnvMap::upload(&ctx, &map)?;
         let conv = Converter::new(&ctx)?;
         let opts = ConvertOptions::new(Mapping::Cube, 16);
-        let (cube, timings) = conv.run(&gpu, &opts)?;
+        let Timed {
+            value: cube,
+            timings,
+        } = conv.run(&gpu, &opts)?;
         let back = cube.download(&ctx)?;
         println!(
             "converted on the engine's device: {} ({:.3} ms GPU)",
             back.mapping.name(),
-            timings.iter().map(|t| t.ms).sum::<f64>()
+            total_ms(&timings)
         );
         drop((gpu, cube, conv));
         assert_eq!(ctx.live_objects(), 0, "envlight left objects behind");

@@ -9,6 +9,7 @@ mod twin;
 use twin::{brute_gpu, worst_relative};
 
 use common::compare::{max_of, min_of, rel_err};
+use envlight::gpu::Timed;
 use envlight::math::filter::{self, at_centres, Kernel};
 use envlight::math::synth::Sky;
 use envlight::math::{Mapping, Orientation};
@@ -215,7 +216,7 @@ fn lanes_and_reaches_change_rounding_only() {
             let mut outs = Vec::new();
             for lanes in [1, 2, 8, 32] {
                 pass.set_texel_lanes(lanes);
-                let (out, _) = pass.run(&g, &o, kernel, target).unwrap();
+                let Timed { value: out, .. } = pass.run(&g, &o, kernel, target).unwrap();
                 let out = out.download(&ctx).unwrap();
                 let vs_twin = worst_relative(&out, &exact);
                 eprintln!("{kernel:?}, {lanes} lanes: twin {vs_twin:.2e}");
@@ -325,7 +326,10 @@ fn phong_levels_match_float64() {
                 to: Mapping::Cube,
                 size: 8,
             };
-            let (maps, sources, _) = pass
+            let Timed {
+                value: (maps, sources),
+                ..
+            } = pass
                 .run_levels(&g, &Orientation::default(), &levels, target)
                 .unwrap();
             let expected: Vec<u32> = (0..4)
@@ -423,7 +427,8 @@ fn the_visit_floor_visits_the_lobes_reach() {
             let tile = common::abi::BRUTE_TILE as f64 * std::f64::consts::SQRT_2 * step.0;
             for (lanes, past) in [(8, d + 2.0 * step.0), (1, cap + tile)] {
                 pass.set_texel_lanes(lanes);
-                let (out, _) = pass.run(&g, &o, Kernel::Phong { n }, target).unwrap();
+                let Timed { value: out, .. } =
+                    pass.run(&g, &o, Kernel::Phong { n }, target).unwrap();
                 let out = out.download(&ctx).unwrap();
                 let inner = at_centres(Mapping::LatLong, 32, 16, |a| sum_within(a, cap - 1e-4));
                 let outer = at_centres(Mapping::LatLong, 32, 16, |a| sum_within(a, past + 1e-4));

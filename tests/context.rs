@@ -2,7 +2,7 @@
 
 mod common;
 
-use envlight::gpu::{Context, ContextOptions, DeviceSelector};
+use envlight::gpu::{Context, ContextOptions, DeviceSelector, Timed};
 use envlight::passes::testing::diagnostics::Diagnostics;
 
 #[test]
@@ -112,7 +112,7 @@ fn live_objects_return_to_zero() {
         let g = envlight::GpuEnvMap::upload(&ctx, &map).unwrap();
         assert!(ctx.live_objects() > 0);
         let opts = envlight::passes::ConvertOptions::new(envlight::Mapping::LatLong, 8);
-        let (out, _) = conv.run(&g, &opts).unwrap();
+        let Timed { value: out, .. } = conv.run(&g, &opts).unwrap();
         drop(g);
         let back = out.download(&ctx).unwrap();
         assert_eq!(back.width, 8);

@@ -7,6 +7,7 @@ mod twin;
 use twin::{convert, src_size, texel_angle};
 
 use common::compare::{max_abs, max_of, rel_err, Errors};
+use envlight::gpu::Timed;
 use envlight::math::synth::smooth_env;
 use envlight::math::Mapping;
 use envlight::passes::{ConvertOptions, Converter};
@@ -384,7 +385,10 @@ fn copy_pass_is_exact() {
             let (w, h) = m.extent_for_size(17);
             let map = EnvMap::from_fn(m, w, h, 2, smooth_env);
             let g = GpuEnvMap::upload(&ctx, &map).unwrap();
-            let (out, t) = copy.run(&g).unwrap();
+            let Timed {
+                value: out,
+                timings: t,
+            } = copy.run(&g).unwrap();
             assert_eq!(t.len(), 1);
             assert_eq!(out.download(&ctx).unwrap(), map, "{m:?}");
         }
@@ -430,7 +434,7 @@ fn nearest_conversion_matches_its_float64_twin() {
             let opts = ConvertOptions::new(Mapping::DualParaboloid, size)
                 .with_supersample(Some(ss))
                 .with_nearest(true);
-            let (out, _) = conv.run(&g, &opts).unwrap();
+            let Timed { value: out, .. } = conv.run(&g, &opts).unwrap();
             let out = out.download(&ctx).unwrap();
             let want = envlight::math::convert::convert_with(
                 &src,
@@ -597,7 +601,7 @@ fn fewer_edge_points_follow_their_twin_and_keep_power() {
             let g = GpuEnvMap::upload(&ctx, src).unwrap();
             let opts =
                 ConvertOptions::new(Mapping::DualParaboloid, size).with_edge_points(Some(points));
-            conv.run(&g, &opts).unwrap().0.download(&ctx).unwrap()
+            conv.run(&g, &opts).unwrap().value.download(&ctx).unwrap()
         };
         let smooth = EnvMap::from_fn(Mapping::LatLong, 96, 48, 1, |d| {
             let s = (13.0 * d.x + 7.0 * d.y).sin();
@@ -782,13 +786,13 @@ fn planned_conversion_matches_its_float64_twin() {
             let gpu = conv
                 .run_planned(&g, &plan)
                 .unwrap()
-                .0
+                .value
                 .download(&ctx)
                 .unwrap();
             let again = conv
                 .run_planned(&g, &plan)
                 .unwrap()
-                .0
+                .value
                 .download(&ctx)
                 .unwrap();
             assert!(
@@ -806,7 +810,7 @@ fn planned_conversion_matches_its_float64_twin() {
             eprintln!("planned, {to:?} {size}, {points} points: GPU vs f64 worst {e:.2e}");
             assert!(e <= 5e-6, "{to:?} {size}: planned GPU vs f64 {e:e}");
             all.merge(&errors);
-            let live = conv.run(&g, &opts).unwrap().0.download(&ctx).unwrap();
+            let live = conv.run(&g, &opts).unwrap().value.download(&ctx).unwrap();
             let (p, q) = (gpu.power(), live.power());
             for c in 0..3 {
                 let e = rel_err(p[c], q[c], 0.0, c);

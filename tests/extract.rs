@@ -6,7 +6,7 @@ mod common;
 #[path = "twins/extract.rs"]
 mod twin;
 
-use envlight::gpu::{Buffer, Image, ImageDesc};
+use envlight::gpu::{Buffer, Image, ImageDesc, Timed};
 use envlight::math::envmap::luminance;
 use envlight::math::lights::{extract, ExtractOptions};
 use envlight::math::Mapping;
@@ -58,7 +58,7 @@ fn the_cap_keeps_the_host_texels_and_counts_the_rest() {
         fill: None,
     };
     let ex = Extractor::new(&ctx).unwrap();
-    let (got, _) = ex.run(&map, &opts).unwrap();
+    let Timed { value: got, .. } = ex.run(&map, &opts).unwrap();
     let want = extract(&map, &opts);
     let y_plateau = luminance(plateau.map(f64::from));
     assert!(
@@ -153,7 +153,7 @@ fn nonfinite_texels_are_zero_and_counted_and_the_next_frame_recovers() {
         Ok(())
     })
     .unwrap();
-    let (broken, _) = ex.run_on(&map, &opts).unwrap();
+    let Timed { value: broken, .. } = ex.run_on(&map, &opts).unwrap();
     assert_eq!(broken.stats.nonfinite, 2, "both texels counted");
     assert!(broken
         .residual
@@ -181,7 +181,7 @@ fn nonfinite_texels_are_zero_and_counted_and_the_next_frame_recovers() {
     // The next frame: the clean map through the same resources.
     let up = ctx.run("the next frame's map", |rec| map.record_upload(rec, &clean));
     up.unwrap();
-    let (next, _) = ex.run_on(&map, &opts).unwrap();
+    let Timed { value: next, .. } = ex.run_on(&map, &opts).unwrap();
     let want = extract(&clean, &opts);
     assert_eq!(next.stats.nonfinite, 0);
     assert_eq!(next.lights.len(), want.lights.len(), "the sun is back");

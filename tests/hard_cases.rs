@@ -9,6 +9,7 @@ mod common;
 
 use common::compare::{abs_err, max_abs, max_of, Errors};
 use common::scenes::{fis, object, scene, sphere_camera, unit_sphere};
+use envlight::gpu::Timed;
 use envlight::math::brdf::{local_view, Brdf, Frame};
 use envlight::math::camera::trace;
 use envlight::math::filter::{self, Kernel};
@@ -125,7 +126,7 @@ fn sh_projection_matches_float64_on_every_hard_map() {
                     assert!(e.to_string().contains("too coarse"), "{}: {e}", c.name);
                     continue;
                 }
-                let (gpu, _) = p.run(&g, order).unwrap();
+                let Timed { value: gpu, .. } = p.run(&g, order).unwrap();
                 let cpu = sh::project(&c.map, order);
                 let scale = max_abs(cpu.iter().flatten().copied());
                 for (k, (a, b)) in gpu.coeffs.iter().zip(&cpu).enumerate() {
@@ -167,7 +168,7 @@ fn conversion_of_every_hard_map() {
             for to in Mapping::ALL {
                 for size in [1u32, 5] {
                     let opts = ConvertOptions::new(to, size);
-                    let out = conv.run(&g, &opts).unwrap().0.download(&ctx).unwrap();
+                    let out = conv.run(&g, &opts).unwrap().value.download(&ctx).unwrap();
                     let what = format!("{} -> {to:?} {size}", c.name);
                     finite_nonnegative(&what, &out.texels);
                     if is_black(&c.map) {
@@ -238,7 +239,7 @@ fn brute_force_of_every_hard_map_matches_float64() {
                     assert!(e.to_string().contains("too sharp"), "{what}: {e}");
                     continue;
                 }
-                let (out, _) = pass
+                let Timed { value: out, .. } = pass
                     .run(&g, &Orientation::default(), kernel, target)
                     .unwrap();
                 let out = out.download(&ctx).unwrap();

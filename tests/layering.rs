@@ -414,5 +414,8 @@ fn the_engine_frame_example_drives_the_passes_without_render() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/frame.rs");
     let text = std::fs::read_to_string(&path).unwrap();
     let named: Vec<&str> = code(&text).filter(|l| l.contains("render::")).collect();
-    assert!(named.is_empty(), "examples/frame.rs names render: {named:?}");
+    assert!(
+        named.is_empty(),
+        "examples/frame.rs names render: {named:?}"
+    );
 }

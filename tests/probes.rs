@@ -4,6 +4,7 @@
 mod common;
 
 use common::compare::finite;
+use envlight::gpu::Timed;
 use envlight::io::{self, LoadOptions};
 use envlight::math::Mapping;
 use envlight::passes::{ConvertOptions, Converter};
@@ -116,7 +117,8 @@ fn conversion_preserves_power_of_every_real_probe() {
                     },
                     32,
                 ] {
-                    let (out, _) = conv.run(&g, &ConvertOptions::new(to, size)).unwrap();
+                    let Timed { value: out, .. } =
+                        conv.run(&g, &ConvertOptions::new(to, size)).unwrap();
                     let out = out.download(&ctx).unwrap();
                     let pout = out.power();
                     // The channel's signed power error of largest magnitude.
@@ -176,7 +178,7 @@ fn grace_probe_and_latlong_agree_after_flips() {
         let run = |file: &str, o: Orientation| {
             let map = load(dir.join(file).to_str().unwrap());
             let g = GpuEnvMap::upload(&ctx, &map).unwrap();
-            let (out, _) = conv
+            let Timed { value: out, .. } = conv
                 .run(
                     &g,
                     &ConvertOptions::new(Mapping::LatLong, 256).with_orientation(o),

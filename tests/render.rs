@@ -6,6 +6,7 @@ mod common;
 mod map_twin;
 
 use common::compare::Errors;
+use envlight::gpu::Timed;
 use envlight::math::brdf::Brdf;
 use envlight::math::camera::{trace, Camera, Projection, Shape};
 use envlight::math::sh;
@@ -90,14 +91,20 @@ fn diffuse_spheres_match_float64_irradiance() {
             },
         ];
         for lmax in [2u32, 8] {
-            let (c, _) = projector.run(&g, lmax).unwrap();
+            let Timed { value: c, .. } = projector.run(&g, lmax).unwrap();
             let irr_gpu = sh::irradiance_coeffs(&c.coeffs);
             let irr_cpu = sh::irradiance_coeffs(&sh::project(&map, lmax));
             for cam in &cameras {
                 let records: Vec<_> = objects.iter().map(|o| o.gpu(lmax)).collect();
-                let (gbuf, t) = gpass.run(cam, &records).unwrap();
+                let Timed {
+                    value: gbuf,
+                    timings: t,
+                } = gpass.run(cam, &records).unwrap();
                 assert_eq!(t[0].label, "gbuffer");
-                let (frame, t) = shade
+                let Timed {
+                    value: frame,
+                    timings: t,
+                } = shade
                     .run(
                         &gbuf,
                         &ShadeInputs {
@@ -202,7 +209,7 @@ fn diffuse_with_lights_matches_float64() {
         let shade = Shade::new(&ctx).unwrap();
         let lmax = 2;
         // As the renderer does: the whole map's GPU coefficients less the light texels'.
-        let (c, _) = projector.run_oriented(&env, lmax, &o).unwrap();
+        let Timed { value: c, .. } = projector.run_oriented(&env, lmax, &o).unwrap();
         let minus = light_sh(&map, &ex, f2w, lmax);
         let res: Vec<[f64; 3]> = c
             .coeffs
@@ -232,10 +239,10 @@ fn diffuse_with_lights_matches_float64() {
             .iter()
             .map(|o| object_record(&o.shape, o.albedo, &Brdf::Lambert, residual))
             .collect();
-        let (gbuf, _) = gpass.run(&cam, &records).unwrap();
+        let Timed { value: gbuf, .. } = gpass.run(&cam, &records).unwrap();
         let mut frames = Vec::new();
         for lights in [Some(&gpu_lights), None] {
-            let (frame, _) = shade
+            let Timed { value: frame, .. } = shade
                 .run(
                     &gbuf,
                     &ShadeInputs {

@@ -10,6 +10,8 @@ use twin::brdfs;
 
 use common::compare::{max_of, Errors};
 use common::scenes::{object, scene, sphere_camera, sphere_pixels, unit_sphere};
+use envlight::gpu::total_ms;
+use envlight::gpu::Timed;
 use envlight::math::brdf::{local_view, Brdf, Frame};
 use envlight::math::sh::{self, count};
 use envlight::math::sh_brdf::{self, ViewGrid, DEFAULT_GRID};
@@ -76,7 +78,10 @@ fn gpu_rotation_is_orthogonal_and_matches_float64() {
             }
         }
         for method in [Rotation::Zxzxz, Rotation::Ivanic] {
-            let (out, t) = rot.run(method, 8, &items).unwrap();
+            let Timed {
+                value: out,
+                timings: t,
+            } = rot.run(method, 8, &items).unwrap();
             let (mut orthos, mut diff) = (Vec::new(), Errors::new());
             for (k, r) in rs.iter().enumerate() {
                 let cols = &out[k * n..(k + 1) * n];
@@ -100,7 +105,7 @@ fn gpu_rotation_is_orthogonal_and_matches_float64() {
                 assert!(want.max_difference(&by_quadrature(8, r)) < 1e-12);
             }
             let (ortho, diff) = (max_of(orthos), diff.worst());
-            let ms: f64 = t.iter().map(|t| t.ms).sum();
+            let ms: f64 = total_ms(&t);
             eprintln!(
                 "{method:?}: orthogonality {ortho:.1e}, against float64 {diff:.1e}, {} rotations in {ms:.2} ms",
                 items.len()

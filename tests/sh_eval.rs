@@ -6,6 +6,7 @@ mod common;
 mod twin;
 
 use common::compare::{abs_err, max_of};
+use envlight::gpu::Timed;
 use envlight::math::filter::{self, at_centres, Kernel};
 use envlight::math::sh::{self, Window};
 use envlight::math::synth::{fibonacci_sphere, smooth_env, Sky};
@@ -92,7 +93,7 @@ fn sh_irradiance_of_clamped_cosine_sky_is_within_truncation_error() {
         let g = GpuEnvMap::upload(&ctx, &map).unwrap();
         let cpu = sh::project(&map, 8);
         for lmax in [1u32, 2, 4, 8] {
-            let (c, _) = projector.run(&g, lmax).unwrap();
+            let Timed { value: c, .. } = projector.run(&g, lmax).unwrap();
             // Analytic coefficients: only m = 0 about +Y is non-zero in a frame with Y as
             // the pole; in ours (pole +Z), project the exact function in f64 at high
             // resolution instead and take the difference to the map's projection.
@@ -111,7 +112,7 @@ fn sh_irradiance_of_clamped_cosine_sky_is_within_truncation_error() {
                 to: Mapping::Cube,
                 size: 8,
             };
-            let (out, _) = eval.run(&irr, target).unwrap();
+            let Timed { value: out, .. } = eval.run(&irr, target).unwrap();
             let out = out.download(&ctx).unwrap();
             let truth = at_centres(Mapping::Cube, 8, 8, |d| {
                 [clamped_cosine_sky_irradiance(d); 3]

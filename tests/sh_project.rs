@@ -9,6 +9,7 @@ use twin::gpu_project;
 
 use common::worst_vs_cpu;
 
+use envlight::gpu::Timed;
 use envlight::math::sh;
 use envlight::math::synth::Sky;
 use envlight::math::Mapping;
@@ -260,7 +261,7 @@ fn oriented_projection_matches_and_flips_parity() {
             flip_v: true,
             rotate_y_degrees: 0.0,
         };
-        let (gpu, _) = p.run_oriented(&g, 4, &o).unwrap();
+        let Timed { value: gpu, .. } = p.run_oriented(&g, 4, &o).unwrap();
         let cpu = sh::project_oriented(&map, 4, o.world_to_file().transpose());
         assert!(worst_vs_cpu(&gpu.coeffs, &cpu) < 1e-5);
         let plain = sh::project(&map, 4);
@@ -294,7 +295,7 @@ fn oriented_projection_matches_and_flips_parity() {
                 rotate_y_degrees,
             };
             for lmax in [2, 8] {
-                let (gpu, _) = p.run_oriented(&g, lmax, &o).unwrap();
+                let Timed { value: gpu, .. } = p.run_oriented(&g, lmax, &o).unwrap();
                 let cpu = sh::project_oriented(&latlong, lmax, o.world_to_file().transpose());
                 let e = worst_vs_cpu(&gpu.coeffs, &cpu);
                 eprintln!("lat-long {o:?} order {lmax}: {e:.2e}");

@@ -14,7 +14,7 @@ pub mod dfg_cache;
 pub mod output;
 
 use crate::error::{Error, Result};
-use crate::gpu::{Buffer, Context, InFlight, Recorder, Timing, Usage};
+use crate::gpu::{Buffer, Context, InFlight, Recorder, Timed, Timing, Usage};
 use crate::math::envmap::luminance;
 use crate::math::exact::{ExactFilter, Query};
 use crate::math::fis::default_dp_size;
@@ -360,7 +360,7 @@ impl PendingBake {
 
     /// Waits for the GPU and reads the results back; refuses a non-finite texel.
     pub fn wait(self) -> Result<Baked> {
-        let (d, timings) = self.inflight.wait()?;
+        let Timed { value: d, timings } = self.inflight.wait()?;
         let flat: Vec<f32> = d.sh.read(sh::count(self.lmax) * 3);
         let sh = ShCoefficients::from_f32(self.lmax, &flat);
         let irradiance = d.irradiance.read();
@@ -809,7 +809,7 @@ impl Baker {
 
     /// [`Baker::dfg`] with its entries where `axes` puts them.
     pub fn dfg_at(&self, size: u32, correlated: bool, axes: DfgAxes) -> Result<Vec<[f32; 2]>> {
-        Ok(self.split.run_dfg_at(size, correlated, axes)?.0)
+        Ok(self.split.run_dfg_at(size, correlated, axes)?.value)
     }
 }
 

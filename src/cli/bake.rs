@@ -9,6 +9,7 @@ use crate::bake::output::{
     SeparateLights,
 };
 use crate::bake::{BakeOptions, Baked, Baker, PendingBake, SpotCheck, SpotCheckPlan};
+use crate::gpu::total_ms;
 use crate::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
 use crate::io::{write_atomic, LoadOptions};
 use crate::math::convert::{reduce_to_fit, Reduction};
@@ -16,7 +17,7 @@ use crate::math::lights::{extract_blocks, record_block};
 use crate::math::split_sum::DfgAxes;
 use crate::{EnvMap, Mapping, Orientation};
 use anyhow::{anyhow, bail, Context as _, Result};
-use clap::Args;
+use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
@@ -52,13 +53,13 @@ pub struct BakeArgs {
     /// FIS samples per specular texel [default: 256]
     #[arg(long)]
     samples: Option<u32>,
-    /// Output container: ktx2 or exr [default: ktx2]
-    #[arg(long)]
-    format: Option<String>,
-    /// KTX2 texels: rgba32f, rgba16f, b10g11r11, e5b9g9r9 or bc6h (texels beyond a format's
-    /// range are clamped into it and the power clamped away reported) [default: rgba32f]
-    #[arg(long)]
-    texels: Option<String>,
+    /// Output container [default: ktx2]
+    #[arg(long, value_enum)]
+    format: Option<Container>,
+    /// KTX2 texels (texels beyond a format's range are clamped into it and the power clamped
+    /// away reported) [default: rgba32f]
+    #[arg(long, ignore_case = true, value_parser = named(TEXELS, Ktx2Format::parse))]
+    texels: Option<Ktx2Format>,
     /// Also write each probe's dual-paraboloid MIP chain (chain.ktx2, RGBA32F premultiplied:
     /// a lookup divides rgb by alpha after filtering), what FIS reads at run time
     #[arg(long)]
@@ -72,8 +73,8 @@ pub struct BakeArgs {
     /// Where the DFG table's entries sit: endpoints (n·v = i/(size − 1), envlight's lookups) or
     /// centres (texel centres, (i + ½)/size, as a plain texture lookup reads them)
     /// [default: endpoints; khronos: centres]
-    #[arg(long)]
-    dfg_samples: Option<String>,
+    #[arg(long, value_parser = named(DFG_AXES, DfgAxes::parse))]
+    dfg_samples: Option<DfgAxes>,
     /// Bake only the i-th of n deterministic subsets (1-based), e.g. 2/8; or `auto`: the
     /// task of a job array (Slurm, AWS Batch, Google Batch; Kubernetes Indexed Jobs with
     /// `auto/N`), from the scheduler's variables
@@ -105,8 +106,8 @@ pub struct BakeArgs {
     /// Bake for an engine: bevy (cubes for its (x, y, −z) lookup, irradiance E/π, e5b9g9r9 +
     /// zstd, skybox.ktx2) or khronos (glTF-IBL-Sampler's yaw, E/π, rgba16f, ⌊log2 size⌋
     /// levels). Options given one by one still apply on top
-    #[arg(long)]
-    preset: Option<String>,
+    #[arg(long, value_parser = named(PRESETS, Preset::parse))]
+    preset: Option<Preset>,
     /// Turn the probe about +Y by this many degrees before baking
     #[arg(long, allow_negative_numbers = true)]
     rotate_y: Option<f64>,
@@ -118,15 +119,36 @@ pub struct BakeArgs {
     flip_v: bool,
     /// Irradiance cube normalisation: e (irradiance) or e-over-pi (a white Lambertian
     /// surface's radiance, what engines multiply by albedo) [default: e]
-    #[arg(long)]
-    irradiance: Option<String>,
+    #[arg(long, value_parser = named(IRRADIANCE, Irradiance::parse))]
+    irradiance: Option<Irradiance>,
     /// Lights: exact (extract them and add them exactly into the cubes), separate (write them
     /// to lights.json and bake only the residual), or off (filter the whole map) [default: exact]
-    #[arg(long)]
-    lights: Option<String>,
+    #[arg(long, value_enum)]
+    lights: Option<LightsMode>,
     /// Supercompress the KTX2 levels with Zstandard
     #[arg(long)]
     zstd: bool,
+}
+
+/// `--texels` values.
+const TEXELS: &[&str] = &["rgba32f", "rgba16f", "b10g11r11", "e5b9g9r9", "bc6h"];
+/// `--preset` values.
+const PRESETS: &[&str] = &["bevy", "khronos"];
+/// `--irradiance` values.
+const IRRADIANCE: &[&str] = &["e", "e-over-pi"];
+/// `--dfg-samples` values.
+const DFG_AXES: &[&str] = &["endpoints", "centres"];
+
+/// The value parser of an option whose values are one of the library's enums, by their
+/// `names` (clap lists them in the help and in a refusal); `parse` is the library's, which
+/// the bake file's keys go through too.
+fn named<T: Clone + Send + Sync + 'static>(
+    names: &'static [&'static str],
+    parse: fn(&str) -> Option<T>,
+) -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(names)
+        .map(move |s| parse(&s).unwrap_or_else(|| unreachable!("{s} is listed, so it parses")))
 }
 
 /// A bake file: every field optional, unknown keys refused.
@@ -162,7 +184,7 @@ enum LightsKey {
 }
 
 /// What a bake does with the map's lights.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 enum LightsMode {
     /// Extracted and added exactly into the cubes.
@@ -180,6 +202,34 @@ impl LightsMode {
             "separate" => Ok(LightsMode::Separate),
             "off" => Ok(LightsMode::Off),
             _ => bail!("--lights {s}: exact, separate or off"),
+        }
+    }
+}
+
+/// The files a bake writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Container {
+    /// KTX2 cubes (and JSON), what engines load.
+    Ktx2,
+    /// OpenEXR images, a file per cube level.
+    Exr,
+}
+
+impl Container {
+    /// Its name, as the manifest records it.
+    fn name(self) -> &'static str {
+        match self {
+            Container::Ktx2 => "ktx2",
+            Container::Exr => "exr",
+        }
+    }
+
+    /// A bake file's `format`.
+    fn parse(s: &str) -> Result<Container> {
+        match s {
+            "ktx2" => Ok(Container::Ktx2),
+            "exr" => Ok(Container::Exr),
+            _ => bail!("--format {s}: ktx2 or exr"),
         }
     }
 }
@@ -523,11 +573,12 @@ impl Plan {
     /// The options decided: the command line over the bake file over the preset over the
     /// defaults.
     fn new(a: &BakeArgs, file: BakeFile) -> Result<Plan> {
-        let preset = match a.preset.as_deref().or(file.preset.as_deref()) {
-            Some(p) => {
+        let preset = match (a.preset, file.preset.as_deref()) {
+            (Some(p), _) => Some(p),
+            (None, Some(p)) => {
                 Some(Preset::parse(p).ok_or_else(|| anyhow!("--preset {p}: bevy or khronos"))?)
             }
-            None => None,
+            (None, None) => None,
         };
         let d = BakeOptions::default();
         let specular_size = a
@@ -535,7 +586,7 @@ impl Plan {
             .or(file.specular_size)
             .unwrap_or(d.specular_size);
         let lights = match (&a.lights, a.no_lights, &file.lights) {
-            (Some(m), _, _) => LightsMode::parse(m)?,
+            (Some(m), _, _) => *m,
             (None, true, _) => LightsMode::Off,
             (None, false, Some(LightsKey::On(on))) => match on {
                 true => LightsMode::Exact,
@@ -567,33 +618,35 @@ impl Plan {
             ..d
         };
         options.validate()?;
-        let format = a
-            .format
-            .clone()
-            .or(file.format)
-            .unwrap_or_else(|| "ktx2".into());
-        if format != "ktx2" && format != "exr" {
-            bail!("--format {format}: ktx2 or exr");
+        let format = match (a.format, &file.format) {
+            (Some(f), _) => f,
+            (None, Some(f)) => Container::parse(f)?,
+            (None, None) => Container::Ktx2,
         }
-        let texels = match a.texels.clone().or(file.texels) {
-            Some(t) => Ktx2Format::parse(&t).ok_or_else(|| {
+        .name()
+        .to_string();
+        let texels = match (a.texels, &file.texels) {
+            (Some(t), _) => t,
+            (None, Some(t)) => Ktx2Format::parse(t).ok_or_else(|| {
                 anyhow!("--texels {t}: rgba32f, rgba16f, b10g11r11, e5b9g9r9 or bc6h")
             })?,
-            None => preset.map_or(Ktx2Format::Rgba32f, |p| p.texels()),
+            (None, None) => preset.map_or(Ktx2Format::Rgba32f, |p| p.texels()),
         };
         let zstd = a.zstd
             || file.zstd == Some(true)
             || preset.is_some_and(|p| p.supercompression() == Supercompression::Zstd);
-        let irradiance = match a.irradiance.clone().or(file.irradiance) {
-            Some(i) => {
-                Irradiance::parse(&i).ok_or_else(|| anyhow!("--irradiance {i}: e or e-over-pi"))?
+        let irradiance = match (a.irradiance, &file.irradiance) {
+            (Some(i), _) => i,
+            (None, Some(i)) => {
+                Irradiance::parse(i).ok_or_else(|| anyhow!("--irradiance {i}: e or e-over-pi"))?
             }
-            None => preset.map_or(Irradiance::E, |p| p.irradiance()),
+            (None, None) => preset.map_or(Irradiance::E, |p| p.irradiance()),
         };
-        let dfg_axes = match a.dfg_samples.clone().or(file.dfg_samples) {
-            Some(s) => DfgAxes::parse(&s)
+        let dfg_axes = match (a.dfg_samples, &file.dfg_samples) {
+            (Some(s), _) => s,
+            (None, Some(s)) => DfgAxes::parse(s)
                 .ok_or_else(|| anyhow!("--dfg-samples {s}: endpoints or centres"))?,
-            None => preset.map_or(DfgAxes::Endpoints, |p| p.dfg_axes()),
+            (None, None) => preset.map_or(DfgAxes::Endpoints, |p| p.dfg_axes()),
         };
         let user = Orientation {
             flip_u: a.flip_u || file.flip_u == Some(true),
@@ -1515,7 +1568,7 @@ impl Run<'_> {
                     stages.check = seconds;
                     c.compare(&baked)
                 });
-                let gpu_ms = baked.timings.iter().map(|t| t.ms).sum::<f64>();
+                let gpu_ms = total_ms(&baked.timings);
                 Ok((outputs, gpu_ms, checked, clamped))
             })
             .with_context(|| w.path.display().to_string());
@@ -1604,6 +1657,52 @@ fn read_probes(
         };
         if tx.send(job).is_err() {
             return;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each value the command line offers for an enum option is a name the bake file's
+    /// parser takes, and together they name every variant.
+    #[test]
+    fn command_line_values_are_the_bake_file_names() {
+        fn all<T: PartialEq + std::fmt::Debug>(
+            names: &[&str],
+            parse: fn(&str) -> Option<T>,
+        ) -> Vec<T> {
+            let mut seen: Vec<T> = Vec::new();
+            for n in names {
+                let v = parse(n).unwrap_or_else(|| panic!("{n} does not parse"));
+                assert!(!seen.contains(&v), "{n} names {v:?} twice");
+                seen.push(v);
+            }
+            seen
+        }
+        let texels = all(TEXELS, Ktx2Format::parse);
+        assert_eq!(texels.len(), 5);
+        for t in texels {
+            assert!(TEXELS.contains(&t.name()));
+        }
+        assert_eq!(all(PRESETS, Preset::parse), [Preset::Bevy, Preset::Khronos]);
+        assert_eq!(
+            all(IRRADIANCE, Irradiance::parse),
+            [Irradiance::E, Irradiance::EOverPi]
+        );
+        assert_eq!(
+            all(DFG_AXES, DfgAxes::parse),
+            [DfgAxes::Endpoints, DfgAxes::Centres]
+        );
+        for v in LightsMode::value_variants() {
+            let n = v.to_possible_value().unwrap();
+            assert_eq!(LightsMode::parse(n.get_name()).unwrap(), *v);
+        }
+        for v in Container::value_variants() {
+            let n = v.to_possible_value().unwrap();
+            assert_eq!(Container::parse(n.get_name()).unwrap(), *v);
+            assert_eq!(v.name(), n.get_name());
         }
     }
 }

@@ -4,6 +4,7 @@ use super::{
     finite_f32, finite_f64, load_with_context, print_timings, save, spinner, upload_while,
     write_map, FilterOut, Global, HostClock, Input, MappingArg, Orient,
 };
+use crate::gpu::Timed;
 use crate::io::ToneMap;
 use crate::math::filter::Kernel;
 use crate::math::sh::{self, Window};
@@ -166,7 +167,10 @@ pub fn convert(g: &Global, a: &ConvertArgs) -> Result<()> {
     let opts = ConvertOptions::new(a.to.into(), a.size)
         .with_orientation(a.orient.orientation())
         .with_supersample(a.supersample);
-    let (dst, timings) = conv.run(&src, &opts)?;
+    let Timed {
+        value: dst,
+        timings,
+    } = conv.run(&src, &opts)?;
     clock.lap(RUN);
     let out = dst.download(&ctx)?;
     clock.lap("download");
@@ -190,7 +194,10 @@ pub fn sh(g: &Global, a: &ShArgs) -> Result<()> {
     let proj = ShProjector::new(&ctx, Subgroups::Auto)?;
     let (gm, ()) = upload_while(&ctx, &map, || proj.prepare(a.order, map.mapping))?;
     clock.lap(UPLOAD);
-    let (coeffs, timings) = proj.run_oriented(&gm, a.order, &a.orient.orientation())?;
+    let Timed {
+        value: coeffs,
+        timings,
+    } = proj.run_oriented(&gm, a.order, &a.orient.orientation())?;
     clock.lap(RUN);
     pb.finish_and_clear();
     let text = serde_json::to_string_pretty(&coeffs.to_json())?;
@@ -235,7 +242,10 @@ pub fn irradiance(g: &Global, a: &IrradianceArgs) -> Result<()> {
     clock.lap(UPLOAD);
     let target = a.out.target();
     let o = a.orient.orientation();
-    let (out, timings) = match a.method {
+    let Timed {
+        value: out,
+        timings,
+    } = match a.method {
         Method::Brute => {
             let pb = spinner("brute-force irradiance on the GPU");
             let r = BruteFilter::new(&ctx)?.run(&gm, &o, Kernel::Cosine, target)?;
@@ -244,7 +254,10 @@ pub fn irradiance(g: &Global, a: &IrradianceArgs) -> Result<()> {
         }
         Method::Sh => {
             let projector = projector.context("the SH projector is built for --method sh")?;
-            let (c, mut timings) = projector.run_oriented(&gm, order, &o)?;
+            let Timed {
+                value: c,
+                mut timings,
+            } = projector.run_oriented(&gm, order, &o)?;
             let dirs = crate::math::synth::fibonacci_sphere(20_000);
             let raw = sh::negativity(&sh::irradiance_coeffs(&c.coeffs), &dirs);
             if raw.fraction > 0.0 {
@@ -280,9 +293,12 @@ pub fn irradiance(g: &Global, a: &IrradianceArgs) -> Result<()> {
             }
             let irr = sh::irradiance_coeffs(&w.apply(&c.coeffs));
             let evaluator = evaluator.context("the SH evaluator is built for --method sh")?;
-            let (out, t) = evaluator.run(&irr, target)?;
+            let Timed {
+                value: out,
+                timings: t,
+            } = evaluator.run(&irr, target)?;
             timings.extend(t);
-            (out, timings)
+            Timed::new(out, timings)
         }
     };
     clock.lap(RUN);
@@ -307,7 +323,10 @@ pub fn prefilter(g: &Global, a: &PrefilterArgs) -> Result<()> {
     let o = a.orient.orientation();
     let Some(count) = a.phong_levels else {
         let n = a.phong.context("--phong or --phong-levels is required")?;
-        let (out, timings) = filter.run(&gm, &o, Kernel::Phong { n }, a.out.target())?;
+        let Timed {
+            value: out,
+            timings,
+        } = filter.run(&gm, &o, Kernel::Phong { n }, a.out.target())?;
         clock.lap(RUN);
         pb.finish_and_clear();
         write_map(&ctx, &out, &a.out.output, a.out.png)?;
@@ -321,7 +340,10 @@ pub fn prefilter(g: &Global, a: &PrefilterArgs) -> Result<()> {
         scale: a.gloss_scale,
         bias: a.gloss_bias,
     };
-    let (maps, sources, timings) = filter.run_levels(&gm, &o, &levels, a.out.target())?;
+    let Timed {
+        value: (maps, sources),
+        timings,
+    } = filter.run_levels(&gm, &o, &levels, a.out.target())?;
     clock.lap(RUN);
     pb.finish_and_clear();
     let stem = a.out.output.with_extension("");

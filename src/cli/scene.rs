@@ -1,6 +1,8 @@
 //! `envlight render`, `plan` and `demo`.
 
 use super::{context, context_while, preview, Global, HostClock};
+use crate::gpu::total_ms;
+use crate::gpu::Timed;
 use crate::io::{self, LoadOptions, ToneMap};
 use crate::passes::{ConvertOptions, Converter};
 use crate::{GpuEnvMap, Mapping};
@@ -117,7 +119,10 @@ fn demo_maps(cli: &Global, input: &Path, out: &Path, size: u32) -> Result<()> {
             size / 2
         };
         let opts = ConvertOptions::new(to, n.max(1));
-        let (dst, timings) = conv.run(&src, &opts)?;
+        let Timed {
+            value: dst,
+            timings,
+        } = conv.run(&src, &opts)?;
         let result = dst.download(&ctx)?;
         let exr = out.join(format!("sky_{}.exr", to.name()));
         let png = out.join(format!("sky_{}.png", to.name()));
@@ -137,7 +142,7 @@ fn demo_maps(cli: &Global, input: &Path, out: &Path, size: u32) -> Result<()> {
         .with_context(|| sheet.display().to_string())?;
     println!("\nPreviews: {}", tm.describe());
     for (to, exr, png, timings, dp) in &rows {
-        let ms: f64 = timings.iter().map(|t| t.ms).sum();
+        let ms: f64 = total_ms(timings);
         println!(
             "{:<16} {:>9.3} ms GPU  power {:+.3}%  {}  {}",
             to.name(),

@@ -20,7 +20,7 @@ pub use pipeline::FrameCache;
 pub(crate) use pipeline::{Bind, Pipeline};
 pub use recorder::{InFlight, Recorded, Recorder};
 pub use resources::{Buffer, Image, ImageDesc, Sampler};
-pub use timing::Timing;
+pub use timing::{total_ms, Timed, Timing};
 
 /// Number of workgroups of `size` needed to cover `n` items.
 pub(crate) fn groups(n: u32, size: u32) -> u32 {

@@ -11,7 +11,7 @@ use super::context::Context;
 use super::pipeline::{Bind, DescriptorSet, FrameCache, Pipeline};
 use super::resources::{Buffer, Image};
 use super::shaders::binding_usage;
-use super::timing::{Timestamps, Timing};
+use super::timing::{Timed, Timestamps, Timing};
 use crate::abi::PushBlock;
 use crate::error::Result;
 use ash::vk;
@@ -585,7 +585,7 @@ pub struct InFlight<R> {
 impl<R> InFlight<R> {
     /// Waits for the work; returns what the recording returned and the GPU time of every
     /// span.
-    pub fn wait(mut self) -> Result<(R, Vec<Timing>)> {
+    pub fn wait(mut self) -> Result<Timed<R>> {
         if let Some((cmd, fence)) = self.pending.take() {
             self.ctx.shared.retire(cmd, fence)?;
         }
@@ -597,7 +597,7 @@ impl<R> InFlight<R> {
             .out
             .take()
             .unwrap_or_else(|| unreachable!("set when submitted"));
-        Ok((out, timings))
+        Ok(Timed::new(out, timings))
     }
 }
 
@@ -647,7 +647,7 @@ impl Context {
         &self,
         what: &'static str,
         record: impl FnOnce(&mut Recorder) -> Result<R>,
-    ) -> Result<(R, Vec<Timing>)> {
+    ) -> Result<Timed<R>> {
         self.run_with(what, true, record)
     }
 
@@ -658,7 +658,8 @@ impl Context {
         what: &'static str,
         record: impl FnOnce(&mut Recorder) -> Result<R>,
     ) -> Result<R> {
-        self.run_with(what, false, record).map(|(r, _)| r)
+        self.run_with(what, false, record)
+            .map(|Timed { value: r, .. }| r)
     }
 
     fn run_with<R>(
@@ -666,7 +667,7 @@ impl Context {
         what: &'static str,
         timestamps: bool,
         record: impl FnOnce(&mut Recorder) -> Result<R>,
-    ) -> Result<(R, Vec<Timing>)> {
+    ) -> Result<Timed<R>> {
         let mut out = None;
         let mut recorded = None;
         self.shared.submit_and_wait(what, |cmd| {
@@ -684,6 +685,6 @@ impl Context {
             None => Vec::new(),
         };
         let out = out.unwrap_or_else(|| unreachable!("set when recording succeeded"));
-        Ok((out, timings))
+        Ok(Timed::new(out, timings))
     }
 }

@@ -16,6 +16,40 @@ pub struct Timing {
     pub ms: f64,
 }
 
+/// GPU milliseconds of `timings` together.
+pub fn total_ms(timings: &[Timing]) -> f64 {
+    timings.iter().map(|t| t.ms).sum()
+}
+
+/// What a submitted piece of work returned, with the GPU time of each span it recorded.
+#[derive(Clone, Debug)]
+pub struct Timed<T> {
+    /// What the work returned.
+    pub value: T,
+    /// The GPU time of each labelled span, in recording order.
+    pub timings: Vec<Timing>,
+}
+
+impl<T> Timed<T> {
+    /// `value`, with the time of its spans.
+    pub fn new(value: T, timings: Vec<Timing>) -> Timed<T> {
+        Timed { value, timings }
+    }
+
+    /// GPU milliseconds of every span together.
+    pub fn ms(&self) -> f64 {
+        total_ms(&self.timings)
+    }
+
+    /// The same spans with `f` applied to the value.
+    pub fn map<U>(self, f: impl FnOnce(T) -> U) -> Timed<U> {
+        Timed {
+            value: f(self.value),
+            timings: self.timings,
+        }
+    }
+}
+
 /// Spans per query pool; more spans take more pools.
 const POOL_SPANS: u32 = 64;
 

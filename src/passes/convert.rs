@@ -4,9 +4,7 @@
 use super::map::GpuEnvMap;
 use crate::abi::{area, binding, push::ConvertPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
-use crate::gpu::{
-    groups, groups_2d, mat3_rows, Bind, Context, Pipeline, Recorder, Sampler, Timing,
-};
+use crate::gpu::{groups, groups_2d, mat3_rows, Bind, Context, Pipeline, Recorder, Sampler, Timed};
 use crate::math::{Mapping, Orientation};
 use crate::passes::testing::poison::{self, PassId};
 use ash::vk;
@@ -547,17 +545,13 @@ impl Converter {
     }
 
     /// Converts `src` to `opts.to` at `opts.size`; returns the new map and the GPU time.
-    pub fn run(&self, src: &GpuEnvMap, opts: &ConvertOptions) -> Result<(GpuEnvMap, Vec<Timing>)> {
+    pub fn run(&self, src: &GpuEnvMap, opts: &ConvertOptions) -> Result<Timed<GpuEnvMap>> {
         self.run_into(src, opts, false)
     }
 
     /// As [`Converter::run`], into a map with a full MIP chain of which only level 0 is
     /// written (for [`crate::passes::mip::MipChain`] to fill).
-    pub fn run_mipped(
-        &self,
-        src: &GpuEnvMap,
-        opts: &ConvertOptions,
-    ) -> Result<(GpuEnvMap, Vec<Timing>)> {
+    pub fn run_mipped(&self, src: &GpuEnvMap, opts: &ConvertOptions) -> Result<Timed<GpuEnvMap>> {
         self.run_into(src, opts, true)
     }
 
@@ -566,7 +560,7 @@ impl Converter {
         src: &GpuEnvMap,
         opts: &ConvertOptions,
         mips: bool,
-    ) -> Result<(GpuEnvMap, Vec<Timing>)> {
+    ) -> Result<Timed<GpuEnvMap>> {
         let (w, h) = opts.to.extent_for_size(opts.size);
         let name = format!("{} {}", opts.to.name(), opts.size);
         let dst = if mips {
@@ -574,9 +568,9 @@ impl Converter {
         } else {
             GpuEnvMap::new(&self.ctx, &name, opts.to, w, h)?
         };
-        let ((), t) = self
+        Ok(self
             .ctx
-            .run("converting a map", |rec| self.record(rec, src, &dst, opts))?;
-        Ok((dst, t))
+            .run("converting a map", |rec| self.record(rec, src, &dst, opts))?
+            .map(|()| dst))
     }
 }

@@ -41,7 +41,7 @@ use crate::abi::push::{ExtractAddPush, ExtractClustersPush, ExtractPreparePush};
 use crate::abi::{binding, push::ExtractPush, ShaderId, WORKGROUP_1D, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{
-    groups, groups_2d, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage,
+    groups, groups_2d, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timed, Usage,
 };
 use crate::math::envmap::{luminance, EnvMap};
 use crate::math::lights::{ExtractOptions, LightKernel};
@@ -646,17 +646,13 @@ impl Extractor {
 
     /// Uploads `map`, projects its band 0, extracts by `opts` and reads everything
     /// back, waiting (for tests and one-off jobs).
-    pub fn run(&self, map: &EnvMap, opts: &ExtractOptions) -> Result<(Extracted, Vec<Timing>)> {
+    pub fn run(&self, map: &EnvMap, opts: &ExtractOptions) -> Result<Timed<Extracted>> {
         let gpu = GpuEnvMap::upload(&self.ctx, map)?;
         self.run_on(&gpu, opts)
     }
 
     /// [`Extractor::run`] on a map already on the GPU.
-    pub fn run_on(
-        &self,
-        gpu: &GpuEnvMap,
-        opts: &ExtractOptions,
-    ) -> Result<(Extracted, Vec<Timing>)> {
+    pub fn run_on(&self, gpu: &GpuEnvMap, opts: &ExtractOptions) -> Result<Timed<Extracted>> {
         self.run_then(gpu, opts, |_, _| Ok(()))
     }
 
@@ -679,7 +675,7 @@ impl Extractor {
             vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuToCpu,
         )?;
-        let (ex, _) = self.run_then(&gpu, opts, |rec, out| {
+        let Timed { value: ex, .. } = self.run_then(&gpu, opts, |rec, out| {
             self.record_prepare(rec, out, file_to_world, lights)?;
             rec.copy_buffer(lights.buffer(), &host, bytes);
             rec.use_buffer(&host, Usage::HostRead);
@@ -694,7 +690,7 @@ impl Extractor {
         gpu: &GpuEnvMap,
         opts: &ExtractOptions,
         then: impl FnOnce(&mut Recorder, &GpuExtraction) -> Result<()>,
-    ) -> Result<(Extracted, Vec<Timing>)> {
+    ) -> Result<Timed<Extracted>> {
         let max = u32::try_from(opts.max_texels)
             .map_err(|_| Error::Invalid(format!("{} light texels", opts.max_texels)))?;
         let out = GpuExtraction::with_fill(
@@ -725,7 +721,10 @@ impl Extractor {
         };
         let header = host("extraction header", words as u64 * 4)?;
         let records = host("extraction records", out.lights.size())?;
-        let ((residual, ()), t) = self.ctx.run("extracting lights", |rec| {
+        let Timed {
+            value: (residual, ()),
+            timings: t,
+        } = self.ctx.run("extracting lights", |rec| {
             projector.record_into(rec, gpu, 0, &Orientation::default(), &sh)?;
             self.record(rec, gpu, &sh, opts.ratio, &out)?;
             rec.copy_buffer(&out.state, &header, words as u64 * 4);
@@ -760,7 +759,7 @@ impl Extractor {
             gpu.height,
             texels.into_iter().map(|t| [t[0], t[1], t[2]]).collect(),
         );
-        Ok((
+        Ok(Timed::new(
             Extracted {
                 stats,
                 lights,

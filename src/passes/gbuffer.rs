@@ -5,7 +5,7 @@
 use super::map::GpuEnvMap;
 use crate::abi::{binding, brdf::technique, object, push::GBufferPush, ShaderId};
 use crate::error::Result;
-use crate::gpu::{Bind, Buffer, Context, ImageDesc, Pipeline, Recorder, Timing};
+use crate::gpu::{Bind, Buffer, Context, ImageDesc, Pipeline, Recorder, Timed};
 use crate::math::brdf::Brdf;
 use crate::math::camera::{Camera, Projection, Shape};
 use crate::math::Mapping;
@@ -369,12 +369,12 @@ impl GBufferPass {
     }
 
     /// Casts the camera's rays against `objects` into a new G-buffer and waits.
-    pub fn run(&self, camera: &Camera, objects: &[ObjectRecord]) -> Result<(GBuffer, Vec<Timing>)> {
+    pub fn run(&self, camera: &Camera, objects: &[ObjectRecord]) -> Result<Timed<GBuffer>> {
         let g = GBuffer::new(&self.ctx, camera.width, camera.height, objects)?;
-        let ((), t) = self
+        Ok(self
             .ctx
-            .run("drawing the G-buffer", |rec| self.record(rec, camera, &g))?;
-        Ok((g, t))
+            .run("drawing the G-buffer", |rec| self.record(rec, camera, &g))?
+            .map(|()| g))
     }
 }
 

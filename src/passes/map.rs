@@ -3,7 +3,7 @@
 //! the host.
 
 use crate::error::{Error, Result};
-use crate::gpu::{Buffer, Context, Image, ImageDesc, Recorder, Usage};
+use crate::gpu::{Buffer, Context, Image, ImageDesc, Recorder, Timed, Usage};
 use crate::math::envmap::EnvMap;
 use crate::math::Mapping;
 use crate::passes::testing::poison::{self, PassId};
@@ -258,7 +258,8 @@ impl GpuEnvMap {
 
     /// Reads one MIP level back with its alpha channel, layer after layer, row after row.
     pub fn download_level(&self, ctx: &Context, level: u32) -> Result<Vec<[f32; 4]>> {
-        let (r, _) = ctx.run("downloading a map", |rec| self.record_download(rec, level))?;
+        let Timed { value: r, .. } =
+            ctx.run("downloading a map", |rec| self.record_download(rec, level))?;
         Ok(r.read())
     }
 }

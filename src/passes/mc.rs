@@ -7,9 +7,7 @@ use super::map::GpuEnvMap;
 use super::{ConvertOptions, Converter};
 use crate::abi::{binding, push::McPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
-use crate::gpu::{
-    groups_2d, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing,
-};
+use crate::gpu::{groups_2d, mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timed};
 use crate::math::envmap::luminance;
 pub use crate::math::envsample::EnvSampler;
 use crate::math::{Mapping, Orientation};
@@ -54,17 +52,20 @@ impl McEnv {
         map: &EnvMap,
         gpu: &GpuEnvMap,
         orientation: &Orientation,
-    ) -> Result<(McEnv, Vec<Timing>)> {
+    ) -> Result<Timed<McEnv>> {
         if map.mapping == Mapping::LatLong {
-            return Ok((McEnv::new(ctx, map, orientation)?, Vec::new()));
+            return Ok(Timed::new(McEnv::new(ctx, map, orientation)?, Vec::new()));
         }
         let n = map.width as f64 * map.height as f64 * map.layers() as f64;
         let width = (((2.0 * n).sqrt() as u32).max(8) / 2 * 2).min(8192);
-        let (ll, t) = converter.run(
+        let Timed {
+            value: ll,
+            timings: t,
+        } = converter.run(
             gpu,
             &ConvertOptions::new(Mapping::LatLong, width).with_orientation(*orientation),
         )?;
-        Ok((
+        Ok(Timed::new(
             McEnv::new(ctx, &ll.download(ctx)?, &Orientation::default())?,
             t,
         ))
@@ -268,12 +269,7 @@ impl MonteCarlo {
     /// Accumulates samples for every pixel of `gbuf` whose material asks for MC, until
     /// `opts.samples` or `opts.target_error`, submitting a batch at a time (an error target
     /// needs the estimate read back between batches). Timings are labelled "mc frame k".
-    pub fn run(
-        &self,
-        gbuf: &GBuffer,
-        env: &McEnv,
-        opts: &McOptions,
-    ) -> Result<(McResult, Vec<Timing>)> {
+    pub fn run(&self, gbuf: &GBuffer, env: &McEnv, opts: &McOptions) -> Result<Timed<McResult>> {
         if opts.samples == 0 {
             return Err(Error::Invalid(
                 "Monte Carlo needs at least one sample".into(),
@@ -299,9 +295,12 @@ impl MonteCarlo {
         };
         while done < opts.samples {
             let this_batch = batch.min(opts.samples - done);
-            let ((), t) = self.ctx.run("Monte Carlo frames", |rec| {
-                self.record(rec, gbuf, env, opts, &accum, done, this_batch, frame)
-            })?;
+            let t = self
+                .ctx
+                .run("Monte Carlo frames", |rec| {
+                    self.record(rec, gbuf, env, opts, &accum, done, this_batch, frame)
+                })?
+                .timings;
             frame += this_batch.div_ceil(per_frame);
             done += this_batch;
             timings.extend(t);
@@ -313,7 +312,7 @@ impl MonteCarlo {
                 }
             }
         }
-        Ok((
+        Ok(Timed::new(
             McResult {
                 accum,
                 samples: done,

@@ -81,6 +81,6 @@ impl MipChain {
         Ok(self
             .ctx
             .run("building the MIP chain", |rec| self.record(rec, dp))?
-            .1)
+            .timings)
     }
 }

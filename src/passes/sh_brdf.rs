@@ -6,7 +6,7 @@
 use crate::abi::{binding, push::ShBrdfPush, push::ShRotatePush, sh_brdf, ShaderId};
 use crate::abi::{SH_MAX_LMAX, WORKGROUP_1D};
 use crate::error::{Error, Result};
-use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Timing, Usage};
+use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Timed, Usage};
 use crate::math::brdf::Brdf;
 use crate::math::sh::count;
 pub use crate::math::sh_brdf::ViewGrid;
@@ -133,7 +133,7 @@ impl ShBrdfProjector {
     }
 
     /// Computes one table and reads it back.
-    pub fn run(&self, brdf: &Brdf, lmax: u32, grid: ViewGrid) -> Result<(Vec<f32>, Vec<Timing>)> {
+    pub fn run(&self, brdf: &Brdf, lmax: u32, grid: ViewGrid) -> Result<Timed<Vec<f32>>> {
         let n = Self::table_floats(lmax, grid);
         let out = Buffer::new(
             &self.ctx,
@@ -142,12 +142,15 @@ impl ShBrdfProjector {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::GpuToCpu,
         )?;
-        let ((), t) = self.ctx.run("projecting a BRDF onto SH", |rec| {
-            self.record(rec, brdf, lmax, grid, &out, 0)?;
-            rec.use_buffer(&out, Usage::HostRead);
-            Ok(())
-        })?;
-        Ok((out.read(n), t))
+        let t = self
+            .ctx
+            .run("projecting a BRDF onto SH", |rec| {
+                self.record(rec, brdf, lmax, grid, &out, 0)?;
+                rec.use_buffer(&out, Usage::HostRead);
+                Ok(())
+            })?
+            .timings;
+        Ok(Timed::new(out.read(n), t))
     }
 }
 
@@ -175,7 +178,7 @@ impl ShRotator {
         method: Rotation,
         lmax: u32,
         items: &[(DMat3, Vec<f64>)],
-    ) -> Result<(Vec<Vec<f32>>, Vec<Timing>)> {
+    ) -> Result<Timed<Vec<Vec<f32>>>> {
         let nc = count(lmax);
         assert!(lmax <= SH_MAX_LMAX && !items.is_empty());
         let mut data: Vec<f32> =
@@ -202,23 +205,29 @@ impl ShRotator {
             method: method.id(),
             pad: 0,
         };
-        let ((), t) = self.ctx.run("rotating SH vectors", |rec| {
-            rec.span("sh rotate", |rec| {
-                rec.dispatch(
-                    &self.pipeline,
-                    &[
-                        (binding::SH_ROT_IN, Bind::Buffer(&input)),
-                        (binding::SH_ROT_OUT, Bind::Buffer(&out)),
-                        (binding::SH_ROT_X90, Bind::Buffer(&self.x90)),
-                    ],
-                    &push,
-                    [groups(items.len() as u32, WORKGROUP_1D), 1, 1],
-                )
-            })?;
-            rec.use_buffer(&out, Usage::HostRead);
-            Ok(())
-        })?;
+        let t = self
+            .ctx
+            .run("rotating SH vectors", |rec| {
+                rec.span("sh rotate", |rec| {
+                    rec.dispatch(
+                        &self.pipeline,
+                        &[
+                            (binding::SH_ROT_IN, Bind::Buffer(&input)),
+                            (binding::SH_ROT_OUT, Bind::Buffer(&out)),
+                            (binding::SH_ROT_X90, Bind::Buffer(&self.x90)),
+                        ],
+                        &push,
+                        [groups(items.len() as u32, WORKGROUP_1D), 1, 1],
+                    )
+                })?;
+                rec.use_buffer(&out, Usage::HostRead);
+                Ok(())
+            })?
+            .timings;
         let flat: Vec<f32> = out.read(items.len() * nc);
-        Ok((flat.chunks_exact(nc).map(<[f32]>::to_vec).collect(), t))
+        Ok(Timed::new(
+            flat.chunks_exact(nc).map(<[f32]>::to_vec).collect(),
+            t,
+        ))
     }
 }

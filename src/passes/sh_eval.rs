@@ -5,7 +5,7 @@ use super::brute::FilterTarget;
 use super::map::GpuEnvMap;
 use crate::abi::{binding, push::ShEvalPush, ShaderId, SH_MAX_LMAX, WORKGROUP_2D};
 use crate::error::{Error, Result};
-use crate::gpu::{groups_2d, Bind, Buffer, Context, Pipeline, Recorder, Timing};
+use crate::gpu::{groups_2d, Bind, Buffer, Context, Pipeline, Recorder, Timed};
 use crate::math::sh;
 use crate::passes::testing::poison::{self, PassId};
 use ash::vk;
@@ -134,16 +134,14 @@ impl ShEvaluator {
     }
 
     /// Evaluates into a new `target` map and waits (see [`ShEvaluator::record`]).
-    pub fn run(
-        &self,
-        coeffs: &[[f64; 3]],
-        target: FilterTarget,
-    ) -> Result<(GpuEnvMap, Vec<Timing>)> {
+    pub fn run(&self, coeffs: &[[f64; 3]], target: FilterTarget) -> Result<Timed<GpuEnvMap>> {
         let (w, h) = target.extent();
         let dst = GpuEnvMap::new(&self.ctx, "sh irradiance", target.to, w, h)?;
-        let ((), t) = self.ctx.run("evaluating SH irradiance", |rec| {
-            self.record(rec, coeffs, &dst)
-        })?;
-        Ok((dst, t))
+        Ok(self
+            .ctx
+            .run("evaluating SH irradiance", |rec| {
+                self.record(rec, coeffs, &dst)
+            })?
+            .map(|()| dst))
     }
 }

@@ -7,7 +7,7 @@
 
 use crate::abi::{binding, push::ShPackPush, ShaderId, WORKGROUP_1D};
 use crate::error::Result;
-use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Timing, Usage};
+use crate::gpu::{groups, Bind, Buffer, Context, Pipeline, Recorder, Timed, Usage};
 pub use crate::math::sh::{irradiance_entries, windowed_entries, PackEntry, Window};
 use crate::passes::testing::poison::{self, PassId};
 use ash::vk;
@@ -107,7 +107,7 @@ impl ShPacker {
         radiance: &[[f64; 3]],
         minus: &[[f64; 3]],
         entries: &[PackEntry],
-    ) -> Result<(Vec<[f32; 3]>, Vec<Timing>)> {
+    ) -> Result<Timed<Vec<[f32; 3]>>> {
         let flat: Vec<f32> = radiance.iter().flatten().map(|&v| v as f32).collect();
         let radiance = Buffer::storage(&self.ctx, "sh pack radiance", &flat)?;
         let quads: Vec<[f32; 4]> = minus
@@ -124,12 +124,18 @@ impl ShPacker {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::GpuToCpu,
         )?;
-        let ((), t) = self.ctx.run("packing SH coefficients", |rec| {
-            self.record(rec, &radiance, entries, minus.as_ref(), &out)?;
-            rec.use_buffer(&out, Usage::HostRead);
-            Ok(())
-        })?;
+        let t = self
+            .ctx
+            .run("packing SH coefficients", |rec| {
+                self.record(rec, &radiance, entries, minus.as_ref(), &out)?;
+                rec.use_buffer(&out, Usage::HostRead);
+                Ok(())
+            })?
+            .timings;
         let packed: Vec<[f32; 4]> = out.read(entries.len());
-        Ok((packed.into_iter().map(|q| [q[0], q[1], q[2]]).collect(), t))
+        Ok(Timed::new(
+            packed.into_iter().map(|q| [q[0], q[1], q[2]]).collect(),
+            t,
+        ))
     }
 }

@@ -12,7 +12,7 @@ use crate::abi::{
     ShaderId, SH_MAX_LMAX, SH_RUN, SH_WORKGROUP,
 };
 use crate::error::{Error, Result};
-use crate::gpu::{mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
+use crate::gpu::{mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timed, Usage};
 use crate::math::sh;
 use crate::passes::testing::poison::{self, PassId};
 use crate::{Mapping, Orientation};
@@ -464,7 +464,7 @@ impl ShProjector {
     }
 
     /// Projects `map` up to band `lmax`; returns the coefficients and the GPU time.
-    pub fn run(&self, map: &GpuEnvMap, lmax: u32) -> Result<(ShCoefficients, Vec<Timing>)> {
+    pub fn run(&self, map: &GpuEnvMap, lmax: u32) -> Result<Timed<ShCoefficients>> {
         self.run_oriented(map, lmax, &Orientation::default())
     }
 
@@ -474,11 +474,14 @@ impl ShProjector {
         map: &GpuEnvMap,
         lmax: u32,
         orientation: &Orientation,
-    ) -> Result<(ShCoefficients, Vec<Timing>)> {
-        let (readback, timings) = self.ctx.run("projecting onto SH", |rec| {
+    ) -> Result<Timed<ShCoefficients>> {
+        let Timed {
+            value: readback,
+            timings,
+        } = self.ctx.run("projecting onto SH", |rec| {
             self.record(rec, map, lmax, orientation)
         })?;
-        Ok((readback.read(), timings))
+        Ok(Timed::new(readback.read(), timings))
     }
 }
 

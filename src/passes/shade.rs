@@ -10,7 +10,7 @@ pub use super::sh_brdf::Rotation;
 pub use super::sh_project::Subgroups;
 use crate::abi::{binding, push::ShadePush, ShadeVariant, ShaderId};
 use crate::error::Result;
-use crate::gpu::{mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage};
+use crate::gpu::{mat3_rows, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timed, Usage};
 use crate::math::{Mapping, Orientation};
 use crate::passes::testing::poison::{self, PassId};
 use std::sync::{Arc, Mutex};
@@ -401,16 +401,12 @@ impl Shade {
 
     /// Shades `gbuf` into a new frame and waits; returns the frame (linear RGB) and its GPU
     /// time ("shade").
-    pub fn run(
-        &self,
-        gbuf: &GBuffer,
-        inputs: &ShadeInputs<'_>,
-    ) -> Result<(GpuEnvMap, Vec<Timing>)> {
+    pub fn run(&self, gbuf: &GBuffer, inputs: &ShadeInputs<'_>) -> Result<Timed<GpuEnvMap>> {
         let frame = target(&self.ctx, "shaded frame", gbuf.width, gbuf.height)?;
-        let ((), t) = self
+        Ok(self
             .ctx
-            .run("shading", |rec| self.record(rec, gbuf, inputs, &frame))?;
-        Ok((frame, t))
+            .run("shading", |rec| self.record(rec, gbuf, inputs, &frame))?
+            .map(|()| frame))
     }
 }
 

@@ -8,7 +8,7 @@ use crate::abi::push::{DfgPush, PrefilterGgxPush};
 use crate::abi::{binding, sh_brdf, split_sum, ShaderId, WORKGROUP_1D, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{
-    groups, groups_2d, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timing, Usage,
+    groups, groups_2d, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timed, Usage,
 };
 pub use crate::math::split_sum::DfgAxes;
 use crate::math::split_sum::{level_alpha, level_size};
@@ -195,7 +195,7 @@ impl SplitSum {
     }
 
     /// Computes one DFG table (at endpoints) and reads it back, with its GPU time.
-    pub fn run_dfg(&self, size: u32, correlated: bool) -> Result<(Vec<[f32; 2]>, Vec<Timing>)> {
+    pub fn run_dfg(&self, size: u32, correlated: bool) -> Result<Timed<Vec<[f32; 2]>>> {
         self.run_dfg_at(size, correlated, DfgAxes::Endpoints)
     }
 
@@ -205,7 +205,7 @@ impl SplitSum {
         size: u32,
         correlated: bool,
         axes: DfgAxes,
-    ) -> Result<(Vec<[f32; 2]>, Vec<Timing>)> {
+    ) -> Result<Timed<Vec<[f32; 2]>>> {
         let n = Self::dfg_floats(size);
         let out = Buffer::new(
             &self.ctx,
@@ -214,13 +214,19 @@ impl SplitSum {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::GpuToCpu,
         )?;
-        let ((), t) = self.ctx.run("computing a DFG table", |rec| {
-            self.record_dfg_at(rec, size, correlated, axes, &out, 0)?;
-            rec.use_buffer(&out, Usage::HostRead);
-            Ok(())
-        })?;
+        let t = self
+            .ctx
+            .run("computing a DFG table", |rec| {
+                self.record_dfg_at(rec, size, correlated, axes, &out, 0)?;
+                rec.use_buffer(&out, Usage::HostRead);
+                Ok(())
+            })?
+            .timings;
         let flat: Vec<f32> = out.read(n);
-        Ok((flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect(), t))
+        Ok(Timed::new(
+            flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect(),
+            t,
+        ))
     }
 
     /// A dual paraboloid `size` a side with exactly `levels` MIP levels, one roughness each

@@ -17,7 +17,7 @@ pub use plan::{
 pub use resident::{Resident, CHAIN_GPU_MAX, DIFFUSE_GPU_MAX};
 
 use crate::error::{Error, Result};
-use crate::gpu::{Context, Timing};
+use crate::gpu::{total_ms, Context, Timed, Timing};
 use crate::math::envmap::EnvMap;
 use crate::math::Orientation;
 use crate::passes::gbuffer::GBuffer;
@@ -45,7 +45,7 @@ pub struct PassRecord {
 impl PassRecord {
     /// Total milliseconds.
     pub fn ms(&self) -> f64 {
-        self.timings.iter().map(|t| t.ms).sum()
+        total_ms(&self.timings)
     }
 }
 
@@ -279,7 +279,10 @@ impl Renderer {
                 shade: built,
                 convert,
             } = builds;
-            let (readback, t) = job.ctx.run("rendering", |rec| {
+            let Timed {
+                value: readback,
+                timings: t,
+            } = job.ctx.run("rendering", |rec| {
                 env_gpu.record_upload(rec, env)?;
                 inputs::record(
                     rec,
@@ -299,19 +302,22 @@ impl Renderer {
             let frame = shading::frame_of(&readback, &gbuf)?;
             return Ok(self.rendered(job, &inputs, frame, records, None, &lit));
         }
-        let ((), t) = job.ctx.run("rendering: inputs", |rec| {
-            env_gpu.record_upload(rec, env)?;
-            inputs::record(
-                rec,
-                &mut marks,
-                job,
-                &passes,
-                ins,
-                &env_gpu,
-                &Work::ALL,
-                builds.convert,
-            )
-        })?;
+        let t = job
+            .ctx
+            .run("rendering: inputs", |rec| {
+                env_gpu.record_upload(rec, env)?;
+                inputs::record(
+                    rec,
+                    &mut marks,
+                    job,
+                    &passes,
+                    ins,
+                    &env_gpu,
+                    &Work::ALL,
+                    builds.convert,
+                )
+            })?
+            .timings;
         marks.split(&t, &mut records);
         // Monte Carlo reads the host between its batches (an error target, a sampling table).
         let mc_pass = pass(&self.mc, || MonteCarlo::new(job.ctx))?;

@@ -16,7 +16,7 @@ use super::records::{gpu_objects, Marks};
 use super::shading::{self, Shading};
 use super::{Job, Rendered, Renderer};
 use crate::error::{Error, Result};
-use crate::gpu::{Buffer, FrameCache, Recorder};
+use crate::gpu::{Buffer, FrameCache, Recorder, Timed};
 use crate::math::lights::{cells_for_rho, largest_rho, resolves_rho, CLUSTER_GRID};
 use crate::math::Mapping;
 use crate::passes::gbuffer::{target, GBuffer};
@@ -294,7 +294,10 @@ impl Renderer {
     /// resident path with the host one on any scene it can render.
     pub fn render_resident(&self, r: &Resident, env: &GpuEnvMap) -> Result<Rendered> {
         let mut marks = Marks(Vec::new());
-        let (readback, t) = self.ctx.run("rendering (resident)", |rec| {
+        let Timed {
+            value: readback,
+            timings: t,
+        } = self.ctx.run("rendering (resident)", |rec| {
             self.record_frame(rec, r, env, &mut marks)?;
             r.frame.record_download(rec, 0)
         })?;

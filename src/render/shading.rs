@@ -7,8 +7,8 @@ use super::plan::PassKind;
 use super::records::Marks;
 use super::{Job, PassRecord};
 use crate::error::{Error, Result};
+use crate::gpu::{Recorder, Timed};
 
-use crate::gpu::Recorder;
 use crate::math::envmap::EnvMap;
 use crate::math::{sh, Mapping};
 use crate::passes::gbuffer::{target, GBuffer};
@@ -68,7 +68,10 @@ pub(super) fn monte_carlo(
     let Some((samples, error)) = job.plan.mc else {
         return Ok(None);
     };
-    let (mc_env, t) = McEnv::for_map(job.ctx, converter, env, env_gpu, &job.orientation)?;
+    let Timed {
+        value: mc_env,
+        timings: t,
+    } = McEnv::for_map(job.ctx, converter, env, env_gpu, &job.orientation)?;
     if !t.is_empty() {
         records.push(PassRecord {
             kind: PassKind::LatLong,
@@ -76,7 +79,10 @@ pub(super) fn monte_carlo(
         });
     }
     let mc = &job.scene.mc;
-    let (res, t) = mc_pass.run(
+    let Timed {
+        value: res,
+        timings: t,
+    } = mc_pass.run(
         gbuf,
         &mc_env,
         &McOptions {
@@ -197,7 +203,10 @@ pub(super) fn shade(
     let frame = frame_target(job, gbuf)?;
     shade_built()?;
     let mut marks = Marks(Vec::new());
-    let (readback, t) = job.ctx.run("rendering: shading", |rec| {
+    let Timed {
+        value: readback,
+        timings: t,
+    } = job.ctx.run("rendering: shading", |rec| {
         record_draw(rec, &mut marks, shade, gbuf, &draw, &frame)?;
         frame.record_download(rec, 0)
     })?;

@@ -3,7 +3,7 @@
 #![allow(dead_code, unused_imports)]
 
 use crate::common::compare::{max_of, min_of, rel_err, Errors};
-use envlight::gpu::Context;
+use envlight::gpu::{Context, Timed};
 use envlight::math::filter::{self, at_centres, Kernel};
 use envlight::math::synth::{smooth_env, Sky};
 use envlight::math::{Mapping, Orientation};
@@ -24,7 +24,10 @@ pub fn brute_gpu(
     target: FilterTarget,
 ) -> EnvMap {
     let g = GpuEnvMap::upload(ctx, map).unwrap();
-    let (out, t) = pass
+    let Timed {
+        value: out,
+        timings: t,
+    } = pass
         .run(&g, &Orientation::default(), kernel, target)
         .unwrap();
     let spans: Vec<&str> = t.iter().map(|t| t.label.as_str()).collect();

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use crate::common::compare::Errors;
-use envlight::gpu::Context;
+use envlight::gpu::{Context, Timed};
 use envlight::math::synth::smooth_env;
 use envlight::math::Mapping;
 use envlight::passes::{ConvertOptions, Converter};
@@ -47,7 +47,10 @@ pub fn convert(
     o: Orientation,
 ) -> EnvMap {
     let g = GpuEnvMap::upload(ctx, src).unwrap();
-    let (out, t) = conv
+    let Timed {
+        value: out,
+        timings: t,
+    } = conv
         .run(&g, &ConvertOptions::new(to, size).with_orientation(o))
         .unwrap();
     assert!(t.iter().all(|t| t.ms >= 0.0 && t.ms.is_finite()));
@@ -142,7 +145,7 @@ fn check_planned(ctx: &Context, conv: &Converter, src: &EnvMap, opts: &ConvertOp
     let gpu = conv
         .run_planned(&g, &plan)
         .unwrap()
-        .0
+        .value
         .download(ctx)
         .unwrap();
     let w2f = opts.orientation.world_to_file();

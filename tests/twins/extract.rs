@@ -4,7 +4,7 @@
 #![allow(dead_code, unused_imports)]
 
 use crate::common::compare::Errors;
-use envlight::gpu::Context;
+use envlight::gpu::{Context, Timed};
 use envlight::math::envmap::luminance;
 use envlight::math::lights::{extract, light_sum_local, ExtractOptions, LightKernel};
 use envlight::math::split_sum::chain_norm;
@@ -74,7 +74,10 @@ pub fn power(map: &EnvMap) -> f64 {
 /// texels (but for those within [`NEAR`] of the threshold), each light's excess, direction and
 /// solid angle, every residual texel, and power conserved. Returns the worst error.
 pub fn compare(ex: &Extractor, map: &EnvMap, opts: &ExtractOptions) -> (Extracted, f64) {
-    let (got, t) = ex.run(map, opts).unwrap();
+    let Timed {
+        value: got,
+        timings: t,
+    } = ex.run(map, opts).unwrap();
     assert!(t.iter().any(|t| t.label == "extract lights"));
     let want = extract(map, opts);
     let thr = want.threshold;
@@ -225,7 +228,10 @@ pub fn compare_add(
     .unwrap();
     let cube = SplitSum::cube_chain(ctx, 16, 2).unwrap();
     let norm = chain_norm(alpha);
-    let (levels, t) = ctx
+    let Timed {
+        value: levels,
+        timings: t,
+    } = ctx
         .run("adding extracted lights", |rec| {
             proj.record_into(rec, &gpu, 0, &Orientation::default(), &sh)?;
             ex.record(rec, &gpu, &sh, opts.ratio, &out)?;
@@ -376,7 +382,7 @@ pub fn check_fill(ctx: &Context) {
         assert!(two.stats.members > two.stats.candidates, "the set grew");
         // Room for ring 0 and ring 1's members: where every texel is its own source, ring 2
         // does not fit.
-        let (one, _) = ex.run(&map, &opts(8192, 1)).unwrap();
+        let Timed { value: one, .. } = ex.run(&map, &opts(8192, 1)).unwrap();
         let (first, _) = compare(&ex, &map, &opts(one.stats.members as usize, 2));
         let (none, _) = compare(&ex, &map, &opts(two.stats.candidates as usize, 2));
         grown.push((
@@ -417,7 +423,7 @@ pub fn check_fill(ctx: &Context) {
     assert!(readers > 0, "rim positions among the lights");
     // Room for the members of ring 1 but not for their rim records: the host's rule grows
     // by fewer rings than the members alone would allow.
-    let (one, _) = ex.run(&rim, &opts(8192, 1)).unwrap();
+    let Timed { value: one, .. } = ex.run(&rim, &opts(8192, 1)).unwrap();
     let (tight, _) = compare(&ex, &rim, &opts(one.stats.members as usize, 2));
     eprintln!(
         "angular rim: {readers} of {} lights read another texel; room for ring 1's members: \

@@ -3,7 +3,7 @@
 #![allow(dead_code, unused_imports)]
 
 use crate::common::compare::Errors;
-use envlight::gpu::Context;
+use envlight::gpu::{Context, Timed};
 use envlight::math::camera::{trace, Camera, Projection, Shape};
 use envlight::passes::gbuffer::{GBufferPass, Object};
 use glam::DVec3;
@@ -80,7 +80,10 @@ pub fn check(ctx: &Context) {
     let records: Vec<_> = objects.iter().map(|o| o.gpu(2)).collect();
     let mut all_misses = 0;
     for (c, cam) in cameras().iter().enumerate() {
-        let (g, t) = pass.run(cam, &records).unwrap();
+        let Timed {
+            value: g,
+            timings: t,
+        } = pass.run(cam, &records).unwrap();
         assert_eq!(t[0].label, "gbuffer");
         let normal = g.normal.download_level(ctx, 0).unwrap();
         let position = g.position.download_level(ctx, 0).unwrap();

@@ -3,7 +3,7 @@
 #![allow(dead_code, unused_imports)]
 
 use crate::common::compare::{max_of, Errors};
-use envlight::gpu::Context;
+use envlight::gpu::{Context, Timed};
 use envlight::math::envmap::luminance;
 use envlight::math::exact::ExactFilter;
 use envlight::math::light_tree::LightTree;
@@ -152,7 +152,7 @@ fn check_level(
         max_of((0..6 * 256).map(|t| luminance(light_sum(prepared, dir(16, t), kernel))));
     let grey = (background * brute_top / norm) as f32;
     let cube = SplitSum::cube_chain(ctx, 16, 2).unwrap();
-    let (levels, _) = ctx
+    let Timed { value: levels, .. } = ctx
         .run("lights test", |rec| {
             rec.clear(&cube.image, [grey, grey, grey, 0.0]);
             pass.record(rec, gpu, kernel, &cube, 0)?;

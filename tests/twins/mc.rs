@@ -4,7 +4,7 @@
 
 use crate::common::compare::{finite, Errors};
 use crate::common::scenes::{fis, object, scene, sphere_camera, unit_sphere};
-use envlight::gpu::Context;
+use envlight::gpu::{Context, Timed};
 use envlight::math::brdf::Brdf;
 use envlight::math::camera::{trace, Camera, Projection, Shape};
 use envlight::math::envmap::luminance;
@@ -87,9 +87,12 @@ pub fn check(ctx: &Context) {
         height: 10,
     };
     let records: Vec<_> = objs.iter().map(|o| o.record(0)).collect();
-    let (gbuf, _) = GBufferPass::new(ctx).unwrap().run(&cam, &records).unwrap();
+    let Timed { value: gbuf, .. } = GBufferPass::new(ctx).unwrap().run(&cam, &records).unwrap();
     let mc_env = McEnv::new(ctx, &env, &orientation).unwrap();
-    let (res, t) = MonteCarlo::new(ctx)
+    let Timed {
+        value: res,
+        timings: t,
+    } = MonteCarlo::new(ctx)
         .unwrap()
         .run(&gbuf, &mc_env, &{
             let mut o = McOptions::new(512);

@@ -4,7 +4,7 @@
 
 use crate::common::compare::{abs_err, max_abs, max_of, Errors};
 use crate::common::scenes::{object, scene, sphere_camera, sphere_pixels, unit_sphere};
-use envlight::gpu::Context;
+use envlight::gpu::{total_ms, Context, Timed};
 use envlight::math::brdf::{local_view, Brdf, Frame};
 use envlight::math::sh::{self, count};
 use envlight::math::sh_brdf::{self, ViewGrid, DEFAULT_GRID};
@@ -54,7 +54,10 @@ pub fn check(ctx: &Context) {
     let grid = ViewGrid { size: 6 };
     for b in brdfs() {
         for lmax in [2, 8] {
-            let (gpu, t) = pass.run(&b, lmax, grid).unwrap();
+            let Timed {
+                value: gpu,
+                timings: t,
+            } = pass.run(&b, lmax, grid).unwrap();
             let cpu = sh_brdf::table(&b, lmax, grid);
             let nc = count(lmax);
             let scale = max_abs(cpu.iter().step_by(nc).copied());
@@ -68,7 +71,7 @@ pub fn check(ctx: &Context) {
             }
             assert_eq!(all.count(), cpu.len());
             let (worst, inner) = (all.worst(), inner.worst());
-            let ms: f64 = t.iter().map(|t| t.ms).sum();
+            let ms: f64 = total_ms(&t);
             eprintln!(
                 "{b:?} l = {lmax}: worst {worst:.1e} (views above 3°: {inner:.1e}), {ms:.1} ms for 36 views"
             );

@@ -3,7 +3,7 @@
 #![allow(dead_code, unused_imports)]
 
 use crate::common::compare::{abs_err, max_of};
-use envlight::gpu::Context;
+use envlight::gpu::{Context, Timed};
 use envlight::math::filter::{self, at_centres, Kernel};
 use envlight::math::sh::{self, Window};
 use envlight::math::synth::{fibonacci_sphere, smooth_env, Sky};
@@ -35,7 +35,7 @@ pub fn check(ctx: &Context) {
             let scale = irr[0][2].abs();
             for to in Mapping::ALL {
                 let target = FilterTarget { to, size: 8 };
-                let (out, _) = eval.run(&irr, target).unwrap();
+                let Timed { value: out, .. } = eval.run(&irr, target).unwrap();
                 let out = out.download(ctx).unwrap();
                 let (w, h) = target.extent();
                 let cpu = at_centres(to, w, h, |d| sh::eval(&irr, d).map(|v| v.max(0.0)));

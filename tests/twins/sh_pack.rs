@@ -3,7 +3,7 @@
 #![allow(dead_code, unused_imports)]
 
 use crate::common::compare::{max_abs, Errors};
-use envlight::gpu::Context;
+use envlight::gpu::{Context, Timed};
 use envlight::math::sh;
 use envlight::math::synth::{smooth_env, Sky};
 use envlight::math::Mapping;
@@ -29,7 +29,10 @@ pub fn check(ctx: &Context) {
     entries.extend(irradiance_entries(8, false));
     entries.extend(windowed_entries(8, Window::Hanning { width: 6.0 }));
     let packer = ShPacker::new(ctx).unwrap();
-    let (got, t) = packer.run(&radiance, &minus, &entries).unwrap();
+    let Timed {
+        value: got,
+        timings: t,
+    } = packer.run(&radiance, &minus, &entries).unwrap();
     assert!(t.iter().any(|t| t.label == "sh pack"));
     let want = sh::pack(&radiance, &minus, &entries);
     assert_eq!(got.len(), want.len());

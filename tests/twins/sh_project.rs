@@ -3,7 +3,7 @@
 #![allow(dead_code, unused_imports)]
 
 use crate::common::worst_vs_cpu;
-use envlight::gpu::Context;
+use envlight::gpu::{Context, Timed};
 use envlight::math::sh;
 use envlight::math::synth::Sky;
 use envlight::math::Mapping;
@@ -17,7 +17,10 @@ pub const BOUND: f64 = 1e-5;
 
 pub fn gpu_project(ctx: &Context, p: &ShProjector, map: &EnvMap, lmax: u32) -> Vec<[f64; 3]> {
     let g = GpuEnvMap::upload(ctx, map).unwrap();
-    let (c, t) = p.run(&g, lmax).unwrap();
+    let Timed {
+        value: c,
+        timings: t,
+    } = p.run(&g, lmax).unwrap();
     assert_eq!(t.len(), 2);
     c.coeffs
 }

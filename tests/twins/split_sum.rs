@@ -4,7 +4,7 @@
 
 use crate::common::compare::{abs_err, max_of, Errors};
 use crate::common::scenes::{object, rel_rms, scene, sphere_camera, sphere_pixels, unit_sphere};
-use envlight::gpu::Context;
+use envlight::gpu::{total_ms, Context, Timed};
 use envlight::math::brdf::{local_view, Brdf, Frame};
 use envlight::math::split_sum::{self, dfg_table, dfg_table_at, prefiltered_chain, DfgAxes};
 use envlight::math::synth::{smooth_env, Sky};
@@ -36,7 +36,10 @@ pub fn check_dfg(ctx: &Context) {
         (true, DfgAxes::Endpoints),
         (true, DfgAxes::Centres),
     ] {
-        let (got, t) = pass.run_dfg_at(size, correlated, axes).unwrap();
+        let Timed {
+            value: got,
+            timings: t,
+        } = pass.run_dfg_at(size, correlated, axes).unwrap();
         let want = dfg_table_at(size, correlated, axes);
         if axes == DfgAxes::Centres {
             let other = dfg_table(size, correlated);
@@ -58,7 +61,7 @@ pub fn check_dfg(ctx: &Context) {
         let worst = errors.worst();
         eprintln!(
             "DFG {size}² correlated {correlated} {axes:?}: worst {worst:.2e}, {:.1} ms",
-            t.iter().map(|t| t.ms).sum::<f64>()
+            total_ms(&t)
         );
         assert!(worst < BOUND, "{worst:e}");
     }

@@ -9,7 +9,7 @@
 
 use crate::cli::{context, Global};
 use crate::error::Result;
-use crate::gpu::Context;
+use crate::gpu::{total_ms, Context, Timed};
 use crate::io::{self, LoadOptions};
 use crate::math::envmap::{luminance, EnvMap};
 use crate::math::filter::Kernel;
@@ -88,13 +88,19 @@ impl Accuracy {
             to: Mapping::Cube,
             size,
         };
-        let (bf, t) = self
+        let Timed {
+            value: bf,
+            timings: t,
+        } = self
             .brute
             .run(&g, &Orientation::default(), Kernel::Cosine, target)?;
-        let brute_ms = t.iter().map(|t| t.ms).sum();
+        let brute_ms = total_ms(&t);
         let bf = bf.download(&self.ctx)?;
-        let (c, t) = self.projector.run(&g, 8)?;
-        let projection_ms = t.iter().map(|t| t.ms).sum();
+        let Timed {
+            value: c,
+            timings: t,
+        } = self.projector.run(&g, 8)?;
+        let projection_ms = total_ms(&t);
         let omega: Vec<f64> = (0..6 * size * size)
             .map(|k| {
                 let r = k % (size * size);
@@ -114,8 +120,11 @@ impl Accuracy {
             for lambda in windows {
                 let irr = sh::irradiance_coeffs(&Window::Sloan { lambda }.apply(radiance));
                 let negative = sh::negativity(&irr, &dirs).fraction;
-                let (e, t) = self.eval.run(&irr, target)?;
-                let eval_ms = t.iter().map(|t| t.ms).sum();
+                let Timed {
+                    value: e,
+                    timings: t,
+                } = self.eval.run(&irr, target)?;
+                let eval_ms = total_ms(&t);
                 let e = e.download(&self.ctx)?;
                 let (mut sum, mut wsum, mut max) = (0.0, 0.0, 0.0f64);
                 for ((a, b), w) in e.texels.iter().zip(&bf.texels).zip(&omega) {

@@ -366,7 +366,7 @@ fn input_rows(
 
 /// The GPU milliseconds of timed frames: per stage, whole, and per part of the chain (the
 /// paraboloid, then each level), each a list over the frames.
-struct Timed {
+struct FrameTimes {
     stages: [Vec<f64>; 3],
     whole: Vec<f64>,
     parts: Vec<Vec<f64>>,
@@ -382,18 +382,20 @@ fn time_frames(
     s: &FrameSettings,
     reps: usize,
     index: &mut usize,
-) -> Result<Timed> {
+) -> Result<FrameTimes> {
     let submissions = ctx.submissions();
-    let mut timed = Timed {
+    let mut timed = FrameTimes {
         stages: Default::default(),
         whole: Vec::new(),
         parts: vec![Vec::new(); s.levels as usize + 1],
     };
     for r in 0..=reps.max(1) {
         for env in gpu {
-            let ((), t) = ctx.run("a frame's refilter", |rec| {
-                record_frame(rec, p, env, frame, s, *index)
-            })?;
+            let t = ctx
+                .run("a frame's refilter", |rec| {
+                    record_frame(rec, p, env, frame, s, *index)
+                })?
+                .timings;
             *index += 1;
             if r > 0 {
                 let ms = stage_ms(&t);
@@ -459,7 +461,7 @@ fn frame_errors(
         max_texels: s.max_lights as usize,
         fill: None,
     };
-    let (got, _): (Extracted, _) = p.extractor.run_on(env, &opts)?;
+    let got: Extracted = p.extractor.run_on(env, &opts)?.value;
     let want = extract(map, &opts);
     let split = got.power();
     let lights = format!(

@@ -3,7 +3,7 @@
 //! Monte Carlo reference (MIS), on a sphere seen from normal incidence to grazing.
 
 use crate::error::Result;
-use crate::gpu::Context;
+use crate::gpu::{total_ms, Context, Timed};
 use crate::math::brdf::Brdf;
 use crate::math::camera::sphere_camera;
 use crate::math::camera::Shape;
@@ -122,17 +122,18 @@ pub fn run(
     let gpass = GBufferPass::new(ctx)?;
     for (name, map) in maps {
         let env_gpu = GpuEnvMap::upload(ctx, map)?;
-        let (dp, _) = conv.run_mipped(
+        let Timed { value: dp, .. } = conv.run_mipped(
             &env_gpu,
             &ConvertOptions::new(Mapping::DualParaboloid, default_dp_size(map)),
         )?;
         mip.run(&dp)?;
-        let (mc_env, _) = McEnv::for_map(ctx, &conv, map, &env_gpu, &Orientation::default())?;
+        let Timed { value: mc_env, .. } =
+            McEnv::for_map(ctx, &conv, map, &env_gpu, &Orientation::default())?;
         for &size in &cfg.sizes {
             let cam = sphere_camera(size);
             for (mname, kind) in materials() {
                 let gbuf = |t: Technique| -> Result<GBuffer> {
-                    Ok(gpass.run(&cam, &[object(kind, t).record(0)])?.0)
+                    Ok(gpass.run(&cam, &[object(kind, t).record(0)])?.value)
                 };
                 let mc_g = gbuf(Technique::Mc {
                     samples: 1,
@@ -150,7 +151,10 @@ pub fn run(
                     cfg.reference
                 ));
                 let run_mc = |samples: u32, mis: bool| -> Result<(Vec<[f64; 3]>, f64)> {
-                    let (res, t) = mc.run(
+                    let Timed {
+                        value: res,
+                        timings: t,
+                    } = mc.run(
                         &mc_g,
                         &mc_env,
                         &McOptions {
@@ -163,7 +167,7 @@ pub fn run(
                     )?;
                     let acc = res.accum.download_level(ctx, 0)?;
                     let mean = acc.iter().map(|&t| pixel_stats(t, res.samples).0).collect();
-                    Ok((mean, t.iter().map(|t| t.ms).sum()))
+                    Ok((mean, total_ms(&t)))
                 };
                 let (reference, _) = run_mc(cfg.reference, true)?;
                 let mut fis_rows =
@@ -188,8 +192,11 @@ pub fn run(
                             footprint: Default::default(),
                         };
                         // The faster of two draws (the first may pay for warming caches).
-                        let (_, t1) = shade.run(&g, &inputs)?;
-                        let (frame, t2) = shade.run(&g, &inputs)?;
+                        let Timed { timings: t1, .. } = shade.run(&g, &inputs)?;
+                        let Timed {
+                            value: frame,
+                            timings: t2,
+                        } = shade.run(&g, &inputs)?;
                         let ms = t1[0].ms.min(t2[0].ms);
                         let f: Vec<[f64; 3]> = frame
                             .download(ctx)?

@@ -5,7 +5,7 @@
 use super::scoring::{errors, scene, sphere_pixels, truth};
 use super::{median, page};
 use crate::abi::SH_MAX_LMAX;
-use crate::gpu::{Context, Timing};
+use crate::gpu::{total_ms, Context, Timed, Timing};
 use crate::math::brdf::Brdf;
 use crate::math::camera::{Camera, Projection};
 use crate::math::exact::ExactFilter;
@@ -40,7 +40,7 @@ pub(super) fn time(reps: usize, mut run: impl FnMut() -> Result<Vec<Timing>>) ->
     run()?;
     let mut ms = Vec::new();
     for _ in 0..reps.max(1) {
-        ms.push(run()?.iter().map(|t| t.ms).sum());
+        ms.push(total_ms(&run()?));
     }
     Ok(median(ms))
 }
@@ -60,7 +60,7 @@ pub(super) fn copy_ms(
         rec.clear(&map.image, [1.0; 4]);
         Ok(())
     })?;
-    time(reps, || Ok(copy.run(&map)?.1))
+    time(reps, || Ok(copy.run(&map)?.timings))
 }
 
 /// |power out / power in − 1| in the worst channel.
@@ -113,7 +113,7 @@ fn map_rows(
             .run("upload", |rec| {
                 rec.span("upload", |rec| up.record_upload(rec, map))
             })?
-            .1)
+            .timings)
     })?;
     let back = up.download(ctx)?;
     let differ = back
@@ -139,8 +139,8 @@ fn map_rows(
     let mut dp = None;
     for (to, size, how) in cases {
         let opts = ConvertOptions::new(to, size);
-        let ms = time(reps, || Ok(conv.run(src, &opts)?.1))?;
-        let (out, _) = conv.run(src, &opts)?;
+        let ms = time(reps, || Ok(conv.run(src, &opts)?.timings))?;
+        let Timed { value: out, .. } = conv.run(src, &opts)?;
         let e = power_error(&out.download(ctx)?, map);
         rows.push(Row {
             input: input.clone(),
@@ -150,7 +150,7 @@ fn map_rows(
             error: format!("power {e:.1e}"),
         });
         if to == Mapping::DualParaboloid {
-            dp = Some(conv.run_mipped(src, &opts)?.0);
+            dp = Some(conv.run_mipped(src, &opts)?.value);
         }
         if how == "areas" {
             rows.extend(planned_row(ctx, &conv, (map, src), &opts, floor, reps)?);
@@ -162,7 +162,9 @@ fn map_rows(
     let mips = MipChain::new(ctx)?;
     let dp_opts = ConvertOptions::new(Mapping::DualParaboloid, dp.width);
     // Each run on a fresh paraboloid: the chain premultiplies level 0 in place.
-    let ms = time(reps, || Ok(mips.run(&conv.run_mipped(src, &dp_opts)?.0)?))?;
+    let ms = time(reps, || {
+        Ok(mips.run(&conv.run_mipped(src, &dp_opts)?.value)?)
+    })?;
     let level0 = dp.download(ctx)?;
     mips.run(&dp)?;
     let want = mip::chain(&level0);
@@ -220,8 +222,8 @@ fn planned_row(
         Err(e) => return Err(e.into()),
     };
     let built = started.elapsed().as_secs_f64() * 1e3;
-    let ms = time(reps, || Ok(conv.run_planned(src, &plan)?.1))?;
-    let (out, _) = conv.run_planned(src, &plan)?;
+    let ms = time(reps, || Ok(conv.run_planned(src, &plan)?.timings))?;
+    let Timed { value: out, .. } = conv.run_planned(src, &plan)?;
     let e = power_error(&out.download(ctx)?, map);
     Ok(Some(Row {
         input: format!("latlong {}x{}", map.width, map.height),
@@ -254,8 +256,8 @@ fn sh_rows(
     let l00 = cpu[0].iter().fold(0.0f64, |a, c| worse(a, c.abs()));
     let mut rows = Vec::new();
     for lmax in 0..=SH_MAX_LMAX {
-        let ms = time(reps, || Ok(proj.run(src, lmax)?.1))?;
-        let (gpu, _) = proj.run(src, lmax)?;
+        let ms = time(reps, || Ok(proj.run(src, lmax)?.timings))?;
+        let Timed { value: gpu, .. } = proj.run(src, lmax)?;
         let mut worst = 0.0f64;
         for (g, c) in gpu.coeffs.iter().zip(&cpu) {
             for ch in 0..3 {
@@ -278,8 +280,8 @@ fn sh_rows(
     let out_floor = copy_ms(ctx, &CopyPass::new(ctx)?, Mapping::Cube, 32, 32, reps)?;
     for lmax in [2u32, 8] {
         let irr = sh::irradiance_coeffs(&cpu[..sh::count(lmax)]);
-        let ms = time(reps, || Ok(eval.run(&irr, target)?.1))?;
-        let (out, _) = eval.run(&irr, target)?;
+        let ms = time(reps, || Ok(eval.run(&irr, target)?.timings))?;
+        let Timed { value: out, .. } = eval.run(&irr, target)?;
         let out = out.download(ctx)?;
         let e00 = irr[0][1].abs();
         let mut worst = 0.0f64;
@@ -329,10 +331,10 @@ fn filter_rows(
             "Phong 64 prefilter (brute force)",
         ),
     ] {
-        let ms = time(reps, || Ok(brute.run(src, &o, kernel, target)?.1))?;
+        let ms = time(reps, || Ok(brute.run(src, &o, kernel, target)?.timings))?;
         let out = brute
             .run(src, &o, kernel, target)?
-            .0
+            .value
             .download_level(ctx, 0)?;
         let worst = probe_texels(8)
             .into_iter()
@@ -368,7 +370,8 @@ fn ggx_chain_row(
 ) -> Result<Row> {
     let size = (map.width / 2).min(512);
     let conv = Converter::new(ctx)?;
-    let (dp, _) = conv.run_mipped(src, &ConvertOptions::new(Mapping::DualParaboloid, size))?;
+    let Timed { value: dp, .. } =
+        conv.run_mipped(src, &ConvertOptions::new(Mapping::DualParaboloid, size))?;
     MipChain::new(ctx)?.run(&dp)?;
     let pass = SplitSum::new(ctx)?;
     let levels = 7;
@@ -380,7 +383,7 @@ fn ggx_chain_row(
             .run("ggx chain", |rec| {
                 pass.record_prefilter(rec, &dp, &chain, &opts)
             })?
-            .1)
+            .timings)
     };
     let ms = time(reps, record)?;
     // Per level the mean over its eight texels; the worst level's mean, and the worst texel.
@@ -430,7 +433,7 @@ fn lights_row(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Row> {
                 rec.clear(&cube.image, [0.0; 4]);
                 pass.record(rec, &gpu, kernel, &cube, 0)
             })?
-            .1)
+            .timings)
     };
     let ms = time(reps, record)?;
     let got = cube.download_level(ctx, 0)?;
@@ -595,7 +598,7 @@ pub fn bench_floors(
             Sky::default().radiance(d)
         });
         let src = GpuEnvMap::upload(ctx, &map)?;
-        let floor = time(reps, || Ok(copy.run(&src)?.1))?;
+        let floor = time(reps, || Ok(copy.run(&src)?.timings))?;
         rows.push(Row {
             input: format!("latlong {w}x{}", w / 2),
             pass: "copy (the floor)".into(),

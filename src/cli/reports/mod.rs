@@ -19,7 +19,8 @@ mod scoring;
 pub mod table;
 
 use super::{context, Global};
-use crate::gpu::Timing;
+use crate::gpu::total_ms;
+use crate::gpu::Timed;
 use crate::math::filter::Kernel;
 use crate::math::sh;
 use crate::math::synth::Sky;
@@ -459,7 +460,7 @@ fn bench_convert(cli: &Global, sizes: &[u32], reps: usize) -> Result<()> {
         copy.run(&src)?;
         let mut copy_ms = Vec::new();
         for _ in 0..reps {
-            copy_ms.push(copy.run(&src)?.1.iter().map(|t| t.ms).sum());
+            copy_ms.push(copy.run(&src)?.ms());
         }
         let floor = median(copy_ms);
         let cases = [
@@ -487,8 +488,11 @@ fn bench_convert(cli: &Global, sizes: &[u32], reps: usize) -> Result<()> {
             let mut ms = Vec::new();
             let mut power = 0.0;
             for r in 0..reps {
-                let (out, t) = conv.run(&src, &opts)?;
-                ms.push(t.iter().map(|t| t.ms).sum());
+                let Timed {
+                    value: out,
+                    timings: t,
+                } = conv.run(&src, &opts)?;
+                ms.push(total_ms(&t));
                 if r == 0 {
                     power = out.download(&ctx)?.power()[1] / pin - 1.0;
                 }
@@ -524,7 +528,6 @@ fn bench_irradiance(cli: &Global, sizes: &[u32], source: u32, reps: usize) -> Re
     let eval = ShEvaluator::new(&ctx)?;
     let reps = reps.max(1);
     let o = Orientation::default();
-    let total = |t: &[Timing]| t.iter().map(|t| t.ms).sum::<f64>();
     for &n in sizes {
         let target = FilterTarget {
             to: Mapping::Angular,
@@ -533,17 +536,19 @@ fn bench_irradiance(cli: &Global, sizes: &[u32], source: u32, reps: usize) -> Re
         brute.run(&src, &o, Kernel::Cosine, target)?;
         let mut b = Vec::new();
         for _ in 0..reps {
-            b.push(total(&brute.run(&src, &o, Kernel::Cosine, target)?.1));
+            b.push(total_ms(
+                &brute.run(&src, &o, Kernel::Cosine, target)?.timings,
+            ));
         }
         let b = median(b);
         for order in [2u32, 8] {
-            let (c, _) = proj.run(&src, order)?;
+            let Timed { value: c, .. } = proj.run(&src, order)?;
             let irr = sh::irradiance_coeffs(&c.coeffs);
             eval.run(&irr, target)?;
             let (mut p, mut e) = (Vec::new(), Vec::new());
             for _ in 0..reps {
-                p.push(total(&proj.run(&src, order)?.1));
-                e.push(total(&eval.run(&irr, target)?.1));
+                p.push(total_ms(&proj.run(&src, order)?.timings));
+                e.push(total_ms(&eval.run(&irr, target)?.timings));
             }
             let (p, e) = (median(p), median(e));
             println!(
@@ -576,7 +581,7 @@ fn bench_sh(cli: &Global, sizes: &[u32], reps: usize) -> Result<()> {
         copy.run(&src)?;
         let mut c = Vec::new();
         for _ in 0..reps {
-            c.push(copy.run(&src)?.1.iter().map(|t| t.ms).sum());
+            c.push(copy.run(&src)?.ms());
         }
         let floor = median(c);
         for (name, p) in &projectors {
@@ -587,7 +592,7 @@ fn bench_sh(cli: &Global, sizes: &[u32], reps: usize) -> Result<()> {
                 p.run(&src, lmax)?;
                 let mut ms = Vec::new();
                 for _ in 0..reps {
-                    ms.push(p.run(&src, lmax)?.1.iter().map(|t| t.ms).sum());
+                    ms.push(p.run(&src, lmax)?.ms());
                 }
                 let m = median(ms);
                 println!(

@@ -5,7 +5,7 @@
 use super::map::GpuEnvMap;
 use crate::abi::{constants, ShaderId, WORKGROUP_1D};
 use crate::error::{Error, Result};
-use crate::gpu::{Context, Pipeline, Recorder, Sampler, Timing};
+use crate::gpu::{Context, Pipeline, Recorder, Sampler, Timed};
 pub use crate::math::filter::Kernel;
 use crate::math::moments;
 use crate::math::{Mapping, Orientation};
@@ -193,13 +193,15 @@ impl BruteFilter {
         orientation: &Orientation,
         kernel: Kernel,
         target: FilterTarget,
-    ) -> Result<(GpuEnvMap, Vec<Timing>)> {
+    ) -> Result<Timed<GpuEnvMap>> {
         let (w, h) = target.extent();
         let dst = GpuEnvMap::new(&self.ctx, "brute-force filtered", target.to, w, h)?;
-        let ((), t) = self.ctx.run("brute-force convolution", |rec| {
-            self.record(rec, src, orientation, kernel, &dst)
-        })?;
-        Ok((dst, t))
+        Ok(self
+            .ctx
+            .run("brute-force convolution", |rec| {
+                self.record(rec, src, orientation, kernel, &dst)
+            })?
+            .map(|()| dst))
     }
 
     /// Prefilters `src` into one map per level of `levels` (level k: the lobe of
@@ -212,7 +214,7 @@ impl BruteFilter {
         orientation: &Orientation,
         levels: &PhongLevels,
         target: FilterTarget,
-    ) -> Result<(Vec<GpuEnvMap>, Vec<u32>, Vec<Timing>)> {
+    ) -> Result<Timed<(Vec<GpuEnvMap>, Vec<u32>)>> {
         let mut maps = Vec::new();
         for k in 0..levels.count {
             let size = (target.size >> k).max(1);
@@ -237,10 +239,13 @@ impl BruteFilter {
                 )
             })
             .collect();
-        let (chosen, t) = self.ctx.run("prefiltered levels", |rec| {
+        let Timed {
+            value: chosen,
+            timings: t,
+        } = self.ctx.run("prefiltered levels", |rec| {
             self.record_levels(rec, src, orientation, &outputs)
         })?;
-        Ok((maps, chosen, t))
+        Ok(Timed::new((maps, chosen), t))
     }
 }
 

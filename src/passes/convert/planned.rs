@@ -6,7 +6,7 @@
 use super::{edge_points, slopes_bytes, ConvertOptions, Converter};
 use crate::abi::{binding, push::ConvertPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
-use crate::gpu::{groups_2d, mat3_rows, Bind, Buffer, Pipeline, Recorder, Timing};
+use crate::gpu::{groups_2d, mat3_rows, Bind, Buffer, Pipeline, Recorder, Timed};
 use crate::math::convert::{area_plan, AreaPlan};
 use crate::math::Mapping;
 use crate::passes::map::GpuEnvMap;
@@ -224,17 +224,15 @@ impl Converter {
     }
 
     /// Converts `src` with `plan` into a new map; returns it and the GPU time.
-    pub fn run_planned(
-        &self,
-        src: &GpuEnvMap,
-        plan: &ConvertPlan,
-    ) -> Result<(GpuEnvMap, Vec<Timing>)> {
+    pub fn run_planned(&self, src: &GpuEnvMap, plan: &ConvertPlan) -> Result<Timed<GpuEnvMap>> {
         let (to, size) = (plan.opts.to, plan.opts.size);
         let (w, h) = to.extent_for_size(size);
         let dst = GpuEnvMap::new(&self.ctx, &format!("{} {size}", to.name()), to, w, h)?;
-        let ((), t) = self.ctx.run("converting a map by its plan", |rec| {
-            self.record_planned(rec, src, &dst, plan)
-        })?;
-        Ok((dst, t))
+        Ok(self
+            .ctx
+            .run("converting a map by its plan", |rec| {
+                self.record_planned(rec, src, &dst, plan)
+            })?
+            .map(|()| dst))
     }
 }

@@ -3,7 +3,7 @@
 
 use crate::abi::{binding, push::CopyPush, ShaderId, WORKGROUP_2D};
 use crate::error::Result;
-use crate::gpu::{groups_2d, Bind, Context, Pipeline, Recorder, Sampler, Timing};
+use crate::gpu::{groups_2d, Bind, Context, Pipeline, Recorder, Sampler, Timed};
 use crate::passes::map::GpuEnvMap;
 
 /// The copy pass.
@@ -50,11 +50,11 @@ impl CopyPass {
     }
 
     /// Copies `src` into a new map of the same size; returns it and the GPU time.
-    pub fn run(&self, src: &GpuEnvMap) -> Result<(GpuEnvMap, Vec<Timing>)> {
+    pub fn run(&self, src: &GpuEnvMap) -> Result<Timed<GpuEnvMap>> {
         let dst = GpuEnvMap::new(&self.ctx, "copy", src.mapping, src.width, src.height)?;
-        let ((), t) = self
+        Ok(self
             .ctx
-            .run("copying a map", |rec| self.record(rec, src, &dst))?;
-        Ok((dst, t))
+            .run("copying a map", |rec| self.record(rec, src, &dst))?
+            .map(|()| dst))
     }
 }

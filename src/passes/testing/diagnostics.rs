@@ -59,25 +59,28 @@ impl Diagnostics {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::GpuToCpu,
         )?;
-        let ((), timings) = self.ctx.run("diagnostics", |rec| {
-            rec.span("draw", |rec| {
-                rec.draw_fullscreen(&self.draw, &[], &(), &[&target])
-            })?;
-            rec.span("busy", |rec| {
-                rec.dispatch(
-                    &self.busy,
-                    &[(binding::BUSY_OUT, Bind::Buffer(&out))],
-                    &BusyPush {
-                        iterations,
-                        count,
-                        pad: [0; 2],
-                    },
-                    [groups(count, WORKGROUP_1D), 1, 1],
-                )
-            })?;
-            rec.use_buffer(&out, Usage::HostRead);
-            Ok(())
-        })?;
+        let timings = self
+            .ctx
+            .run("diagnostics", |rec| {
+                rec.span("draw", |rec| {
+                    rec.draw_fullscreen(&self.draw, &[], &(), &[&target])
+                })?;
+                rec.span("busy", |rec| {
+                    rec.dispatch(
+                        &self.busy,
+                        &[(binding::BUSY_OUT, Bind::Buffer(&out))],
+                        &BusyPush {
+                            iterations,
+                            count,
+                            pad: [0; 2],
+                        },
+                        [groups(count, WORKGROUP_1D), 1, 1],
+                    )
+                })?;
+                rec.use_buffer(&out, Usage::HostRead);
+                Ok(())
+            })?
+            .timings;
         let sum: f64 = out
             .read::<f32>(count as usize)
             .iter()
