@@ -11,7 +11,9 @@
 //! [`output`] says what the files hold for each engine: frames, presets, clamping, lights.
 
 pub mod dfg_cache;
+pub mod files;
 pub mod output;
+pub mod plan;
 
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, InFlight, Recorder, Timed, Timing, Usage};

@@ -4,10 +4,9 @@
 
 use super::schedule::{classify, exit_for, parse_items, shard_auto, Exit, Failure, EXIT_RETRY};
 use super::{context, Global};
-use crate::bake::output::{
-    clamp_cube, compose, needs_clamp, separate_options, CubeClamp, Irradiance, Preset,
-    SeparateLights,
-};
+use crate::bake::files::{probe_files, Clamps};
+use crate::bake::output::{separate_options, Irradiance, Preset, SeparateLights};
+use crate::bake::plan::{BakePlan, BakeSettings, Container, LightsKey, LightsMode};
 use crate::bake::{BakeOptions, Baked, Baker, PendingBake, SpotCheck, SpotCheckPlan};
 use crate::gpu::total_ms;
 use crate::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
@@ -17,11 +16,10 @@ use crate::math::lights::{extract_blocks, record_block};
 use crate::math::split_sum::DfgAxes;
 use crate::{EnvMap, Mapping, Orientation};
 use anyhow::{anyhow, bail, Context as _, Result};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
-use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -54,7 +52,7 @@ pub struct BakeArgs {
     #[arg(long)]
     samples: Option<u32>,
     /// Output container [default: ktx2]
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = named(FORMATS, Container::parse))]
     format: Option<Container>,
     /// KTX2 texels (texels beyond a format's range are clamped into it and the power clamped
     /// away reported) [default: rgba32f]
@@ -123,13 +121,17 @@ pub struct BakeArgs {
     irradiance: Option<Irradiance>,
     /// Lights: exact (extract them and add them exactly into the cubes), separate (write them
     /// to lights.json and bake only the residual), or off (filter the whole map) [default: exact]
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = named(LIGHTS, LightsMode::parse))]
     lights: Option<LightsMode>,
     /// Supercompress the KTX2 levels with Zstandard
     #[arg(long)]
     zstd: bool,
 }
 
+/// `--format` values.
+const FORMATS: &[&str] = &["ktx2", "exr"];
+/// `--lights` values.
+const LIGHTS: &[&str] = &["exact", "separate", "off"];
 /// `--texels` values.
 const TEXELS: &[&str] = &["rgba32f", "rgba16f", "b10g11r11", "e5b9g9r9", "bc6h"];
 /// `--preset` values.
@@ -149,89 +151,6 @@ fn named<T: Clone + Send + Sync + 'static>(
     use clap::builder::TypedValueParser as _;
     clap::builder::PossibleValuesParser::new(names)
         .map(move |s| parse(&s).unwrap_or_else(|| unreachable!("{s} is listed, so it parses")))
-}
-
-/// A bake file: every field optional, unknown keys refused.
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct BakeFile {
-    sh_order: Option<u32>,
-    irradiance_size: Option<u32>,
-    specular_size: Option<u32>,
-    specular_levels: Option<u32>,
-    samples: Option<u32>,
-    format: Option<String>,
-    texels: Option<String>,
-    dfg: Option<bool>,
-    dfg_samples: Option<String>,
-    chain: Option<bool>,
-    lights: Option<LightsKey>,
-    check: Option<u32>,
-    preset: Option<String>,
-    rotate_y: Option<f64>,
-    flip_u: Option<bool>,
-    flip_v: Option<bool>,
-    irradiance: Option<String>,
-    zstd: Option<bool>,
-}
-
-/// A bake file's `lights`: true (exact), false (off), or a mode's name.
-#[derive(Debug, Deserialize)]
-#[serde(untagged)]
-enum LightsKey {
-    On(bool),
-    Mode(String),
-}
-
-/// What a bake does with the map's lights.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, ValueEnum)]
-#[serde(rename_all = "kebab-case")]
-enum LightsMode {
-    /// Extracted and added exactly into the cubes.
-    Exact,
-    /// Written to lights.json; the cubes hold the residual.
-    Separate,
-    /// The whole map filtered by SH and FIS.
-    Off,
-}
-
-impl LightsMode {
-    fn parse(s: &str) -> Result<LightsMode> {
-        match s {
-            "exact" => Ok(LightsMode::Exact),
-            "separate" => Ok(LightsMode::Separate),
-            "off" => Ok(LightsMode::Off),
-            _ => bail!("--lights {s}: exact, separate or off"),
-        }
-    }
-}
-
-/// The files a bake writes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum Container {
-    /// KTX2 cubes (and JSON), what engines load.
-    Ktx2,
-    /// OpenEXR images, a file per cube level.
-    Exr,
-}
-
-impl Container {
-    /// Its name, as the manifest records it.
-    fn name(self) -> &'static str {
-        match self {
-            Container::Ktx2 => "ktx2",
-            Container::Exr => "exr",
-        }
-    }
-
-    /// A bake file's `format`.
-    fn parse(s: &str) -> Result<Container> {
-        match s {
-            "ktx2" => Ok(Container::Ktx2),
-            "exr" => Ok(Container::Exr),
-            _ => bail!("--format {s}: ktx2 or exr"),
-        }
-    }
 }
 
 /// Everything that decides the outputs' bytes.
@@ -387,19 +306,6 @@ impl Stages {
     }
 }
 
-/// What clamping took from one probe's cubes.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-struct Clamps {
-    irradiance: CubeClamp,
-    specular: CubeClamp,
-}
-
-impl Clamps {
-    fn worst(&self) -> f64 {
-        self.irradiance.worst().max(self.specular.worst())
-    }
-}
-
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct Manifest {
     settings: Settings,
@@ -541,290 +447,66 @@ fn manifest_name(shard: Option<(usize, usize)>, items: Option<(usize, usize)>) -
     }
 }
 
-fn cube_image(texels: &[[f32; 4]], size: u32) -> EnvMap {
-    EnvMap::new(
-        Mapping::Cube,
-        size,
-        size,
-        texels.iter().map(|t| [t[0], t[1], t[2]]).collect(),
-    )
-}
-
-/// Everything a run decided from its arguments, its bake file and its preset.
-struct Plan {
-    options: BakeOptions,
-    format: String,
-    texels: Ktx2Format,
-    sc: Supercompression,
-    preset: Option<Preset>,
-    /// World → file of the cube frame: the user's orientation after the preset's frame.
-    orientation: Orientation,
-    /// The preset's cube → world (identity without one).
-    cube_to_world: glam::DMat3,
-    irradiance: Irradiance,
-    lights: LightsMode,
-    check: u32,
-    dfg: bool,
-    dfg_axes: DfgAxes,
-    max_source_side: Option<u32>,
-}
-
-impl Plan {
-    /// The options decided: the command line over the bake file over the preset over the
-    /// defaults.
-    fn new(a: &BakeArgs, file: BakeFile) -> Result<Plan> {
-        let preset = match (a.preset, file.preset.as_deref()) {
-            (Some(p), _) => Some(p),
-            (None, Some(p)) => {
-                Some(Preset::parse(p).ok_or_else(|| anyhow!("--preset {p}: bevy or khronos"))?)
-            }
-            (None, None) => None,
-        };
-        let d = BakeOptions::default();
-        let specular_size = a
-            .specular_size
-            .or(file.specular_size)
-            .unwrap_or(d.specular_size);
-        let lights = match (&a.lights, a.no_lights, &file.lights) {
-            (Some(m), _, _) => *m,
-            (None, true, _) => LightsMode::Off,
-            (None, false, Some(LightsKey::On(on))) => match on {
-                true => LightsMode::Exact,
-                false => LightsMode::Off,
-            },
-            (None, false, Some(LightsKey::Mode(m))) => LightsMode::parse(m)?,
-            (None, false, None) => LightsMode::Exact,
-        };
-        let options = BakeOptions {
-            sh_order: a.sh_order.or(file.sh_order).unwrap_or(d.sh_order),
-            irradiance_size: a
-                .irradiance_size
-                .or(file.irradiance_size)
-                .unwrap_or(d.irradiance_size),
-            specular_size,
-            specular_levels: a
-                .specular_levels
-                .or(file.specular_levels)
-                .or(preset.and_then(|p| p.specular_levels(specular_size)))
-                .unwrap_or_else(|| {
-                    // 8, or every level a smaller cube has.
-                    let most = crate::passes::map::full_mips(specular_size, specular_size);
-                    d.specular_levels.min(most)
-                }),
-            samples: a.samples.or(file.samples).unwrap_or(d.samples),
-            chain: a.chain || file.chain == Some(true),
-            lights: lights == LightsMode::Exact,
-            dfg_size: preset.and_then(|p| p.dfg_size()).unwrap_or(d.dfg_size),
-            ..d
-        };
-        options.validate()?;
-        let format = match (a.format, &file.format) {
-            (Some(f), _) => f,
-            (None, Some(f)) => Container::parse(f)?,
-            (None, None) => Container::Ktx2,
-        }
-        .name()
-        .to_string();
-        let texels = match (a.texels, &file.texels) {
-            (Some(t), _) => t,
-            (None, Some(t)) => Ktx2Format::parse(t).ok_or_else(|| {
-                anyhow!("--texels {t}: rgba32f, rgba16f, b10g11r11, e5b9g9r9 or bc6h")
-            })?,
-            (None, None) => preset.map_or(Ktx2Format::Rgba32f, |p| p.texels()),
-        };
-        let zstd = a.zstd
-            || file.zstd == Some(true)
-            || preset.is_some_and(|p| p.supercompression() == Supercompression::Zstd);
-        let irradiance = match (a.irradiance, &file.irradiance) {
-            (Some(i), _) => i,
-            (None, Some(i)) => {
-                Irradiance::parse(i).ok_or_else(|| anyhow!("--irradiance {i}: e or e-over-pi"))?
-            }
-            (None, None) => preset.map_or(Irradiance::E, |p| p.irradiance()),
-        };
-        let dfg_axes = match (a.dfg_samples, &file.dfg_samples) {
-            (Some(s), _) => s,
-            (None, Some(s)) => DfgAxes::parse(s)
-                .ok_or_else(|| anyhow!("--dfg-samples {s}: endpoints or centres"))?,
-            (None, None) => preset.map_or(DfgAxes::Endpoints, |p| p.dfg_axes()),
-        };
-        let user = Orientation {
-            flip_u: a.flip_u || file.flip_u == Some(true),
-            flip_v: a.flip_v || file.flip_v == Some(true),
-            rotate_y_degrees: a.rotate_y.or(file.rotate_y).unwrap_or(0.0),
-        };
-        user.validate().map_err(|e| anyhow!("--rotate-y: {e}"))?;
-        let frame = preset.map(|p| p.cube_frame()).unwrap_or_default();
-        Ok(Plan {
-            options,
-            format,
-            texels,
-            sc: if zstd {
-                Supercompression::Zstd
-            } else {
-                Supercompression::None
-            },
-            preset,
-            orientation: compose(&user, &frame),
-            cube_to_world: frame.world_to_file(),
-            irradiance,
-            lights,
-            check: a.check.or(file.check).unwrap_or(2),
-            dfg: a.dfg || file.dfg == Some(true) || preset.is_some_and(|p| p.lut()),
-            dfg_axes,
-            max_source_side: a.max_source_side,
-        })
-    }
-
-    /// What decides the outputs' bytes.
-    fn settings(&self) -> Settings {
-        Settings {
-            envlight: env!("CARGO_PKG_VERSION").into(),
-            options: self.options,
-            format: self.format.clone(),
-            texels: self.texels.name().into(),
-            preset: self.preset,
-            orientation: self.orientation,
-            irradiance: self.irradiance,
-            lights: self.lights,
-            zstd: self.sc == Supercompression::Zstd,
-            max_source_side: self.max_source_side,
-        }
+/// The settings the command line gives (each flag absent where not given).
+fn cli_settings(a: &BakeArgs) -> BakeSettings {
+    let flag = |on: bool| on.then_some(true);
+    let lights = match (a.lights, a.no_lights) {
+        (Some(m), _) => Some(m),
+        (None, true) => Some(LightsMode::Off),
+        (None, false) => None,
+    };
+    BakeSettings {
+        sh_order: a.sh_order,
+        irradiance_size: a.irradiance_size,
+        specular_size: a.specular_size,
+        specular_levels: a.specular_levels,
+        samples: a.samples,
+        format: a.format,
+        texels: a.texels,
+        dfg: flag(a.dfg),
+        dfg_samples: a.dfg_samples,
+        chain: flag(a.chain),
+        lights: lights.map(LightsKey::Mode),
+        check: a.check,
+        preset: a.preset,
+        rotate_y: a.rotate_y,
+        flip_u: flag(a.flip_u),
+        flip_v: flag(a.flip_v),
+        irradiance: a.irradiance,
+        zstd: flag(a.zstd),
+        max_source_side: a.max_source_side,
     }
 }
 
-/// One probe's files, with their bytes, and what clamping took.
-type Files = (Vec<(PathBuf, Vec<u8>)>, Option<Clamps>);
-
-/// A probe's KTX2 files: irradiance and specular cubes clamped into the texel format (the
-/// power clamped away reported), the skybox where the preset wants one, the chain.
-fn ktx2_files(dir: &Path, baked: &Baked, plan: &Plan) -> Result<Files> {
-    let o = &plan.options;
-    let scale = plan.irradiance.scale();
-    // Copies only where the texels change (a copy of a 256² cube's fresh pages is a few ms).
-    let mut irradiance: Cow<[Vec<[f32; 4]>]> = match scale {
-        1.0 => Cow::Borrowed(std::slice::from_ref(&baked.irradiance)),
-        _ => Cow::Owned(vec![baked
-            .irradiance
-            .iter()
-            .map(|t| [t[0] * scale, t[1] * scale, t[2] * scale, t[3]])
-            .collect()]),
-    };
-    let mut specular = Cow::Borrowed(&baked.specular[..]);
-    let clamp = |levels: &mut Cow<[Vec<[f32; 4]>]>, size| match needs_clamp(plan.texels, levels) {
-        true => clamp_cube(plan.texels, size, levels.to_mut()),
-        false => CubeClamp::none(levels.len()),
-    };
-    let clamps = Clamps {
-        irradiance: clamp(&mut irradiance, o.irradiance_size),
-        specular: clamp(&mut specular, o.specular_size),
-    };
-    let clamped = clamps.irradiance.channels
-        + clamps.irradiance.negative
-        + clamps.specular.channels
-        + clamps.specular.negative
-        > 0;
-    let cube = |levels: &[Vec<[f32; 4]>], size| -> Result<Vec<u8>> {
-        Ok(ktx2::encode_with(
-            &Ktx2Image::cube(size, levels),
-            plan.texels,
-            plan.sc,
-        )?)
-    };
-    let mut files = vec![
-        (
-            dir.join("irradiance.ktx2"),
-            cube(&irradiance, o.irradiance_size)?,
-        ),
-        (dir.join("specular.ktx2"), cube(&specular, o.specular_size)?),
-    ];
-    if plan.preset.is_some_and(|p| p.skybox()) {
-        files.push((
-            dir.join("skybox.ktx2"),
-            cube(&specular[..1], o.specular_size)?,
-        ));
+/// What decides the outputs' bytes, as the manifest records it.
+fn settings(plan: &BakePlan) -> Settings {
+    Settings {
+        envlight: env!("CARGO_PKG_VERSION").into(),
+        options: plan.options,
+        format: plan.container.name().into(),
+        texels: plan.texels.name().into(),
+        preset: plan.preset,
+        orientation: plan.orientation,
+        irradiance: plan.irradiance,
+        lights: plan.lights,
+        zstd: plan.supercompression == Supercompression::Zstd,
+        max_source_side: plan.max_source_side,
     }
-    if let Some(first) = baked.chain.first() {
-        // Premultiplied with a weight that reaches 4 at the poles: float32, so that
-        // neither a sun nor the weight is refused or rounded.
-        let side = ((first.len() / 2) as f64).sqrt() as u32;
-        let chain = Ktx2Image {
-            width: side,
-            height: side,
-            faces: 1,
-            layers: 2,
-            levels: &baked.chain,
-        };
-        files.push((
-            dir.join("chain.ktx2"),
-            ktx2::encode_with(&chain, Ktx2Format::Rgba32f, plan.sc)?,
-        ));
-    }
-    Ok((files, clamped.then_some(clamps)))
 }
 
-/// A probe's EXR files (float32: nothing is clamped).
-fn exr_files(dir: &Path, baked: &Baked, plan: &Plan) -> Result<Vec<(PathBuf, Vec<u8>)>> {
-    let o = &plan.options;
-    let mut files = Vec::new();
-    let tmp = dir.join(format!(".bake-{}.exr", std::process::id()));
-    let exr = |map: &EnvMap| -> Result<Vec<u8>> {
-        crate::io::save_exr(map, &tmp)?;
-        let b = std::fs::read(&tmp)?;
-        let _ = std::fs::remove_file(&tmp);
-        Ok(b)
-    };
-    let scale = plan.irradiance.scale();
-    let irradiance: Vec<[f32; 4]> = baked
-        .irradiance
-        .iter()
-        .map(|t| [t[0] * scale, t[1] * scale, t[2] * scale, t[3]])
-        .collect();
-    let b = exr(&cube_image(&irradiance, o.irradiance_size))?;
-    files.push((dir.join("irradiance.exr"), b));
-    for (k, level) in baked.specular.iter().enumerate() {
-        let size = (o.specular_size >> k).max(1);
-        let b = exr(&cube_image(level, size))?;
-        files.push((dir.join(format!("specular.level{k}.exr")), b));
-    }
-    // The chain's radiance (rgb / weight), a dual-paraboloid map per level.
-    for (k, level) in baked.chain.iter().enumerate() {
-        let side = ((level.len() / 2) as f64).sqrt() as u32;
-        let texels = level
-            .iter()
-            .map(|t| {
-                let w = if t[3] > 0.0 { 1.0 / t[3] } else { 0.0 };
-                [t[0] * w, t[1] * w, t[2] * w]
-            })
-            .collect();
-        let map = EnvMap::new(Mapping::DualParaboloid, side, side, texels);
-        files.push((dir.join(format!("chain.level{k}.exr")), exr(&map)?));
-    }
-    Ok(files)
-}
-
-/// Writes one probe's files into `dir`; returns them (paths relative to `root`) and what
-/// clamping took.
+/// Writes one probe's files into `dir` (`bake::files::probe_files`); returns them (paths
+/// relative to `root`, with their sizes and hashes) and what clamping took.
 fn write_probe(
     root: &Path,
     dir: &Path,
     baked: &Baked,
-    plan: &Plan,
+    plan: &BakePlan,
     lights: Option<&SeparateLights>,
 ) -> Result<(Vec<Output>, Option<Clamps>)> {
     std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
-    let sh = serde_json::to_string_pretty(&baked.sh.to_json())?;
-    let (mut files, clamps) = match plan.format.as_str() {
-        "ktx2" => ktx2_files(dir, baked, plan)?,
-        _ => (exr_files(dir, baked, plan)?, None),
-    };
-    files.insert(0, (dir.join("sh.json"), sh.into_bytes()));
-    if let Some(l) = lights {
-        let json = serde_json::to_string_pretty(&l.to_json())?;
-        files.push((dir.join("lights.json"), json.into_bytes()));
-    }
+    let made = probe_files(dir, baked, plan, lights)?;
     let mut outputs = Vec::new();
-    for (path, bytes) in files {
+    for (path, bytes) in made.files {
         write_atomic(&path, &bytes)?;
         outputs.push(Output {
             file: path
@@ -836,7 +518,7 @@ fn write_probe(
             sha256: sha256(&bytes),
         });
     }
-    Ok((outputs, clamps))
+    Ok((outputs, made.clamped))
 }
 
 /// The record a probe's folder keeps of its bake (`probe.json`), so that another run into the
@@ -1021,14 +703,14 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
     if a.merge {
         return merge(&a.out);
     }
-    let file: BakeFile = match &a.config {
+    let file = match &a.config {
         Some(p) => {
-            toml::from_str(&std::fs::read_to_string(p).with_context(|| p.display().to_string())?)
-                .with_context(|| format!("{}: not a bake file", p.display()))?
+            let text = std::fs::read_to_string(p).with_context(|| p.display().to_string())?;
+            BakeSettings::from_toml(&text).with_context(|| p.display().to_string())?
         }
-        None => BakeFile::default(),
+        None => BakeSettings::default(),
     };
-    let plan = Plan::new(a, file)?;
+    let plan = BakePlan::new(&cli_settings(a).over(file))?;
     let inputs = collect(&a.inputs)?;
     if inputs.is_empty() {
         bail!("no probes among the inputs");
@@ -1043,7 +725,7 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
             );
         }
     }
-    let settings = plan.settings();
+    let settings = settings(&plan);
     let settings_sha256 = sha256(serde_json::to_string(&settings)?.as_bytes());
     let out = &a.out;
     std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
@@ -1235,7 +917,7 @@ fn same_inputs(what: &str, recorded: &[Manifest], inputs: &[String]) -> Result<(
 /// Writes the split-sum table once: `dfg.ktx2` (RGBA32F, A and B in R and G, row √α after
 /// row), and for presets that want one `lut.png` (8-bit R = A, G = B, B = 0, row 0 at the
 /// smallest roughness: glTF-IBL-Sampler's `outputLUT.png`).
-fn write_dfg(baker: &Baker, plan: &Plan, out: &Path) -> Result<()> {
+fn write_dfg(baker: &Baker, plan: &BakePlan, out: &Path) -> Result<()> {
     let size = plan.options.dfg_size;
     // Kept between runs (`bake::dfg_cache`): it depends on no probe.
     let cache = crate::bake::dfg_cache::default_dir();
@@ -1265,7 +947,7 @@ fn write_dfg(baker: &Baker, plan: &Plan, out: &Path) -> Result<()> {
 }
 
 /// Prints the run's table: per probe its status, times, errors and what clamping took.
-fn summary(manifest: &Manifest, plan: &Plan) {
+fn summary(manifest: &Manifest, plan: &BakePlan) {
     println!(
         "| probe | status | seconds | GPU ms | irradiance error | specular error (worst level) \
          | power clamped (worst level) | power in lights.json |\n|---|---|---|---|---|---|---|---|"
@@ -1332,7 +1014,7 @@ const LARGE_TEXELS: usize = 1 << 22;
 
 /// One run's fixed parts, shared by its probes.
 struct Run<'a> {
-    plan: &'a Plan,
+    plan: &'a BakePlan,
     baker: &'a Baker,
     out: &'a Path,
     settings_sha256: &'a str,
@@ -1695,14 +1377,16 @@ mod tests {
             all(DFG_AXES, DfgAxes::parse),
             [DfgAxes::Endpoints, DfgAxes::Centres]
         );
-        for v in LightsMode::value_variants() {
-            let n = v.to_possible_value().unwrap();
-            assert_eq!(LightsMode::parse(n.get_name()).unwrap(), *v);
-        }
-        for v in Container::value_variants() {
-            let n = v.to_possible_value().unwrap();
-            assert_eq!(Container::parse(n.get_name()).unwrap(), *v);
-            assert_eq!(v.name(), n.get_name());
+        assert_eq!(
+            all(LIGHTS, LightsMode::parse),
+            [LightsMode::Exact, LightsMode::Separate, LightsMode::Off]
+        );
+        assert_eq!(
+            all(FORMATS, Container::parse),
+            [Container::Ktx2, Container::Exr]
+        );
+        for f in [Container::Ktx2, Container::Exr] {
+            assert!(FORMATS.contains(&f.name()));
         }
     }
 }

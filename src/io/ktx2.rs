@@ -47,8 +47,9 @@ pub const IDENTIFIER: [u8; 12] = [
     0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A,
 ];
 
-/// Texel formats written.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Texel formats written (a bake file names them as [`Ktx2Format::name`] does).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Ktx2Format {
     /// VK_FORMAT_R16G16B16A16_SFLOAT (97).
     Rgba16f,
