@@ -3,12 +3,14 @@
 //! or a command line, the one laid over the other ([`BakeSettings::over`]). [`BakePlan::new`]
 //! resolves them over a preset and the defaults into what the bake does and writes.
 
-use super::output::{compose, Irradiance, Preset};
+use super::output::{compose, separate_options, Irradiance, Preset, SeparateLights};
 use super::BakeOptions;
 use crate::error::{Error, Result};
 use crate::io::ktx2::{Ktx2Format, Supercompression};
+use crate::math::lights::{extract_blocks, record_block};
 use crate::math::split_sum::DfgAxes;
 use crate::math::Orientation;
+use crate::EnvMap;
 use serde::{Deserialize, Serialize};
 
 /// What a bake does with the map's lights.
@@ -253,6 +255,22 @@ impl BakePlan {
             dfg_axes,
             max_source_side: s.max_source_side,
         })
+    }
+
+    /// What the cubes are baked from: `map` itself, or with separate lights its residual and
+    /// the lights `lights.json` holds (extracted in blocks of the light record width, each
+    /// light's texels clamped as the format needs, in the plan's cube frame).
+    pub fn split_lights(&self, map: EnvMap) -> Result<(EnvMap, Option<SeparateLights>)> {
+        match self.lights {
+            LightsMode::Separate => {
+                let block = record_block(&map, self.options.light_record_width);
+                let options = separate_options(&map, self.texels);
+                let ex = extract_blocks(&map, &options, block).extraction;
+                let lights = SeparateLights::new(&map, &ex, &self.orientation, self.cube_to_world)?;
+                Ok((ex.residual, Some(lights)))
+            }
+            LightsMode::Exact | LightsMode::Off => Ok((map, None)),
+        }
     }
 }
 

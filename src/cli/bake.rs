@@ -5,14 +5,13 @@
 use super::schedule::{classify, exit_for, parse_items, shard_auto, Exit, Failure, EXIT_RETRY};
 use super::{context, Global};
 use crate::bake::files::{probe_files, Clamps};
-use crate::bake::output::{separate_options, Irradiance, Preset, SeparateLights};
+use crate::bake::output::{Irradiance, Preset, SeparateLights};
 use crate::bake::plan::{BakePlan, BakeSettings, Container, LightsKey, LightsMode};
 use crate::bake::{BakeOptions, Baked, Baker, PendingBake, SpotCheck, SpotCheckPlan};
 use crate::gpu::total_ms;
 use crate::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
 use crate::io::{write_atomic, LoadOptions};
 use crate::math::convert::{reduce_to_fit, Reduction};
-use crate::math::lights::{extract_blocks, record_block};
 use crate::math::split_sum::DfgAxes;
 use crate::{EnvMap, Mapping, Orientation};
 use anyhow::{anyhow, bail, Context as _, Result};
@@ -1161,16 +1160,7 @@ impl Run<'_> {
         });
         let submitted = map.and_then(|map| {
             // Separate lights: the cubes see the residual, lights.json the lights.
-            let (source, lights) = match plan.lights {
-                LightsMode::Separate => {
-                    let block = record_block(&map, plan.options.light_record_width);
-                    let ex = extract_blocks(&map, &separate_options(&map, plan.texels), block)
-                        .extraction;
-                    let l = SeparateLights::new(&map, &ex, &plan.orientation, plan.cube_to_world)?;
-                    (ex.residual, Some(l))
-                }
-                _ => (map, None),
-            };
+            let (source, lights) = plan.split_lights(map)?;
             let pending = self
                 .baker
                 .submit(&source, &plan.orientation, &plan.options)?;
