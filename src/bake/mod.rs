@@ -12,6 +12,7 @@
 
 pub mod dfg_cache;
 pub mod files;
+pub mod manifest;
 pub mod output;
 pub mod plan;
 

@@ -2,23 +2,26 @@
 //! irradiance cube, specular cube with a level per roughness), with a manifest that makes
 //! re-runs skip what is done, deterministic shards, and a merge of the shards' manifests.
 
-use super::schedule::{classify, exit_for, parse_items, shard_auto, Exit, Failure, EXIT_RETRY};
+use super::schedule::{classify, exit_for, parse_items, shard_auto, Exit, EXIT_RETRY};
 use super::{context, Global};
 use crate::bake::files::{probe_files, Clamps};
+use crate::bake::manifest::Failure;
+use crate::bake::manifest::{
+    lock_probe, manifest_name, outputs_intact, read_manifests, recorded, sha256, write_outputs,
+    Entry, Manifest, Output, Record, Reduced, Settings, Stages, RECORD,
+};
 use crate::bake::output::{Irradiance, Preset, SeparateLights};
 use crate::bake::plan::{BakePlan, BakeSettings, Container, LightsKey, LightsMode};
-use crate::bake::{BakeOptions, Baked, Baker, PendingBake, SpotCheck, SpotCheckPlan};
+use crate::bake::{Baked, Baker, PendingBake, SpotCheckPlan};
 use crate::gpu::total_ms;
-use crate::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
+use crate::io::ktx2::{self, Ktx2Format, Ktx2Image};
 use crate::io::{write_atomic, LoadOptions};
 use crate::math::convert::{reduce_to_fit, Reduction};
 use crate::math::split_sum::DfgAxes;
-use crate::{EnvMap, Mapping, Orientation};
+use crate::{EnvMap, Mapping};
 use anyhow::{anyhow, bail, Context as _, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -152,31 +155,6 @@ fn named<T: Clone + Send + Sync + 'static>(
         .map(move |s| parse(&s).unwrap_or_else(|| unreachable!("{s} is listed, so it parses")))
 }
 
-/// Everything that decides the outputs' bytes.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-struct Settings {
-    envlight: String,
-    options: BakeOptions,
-    format: String,
-    texels: String,
-    preset: Option<Preset>,
-    orientation: Orientation,
-    irradiance: Irradiance,
-    lights: LightsMode,
-    zstd: bool,
-    /// `--max-source-side`, where given.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    max_source_side: Option<u32>,
-}
-
-/// One output file in the manifest.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-struct Output {
-    file: String,
-    bytes: u64,
-    sha256: String,
-}
-
 /// A probe as the reader thread hands it over.
 enum Prepared {
     /// Unchanged since a previous run: its entry, marked skipped.
@@ -190,63 +168,6 @@ enum Prepared {
         /// Seconds spent reading, hashing and decoding it.
         read_s: f64,
     },
-}
-
-/// One probe in the manifest.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct Entry {
-    input: String,
-    input_sha256: String,
-    status: String,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    error: Option<String>,
-    /// A failed probe's cause: its input (retrying cannot help) or the system (retry).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    failure: Option<Failure>,
-    outputs: Vec<Output>,
-    /// The run's wall time from the previous probe's end to this one's (they add up).
-    seconds: f64,
-    /// Of which the reader thread spent this long reading, hashing and decoding it
-    /// alongside the GPU work.
-    #[serde(default)]
-    read_seconds: f64,
-    gpu_ms: f64,
-    /// Errors against exact filters at a few texels (absent when not checked).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    check: Option<SpotCheck>,
-    /// What clamping the cubes into the texel format took from them (absent when nothing
-    /// was clamped or the format holds every value).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    clamped: Option<Clamps>,
-    /// With `--lights separate`: the share of the map's power per channel the cubes leave to
-    /// lights.json.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    separated: Option<[f64; 3]>,
-    /// Seconds this run waited for the probe's lock, which another live bake held (absent
-    /// where the lock was free: a killed holder's lock is dropped with its process).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    lock_wait_seconds: Option<f64>,
-    /// Where a baked probe's time went (absent for skipped and failed probes).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    stages: Option<Stages>,
-    /// How a source larger than `--max-source-side` or the device's largest image was
-    /// reduced before baking (absent where it was baked as read).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    reduced: Option<Reduced>,
-}
-
-/// A source reduced before its bake.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-struct Reduced {
-    /// Its size as read, (width, height).
-    from: [u32; 2],
-    /// The size baked.
-    to: [u32; 2],
-    /// The largest side allowed.
-    limit: u32,
-    /// `blocks K` (the means of K × K blocks) or `resampled` (a conversion scaled to the
-    /// source's power).
-    how: String,
 }
 
 /// `map` reduced to fit `limit` texels a side ([`reduce_to_fit`]), and how; as it is where
@@ -267,57 +188,6 @@ fn fit(map: EnvMap, limit: u32) -> (EnvMap, Option<Reduced>) {
             (small, Some(r))
         }
     }
-}
-
-/// Where a baked probe's time went: host seconds per stage, and the GPU's time per kind
-/// of pass (timestamps). Reading runs on its own thread, beside the previous probe's work.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-struct Stages {
-    /// Reading, hashing and decoding the input.
-    read: f64,
-    /// Statistics, light extraction and the grids of block means.
-    lights: f64,
-    /// Staging the source (a large map's banded upload) and recording the submission.
-    upload: f64,
-    /// Waiting for the GPU's work and reading the cubes back.
-    gpu_wait: f64,
-    /// GPU milliseconds of the conversions: paraboloids, the clamp, their MIP chains.
-    gpu_convert_ms: f64,
-    /// GPU milliseconds of the filters: SH, the irradiance cube, the specular levels, lights.
-    gpu_filter_ms: f64,
-    /// The spot check's float64 exact filters, which run beside the GPU wait and the writes
-    /// (on a CPU device, on the same cores as the bake).
-    check: f64,
-    /// Encoding and writing the files and the record.
-    write: f64,
-}
-
-impl Stages {
-    /// The GPU milliseconds of `timings` split into conversions and filters.
-    fn gpu(timings: &[crate::gpu::Timing]) -> (f64, f64) {
-        let convert = |l: &str| ["convert", "mip", "clamp"].iter().any(|p| l.starts_with(p));
-        timings
-            .iter()
-            .fold((0.0, 0.0), |(c, f), t| match convert(&t.label) {
-                true => (c + t.ms, f),
-                false => (c, f + t.ms),
-            })
-    }
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct Manifest {
-    settings: Settings,
-    settings_sha256: String,
-    shard: Option<String>,
-    /// With `--items`: the range of inputs baked, A-B.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    items: Option<String>,
-    /// Every input of the set a shard or range belongs to, in the order shards split it (a
-    /// merge names the probes no part has baked).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    inputs: Vec<String>,
-    probes: Vec<Entry>,
 }
 
 /// A probe whose bake is on the GPU.
@@ -370,13 +240,6 @@ fn failed(
     }
 }
 
-fn sha256(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
-
 /// (i, n) from "i/n", 1 ≤ i ≤ n.
 fn parse_shard(s: &str) -> Result<(usize, usize)> {
     let (i, n) = s
@@ -418,34 +281,6 @@ fn collect(inputs: &[String]) -> Result<Vec<PathBuf>> {
     Ok(v)
 }
 
-fn read_manifests(out: &Path) -> Vec<Manifest> {
-    let Ok(rd) = std::fs::read_dir(out) else {
-        return Vec::new();
-    };
-    let mut paths: Vec<PathBuf> = rd
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.file_name()
-                .and_then(|n| n.to_str())
-                .is_some_and(|n| n.starts_with("manifest") && n.ends_with(".json"))
-        })
-        .collect();
-    paths.sort();
-    paths
-        .iter()
-        .filter_map(|p| std::fs::read(p).ok())
-        .filter_map(|b| serde_json::from_slice(&b).ok())
-        .collect()
-}
-
-fn manifest_name(shard: Option<(usize, usize)>, items: Option<(usize, usize)>) -> String {
-    match (shard, items) {
-        (Some((i, n)), _) => format!("manifest-shard-{i}-of-{n}.json"),
-        (None, Some((a, b))) => format!("manifest-items-{a}-{b}.json"),
-        (None, None) => "manifest.json".into(),
-    }
-}
-
 /// The settings the command line gives (each flag absent where not given).
 fn cli_settings(a: &BakeArgs) -> BakeSettings {
     let flag = |on: bool| on.then_some(true);
@@ -477,22 +312,6 @@ fn cli_settings(a: &BakeArgs) -> BakeSettings {
     }
 }
 
-/// What decides the outputs' bytes, as the manifest records it.
-fn settings(plan: &BakePlan) -> Settings {
-    Settings {
-        envlight: env!("CARGO_PKG_VERSION").into(),
-        options: plan.options,
-        format: plan.container.name().into(),
-        texels: plan.texels.name().into(),
-        preset: plan.preset,
-        orientation: plan.orientation,
-        irradiance: plan.irradiance,
-        lights: plan.lights,
-        zstd: plan.supercompression == Supercompression::Zstd,
-        max_source_side: plan.max_source_side,
-    }
-}
-
 /// Writes one probe's files into `dir` (`bake::files::probe_files`); returns them (paths
 /// relative to `root`, with their sizes and hashes) and what clamping took.
 fn write_probe(
@@ -504,79 +323,8 @@ fn write_probe(
 ) -> Result<(Vec<Output>, Option<Clamps>)> {
     std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
     let made = probe_files(dir, baked, plan, lights)?;
-    let mut outputs = Vec::new();
-    for (path, bytes) in made.files {
-        write_atomic(&path, &bytes)?;
-        outputs.push(Output {
-            file: path
-                .strip_prefix(root)
-                .unwrap_or(&path)
-                .to_string_lossy()
-                .replace('\\', "/"),
-            bytes: bytes.len() as u64,
-            sha256: sha256(&bytes),
-        });
-    }
+    let outputs = write_outputs(root, made.files)?;
     Ok((outputs, made.clamped))
-}
-
-/// The record a probe's folder keeps of its bake (`probe.json`), so that another run into the
-/// same folder — a second shard, a retried job — finds it done.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct Record {
-    settings_sha256: String,
-    entry: Entry,
-}
-
-const RECORD: &str = "probe.json";
-
-/// Takes probe `name`'s lock in `out` (a file lock, which the system drops with a killed
-/// process), waiting while another run holds it; the lock and the seconds waited (None where
-/// it was free).
-fn lock_probe(out: &Path, name: &str, pb: &ProgressBar) -> Result<(std::fs::File, Option<f64>)> {
-    let dir = out.join(name);
-    std::fs::create_dir_all(&dir).with_context(|| dir.display().to_string())?;
-    let path = dir.join(".lock");
-    let f = std::fs::OpenOptions::new()
-        .create(true)
-        .truncate(false)
-        .write(true)
-        .open(&path)
-        .with_context(|| path.display().to_string())?;
-    let waited = match f.try_lock() {
-        Ok(()) => None,
-        Err(std::fs::TryLockError::WouldBlock) => {
-            pb.suspend(|| eprintln!("waiting for another bake of {name} to finish"));
-            let t0 = Instant::now();
-            f.lock().with_context(|| path.display().to_string())?;
-            Some(t0.elapsed().as_secs_f64())
-        }
-        Err(std::fs::TryLockError::Error(e)) => {
-            return Err(anyhow::Error::from(e).context(path.display().to_string()))
-        }
-    };
-    Ok((f, waited))
-}
-
-/// Probe `name`'s entry when its folder already holds a bake of `input_sha256` with these
-/// settings, its files intact.
-fn recorded(out: &Path, name: &str, settings_sha256: &str, input_sha256: &str) -> Option<Entry> {
-    let bytes = std::fs::read(out.join(name).join(RECORD)).ok()?;
-    let r: Record = serde_json::from_slice(&bytes).ok()?;
-    (r.settings_sha256 == settings_sha256
-        && r.entry.input_sha256 == input_sha256
-        && r.entry.status != "failed"
-        && outputs_intact(out, &r.entry))
-    .then_some(r.entry)
-}
-
-/// Whether every output of `e` under `root` is there with its recorded hash.
-fn outputs_intact(root: &Path, e: &Entry) -> bool {
-    !e.outputs.is_empty()
-        && e.outputs.iter().all(|o| {
-            std::fs::read(root.join(&o.file))
-                .is_ok_and(|b| b.len() as u64 == o.bytes && sha256(&b) == o.sha256)
-        })
 }
 
 /// `bake --merge`: joins the shard manifests in `out` into `out/manifest.json` and lists
@@ -724,8 +472,8 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
             );
         }
     }
-    let settings = settings(&plan);
-    let settings_sha256 = sha256(serde_json::to_string(&settings)?.as_bytes());
+    let settings = Settings::of(&plan);
+    let settings_sha256 = settings.sha256()?;
     let out = &a.out;
     std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
     let manifests: Vec<Manifest> = read_manifests(out)
@@ -1124,7 +872,10 @@ impl Run<'_> {
             .map(|n| n.to_string_lossy().to_string())
             .unwrap_or_default();
         pb.set_message(name.clone());
-        let (lock, lock_wait) = match lock_probe(self.out, &name, pb) {
+        let waiting = || pb.suspend(|| eprintln!("waiting for another bake of {name} to finish"));
+        let (lock, lock_wait) = match lock_probe(self.out, &name, waiting)
+            .map_err(anyhow::Error::from)
+        {
             Ok(l) => l,
             Err(e) => return Started::Done(Box::new(failed(pb, input, input_sha256, e, read_s))),
         };

@@ -29,15 +29,7 @@ impl std::fmt::Display for Exit {
 
 impl std::error::Error for Exit {}
 
-/// What failed a probe.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Failure {
-    /// The input itself: unreadable, truncated, not a map envlight can filter.
-    Input,
-    /// The device or the system: retrying may succeed.
-    System,
-}
+pub use crate::bake::manifest::Failure;
 
 /// Whether `e`, failing the probe read from `input`, is the input's fault: a file envlight
 /// could not use ([`crate::Error::BadFile`]), a value it refuses ([`crate::Error::Invalid`]) or
