@@ -204,25 +204,14 @@ fn stage_ms(t: &[Timing]) -> [f64; 3] {
     STAGES.map(|(label, _)| t.iter().filter(|t| t.label == label).map(|t| t.ms).sum())
 }
 
-/// One input's rows: `frames` maps (the sun moving), each refiltered `reps` times after an
-/// untimed frame; the median per stage; errors from the last frame. Also the chain's
-/// conversion plan, where it has one: the host's time to make it and its size.
-fn input_rows(
+/// The resources one frame's refilter writes, made once for `mapping` `w` × `h` inputs, and
+/// the chain's conversion plan where it pays (with a note of its host time and size).
+fn frame_resources(
     ctx: &Context,
     p: &Passes,
-    mapping: Mapping,
-    size: u32,
+    (mapping, w, h): (Mapping, u32, u32),
     s: &FrameSettings,
-    reps: usize,
-) -> Result<(String, [f64; 3], String, Option<String>)> {
-    let frames: Vec<EnvMap> = (0..3)
-        .map(|k| sky_at(mapping, size, 40.0 + 25.0 * k as f64))
-        .collect();
-    let gpu: Vec<GpuEnvMap> = frames
-        .iter()
-        .map(|m| GpuEnvMap::upload(ctx, m))
-        .collect::<crate::error::Result<_>>()?;
-    let (w, h) = (gpu[0].width, gpu[0].height);
+) -> Result<(Frame, Option<String>)> {
     let frame = Frame {
         l00: Buffer::new(
             ctx,
@@ -276,6 +265,29 @@ fn input_rows(
             plan.bytes() as f64 / 1e6
         )
     });
+    Ok((frame, plan_note))
+}
+
+/// One input's rows: `frames` maps (the sun moving), each refiltered `reps` times after an
+/// untimed frame; the median per stage; errors from the last frame. Also the chain's
+/// conversion plan, where it has one: the host's time to make it and its size.
+fn input_rows(
+    ctx: &Context,
+    p: &Passes,
+    mapping: Mapping,
+    size: u32,
+    s: &FrameSettings,
+    reps: usize,
+) -> Result<(String, [f64; 3], String, Option<String>)> {
+    let frames: Vec<EnvMap> = (0..3)
+        .map(|k| sky_at(mapping, size, 40.0 + 25.0 * k as f64))
+        .collect();
+    let gpu: Vec<GpuEnvMap> = frames
+        .iter()
+        .map(|m| GpuEnvMap::upload(ctx, m))
+        .collect::<crate::error::Result<_>>()?;
+    let (w, h) = (gpu[0].width, gpu[0].height);
+    let (frame, plan_note) = frame_resources(ctx, p, (mapping, w, h), s)?;
     let mut index = 0;
     let timed = time_frames(ctx, p, &gpu, &frame, s, reps, &mut index)?;
     let copy = CopyPass::new(ctx)?;

@@ -329,9 +329,14 @@ fn peer_jobs(opts: &PeersOptions, tmp: &Path) -> Result<Vec<Job>> {
             goal: "≤ 0.15 s whole process",
         },
     ];
-    // The FIS row: a GGX α 0.3 unit sphere, 128², FIS with 64 samples, lit by the map
-    // (lights extracted, the default), seen orthographically.
-    let map_abs = std::fs::canonicalize(opts.map).with_context(|| map.clone())?;
+    write_fis_scene(opts.map, tmp)?;
+    Ok(jobs)
+}
+
+/// The FIS job's scene, `tmp/fis.toml`: a GGX α 0.3 unit sphere, 128², FIS with 64 samples,
+/// lit by `map` (lights extracted, the default), seen orthographically.
+fn write_fis_scene(map: &Path, tmp: &Path) -> Result<()> {
+    let map_abs = std::fs::canonicalize(map).with_context(|| map.display().to_string())?;
     std::fs::write(
         tmp.join("fis.toml"),
         format!(
@@ -343,7 +348,7 @@ fn peer_jobs(opts: &PeersOptions, tmp: &Path) -> Result<Vec<Job>> {
         ),
     )?;
 
-    Ok(jobs)
+    Ok(())
 }
 
 /// One job's medians: (job, envlight s, cmft s, envlight cold s, GPU ms, envlight error,
