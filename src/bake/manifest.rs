@@ -137,6 +137,30 @@ pub struct Entry {
     pub reduced: Option<Reduced>,
 }
 
+impl Entry {
+    /// An entry of `input` (its SHA-256 `input_sha256`) with `status`, nothing else recorded
+    /// yet: no outputs, times zero, every optional part absent.
+    pub fn new(input: String, input_sha256: String, status: &str) -> Entry {
+        Entry {
+            input,
+            input_sha256,
+            status: status.into(),
+            error: None,
+            failure: None,
+            outputs: Vec::new(),
+            seconds: 0.0,
+            read_seconds: 0.0,
+            gpu_ms: 0.0,
+            check: None,
+            clamped: None,
+            separated: None,
+            lock_wait_seconds: None,
+            stages: None,
+            reduced: None,
+        }
+    }
+}
+
 /// A source reduced before its bake.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Reduced {
@@ -352,21 +376,8 @@ mod tests {
 
     fn entry(input_sha256: &str, outputs: Vec<Output>) -> Entry {
         Entry {
-            input: "in/p.hdr".into(),
-            input_sha256: input_sha256.into(),
-            status: "baked".into(),
-            error: None,
-            failure: None,
             outputs,
-            seconds: 1.0,
-            read_seconds: 0.1,
-            gpu_ms: 2.0,
-            check: None,
-            clamped: None,
-            separated: None,
-            lock_wait_seconds: None,
-            stages: None,
-            reduced: None,
+            ..Entry::new("in/p.hdr".into(), input_sha256.into(), "baked")
         }
     }
 

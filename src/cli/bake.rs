@@ -222,21 +222,10 @@ fn failed(
     pb.suspend(|| eprintln!("error: {e:#}"));
     let failure = classify(&e, Path::new(&input));
     Entry {
-        input,
-        input_sha256,
-        status: "failed".into(),
         error: Some(format!("{e:#}")),
         failure: Some(failure),
-        outputs: Vec::new(),
-        seconds: 0.0,
         read_seconds,
-        gpu_ms: 0.0,
-        check: None,
-        clamped: None,
-        separated: None,
-        lock_wait_seconds: None,
-        stages: None,
-        reduced: None,
+        ..Entry::new(input, input_sha256, "failed")
     }
 }
 
@@ -997,13 +986,7 @@ impl Run<'_> {
             .with_context(|| w.path.display().to_string());
         let entry = match result {
             Ok((outputs, gpu_ms, check, clamped)) => Entry {
-                input: w.input,
-                input_sha256: w.input_sha256,
-                status: "baked".into(),
-                error: None,
-                failure: None,
                 outputs,
-                seconds: 0.0,
                 read_seconds: w.read_s,
                 gpu_ms,
                 check,
@@ -1012,6 +995,7 @@ impl Run<'_> {
                 lock_wait_seconds: w.lock_wait,
                 stages: Some(stages),
                 reduced: w.reduced,
+                ..Entry::new(w.input, w.input_sha256, "baked")
             },
             Err(e) => return failed(pb, w.input, w.input_sha256, e, w.read_s),
         };
