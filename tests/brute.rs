@@ -374,7 +374,7 @@ fn phong_levels_match_float64() {
     common::finish(ctx);
 }
 
-/// The visit floor (`BruteFilter::set_visit_floor`, what `bench peers` times as the floor of
+/// The visit floor (`BruteFilter::set_visit_floor`, what `cargo xtask lab peers` times as the floor of
 /// the exact sum) visits what the sum visits, read once each: per output texel Σ L·Ω over
 /// the walk's texels. It must hold every texel whose centre lies inside the lobe's cap above
 /// the cut-off (those the rule keeps) and nothing past the walk's stated reach: the rows'

@@ -99,11 +99,11 @@ fn a_closed_pipe_ends_output_without_a_panic() {
     assert!(!err.contains("panicked"), "stderr: {err}");
 }
 
-/// Commands that read the user's probes or peers take them from flags or environment
-/// variables, never from a path of the developers' checkout: `report` without `--probes` or
-/// `ENVLIGHT_PROBES`, and `bench peers` without `--map`, say what they need.
+/// Commands that read the user's probes take them from flags or environment variables, never
+/// from a path of the developers' checkout: `report` without `--probes` or `ENVLIGHT_PROBES`
+/// says what it needs.
 #[test]
-fn probes_and_peers_come_from_the_user() {
+fn probes_come_from_the_user() {
     let exe = env!("CARGO_BIN_EXE_envlight");
     let o = std::process::Command::new(exe)
         .args(["--device", "cpu", "report", "--quick", "--out"])
@@ -113,10 +113,4 @@ fn probes_and_peers_come_from_the_user() {
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("--probes"), "{err}");
-    let o = std::process::Command::new(exe)
-        .args(["bench", "peers"])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("--map"), "{err}");
 }

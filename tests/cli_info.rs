@@ -60,3 +60,46 @@ fn lights_command_reports_the_sun() {
     assert!(String::from_utf8_lossy(&missing.stderr).contains("none.hdr"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `envlight --help` and `envlight bench --help` list the user's jobs: no peer tool (cmft,
+/// glTF-IBL-Sampler) and none of the lab's commands, which `cargo xtask lab` runs.
+#[test]
+fn help_lists_the_users_jobs_only() {
+    let exe = env!("CARGO_BIN_EXE_envlight");
+    for args in [&["--help"][..], &["bench", "--help"][..]] {
+        let o = std::process::Command::new(exe).args(args).output().unwrap();
+        assert!(o.status.success());
+        let text = String::from_utf8_lossy(&o.stdout).to_lowercase();
+        assert!(text.contains("commands:"), "{text}");
+        for name in [
+            "cmft",
+            "ibl",
+            "sampler",
+            "peers",
+            "formats",
+            "scale",
+            "fis ",
+            "accuracy ",
+            "accuracy table",
+        ] {
+            assert!(!text.contains(name), "{args:?} names {name}:\n{text}");
+        }
+    }
+    for job in [
+        "info",
+        "convert",
+        "irradiance",
+        "prefilter",
+        "bake",
+        "render",
+        "report",
+        "bench",
+    ] {
+        let o = std::process::Command::new(exe)
+            .args(["help"])
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(text.contains(&format!("  {job} ")), "no {job}:\n{text}");
+    }
+}

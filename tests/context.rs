@@ -144,7 +144,7 @@ fn a_leak_reported_at_teardown_reaches_the_log() {
 }
 
 /// A context envlight creates says what its creation cost, phase by phase (the floor `envlight
-/// devices` and `bench peers` report): every phase finite and non-negative, the instance and
+/// devices` and `cargo xtask lab peers` report): every phase finite and non-negative, the instance and
 /// device together above zero (a driver does work there).
 #[test]
 fn an_owned_context_reports_its_start_up() {

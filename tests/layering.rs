@@ -348,6 +348,42 @@ fn the_library_keeps_to_std_and_its_own_crates() {
     }
 }
 
+/// The lab (tools/lab) is a user of the library like any other: it depends on it without the
+/// test hooks and names none of them, nor the command line's modules; and the program's own
+/// sources neither time cmft nor write the lab's performance pages.
+#[test]
+fn the_lab_uses_the_public_api_and_the_program_keeps_out_of_the_lab() {
+    let manifest = std::fs::read_to_string("tools/lab/Cargo.toml").unwrap();
+    let dep = manifest
+        .lines()
+        .find(|l| l.starts_with("envlight = "))
+        .expect("the lab depends on envlight");
+    assert!(
+        dep.contains("default-features = false") && !dep.contains("test-hooks"),
+        "tools/lab/Cargo.toml: {dep}"
+    );
+    let lab = sources("tools/lab/src", "rs");
+    assert!(lab.len() >= 10, "the lab's sources: {}", lab.len());
+    for (path, text) in lab {
+        for name in ["passes::testing", "envlight::hooks", "envlight::cli"] {
+            assert!(
+                code(&text).all(|l| !l.contains(name)),
+                "{}: the lab names {name}",
+                path.display()
+            );
+        }
+    }
+    for (path, text) in sources("src/cli", "rs") {
+        for name in ["ENVLIGHT_CMFT", "bench peers", "page::write_section"] {
+            assert!(
+                code(&text).all(|l| !l.contains(name)),
+                "{}: the program names {name}, which is the lab's",
+                path.display()
+            );
+        }
+    }
+}
+
 #[test]
 fn only_the_runner_submits() {
     for (path, text) in sources("src", "rs") {

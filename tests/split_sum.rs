@@ -195,7 +195,7 @@ fn furnace_shows_the_albedo() {
 /// it is the n = v = r lobe at grazing views
 /// (venice, pixels within 37° of the view axis: 1.8%, 3.6%, 6.8%); on the sun map α between
 /// two levels also lerps two highlights of very different peaks (6 levels: 34% at α 0.1).
-/// `envlight report --split-sum-every-probe` scores every probe.
+/// `cargo xtask lab recipes` scores every probe.
 #[test]
 fn split_sum_error_against_mc_on_real_probes() {
     let Some(dir) = common::probes() else {

@@ -170,7 +170,7 @@ pub mod split_sum {
     pub const DEFAULT_LEVELS: u32 = 7;
     /// FIS samples per prefiltered texel by default: where more samples stop paying (on a
     /// sun probe at GGX α 0.16, 256 samples' chain errs 8% against converged MC, FIS's own
-    /// render 5%; `envlight report --split-sum-every-probe` scores the chain).
+    /// render 5%; `cargo xtask lab recipes` scores the chain).
     pub const DEFAULT_SAMPLES: u32 = 256;
     /// Side of the prefiltered chain's level 0 by default (capped by the FIS paraboloid's).
     pub const DEFAULT_SIZE: u32 = 512;
@@ -211,7 +211,7 @@ pub mod lights {
     /// Diffuse techniques (SH irradiance, prefiltered irradiance) extract above this many
     /// times the mean luminance, uncapped, and sum the light texels by clusters: a deep
     /// extraction leaves SH 2 only the smooth residual, so the sharp softboxes of a studio
-    /// probe stop ringing into it (`envlight report --table` scores SH 2 with lights on the
+    /// probe stop ringing into it (`cargo xtask lab table` scores SH 2 with lights on the
     /// five table probes).
     pub const DIFFUSE_RATIO: f64 = 2.0;
     /// Columns of the lat-long grid whose cells gather light texels into clusters for the
@@ -229,7 +229,7 @@ pub mod lights {
     /// FIS, split-sum and footprint lookups extract above this many times the mean
     /// luminance by default (the renderer's chain, summed through the light tree): a shallow
     /// extraction leaves a studio's softboxes in the chain, whose few filtered samples alias
-    /// them (`envlight report --table` scores FIS with lights).
+    /// them (`cargo xtask lab table` scores FIS with lights).
     pub const CHAIN_RATIO: f64 = 2.0;
     /// Most light texels of the chain's extraction by default, and the most a scene may ask
     /// for: llvmpipe ends a loop after 65 535 iterations, and a pixel's walk may visit every
@@ -464,7 +464,7 @@ pub mod footprint {
     /// Most taps along a footprint's major axis; beyond that ratio the taps blur more.
     pub const MAX_TAPS: u32 = 16;
     /// Lod bias of each tap (log2 of the texel side over the tap's spacing): half a level
-    /// finer offsets the tent a trilinear read adds to the box (`envlight report --table`
+    /// finer offsets the tent a trilinear read adds to the box (`cargo xtask lab table`
     /// scores the mirror against the pixel-area mean).
     pub const LOD_BIAS: f64 = -0.5;
     /// Taken off a footprint's length over the tap spacing before rounding up, so that a

@@ -1,6 +1,6 @@
 //! The `envlight` program: its commands and what each runs.
 
-use super::reports::{AccuracyWhat, Bench};
+use super::reports::Bench;
 use super::{validation_messages, Global};
 use clap::{Parser, Subcommand};
 
@@ -25,11 +25,6 @@ enum Command {
     Sh(super::maps::ShArgs),
     Irradiance(super::maps::IrradianceArgs),
     Prefilter(super::maps::PrefilterArgs),
-    /// What accuracy costs: SH irradiance of orders 0–8 against brute force, with GPU times
-    Accuracy {
-        #[command(subcommand)]
-        what: AccuracyWhat,
-    },
     Demo(super::scene::DemoArgs),
     Render(super::scene::RenderArgs),
     Plan(super::scene::PlanArgs),
@@ -63,7 +58,6 @@ pub fn main() {
         Command::Sh(a) => super::maps::sh(g, a),
         Command::Irradiance(a) => super::maps::irradiance(g, a),
         Command::Prefilter(a) => super::maps::prefilter(g, a),
-        Command::Accuracy { what } => super::reports::accuracy(g, what),
         Command::Demo(a) => super::scene::demo(g, a),
         Command::Render(a) => super::scene::render(g, a),
         Command::Plan(a) => super::scene::plan(a),

@@ -250,7 +250,7 @@ fn collect(inputs: &[String]) -> Result<Vec<PathBuf>> {
     for s in inputs {
         let p = PathBuf::from(s);
         if p.is_dir() {
-            v.extend(super::probe_files(&p)?);
+            v.extend(crate::io::probes_in(&p)?);
         } else if p.is_file() {
             v.push(p);
         } else {

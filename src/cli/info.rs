@@ -167,21 +167,10 @@ pub fn devices(g: &Global) -> Result<()> {
 }
 
 /// The line `envlight devices` reports its context's start-up and teardown with (read back by
-/// `bench peers`, [`parse_startup_line`]).
+/// `cargo xtask lab peers`).
 pub fn startup_line(s: &crate::gpu::Startup, teardown_ms: f64) -> String {
     format!(
         "start-up ms: loader {:.1}, instance {:.1}, device {:.1}, rest {:.1}; teardown ms {:.1}",
         s.loader_ms, s.instance_ms, s.device_ms, s.rest_ms, teardown_ms
     )
-}
-
-/// The five numbers of a [`startup_line`] (loader, instance, device, rest, teardown), if
-/// `text` holds one.
-pub fn parse_startup_line(text: &str) -> Option<[f64; 5]> {
-    let line = text.lines().find(|l| l.starts_with("start-up ms: "))?;
-    let mut v = line
-        .split(|c: char| c == ',' || c == ';' || c == ':' || c.is_whitespace())
-        .filter_map(|w| w.parse::<f64>().ok());
-    let out = [v.next()?, v.next()?, v.next()?, v.next()?, v.next()?];
-    v.next().is_none().then_some(out)
 }

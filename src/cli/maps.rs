@@ -136,7 +136,7 @@ pub struct PrefilterArgs {
     /// cmft's glossBias for --phong-levels
     #[arg(long, value_parser = finite_f64, default_value_t = 1.0)]
     gloss_bias: f64,
-    /// Benchmark instrument (`envlight bench peers`), with --phong: write, per output texel,
+    /// Benchmark instrument (`cargo xtask lab peers`), with --phong: write, per output texel,
     /// the sum of L·Ω over the source texels the exact sum visits, read once each without the
     /// lobe's rule, so that the time printed is the floor of visiting them; not a prefiltered map
     #[arg(long, conflicts_with = "phong_levels")]
@@ -145,7 +145,7 @@ pub struct PrefilterArgs {
     out: FilterOut,
 }
 
-/// Host span labels shared by the commands here (`bench peers` reads them back).
+/// Host span labels shared by the commands here (`cargo xtask lab peers` reads them back).
 const LOAD: &str = "load file ∥ create device";
 const UPLOAD: &str = "upload ∥ build pipelines";
 const RUN: &str = "record, GPU work, wait";

@@ -152,26 +152,6 @@ pub fn finite_f32(s: &str) -> std::result::Result<f32, String> {
     Ok(v as f32)
 }
 
-/// The probe files of a folder (.hdr, .exr, .dds, .pfm, any case), sorted.
-pub fn probe_files(dir: &Path) -> Result<Vec<PathBuf>> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
-        .with_context(|| dir.display().to_string())?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.is_file()
-                && matches!(
-                    p.extension()
-                        .and_then(|e| e.to_str())
-                        .map(|e| e.to_ascii_lowercase())
-                        .as_deref(),
-                    Some("hdr" | "exr" | "dds" | "pfm")
-                )
-        })
-        .collect();
-    v.sort();
-    Ok(v)
-}
-
 /// The device the options ask for.
 pub fn context(g: &Global) -> Result<Context> {
     let mut opts = ContextOptions::default();
@@ -297,7 +277,7 @@ pub fn save(map: &EnvMap, output: &Path, png: Option<ToneMap>) -> Result<()> {
 }
 
 /// Host wall-clock spans of a command, printed as "host x ms label" lines beside its GPU
-/// spans, so that where a whole process's time goes can be read off its output (`bench peers`
+/// spans, so that where a whole process's time goes can be read off its output (`cargo xtask lab peers`
 /// tabulates them).
 pub struct HostClock {
     last: Instant,

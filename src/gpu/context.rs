@@ -286,7 +286,7 @@ pub struct Context {
 }
 
 /// What creating an owned context cost on the host, in milliseconds: the floor under every
-/// job of a process, which the driver sets (see `envlight devices` and `bench peers`).
+/// job of a process, which the driver sets (see `envlight devices` and `cargo xtask lab peers`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Startup {
     /// Loading the Vulkan loader library.

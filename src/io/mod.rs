@@ -120,6 +120,31 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     })
 }
 
+/// The probe files of a folder: its .hdr, .exr, .dds and .pfm files (any case), sorted, as
+/// `envlight bake DIR` and the benchmarks take a folder.
+pub fn probes_in(dir: &Path) -> Result<Vec<PathBuf>> {
+    let io = |source| Error::Io {
+        path: dir.to_path_buf(),
+        source,
+    };
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(io)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.is_file()
+                && matches!(
+                    p.extension()
+                        .and_then(|e| e.to_str())
+                        .map(|e| e.to_ascii_lowercase())
+                        .as_deref(),
+                    Some("hdr" | "exr" | "dds" | "pfm")
+                )
+        })
+        .collect();
+    v.sort();
+    Ok(v)
+}
+
 /// What to do with NaN, infinite and negative texels.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Sanitize {

@@ -7,6 +7,7 @@ mod lights;
 pub mod plan;
 mod records;
 mod resident;
+pub mod score;
 mod shading;
 
 pub use crate::scene::MapShape;

@@ -305,7 +305,7 @@ fn white() -> [f64; 3] {
 }
 
 /// The default lod bias of filtered importance sampling: 0 reads the level whose texel
-/// matches each sample's solid angle (`envlight bench fis` sweeps the bias against Monte
+/// matches each sample's solid angle (`cargo xtask lab fis` sweeps the bias against Monte
 /// Carlo; docs/fis/).
 pub const DEFAULT_FIS_BIAS: f64 = defaults::FIS_BIAS;
 

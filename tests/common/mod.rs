@@ -4,6 +4,10 @@
 pub mod bake;
 pub mod compare;
 pub mod scenes;
+// The probes folder and skip records, shared with the lab's tests (tools/lab/tests).
+mod probes;
+#[allow(unused_imports)]
+pub use probes::{probes, skipped};
 
 /// The tuning constants GLSL and Rust share (`src/abi/parameters.rs`; the layout is private to
 /// the library), read by path as tools/shaderc reads the layout: the tests check the library
@@ -43,33 +47,6 @@ pub fn finish(ctx: Context) {
     );
 }
 
-/// The real probes folder from ENVLIGHT_PROBES, or None when it is unset. When it is set it
-/// must exist, and in CI (`CI` set, as `.ci/run` does) it must be set: there the probe tests
-/// never skip. A skip is noted on stderr and in the file `ENVLIGHT_SKIP_LOG` names, which
-/// `cargo xtask test` prints in its summary.
-pub fn probes() -> Option<PathBuf> {
-    match std::env::var_os("ENVLIGHT_PROBES") {
-        Some(p) => {
-            let p = PathBuf::from(p);
-            assert!(
-                p.is_dir(),
-                "ENVLIGHT_PROBES={} is not a folder",
-                p.display()
-            );
-            Some(p)
-        }
-        None => {
-            assert!(
-                std::env::var_os("CI").is_none(),
-                "CI is set but ENVLIGHT_PROBES is not: the tests on real probes must run in CI \
-                 (.ci/run sets it to ../shared/probes)"
-            );
-            skipped("ENVLIGHT_PROBES is unset: the tests on real probes did not run");
-            None
-        }
-    }
-}
-
 /// Whether the device has `what` (`has`), for a test whose comparison needs it: a test that
 /// compares a feature's path with its fallback compares the fallback with itself where the
 /// feature is missing. Without it the test is recorded as skipped, and in CI (`CI` set)
@@ -85,25 +62,6 @@ pub fn require(has: bool, what: &str) -> bool {
         ));
     }
     has
-}
-
-/// Records that the current test skipped its work, and why.
-pub fn skipped(why: &str) {
-    let test = std::thread::current()
-        .name()
-        .unwrap_or("(unnamed test)")
-        .to_string();
-    eprintln!("SKIPPED {test}: {why}");
-    if let Some(log) = std::env::var_os("ENVLIGHT_SKIP_LOG") {
-        use std::io::Write;
-        if let Ok(mut f) = std::fs::OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(log)
-        {
-            let _ = writeln!(f, "{test}: {why}");
-        }
-    }
 }
 
 /// Writes actual and expected maps beside each other under target/test-output for a person to

@@ -10,7 +10,6 @@
 //! k/(levels − 1)) and Bevy (lod = perceptual roughness × (levels − 1)); cmft's Phong levels
 //! are read at the exponent that matches GGX α (`CubeConvention::level_of`).
 
-use super::scoring::{errors, scene, sphere_pixels, truth};
 use crate::bake::output::Preset;
 use crate::math::brdf::Brdf;
 use crate::math::camera::{trace, Camera, Shape};
@@ -18,6 +17,7 @@ use crate::math::convert::sample;
 use crate::math::mip::Level;
 use crate::math::split_sum::{dfg_table, level_alpha, shade, shade_taps, texel_dir};
 use crate::math::Mapping;
+use crate::render::score::{errors, scene, sphere_pixels, truth};
 use crate::render::Renderer;
 use crate::scene::{LightsMode, SplitSumSettings, Technique};
 use crate::{EnvMap, Orientation};

@@ -8,7 +8,7 @@
 //! every output texel (each read once, written once, no arithmetic).
 
 use super::floors::{copy_ms, probe_texels, rel_lum, worse};
-use super::{median, page};
+use super::median;
 use crate::gpu::{Buffer, Context, Timing};
 use crate::math::convert::residual_edge_points;
 use crate::math::envmap::luminance;
@@ -500,7 +500,8 @@ fn frame_errors(
 
 /// Runs the benchmark: cube inputs of `cubes` sides and lat-long inputs of `widths`, each
 /// refiltered with `s` into a chain of each side in `chains` (its paraboloid twice that);
-/// prints the table and, with `out`, writes the "dynamic" section of that performance page.
+/// prints the method, a blank line and the tables (`cargo xtask lab dynamic` writes them as
+/// a performance page's section).
 pub fn bench_dynamic(
     ctx: &Context,
     cubes: &[u32],
@@ -508,7 +509,6 @@ pub fn bench_dynamic(
     chains: &[u32],
     s: &FrameSettings,
     reps: usize,
-    out: Option<&std::path::Path>,
 ) -> Result<()> {
     let passes = Passes {
         proj: ShProjector::new(ctx, Subgroups::Auto)?,
@@ -628,18 +628,5 @@ pub fn bench_dynamic(
         ),
     };
     print!("{method}\n\n{body}");
-    if let Some(out) = out {
-        let section = page::Section {
-            job: if sliced { "dynamic-sliced" } else { "dynamic" },
-            title: if sliced {
-                "An environment that changes every frame, its chain time-sliced"
-            } else {
-                "An environment that changes every frame"
-            },
-            method: &method,
-            body: &body,
-        };
-        page::write_section(out, &section, &page::Provenance::of(ctx.info()))?;
-    }
     Ok(())
 }

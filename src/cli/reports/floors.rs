@@ -2,8 +2,7 @@
 //! (one read and one write of each of its texels, `passes::testing::copy`), and its error, at
 //! several sizes of one lat-long map — a roofline table a GPU timer reads at a glance.
 
-use super::scoring::{errors, scene, sphere_pixels, truth};
-use super::{median, page};
+use super::median;
 use crate::abi::SH_MAX_LMAX;
 use crate::gpu::{total_ms, Context, Timed, Timing};
 use crate::math::brdf::Brdf;
@@ -20,6 +19,7 @@ use crate::passes::{
     BruteFilter, ConvertOptions, Converter, FilterTarget, GpuLights, LightsPass, MipChain,
     PrefilterOptions, ShEvaluator, ShProjector, SplitSum,
 };
+use crate::render::score::{errors, scene, sphere_pixels, truth};
 use crate::render::{PassKind, Renderer};
 use crate::scene::{LookupFilter, SplitSumSettings, Technique};
 use crate::{EnvMap, GpuEnvMap, Mapping, Orientation};
@@ -584,13 +584,9 @@ fn shade_rows(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Vec<Row>> {
 }
 
 /// `envlight bench floors`: the rows at each lat-long width in `sizes` (the analytic sky, a
-/// sun 10⁵ × the zenith), printed, and with `out` written as the page's "floors" section.
-pub fn bench_floors(
-    ctx: &Context,
-    sizes: &[u32],
-    reps: usize,
-    out: Option<&std::path::Path>,
-) -> Result<()> {
+/// sun 10⁵ × the zenith), printed: the method, a blank line, the table (`cargo xtask lab
+/// floors` writes it as a performance page's section).
+pub fn bench_floors(ctx: &Context, sizes: &[u32], reps: usize) -> Result<()> {
     let copy = CopyPass::new(ctx)?;
     let mut rows = Vec::new();
     for &w in sizes {
@@ -642,14 +638,5 @@ pub fn bench_floors(
         ));
     }
     print!("{method}\n\n{body}");
-    if let Some(out) = out {
-        let section = page::Section {
-            job: "floors",
-            title: "Every pass against its floor",
-            method: &method,
-            body: &body,
-        };
-        page::write_section(out, &section, &page::Provenance::of(ctx.info()))?;
-    }
     Ok(())
 }

@@ -1,22 +1,12 @@
-//! Benchmarks and reports, in one place: GPU time from timestamp queries, medians of
-//! repeated runs, ratios against a floor measured in the same run, and the error beside
-//! each time.
+//! The user's `report` and `bench` of envlight's own passes on their device: GPU time from
+//! timestamp queries, medians of repeated runs, ratios against a floor measured in the same
+//! run, and the error beside each time. The project's lab (benchmarks against the peers, the
+//! accuracy table, the performance pages) is `tools/lab`.
 
-pub mod accuracy;
 pub mod cubes;
 mod dynamic;
-pub mod fis;
-pub mod fis_report;
 mod floors;
-pub mod formats;
-pub mod ibl;
-pub mod page;
-pub mod peers;
-mod recipes;
 pub mod report;
-pub mod scale;
-mod scoring;
-pub mod table;
 
 use super::{context, Global};
 use crate::gpu::total_ms;
@@ -30,26 +20,8 @@ use crate::passes::{
     BruteFilter, ConvertOptions, Converter, FilterTarget, ShEvaluator, ShProjector,
 };
 use crate::{EnvMap, GpuEnvMap, Mapping, Orientation};
-use anyhow::{Context as _, Result};
+use anyhow::Result;
 use clap::Subcommand;
-use std::path::{Path, PathBuf};
-
-/// What accuracy costs: SH irradiance of orders 0–8 against brute force, with GPU times
-#[derive(Subcommand)]
-pub enum AccuracyWhat {
-    /// SH irradiance against brute force on maps or folders of maps
-    Sh {
-        /// Maps, or folders whose .hdr/.exr/.dds/.pfm files are all taken
-        #[arg(required = true)]
-        inputs: Vec<PathBuf>,
-        /// Output folder for accuracy.md, accuracy.csv and accuracy.png
-        #[arg(long, default_value = "out/accuracy")]
-        out: PathBuf,
-        /// Cube face size of the set of normals compared
-        #[arg(long, default_value_t = 8)]
-        size: u32,
-    },
-}
 
 /// Benchmarks (GPU time from timestamp queries)
 #[derive(Subcommand)]
@@ -72,10 +44,6 @@ pub enum Bench {
         /// Timed repetitions per case (the median is reported)
         #[arg(long, default_value_t = 3)]
         reps: usize,
-        /// Write the result as the "floors" section of this performance page
-        /// (docs/performance/<device>.md)
-        #[arg(long)]
-        out: Option<PathBuf>,
     },
     /// What refiltering an environment that changes every frame costs: SH 2 + irradiance,
     /// light extraction and the GGX chain recorded into one submission a frame, per-stage GPU
@@ -103,10 +71,6 @@ pub enum Bench {
         /// Timed rounds of three frames each (the median is reported)
         #[arg(long, default_value_t = 3)]
         reps: usize,
-        /// Write the result as the "dynamic" section of this performance page
-        /// (docs/performance/<device>.md)
-        #[arg(long)]
-        out: Option<PathBuf>,
     },
     /// Brute-force irradiance against SH (projection + evaluation) at equal output sizes
     Irradiance {
@@ -120,112 +84,6 @@ pub enum Bench {
         #[arg(long, default_value_t = 3)]
         reps: usize,
     },
-    /// What accuracy costs in time: FIS and plain BRDF-sampled MC against a converged MIS
-    /// reference, on a studio and a sun map (CSV, markdown and a PNG plot)
-    Fis {
-        /// Environment maps (default: the bundled sky)
-        #[arg(long, value_delimiter = ',')]
-        maps: Vec<PathBuf>,
-        /// Image sides
-        #[arg(long, value_delimiter = ',', default_value = "512,1024")]
-        sizes: Vec<u32>,
-        /// FIS sample counts
-        #[arg(long, value_delimiter = ',', default_value = "1,4,16,64,256")]
-        fis: Vec<u32>,
-        /// Plain MC sample counts
-        #[arg(long, value_delimiter = ',', default_value = "1,4,16,64,256,1024,4096")]
-        mc: Vec<u32>,
-        /// Samples per pixel of the MIS reference
-        #[arg(long, default_value_t = 16384)]
-        reference: u32,
-        /// Lod biases swept at FIS 16 and 64
-        #[arg(long, value_delimiter = ',', default_value = "-1,0,0.5,1,1.5,2,3", value_parser = crate::cli::finite_f64)]
-        biases: Vec<f64>,
-        /// Output folder
-        #[arg(long, default_value = "docs/fis")]
-        out: PathBuf,
-    },
-    /// Whole-process times of the jobs users give cmft, paired with cmft on the same machine,
-    /// each with its error (markdown; --out writes its section of a performance page)
-    Peers {
-        /// The map every job reads (.hdr, which cmft reads too)
-        #[arg(long)]
-        map: PathBuf,
-        /// cmft's executable (default: $ENVLIGHT_CMFT); without it cmft's columns stay empty
-        #[arg(long)]
-        cmft: Option<PathBuf>,
-        /// Timed pairs per fast job (the median is reported)
-        #[arg(long, default_value_t = 5)]
-        reps: usize,
-        /// Timed pairs for the Phong job
-        #[arg(long, default_value_t = 1)]
-        phong_reps: usize,
-        /// The performance page (docs/performance/DEVICE.md) to write this job's section into
-        #[arg(long)]
-        out: Option<PathBuf>,
-    },
-    /// GGX cubes of `envlight bake --preset khronos` beside glTF-IBL-Sampler's on the same
-    /// probes: whole-process seconds and each level's error against the exact prefilter, at
-    /// several sample counts for each (markdown)
-    Ibl {
-        /// Probes, or folders whose .hdr/.exr/.dds/.pfm files are all taken
-        #[arg(required = true)]
-        inputs: Vec<PathBuf>,
-        /// glTF-IBL-Sampler's wrapper (default: $ENVLIGHT_IBLSAMPLER); without it envlight runs
-        /// alone
-        #[arg(long)]
-        sampler: Option<PathBuf>,
-        /// Cube face size at level 0 (levels: log2 of it, as the sampler's default)
-        #[arg(long, default_value_t = 256)]
-        size: u32,
-        /// Interleaved runs of each configuration (the median is reported)
-        #[arg(long, default_value_t = 3)]
-        runs: u32,
-        /// envlight's FIS samples per texel, one configuration each
-        #[arg(long, value_delimiter = ',', default_value = "16,64,256")]
-        ours: Vec<u32>,
-        /// glTF-IBL-Sampler's sample counts, one configuration each
-        #[arg(long, value_delimiter = ',', default_value = "16,64,256,1024")]
-        theirs: Vec<u32>,
-        /// Texels checked per level against the exact prefilter
-        #[arg(long, default_value_t = 192)]
-        texels: u32,
-        /// The performance page (docs/performance/DEVICE.md) to write this job's section into
-        #[arg(long)]
-        out: Option<PathBuf>,
-    },
-    /// What a bake costs against the source's resolution: a lat-long probe upsampled ×k (the
-    /// same picture), baked in its own process: seconds, peak RSS, stages and errors
-    /// (markdown)
-    Scale {
-        /// A lat-long probe
-        input: PathBuf,
-        /// Upsampling factors
-        #[arg(long, value_delimiter = ',', default_value = "1,4,8,16")]
-        factors: Vec<u32>,
-        /// The performance page (docs/performance/DEVICE.md) to write this job's section into
-        #[arg(long)]
-        out: Option<PathBuf>,
-    },
-    /// What each KTX2 texel format and Zstandard cost and keep: per probe the bytes of its
-    /// cubes and each specular level's error against rgba32f (markdown)
-    Formats {
-        /// Probes, or folders whose .hdr/.exr/.dds/.pfm files are all taken
-        #[arg(required = true)]
-        inputs: Vec<PathBuf>,
-        /// Specular cube face size at level 0
-        #[arg(long, default_value_t = 256)]
-        specular_size: u32,
-        /// Specular levels
-        #[arg(long, default_value_t = 8)]
-        specular_levels: u32,
-        /// Irradiance cube face size
-        #[arg(long, default_value_t = 32)]
-        irradiance_size: u32,
-        /// The performance page (docs/performance/DEVICE.md) to write this job's section into
-        #[arg(long)]
-        out: Option<PathBuf>,
-    },
     /// Conversion time at several source widths, against a plain copy of the same source
     Convert {
         /// Source lat-long widths
@@ -237,14 +95,7 @@ pub enum Bench {
     },
 }
 
-/// `envlight accuracy`.
-pub fn accuracy(g: &Global, what: &AccuracyWhat) -> Result<()> {
-    match what {
-        AccuracyWhat::Sh { inputs, out, size } => accuracy::accuracy_sh(g, inputs, out, *size),
-    }
-}
-
-/// The commit a page is made at: $ENVLIGHT_COMMIT, else `git rev-parse --short HEAD` in the
+/// The commit a report is made at: $ENVLIGHT_COMMIT, else `git rev-parse --short HEAD` in the
 /// working directory, else the package version.
 pub fn commit() -> String {
     std::env::var("ENVLIGHT_COMMIT")
@@ -264,61 +115,7 @@ pub fn commit() -> String {
 /// `envlight bench`.
 pub fn bench(g: &Global, what: &Bench) -> Result<()> {
     match what {
-        Bench::Fis {
-            maps,
-            sizes,
-            fis,
-            mc,
-            reference,
-            biases,
-            out,
-        } => bench_fis(g, maps, sizes, fis, mc, *reference, biases, out),
         Bench::Convert { sizes, reps } => bench_convert(g, sizes, *reps),
-        Bench::Ibl {
-            inputs,
-            sampler,
-            size,
-            runs,
-            ours,
-            theirs,
-            texels,
-            out,
-        } => ibl::bench_ibl(
-            g,
-            &ibl::IblOptions {
-                inputs: inputs.clone(),
-                sampler: sampler
-                    .clone()
-                    .or_else(|| std::env::var_os("ENVLIGHT_IBLSAMPLER").map(PathBuf::from)),
-                size: *size,
-                runs: (*runs).max(1),
-                ours: ours.clone(),
-                theirs: theirs.clone(),
-                texels: (*texels).max(1),
-                out: out.clone(),
-            },
-        ),
-        Bench::Scale {
-            input,
-            factors,
-            out,
-        } => scale::bench_scale(g, input, factors, out.as_ref()),
-        Bench::Formats {
-            inputs,
-            specular_size,
-            specular_levels,
-            irradiance_size,
-            out,
-        } => {
-            let opts = crate::bake::BakeOptions {
-                specular_size: *specular_size,
-                specular_levels: *specular_levels,
-                irradiance_size: *irradiance_size,
-                ..Default::default()
-            };
-            opts.validate()?;
-            formats::bench_formats(g, inputs, &opts, out.as_deref())
-        }
         Bench::Irradiance {
             sizes,
             source,
@@ -332,7 +129,6 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
             samples,
             slices,
             reps,
-            out,
         } => {
             let settings = dynamic::FrameSettings {
                 chain: 0,
@@ -344,93 +140,10 @@ pub fn bench(g: &Global, what: &Bench) -> Result<()> {
                 ratio: crate::abi::lights::DIFFUSE_RATIO,
                 max_lights: crate::abi::lights::CHAIN_MAX_TEXELS,
             };
-            dynamic::bench_dynamic(
-                &context(g)?,
-                cubes,
-                widths,
-                chain,
-                &settings,
-                *reps,
-                out.as_deref(),
-            )
+            dynamic::bench_dynamic(&context(g)?, cubes, widths, chain, &settings, *reps)
         }
-        Bench::Floors { sizes, reps, out } => {
-            floors::bench_floors(&context(g)?, sizes, *reps, out.as_deref())
-        }
-        Bench::Peers {
-            map,
-            cmft,
-            reps,
-            phong_reps,
-            out,
-        } => {
-            let cmft = cmft
-                .clone()
-                .or_else(|| std::env::var_os("ENVLIGHT_CMFT").map(PathBuf::from));
-            if cmft.is_none() {
-                eprintln!("ENVLIGHT_CMFT is not set: timing envlight alone, cmft skipped");
-            }
-            peers::bench_peers(&peers::PeersOptions {
-                map,
-                cmft: cmft.as_deref(),
-                reps: *reps,
-                phong_reps: *phong_reps,
-                // The parent's context only names the device; it is gone before any timing.
-                page: match out {
-                    Some(p) => Some((p.as_path(), page::Provenance::of(context(g)?.info()))),
-                    None => None,
-                },
-            })
-        }
+        Bench::Floors { sizes, reps } => floors::bench_floors(&context(g)?, sizes, *reps),
     }
-}
-
-#[allow(clippy::too_many_arguments)]
-fn bench_fis(
-    cli: &Global,
-    maps: &[PathBuf],
-    sizes: &[u32],
-    fis: &[u32],
-    mc: &[u32],
-    reference: u32,
-    biases: &[f64],
-    out: &Path,
-) -> Result<()> {
-    let ctx = context(cli)?;
-    let default = [PathBuf::from("assets/sky_latlong.exr")];
-    let paths = if maps.is_empty() { &default[..] } else { maps };
-    let mut loaded = Vec::new();
-    for p in paths {
-        let m = crate::io::load(p, &Default::default())?;
-        let name = p
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        loaded.push((name, m));
-    }
-    let cfg = fis::FisBench {
-        sizes: sizes.to_vec(),
-        fis: fis.to_vec(),
-        mc: mc.to_vec(),
-        reference,
-        biases: biases.to_vec(),
-        bias_at: vec![16, 64],
-        bias: crate::scene::DEFAULT_FIS_BIAS,
-    };
-    let bar = indicatif::ProgressBar::new_spinner();
-    let rows = fis::run(&ctx, &loaded, &cfg, |m| bar.set_message(m.to_string()))?;
-    bar.finish_and_clear();
-    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
-    let device = format!("{} ({})", ctx.info().name, ctx.info().driver);
-    std::fs::write(out.join("fis_vs_mc.csv"), fis_report::csv(&rows))?;
-    let md = fis_report::markdown(&rows, &device);
-    std::fs::write(out.join("fis_vs_mc.md"), &md)?;
-    let png = out.join("fis_vs_mc.png");
-    fis_report::plot(&rows)
-        .save(&png)
-        .with_context(|| png.display().to_string())?;
-    println!("{md}");
-    Ok(())
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

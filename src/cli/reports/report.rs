@@ -4,9 +4,9 @@
 //! material) and report.png (error against time, one panel per material).
 
 use super::super::{context, Global};
-use super::scoring::{errors, scene, sphere_pixels, truth};
 use crate::math::brdf::Brdf;
 use crate::math::camera::{sphere_camera, Camera};
+use crate::render::score::{errors, scene, sphere_pixels, truth};
 use crate::render::PassKind;
 use crate::render::Renderer;
 use crate::scene::{LightsMode, Scene, SplitSumSettings, Technique};
@@ -31,40 +31,13 @@ pub struct ReportArgs {
     /// a few minutes on lavapipe
     #[arg(long)]
     quick: bool,
-    /// Side of the sphere image (default 64, quick 24, table 128)
+    /// Side of the sphere image (default 64, quick 24)
     #[arg(long)]
     size: Option<u32>,
     /// Samples per pixel of each of the two Monte Carlo reference renders (default 16384,
-    /// quick 1024, table 4096)
+    /// quick 1024)
     #[arg(long)]
     reference: Option<u32>,
-    /// Instead: the accuracy table (table.md, table.csv, error_maps.png): five
-    /// probes, diffuse by SH 2 and 8 and prefiltered, GGX α 0.05 to 0.6 by FIS 16/64/256
-    /// (sequence rotation off and on), Phong 64 prefiltered and the mirror, with light
-    /// extraction and without, per-pixel errors against the reference (default size 128,
-    /// reference 2 × 4096 spp)
-    #[arg(long)]
-    table: bool,
-    /// With --table: only these materials ("diffuse", "ggx 0.05" … "ggx 0.6", "phong 64",
-    /// "mirror")
-    #[arg(long, value_delimiter = ',')]
-    materials: Vec<String>,
-    /// With --table: only the probes whose file names contain one of these
-    #[arg(long, value_delimiter = ',')]
-    only: Vec<String>,
-    /// With --table: render through the resident path (`envlight render --resident`: the map
-    /// on the GPU, its lights extracted there) instead of the host path
-    #[arg(long)]
-    resident: bool,
-    /// With --table: the scenes' light_texels (the most light texels FIS, split-sum and
-    /// footprint lookups extract; default 16384)
-    #[arg(long)]
-    light_texels: Option<u32>,
-    /// Instead: the specular recipes (split-sum with and without extracted lights, lobe taps
-    /// 4, 8, 16), FIS and SH-BRDF against the reference on every probe of the folder at GGX
-    /// α 0.05 to 0.6, with their per-frame GPU time (split_sum.md, split_sum.csv)
-    #[arg(long)]
-    split_sum_every_probe: bool,
     /// Instead: score these prefiltered cubes (KTX2 or DDS) as split-sum shading against
     /// Monte Carlo on --cube-probe, beside envlight's own renders (cubes.md, cubes.csv)
     #[arg(long)]
@@ -440,16 +413,8 @@ fn probes_dir(args: &ReportArgs) -> Result<PathBuf> {
 /// Runs the report.
 pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     let quick = args.quick;
-    let size = args.size.unwrap_or(match (args.table, quick) {
-        (true, _) => 128,
-        (_, true) => 24,
-        _ => 64,
-    });
-    let reference = args.reference.unwrap_or(match (args.table, quick) {
-        (true, _) => 4096,
-        (_, true) => 1024,
-        _ => 16384,
-    });
+    let size = args.size.unwrap_or(if quick { 24 } else { 64 });
+    let reference = args.reference.unwrap_or(if quick { 1024 } else { 16384 });
     // Quick: a 256² paraboloid instead of the source-sized one, so lavapipe converts fast.
     let dp = quick.then_some(256);
     let ctx = context(g)?;
@@ -459,16 +424,6 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     let cam = sphere_camera(size);
     let pixels = sphere_pixels(&cam);
     let split = args.split();
-    if args.table {
-        let pick = super::table::Pick {
-            materials: args.materials.clone(),
-            probes: args.only.clone(),
-            resident: args.resident,
-            light_texels: args.light_texels,
-        };
-        let dir = probes_dir(args)?;
-        return super::table::table(&renderer, &dir, size, reference, &args.out, &device, &pick);
-    }
     if !args.cube.is_empty() {
         let a = super::cubes::CubeArgs {
             probe: args.cube_probe.as_deref().ok_or_else(|| {
@@ -478,10 +433,6 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
             out: &args.out,
         };
         return super::cubes::score(&renderer, cam, reference, &device, &a);
-    }
-    if args.split_sum_every_probe {
-        let dir = probes_dir(args)?;
-        return super::recipes::sweep(&renderer, &dir, cam, reference, &args.out, &device, split);
     }
     let dir = probes_dir(args)?;
     let mut rows = Vec::new();

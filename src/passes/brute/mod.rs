@@ -68,7 +68,7 @@ use variants::{default_texel_lanes, lane_count, PIPELINE_SLOTS};
 /// Invocations a convolution keeps busy by default: outputs smaller than this (the coarse
 /// Phong levels: 6 texels at 1²) split the source among parts, each summed by its own
 /// invocation, then added per texel. 2¹⁶ fills current GPUs' cores several times over
-/// (`envlight bench peers` times the coarse Phong levels).
+/// (`cargo xtask lab peers` times the coarse Phong levels).
 pub const DEFAULT_TARGET_INVOCATIONS: u32 = 1 << 16;
 
 impl BruteFilter {
@@ -111,7 +111,7 @@ impl BruteFilter {
     /// instrument instead (`true`): each output texel gets Σ L·Ω over the source texels its
     /// walk visits (the same rows or tiles, the same lanes and chunks), read once each,
     /// without the rule, so that its time is what visiting the exact sum's texels costs
-    /// (`envlight bench peers`). Not a filtered map; [`BruteFilter::record_levels`] refuses it.
+    /// (`cargo xtask lab peers`). Not a filtered map; [`BruteFilter::record_levels`] refuses it.
     pub(crate) fn set_visit_floor(&mut self, on: bool) {
         self.visit_floor = on;
     }

@@ -18,7 +18,7 @@ pub fn pipelines_created(ctx: &Context) -> Vec<&'static str> {
 }
 
 /// [`BruteFilter`]'s visit floor: each output texel sums L·Ω over the texels its walk visits,
-/// without the rule (what `envlight bench peers` times as the floor of the exact sum).
+/// without the rule (what `cargo xtask lab peers` times as the floor of the exact sum).
 pub fn set_visit_floor(filter: &mut BruteFilter, on: bool) {
     filter.set_visit_floor(on);
 }

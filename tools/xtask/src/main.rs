@@ -1,4 +1,4 @@
-//! Project tasks: `cargo xtask <setup|test|demo|bench|shaders|gen-assets|lint>`.
+//! Project tasks: `cargo xtask <setup|test|demo|bench|lab|shaders|gen-assets|lint>`.
 //!
 //! `setup` installs what the project needs on a Debian-like system (idempotently); `test` and
 //! `demo` run it first, so the README's two commands work on a fresh machine. `test --quick`
@@ -142,6 +142,10 @@ fn test(rest: &[&str]) -> Result<(), String> {
     let mut args = vec!["test"];
     if quick {
         args.extend(QUICK);
+    } else if rest.is_empty() {
+        // The whole suite: the library's and the lab's tests (which run the `envlight`
+        // program beside the lab's: one build makes both).
+        args.extend(["-p", "envlight", "-p", "envlight-lab"]);
     }
     args.extend(rest.iter().filter(|a| **a != "--quick"));
     let log = std::env::temp_dir().join(format!("envlight-skips-{}.txt", std::process::id()));
@@ -191,6 +195,14 @@ fn run(task: &str, rest: &[String]) -> Result<(), String> {
             args.extend(&rest);
             cargo(&args)
         }
+        "lab" => {
+            setup()?;
+            // The lab runs the `envlight` program beside it for whole-process timings.
+            cargo(&["build", "--release", "--bin", "envlight"])?;
+            let mut args = vec!["run", "--release", "-p", "envlight-lab", "--"];
+            args.extend(&rest);
+            cargo(&args)
+        }
         "shaders" => {
             setup()?;
             cargo(&["run", "--release", "-p", "envlight-shaderc"])
@@ -198,7 +210,14 @@ fn run(task: &str, rest: &[String]) -> Result<(), String> {
         "gen-assets" => cargo(&["run", "--release", "-p", "envlight-assets"]),
         "lint" => {
             cargo(&["fmt", "--all", "--", "--check"])?;
-            cargo(&["clippy", "--all-targets", "--", "-D", "warnings"])
+            cargo(&[
+                "clippy",
+                "--workspace",
+                "--all-targets",
+                "--",
+                "-D",
+                "warnings",
+            ])
         }
         _ => Err(format!(
             "unknown task '{task}'; tasks: setup, test, demo, bench, shaders, gen-assets, lint"
@@ -209,7 +228,7 @@ fn run(task: &str, rest: &[String]) -> Result<(), String> {
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some((task, rest)) = args.split_first() else {
-        eprintln!("usage: cargo xtask <setup|test|demo|bench|shaders|gen-assets|lint> [args]");
+        eprintln!("usage: cargo xtask <setup|test|demo|bench|lab|shaders|gen-assets|lint> [args]");
         return ExitCode::FAILURE;
     };
     // Tasks run from the workspace root whatever the caller's directory.

@@ -1,4 +1,4 @@
-//! `envlight bench ibl`: `envlight bake --preset khronos` beside glTF-IBL-Sampler (the Khronos
+//! `envlight-lab ibl`: `envlight bake --preset khronos` beside glTF-IBL-Sampler (the Khronos
 //! reference prefilter) on the same probes and device, at several sample counts for each:
 //! whole-process times from interleaved runs, and each GGX cube's error per level against
 //! the float64 exact prefilter at that level's α, read from the files both tools write.
@@ -8,20 +8,20 @@
 //! conventions (its frame, roughness = level/(levels − 1), α = roughness², rgba16f), which
 //! the Khronos preset shares, so one exact filter in that frame scores both.
 
-use crate::bake::output::Preset;
-use crate::cli::{probe_files, Global};
-use crate::io::ktx2;
-use crate::math::envmap::luminance;
-use crate::math::exact::ExactFilter;
-use crate::math::split_sum::level_alpha;
-use crate::math::Mapping;
+use crate::common::Global;
 use anyhow::{anyhow, bail, Context as _, Result};
+use envlight::bake::output::Preset;
+use envlight::io::ktx2;
+use envlight::math::envmap::luminance;
+use envlight::math::exact::ExactFilter;
+use envlight::math::split_sum::level_alpha;
+use envlight::math::Mapping;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-/// What `envlight bench ibl` is asked.
+/// What `envlight-lab ibl` is asked.
 pub struct IblOptions {
     /// Probes, or folders of probes.
     pub inputs: Vec<PathBuf>,
@@ -79,7 +79,7 @@ fn command(g: &Global, o: &IblOptions, tool: Tool, hdr: &Path, dir: &Path) -> Re
     let levels = o.size.ilog2().to_string();
     Ok(match tool {
         Tool::Envlight(n) => {
-            let mut c = Command::new(std::env::current_exe()?);
+            let mut c = Command::new(crate::common::envlight_exe()?);
             if let Some(d) = &g.device {
                 c.args(["--device", d]);
             }
@@ -147,7 +147,7 @@ fn timed(mut c: Command, dir: &Path) -> Result<f64> {
 
 /// The checked texels of each level ≥ 1 (index into the level, exact luminance): the texel
 /// holding the probe's brightest direction, then `texels` − 1 spread over the faces.
-fn exact_texels(map: &crate::EnvMap, size: u32, texels: u32) -> Vec<Vec<(usize, f64)>> {
+fn exact_texels(map: &envlight::EnvMap, size: u32, texels: u32) -> Vec<Vec<(usize, f64)>> {
     let frame = Preset::Khronos.cube_frame().world_to_file().transpose();
     let exact = ExactFilter::new(map, frame);
     let levels = size.ilog2();
@@ -229,8 +229,8 @@ fn level_errors(path: &Path, exact: &[Vec<(usize, f64)>]) -> Result<Vec<f64>> {
 /// The probe as a lat-long Radiance file both tools read: itself, or its 1024 × 512
 /// resampling (bilinear, as the GPU reads a map) written into `dir`.
 fn latlong_hdr(probe: &Path, dir: &Path) -> Result<PathBuf> {
-    let map =
-        crate::io::load(probe, &Default::default()).with_context(|| probe.display().to_string())?;
+    let map = envlight::io::load(probe, &Default::default())
+        .with_context(|| probe.display().to_string())?;
     let is_hdr = probe
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("hdr"));
@@ -242,7 +242,7 @@ fn latlong_hdr(probe: &Path, dir: &Path) -> Result<PathBuf> {
     for j in 0..h {
         for i in 0..w {
             let d = Mapping::LatLong.coord_to_dir(Mapping::texel_center(w, h, 0, i, j));
-            let v = crate::math::convert::sample(&map, d);
+            let v = envlight::math::convert::sample(&map, d);
             texels.push(image::Rgb([v[0] as f32, v[1] as f32, v[2] as f32]));
         }
     }
@@ -264,7 +264,7 @@ pub fn bench_ibl(g: &Global, o: &IblOptions) -> Result<()> {
     let mut files = Vec::new();
     for p in &o.inputs {
         if p.is_dir() {
-            files.extend(probe_files(p)?);
+            files.extend(envlight::io::probes_in(p)?);
         } else {
             files.push(p.clone());
         }
@@ -282,7 +282,7 @@ pub fn bench_ibl(g: &Global, o: &IblOptions) -> Result<()> {
     let mut results = Vec::new();
     for probe in &files {
         let hdr = latlong_hdr(probe, &scratch)?;
-        let map = crate::io::load(&hdr, &Default::default())
+        let map = envlight::io::load(&hdr, &Default::default())
             .with_context(|| hdr.display().to_string())?;
         let exact = exact_texels(&map, o.size, o.texels);
         let mut rows: Vec<Measured> = tools
@@ -313,14 +313,14 @@ pub fn bench_ibl(g: &Global, o: &IblOptions) -> Result<()> {
     let (method, md) = markdown(o, &results);
     print!("{method}\n\n{md}");
     if let Some(out) = &o.out {
-        let ctx = super::super::context(g)?;
-        let section = super::page::Section {
+        let ctx = crate::common::context(g)?;
+        let section = crate::page::Section {
             job: "ibl",
             title: "GGX cubes: envlight bake beside glTF-IBL-Sampler",
             method: &method,
             body: &md,
         };
-        super::page::write_section(out, &section, &super::page::Provenance::of(ctx.info()))?;
+        crate::page::write_section(out, &section, &crate::page::Provenance::of(ctx.info()))?;
     }
     Ok(())
 }
@@ -413,6 +413,58 @@ fn markdown(o: &IblOptions, results: &[(String, Vec<Measured>)]) -> (String, Str
         ),
     };
     (method, md)
+}
+
+/// `envlight-lab ibl`: GGX cubes of `envlight bake --preset khronos` beside
+/// glTF-IBL-Sampler's on the same probes: whole-process seconds and each level's error against
+/// the exact prefilter, at several sample counts for each (markdown)
+#[derive(clap::Args)]
+pub struct IblArgs {
+    /// Probes, or folders whose .hdr/.exr/.dds/.pfm files are all taken
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+    /// glTF-IBL-Sampler's wrapper (default: $ENVLIGHT_IBLSAMPLER); without it envlight runs
+    /// alone
+    #[arg(long)]
+    sampler: Option<PathBuf>,
+    /// Cube face size at level 0 (levels: log2 of it, as the sampler's default)
+    #[arg(long, default_value_t = 256)]
+    size: u32,
+    /// Interleaved runs of each configuration (the median is reported)
+    #[arg(long, default_value_t = 3)]
+    runs: u32,
+    /// envlight's FIS samples per texel, one configuration each
+    #[arg(long, value_delimiter = ',', default_value = "16,64,256")]
+    ours: Vec<u32>,
+    /// glTF-IBL-Sampler's sample counts, one configuration each
+    #[arg(long, value_delimiter = ',', default_value = "16,64,256,1024")]
+    theirs: Vec<u32>,
+    /// Texels checked per level against the exact prefilter
+    #[arg(long, default_value_t = 192)]
+    texels: u32,
+    /// The performance page (docs/performance/DEVICE.md) to write this job's section into
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// Runs `envlight-lab ibl`.
+pub fn run(g: &Global, a: &IblArgs) -> Result<()> {
+    bench_ibl(
+        g,
+        &IblOptions {
+            inputs: a.inputs.clone(),
+            sampler: a
+                .sampler
+                .clone()
+                .or_else(|| std::env::var_os("ENVLIGHT_IBLSAMPLER").map(PathBuf::from)),
+            size: a.size,
+            runs: a.runs.max(1),
+            ours: a.ours.clone(),
+            theirs: a.theirs.clone(),
+            texels: a.texels.max(1),
+            out: a.out.clone(),
+        },
+    )
 }
 
 #[cfg(test)]

@@ -1,16 +1,17 @@
-//! How the reports score a technique: the sphere scene they render, the pixels they score, the
-//! errors they report, and the two-seed Monte Carlo reference they score against.
+//! How a technique is scored against converged Monte Carlo (`envlight report`, the
+//! benchmarks): the sphere scene rendered, the pixels scored, the errors reported, and the
+//! two-seed Monte Carlo reference with its own noise.
 
+use crate::error::Result;
 use crate::math::brdf::Brdf;
 use crate::math::camera::{trace, Camera, Shape};
 use crate::render::Renderer;
 use crate::scene::{Material, Scene, SceneObject, SplitSumSettings, Technique};
 use crate::EnvMap;
-use anyhow::Result;
 
 /// The report's scene: `brdf` on a unit sphere at the origin under technique `t`, seen by
 /// `cam`, with the FIS paraboloid size `dp`, the MC seed and split-sum settings given.
-pub(super) fn scene(
+pub fn scene(
     cam: Camera,
     brdf: Brdf,
     t: Technique,
@@ -37,7 +38,7 @@ pub(super) fn scene(
 }
 
 /// Pixels that see the sphere away from its silhouette, with their tile (8 × 8 pixels).
-pub(super) fn sphere_pixels(cam: &Camera) -> Vec<(usize, u32)> {
+pub fn sphere_pixels(cam: &Camera) -> Vec<(usize, u32)> {
     let tiles_x = cam.width.div_ceil(8);
     let sphere = [Shape::Sphere {
         center: [0.0; 3],
@@ -57,7 +58,7 @@ pub(super) fn sphere_pixels(cam: &Camera) -> Vec<(usize, u32)> {
 
 /// (relative RMS, mean bias, worst tile) of `a` against `m` over `pixels`, all channels; tiles
 /// with fewer than 16 sphere pixels are left out of the worst.
-pub(super) fn errors(a: &EnvMap, m: &EnvMap, pixels: &[(usize, u32)]) -> (f64, f64, f64) {
+pub fn errors(a: &EnvMap, m: &EnvMap, pixels: &[(usize, u32)]) -> (f64, f64, f64) {
     let (mut se, mut sm2, mut sa, mut sm) = (0.0, 0.0, 0.0, 0.0);
     let mut tiles: std::collections::BTreeMap<u32, (f64, f64, u32)> = Default::default();
     for &(k, tile) in pixels {
@@ -83,7 +84,7 @@ pub(super) fn errors(a: &EnvMap, m: &EnvMap, pixels: &[(usize, u32)]) -> (f64, f
 
 /// The reference frame of `brdf` on the sphere: two independent MIS renders of `samples`
 /// each; their mean is the reference, half their relative RMS difference its noise.
-pub(super) fn truth(
+pub fn truth(
     renderer: &Renderer,
     cam: Camera,
     brdf: Brdf,
@@ -105,7 +106,7 @@ pub(super) fn truth(
 }
 
 /// The texel-wise mean of two frames of one size.
-pub(super) fn average(a: &EnvMap, b: &EnvMap) -> EnvMap {
+pub fn average(a: &EnvMap, b: &EnvMap) -> EnvMap {
     let mut out = a.clone();
     for (o, t) in out.texels.iter_mut().zip(&b.texels) {
         for ch in 0..3 {

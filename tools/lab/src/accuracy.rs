@@ -1,5 +1,5 @@
 //! What SH irradiance costs in accuracy and time against the brute-force convolution
-//! (`envlight accuracy sh`): for each map, the RMS and max relative error of orders 0, 1, 2,
+//! (`envlight-lab accuracy`): for each map, the RMS and max relative error of orders 0, 1, 2,
 //! 4, 6 and 8 (without a window and with the smallest non-negative Sloan window) over a
 //! uniform set of normals, and the GPU times of projection, evaluation and brute force.
 //!
@@ -7,19 +7,19 @@
 //! exact solid angles, so sums over them are integrals over the sphere. Relative errors are of
 //! luminance, against the brute-force irradiance at the same normal.
 
-use crate::cli::{context, Global};
-use crate::error::Result;
-use crate::gpu::{total_ms, Context, Timed};
-use crate::io::{self, LoadOptions};
-use crate::math::envmap::{luminance, EnvMap};
-use crate::math::filter::Kernel;
-use crate::math::sh::{self, Window};
-use crate::math::synth::fibonacci_sphere;
-use crate::math::{Mapping, Orientation};
-use crate::passes::sh_project::{ShProjector, Subgroups};
-use crate::passes::{BruteFilter, FilterTarget, ShEvaluator};
-use crate::GpuEnvMap;
+use crate::common::{context, Global};
 use anyhow::Context as _;
+use envlight::error::Result;
+use envlight::gpu::{total_ms, Context, Timed};
+use envlight::io::{self, LoadOptions};
+use envlight::math::envmap::{luminance, EnvMap};
+use envlight::math::filter::Kernel;
+use envlight::math::sh::{self, Window};
+use envlight::math::synth::fibonacci_sphere;
+use envlight::math::{Mapping, Orientation};
+use envlight::passes::sh_project::{ShProjector, Subgroups};
+use envlight::passes::{BruteFilter, FilterTarget, ShEvaluator};
+use envlight::GpuEnvMap;
 use indicatif::ProgressBar;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -296,12 +296,12 @@ pub fn plot(reports: &[MapReport]) -> image::RgbImage {
     img
 }
 
-/// `envlight accuracy sh`: the report on every map, written to `out`.
+/// `envlight-lab accuracy`: the report on every map, written to `out`.
 pub fn accuracy_sh(cli: &Global, inputs: &[PathBuf], out: &Path, size: u32) -> anyhow::Result<()> {
     let mut files = Vec::new();
     for i in inputs {
         if i.is_dir() {
-            files.extend(crate::cli::probe_files(i)?);
+            files.extend(envlight::io::probes_in(i)?);
         } else {
             files.push(i.clone());
         }

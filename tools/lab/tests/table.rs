@@ -1,6 +1,7 @@
 //! The accuracy table's every case bounded at 1.3× its measured error, so
 //! that a regression in any technique, with light extraction or without, fails.
 
+#[path = "../../../tests/common/probes.rs"]
 mod common;
 
 use std::collections::BTreeMap;
@@ -20,7 +21,7 @@ fn rows(csv: &str) -> BTreeMap<String, f64> {
         .collect()
 }
 
-/// `envlight report --table` on the five probes at 32² (reference 2 × 4096 spp MIS Monte
+/// `envlight-lab table` on the five probes at 32² (reference 2 × 4096 spp MIS Monte
 /// Carlo, the mirror's 16×16 supersampled), with the validation layer on: each of its 295
 /// cases (diffuse by SH 2, SH 8 and prefiltered; GGX α 0.05, 0.1, 0.3, 0.6 by FIS 16, 64,
 /// 256 with sequence rotation off and on; Phong 64 prefiltered; the mirror
@@ -53,8 +54,8 @@ fn every_case_of_the_accuracy_table_stays_within_1_3x_of_its_measured_error() {
             .map(|(only, out)| {
                 let dir = &dir;
                 scope.spawn(move || {
-                    std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
-                        .args(["--validation", "--device", "cpu", "report", "--table"])
+                    std::process::Command::new(env!("CARGO_BIN_EXE_envlight-lab"))
+                        .args(["--validation", "--device", "cpu", "table"])
                         .args(["--size", "32", "--reference", "4096", "--only", only])
                         .arg("--probes")
                         .arg(dir)
@@ -70,7 +71,7 @@ fn every_case_of_the_accuracy_table_stays_within_1_3x_of_its_measured_error() {
             assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         }
     });
-    let measured = rows(include_str!("data/accuracy_table_32.csv"));
+    let measured = rows(include_str!("../../../tests/data/accuracy_table_32.csv"));
     let mut got = BTreeMap::new();
     for out in &outs {
         got.extend(rows(

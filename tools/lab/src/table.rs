@@ -1,19 +1,19 @@
-//! `envlight report --table`: the accuracy table. Every real-time technique on five
+//! `envlight-lab table`: the accuracy table. Every real-time technique on five
 //! real probes, with light extraction and without, scored per pixel against a converged
 //! reference: table.md (the table, the goals checked, the rotate comparison), table.csv (one
 //! row per probe × material × technique × settings) and error_maps.png (signed per-pixel
 //! error of a selection of rows, one row of maps per probe).
 
-use super::scoring::{average, scene, sphere_pixels};
-use crate::math::brdf::Brdf;
-use crate::math::camera::{Camera, Shape};
-use crate::math::envmap::luminance;
-use crate::render::{MapShape, Renderer};
-use crate::scene::{LightsMode, LookupFilter, Scene, SplitSumSettings, Technique};
-use crate::EnvMap;
 use anyhow::{anyhow, Context as _, Result};
+use envlight::math::brdf::Brdf;
+use envlight::math::camera::{Camera, Shape};
+use envlight::math::envmap::luminance;
+use envlight::render::score::{average, scene, sphere_pixels};
+use envlight::render::{MapShape, Renderer};
+use envlight::scene::{LightsMode, LookupFilter, Scene, SplitSumSettings, Technique};
+use envlight::EnvMap;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// The probes of the table, with what kind of light each is.
@@ -249,7 +249,7 @@ pub fn table(
     device: &str,
     pick: &Pick,
 ) -> Result<()> {
-    let cam = crate::math::camera::sphere_camera(size);
+    let cam = envlight::math::camera::sphere_camera(size);
     let pixels = sphere_pixels(&cam);
     let split = SplitSumSettings::default();
     let started = Instant::now();
@@ -269,7 +269,7 @@ pub fn table(
         .filter(|p| pick.probes.is_empty() || pick.probes.iter().any(|q| p.0.contains(q.as_str())));
     for (n, (file, _)) in probes.enumerate() {
         let path = dir.join(file);
-        let env = crate::io::load(&path, &crate::io::LoadOptions::default())
+        let env = envlight::io::load(&path, &envlight::io::LoadOptions::default())
             .with_context(|| format!("report --table: probe {} (set --probes)", path.display()))?;
         let probe = file.trim_end_matches(".hdr").to_string();
         if n == 0 {
@@ -277,7 +277,7 @@ pub fn table(
         }
         let gpu = pick
             .resident
-            .then(|| crate::passes::GpuEnvMap::upload(renderer.context(), &env))
+            .then(|| envlight::passes::GpuEnvMap::upload(renderer.context(), &env))
             .transpose()?;
         for (material, brdf) in &materials {
             let (material, brdf) = (material.as_str(), *brdf);
@@ -325,6 +325,7 @@ pub fn table(
     }
     std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
     write_csv(&out.join("table.csv"), &rows)?;
+    let chain = envlight::math::lights::ExtractOptions::chain();
     let settings = format!(
         "Device: {device}. {}Unit sphere {size}² seen orthographically (normal to grazing \
          incidence), pixels whose centre sees it. Reference of every lobe: the mean of two \
@@ -342,17 +343,16 @@ pub fn table(
                 "Rendered through the resident path (the map on the GPU, its lights extracted \
                  there each frame by the host path's rule: at most {} texels for the chain's \
                  techniques). ",
-                pick.light_texels.unwrap_or(crate::render::CHAIN_GPU_MAX)
+                pick.light_texels.unwrap_or(envlight::render::CHAIN_GPU_MAX)
             ),
             false => String::new(),
         },
-        crate::scene::DEFAULT_FIS_BIAS,
-        crate::scene::DEFAULT_FIS_BIAS_RESIDUAL,
-        crate::abi::lights::CHAIN_RATIO,
-        pick.light_texels
-            .unwrap_or(crate::abi::lights::CHAIN_MAX_TEXELS),
-        crate::abi::lights::CHAIN_FILL,
-        crate::math::lights::DIFFUSE_RATIO,
+        envlight::scene::DEFAULT_FIS_BIAS,
+        envlight::scene::DEFAULT_FIS_BIAS_RESIDUAL,
+        chain.ratio,
+        pick.light_texels.unwrap_or(chain.max_texels as u32),
+        chain.fill.unwrap_or_default(),
+        envlight::math::lights::DIFFUSE_RATIO,
         started.elapsed().as_secs_f64()
     );
     std::fs::write(out.join("table.md"), markdown(&rows, &settings)).with_context(|| "table.md")?;
@@ -368,7 +368,7 @@ pub fn table(
 /// Pipelines are built, and lavapipe compiles shaders, on first use: one small render of
 /// each kind of case in `all` keeps that out of the GPU times measured after it.
 fn warm_up(renderer: &Renderer, env: &EnvMap, all: &[Case], split: SplitSumSettings) -> Result<()> {
-    let small = crate::math::camera::sphere_camera(8);
+    let small = envlight::math::camera::sphere_camera(8);
     let mut seen: Vec<(&'static str, LightsMode, LookupFilter, &'static str)> = Vec::new();
     for c in all {
         let key = (c.technique.name(), c.lights, c.filter, c.rotate());
@@ -400,7 +400,7 @@ fn reference_of(
             radius: 1.0,
         }];
         return Ok((
-            crate::math::footprint::supersampled(env, &cam, &sphere, 16),
+            envlight::math::footprint::supersampled(env, &cam, &sphere, 16),
             0.0,
         ));
     }
@@ -808,4 +808,61 @@ fn maps(path: &Path, rows: &[Row], size: u32, device: &str) -> Result<()> {
     }
     root.present().map_err(|x| e(&x))?;
     Ok(())
+}
+
+/// `envlight-lab table`: the accuracy table (table.md, table.csv, error_maps.png): five
+/// probes, diffuse by SH 2 and 8 and prefiltered, GGX α 0.05 to 0.6 by FIS 16/64/256
+/// (sequence rotation off and on), Phong 64 prefiltered and the mirror, with light extraction
+/// and without, per-pixel errors against the reference
+#[derive(clap::Args)]
+pub struct TableArgs {
+    /// Folder of the probes (default: $ENVLIGHT_PROBES; one of the two is needed)
+    #[arg(long)]
+    probes: Option<PathBuf>,
+    /// Output folder
+    #[arg(long, default_value = "docs/accuracy")]
+    out: PathBuf,
+    /// Side of the sphere image
+    #[arg(long, default_value_t = 128)]
+    size: u32,
+    /// Samples per pixel of each of the two Monte Carlo reference renders
+    #[arg(long, default_value_t = 4096)]
+    reference: u32,
+    /// Only these materials ("diffuse", "ggx 0.05" … "ggx 0.6", "phong 64", "mirror")
+    #[arg(long, value_delimiter = ',')]
+    materials: Vec<String>,
+    /// Only the probes whose file names contain one of these
+    #[arg(long, value_delimiter = ',')]
+    only: Vec<String>,
+    /// Render through the resident path (`envlight render --resident`: the map on the GPU,
+    /// its lights extracted there) instead of the host path
+    #[arg(long)]
+    resident: bool,
+    /// The scenes' light_texels (the most light texels FIS, split-sum and footprint lookups
+    /// extract; default 16384)
+    #[arg(long)]
+    light_texels: Option<u32>,
+}
+
+/// Runs `envlight-lab table`.
+pub fn run(g: &crate::common::Global, a: &TableArgs) -> Result<()> {
+    let ctx = crate::common::context(g)?;
+    let device = format!("{} ({})", ctx.info().name, ctx.info().driver.trim());
+    eprintln!("device: {device}");
+    let pick = Pick {
+        materials: a.materials.clone(),
+        probes: a.only.clone(),
+        resident: a.resident,
+        light_texels: a.light_texels,
+    };
+    let dir = crate::common::probes_dir(a.probes.as_deref())?;
+    table(
+        &Renderer::new(&ctx),
+        &dir,
+        a.size,
+        a.reference,
+        &a.out,
+        &device,
+        &pick,
+    )
 }

@@ -1,10 +1,10 @@
-//! `bench scale`: what a bake costs against the source's resolution. A lat-long probe is
+//! `envlight-lab scale`: what a bake costs against the source's resolution. A lat-long probe is
 //! upsampled ×k (each texel repeated: the same picture at k² the texels), written as a
 //! Radiance file, and baked by `envlight bake` in its own process at default settings:
 //! whole-process seconds and peak RSS (the child's own, from `wait4`), the manifest's stages
 //! and spot-check errors (the same content should bake the same cubes at every size).
 
-use super::super::Global;
+use crate::common::Global;
 use anyhow::{anyhow, bail, Context as _, Result};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -49,7 +49,7 @@ fn measured(mut c: Command) -> Result<(f64, u64)> {
 }
 
 /// `map` with each texel repeated `k` × `k` times.
-fn upsampled(map: &crate::EnvMap, k: u32) -> Vec<image::Rgb<f32>> {
+fn upsampled(map: &envlight::EnvMap, k: u32) -> Vec<image::Rgb<f32>> {
     let (w, h) = (map.width * k, map.height * k);
     let mut out = Vec::with_capacity((w * h) as usize);
     for j in 0..h {
@@ -63,8 +63,8 @@ fn upsampled(map: &crate::EnvMap, k: u32) -> Vec<image::Rgb<f32>> {
 /// Bakes `input` upsampled by each of `factors`; prints the table and, with `out`, writes
 /// it as the page's "bake-scale" section.
 pub fn bench_scale(g: &Global, input: &Path, factors: &[u32], out: Option<&PathBuf>) -> Result<()> {
-    let map = crate::io::load(input, &Default::default())?;
-    if map.mapping != crate::Mapping::LatLong {
+    let map = envlight::io::load(input, &Default::default())?;
+    if map.mapping != envlight::Mapping::LatLong {
         bail!(
             "{}: bench scale upsamples lat-long maps only",
             input.display()
@@ -84,7 +84,7 @@ pub fn bench_scale(g: &Global, input: &Path, factors: &[u32], out: Option<&PathB
                 .with_context(|| hdr.display().to_string())?;
         }
         let baked = dir.join("out");
-        let mut c = Command::new(std::env::current_exe()?);
+        let mut c = Command::new(crate::common::envlight_exe()?);
         if let Some(d) = &g.device {
             c.args(["--device", d]);
         }
@@ -111,14 +111,14 @@ pub fn bench_scale(g: &Global, input: &Path, factors: &[u32], out: Option<&PathB
     let (method, md) = markdown(&name, &rows)?;
     print!("{method}\n\n{md}");
     if let Some(out) = out {
-        let ctx = super::super::context(g)?;
-        let section = super::page::Section {
+        let ctx = crate::common::context(g)?;
+        let section = crate::page::Section {
             job: "bake-scale",
             title: "Bake time and memory against the source's resolution",
             method: &method,
             body: &md,
         };
-        super::page::write_section(out, &section, &super::page::Provenance::of(ctx.info()))?;
+        crate::page::write_section(out, &section, &crate::page::Provenance::of(ctx.info()))?;
     }
     Ok(())
 }
@@ -173,4 +173,19 @@ fn markdown(name: &str, rows: &[Row]) -> Result<(String, String)> {
         );
     }
     Ok((method, md))
+}
+
+/// `envlight-lab scale`: what a bake costs against the source's resolution: a lat-long probe
+/// upsampled ×k (the same picture), baked in its own process: seconds, peak RSS, stages and
+/// errors (markdown)
+#[derive(clap::Args)]
+pub struct ScaleArgs {
+    /// A lat-long probe
+    pub input: PathBuf,
+    /// Upsampling factors
+    #[arg(long, value_delimiter = ',', default_value = "1,4,8,16")]
+    pub factors: Vec<u32>,
+    /// The performance page (docs/performance/DEVICE.md) to write this job's section into
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }

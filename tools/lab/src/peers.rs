@@ -1,18 +1,18 @@
-//! `envlight bench peers`: the jobs a user would otherwise give cmft, timed as whole processes
+//! `envlight-lab peers`: the jobs a user would otherwise give cmft, timed as whole processes
 //! in paired, alternating runs on the same machine, with each result's error beside its time.
 
-use crate::io::{load, LoadOptions};
-use crate::math::filter::{Kernel, Prepared};
-use crate::math::sh;
-use crate::passes::brute::PhongLevels;
-use crate::EnvMap;
 use anyhow::{bail, Context as _, Result};
+use envlight::io::{load, LoadOptions};
+use envlight::math::filter::{Kernel, Prepared};
+use envlight::math::sh;
+use envlight::passes::brute::PhongLevels;
+use envlight::EnvMap;
 use glam::{DMat3, DVec3};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-/// Options of `envlight bench peers`.
+/// Options of `envlight-lab peers`.
 pub struct PeersOptions<'a> {
     /// The map every job reads (cmft reads .hdr and .dds, not EXR).
     pub map: &'a Path,
@@ -24,7 +24,7 @@ pub struct PeersOptions<'a> {
     pub phong_reps: usize,
     /// The performance page to write the job's section into (the section is also printed),
     /// and the device, CPU, commit, date and command it names.
-    pub page: Option<(&'a Path, super::page::Provenance)>,
+    pub page: Option<(&'a Path, crate::page::Provenance)>,
 }
 
 /// How `bench peers` measures, as its page section states it.
@@ -69,7 +69,7 @@ fn run(program: &Path, args: &[String], env: &[(&str, &str)]) -> Result<(f64, St
 fn startup_medians(outs: &[String]) -> Option<[f64; 5]> {
     let lines: Vec<[f64; 5]> = outs
         .iter()
-        .filter_map(|o| crate::cli::info::parse_startup_line(o))
+        .filter_map(|o| crate::common::parse_startup_line(o))
         .collect();
     if lines.is_empty() {
         return None;
@@ -165,7 +165,7 @@ fn load_any(path: &Path) -> Result<EnvMap> {
 
 /// Runs the table and writes the report.
 pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
-    let me = std::env::current_exe()?;
+    let me = crate::common::envlight_exe()?;
     if !opts.map.exists() {
         bail!(
             "{}: no such map (give an existing .hdr with --map)",
@@ -178,13 +178,13 @@ pub fn bench_peers(opts: &PeersOptions) -> Result<()> {
     let md = peers_markdown(opts, &measured);
     println!("{md}");
     if let Some((out, provenance)) = &opts.page {
-        let section = super::page::Section {
+        let section = crate::page::Section {
             job: "peers",
             title: "The jobs users give cmft, paired with cmft",
             method: METHOD,
             body: &md,
         };
-        super::page::write_section(out, &section, provenance)?;
+        crate::page::write_section(out, &section, provenance)?;
     }
     let _ = std::fs::remove_dir_all(&tmp);
     Ok(())
@@ -528,7 +528,7 @@ fn peers_markdown(opts: &PeersOptions, m: &Measured<'_>) -> String {
             } else {
                 String::new()
             },
-            crate::abi::filter_rule::LOG_CUTOFF,
+            envlight::math::filter::LOG_CUTOFF,
             gpu - floor_gpu,
             100.0 * (whole - floor) / whole.max(1e-9),
         ));
@@ -620,7 +620,7 @@ fn errors(job: &str, src: &EnvMap, tmp: &Path, cmft: bool) -> Result<(String, St
     let dash = || "–".to_string();
     if job.starts_with("SH") {
         let text = std::fs::read_to_string(tmp.join("sh.json"))?;
-        let json: crate::passes::sh_project::ShJson = serde_json::from_str(&text)?;
+        let json: envlight::passes::sh_project::ShJson = serde_json::from_str(&text)?;
         let cpu = sh::project(src, 2);
         let top = cpu.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
         let worst = json
@@ -736,25 +736,70 @@ fn tempdir() -> Result<PathBuf> {
     Ok(d)
 }
 
+/// `envlight-lab peers`: whole-process times of the jobs users give cmft, paired with cmft on
+/// the same machine, each with its error (markdown; --out writes its section of a page)
+#[derive(clap::Args)]
+pub struct PeersArgs {
+    /// The map every job reads (.hdr, which cmft reads too)
+    #[arg(long)]
+    map: PathBuf,
+    /// cmft's executable (default: $ENVLIGHT_CMFT); without it cmft's columns stay empty
+    #[arg(long)]
+    cmft: Option<PathBuf>,
+    /// Timed pairs per fast job (the median is reported)
+    #[arg(long, default_value_t = 5)]
+    reps: usize,
+    /// Timed pairs for the Phong job
+    #[arg(long, default_value_t = 1)]
+    phong_reps: usize,
+    /// The performance page (docs/performance/DEVICE.md) to write this job's section into
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// Runs `envlight-lab peers`.
+pub fn cli(g: &crate::common::Global, a: &PeersArgs) -> Result<()> {
+    let cmft = a
+        .cmft
+        .clone()
+        .or_else(|| std::env::var_os("ENVLIGHT_CMFT").map(PathBuf::from));
+    if cmft.is_none() {
+        eprintln!("ENVLIGHT_CMFT is not set: timing envlight alone, cmft skipped");
+    }
+    bench_peers(&PeersOptions {
+        map: &a.map,
+        cmft: cmft.as_deref(),
+        reps: a.reps,
+        phong_reps: a.phong_reps,
+        // The parent's context only names the device; it is gone before any timing.
+        page: match &a.out {
+            Some(p) => Some((
+                p.as_path(),
+                crate::page::Provenance::of(crate::common::context(g)?.info()),
+            )),
+            None => None,
+        },
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// The floor's split reads back what `envlight devices` prints (`cli::info::startup_line`),
+    /// The floor's split reads back what `envlight devices` prints (its start-up line),
     /// each number's median across runs alone; runs without the line are left out.
     #[test]
     fn startup_lines_are_read_back_as_medians() {
-        use crate::gpu::Startup;
+        // As `envlight devices` prints it (its `startup_line`).
         let line = |k: f64| {
-            let s = Startup {
-                loader_ms: 0.5 * k,
-                instance_ms: 20.0 + k,
-                device_ms: 3.0 * k,
-                rest_ms: 0.25,
-            };
             format!(
-                "envlight uses: x\n{}\n",
-                crate::cli::info::startup_line(&s, 10.0 - k)
+                "envlight uses: x\nstart-up ms: loader {:.1}, instance {:.1}, device {:.1}, \
+                 rest {:.1}; teardown ms {:.1}\n",
+                0.5 * k,
+                20.0 + k,
+                3.0 * k,
+                0.25,
+                10.0 - k
             )
         };
         let outs = [
@@ -767,9 +812,24 @@ mod tests {
         assert_eq!(m, [1.0, 22.0, 6.0, 0.2, 8.0]);
         assert_eq!(startup_medians(&outs[2..3]), None);
         assert_eq!(
-            crate::cli::info::parse_startup_line("start-up ms: loader 1.0"),
+            crate::common::parse_startup_line("start-up ms: loader 1.0"),
             None
         );
+    }
+
+    /// The line the `envlight` program beside the lab prints (`envlight devices`) is the one
+    /// read back: five finite, non-negative numbers.
+    #[test]
+    fn the_programs_startup_line_is_read_back() {
+        let exe = crate::common::envlight_exe().unwrap();
+        let o = Command::new(exe)
+            .args(["--device", "cpu", "devices"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let text = String::from_utf8_lossy(&o.stdout);
+        let v = crate::common::parse_startup_line(&text).unwrap_or_else(|| panic!("{text}"));
+        assert!(v.iter().all(|x| x.is_finite() && *x >= 0.0), "{v:?}");
     }
 
     /// The breakdown reads back exactly what the commands print (`cli::HostClock`).

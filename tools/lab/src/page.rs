@@ -1,5 +1,5 @@
 //! Performance pages (`docs/performance/<device>.md`), one per device, written only by
-//! `envlight bench … --out PAGE`: a header naming the device, its driver and the CPU, then one
+//! `cargo xtask lab … --out PAGE`: a header naming the device, its driver and the CPU, then one
 //! section per job, headed by the commit, date, command and method that measured it. A rerun
 //! of a bench replaces its own section and leaves the others; the history of the figures is
 //! `git log -p` of the page. A page of one device refuses a run on another.
@@ -27,7 +27,7 @@ pub struct Provenance {
 
 impl Provenance {
     /// This process on `info`'s device, now.
-    pub fn of(info: &crate::gpu::DeviceInfo) -> Provenance {
+    pub fn of(info: &envlight::gpu::DeviceInfo) -> Provenance {
         let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
         let quote = |a: String| match a.contains(' ') {
             true => format!("'{a}'"),
@@ -36,9 +36,9 @@ impl Provenance {
         Provenance {
             device: format!("{} (driver {})", info.name, info.driver.trim()),
             cpu: format!("{}, {cores} cores", cpu_name()),
-            commit: super::commit(),
+            commit: crate::common::commit(),
             date: today(),
-            command: std::iter::once("envlight".to_string())
+            command: std::iter::once("cargo xtask lab".to_string())
                 .chain(std::env::args().skip(1).map(quote))
                 .collect::<Vec<_>>()
                 .join(" "),
@@ -97,7 +97,7 @@ pub struct Section<'a> {
 fn header(p: &Provenance) -> String {
     format!(
         "# envlight on {0}\n\nDevice: {0}. CPU: {1}.\n\n\
-         Written by `envlight bench … --out` only: each section names the commit, date, \
+         Written by `cargo xtask lab … --out` only: each section names the commit, date, \
          command and method that measured it, and a rerun of its bench replaces it. Earlier \
          figures: `git log -p` of this file.\n",
         p.device, p.cpu
@@ -174,7 +174,7 @@ pub fn write_section(path: &Path, s: &Section<'_>, p: &Provenance) -> Result<()>
     for (_, text) in &all {
         let _ = write!(page, "\n{text}\n");
     }
-    crate::io::write_atomic(path, page.as_bytes())
+    envlight::io::write_atomic(path, page.as_bytes())
         .with_context(|| format!("writing {}", path.display()))?;
     eprintln!("wrote the {} section of {}", s.job, path.display());
     Ok(())

@@ -1,6 +1,6 @@
-//! The tables and the plot of `envlight bench fis` (see [`super::fis`] for the runs).
+//! The tables and the plot of `envlight-lab fis` (see [`super::fis`] for the runs).
 
-use super::fis::{materials, Row};
+use crate::fis::{materials, Row};
 
 /// The rows as CSV.
 pub fn csv(rows: &[Row]) -> String {
@@ -172,7 +172,7 @@ pub fn plot(rows: &[Row]) -> image::RgbImage {
     let mats: Vec<String> = materials().into_iter().map(|m| m.0).collect();
     for (_, c) in &curves {
         let mi = mats.iter().position(|m| *m == c[0].material).unwrap_or(0);
-        let colour = super::accuracy::plot_colour(mi);
+        let colour = crate::accuracy::plot_colour(mi);
         let fis = c[0].technique == "fis";
         for pair in c.windows(2) {
             let (a, b) = (

@@ -1,19 +1,19 @@
-//! `envlight report --split-sum-every-probe`: the specular recipes an engine can shade GGX
+//! `envlight-lab recipes`: the specular recipes an engine can shade GGX
 //! with from the same baked chain (split-sum as Karis wrote it, with and without extracted
 //! lights, and the lobe taps recipe), beside FIS and SH-BRDF, against converged Monte Carlo on
 //! every probe of a folder and GGX α 0.05 to 0.6, with each recipe's per-frame GPU time:
 //! split_sum.md and split_sum.csv.
 
-use super::scoring::{errors, scene, sphere_pixels, truth};
-use crate::math::brdf::Brdf;
-use crate::math::camera::{sphere_camera, Camera};
-use crate::render::PassKind;
-use crate::render::Renderer;
-use crate::scene::{LightsMode, Scene, SplitSumSettings, Technique};
-use crate::EnvMap;
 use anyhow::{Context as _, Result};
+use envlight::math::brdf::Brdf;
+use envlight::math::camera::{sphere_camera, Camera};
+use envlight::render::score::{errors, scene, sphere_pixels, truth};
+use envlight::render::PassKind;
+use envlight::render::Renderer;
+use envlight::scene::{LightsMode, Scene, SplitSumSettings, Technique};
+use envlight::EnvMap;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The α of the sweep.
 const ALPHAS: [f64; 6] = [0.05, 0.1, 0.2, 0.3, 0.45, 0.6];
@@ -63,7 +63,7 @@ fn recipes() -> Vec<Recipe> {
             label: "sh_brdf l=8",
             technique: Technique::ShBrdf {
                 order: 8,
-                grid: crate::math::sh_brdf::DEFAULT_GRID,
+                grid: envlight::math::sh_brdf::DEFAULT_GRID,
                 window: None,
             },
             taps: 1,
@@ -125,7 +125,7 @@ fn timings(renderer: &Renderer, env: &EnvMap, split: SplitSumSettings) -> Result
 type Cell = (String, f64, usize, f64, f64, f64);
 
 /// Runs the sweep over every probe of `dir` into `out`.
-pub(super) fn sweep(
+fn sweep(
     renderer: &Renderer,
     dir: &Path,
     cam: Camera,
@@ -135,12 +135,12 @@ pub(super) fn sweep(
     split: SplitSumSettings,
 ) -> Result<()> {
     let pixels = sphere_pixels(&cam);
-    let files = super::super::probe_files(dir)?;
+    let files = envlight::io::probes_in(dir)?;
     let list = recipes();
     let mut cells: Vec<Cell> = Vec::new();
     let mut times = None;
     for path in &files {
-        let env = crate::io::load(path, &crate::io::LoadOptions::default())
+        let env = envlight::io::load(path, &envlight::io::LoadOptions::default())
             .with_context(|| path.display().to_string())?;
         let name = path
             .file_stem()
@@ -259,4 +259,57 @@ fn markdown(cells: &[Cell], list: &[Recipe], times: &[f64], head: &str) -> Strin
         }
     }
     md
+}
+
+/// `envlight-lab recipes`: the specular recipes (split-sum with and without extracted lights,
+/// lobe taps 4, 8, 16), FIS and SH-BRDF against the reference on every probe of the folder at
+/// GGX α 0.05 to 0.6, with their per-frame GPU time (split_sum.md, split_sum.csv)
+#[derive(clap::Args)]
+pub struct RecipesArgs {
+    /// Folder of the probes (default: $ENVLIGHT_PROBES; one of the two is needed)
+    #[arg(long)]
+    probes: Option<PathBuf>,
+    /// Output folder
+    #[arg(long, default_value = "out/report")]
+    out: PathBuf,
+    /// Side of the sphere image
+    #[arg(long, default_value_t = 64)]
+    size: u32,
+    /// Samples per pixel of each of the two Monte Carlo reference renders
+    #[arg(long, default_value_t = 16384)]
+    reference: u32,
+    /// Split-sum's roughness levels (default: the scene default)
+    #[arg(long)]
+    split_levels: Option<u32>,
+    /// Split-sum's chain size (default: the scene default)
+    #[arg(long)]
+    split_size: Option<u32>,
+    /// Split-sum's FIS samples per texel (default: the scene default)
+    #[arg(long)]
+    split_samples: Option<u32>,
+}
+
+/// Runs `envlight-lab recipes`.
+pub fn run(g: &crate::common::Global, a: &RecipesArgs) -> Result<()> {
+    let ctx = crate::common::context(g)?;
+    let device = format!("{} ({})", ctx.info().name, ctx.info().driver.trim());
+    eprintln!("device: {device}");
+    let d = SplitSumSettings::default();
+    let split = SplitSumSettings {
+        size: a.split_size.or(d.size),
+        levels: a.split_levels.unwrap_or(d.levels),
+        samples: a.split_samples.unwrap_or(d.samples),
+        ..d
+    };
+    let dir = crate::common::probes_dir(a.probes.as_deref())?;
+    let cam = sphere_camera(a.size);
+    sweep(
+        &Renderer::new(&ctx),
+        &dir,
+        cam,
+        a.reference,
+        &a.out,
+        &device,
+        split,
+    )
 }

@@ -1,16 +1,16 @@
-//! `envlight bench formats`: what each KTX2 texel format and Zstandard cost and keep, per
+//! `envlight-lab formats`: what each KTX2 texel format and Zstandard cost and keep, per
 //! probe: the bytes of its irradiance and specular cubes, and each specular level's relative
 //! luminance error against the rgba32f cubes of the same bake (mean and worst texel), with the
 //! share of power clamped away where a format cannot hold a texel.
 
-use crate::bake::output::clamp_cube;
-use crate::bake::{BakeOptions, Baker};
-use crate::cli::{context, probe_files, Global};
-use crate::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
-use crate::io::LoadOptions;
-use crate::math::envmap::luminance;
-use crate::Orientation;
+use crate::common::{context, Global};
 use anyhow::{Context as _, Result};
+use envlight::bake::output::clamp_cube;
+use envlight::bake::{BakeOptions, Baker};
+use envlight::io::ktx2::{self, Ktx2Format, Ktx2Image, Supercompression};
+use envlight::io::LoadOptions;
+use envlight::math::envmap::luminance;
+use envlight::Orientation;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -77,7 +77,7 @@ fn encode_cube(levels: &[Vec<[f32; 4]>], size: u32, format: Ktx2Format) -> Resul
     })
 }
 
-/// Runs `envlight bench formats`.
+/// Runs `envlight-lab formats`.
 pub fn bench_formats(
     g: &Global,
     inputs: &[PathBuf],
@@ -87,7 +87,7 @@ pub fn bench_formats(
     let mut files = Vec::new();
     for p in inputs {
         if p.is_dir() {
-            files.extend(probe_files(p)?);
+            files.extend(envlight::io::probes_in(p)?);
         } else {
             files.push(p.clone());
         }
@@ -97,7 +97,7 @@ pub fn bench_formats(
     let baker = Baker::new(&ctx)?;
     let mut rows = Vec::new();
     for path in &files {
-        let map = crate::io::load(path, &LoadOptions::default())
+        let map = envlight::io::load(path, &LoadOptions::default())
             .with_context(|| path.display().to_string())?;
         let baked = baker.bake(&map, &Orientation::default(), opts)?;
         let probe = path
@@ -130,13 +130,13 @@ pub fn bench_formats(
     let (method, report) = markdown(&rows, opts);
     print!("{method}\n\n{report}");
     if let Some(out) = out {
-        let section = super::page::Section {
+        let section = crate::page::Section {
             job: "formats",
             title: "KTX2 texel formats: size and error against rgba32f",
             method: &method,
             body: &report,
         };
-        super::page::write_section(out, &section, &super::page::Provenance::of(ctx.info()))?;
+        crate::page::write_section(out, &section, &crate::page::Provenance::of(ctx.info()))?;
     }
     Ok(())
 }
@@ -240,4 +240,35 @@ fn markdown(rows: &[Row], opts: &BakeOptions) -> (String, String) {
         );
     }
     (method, s)
+}
+
+/// `envlight-lab formats`: what each KTX2 texel format and Zstandard cost and keep: per
+/// probe the bytes of its cubes and each specular level's error against rgba32f (markdown)
+#[derive(clap::Args)]
+pub struct FormatsArgs {
+    /// Probes, or folders whose .hdr/.exr/.dds/.pfm files are all taken
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+    /// Specular cube face size at level 0
+    #[arg(long, default_value_t = 256)]
+    specular_size: u32,
+    /// Specular levels
+    #[arg(long, default_value_t = 8)]
+    specular_levels: u32,
+    /// Irradiance cube face size
+    #[arg(long, default_value_t = 32)]
+    irradiance_size: u32,
+    /// The performance page (docs/performance/DEVICE.md) to write this job's section into
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// Runs `envlight-lab formats`.
+pub fn run(g: &Global, a: &FormatsArgs) -> Result<()> {
+    let mut opts = BakeOptions::default();
+    opts.specular_size = a.specular_size;
+    opts.specular_levels = a.specular_levels;
+    opts.irradiance_size = a.irradiance_size;
+    opts.validate()?;
+    bench_formats(g, &a.inputs, &opts, a.out.as_deref())
 }

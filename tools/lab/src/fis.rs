@@ -2,22 +2,23 @@
 //! Carlo at growing sample counts, each timed on the GPU and scored against a converged
 //! Monte Carlo reference (MIS), on a sphere seen from normal incidence to grazing.
 
-use crate::error::Result;
-use crate::gpu::{total_ms, Context, Timed};
-use crate::math::brdf::Brdf;
-use crate::math::camera::sphere_camera;
-use crate::math::camera::Shape;
-use crate::math::envmap::luminance;
-use crate::math::fis::default_dp_size;
-use crate::math::{Mapping, Orientation};
-use crate::passes::gbuffer::{GBuffer, GBufferPass};
-use crate::passes::mc::{pixel_stats, McEnv, McOptions, MonteCarlo};
-use crate::passes::mip::MipChain;
-use crate::passes::shade::{Shade, ShadeInputs};
-use crate::passes::{ConvertOptions, Converter};
-use crate::scene::{Material, SceneObject, Technique};
-use crate::EnvMap;
-use crate::GpuEnvMap;
+use envlight::error::Result;
+use envlight::gpu::{total_ms, Context, Timed};
+use envlight::math::brdf::Brdf;
+use envlight::math::camera::sphere_camera;
+use envlight::math::camera::Shape;
+use envlight::math::envmap::luminance;
+use envlight::math::fis::default_dp_size;
+use envlight::math::{Mapping, Orientation};
+use envlight::passes::gbuffer::{GBuffer, GBufferPass};
+use envlight::passes::mc::{pixel_stats, McEnv, McOptions, MonteCarlo};
+use envlight::passes::mip::MipChain;
+use envlight::passes::shade::{Shade, ShadeInputs};
+use envlight::passes::{ConvertOptions, Converter};
+use envlight::scene::{Material, SceneObject, Technique};
+use envlight::EnvMap;
+use envlight::GpuEnvMap;
+use std::path::PathBuf;
 
 /// What to measure.
 #[derive(Clone, Debug)]
@@ -154,17 +155,13 @@ pub fn run(
                     let Timed {
                         value: res,
                         timings: t,
-                    } = mc.run(
-                        &mc_g,
-                        &mc_env,
-                        &McOptions {
-                            samples,
-                            mis,
-                            seed: if mis { 7 } else { 3 },
-                            per_frame: samples.min(256),
-                            ..Default::default()
-                        },
-                    )?;
+                    } = mc.run(&mc_g, &mc_env, &{
+                        let mut o = McOptions::new(samples);
+                        o.mis = mis;
+                        o.seed = if mis { 7 } else { 3 };
+                        o.per_frame = samples.min(256);
+                        o
+                    })?;
                     let acc = res.accum.download_level(ctx, 0)?;
                     let mean = acc.iter().map(|&t| pixel_stats(t, res.samples).0).collect();
                     Ok((mean, total_ms(&t)))
@@ -185,7 +182,7 @@ pub fn run(
                             prefiltered: None,
                             mc: None,
                             brdf_sh: None,
-                            sh_rotation: crate::passes::shade::Rotation::Zxzxz,
+                            sh_rotation: envlight::passes::shade::Rotation::Zxzxz,
                             split: None,
                             shadows: false,
                             lights: None,
@@ -243,4 +240,76 @@ pub fn run(
         }
     }
     Ok(rows)
+}
+
+/// `envlight-lab fis`: FIS and plain BRDF-sampled MC against a converged MIS reference, on a
+/// studio and a sun map (fis_vs_mc.csv, .md and .png; docs/fis/ holds them)
+#[derive(clap::Args)]
+pub struct FisArgs {
+    /// Environment maps (default: the bundled sky)
+    #[arg(long, value_delimiter = ',')]
+    maps: Vec<PathBuf>,
+    /// Image sides
+    #[arg(long, value_delimiter = ',', default_value = "512,1024")]
+    sizes: Vec<u32>,
+    /// FIS sample counts
+    #[arg(long, value_delimiter = ',', default_value = "1,4,16,64,256")]
+    fis: Vec<u32>,
+    /// Plain MC sample counts
+    #[arg(long, value_delimiter = ',', default_value = "1,4,16,64,256,1024,4096")]
+    mc: Vec<u32>,
+    /// Samples per pixel of the MIS reference
+    #[arg(long, default_value_t = 16384)]
+    reference: u32,
+    /// Lod biases swept at FIS 16 and 64
+    #[arg(long, value_delimiter = ',', default_value = "-1,0,0.5,1,1.5,2,3", value_parser = crate::common::finite_f64)]
+    biases: Vec<f64>,
+    /// Output folder
+    #[arg(long, default_value = "docs/fis")]
+    out: PathBuf,
+}
+
+/// Runs `envlight-lab fis`: the rows, then their CSV, markdown and plot in `a.out`.
+pub fn bench_fis(g: &crate::common::Global, a: &FisArgs) -> anyhow::Result<()> {
+    use anyhow::Context as _;
+    let ctx = crate::common::context(g)?;
+    let default = [PathBuf::from("assets/sky_latlong.exr")];
+    let paths = if a.maps.is_empty() {
+        &default[..]
+    } else {
+        &a.maps[..]
+    };
+    let mut loaded = Vec::new();
+    for p in paths {
+        let m = envlight::io::load(p, &Default::default())?;
+        let name = p
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        loaded.push((name, m));
+    }
+    let cfg = FisBench {
+        sizes: a.sizes.clone(),
+        fis: a.fis.clone(),
+        mc: a.mc.clone(),
+        reference: a.reference,
+        biases: a.biases.clone(),
+        bias_at: vec![16, 64],
+        bias: envlight::scene::DEFAULT_FIS_BIAS,
+    };
+    let bar = indicatif::ProgressBar::new_spinner();
+    let rows = run(&ctx, &loaded, &cfg, |m| bar.set_message(m.to_string()))?;
+    bar.finish_and_clear();
+    let out = &a.out;
+    std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
+    let device = format!("{} ({})", ctx.info().name, ctx.info().driver);
+    std::fs::write(out.join("fis_vs_mc.csv"), crate::fis_report::csv(&rows))?;
+    let md = crate::fis_report::markdown(&rows, &device);
+    std::fs::write(out.join("fis_vs_mc.md"), &md)?;
+    let png = out.join("fis_vs_mc.png");
+    crate::fis_report::plot(&rows)
+        .save(&png)
+        .with_context(|| png.display().to_string())?;
+    println!("{md}");
+    Ok(())
 }
