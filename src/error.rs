@@ -26,6 +26,15 @@ pub enum Error {
     /// A user-supplied parameter is out of range (a size of zero, an unknown mapping name…).
     #[error("{0}")]
     Invalid(String),
+    /// An error of some larger job, with what the job was doing (a probe's path in a set's
+    /// bake): "context: error".
+    #[error("{context}: {inner}")]
+    Context {
+        /// What was being done, or on what.
+        context: String,
+        /// What went wrong.
+        inner: Box<Error>,
+    },
     /// The Vulkan loader (libvulkan.so.1) could not be loaded.
     #[error(
         "no Vulkan loader found ({0}); install it with `apt-get install libvulkan1 mesa-vulkan-drivers` \
@@ -69,6 +78,22 @@ impl<T> VkContext<T> for std::result::Result<T, vk::Result> {
 }
 
 impl Error {
+    /// This error inside `context` ([`Error::Context`]).
+    pub fn context(self, context: impl Into<String>) -> Error {
+        Error::Context {
+            context: context.into(),
+            inner: Box::new(self),
+        }
+    }
+
+    /// The error under any [`Error::Context`] around it.
+    pub fn innermost(&self) -> &Error {
+        match self {
+            Error::Context { inner, .. } => inner.innermost(),
+            e => e,
+        }
+    }
+
     /// A [`Error::BadFile`] for `path`.
     pub(crate) fn bad_file(path: impl Into<PathBuf>, problem: impl Into<String>) -> Error {
         Error::BadFile {

@@ -15,6 +15,9 @@ pub mod files;
 pub mod manifest;
 pub mod output;
 pub mod plan;
+mod run;
+pub mod schedule;
+pub mod set;
 
 use crate::error::{Error, Result};
 use crate::gpu::{Buffer, Context, InFlight, Recorder, Timed, Timing, Usage};
