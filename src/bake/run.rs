@@ -7,13 +7,14 @@ use super::manifest::{
     lock_probe, outputs_intact, recorded, sha256, write_outputs, Entry, Output, Record, Reduced,
     Stages, RECORD,
 };
+use super::manifest::{manifest_name, Manifest};
 use super::output::SeparateLights;
 use super::plan::BakePlan;
 use super::schedule::classify;
-use super::set::{input_name, write_json, Progress, SetBake};
+use super::set::{input_name, write_dfg, write_json, Part, Progress, SetBake, Written};
 use super::{Baked, Baker, PendingBake, SpotCheckPlan};
 use crate::error::{Error, Result};
-use crate::gpu::total_ms;
+use crate::gpu::{total_ms, Context};
 use crate::io::LoadOptions;
 use crate::math::convert::{reduce_to_fit, Reduction};
 use crate::{EnvMap, Mapping};
@@ -372,6 +373,53 @@ impl Run<'_> {
             Ok(()) => entry,
             Err(e) => self.failed(entry.input, entry.input_sha256, e, w.read_s),
         }
+    }
+}
+
+impl SetBake<'_> {
+    /// Bakes the part on `ctx` with `baker`: writes the DFG table where the plan asks for it,
+    /// then each probe's files and record (skipping, unless `force`, what this folder holds
+    /// intact with these settings), then the manifest. A probe that fails is recorded as
+    /// failed and the run goes on; the error is the run's own (a table or a manifest that
+    /// could not be written).
+    pub fn run(
+        &self,
+        ctx: &Context,
+        baker: &Baker,
+        force: bool,
+        progress: &dyn Progress,
+    ) -> Result<Written> {
+        if self.plan.dfg {
+            write_dfg(baker, self.plan, &self.out)?;
+        }
+        let info = ctx.info();
+        let user = self.plan.max_source_side.unwrap_or(u32::MAX).max(1);
+        let run = Run {
+            job: self,
+            baker,
+            force,
+            max_side: (
+                info.max_image_dimension_2d.min(user),
+                info.max_image_dimension_cube.min(user),
+            ),
+            progress,
+        };
+        let entries = run.probes();
+        let (shard, items) = (self.part.shard(), self.part.items());
+        let manifest = Manifest {
+            settings: self.settings.clone(),
+            settings_sha256: self.settings_sha256.clone(),
+            shard: shard.map(|(i, n)| format!("{i}/{n}")),
+            items: items.map(|(first, last)| format!("{first}-{last}")),
+            inputs: match self.part {
+                Part::All => Vec::new(),
+                _ => self.names.clone(),
+            },
+            probes: entries,
+        };
+        let path = self.out.join(manifest_name(shard, items));
+        write_json(&path, &manifest)?;
+        Ok(Written { manifest, path })
     }
 }
 

@@ -19,12 +19,11 @@
 //! # }
 //! ```
 
-use super::manifest::{manifest_name, read_manifests, Entry, Failure, Manifest, Settings};
+use super::manifest::{read_manifests, Entry, Failure, Manifest, Settings};
 use super::plan::BakePlan;
 use super::schedule::parse_shard;
 use super::Baker;
 use crate::error::{Error, Result};
-use crate::gpu::Context;
 use crate::io::ktx2::{self, Ktx2Format, Ktx2Image};
 use crate::io::write_atomic;
 use std::path::{Path, PathBuf};
@@ -130,14 +129,14 @@ pub enum Part {
 }
 
 impl Part {
-    fn shard(self) -> Option<(usize, usize)> {
+    pub(super) fn shard(self) -> Option<(usize, usize)> {
         match self {
             Part::Shard { index, count } => Some((index, count)),
             _ => None,
         }
     }
 
-    fn items(self) -> Option<(usize, usize)> {
+    pub(super) fn items(self) -> Option<(usize, usize)> {
         match self {
             Part::Items { first, last } => Some((first, last)),
             _ => None,
@@ -149,12 +148,12 @@ impl Part {
 pub struct SetBake<'a> {
     pub(super) plan: &'a BakePlan,
     pub(super) out: PathBuf,
-    part: Part,
-    names: Vec<String>,
+    pub(super) part: Part,
+    pub(super) names: Vec<String>,
     pub(super) mine: Vec<PathBuf>,
     /// Done probes the folder's manifests with these settings record.
     pub(super) previous: Vec<Entry>,
-    settings: Settings,
+    pub(super) settings: Settings,
     pub(super) settings_sha256: String,
 }
 
@@ -255,51 +254,6 @@ impl<'a> SetBake<'a> {
     /// Whether this run takes up no probe (an empty shard of a small set).
     pub fn is_empty(&self) -> bool {
         self.mine.is_empty()
-    }
-
-    /// Bakes the part on `ctx` with `baker`: writes the DFG table where the plan asks for it,
-    /// then each probe's files and record (skipping, unless `force`, what this folder holds
-    /// intact with these settings), then the manifest. A probe that fails is recorded as
-    /// failed and the run goes on; the error is the run's own (a table or a manifest that
-    /// could not be written).
-    pub fn run(
-        &self,
-        ctx: &Context,
-        baker: &Baker,
-        force: bool,
-        progress: &dyn Progress,
-    ) -> Result<Written> {
-        if self.plan.dfg {
-            write_dfg(baker, self.plan, &self.out)?;
-        }
-        let info = ctx.info();
-        let user = self.plan.max_source_side.unwrap_or(u32::MAX).max(1);
-        let run = super::run::Run {
-            job: self,
-            baker,
-            force,
-            max_side: (
-                info.max_image_dimension_2d.min(user),
-                info.max_image_dimension_cube.min(user),
-            ),
-            progress,
-        };
-        let entries = run.probes();
-        let (shard, items) = (self.part.shard(), self.part.items());
-        let manifest = Manifest {
-            settings: self.settings.clone(),
-            settings_sha256: self.settings_sha256.clone(),
-            shard: shard.map(|(i, n)| format!("{i}/{n}")),
-            items: items.map(|(first, last)| format!("{first}-{last}")),
-            inputs: match self.part {
-                Part::All => Vec::new(),
-                _ => self.names.clone(),
-            },
-            probes: entries,
-        };
-        let path = self.out.join(manifest_name(shard, items));
-        write_json(&path, &manifest)?;
-        Ok(Written { manifest, path })
     }
 }
 
