@@ -12,15 +12,16 @@
 //!   buffer its caller owns; it never submits. [`Context::run`] is the one place that submits
 //!   and waits, for the command line, tests and one-off jobs.
 //! - [`io`]: EXR, HDR, PFM, PNG and KTX2 in and out. [`bake`]: SH, irradiance and GGX cubes
-//!   for an engine. [`scene`] and [`render`]: the reference renderer (a scene resolves into a
-//!   [`render::Plan`] once and runs stage by stage).
+//!   for an engine, one probe or a whole set. [`scene`] and [`render`]: the reference
+//!   renderer (a scene resolves into a [`render::Plan`] once and runs stage by stage).
+//!   [`bench`]: what each pass costs on a device against its floor, with its error.
 //!
 //! Features: `cli` (default) builds the `envlight` binary and is the only user of clap,
 //! indicatif and anyhow; `reference` makes `math` public, the float64 reference
 //! implementations every pass is tested against; `test-hooks` exposes
 //! `passes::testing`, what only the tests call. The layout GLSL and Rust share (`src/abi`) is
 //! private. Modules import one way (abi and error ← math ← io ← gpu ← passes ← scene ←
-//! render and bake ← cli; `tests/layering.rs` checks it); `docs/design.md` has the rest.
+//! render and bake ← bench ← cli; `tests/layering.rs` checks it); `docs/design.md` has the rest.
 //!
 //! # Embedding
 //! An engine adopts its device ([`Context::adopt`]), builds the passes it needs once, and
@@ -72,6 +73,7 @@
 #[allow(dead_code, unused_imports)]
 mod abi;
 pub mod bake;
+pub mod bench;
 #[cfg(feature = "cli")]
 #[doc(hidden)]
 pub mod cli;

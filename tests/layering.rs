@@ -172,7 +172,8 @@ fn layer(top: &str) -> usize {
         "passes" => 4,
         "scene" => 5,
         "render" | "bake" => 6,
-        "cli" => 7,
+        "bench" => 7,
+        "cli" => 8,
         other => panic!("src/{other}: no layer assigned (add it to layer())"),
     }
 }

@@ -11,8 +11,8 @@ mod fis;
 mod fis_report;
 mod formats;
 mod ibl;
+mod own;
 mod page;
-mod passthrough;
 mod peers;
 mod recipes;
 mod scale;
@@ -56,8 +56,8 @@ enum Command {
     Formats(formats::FormatsArgs),
     Table(table::TableArgs),
     Recipes(recipes::RecipesArgs),
-    Floors(passthrough::FloorsArgs),
-    Dynamic(passthrough::DynamicArgs),
+    Floors(own::FloorsArgs),
+    Dynamic(own::DynamicArgs),
 }
 
 fn main() {
@@ -72,8 +72,8 @@ fn main() {
         Command::Formats(a) => formats::run(g, a),
         Command::Table(a) => table::run(g, a),
         Command::Recipes(a) => recipes::run(g, a),
-        Command::Floors(a) => passthrough::floors(g, a),
-        Command::Dynamic(a) => passthrough::dynamic(g, a),
+        Command::Floors(a) => own::floors(g, a),
+        Command::Dynamic(a) => own::dynamic(g, a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -1,6 +1,6 @@
-//! The lab's commands end to end, each as `cargo xtask lab` runs it: `accuracy`, `scale`,
-//! `formats`, `dynamic` (through the `envlight` program beside the lab) and `peers`' refusal
-//! without a map. The accuracy table has its own file (tests/table.rs).
+//! The lab's commands end to end, each as `cargo xtask lab` runs it: `accuracy`, `scale`
+//! (which bakes with the `envlight` program beside the lab), `formats`, `dynamic` and
+//! `peers`' refusal without a map. The accuracy table has its own file (tests/table.rs).
 
 use envlight::math::synth::smooth_env;
 use envlight::math::Mapping;
@@ -176,9 +176,9 @@ fn formats_reports_every_format() {
     }
 }
 
-/// `dynamic --slices 2` runs `envlight bench dynamic` (the program beside the lab) and
-/// writes what it printed as the page's "dynamic-sliced" section: its title, its command,
-/// the program's method and, per input, its six rows.
+/// `dynamic --slices 2` writes the library's report (what `envlight bench dynamic` prints)
+/// as the page's "dynamic-sliced" section: its title, its command, its method and, per
+/// input, its six rows.
 #[test]
 fn dynamic_writes_the_programs_tables_as_its_section() {
     let text = lab_page(

@@ -1,9 +1,10 @@
-//! `envlight bench floors`: every pass's GPU time beside its floor, a copy of the same input
+//! Every pass's GPU time beside its floor, a copy of the same input
 //! (one read and one write of each of its texels, `passes::testing::copy`), and its error, at
 //! several sizes of one lat-long map — a roofline table a GPU timer reads at a glance.
 
-use super::median;
+use super::{median, Report};
 use crate::abi::SH_MAX_LMAX;
+use crate::error::Result;
 use crate::gpu::{total_ms, Context, Timed, Timing};
 use crate::math::brdf::Brdf;
 use crate::math::camera::{Camera, Projection};
@@ -23,7 +24,6 @@ use crate::render::score::{errors, scene, sphere_pixels, truth};
 use crate::render::{PassKind, Renderer};
 use crate::scene::{LookupFilter, SplitSumSettings, Technique};
 use crate::{EnvMap, GpuEnvMap, Mapping, Orientation};
-use anyhow::Result;
 use glam::{DMat3, DVec3};
 
 /// One pass at one size: its GPU time, its floor's, and its error in words.
@@ -36,7 +36,7 @@ struct Row {
 }
 
 /// The median of `reps` runs' total GPU time, after one untimed run (pipelines, warm-up).
-pub(super) fn time(reps: usize, mut run: impl FnMut() -> Result<Vec<Timing>>) -> Result<f64> {
+pub(crate) fn time(reps: usize, mut run: impl FnMut() -> Result<Vec<Timing>>) -> Result<f64> {
     run()?;
     let mut ms = Vec::new();
     for _ in 0..reps.max(1) {
@@ -162,9 +162,7 @@ fn map_rows(
     let mips = MipChain::new(ctx)?;
     let dp_opts = ConvertOptions::new(Mapping::DualParaboloid, dp.width);
     // Each run on a fresh paraboloid: the chain premultiplies level 0 in place.
-    let ms = time(reps, || {
-        Ok(mips.run(&conv.run_mipped(src, &dp_opts)?.value)?)
-    })?;
+    let ms = time(reps, || mips.run(&conv.run_mipped(src, &dp_opts)?.value))?;
     let level0 = dp.download(ctx)?;
     mips.run(&dp)?;
     let want = mip::chain(&level0);
@@ -219,7 +217,7 @@ fn planned_row(
         Err(crate::Error::Invalid(why)) if why.contains("maxStorageBufferRange") => {
             return Ok(None)
         }
-        Err(e) => return Err(e.into()),
+        Err(e) => return Err(e),
     };
     let built = started.elapsed().as_secs_f64() * 1e3;
     let ms = time(reps, || Ok(conv.run_planned(src, &plan)?.timings))?;
@@ -583,10 +581,15 @@ fn shade_rows(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Vec<Row>> {
     Ok(rows)
 }
 
-/// `envlight bench floors`: the rows at each lat-long width in `sizes` (the analytic sky, a
-/// sun 10⁵ × the zenith), printed: the method, a blank line, the table (`cargo xtask lab
-/// floors` writes it as a performance page's section).
-pub fn bench_floors(ctx: &Context, sizes: &[u32], reps: usize) -> Result<()> {
+/// Every pass against its floor at each lat-long width in `sizes` (the analytic sky, a sun
+/// 10⁵ × the zenith), the median of `reps` timed runs; `progress` hears of each width done.
+/// The report's job is "floors".
+pub fn floors(
+    ctx: &Context,
+    sizes: &[u32],
+    reps: usize,
+    progress: &dyn Fn(&str),
+) -> Result<Report> {
     let copy = CopyPass::new(ctx)?;
     let mut rows = Vec::new();
     for &w in sizes {
@@ -606,7 +609,7 @@ pub fn bench_floors(ctx: &Context, sizes: &[u32], reps: usize) -> Result<()> {
         rows.extend(sh_rows(ctx, &map, &src, floor, reps)?);
         rows.extend(filter_rows(ctx, &map, &src, floor, reps)?);
         rows.extend(shade_rows(ctx, &map, reps)?);
-        eprintln!("latlong {w}: done");
+        progress(&format!("floors: latlong {w}: done"));
     }
     let method = format!(
         "GPU time from timestamps, the median of {reps} runs after an untimed one. Each pass's \
@@ -637,6 +640,10 @@ pub fn bench_floors(ctx: &Context, sizes: &[u32], reps: usize) -> Result<()> {
             r.error
         ));
     }
-    print!("{method}\n\n{body}");
-    Ok(())
+    Ok(Report {
+        job: "floors",
+        title: "Every pass against its floor",
+        method,
+        body,
+    })
 }

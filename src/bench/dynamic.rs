@@ -1,4 +1,4 @@
-//! `envlight bench dynamic`: what refiltering an environment that changes every frame costs.
+//! What refiltering an environment that changes every frame costs.
 //! Each frame's map is an image already on the GPU (as an engine renders its sky or a
 //! reflection probe), its sun at another azimuth each frame; the whole refilter — SH 2 with
 //! its 32² irradiance cube, light extraction, and the GGX chain of the residual (conversion to a
@@ -8,7 +8,8 @@
 //! every output texel (each read once, written once, no arithmetic).
 
 use super::floors::{copy_ms, probe_texels, rel_lum, worse};
-use super::median;
+use super::{median, Report};
+use crate::error::Result;
 use crate::gpu::{Buffer, Context, Timing};
 use crate::math::convert::residual_edge_points;
 use crate::math::envmap::luminance;
@@ -24,7 +25,6 @@ use crate::passes::{
     MipChain, PrefilterOptions, ShEvaluator, ShProjector, SplitSum, Subgroups,
 };
 use crate::{EnvMap, GpuEnvMap};
-use anyhow::Result;
 use ash::vk;
 use glam::{DMat3, DVec3};
 use gpu_allocator::MemoryLocation;
@@ -48,6 +48,25 @@ pub struct FrameSettings {
     pub ratio: f64,
     /// Most light texels.
     pub max_lights: u32,
+}
+
+impl FrameSettings {
+    /// `samples` FIS samples per chain texel and the chain's rough levels over `slices`
+    /// frames; the rest as an engine's frame would have it: 7 levels, a 32² irradiance cube,
+    /// lights above the diffuse ratio × the mean, at most as many as the chain extracts. The
+    /// chain's side (and its paraboloid's) are set per run by [`dynamic`].
+    pub fn new(samples: u32, slices: u32) -> FrameSettings {
+        FrameSettings {
+            chain: 0,
+            levels: 7,
+            samples,
+            slices,
+            paraboloid: 0,
+            irradiance: 32,
+            ratio: crate::abi::lights::DIFFUSE_RATIO,
+            max_lights: crate::abi::lights::CHAIN_MAX_TEXELS,
+        }
+    }
 }
 
 /// The stages, by the span that times each.
@@ -359,11 +378,6 @@ fn input_rows(
         s.chain,
         all / floor
     ));
-    eprintln!(
-        "dynamic {input}, chain {}: {all:.3} ms a frame, {:.1}× its floor",
-        s.chain,
-        all / floor
-    );
     let total: f64 = stage.iter().sum();
     let parts: Vec<f64> = timed.parts.into_iter().map(median).collect();
     let levels: Vec<String> = (0..s.levels as usize)
@@ -424,7 +438,9 @@ fn time_frames(
     let runs = (reps.max(1) + 1) * gpu.len();
     let made = ctx.submissions() - submissions;
     if made as usize != runs {
-        anyhow::bail!("{runs} frames took {made} submissions");
+        return Err(crate::Error::Invalid(format!(
+            "{runs} frames took {made} submissions"
+        )));
     }
     Ok(timed)
 }
@@ -499,17 +515,18 @@ fn frame_errors(
 }
 
 /// Runs the benchmark: cube inputs of `cubes` sides and lat-long inputs of `widths`, each
-/// refiltered with `s` into a chain of each side in `chains` (its paraboloid twice that);
-/// prints the method, a blank line and the tables (`cargo xtask lab dynamic` writes them as
-/// a performance page's section).
-pub fn bench_dynamic(
+/// refiltered with `s` into a chain of each side in `chains` (its paraboloid twice that), in
+/// `reps` timed rounds; `progress` hears of each input done. The report's job is "dynamic",
+/// or "dynamic-sliced" where `s.slices` is above 1.
+pub fn dynamic(
     ctx: &Context,
     cubes: &[u32],
     widths: &[u32],
     chains: &[u32],
     s: &FrameSettings,
     reps: usize,
-) -> Result<()> {
+    progress: &dyn Fn(&str),
+) -> Result<Report> {
     let passes = Passes {
         proj: ShProjector::new(ctx, Subgroups::Auto)?,
         eval: ShEvaluator::new(ctx)?,
@@ -543,6 +560,10 @@ pub fn bench_dynamic(
             ..*s
         };
         let (rows, share, level_row, plan) = input_rows(ctx, &passes, mapping, size, s, reps)?;
+        progress(&format!(
+            "dynamic: {} {size}, chain {c}²: done",
+            mapping.name()
+        ));
         plans.extend(plan);
         body.push_str(&rows);
         level_rows.push_str(&level_row);
@@ -627,6 +648,14 @@ pub fn bench_dynamic(
             lag = s.slices - 1
         ),
     };
-    print!("{method}\n\n{body}");
-    Ok(())
+    Ok(Report {
+        job: if sliced { "dynamic-sliced" } else { "dynamic" },
+        title: if sliced {
+            "An environment that changes every frame, its chain time-sliced"
+        } else {
+            "An environment that changes every frame"
+        },
+        method,
+        body,
+    })
 }
