@@ -115,3 +115,22 @@ pub fn average(a: &EnvMap, b: &EnvMap) -> EnvMap {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn errors_measure_rms_bias_and_tiles() {
+        let m = EnvMap::new(crate::Mapping::LatLong, 8, 8, vec![[1.0; 3]; 64]);
+        let mut a = m.clone();
+        for t in &mut a.texels[..32] {
+            *t = [1.5; 3];
+        }
+        let pixels: Vec<(usize, u32)> = (0..64).map(|k| (k, (k / 32) as u32)).collect();
+        let (rms, bias, tile) = errors(&a, &m, &pixels);
+        assert!((rms - (0.25f64 * 32.0 / 64.0).sqrt()).abs() < 1e-12);
+        assert!((bias - 0.25).abs() < 1e-12);
+        assert!((tile - 0.5).abs() < 1e-12);
+    }
+}
