@@ -67,7 +67,7 @@ pub fn main() {
         Command::Bench { what } => super::reports::bench(g, what),
     };
     if let Err(e) = result {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", super::error_text(&e));
         // A bake's own codes (schedule::EXIT_*) tell schedulers whether to retry.
         let code = e
             .downcast_ref::<super::schedule::Exit>()

@@ -302,7 +302,7 @@ pub fn bake(g: &Global, a: &BakeArgs) -> Result<()> {
     // No device, or none that starts: a system failure, worth retrying elsewhere.
     let ctx = context(g).map_err(|e| Exit {
         code: EXIT_RETRY,
-        message: format!("{e:#}"),
+        message: super::error_text(&e),
     })?;
     check_gpu(g, &ctx, a.require_gpu)?;
     let baker = Baker::new(&ctx)?;

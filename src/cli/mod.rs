@@ -315,3 +315,37 @@ pub fn print_timings(t: &[Timing]) {
         println!("  GPU {:>9.3} ms  {}", t.ms, t.label);
     }
 }
+
+/// `e` and its causes, "error: cause: cause", each cause said once: a cause whose text ends
+/// the message already (the library's errors name their OS error in their own text) is not
+/// repeated.
+pub fn error_text(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !text.ends_with(&c) {
+            text.push_str(": ");
+            text.push_str(&c);
+        }
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cause the message already ends with is said once; other causes follow it.
+    #[test]
+    fn each_cause_is_said_once() {
+        let os = std::io::Error::new(std::io::ErrorKind::NotFound, "No such file");
+        let e: anyhow::Error = crate::Error::Io {
+            path: "/x.exr".into(),
+            source: os,
+        }
+        .into();
+        assert_eq!(error_text(&e), "/x.exr: No such file");
+        let e = e.context("loading the probe");
+        assert_eq!(error_text(&e), "loading the probe: /x.exr: No such file");
+    }
+}
