@@ -5,8 +5,11 @@
 //! Each benchmark builds its own passes and submits through [`Context::run`]; none is meant
 //! for an engine's frame.
 
+pub mod cubes;
 mod dynamic;
 mod floors;
+pub mod pareto;
+pub mod report;
 
 pub use dynamic::{dynamic, FrameSettings};
 pub use floors::floors;

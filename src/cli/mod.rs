@@ -152,6 +152,18 @@ pub fn finite_f32(s: &str) -> std::result::Result<f32, String> {
     Ok(v as f32)
 }
 
+/// The value parser of an option whose values are one of the library's enums, by their
+/// `names` (clap lists them in the help and in a refusal); `parse` is the library's, which
+/// the bake file's keys go through too.
+pub fn named<T: Clone + Send + Sync + 'static>(
+    names: &'static [&'static str],
+    parse: fn(&str) -> Option<T>,
+) -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(names)
+        .map(move |s| parse(&s).unwrap_or_else(|| unreachable!("{s} is listed, so it parses")))
+}
+
 /// The device the options ask for.
 pub fn context(g: &Global) -> Result<Context> {
     let mut opts = ContextOptions::default();

@@ -1,6 +1,7 @@
 //! `envlight bake`'s options: clap's arguments, each enum option's values by the library's
 //! names, and the settings they give.
 
+use super::super::named;
 use crate::bake::output::{Irradiance, Preset};
 use crate::bake::plan::{BakeSettings, Container, LightsKey, LightsMode};
 use crate::io::ktx2::Ktx2Format;
@@ -125,18 +126,6 @@ const PRESETS: &[&str] = &["bevy", "khronos"];
 const IRRADIANCE: &[&str] = &["e", "e-over-pi"];
 /// `--dfg-samples` values.
 const DFG_AXES: &[&str] = &["endpoints", "centres"];
-
-/// The value parser of an option whose values are one of the library's enums, by their
-/// `names` (clap lists them in the help and in a refusal); `parse` is the library's, which
-/// the bake file's keys go through too.
-fn named<T: Clone + Send + Sync + 'static>(
-    names: &'static [&'static str],
-    parse: fn(&str) -> Option<T>,
-) -> impl clap::builder::TypedValueParser<Value = T> {
-    use clap::builder::TypedValueParser as _;
-    clap::builder::PossibleValuesParser::new(names)
-        .map(move |s| parse(&s).unwrap_or_else(|| unreachable!("{s} is listed, so it parses")))
-}
 
 /// The settings the command line gives (each flag absent where not given).
 pub(super) fn cli_settings(a: &BakeArgs) -> BakeSettings {

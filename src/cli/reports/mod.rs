@@ -2,7 +2,6 @@
 //! `envlight::bench`, printed). The project's lab (benchmarks against the peers, the
 //! accuracy table, the performance pages) is `tools/lab`.
 
-pub mod cubes;
 pub mod report;
 
 use super::{context, Global};

@@ -1,7 +1,7 @@
 //! The report's chart: error against time, one panel per material, labels placed apart.
 
-use super::pareto::{front, material_names, points, Point};
-use super::Row;
+use crate::bench::pareto::{front, material_names, points, Point};
+use crate::bench::report::Row;
 use anyhow::{anyhow, Result};
 use std::path::Path;
 
@@ -15,7 +15,7 @@ fn colour(technique: &str) -> plotters::style::RGBColor {
         "fis" => RGBColor(44, 160, 44),
         "mc" => RGBColor(214, 39, 40),
         "sh_brdf" => RGBColor(148, 103, 189),
-        super::super::cubes::PEER => RGBColor(127, 127, 127),
+        crate::bench::cubes::PEER => RGBColor(127, 127, 127),
         _ => RGBColor(255, 127, 14),
     }
 }
@@ -121,7 +121,7 @@ pub(super) fn plot(path: &Path, rows: &[Row], device: &str) -> Result<()> {
         "mc",
         "sh_brdf",
         "split_sum",
-        super::super::cubes::PEER,
+        crate::bench::cubes::PEER,
     ];
     for (k, f) in families.iter().enumerate() {
         let x = 20 + k as i32 * 150;

@@ -1,27 +1,38 @@
-//! The report's Pareto fronts: each technique's mean time and error per material, the
-//! techniques no faster one beats, and the markdown that tabulates them.
+//! A report's Pareto fronts: each technique's mean time and error per material, the
+//! techniques no faster one beats, and the markdown that tabulates them (report.md).
 
-use super::Row;
+use super::report::Row;
 use std::fmt::Write as _;
 
 /// A technique's summary over the probes for one material: (label, mean GPU ms, mean
 /// relative RMS, worst relative RMS, mean |bias|, worst tile, mean precompute ms).
-pub(super) struct Point {
-    pub(super) label: String,
-    pub(super) technique: &'static str,
-    pub(super) ms: f64,
-    pub(super) rms: f64,
-    pub(super) worst: f64,
-    pub(super) bias: f64,
-    pub(super) tile: f64,
-    pub(super) pre: f64,
-    pub(super) process: f64,
-    /// Mean per-frame GPU ms when the environment changes every frame, and its mean error.
-    pub(super) frame: f64,
-    pub(super) frame_rms: f64,
+pub struct Point {
+    /// The technique and its parameters.
+    pub label: String,
+    /// The technique's name.
+    pub technique: &'static str,
+    /// Mean GPU ms over the probes.
+    pub ms: f64,
+    /// Mean relative RMS.
+    pub rms: f64,
+    /// Worst relative RMS.
+    pub worst: f64,
+    /// Mean |bias|.
+    pub bias: f64,
+    /// Worst tile.
+    pub tile: f64,
+    /// Mean precomputation GPU ms.
+    pub pre: f64,
+    /// Mean whole-process seconds.
+    pub process: f64,
+    /// Mean per-frame GPU ms when the environment changes every frame.
+    pub frame: f64,
+    /// Its mean error.
+    pub frame_rms: f64,
 }
 
-pub(super) fn points(rows: &[Row], material: &str) -> Vec<Point> {
+/// The techniques' points for `material`, in the order the rows first name them.
+pub fn points(rows: &[Row], material: &str) -> Vec<Point> {
     let mut labels: Vec<(String, &'static str)> = Vec::new();
     for r in rows.iter().filter(|r| r.material == material) {
         if !labels.iter().any(|l| l.0 == r.label()) {
@@ -54,7 +65,7 @@ pub(super) fn points(rows: &[Row], material: &str) -> Vec<Point> {
 }
 
 /// Indices of the Pareto front, fastest first: each is more accurate than everything faster.
-pub(super) fn front(p: &[Point]) -> Vec<usize> {
+pub fn front(p: &[Point]) -> Vec<usize> {
     let mut idx: Vec<usize> = (0..p.len()).collect();
     idx.sort_by(|&a, &b| {
         p[a].ms
@@ -72,7 +83,7 @@ pub(super) fn front(p: &[Point]) -> Vec<usize> {
 }
 
 /// The front of `p` as "≥ T ms: **label** (E%)" steps.
-pub(super) fn front_line(p: &[Point]) -> String {
+pub fn front_line(p: &[Point]) -> String {
     front(p)
         .iter()
         .map(|&i| {
@@ -87,7 +98,8 @@ pub(super) fn front_line(p: &[Point]) -> String {
         .join(" → ")
 }
 
-pub(super) fn material_names(rows: &[Row]) -> Vec<String> {
+/// The materials, in the order the rows first name them.
+pub fn material_names(rows: &[Row]) -> Vec<String> {
     let mut v: Vec<String> = Vec::new();
     for r in rows {
         if !v.contains(&r.material) {
@@ -97,7 +109,8 @@ pub(super) fn material_names(rows: &[Row]) -> Vec<String> {
     v
 }
 
-pub(super) fn markdown(rows: &[Row], settings: &str) -> String {
+/// report.md: the headline, a table and a front per material, under `settings`.
+pub fn markdown(rows: &[Row], settings: &str) -> String {
     let mut md = String::from("# envlight report: accuracy against time\n\n");
     let _ = writeln!(md, "{settings}\n");
     md.push_str("## Headline: what to use at which time budget\n\n");

@@ -1,4 +1,4 @@
-//! `envlight report --cube FILE …`: prefiltered cubes a user already has (from envlight's
+//! Prefiltered cubes a user already has (`envlight report --cube FILE …`) (from envlight's
 //! bake, glTF-IBL-Sampler, cmft or any tool writing the same conventions) scored as split-sum
 //! shading against converged Monte Carlo, beside envlight's own split-sum and lobe-taps
 //! renders of the same probe: cubes.md and cubes.csv.
@@ -11,6 +11,7 @@
 //! are read at the exponent that matches GGX α (`CubeConvention::level_of`).
 
 use crate::bake::output::Preset;
+use crate::error::{Error, Result};
 use crate::math::brdf::Brdf;
 use crate::math::camera::{trace, Camera, Shape};
 use crate::math::convert::sample;
@@ -21,14 +22,12 @@ use crate::render::score::{errors, scene, sphere_pixels, truth};
 use crate::render::Renderer;
 use crate::scene::{LightsMode, SplitSumSettings, Technique};
 use crate::{EnvMap, Orientation};
-use anyhow::{bail, Context as _, Result};
-use clap::ValueEnum;
 use glam::{DMat3, DVec3};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Whose conventions a cube follows.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CubeConvention {
     /// envlight's own frame (`envlight bake` without a preset).
     Envlight,
@@ -45,6 +44,20 @@ pub enum CubeConvention {
 const CMFT_GLOSS: (f64, f64) = (10.0, 1.0);
 
 impl CubeConvention {
+    /// The conventions' names, as [`CubeConvention::parse`] reads them.
+    pub const NAMES: [&'static str; 4] = ["envlight", "khronos", "bevy", "cmft"];
+
+    /// The convention `name` names (one of [`CubeConvention::NAMES`]).
+    pub fn parse(name: &str) -> Option<CubeConvention> {
+        match name {
+            "envlight" => Some(CubeConvention::Envlight),
+            "khronos" => Some(CubeConvention::Khronos),
+            "bevy" => Some(CubeConvention::Bevy),
+            "cmft" => Some(CubeConvention::Cmft),
+            _ => None,
+        }
+    }
+
     fn frame(self) -> Orientation {
         match self {
             CubeConvention::Envlight => Orientation::default(),
@@ -85,19 +98,19 @@ pub const PEER: &str = "gltf-ibl-sampler";
 const TAPS: u32 = 8;
 
 /// Entries per side of the float64 DFG table.
-pub(super) const DFG_SIZE: u32 = 32;
+pub const DFG_SIZE: u32 = 32;
 
 /// The cube at `path` (KTX2 or DDS) as a chain of dual-paraboloid levels in the world, level
 /// k holding α = (k/(levels − 1))² read from the cube's level [`CubeConvention::level_of`]
 /// (lerped between two levels where that is fractional).
-pub(super) fn cube_chain(path: &Path, convention: CubeConvention) -> Result<Vec<Level>> {
+pub(crate) fn cube_chain(path: &Path, convention: CubeConvention) -> Result<Vec<Level>> {
     let cube = crate::io::load_cube_levels(path)?;
     let levels = cube.len() as u32;
     if levels < 2 {
-        bail!(
-            "{}: one level; a prefiltered cube needs 2 levels or more",
-            path.display()
-        );
+        return Err(Error::bad_file(
+            path,
+            "one level; a prefiltered cube needs 2 levels or more",
+        ));
     }
     // world → cube: the frame's matrix maps cube directions into the world.
     let world_to_cube: DMat3 = convention.frame().world_to_file().transpose();
@@ -146,7 +159,7 @@ fn pixel_frames(cam: &Camera) -> Vec<(usize, DVec3, DVec3)> {
 }
 
 /// The frame split-sum shading from `chain` gives at GGX α: one read along r, or `taps`.
-pub(super) fn shade_frame(
+pub(crate) fn shade_frame(
     cam: &Camera,
     chain: &[Level],
     table: &[[f64; 2]],
@@ -190,28 +203,32 @@ pub fn with_conventions(
         .collect()
 }
 
-/// What to score.
-pub struct CubeArgs<'a> {
+/// The scores of a probe's cubes: (label, α, relative RMS, mean bias) rows, the reference's
+/// noise among them.
+pub struct CubeScores {
     /// The probe the cubes were made from.
-    pub probe: &'a Path,
-    /// (file, convention) of each cube.
-    pub cubes: Vec<(PathBuf, CubeConvention)>,
-    /// Where cubes.md and cubes.csv go.
-    pub out: &'a Path,
+    pub probe: PathBuf,
+    /// The sphere's side.
+    pub size: u32,
+    /// Samples per pixel of each of the reference's two renders.
+    pub reference: u32,
+    /// (label, α, relative RMS, mean bias).
+    pub rows: Vec<(String, f64, f64, f64)>,
 }
 
-/// Scores the cubes at GGX α 0.05, 0.1, 0.3, 0.6 on a sphere seen by `cam`.
+/// Scores the `cubes` (file, convention) of `probe` at GGX α 0.05, 0.1, 0.3, 0.6 on a sphere
+/// seen by `cam`, against two `reference`-spp MIS renders, beside envlight's own split-sum
+/// and lobe-taps renders; `progress` hears each score.
 pub fn score(
     renderer: &Renderer,
     cam: Camera,
     reference: u32,
-    device: &str,
-    a: &CubeArgs,
-) -> Result<()> {
-    let env = crate::io::load(a.probe, &Default::default())
-        .with_context(|| a.probe.display().to_string())?;
-    let chains = a
-        .cubes
+    probe: &Path,
+    cubes: &[(PathBuf, CubeConvention)],
+    progress: &dyn Fn(&str),
+) -> Result<CubeScores> {
+    let env = crate::io::load(probe, &Default::default())?;
+    let chains = cubes
         .iter()
         .map(|(p, c)| cube_chain(p, *c))
         .collect::<Result<Vec<_>>>()?;
@@ -227,7 +244,7 @@ pub fn score(
         let (truth, noise) = truth(renderer, cam, b, None, split, reference, &env)?;
         let mut push = |label: String, frame: &EnvMap| {
             let (rms, bias, _) = errors(frame, &truth, &pixels);
-            eprintln!("α {alpha} {label}: {rms:.3e} (bias {bias:+.2e})");
+            progress(&format!("α {alpha} {label}: {rms:.3e} (bias {bias:+.2e})"));
             rows.push((label, alpha, rms, bias));
         };
         for (taps, lights, label) in [
@@ -253,7 +270,7 @@ pub fn score(
             sc.environment.lights = lights;
             push(label.to_string(), &renderer.render(&sc, &env)?.frame);
         }
-        for ((path, conv), chain) in a.cubes.iter().zip(&chains) {
+        for ((path, conv), chain) in cubes.iter().zip(&chains) {
             let name = path.display();
             // Split-sum only: a cube that holds its sun aliases under a few lobe taps (that
             // recipe wants the lights apart, as `bake --lights separate` writes them).
@@ -262,101 +279,80 @@ pub fn score(
         }
         rows.push(("reference noise".into(), alpha, noise, 0.0));
     }
-    write(a, device, cam, reference, &rows)
+    Ok(CubeScores {
+        probe: probe.to_path_buf(),
+        size: cam.width,
+        reference,
+        rows,
+    })
 }
 
-fn write(
-    a: &CubeArgs,
-    device: &str,
-    cam: Camera,
-    reference: u32,
-    rows: &[(String, f64, f64, f64)],
-) -> Result<()> {
-    let mut csv = String::from("label,alpha,relative_rms,mean_bias\n");
-    for (l, alpha, rms, bias) in rows {
-        let _ = writeln!(csv, "\"{l}\",{alpha},{rms:.5e},{bias:.5e}");
-    }
-    let mut md = format!(
-        "# Prefiltered cubes scored against Monte Carlo\n\nProbe {}; device {device}; sphere \
-         {}² from normal to grazing incidence; reference 2 × {reference} spp MIS. Each cube \
-         is read from its file in its convention's frame, level k taken as GGX α = (k/(levels \
-         − 1))², and shaded by split-sum (one read along r) times A + B from a float64 DFG \
-         table; envlight's own split-sum and lobe-taps ({TAPS} taps) renders of the probe are \
-         beside them. Relative RMS over the sphere, \
-         mean bias in parentheses.\n\n| cube or render | α 0.05 | α 0.1 | α 0.3 | α 0.6 |\n\
-         |---|---|---|---|---|\n",
-        a.probe.display(),
-        cam.width
-    );
-    let mut labels: Vec<&str> = Vec::new();
-    for (l, ..) in rows {
-        if !labels.contains(&l.as_str()) {
-            labels.push(l);
+impl CubeScores {
+    /// cubes.csv: a row per score.
+    pub fn csv(&self) -> String {
+        let mut csv = String::from("label,alpha,relative_rms,mean_bias\n");
+        for (l, alpha, rms, bias) in &self.rows {
+            let _ = writeln!(csv, "\"{l}\",{alpha},{rms:.5e},{bias:.5e}");
         }
+        csv
     }
-    for l in labels {
-        let cells: Vec<String> = rows
-            .iter()
-            .filter(|r| r.0 == l)
-            .map(|r| format!("{:.1}% ({:+.1}%)", 100.0 * r.2, 100.0 * r.3))
-            .collect();
-        let _ = writeln!(md, "| {l} | {} |", cells.join(" | "));
+
+    /// cubes.md, measured on `device`: a row per cube or render, a column per α.
+    pub fn markdown(&self, device: &str) -> String {
+        let mut md = format!(
+            "# Prefiltered cubes scored against Monte Carlo\n\nProbe {}; device {device}; sphere \
+             {}² from normal to grazing incidence; reference 2 × {} spp MIS. Each cube \
+             is read from its file in its convention's frame, level k taken as GGX α = (k/(levels \
+             − 1))², and shaded by split-sum (one read along r) times A + B from a float64 DFG \
+             table; envlight's own split-sum and lobe-taps ({TAPS} taps) renders of the probe are \
+             beside them. Relative RMS over the sphere, \
+             mean bias in parentheses.\n\n| cube or render | α 0.05 | α 0.1 | α 0.3 | α 0.6 |\n\
+             |---|---|---|---|---|\n",
+            self.probe.display(),
+            self.size,
+            self.reference
+        );
+        let mut labels: Vec<&str> = Vec::new();
+        for (l, ..) in &self.rows {
+            if !labels.contains(&l.as_str()) {
+                labels.push(l);
+            }
+        }
+        for l in labels {
+            let cells: Vec<String> = self
+                .rows
+                .iter()
+                .filter(|r| r.0 == l)
+                .map(|r| format!("{:.1}% ({:+.1}%)", 100.0 * r.2, 100.0 * r.3))
+                .collect();
+            let _ = writeln!(md, "| {l} | {} |", cells.join(" | "));
+        }
+        md
     }
-    std::fs::create_dir_all(a.out).with_context(|| a.out.display().to_string())?;
-    std::fs::write(a.out.join("cubes.csv"), csv).context("cubes.csv")?;
-    std::fs::write(a.out.join("cubes.md"), md).context("cubes.md")?;
-    println!("wrote {}/cubes.md, cubes.csv", a.out.display());
-    Ok(())
 }
 
 /// A cube glTF-IBL-Sampler made of a probe, with its whole-process seconds.
-pub(super) struct PeerCube {
+pub struct PeerCube {
     /// Its GGX samples.
     pub samples: u32,
     /// Wall seconds of its run.
     pub seconds: f64,
     /// The cube as a chain in the world.
-    pub chain: Vec<Level>,
+    pub(crate) chain: Vec<Level>,
 }
 
-/// Runs glTF-IBL-Sampler (`sampler`, its wrapper) on the lat-long `probe` once per sample
-/// count and a cube of `size` (its default, half the panorama's height, where `None`), with
-/// its defaults otherwise (log2 of the size levels, rgba16f), in `scratch`.
-pub(super) fn sampler_cubes(
-    sampler: &Path,
-    probe: &Path,
-    scratch: &Path,
-    counts: &[u32],
-    size: Option<u32>,
-) -> Result<Vec<PeerCube>> {
-    let mut out = Vec::new();
-    for &n in counts {
-        let cube = scratch.join(format!("iblsampler-{n}.ktx2"));
-        let mut c = std::process::Command::new(sampler);
-        c.arg("-inputPath").arg(probe).arg("-outCubeMap").arg(&cube);
-        c.arg("-outLUT").arg(scratch.join("iblsampler-lut.png"));
-        c.args(["-distribution", "GGX", "-sampleCount", &n.to_string()]);
-        if let Some(s) = size {
-            c.args(["-cubeMapResolution", &s.to_string()]);
-            c.args(["-mipLevelCount", &s.ilog2().to_string()]);
-        }
-        let t0 = std::time::Instant::now();
-        let o = c.output().with_context(|| sampler.display().to_string())?;
-        let seconds = t0.elapsed().as_secs_f64();
-        if !o.status.success() {
-            bail!(
-                "{} on {}: {}",
-                sampler.display(),
-                probe.display(),
-                String::from_utf8_lossy(&o.stderr)
-            );
-        }
-        let chain = cube_chain(&cube, CubeConvention::Khronos)?;
-        out.push(PeerCube {
-            samples: n,
+impl PeerCube {
+    /// The cube of `path` (KTX2 or DDS, in `convention`), made with `samples` in `seconds`.
+    pub fn read(
+        path: &Path,
+        convention: CubeConvention,
+        samples: u32,
+        seconds: f64,
+    ) -> Result<PeerCube> {
+        Ok(PeerCube {
+            samples,
             seconds,
-            chain,
-        });
+            chain: cube_chain(path, convention)?,
+        })
     }
-    Ok(out)
 }

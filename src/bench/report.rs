@@ -1,0 +1,461 @@
+//! What accuracy costs in time on a user's probes (`envlight report`): every technique on
+//! real probes and several materials, scored against a converged Monte Carlo reference, with
+//! its GPU time, its whole process's time and its frame when the environment changes every
+//! frame. [`run`] measures; [`csv`] and [`super::pareto::markdown`] tabulate.
+
+use super::cubes::PeerCube;
+use crate::error::Result;
+use crate::gpu::Context;
+use crate::math::brdf::Brdf;
+use crate::math::camera::{sphere_camera, Camera};
+use crate::passes::GpuEnvMap;
+use crate::render::score::{errors, scene, sphere_pixels, truth};
+use crate::render::{PassKind, Renderer};
+use crate::scene::{LightsMode, Scene, SplitSumSettings, Technique};
+use crate::EnvMap;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+/// What a report measures.
+#[derive(Clone, Copy, Debug)]
+pub struct ReportOptions {
+    /// The reduced set (two probes, two materials, fewer parameters, a 256² FIS paraboloid)
+    /// that runs in a few minutes on lavapipe.
+    pub quick: bool,
+    /// Side of the sphere image.
+    pub size: u32,
+    /// Samples per pixel of each of the two Monte Carlo reference renders.
+    pub reference: u32,
+    /// Split-sum's chain.
+    pub split: SplitSumSettings,
+}
+
+impl ReportOptions {
+    /// The defaults of a full (64², 2 × 16384 spp) or `quick` (24², 2 × 1024 spp) report.
+    pub fn new(quick: bool) -> ReportOptions {
+        ReportOptions {
+            quick,
+            size: if quick { 24 } else { 64 },
+            reference: if quick { 1024 } else { 16384 },
+            split: SplitSumSettings::default(),
+        }
+    }
+
+    /// The FIS paraboloid's side: 256² for quick runs (lavapipe converts it fast), else sized
+    /// by the source.
+    pub fn paraboloid(&self) -> Option<u32> {
+        self.quick.then_some(256)
+    }
+}
+
+/// What a report asks of its caller beside the probes.
+pub struct Hooks<'a> {
+    /// Whole-process seconds of a render of a scene whose environment is a file, as a user
+    /// runs it (`envlight render`).
+    pub process: &'a dyn Fn(&Scene) -> Result<f64>,
+    /// A peer's cubes of a probe file (glTF-IBL-Sampler's), shaded by split-sum beside the
+    /// GGX materials; none where there is no peer.
+    pub peers: &'a dyn Fn(&Path) -> Result<Vec<PeerCube>>,
+    /// Each measurement, in words, as it is made.
+    pub progress: &'a dyn Fn(&str),
+}
+
+/// One measurement: a technique with its parameters, on a probe, for a material.
+#[derive(Clone, Debug)]
+pub struct Row {
+    /// The probe (file name without .hdr).
+    pub probe: String,
+    /// What kind of light it is ("soft", "sun", "studio").
+    pub kind: &'static str,
+    /// The material's name.
+    pub material: String,
+    /// The technique's name.
+    pub technique: &'static str,
+    /// Its parameters ("N=64", "l=2", …; "(no lights)" where lights stay in the map).
+    pub params: String,
+    /// Relative RMS over the sphere against the reference.
+    pub rms: f64,
+    /// Mean bias against the reference.
+    pub bias: f64,
+    /// The worst 8 × 8 tile's |ratio − 1|.
+    pub tile: f64,
+    /// GPU ms of the render (precomputation and shading).
+    pub gpu_ms: f64,
+    /// Of which precomputation.
+    pub pre_ms: f64,
+    /// Wall seconds of the render in this process.
+    pub wall_s: f64,
+    /// Wall seconds of `envlight render` as its own process.
+    pub process_s: f64,
+    /// The reference's own noise (half its two renders' relative RMS difference).
+    pub noise: f64,
+    /// GPU ms of a frame when the environment changes every frame: the resident path's
+    /// whole frame (projection, extraction, chains, shading); Monte Carlo's host render
+    /// (its sampling tables, rebuilt on the host at each change, not counted); a peer's
+    /// bake (its whole process) plus split-sum's shading.
+    pub frame_ms: f64,
+    /// Relative RMS of that path's render.
+    pub frame_rms: f64,
+}
+
+impl Row {
+    /// The technique and its parameters, as the tables label it.
+    pub fn label(&self) -> String {
+        if self.params.is_empty() {
+            self.technique.to_string()
+        } else {
+            format!("{} {}", self.technique, self.params)
+        }
+    }
+}
+
+/// The probes: (file, what kind of light it is).
+fn probes(quick: bool) -> Vec<(&'static str, &'static str)> {
+    let mut v = vec![
+        ("venice_sunset_1k.hdr", "soft"),
+        ("spiaggia_di_mondello_1k.hdr", "sun"),
+    ];
+    if !quick {
+        v.push(("studio_small_08_1k.hdr", "studio"));
+        v.push(("quarry_01_1k.hdr", "sun"));
+    }
+    v
+}
+
+fn materials(quick: bool) -> Vec<(&'static str, Brdf)> {
+    let ggx = |alpha| Brdf::Ggx {
+        alpha,
+        correlated: true,
+    };
+    if quick {
+        return vec![("diffuse", Brdf::Lambert), ("ggx 0.3", ggx(0.3))];
+    }
+    vec![
+        ("diffuse", Brdf::Lambert),
+        ("ggx 0.1", ggx(0.1)),
+        ("ggx 0.3", ggx(0.3)),
+        ("ggx 0.6", ggx(0.6)),
+        ("phong 50", Brdf::Phong { n: 50.0 }),
+        ("mirror", Brdf::Mirror),
+    ]
+}
+
+/// A technique to score: its label, split-sum taps, and whether the probe's lights are
+/// extracted (the default) or left in the map.
+type Case = (Technique, String, u32, bool);
+
+/// The techniques that apply to `brdf`, each with light extraction and, where a technique
+/// reads it (not the Monte Carlo reference, not the mirror lookup), without; quick runs take
+/// the second row for SH order 2, FIS 64 and split-sum only.
+fn cases(brdf: &Brdf, quick: bool) -> Vec<Case> {
+    let with: Vec<(Technique, String, u32)> = techniques(brdf, quick);
+    let mut v = Vec::new();
+    for (t, label, taps) in with {
+        let both = match t {
+            Technique::Mc { .. } | Technique::Lookup => false,
+            _ if !quick => true,
+            Technique::Sh { order } => order == 2,
+            Technique::Fis { samples, .. } => samples == 64,
+            Technique::SplitSum => taps == 1,
+            _ => false,
+        };
+        if both {
+            // No comma: the label is a CSV field.
+            let off = match label.is_empty() {
+                true => "(no lights)".to_string(),
+                false => format!("{label} (no lights)"),
+            };
+            v.push((t, off, taps, false));
+        }
+        v.push((t, label, taps, true));
+    }
+    v
+}
+
+/// The techniques that apply to `brdf`, with their labels and split-sum taps.
+fn techniques(brdf: &Brdf, quick: bool) -> Vec<(Technique, String, u32)> {
+    let (fis, mc, orders): (&[u32], &[u32], &[u32]) = if quick {
+        (&[16, 64], &[64, 256], &[2, 8])
+    } else {
+        (&[4, 16, 64, 256], &[16, 64, 256, 1024], &[2, 4, 8])
+    };
+    let mut v = Vec::new();
+    if matches!(brdf, Brdf::Mirror) {
+        return vec![(Technique::Lookup, String::new(), 1)];
+    }
+    if matches!(brdf, Brdf::Lambert) {
+        for &order in orders {
+            v.push((Technique::Sh { order }, format!("l={order}")));
+        }
+    }
+    if matches!(brdf, Brdf::Lambert | Brdf::Phong { .. }) && !quick {
+        let size = if matches!(brdf, Brdf::Lambert) {
+            32
+        } else {
+            64
+        };
+        v.push((Technique::Prefiltered { size }, format!("{size}")));
+    }
+    for &samples in fis {
+        let t = Technique::Fis {
+            samples,
+            bias: None,
+            rotate: true,
+        };
+        v.push((t, format!("N={samples}")));
+    }
+    for &samples in mc {
+        let t = Technique::Mc {
+            samples,
+            error: None,
+        };
+        v.push((t, format!("N={samples}")));
+    }
+    for &order in orders {
+        let t = Technique::ShBrdf {
+            order,
+            grid: crate::math::sh_brdf::DEFAULT_GRID,
+            window: None,
+        };
+        v.push((t, format!("l={order}")));
+    }
+    let mut v: Vec<(Technique, String, u32)> = v.into_iter().map(|(t, l)| (t, l, 1)).collect();
+    if matches!(brdf, Brdf::Ggx { .. }) {
+        v.push((Technique::SplitSum, String::new(), 1));
+        let taps = 8;
+        v.push((Technique::SplitSum, format!("taps={taps}"), taps));
+    }
+    v
+}
+
+/// What a case is measured against: a probe (file, kind; on disk at `absolute`, in memory
+/// and on the GPU), a material and its reference (with its noise).
+struct Against<'a> {
+    process: &'a dyn Fn(&Scene) -> Result<f64>,
+    progress: &'a dyn Fn(&str),
+    renderer: &'a Renderer,
+    probe: (&'a str, &'static str),
+    material: &'a str,
+    absolute: &'a Path,
+    env: &'a EnvMap,
+    gpu: &'a GpuEnvMap,
+    truth: (&'a EnvMap, f64),
+    pixels: &'a [(usize, u32)],
+}
+
+/// One case's row: the host path's render timed and scored, the whole process timed, and
+/// the frame of a changing environment (the resident path, except Monte Carlo's).
+fn measure(a: &Against<'_>, sc: &Scene, t: Technique, params: String) -> Result<Row> {
+    let truth = a.truth.0;
+    // One untimed render first: pipelines are built on first use.
+    a.renderer.render(sc, a.env)?;
+    let t0 = Instant::now();
+    let r = a.renderer.render(sc, a.env)?;
+    let wall_s = t0.elapsed().as_secs_f64();
+    let (rms, bias, tile) = errors(&r.frame, truth, a.pixels);
+    let mut on_disk = sc.clone();
+    on_disk.environment.file = a.absolute.to_path_buf();
+    let process_s = (a.process)(&on_disk)?;
+    let per_frame = |k: PassKind| {
+        matches!(
+            k,
+            PassKind::GBuffer | PassKind::Shade | PassKind::MonteCarlo
+        )
+    };
+    let gpu_ms: f64 = r.records.iter().map(|p| p.ms()).sum();
+    // (+ 0.0: an empty float sum is −0.)
+    let pre_ms: f64 = r
+        .records
+        .iter()
+        .filter(|p| !per_frame(p.kind))
+        .map(|p| p.ms())
+        .sum::<f64>()
+        + 0.0;
+    let (frame_ms, frame_rms) = match t {
+        Technique::Mc { .. } => (gpu_ms, rms),
+        _ => changing_frame(a.renderer, sc, a.gpu, truth, a.pixels)?,
+    };
+    let row = Row {
+        probe: a.probe.0.trim_end_matches(".hdr").to_string(),
+        kind: a.probe.1,
+        material: a.material.to_string(),
+        technique: t.name(),
+        params,
+        rms,
+        bias,
+        tile,
+        gpu_ms,
+        pre_ms,
+        wall_s,
+        process_s,
+        noise: a.truth.1,
+        frame_ms,
+        frame_rms,
+    };
+    (a.progress)(&format!(
+        "{:>28} {:>9} {:<16} rms {:>8.2e} bias {:>+9.2e} tile {:>8.2e} gpu {:>9.2} ms (pre {:>8.2}) wall {:.3} s; changing: {:>9.2} ms rms {:>8.2e}",
+        row.probe, row.material, row.label(), rms, bias, tile, gpu_ms, pre_ms, wall_s, frame_ms, frame_rms
+    ));
+    Ok(row)
+}
+
+/// The resident path's frame of `sc` from `gpu` (`Renderer::resident`, one untimed frame
+/// first: pipelines are built on first use): its GPU ms and its relative RMS against `truth`.
+fn changing_frame(
+    renderer: &Renderer,
+    sc: &Scene,
+    gpu: &GpuEnvMap,
+    truth: &EnvMap,
+    pixels: &[(usize, u32)],
+) -> Result<(f64, f64)> {
+    let prepared = renderer.resident(
+        sc,
+        crate::render::MapShape {
+            mapping: gpu.mapping,
+            width: gpu.width,
+            height: gpu.height,
+        },
+    )?;
+    renderer.render_resident(&prepared, gpu)?;
+    let r = renderer.render_resident(&prepared, gpu)?;
+    let ms = r.records.iter().map(|p| p.ms()).sum();
+    Ok((ms, errors(&r.frame, truth, pixels).0))
+}
+
+/// The rows of glTF-IBL-Sampler's cubes of `file` (`at`: file, probe kind, material) for a
+/// GGX `brdf`: each shaded by split-sum in float64 and scored against `truth`. Its bake is
+/// precomputation, timed as its whole process (it has no timestamps, so its wall time bounds
+/// its GPU time): with one environment a frame costs split-sum's `shading` ms, and when the
+/// environment changes every frame, the bake as well.
+fn peer_rows(
+    peers: &[super::cubes::PeerCube],
+    (file, kind, material): (&str, &'static str, &str),
+    brdf: Brdf,
+    cam: &Camera,
+    truth: &EnvMap,
+    noise: f64,
+    shading: f64,
+) -> Vec<Row> {
+    let Brdf::Ggx { alpha, .. } = brdf else {
+        return Vec::new();
+    };
+    let table = crate::math::split_sum::dfg_table(super::cubes::DFG_SIZE, true);
+    let pixels = sphere_pixels(cam);
+    peers
+        .iter()
+        .map(|p| {
+            let f = super::cubes::shade_frame(cam, &p.chain, &table, alpha, 1);
+            let (rms, bias, tile) = errors(&f, truth, &pixels);
+            Row {
+                probe: file.trim_end_matches(".hdr").to_string(),
+                kind,
+                material: material.to_string(),
+                technique: super::cubes::PEER,
+                params: format!("N={}", p.samples),
+                rms,
+                bias,
+                tile,
+                gpu_ms: 1e3 * p.seconds + shading,
+                pre_ms: 1e3 * p.seconds,
+                wall_s: p.seconds,
+                process_s: p.seconds,
+                noise,
+                frame_ms: 1e3 * p.seconds + shading,
+                frame_rms: rms,
+            }
+        })
+        .collect()
+}
+
+/// Measures every case on the probes of `dir` (venice_sunset and spiaggia_di_mondello, and in
+/// full runs studio_small_08 and quarry_01): one row per technique × parameters × probe ×
+/// material.
+pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Result<Vec<Row>> {
+    let renderer = Renderer::new(ctx);
+    let cam = sphere_camera(o.size);
+    let pixels = sphere_pixels(&cam);
+    let (split, dp, quick) = (o.split, o.paraboloid(), o.quick);
+    let mut rows = Vec::new();
+    for (file, kind) in probes(quick) {
+        let path = dir.join(file);
+        let within =
+            |e: crate::Error| e.context(format!("report: probe {} (set --probes)", path.display()));
+        let absolute = path.canonicalize().map_err(|source| {
+            within(crate::Error::Io {
+                path: path.clone(),
+                source,
+            })
+        })?;
+        let env = crate::io::load(&path, &crate::io::LoadOptions::default()).map_err(within)?;
+        let peers = (hooks.peers)(&path)?;
+        // The map on the GPU once, for the resident path's frames (the paraboloid sized by
+        // the source there: the resident path follows the scene, and quick runs' 256² is
+        // the host path's setting).
+        let gpu = GpuEnvMap::upload(ctx, &env)?;
+        for (name, brdf) in materials(quick) {
+            let (truth, noise) = truth(&renderer, cam, brdf, dp, split, o.reference, &env)?;
+            for (t, params, taps, extract) in cases(&brdf, quick) {
+                let mut sc = scene(cam, brdf, t, dp, 7, SplitSumSettings { taps, ..split });
+                if !extract {
+                    sc.environment.lights = LightsMode::None;
+                }
+                let at = Against {
+                    process: hooks.process,
+                    progress: hooks.progress,
+                    renderer: &renderer,
+                    probe: (file, kind),
+                    material: name,
+                    absolute: &absolute,
+                    env: &env,
+                    gpu: &gpu,
+                    truth: (&truth, noise),
+                    pixels: &pixels,
+                };
+                rows.push(measure(&at, &sc, t, params)?);
+            }
+            // The peers' cubes are shaded by split-sum: its per-frame shading cost here.
+            let shading = rows
+                .iter()
+                .find(|r| {
+                    r.probe == file.trim_end_matches(".hdr")
+                        && r.material == name
+                        && r.technique == "split_sum"
+                        && r.params.is_empty()
+                })
+                .map_or(0.0, |r| r.gpu_ms - r.pre_ms);
+            let at = (file, kind, name);
+            rows.extend(peer_rows(&peers, at, brdf, &cam, &truth, noise, shading));
+        }
+    }
+    Ok(rows)
+}
+
+/// report.csv: a row per measurement.
+pub fn csv(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "technique,params,probe,probe_kind,material,relative_rms,mean_bias,worst_tile,gpu_ms,precompute_gpu_ms,render_wall_s,process_s,reference_noise,changing_frame_gpu_ms,changing_frame_relative_rms\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.4},{:.4},{:.4},{:.4},{:.3e},{:.4},{:.6e}",
+            r.technique,
+            r.params,
+            r.probe,
+            r.kind,
+            r.material,
+            r.rms,
+            r.bias,
+            r.tile,
+            r.gpu_ms,
+            r.pre_ms,
+            r.wall_s,
+            r.process_s,
+            r.noise,
+            r.frame_ms,
+            r.frame_rms
+        );
+    }
+    s
+}
