@@ -14,7 +14,7 @@
 //! - [`io`]: EXR, HDR, PFM, PNG and KTX2 in and out. [`bake`]: SH, irradiance and GGX cubes
 //!   for an engine, one probe or a whole set. [`scene`] and [`render`]: the reference
 //!   renderer (a scene resolves into a [`render::Plan`] once and runs stage by stage).
-//!   [`bench`]: what each pass costs on a device against its floor, with its error.
+//!   [`bench`](mod@bench): what each pass costs on a device against its floor, with its error.
 //!
 //! Features: `cli` (default) builds the `envlight` binary and is the only user of clap,
 //! indicatif and anyhow; `reference` makes `math` public, the float64 reference

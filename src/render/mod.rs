@@ -166,8 +166,8 @@ impl Renderer {
         })
     }
 
-    /// Renders `scene` with `env` (from [`load_environment`]). Without Monte Carlo the render
-    /// is one submission: the uploads, every pass before the shading (SH coefficients stay on
+    /// Renders `scene` with `env` (from [`Scene::load_environment`]). Without Monte Carlo the
+    /// render is one submission: the uploads, every pass before the shading (SH coefficients stay on
     /// the GPU, packed there for each object), the draw and the frame's download. Monte Carlo
     /// submits in turn the inputs, its batches (an error target reads the estimate back between
     /// them; a map that is not lat-long comes back converted for its sampling tables) and the
@@ -375,8 +375,8 @@ struct Builds<'a> {
     convert: Box<dyn FnOnce() -> Result<()> + 'a>,
 }
 
-/// Renders `scene` with `env` (from [`load_environment`]) on `ctx`, with a renderer of its
-/// own (see [`Renderer`] to reuse the passes across renders).
+/// Renders `scene` with `env` (from [`Scene::load_environment`]) on `ctx`, with a renderer of
+/// its own (see [`Renderer`] to reuse the passes across renders).
 pub fn render(ctx: &Context, scene: &Scene, env: &EnvMap) -> Result<Rendered> {
     Renderer::new(ctx).render(scene, env)
 }

@@ -97,7 +97,7 @@ fn cargo(args: &[&str]) -> Result<(), String> {
 /// The inner-loop subset of `test --quick` (under 2 minutes once built): the library's unit
 /// tests and float64 oracles, input validation and bad files, the fuzz corpora, the layering
 /// and plan checks, the tests' own hygiene and mutation matrix, and the quick GPU checks of
-/// context teardown, mappings, GPU maps and the G-buffer.
+/// context teardown, mappings, GPU maps, the G-buffer and a set's bake.
 const QUICK: &[&str] = &[
     "--lib",
     "--test",
@@ -122,6 +122,8 @@ const QUICK: &[&str] = &[
     "map",
     "--test",
     "gbuffer",
+    "--test",
+    "bake_set",
 ];
 
 /// `cargo test` (everything, or with `--quick` the [`QUICK`] subset), then a summary of the
