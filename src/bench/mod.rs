@@ -14,8 +14,10 @@ pub mod report;
 pub use dynamic::{dynamic, FrameSettings};
 pub use floors::floors;
 
+use floors::time;
+
 use crate::error::Result;
-use crate::gpu::{total_ms, Context, Timed};
+use crate::gpu::{Context, Timed};
 use crate::math::filter::Kernel;
 use crate::math::sh;
 use crate::math::synth::Sky;
@@ -66,20 +68,14 @@ pub fn convert(ctx: &Context, sizes: &[u32], reps: usize) -> Result<Report> {
     let _ = writeln!(body, "|---|---|---|---|---|---|---|---|");
     let conv = Converter::new(ctx)?;
     let copy = CopyPass::new(ctx)?;
-    let reps = reps.max(1);
     for &w in sizes {
         let map = EnvMap::from_fn(Mapping::LatLong, w, w / 2, 2, |d| {
             Sky::default().radiance(d)
         });
         let pin = map.power()[1];
         let src = GpuEnvMap::upload(ctx, &map)?;
-        // One untimed run of each pass first: pipeline and driver warm-up.
-        copy.run(&src)?;
-        let mut copy_ms = Vec::new();
-        for _ in 0..reps {
-            copy_ms.push(copy.run(&src)?.ms());
-        }
-        let floor = median(copy_ms);
+        // Each pass is timed after an untimed run: pipeline and driver warm-up.
+        let floor = time(reps, || Ok(copy.run(&src)?.timings))?;
         let cases = [
             (Mapping::LatLong, w, None),
             (Mapping::Cube, w / 4, Some(1)),
@@ -101,20 +97,9 @@ pub fn convert(ctx: &Context, sizes: &[u32], reps: usize) -> Result<Report> {
                     })
                     .to_string()
             };
-            conv.run(&src, &opts)?;
-            let mut ms = Vec::new();
-            let mut power = 0.0;
-            for r in 0..reps {
-                let Timed {
-                    value: out,
-                    timings: t,
-                } = conv.run(&src, &opts)?;
-                ms.push(total_ms(&t));
-                if r == 0 {
-                    power = out.download(ctx)?.power()[1] / pin - 1.0;
-                }
-            }
-            let m = median(ms);
+            let out = conv.run(&src, &opts)?.value;
+            let power = out.download(ctx)?.power()[1] / pin - 1.0;
+            let m = time(reps, || Ok(conv.run(&src, &opts)?.timings))?;
             let _ = writeln!(
                 body,
                 "| latlong {w}x{} | -> {}{} | {ow}x{oh}x{} | {ss} | {floor:.3} | {m:.3} | {:.1} | {:+.3}% |",
@@ -151,31 +136,20 @@ pub fn irradiance(ctx: &Context, sizes: &[u32], source: u32, reps: usize) -> Res
     let brute = BruteFilter::new(ctx)?;
     let proj = ShProjector::new(ctx, Subgroups::Auto)?;
     let eval = ShEvaluator::new(ctx)?;
-    let reps = reps.max(1);
     let o = Orientation::default();
     for &n in sizes {
         let target = FilterTarget {
             to: Mapping::Angular,
             size: n,
         };
-        brute.run(&src, &o, Kernel::Cosine, target)?;
-        let mut b = Vec::new();
-        for _ in 0..reps {
-            b.push(total_ms(
-                &brute.run(&src, &o, Kernel::Cosine, target)?.timings,
-            ));
-        }
-        let b = median(b);
+        let b = time(reps, || {
+            Ok(brute.run(&src, &o, Kernel::Cosine, target)?.timings)
+        })?;
         for order in [2u32, 8] {
             let Timed { value: c, .. } = proj.run(&src, order)?;
             let irr = sh::irradiance_coeffs(&c.coeffs);
-            eval.run(&irr, target)?;
-            let (mut p, mut e) = (Vec::new(), Vec::new());
-            for _ in 0..reps {
-                p.push(total_ms(&proj.run(&src, order)?.timings));
-                e.push(total_ms(&eval.run(&irr, target)?.timings));
-            }
-            let (p, e) = (median(p), median(e));
+            let p = time(reps, || Ok(proj.run(&src, order)?.timings))?;
+            let e = time(reps, || Ok(eval.run(&irr, target)?.timings))?;
             let _ = writeln!(
                 body,
                 "| angular {n}x{n} | {b:.1} | {order} | {p:.3} | {e:.3} | {:.0}x | {:.0}x |",
@@ -204,7 +178,6 @@ pub fn sh(ctx: &Context, sizes: &[u32], reps: usize) -> Result<Report> {
     );
     let _ = writeln!(body, "|---|---|---|---|---|---|");
     let copy = CopyPass::new(ctx)?;
-    let reps = reps.max(1);
     let projectors = [
         ("subgroups", ShProjector::new(ctx, Subgroups::Auto)?),
         ("shared tree", ShProjector::new(ctx, Subgroups::Off)?),
@@ -214,23 +187,13 @@ pub fn sh(ctx: &Context, sizes: &[u32], reps: usize) -> Result<Report> {
             Sky::default().radiance(d)
         });
         let src = GpuEnvMap::upload(ctx, &map)?;
-        copy.run(&src)?;
-        let mut c = Vec::new();
-        for _ in 0..reps {
-            c.push(copy.run(&src)?.ms());
-        }
-        let floor = median(c);
+        let floor = time(reps, || Ok(copy.run(&src)?.timings))?;
         for (name, p) in &projectors {
             if *name == "subgroups" && !p.uses_subgroups() {
                 continue;
             }
             for lmax in [2, 8] {
-                p.run(&src, lmax)?;
-                let mut ms = Vec::new();
-                for _ in 0..reps {
-                    ms.push(p.run(&src, lmax)?.ms());
-                }
-                let m = median(ms);
+                let m = time(reps, || Ok(p.run(&src, lmax)?.timings))?;
                 let _ = writeln!(
                     body,
                     "| latlong {w}x{} | {name} | {lmax} | {floor:.3} | {m:.3} | {:.1} |",
