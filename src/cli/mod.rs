@@ -13,7 +13,7 @@ pub mod schedule;
 
 pub use app::main;
 
-use crate::gpu::{Context, ContextOptions, DeviceSelector, Timing};
+use crate::gpu::{Context, ContextOptions, Timing};
 use crate::io::{self, LoadOptions, Sanitize, ToneMap};
 use crate::passes::FilterTarget;
 use crate::{EnvMap, GpuEnvMap, Mapping, Orientation};
@@ -166,13 +166,7 @@ pub fn named<T: Clone + Send + Sync + 'static>(
 
 /// The device the options ask for.
 pub fn context(g: &Global) -> Result<Context> {
-    let mut opts = ContextOptions::default();
-    if let Some(d) = &g.device {
-        opts.device = DeviceSelector::parse(d);
-    }
-    opts.validation |= g.validation;
-    // Compiled pipelines kept between runs, beside the DFG tables (`bake::dfg_cache`).
-    opts.pipeline_cache = crate::gpu::pipeline_cache::default_dir();
+    let opts = ContextOptions::from_flags(g.device.as_deref(), g.validation);
     let ctx = Context::new(&opts)?;
     if opts.validation {
         if let Ok(mut logs) = VALIDATION_LOGS.lock() {

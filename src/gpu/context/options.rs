@@ -101,6 +101,20 @@ impl ContextOptions {
             ..Default::default()
         }
     }
+
+    /// What a program's `--device` and `--validation` options ask for: the device `device`
+    /// names ([`DeviceSelector::parse`]; absent, `ENVLIGHT_DEVICE`'s), validation where
+    /// `validation` or [`Default`] turns it on, and compiled pipelines kept between runs
+    /// (`crate::gpu::pipeline_cache::default_dir`, beside the bake's DFG tables).
+    pub fn from_flags(device: Option<&str>, validation: bool) -> Self {
+        let mut opts = ContextOptions::default();
+        if let Some(d) = device {
+            opts.device = DeviceSelector::parse(d);
+        }
+        opts.validation |= validation;
+        opts.pipeline_cache = crate::gpu::pipeline_cache::default_dir();
+        opts
+    }
 }
 
 impl Default for ContextOptions {
@@ -131,4 +145,22 @@ pub struct AdoptInfo {
     pub queue_family_index: u32,
     /// Whether the instance has `VK_EXT_debug_utils` enabled (then envlight names its objects).
     pub debug_utils: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The flags pick the device and turn validation on; without them the environment's
+    /// device and the default validation stand; both keep the pipeline cache.
+    #[test]
+    fn flags_give_the_options() {
+        let o = ContextOptions::from_flags(Some("cpu"), true);
+        assert_eq!(o.device, DeviceSelector::parse("cpu"));
+        assert!(o.validation);
+        assert_eq!(o.pipeline_cache, crate::gpu::pipeline_cache::default_dir());
+        let d = ContextOptions::from_flags(None, false);
+        assert_eq!(d.device, DeviceSelector::from_env());
+        assert_eq!(d.validation, ContextOptions::default().validation);
+    }
 }

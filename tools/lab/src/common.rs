@@ -3,7 +3,7 @@
 
 use anyhow::{bail, Result};
 use clap::Args;
-use envlight::gpu::{Context, ContextOptions, DeviceSelector};
+use envlight::gpu::{Context, ContextOptions};
 use std::path::PathBuf;
 
 /// Options every lab command takes (as `envlight`'s own).
@@ -21,12 +21,7 @@ pub struct Global {
 /// The device the options ask for (the pipeline cache `envlight` keeps, so that the lab's
 /// timings see the same warm pipelines as the program's).
 pub fn context(g: &Global) -> Result<Context> {
-    let mut opts = ContextOptions::default();
-    if let Some(d) = &g.device {
-        opts.device = DeviceSelector::parse(d);
-    }
-    opts.validation |= g.validation;
-    opts.pipeline_cache = envlight::gpu::pipeline_cache::default_dir();
+    let opts = ContextOptions::from_flags(g.device.as_deref(), g.validation);
     let ctx = Context::new(&opts)?;
     if opts.validation {
         if let Ok(mut logs) = VALIDATION_LOGS.lock() {
