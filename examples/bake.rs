@@ -1,7 +1,7 @@
 //! An asset pipeline baking probes in-process, as an engine's editor would: the same settings
 //! a bake file holds, resolved into a plan, each probe baked on the GPU and its files written
 //! where the pipeline wants them, byte for byte what `envlight bake` writes for the same
-//! settings (`tests/bake_example.rs` checks that).
+//! settings (`tests/bake_example.rs` checks that), with each probe's preview.
 //!
 //! `cargo run --example bake PROBE... [--out DIR]` bakes each probe with the Bevy preset and
 //! light separation into `DIR/<probe file name>/` (default `out/baked`).
@@ -9,6 +9,7 @@
 use envlight::bake::files::probe_files;
 use envlight::bake::output::Preset;
 use envlight::bake::plan::{BakePlan, BakeSettings, LightsKey, LightsMode};
+use envlight::bake::preview::{preview, PreviewCubes, PREVIEW_FILE};
 use envlight::bake::Baker;
 use envlight::{Context, ContextOptions, LoadOptions};
 use std::path::{Path, PathBuf};
@@ -52,6 +53,13 @@ pub fn bake(
             std::fs::write(&path, bytes)?;
             written.push(path);
         }
+        // The preview, rendered from the files just written and checked against the float
+        // data they came from (a pipeline can stop on `check.worst`).
+        let intent = PreviewCubes::intent(&baked, &plan, lights.as_ref());
+        let p = preview(&dir, &plan, &intent)?;
+        let path = dir.join(PREVIEW_FILE);
+        std::fs::write(&path, p.png)?;
+        written.push(path);
     }
     Ok(written)
 }

@@ -53,13 +53,14 @@ fn statuses(m: &Manifest) -> Vec<&str> {
     m.probes.iter().map(|e| e.status.as_str()).collect()
 }
 
-/// Every file under `dir` but the manifests and records (which hold timings), with its bytes.
+/// Every file under `dir` but the manifests, records and gallery (which hold timings), with
+/// its bytes.
 fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
     let mut v: Vec<(PathBuf, Vec<u8>)> = walk(dir)
         .into_iter()
         .filter(|p| {
             let n = p.file_name().unwrap().to_string_lossy();
-            !(n.starts_with("manifest") || n == "probe.json" || n == ".lock")
+            !(n.starts_with("manifest") || n == "probe.json" || n == ".lock" || n == "index.html")
         })
         .map(|p| {
             (

@@ -6,6 +6,7 @@
 use super::files::Clamps;
 use super::output::{Irradiance, Preset};
 use super::plan::{BakePlan, LightsMode};
+use super::preview::PreviewCheck;
 use super::{BakeOptions, SpotCheck};
 use crate::error::{Error, Result};
 use crate::io::ktx2::Supercompression;
@@ -40,6 +41,18 @@ pub struct Settings {
     /// `--max-source-side`, where given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_source_side: Option<u32>,
+    /// Whether previews are rendered (recorded only when off, so that the settings of a bake
+    /// with previews hash as they did before previews existed).
+    #[serde(default = "yes", skip_serializing_if = "is_yes")]
+    pub preview: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn is_yes(b: &bool) -> bool {
+    *b
 }
 
 impl Settings {
@@ -56,6 +69,7 @@ impl Settings {
             lights: plan.lights,
             zstd: plan.supercompression == Supercompression::Zstd,
             max_source_side: plan.max_source_side,
+            preview: plan.preview,
         }
     }
 
@@ -135,6 +149,9 @@ pub struct Entry {
     /// reduced before baking (absent where it was baked as read).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reduced: Option<Reduced>,
+    /// The preview's check, files against intent (absent without a preview).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preview: Option<PreviewCheck>,
 }
 
 impl Entry {
@@ -157,6 +174,7 @@ impl Entry {
             lock_wait_seconds: None,
             stages: None,
             reduced: None,
+            preview: None,
         }
     }
 }
@@ -196,6 +214,9 @@ pub struct Stages {
     pub check: f64,
     /// Encoding and writing the files and the record.
     pub write: f64,
+    /// Rendering `preview.png` from the files written, and its check.
+    #[serde(default)]
+    pub preview: f64,
 }
 
 impl Stages {

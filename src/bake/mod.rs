@@ -12,9 +12,11 @@
 
 pub mod dfg_cache;
 pub mod files;
+pub mod gallery;
 pub mod manifest;
 pub mod output;
 pub mod plan;
+pub mod preview;
 mod run;
 pub mod schedule;
 pub mod set;
@@ -184,7 +186,7 @@ impl SpotCheck {
 
 /// The larger of two errors, NaN where either is (`f64::max` would drop it and call a check
 /// that computed NaN clean).
-fn worse(a: f64, b: f64) -> f64 {
+pub(crate) fn worse(a: f64, b: f64) -> f64 {
     if a.is_nan() || b.is_nan() {
         f64::NAN
     } else {

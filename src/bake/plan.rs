@@ -118,6 +118,8 @@ pub struct BakeSettings {
     pub irradiance: Option<Irradiance>,
     /// Supercompress the KTX2 levels with Zstandard.
     pub zstd: Option<bool>,
+    /// Render each probe's `preview.png` from its files, with its check (on by default).
+    pub preview: Option<bool>,
     /// Reduce a source wider or taller than this before baking it (not a bake file's key).
     #[serde(skip)]
     pub max_source_side: Option<u32>,
@@ -150,6 +152,7 @@ impl BakeSettings {
             flip_v: self.flip_v.or(under.flip_v),
             irradiance: self.irradiance.or(under.irradiance),
             zstd: self.zstd.or(under.zstd),
+            preview: self.preview.or(under.preview),
             max_source_side: self.max_source_side.or(under.max_source_side),
         }
     }
@@ -185,6 +188,8 @@ pub struct BakePlan {
     pub dfg_axes: DfgAxes,
     /// The largest source side baked as read, where given.
     pub max_source_side: Option<u32>,
+    /// Whether each probe gets `preview.png` and its check ([`super::preview`]).
+    pub preview: bool,
 }
 
 impl BakePlan {
@@ -254,6 +259,7 @@ impl BakePlan {
             dfg: s.dfg == Some(true) || preset.is_some_and(|p| p.lut()),
             dfg_axes,
             max_source_side: s.max_source_side,
+            preview: s.preview != Some(false),
         })
     }
 

@@ -3,6 +3,7 @@
 //! and checked.
 
 use super::files::{probe_files, Clamps};
+use super::gallery::write_gallery;
 use super::manifest::{
     lock_probe, outputs_intact, recorded, sha256, write_outputs, Entry, Output, Record, Reduced,
     Stages, RECORD,
@@ -10,6 +11,7 @@ use super::manifest::{
 use super::manifest::{manifest_name, Manifest};
 use super::output::SeparateLights;
 use super::plan::BakePlan;
+use super::preview::{preview, PreviewCubes, PREVIEW_FILE};
 use super::schedule::classify;
 use super::set::{input_name, write_dfg, write_json, Part, Progress, SetBake, Written};
 use super::{Baked, Baker, PendingBake, SpotCheckPlan};
@@ -339,19 +341,31 @@ impl Run<'_> {
                 (stages.gpu_convert_ms, stages.gpu_filter_ms) = Stages::gpu(&baked.timings);
                 let dir = out.join(&w.name);
                 let t1 = Instant::now();
-                let (outputs, clamped) = write_probe(out, &dir, &baked, plan, w.lights.as_ref())?;
+                let (mut outputs, clamped) =
+                    write_probe(out, &dir, &baked, plan, w.lights.as_ref())?;
                 stages.write = t1.elapsed().as_secs_f64();
+                let t2 = Instant::now();
+                let preview = match plan.preview {
+                    true => {
+                        let intent = PreviewCubes::intent(&baked, plan, w.lights.as_ref());
+                        let p = preview(&dir, plan, &intent)?;
+                        outputs.extend(write_outputs(out, vec![(dir.join(PREVIEW_FILE), p.png)])?);
+                        Some(p.check)
+                    }
+                    false => None,
+                };
+                stages.preview = t2.elapsed().as_secs_f64();
                 let checked = checking.map(|h| {
                     let (c, seconds) = h.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
                     stages.check = seconds;
                     c.compare(&baked)
                 });
                 let gpu_ms = total_ms(&baked.timings);
-                Ok((outputs, gpu_ms, checked, clamped))
+                Ok((outputs, gpu_ms, checked, clamped, preview))
             })
             .map_err(|e| e.context(w.path.display().to_string()));
         let entry = match result {
-            Ok((outputs, gpu_ms, check, clamped)) => Entry {
+            Ok((outputs, gpu_ms, check, clamped, preview)) => Entry {
                 outputs,
                 read_seconds: w.read_s,
                 gpu_ms,
@@ -361,6 +375,7 @@ impl Run<'_> {
                 lock_wait_seconds: w.lock_wait,
                 stages: Some(stages),
                 reduced: w.reduced,
+                preview,
                 ..Entry::new(w.input, w.input_sha256, "baked")
             },
             Err(e) => return self.failed(w.input, w.input_sha256, e, w.read_s),
@@ -419,6 +434,7 @@ impl SetBake<'_> {
         };
         let path = self.out.join(manifest_name(shard, items));
         write_json(&path, &manifest)?;
+        write_gallery(&self.out)?;
         Ok(Written { manifest, path })
     }
 }

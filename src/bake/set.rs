@@ -442,6 +442,7 @@ pub fn merge(out: &Path) -> Result<Merged> {
         probes,
     };
     write_json(&out.join("manifest.json"), &manifest)?;
+    super::gallery::write_gallery(out)?;
     Ok(Merged {
         manifest,
         parts: parts.len(),

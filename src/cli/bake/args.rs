@@ -87,6 +87,9 @@ pub struct BakeArgs {
     /// to the summary and the manifest [default: 2]
     #[arg(long)]
     pub(super) check: Option<u32>,
+    /// Write no preview.png per probe (and no files-against-intent check)
+    #[arg(long)]
+    pub(super) no_preview: bool,
     /// Bake for an engine: bevy (cubes for its (x, y, −z) lookup, irradiance E/π, e5b9g9r9 +
     /// zstd, skybox.ktx2) or khronos (glTF-IBL-Sampler's yaw, E/π, rgba16f, ⌊log2 size⌋
     /// levels). Options given one by one still apply on top
@@ -154,6 +157,7 @@ pub(super) fn cli_settings(a: &BakeArgs) -> BakeSettings {
         flip_v: flag(a.flip_v),
         irradiance: a.irradiance,
         zstd: flag(a.zstd),
+        preview: a.no_preview.then_some(false),
         max_source_side: a.max_source_side,
     }
 }
