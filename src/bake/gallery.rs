@@ -21,7 +21,7 @@ pub const GALLERY_FILE: &str = "index.html";
 pub const HIGH_ERROR: f64 = 0.01;
 
 /// Every probe the folder's manifests hold, one entry each (a baked or skipped one before a
-/// failed one), by name.
+/// failed one), failed probes first, then by name (the page's first order).
 pub fn gallery_entries(manifests: &[Manifest]) -> Vec<Entry> {
     let mut probes: Vec<Entry> = manifests
         .iter()
@@ -31,6 +31,7 @@ pub fn gallery_entries(manifests: &[Manifest]) -> Vec<Entry> {
         (name(a), &a.input, a.status == "failed").cmp(&(name(b), &b.input, b.status == "failed"))
     });
     probes.dedup_by(|later, kept| later.input == kept.input);
+    probes.sort_by_key(|e| (e.status != "failed", name(e)));
     probes
 }
 
@@ -205,7 +206,7 @@ fn card(e: &Entry) -> String {
 const STYLE: &str = "body{font-family:sans-serif;margin:1em;background:#f4f4f4;color:#222}\
 header{margin-bottom:1em}#controls{display:flex;gap:1em;flex-wrap:wrap;align-items:center}\
 #cards{display:flex;flex-wrap:wrap;gap:1em}\
-.card{background:#fff;border:1px solid #ccc;border-radius:6px;padding:.6em;width:520px}\
+.card{background:#fff;border:1px solid #ccc;border-radius:6px;padding:.6em;width:480px}\
 .card.failed{border:2px solid #c0392b;background:#fdecea}.card h2{font-size:1.05em;margin:.2em 0}\
 .card img{max-width:100%;height:auto;display:block}.error{color:#c0392b;font-weight:bold}\
 dl{display:grid;grid-template-columns:max-content 1fr;gap:.1em .8em;font-size:.85em;margin:.4em 0}\
@@ -227,7 +228,10 @@ const SCRIPT: &str = r#"(function () {
     var key = sort.value, shown = 0;
     cards.forEach(function (c) { var k = keep(c); c.hidden = !k; if (k) shown++; });
     cards.slice().sort(function (a, b) {
-      if (key === 'name') return a.dataset.name.localeCompare(b.dataset.name);
+      if (key === 'name') {
+        var fa = a.dataset.status === 'failed' ? 0 : 1, fb = b.dataset.status === 'failed' ? 0 : 1;
+        return fa !== fb ? fa - fb : a.dataset.name.localeCompare(b.dataset.name);
+      }
       var d = parseFloat(b.dataset[key]) - parseFloat(a.dataset[key]);
       return d !== 0 ? d : a.dataset.name.localeCompare(b.dataset.name);
     }).forEach(function (c) { main.appendChild(c); });
@@ -286,7 +290,7 @@ pub fn gallery_html(entries: &[Entry], manifest: Option<&Manifest>) -> String {
          spheres against the same spheres from envlight's float data before writing; above \
          {hi} a card counts as high error.</p>\n\
          <div id=\"controls\">\n<label>sort by <select id=\"sort\">\
-         <option value=\"name\">name</option><option value=\"error\">files vs intent</option>\
+         <option value=\"name\">failed first, then name</option><option value=\"error\">files vs intent</option>\
          <option value=\"check\">spot check</option><option value=\"clamped\">power clamped</option>\
          <option value=\"seconds\">seconds</option></select></label>\n\
          <label><input type=\"checkbox\" id=\"only-failed\"> failed</label>\n\
@@ -360,7 +364,7 @@ mod tests {
                 probes: vec![entry("a/x.hdr", "baked"), entry("c/z.hdr", "failed")],
             },
         ]);
-        // x baked in one part, failed in another: the baked entry is kept.
+        // x baked in one part, failed in another: the baked entry is kept; failed first.
         let names: Vec<(String, &str)> = entries
             .iter()
             .map(|e| (name(e), e.status.as_str()))
@@ -368,9 +372,9 @@ mod tests {
         assert_eq!(
             names,
             [
+                ("z.hdr".into(), "failed"),
                 ("x.hdr".into(), "baked"),
-                ("y.exr".into(), "baked"),
-                ("z.hdr".into(), "failed")
+                ("y.exr".into(), "baked")
             ]
         );
         let html = gallery_html(&entries, None);

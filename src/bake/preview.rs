@@ -31,6 +31,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::sync::OnceLock;
 
+pub mod breakage;
 mod font;
 
 /// The preview's file name in a probe's folder.

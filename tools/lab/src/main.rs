@@ -14,6 +14,7 @@ mod ibl;
 mod own;
 mod page;
 mod peers;
+mod previews;
 mod recipes;
 mod scale;
 mod table;
@@ -58,6 +59,8 @@ enum Command {
     Recipes(recipes::RecipesArgs),
     Floors(own::FloorsArgs),
     Dynamic(own::DynamicArgs),
+    /// The bake's previews: files against intent, right and broken, and their cost
+    Previews(previews::PreviewsArgs),
 }
 
 fn main() {
@@ -74,6 +77,7 @@ fn main() {
         Command::Recipes(a) => recipes::run(g, a),
         Command::Floors(a) => own::floors(g, a),
         Command::Dynamic(a) => own::dynamic(g, a),
+        Command::Previews(a) => previews::run(g, a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -20,6 +20,8 @@ const PACKAGES: &[&str] = &[
     "python3",
     "slurm-wlm",
     "munge",
+    // Headless, for the bake gallery's browser test (tests/gallery.rs).
+    "chromium",
 ];
 
 fn installed(pkg: &str) -> bool {
