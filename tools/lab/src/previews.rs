@@ -238,7 +238,7 @@ fn markdown(
     n: usize,
 ) -> (String, String) {
     let method = format!(
-        "Method: each probe baked in-process with `--preset bevy` (e5b9g9r9 + Zstandard) and \
+        "Each probe baked in-process with `--preset bevy` (e5b9g9r9 + Zstandard) and \
          `--preset khronos` (rgba16f) at the presets' sizes, its files written, read back and \
          rendered by `bake::preview`; files against intent is the worst sphere's relative RMS \
          against the same spheres from the bake's float cubes. Each breakage \
