@@ -126,7 +126,7 @@ pub fn bench_scale(g: &Global, input: &Path, factors: &[u32], out: Option<&PathB
 /// The method line and the table.
 fn markdown(name: &str, rows: &[Row]) -> Result<(String, String)> {
     let method = format!(
-        "Method: {name} upsampled ×k (each texel repeated: the same picture), written as \
+        "{name} upsampled ×k (each texel repeated: the same picture), written as \
          Radiance RGBE, baked by `envlight bake` at default settings in its own process, one \
          run each: whole-process seconds and the process's peak RSS (`wait4`), the manifest's \
          stages (read: reading, hashing, decoding; lights: statistics, extractions and grids; \
