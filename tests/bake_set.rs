@@ -296,3 +296,39 @@ fn a_bad_input_fails_alone() {
     }
     common::finish(ctx);
 }
+
+/// Each baked probe gets preview.png, listed among its outputs with its check in its entry
+/// (rgba32f files: nothing lost, so files and intent agree to float32's rounding); without
+/// previews there is neither, and the settings say so.
+#[test]
+fn previews_are_written_and_recorded_unless_turned_off() {
+    let ctx = common::ctx();
+    {
+        let (inputs, out, baker) = scratch(&ctx, "set-previews");
+        let set = ProbeSet::new([inputs.join("p0.exr"), inputs.join("p1.exr")]).unwrap();
+        let with = plan(LightsMode::Exact);
+        let written = run(&ctx, &baker, &set, &with, &out, Part::All);
+        for e in &written.manifest.probes {
+            let listed = e.outputs.iter().find(|o| o.file.ends_with("/preview.png"));
+            let listed = listed.expect("preview.png among the outputs");
+            assert!(out.join(&listed.file).is_file());
+            let check = e.preview.as_ref().expect("the preview's check");
+            assert_eq!(check.files_vs_intent.len(), 5);
+            assert!(check.worst < 1e-6, "{check:?}");
+        }
+        assert!(written.manifest.settings.preview);
+        assert!(out.join("index.html").is_file());
+
+        let mut without = plan(LightsMode::Exact);
+        without.preview = false;
+        let out2 = out.with_file_name("out-no-preview");
+        let written = run(&ctx, &baker, &set, &without, &out2, Part::All);
+        for e in &written.manifest.probes {
+            assert!(e.preview.is_none());
+            assert!(e.outputs.iter().all(|o| !o.file.ends_with("preview.png")));
+        }
+        assert!(!written.manifest.settings.preview);
+        assert!(walk(&out2).iter().all(|p| !p.ends_with("preview.png")));
+    }
+    common::finish(ctx);
+}

@@ -19,6 +19,16 @@ use std::path::Path;
 fn bake(baker: &Baker, probe: &Path, preset: Preset, dir: &Path) -> (BakePlan, PreviewCubes) {
     let mut s = BakeSettings::default();
     s.preset = Some(preset);
+    bake_with(baker, probe, s, dir)
+}
+
+/// As [`bake`], with settings `s` (sizes made small).
+fn bake_with(
+    baker: &Baker,
+    probe: &Path,
+    mut s: BakeSettings,
+    dir: &Path,
+) -> (BakePlan, PreviewCubes) {
     (s.specular_size, s.irradiance_size, s.samples) = (Some(64), Some(16), Some(64));
     let plan = BakePlan::new(&s).unwrap();
     let map = envlight::load(probe, &LoadOptions::default()).unwrap();
@@ -92,6 +102,50 @@ fn files_against_intent_is_small_when_right_and_catches_each_breakage() {
                     );
                 }
             }
+        }
+    }
+    common::finish(ctx);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Without a preset the files hold E (not E/π) in envlight's frame; as float32 KTX2 or EXR
+/// nothing is lost, so files and intent agree to rounding, with separated lights added back
+/// from lights.json; BC6H's blocks show as a loss of their own size.
+#[test]
+fn own_frames_containers_and_formats_read_back_as_written() {
+    use envlight::bake::plan::{Container, LightsKey, LightsMode};
+    use envlight::io::ktx2::Ktx2Format;
+    let Some(probes) = common::probes() else {
+        return;
+    };
+    let dir = common::bake::temp("preview-own");
+    let probe = probes.join("quarry_01_1k.hdr");
+    let ctx = common::ctx();
+    {
+        let baker = Baker::new(&ctx).unwrap();
+        let mut cases: Vec<(&str, BakeSettings, f64)> = Vec::new();
+        let mut s = BakeSettings::default();
+        s.texels = Some(Ktx2Format::Rgba32f);
+        cases.push(("rgba32f", s.clone(), 1e-6));
+        s.lights = Some(LightsKey::Mode(LightsMode::Separate));
+        s.rotate_y = Some(30.0);
+        cases.push(("rgba32f, separate lights, turned", s, 1e-6));
+        let mut s = BakeSettings::default();
+        s.format = Some(Container::Exr);
+        cases.push(("exr", s, 1e-6));
+        // The BC6H encoder is the `bc6h` feature's (on by default).
+        if cfg!(feature = "bc6h") {
+            let mut s = BakeSettings::default();
+            s.texels = Some(Ktx2Format::Bc6h);
+            cases.push(("bc6h", s, 0.05));
+        }
+        for (name, s, bound) in cases {
+            let out = dir.join(name);
+            let (plan, intent) = bake_with(&baker, &probe, s, &out);
+            let check = preview(&out, &plan, &intent).unwrap().check;
+            eprintln!("{name}: files vs intent {:.2e}", check.worst);
+            assert!(check.worst <= bound, "{name}: {check:?}");
+            assert!(check.worst > 0.0 || name != "bc6h");
         }
     }
     common::finish(ctx);

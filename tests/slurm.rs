@@ -439,7 +439,8 @@ fn check_jobs(cluster: &Cluster, job: &str, merge: &str, logs: &Path, out: &Path
 
 /// The merged manifest lists the 8 probes, none failed, with the single run's output hashes;
 /// every file a probe's folder holds, but its record of this run (`probe.json`: times, paths)
-/// and its lock, is byte-identical to the single run's.
+/// and its lock, is byte-identical to the single run's (previews included); the gallery has a
+/// card a probe.
 fn check_outputs(single: &Path, out: &Path) {
     let read = |p: &Path| -> serde_json::Value {
         serde_json::from_slice(&std::fs::read(p.join("manifest.json")).unwrap()).unwrap()
@@ -484,7 +485,10 @@ fn check_outputs(single: &Path, out: &Path) {
     }
     assert_eq!(
         compared,
-        8 * 3,
-        "sh.json, irradiance.ktx2 and specular.ktx2 per probe"
+        8 * 4,
+        "sh.json, irradiance.ktx2, specular.ktx2 and preview.png per probe"
     );
+    // The merge's gallery: one card a probe, whichever shard baked it.
+    let page = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert_eq!(page.matches("<article class=\"card").count(), 8);
 }

@@ -382,7 +382,31 @@ mod tests {
         assert_eq!(html.matches("<article class=\"card failed\"").count(), 1);
         assert!(html.contains("failed: truncated &lt;file&gt; &amp; &quot;more&quot;"));
         assert!(html.contains("<img src=\"x.hdr/preview.png\""));
+        // The failed card has its message and no picture.
+        let failed = &html[html.find("card failed").unwrap()..];
+        let failed = &failed[..failed.find("</article>").unwrap()];
+        assert!(failed.contains("class=\"error\"") && !failed.contains("<img"));
         // Nothing reaches the network.
         assert!(!html.contains("http:") && !html.contains("https:") && !html.contains("//cdn"));
+    }
+
+    /// A set of a thousand probes: one card each, every picture loaded lazily with its size
+    /// given (so the page lays out before any loads), in a page of well under 2 MB.
+    #[test]
+    fn a_thousand_probes_make_one_light_page() {
+        let entries: Vec<Entry> = (0..1000)
+            .map(|k| {
+                entry(
+                    &format!("in/p{k:04}.hdr"),
+                    if k % 97 == 0 { "failed" } else { "baked" },
+                )
+            })
+            .collect();
+        let html = gallery_html(&entries, None);
+        assert_eq!(html.matches("<article class=\"card").count(), 1000);
+        let imgs = html.matches("<img ").count();
+        assert_eq!(imgs, 1000 - 11);
+        assert_eq!(html.matches("loading=\"lazy\" width=").count(), imgs);
+        assert!(html.len() < 2 << 20, "{} bytes", html.len());
     }
 }
