@@ -27,8 +27,9 @@ pub enum Error {
     #[error("{0}")]
     Invalid(String),
     /// An error of some larger job, with what the job was doing (a probe's path in a set's
-    /// bake): "context: error".
-    #[error("{context}: {inner}")]
+    /// bake): "context: error", or the error alone where it already begins with the context
+    /// (a bad file's error names its path).
+    #[error("{}", context_text(context, inner))]
     Context {
         /// What was being done, or on what.
         context: String,
@@ -77,6 +78,15 @@ impl<T> VkContext<T> for std::result::Result<T, vk::Result> {
     }
 }
 
+/// [`Error::Context`]'s message: the context said once.
+fn context_text(context: &str, inner: &Error) -> String {
+    let inner = inner.to_string();
+    match inner.strip_prefix(context) {
+        Some(rest) if rest.starts_with(':') => inner,
+        _ => format!("{context}: {inner}"),
+    }
+}
+
 impl Error {
     /// This error inside `context` ([`Error::Context`]).
     pub fn context(self, context: impl Into<String>) -> Error {
@@ -100,5 +110,25 @@ impl Error {
             path: path.into(),
             problem: problem.into(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A context the error already begins with is said once; another is put before it.
+    #[test]
+    fn a_context_is_said_once() {
+        let bad = Error::bad_file("/in/p.dds", "truncated DDS");
+        assert_eq!(
+            bad.context("/in/p.dds").to_string(),
+            "/in/p.dds: truncated DDS"
+        );
+        let e = Error::Invalid("no levels".into()).context("/in/p.dds");
+        assert_eq!(e.to_string(), "/in/p.dds: no levels");
+        // A context that is only a prefix of the path is not the path.
+        let e = Error::bad_file("/in/p.dds", "truncated DDS").context("/in/p");
+        assert_eq!(e.to_string(), "/in/p: /in/p.dds: truncated DDS");
     }
 }
