@@ -9,7 +9,7 @@
 use envlight::bake::files::probe_files;
 use envlight::bake::output::Preset;
 use envlight::bake::plan::{BakePlan, BakeSettings, LightsKey, LightsMode};
-use envlight::bake::preview::{preview, PreviewCubes, PREVIEW_FILE};
+use envlight::bake::preview::{preview, reference_view, PreviewCubes, Source, PREVIEW_FILE};
 use envlight::bake::Baker;
 use envlight::{Context, ContextOptions, LoadOptions};
 use std::path::{Path, PathBuf};
@@ -56,7 +56,14 @@ pub fn bake(
         // The preview, rendered from the files just written and checked against the float
         // data they came from (a pipeline can stop on `check.worst`).
         let intent = PreviewCubes::intent(&baked, &plan, lights.as_ref());
-        let p = preview(&dir, &plan, &intent)?;
+        // Recipe against reference: split-sum against envlight's reference on the map the
+        // cubes came from and the lights handed out.
+        let source = Source {
+            map: &source,
+            separated: lights.as_ref(),
+        };
+        let reference = reference_view(source, &plan);
+        let p = preview(&dir, &plan, &intent, Some(&reference))?;
         let path = dir.join(PREVIEW_FILE);
         std::fs::write(&path, p.png)?;
         written.push(path);

@@ -7,6 +7,7 @@
 //! (`index.html#failed&sort=error`), so a link or a headless browser can open it filtered.
 
 use super::manifest::{read_manifests, Entry, Manifest};
+use super::preview::reference::COMPARED;
 use super::preview::{PREVIEW_FILE, PREVIEW_SIZE, SPHERES};
 use crate::error::Result;
 use crate::io::write_atomic;
@@ -157,6 +158,14 @@ fn card(e: &Entry) -> String {
                 parts.join(", ")
             ),
         );
+        if !p.recipe_vs_reference.is_empty() {
+            let parts: Vec<String> = COMPARED
+                .iter()
+                .zip(&p.recipe_vs_reference)
+                .map(|(s, x)| format!("{} {}", s.label().to_lowercase(), percent(*x)))
+                .collect();
+            row("recipe vs reference", parts.join(", "));
+        }
     }
     if let Some(c) = &e.check {
         row(
@@ -333,6 +342,7 @@ mod tests {
                 files_vs_intent: vec![1e-3; 5],
                 worst: 1e-3,
                 exposure: 0.0,
+                recipe_vs_reference: vec![0.1, 0.05, 0.03, 0.01],
             });
         }
         e

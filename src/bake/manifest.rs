@@ -214,9 +214,13 @@ pub struct Stages {
     pub check: f64,
     /// Encoding and writing the files and the record.
     pub write: f64,
-    /// Rendering `preview.png` from the files written, and its check.
+    /// Rendering `preview.png` from the files written, and its checks.
     #[serde(default)]
     pub preview: f64,
+    /// The preview's reference (recipe against reference), which runs beside the GPU wait
+    /// and the writes.
+    #[serde(default)]
+    pub preview_reference: f64,
 }
 
 impl Stages {

@@ -21,7 +21,6 @@ use super::output::SeparateLights;
 use super::plan::{BakePlan, Container};
 use super::Baked;
 use crate::error::{Error, Result};
-use crate::io::{tone_map, ToneMap};
 use crate::math::envmap::luminance;
 use crate::math::split_sum::MU_MIN;
 use crate::math::{convert, Mapping};
@@ -33,6 +32,8 @@ use std::sync::OnceLock;
 
 pub mod breakage;
 mod font;
+mod picture;
+pub mod reference;
 
 /// The preview's file name in a probe's folder.
 pub const PREVIEW_FILE: &str = "preview.png";
@@ -68,8 +69,8 @@ pub const SPHERES: [Sphere; 5] = [
     Sphere::Diffuse,
 ];
 
-/// The preview's size in pixels: the row of spheres and its caption.
-pub const PREVIEW_SIZE: (u32, u32) = (WIDTH, ROW + CAPTION);
+/// The preview's size in pixels: the row of spheres, its caption, and the recipe's heat maps.
+pub const PREVIEW_SIZE: (u32, u32) = (WIDTH, ROW + CAPTION + picture::HEAT);
 
 /// The picture's width and the spheres' row height, in pixels.
 const WIDTH: u32 = 640;
@@ -447,6 +448,10 @@ pub struct PreviewCheck {
     pub worst: f64,
     /// The picture's exposure (EV): the intent's diffuse sphere at a mean luminance of 0.5.
     pub exposure: f64,
+    /// Recipe against reference, relative RMS per sphere of [`reference::COMPARED`] (GGX
+    /// 0.1, 0.3, 0.6, diffuse); empty where no source was given.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub recipe_vs_reference: Vec<f64>,
 }
 
 /// A rendered preview: the PNG's bytes and its check.
@@ -479,67 +484,75 @@ fn exposure(p: &Picture) -> f64 {
     }
 }
 
+/// What envlight's reference sees of a probe: the map its cubes were baked from (the
+/// residual, where lights were separated) and the separated lights.
+#[derive(Clone, Copy)]
+pub struct Source<'a> {
+    /// The map as baked, in its file's frame.
+    pub map: &'a EnvMap,
+    /// The lights a bake handed to lights.json.
+    pub separated: Option<&'a SeparateLights>,
+}
+
+/// The reference view of `source` baked by `plan` ([`reference::ReferenceView`]): what
+/// [`preview`] compares the recipe with. It needs only the source: a bake computes it while
+/// the GPU works.
+pub fn reference_view(source: Source<'_>, plan: &BakePlan) -> reference::ReferenceView {
+    let cube_to_file = plan.orientation.world_to_file();
+    let r = reference::Reference::new(source.map, separated_texels(source.separated, cube_to_file));
+    reference::ReferenceView::new(&r)
+}
+
 /// The preview of a probe whose files are in `dir`: rendered from them, checked against
-/// `intent` (see the module docs).
-pub fn preview(dir: &Path, plan: &BakePlan, intent: &PreviewCubes) -> Result<Preview> {
+/// `intent`, and, given the `reference` ([`reference_view`]), the recipe checked against it
+/// (see the module docs).
+pub fn preview(
+    dir: &Path,
+    plan: &BakePlan,
+    intent: &PreviewCubes,
+    reference: Option<&reference::ReferenceView>,
+) -> Result<Preview> {
     let files = PreviewCubes::from_files(dir, plan)?;
     let got = render(&files, plan.cube_to_world);
     let want = render(intent, plan.cube_to_world);
     let errors = sphere_errors(&got, &want);
     let worst = errors.iter().copied().fold(0.0, super::worse);
+    let file_to_cube = plan.orientation.world_to_file().transpose();
+    let recipe = reference.map(|r| reference::recipe_check(&files, file_to_cube, r));
     let check = PreviewCheck {
         files_vs_intent: errors,
         worst,
         exposure: exposure(&want),
+        recipe_vs_reference: recipe
+            .as_ref()
+            .map(|r| r.errors.clone())
+            .unwrap_or_default(),
     };
-    let png = png(&got, &check)?;
+    let png = picture::png(&got, &check, recipe.as_ref())?;
     Ok(Preview { png, check })
 }
 
-/// The picture tone-mapped, with its caption: the spheres' labels, the check and the tone
-/// mapping.
-fn png(p: &Picture, check: &PreviewCheck) -> Result<Vec<u8>> {
-    let (w, h) = (p.width, p.height + CAPTION);
-    let tm = ToneMap {
-        exposure: check.exposure as f32,
-    };
-    let mut img: Vec<[u8; 3]> = p
-        .rgb
-        .iter()
-        .map(|c| tone_map(c.map(|x| x as f32), tm))
-        .collect();
-    img.resize((w * h) as usize, [24, 24, 24]);
-    let grey = [200, 200, 200];
-    let first = WIDTH as f64 / 2.0 - FOCAL * SPACING * (SPHERES.len() - 1) as f64 / 2.0 / DEPTH;
-    for (k, s) in SPHERES.iter().enumerate() {
-        let text = s.label();
-        let cx = first + FOCAL * SPACING * k as f64 / DEPTH;
-        let x = (cx - font::width(&text, 1) as f64 / 2.0).max(0.0) as u32;
-        font::draw(&mut img, w, (x, p.height + 4), &text, 1, grey);
-    }
-    let line = format!("FILES VS INTENT, WORST SPHERE: {:.3}%", 100.0 * check.worst);
-    let ink = if check.worst <= 0.01 {
-        [140, 220, 140]
-    } else {
-        [255, 120, 100]
-    };
-    font::draw(&mut img, w, (4, p.height + 17), &line, 2, ink);
-    let tone = format!(
-        "TONE: REINHARD X/(1+X) PER CHANNEL, {:+.1} EV, SRGB. LINEAR DATA IS COMPARED.",
-        check.exposure
-    );
-    font::draw(&mut img, w, (4, p.height + 38), &tone, 1, grey);
-    let mut out = Vec::new();
-    let bytes: Vec<u8> = img.iter().flatten().copied().collect();
-    image::ImageEncoder::write_image(
-        image::codecs::png::PngEncoder::new(&mut out),
-        &bytes,
-        w,
-        h,
-        image::ExtendedColorType::Rgb8,
-    )
-    .map_err(|e| Error::Invalid(format!("preview PNG: {e}")))?;
-    Ok(out)
+/// Separated lights as light texels in the file frame (`cube_to_file` turns their
+/// cube-frame directions).
+fn separated_texels(
+    lights: Option<&SeparateLights>,
+    cube_to_file: DMat3,
+) -> Vec<crate::math::lights::LightTexel> {
+    lights
+        .map(|ls| {
+            ls.lights
+                .iter()
+                .map(|l| crate::math::lights::LightTexel {
+                    layer: 0,
+                    i: 0,
+                    j: 0,
+                    dir: (cube_to_file * DVec3::from(l.direction)).normalize(),
+                    omega: l.solid_angle,
+                    radiance: l.radiance.map(|r| r as f32),
+                })
+                .collect()
+        })
+        .unwrap_or_default()
 }
 
 #[cfg(test)]

@@ -11,7 +11,8 @@ use super::manifest::{
 use super::manifest::{manifest_name, Manifest};
 use super::output::SeparateLights;
 use super::plan::BakePlan;
-use super::preview::{preview, PreviewCubes, PREVIEW_FILE};
+use super::preview::reference::ReferenceView;
+use super::preview::{preview, reference_view, PreviewCubes, Source, PREVIEW_FILE};
 use super::schedule::classify;
 use super::set::{input_name, write_dfg, write_json, Part, Progress, SetBake, Written};
 use super::{Baked, Baker, PendingBake, SpotCheckPlan};
@@ -49,7 +50,7 @@ struct InGpu {
     name: String,
     input: String,
     input_sha256: String,
-    /// The source, until the spot check takes it.
+    /// The source, for the spot check and the preview's reference.
     map: Option<EnvMap>,
     /// Seconds spent reading, hashing and decoding it.
     read_s: f64,
@@ -309,18 +310,28 @@ impl Run<'_> {
             upload: host.upload,
             ..Stages::default()
         };
-        // The spot check's exact filters need the source alone: they run while the GPU bakes.
-        let map = w.map.take().filter(|_| plan.check > 0);
+        // The spot check's exact filters and the preview's reference need the source alone:
+        // they run while the GPU bakes.
+        let map = w.map.take();
+        let separated = w.lights.clone();
         std::thread::scope(|s| {
-            let checking = map.map(|map| {
+            let checking = map.as_ref().filter(|_| plan.check > 0).map(|map| {
                 s.spawn(move || {
                     let t = Instant::now();
                     let o = &plan.options;
-                    let c = SpotCheckPlan::new(&map, &plan.orientation, o, plan.check);
+                    let c = SpotCheckPlan::new(map, &plan.orientation, o, plan.check);
                     (c, t.elapsed().as_secs_f64())
                 })
             });
-            self.finish_with(w, stages, checking)
+            let referencing = map.as_ref().filter(|_| plan.preview).map(|map| {
+                let separated = separated.as_ref();
+                s.spawn(move || {
+                    let t = Instant::now();
+                    let v = reference_view(Source { map, separated }, plan);
+                    (v, t.elapsed().as_secs_f64())
+                })
+            });
+            self.finish_with(w, stages, checking, referencing)
         })
     }
 
@@ -330,6 +341,7 @@ impl Run<'_> {
         w: InGpu,
         mut stages: Stages,
         checking: Option<std::thread::ScopedJoinHandle<'_, (SpotCheckPlan, f64)>>,
+        referencing: Option<std::thread::ScopedJoinHandle<'_, (ReferenceView, f64)>>,
     ) -> Entry {
         let (out, plan) = (&self.job.out, self.job.plan);
         let t0 = Instant::now();
@@ -348,7 +360,16 @@ impl Run<'_> {
                 let preview = match plan.preview {
                     true => {
                         let intent = PreviewCubes::intent(&baked, plan, w.lights.as_ref());
-                        let p = preview(&dir, plan, &intent)?;
+                        let (reference, seconds) = match referencing {
+                            Some(h) => {
+                                let (v, s) =
+                                    h.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
+                                (Some(v), s)
+                            }
+                            None => (None, 0.0),
+                        };
+                        stages.preview_reference = seconds;
+                        let p = preview(&dir, plan, &intent, reference.as_ref())?;
                         outputs.extend(write_outputs(out, vec![(dir.join(PREVIEW_FILE), p.png)])?);
                         Some(p.check)
                     }

@@ -207,11 +207,12 @@ fn the_png_states_its_tone_mapping_and_decodes() {
         files_vs_intent: sphere_errors(&p, &p),
         worst: 0.0,
         exposure: exposure(&p),
+        recipe_vs_reference: Vec::new(),
     };
     assert!(check.exposure.is_finite() && check.exposure != 0.0);
-    let bytes = png(&p, &check).unwrap();
+    let bytes = picture::png(&p, &check, None).unwrap();
     let img = image::load_from_memory(&bytes).unwrap().into_rgb8();
-    assert_eq!((img.width(), img.height()), (WIDTH, ROW + CAPTION));
+    assert_eq!((img.width(), img.height()), PREVIEW_SIZE);
     // The caption holds text (lit pixels on its dark ground), the row a picture.
     let caption = img
         .rows()

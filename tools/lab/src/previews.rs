@@ -12,7 +12,7 @@ use envlight::bake::files::probe_files;
 use envlight::bake::output::Preset;
 use envlight::bake::plan::{BakePlan, BakeSettings};
 use envlight::bake::preview::breakage::Breakage;
-use envlight::bake::preview::{preview, PreviewCubes};
+use envlight::bake::preview::{preview, reference_view, PreviewCubes, Source};
 use envlight::bake::Baker;
 use envlight::LoadOptions;
 use std::fmt::Write as _;
@@ -44,6 +44,8 @@ struct Row {
     right: f64,
     /// Per breakage, the worst sphere.
     broken: Vec<f64>,
+    /// Recipe against reference per compared sphere.
+    recipe: Vec<f64>,
 }
 
 fn copy_dir(from: &Path, to: &Path) -> Result<()> {
@@ -81,13 +83,19 @@ fn checks(g: &Global, files: &[PathBuf], scratch: &Path) -> Result<Vec<Row>> {
                 std::fs::write(p, bytes)?;
             }
             let intent = PreviewCubes::intent(&baked, &plan, lights.as_ref());
-            let right = preview(&dir, &plan, &intent)?.check.worst;
+            let src = Source {
+                map: &source,
+                separated: lights.as_ref(),
+            };
+            let reference = reference_view(src, &plan);
+            let check = preview(&dir, &plan, &intent, Some(&reference))?.check;
+            let (right, recipe) = (check.worst, check.recipe_vs_reference);
             let mut broken = Vec::new();
             for b in Breakage::ALL {
                 let d = scratch.join(format!("{preset:?}-{b:?}")).join(&probe);
                 copy_dir(&dir, &d)?;
                 b.apply(&d)?;
-                broken.push(preview(&d, &plan, &intent)?.check.worst);
+                broken.push(preview(&d, &plan, &intent, None)?.check.worst);
             }
             eprintln!("{probe} {preset:?}: right {right:.2e}, broken {broken:?}");
             rows.push(Row {
@@ -95,6 +103,7 @@ fn checks(g: &Global, files: &[PathBuf], scratch: &Path) -> Result<Vec<Row>> {
                 preset,
                 right,
                 broken,
+                recipe,
             });
         }
     }
@@ -253,10 +262,11 @@ fn markdown(
     let names: Vec<&str> = Breakage::ALL.iter().map(|x| x.name()).collect();
     let _ = writeln!(
         b,
-        "| probe | preset | files vs intent | {} | smallest ratio broken / right |",
+        "| probe | preset | files vs intent | {} | smallest ratio broken / right | recipe vs \
+         reference: GGX 0.1 / 0.3 / 0.6 / diffuse |",
         names.join(" | ")
     );
-    let _ = writeln!(b, "|---|---|---|{}---|", "---|".repeat(names.len()));
+    let _ = writeln!(b, "|---|---|---|{}---|---|", "---|".repeat(names.len()));
     for r in rows {
         let ratio = r
             .broken
@@ -270,12 +280,17 @@ fn markdown(
             .collect();
         let _ = writeln!(
             b,
-            "| {} | {:?} | {:.3}% | {} | {:.0}× |",
+            "| {} | {:?} | {:.3}% | {} | {:.0}× | {} |",
             r.probe,
             r.preset,
             100.0 * r.right,
             broken.join(" | "),
-            ratio
+            ratio,
+            r.recipe
+                .iter()
+                .map(|x| format!("{:.1}%", 100.0 * x))
+                .collect::<Vec<_>>()
+                .join(" / ")
         );
     }
     // NaN kept (f64::max would drop it).
