@@ -3,8 +3,8 @@
 //! float64 on the host, as the renderer's "FIS with lights" twin: the source's light texels
 //! (everything above twice its mean) summed exactly through a light tree, plus, for GGX,
 //! filtered importance sampling of the residual, and for the diffuse sphere the exact
-//! irradiance sum over the residual reduced to [`DIFFUSE_SIDE`] (block means, power kept:
-//! the cosine is smooth at that scale). The view is the report's (`math::camera::sphere_camera`: a unit
+//! irradiance sum over the residual reduced to about 8,000 texels ([`diffuse_side`]: block
+//! means, power kept; the cosine is smooth at that scale). The view is the report's (`math::camera::sphere_camera`: a unit
 //! sphere, orthographic, from (0, 0.3, 5)), at [`SIDE`]², so the figures read beside the
 //! report's split-sum rows for the same probe and α.
 
@@ -14,7 +14,9 @@ use crate::math::camera::{sphere_camera, trace, Shape};
 use crate::math::envmap::luminance;
 use crate::math::exact::ExactFilter;
 use crate::math::light_tree::LightTree;
-use crate::math::lights::{extract, lobe_scale, prepare, ExtractOptions, LightTexel};
+use crate::math::lights::{
+    cells_for, extract, lobe_scale, prepare_cells, ExtractOptions, LightTexel,
+};
 use crate::math::mip::Level;
 use crate::math::{convert, fis, mip, Mapping};
 use crate::EnvMap;
@@ -26,8 +28,15 @@ pub const SIDE: u32 = 32;
 const GGX_SAMPLES: u32 = 256;
 /// The residual's dual paraboloid, a side.
 const DP_SIZE: u32 = 128;
-/// The largest side of the map the diffuse reference sums.
-pub const DIFFUSE_SIDE: u32 = 128;
+/// The largest side of the map the diffuse reference sums, by mapping: about 8,000 texels
+/// (a lat-long 128 wide, a cube of 32² faces, a paraboloid or angular map 64 a side).
+pub fn diffuse_side(m: Mapping) -> u32 {
+    match m {
+        Mapping::LatLong => 128,
+        Mapping::Cube => 32,
+        _ => 64,
+    }
+}
 
 /// The spheres compared (the mirror has no integral to err).
 pub const COMPARED: [Sphere; 4] = [
@@ -45,7 +54,7 @@ pub struct Reference {
     /// The residual reduced for the diffuse sum.
     small: EnvMap,
     /// Per sphere of [`COMPARED`]: its BRDF, lobe scale and the light texels' tree.
-    trees: Vec<(Brdf, f64, LightTree)>,
+    trees: Vec<(Brdf, f64, std::sync::Arc<LightTree>)>,
     separated: Vec<LightTexel>,
 }
 
@@ -63,7 +72,7 @@ impl Reference {
     /// before, file frame) to add at their centres.
     pub fn new(source: &EnvMap, separated: Vec<LightTexel>) -> Reference {
         let ex = extract(source, &ExtractOptions::chain());
-        let small = match convert::reduce_to_fit(&ex.residual, DIFFUSE_SIDE) {
+        let small = match convert::reduce_to_fit(&ex.residual, diffuse_side(source.mapping)) {
             Some((m, _)) => m,
             None => ex.residual.clone(),
         };
@@ -80,12 +89,23 @@ impl Reference {
             DMat3::IDENTITY,
             ss,
         );
+        // One tree per quadrature (cells a texel): the wider lobes share theirs.
+        let mut built: Vec<(u32, std::sync::Arc<LightTree>)> = Vec::new();
         let trees = COMPARED
             .iter()
             .map(|s| {
                 let brdf = brdf_of(*s);
                 let scale = lobe_scale(&brdf).unwrap_or(1.0);
-                let tree = LightTree::new(prepare(source, &ex, DMat3::IDENTITY, scale));
+                let cells = cells_for(&ex, scale);
+                let tree = match built.iter().find(|(c, _)| *c == cells) {
+                    Some((_, t)) => t.clone(),
+                    None => {
+                        let lights = prepare_cells(source, &ex.lights, DMat3::IDENTITY, cells);
+                        let t = std::sync::Arc::new(LightTree::new(lights));
+                        built.push((cells, t.clone()));
+                        t
+                    }
+                };
                 (brdf, scale, tree)
             })
             .collect();
@@ -137,7 +157,8 @@ pub struct ReferenceView {
 
 impl ReferenceView {
     /// The reference of `reference` over the view's sphere pixels (a margin of 1e-3, as the
-    /// report's).
+    /// report's) of one colour of a checkerboard: half the pixels, an even sample of the
+    /// sphere for the relative RMS (the heat map fills the others from their neighbours).
     pub fn new(reference: &Reference) -> ReferenceView {
         let cam = sphere_camera(SIDE);
         let sphere = [Shape::Sphere {
@@ -148,6 +169,9 @@ impl ReferenceView {
         for j in 0..SIDE {
             for i in 0..SIDE {
                 let (o, d) = cam.ray(i, j);
+                if (i + j) % 2 == 1 {
+                    continue;
+                }
                 if let Some(h) = trace(&sphere, o, d).filter(|h| h.margin >= 1e-3) {
                     pixels.push(((j * SIDE + i) as usize, h.normal, -d));
                 }
