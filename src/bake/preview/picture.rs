@@ -55,31 +55,13 @@ fn caption(img: &mut [[u8; 3]], p: &Picture, check: &PreviewCheck) {
     font::draw(img, w, (4, p.height + 38), &tone, 1, GREY);
 }
 
-/// `map` ([`SIDE`]², NaN where not computed) with each NaN that has computed neighbours
-/// left, right, above or below replaced by their mean: the checkerboard's other colour.
-fn fill_checkerboard(map: &[f64]) -> Vec<f64> {
-    let s = SIDE as i64;
-    let at = |x: i64, y: i64| {
-        (x >= 0 && y >= 0 && x < s && y < s)
-            .then(|| map[(y * s + x) as usize])
-            .filter(|e| !e.is_nan())
-    };
-    (0..s * s)
+/// `map` ([`SIDE`]², computed on even rows and columns, NaN elsewhere and off the sphere)
+/// with each pixel showing its 2 × 2 block's computed one.
+fn fill_blocks(map: &[f64]) -> Vec<f64> {
+    (0..SIDE * SIDE)
         .map(|k| {
-            let (x, y) = (k % s, k / s);
-            if let Some(e) = at(x, y) {
-                return e;
-            }
-            let near: Vec<f64> = [(x - 1, y), (x + 1, y), (x, y - 1), (x, y + 1)]
-                .iter()
-                .filter_map(|&(a, b)| at(a, b))
-                .collect();
-            match near.len() {
-                // Inside the sphere a pixel of the other colour has 3 or 4 computed
-                // neighbours; at the rim fewer, and those stay off the sphere.
-                3 | 4 => near.iter().sum::<f64>() / near.len() as f64,
-                _ => f64::NAN,
-            }
+            let (x, y) = (k % SIDE, k / SIDE);
+            map[((y & !1) * SIDE + (x & !1)) as usize]
         })
         .collect()
 }
@@ -108,7 +90,7 @@ fn heat(img: &mut [[u8; 3]], w: u32, y0: u32, recipe: Option<&RecipeCheck>) {
     let side = SIDE * ZOOM;
     for (k, (s, map)) in COMPARED.iter().zip(&r.heat).enumerate() {
         let x0 = 8 + k as u32 * 146;
-        let filled = fill_checkerboard(map);
+        let filled = fill_blocks(map);
         for y in 0..side {
             for x in 0..side {
                 let e = filled[((y / ZOOM) * SIDE + x / ZOOM) as usize];
