@@ -252,7 +252,11 @@ fn markdown(
          rendered by `bake::preview`; files against intent is the worst sphere's relative RMS \
          against the same spheres from the bake's float cubes. Each breakage \
          (`bake::preview::breakage`) rewrites a copy of the written files: every specular face \
-         mirrored, the irradiance π× too bright, the specular levels in reverse order. Cost: \
+         mirrored, the irradiance π× too bright, the specular levels in reverse order. Recipe \
+         vs reference: the preview's split-sum (GGX) and E/π (diffuse) from the Bevy or \
+         Khronos files against envlight's float64 reference (FIS of the residual with the light \
+         texels summed through a tree; the exact irradiance sum), relative RMS over even rows \
+         and columns of the report's 32² sphere view. Cost: \
          `envlight bake` of the {n} probes with `--preset bevy`, with previews and with \
          `--no-preview`, alternating, {r} runs each, wall-clock seconds of the whole process; \
          and the manifest's own preview stage against its probes' seconds.",
