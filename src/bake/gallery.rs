@@ -162,7 +162,7 @@ fn card(e: &Entry) -> String {
             let parts: Vec<String> = COMPARED
                 .iter()
                 .zip(&p.recipe_vs_reference)
-                .map(|(s, x)| format!("{} {}", s.label().to_lowercase(), percent(*x)))
+                .map(|(s, x)| format!("{} {:.1}%", s.label().to_lowercase(), 100.0 * x))
                 .collect();
             row("recipe vs reference", parts.join(", "));
         }
@@ -297,7 +297,9 @@ pub fn gallery_html(entries: &[Entry], manifest: Option<&Manifest>) -> String {
          them: the skybox behind a mirror, white GGX metals of α 0.1, 0.3 and 0.6 (split-sum) \
          and a white diffuse sphere. <em>Files vs intent</em> is the relative RMS of those \
          spheres against the same spheres from envlight's float data before writing; above \
-         {hi} a card counts as high error.</p>\n\
+         {hi} a card counts as high error. <em>Recipe vs reference</em> is what the engine's \
+         split-sum (and E/π) itself costs on the probe against envlight's reference, in the \
+         report's view.</p>\n\
          <div id=\"controls\">\n<label>sort by <select id=\"sort\">\
          <option value=\"name\">failed first, then name</option><option value=\"error\">files vs intent</option>\
          <option value=\"check\">spot check</option><option value=\"clamped\">power clamped</option>\
