@@ -283,31 +283,12 @@ fn albedo(alpha: f64, mu: f64) -> f64 {
         * (p2 - p0 + f * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3 + f * (3.0 * (p1 - p2) + p3 - p0)))
 }
 
-/// A + B (F = 1) of GGX α at n·v = `mu`: ∫ f·cos dω over the GGX sampler's unit square,
-/// whose weight is bounded and smooth there (16 × 16 panels of 4 × 4 Gauss–Legendre nodes;
-/// [`crate::math::brdf::Brdf::albedo`]'s rule, coarser: the recipe's albedo, not an oracle).
+/// A + B (F = 1) of GGX α at n·v = `mu`: [`crate::math::brdf::Brdf::albedo`]'s quadrature
+/// with 16 × 16 panels of 4 × 4 nodes (the recipe's albedo, not an oracle).
 fn directional_albedo(alpha: f64, mu: f64) -> f64 {
-    let brdf = crate::math::split_sum::ggx(alpha, true);
     let mu = mu.clamp(MU_MIN, 1.0);
     let wo = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
-    let (x, w) = crate::math::quadrature::gauss_legendre(4);
-    let panels = 16;
-    let h = 1.0 / panels as f64;
-    let mut total = 0.0;
-    for pa in 0..panels {
-        for pb in 0..panels {
-            for (xa, wa) in x.iter().zip(&w) {
-                for (xb, wb) in x.iter().zip(&w) {
-                    let u = [
-                        (pa as f64 + 0.5 * (xa + 1.0)) * h,
-                        (pb as f64 + 0.5 * (xb + 1.0)) * h,
-                    ];
-                    total += 0.25 * wa * wb * h * h * brdf.weight(wo, brdf.sample(wo, u));
-                }
-            }
-        }
-    }
-    total
+    crate::math::split_sum::ggx(alpha, true).albedo_rule(wo, 16, 4)
 }
 
 /// The specular cube read at `lod`, trilinear between levels.

@@ -387,28 +387,32 @@ impl Brdf {
         match *self {
             Brdf::Lambert | Brdf::Mirror => 1.0,
             Brdf::Phong { n } => phong_albedo(n, wo.z),
-            _ => {
-                let (x, w) = super::quadrature::gauss_legendre(8);
-                let panels = 24;
-                let h = 1.0 / panels as f64;
-                let mut total = 0.0;
-                for pa in 0..panels {
-                    for pb in 0..panels {
-                        for (xa, wa) in x.iter().zip(&w) {
-                            for (xb, wb) in x.iter().zip(&w) {
-                                let u = [
-                                    (pa as f64 + 0.5 * (xa + 1.0)) * h,
-                                    (pb as f64 + 0.5 * (xb + 1.0)) * h,
-                                ];
-                                let wi = self.sample(wo, u);
-                                total += 0.25 * wa * wb * h * h * self.weight(wo, wi);
-                            }
-                        }
+            _ => self.albedo_rule(wo, 24, 8),
+        }
+    }
+
+    /// [`Brdf::albedo`]'s quadrature over the sampling map's unit square with `panels` ×
+    /// `panels` panels of `nodes` × `nodes` Gauss–Legendre nodes (any BRDF but Phong's
+    /// indicator; a coarser rule where its error is allowed).
+    pub fn albedo_rule(&self, wo: DVec3, panels: u32, nodes: usize) -> f64 {
+        let (x, w) = super::quadrature::gauss_legendre(nodes);
+        let h = 1.0 / panels as f64;
+        let mut total = 0.0;
+        for pa in 0..panels {
+            for pb in 0..panels {
+                for (xa, wa) in x.iter().zip(&w) {
+                    for (xb, wb) in x.iter().zip(&w) {
+                        let u = [
+                            (pa as f64 + 0.5 * (xa + 1.0)) * h,
+                            (pb as f64 + 0.5 * (xb + 1.0)) * h,
+                        ];
+                        let wi = self.sample(wo, u);
+                        total += 0.25 * wa * wb * h * h * self.weight(wo, wi);
                     }
                 }
-                total
             }
         }
+        total
     }
 }
 
