@@ -71,7 +71,8 @@ fn json<T: Serialize>(value: &T) -> Result<String> {
         .map_err(|e| Error::Invalid(format!("a probe's JSON could not be written: {e}")))
 }
 
-fn cube_image(texels: &[[f32; 4]], size: u32) -> EnvMap {
+/// A cube level's RGBA texels as an [`EnvMap`] (alpha dropped).
+pub(crate) fn cube_image(texels: &[[f32; 4]], size: u32) -> EnvMap {
     EnvMap::new(
         Mapping::Cube,
         size,

@@ -41,8 +41,8 @@ pub struct Settings {
     /// `--max-source-side`, where given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_source_side: Option<u32>,
-    /// Whether previews are rendered (recorded only when off, so that the settings of a bake
-    /// with previews hash as they did before previews existed).
+    /// Whether previews are rendered (recorded only when off, so that a folder whose
+    /// manifests lack the key keeps its settings hash and resumes).
     #[serde(default = "yes", skip_serializing_if = "is_yes")]
     pub preview: bool,
 }

@@ -17,6 +17,7 @@
 //! The check compares linear radiance, per sphere, as a relative RMS over its pixels and
 //! channels; the picture is tone-mapped (stated on it) for people only.
 
+use super::files::cube_image as cube;
 use super::output::SeparateLights;
 use super::plan::{BakePlan, Container};
 use super::Baked;
@@ -105,15 +106,6 @@ pub struct PreviewCubes {
     pub irradiance_scale: f64,
     /// Lights added back (those a bake separated).
     pub lights: Vec<AddedLight>,
-}
-
-fn cube(texels: &[[f32; 4]], size: u32) -> EnvMap {
-    EnvMap::new(
-        Mapping::Cube,
-        size,
-        size,
-        texels.iter().map(|t| [t[0], t[1], t[2]]).collect(),
-    )
 }
 
 fn added(lights: &SeparateLights) -> Vec<AddedLight> {

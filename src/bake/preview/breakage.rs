@@ -87,10 +87,7 @@ impl Breakage {
                     .levels
                     .iter()
                     .enumerate()
-                    .map(|(k, l)| {
-                        let texels = l.iter().map(|p| [p[0], p[1], p[2]]).collect();
-                        EnvMap::new(Mapping::Cube, side(k), side(k), texels)
-                    })
+                    .map(|(k, l)| crate::bake::files::cube_image(l, side(k)))
                     .collect();
                 (0..n)
                     .map(|k| {
