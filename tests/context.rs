@@ -143,6 +143,33 @@ fn a_leak_reported_at_teardown_reaches_the_log() {
     );
 }
 
+/// A program's `ValidationRecord` keeps each validated context's log past the context: a
+/// leak left at teardown of one context is in its messages afterwards, and a context made
+/// without validation adds nothing.
+#[test]
+fn a_validation_record_keeps_the_logs_of_contexts_gone() {
+    use envlight::gpu::{ContextOptions, DeviceSelector, ValidationRecord};
+    let record = ValidationRecord::new();
+    let mut opts = ContextOptions::new(DeviceSelector::from_env());
+    opts.validation = true;
+    let ctx = record.context(&opts).unwrap();
+    let info = ash::vk::BufferCreateInfo::default()
+        .size(256)
+        .usage(ash::vk::BufferUsageFlags::STORAGE_BUFFER);
+    // SAFETY: valid device and create info; the buffer is deliberately never destroyed.
+    let _leaked = unsafe { ctx.device().create_buffer(&info, None) }.unwrap();
+    assert!(record.messages().is_empty());
+    drop(ctx);
+    let messages = record.messages();
+    assert!(
+        messages.iter().any(|m| m.contains("VkBuffer")),
+        "the record lost the leak: {messages:?}"
+    );
+    opts.validation = false;
+    drop(record.context(&opts).unwrap());
+    assert_eq!(record.messages(), messages);
+}
+
 /// A context envlight creates says what its creation cost, phase by phase (the floor `envlight
 /// devices` and `cargo xtask lab peers` report): every phase finite and non-negative, the instance and
 /// device together above zero (a driver does work there).

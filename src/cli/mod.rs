@@ -167,27 +167,17 @@ pub fn named<T: Clone + Send + Sync + 'static>(
 /// The device the options ask for.
 pub fn context(g: &Global) -> Result<Context> {
     let opts = ContextOptions::from_flags(g.device.as_deref(), g.validation);
-    let ctx = Context::new(&opts)?;
-    if opts.validation {
-        if let Ok(mut logs) = VALIDATION_LOGS.lock() {
-            logs.push(ctx.validation_log());
-        }
-    }
-    Ok(ctx)
+    Ok(VALIDATION.context(&opts)?)
 }
 
-/// The validation logs of every context this process made with validation on.
-static VALIDATION_LOGS: std::sync::Mutex<Vec<crate::gpu::ValidationLog>> =
-    std::sync::Mutex::new(Vec::new());
+/// This process's contexts' validation logs.
+static VALIDATION: crate::gpu::ValidationRecord = crate::gpu::ValidationRecord::new();
 
 /// Messages the validation layer reported on this process's contexts, teardown included:
 /// `main` checks them after the command has dropped its contexts, and a non-empty list
 /// fails the process (so tests that run the CLI with `--validation` see them).
 pub fn validation_messages() -> Vec<String> {
-    VALIDATION_LOGS
-        .lock()
-        .map(|logs| logs.iter().flat_map(|l| l.messages()).collect())
-        .unwrap_or_default()
+    VALIDATION.messages()
 }
 
 /// A spinner on stderr while something runs.

@@ -55,6 +55,44 @@ impl ValidationLog {
     }
 }
 
+/// The validation logs of every context a program makes with validation on, readable after
+/// the contexts are gone (the layer reports leaks at teardown): a program keeps one in a
+/// static, makes its contexts through it, and fails where [`ValidationRecord::messages`] is
+/// not empty at its end (`envlight` and the lab do).
+pub struct ValidationRecord(Mutex<Vec<ValidationLog>>);
+
+impl ValidationRecord {
+    /// An empty record.
+    pub const fn new() -> ValidationRecord {
+        ValidationRecord(Mutex::new(Vec::new()))
+    }
+
+    /// A context made with `opts`, its log kept where validation is on.
+    pub fn context(&self, opts: &ContextOptions) -> Result<Context> {
+        let ctx = Context::new(opts)?;
+        if opts.validation {
+            if let Ok(mut logs) = self.0.lock() {
+                logs.push(ctx.validation_log());
+            }
+        }
+        Ok(ctx)
+    }
+
+    /// Every message the recorded contexts' layers reported, teardown included.
+    pub fn messages(&self) -> Vec<String> {
+        self.0
+            .lock()
+            .map(|logs| logs.iter().flat_map(|l| l.messages()).collect())
+            .unwrap_or_default()
+    }
+}
+
+impl Default for ValidationRecord {
+    fn default() -> Self {
+        ValidationRecord::new()
+    }
+}
+
 unsafe extern "system" fn debug_callback(
     severity: vk::DebugUtilsMessageSeverityFlagsEXT,
     _types: vk::DebugUtilsMessageTypeFlagsEXT,

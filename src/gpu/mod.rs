@@ -14,7 +14,7 @@ pub(crate) mod timing;
 pub use barrier::Usage;
 pub use context::{
     parse_uuid, uuid_text, AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSelector, Startup,
-    ValidationLog,
+    ValidationLog, ValidationRecord,
 };
 pub use pipeline::FrameCache;
 pub(crate) use pipeline::{Bind, Pipeline};

@@ -22,26 +22,16 @@ pub struct Global {
 /// timings see the same warm pipelines as the program's).
 pub fn context(g: &Global) -> Result<Context> {
     let opts = ContextOptions::from_flags(g.device.as_deref(), g.validation);
-    let ctx = Context::new(&opts)?;
-    if opts.validation {
-        if let Ok(mut logs) = VALIDATION_LOGS.lock() {
-            logs.push(ctx.validation_log());
-        }
-    }
-    Ok(ctx)
+    Ok(VALIDATION.context(&opts)?)
 }
 
-/// The validation logs of every context this process made with validation on.
-static VALIDATION_LOGS: std::sync::Mutex<Vec<envlight::gpu::ValidationLog>> =
-    std::sync::Mutex::new(Vec::new());
+/// This process's contexts' validation logs.
+static VALIDATION: envlight::gpu::ValidationRecord = envlight::gpu::ValidationRecord::new();
 
 /// Messages the validation layer reported on this process's contexts, teardown included
 /// (`main` fails the process on any, as `envlight` does).
 pub fn validation_messages() -> Vec<String> {
-    VALIDATION_LOGS
-        .lock()
-        .map(|logs| logs.iter().flat_map(|l| l.messages()).collect())
-        .unwrap_or_default()
+    VALIDATION.messages()
 }
 
 /// The `envlight` program the whole-process benchmarks run: $ENVLIGHT_BIN, else the one beside
