@@ -127,14 +127,20 @@ impl EnvMap {
             return;
         }
         // Solid angles and sources are the same on every layer; find them once per texel.
+        let omega = self.mapping.texel_solid_angles(w, h);
         let mut table = Vec::with_capacity((w * h) as usize);
         for j in 0..h {
             for i in 0..w {
-                table.push(
-                    self.mapping
+                // A texel with no part of the sphere has no source (integration_source would
+                // find its solid angle again to say so).
+                let o = omega[(j * w + i) as usize];
+                table.push(match o > 0.0 || self.mapping.texel_in_domain(w, h, i, j) {
+                    true => self
+                        .mapping
                         .integration_source(w, h, i, j)
-                        .map(|src| (src, self.mapping.texel_solid_angle(w, h, i, j))),
-                );
+                        .map(|src| (src, o)),
+                    false => None,
+                });
             }
         }
         for layer in 0..self.layers() {

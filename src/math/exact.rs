@@ -65,6 +65,9 @@ pub struct ExactFilter<'a> {
     /// other mappings): a texel's direction is then its row's and its column's, as
     /// [`Mapping::coord_to_dir`] finds it, without a sine per texel.
     columns: Vec<(f64, f64)>,
+    /// Other mappings' texel solid angles ([`Mapping::texel_solid_angles`]; empty for a
+    /// lat-long, whose rows share one).
+    omega: Vec<f64>,
 }
 
 impl<'a> ExactFilter<'a> {
@@ -79,10 +82,15 @@ impl<'a> ExactFilter<'a> {
                 .collect(),
             _ => Vec::new(),
         };
+        let omega = match map.mapping {
+            Mapping::LatLong => Vec::new(),
+            m => m.texel_solid_angles(map.width, map.height),
+        };
         ExactFilter {
             map,
             file_to_world,
             columns,
+            omega,
         }
     }
 
@@ -110,10 +118,13 @@ impl<'a> ExactFilter<'a> {
             return;
         }
         for i in 0..w {
+            let omega = self.omega[(j * w + i) as usize];
+            if omega <= 0.0 && !map.mapping.texel_in_domain(w, h, i, j) {
+                continue;
+            }
             let Some((si, sj)) = map.mapping.integration_source(w, h, i, j) else {
                 continue;
             };
-            let omega = map.mapping.texel_solid_angle(w, h, i, j);
             let c = map
                 .mapping
                 .coord_to_dir(Mapping::texel_center(w, h, layer, i, j));
