@@ -12,7 +12,7 @@ use super::{shade, PreviewCubes, Sphere};
 use crate::math::brdf::{local_view, Brdf, Frame};
 use crate::math::camera::{sphere_camera, trace, Shape};
 use crate::math::envmap::luminance;
-use crate::math::exact::ExactFilter;
+use crate::math::exact::{ExactFilter, Query};
 use crate::math::light_tree::LightTree;
 use crate::math::lights::{
     cells_for, extract, lobe_scale, prepare_cells, ExtractOptions, LightTexel,
@@ -119,30 +119,56 @@ impl Reference {
 
     /// ∫ L·f·cos dω of sphere `s` at normal `n`, view `v` (file frame).
     pub fn radiance(&self, s: Sphere, n: DVec3, v: DVec3) -> [f64; 3] {
+        self.values(s, &[(n, v)])[0]
+    }
+
+    /// [`Reference::radiance`] at each (normal, view) of `at`: the diffuse sums in one pass
+    /// over the reduced residual.
+    pub fn values(&self, s: Sphere, at: &[(DVec3, DVec3)]) -> Vec<[f64; 3]> {
         let Some(k) = COMPARED.iter().position(|c| *c == s) else {
             // The mirror: the residual along the reflection.
-            return fis::lookup(&self.chain, 2.0 * n.dot(v) * n - v, 0.0);
+            return at
+                .iter()
+                .map(|&(n, v)| fis::lookup(&self.chain, 2.0 * n.dot(v) * n - v, 0.0))
+                .collect();
         };
         let (brdf, scale, tree) = &self.trees[k];
-        let mut out = match s {
-            Sphere::Diffuse => ExactFilter::new(&self.small, DMat3::IDENTITY)
-                .irradiance(n)
-                .map(|e| e / std::f64::consts::PI),
+        let residual: Vec<[f64; 3]> = match s {
+            Sphere::Diffuse => {
+                let queries: Vec<Query> =
+                    at.iter().map(|&(n, _)| Query::Irradiance { n }).collect();
+                ExactFilter::new(&self.small, DMat3::IDENTITY)
+                    .evaluate(&queries)
+                    .into_iter()
+                    .map(|e| e.map(|x| x / std::f64::consts::PI))
+                    .collect()
+            }
             _ => {
                 let bias = crate::scene::DEFAULT_FIS_BIAS_RESIDUAL;
-                fis::estimate(&self.chain, brdf, n, v, GGX_SAMPLES, bias, [0.0; 2])
+                at.iter()
+                    .map(|&(n, v)| {
+                        fis::estimate(&self.chain, brdf, n, v, GGX_SAMPLES, bias, [0.0; 2])
+                    })
+                    .collect()
             }
         };
-        let lights = tree.sum_brdf(brdf, n, v, *scale, luminance(out));
-        let frame = Frame::new(n);
-        let wo = local_view(&frame, v);
-        for (c, o) in out.iter_mut().enumerate() {
-            *o += lights[c];
-            for l in &self.separated {
-                *o += brdf.eval_cos(wo, frame.to_local(l.dir)) * l.omega * l.radiance[c] as f64;
-            }
-        }
-        out
+        at.iter()
+            .zip(residual)
+            .map(|(&(n, v), mut out)| {
+                let lights = tree.sum_brdf(brdf, n, v, *scale, luminance(out));
+                let frame = Frame::new(n);
+                let wo = local_view(&frame, v);
+                for (c, o) in out.iter_mut().enumerate() {
+                    *o += lights[c];
+                    for l in &self.separated {
+                        *o += brdf.eval_cos(wo, frame.to_local(l.dir))
+                            * l.omega
+                            * l.radiance[c] as f64;
+                    }
+                }
+                out
+            })
+            .collect()
     }
 }
 
@@ -177,15 +203,8 @@ impl ReferenceView {
                 }
             }
         }
-        let values = COMPARED
-            .iter()
-            .map(|s| {
-                pixels
-                    .iter()
-                    .map(|&(_, n, v)| reference.radiance(*s, n, v))
-                    .collect()
-            })
-            .collect();
+        let at: Vec<(DVec3, DVec3)> = pixels.iter().map(|&(_, n, v)| (n, v)).collect();
+        let values = COMPARED.iter().map(|s| reference.values(*s, &at)).collect();
         ReferenceView { pixels, values }
     }
 }
