@@ -30,7 +30,7 @@ pub struct PreviewsArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     /// Rounds of the whole-process timing (a bake with previews, then one without)
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 3)]
     rounds: u32,
     /// Also write a screenshot of the gallery of four probes and a truncated file here
     #[arg(long)]
