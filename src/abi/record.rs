@@ -41,13 +41,13 @@ records! {
         shape: [f32; 4] = "vec4",
         /// Albedo (diffuse) or specular colour, RGB; w unused.
         albedo: [f32; 4] = "vec4",
-        /// [`super::object::SPHERE`] or [`super::object::PLANE`].
+        /// `abi::object::SPHERE` or `abi::object::PLANE`.
         kind: u32 = "uint",
         /// A plane's extent about its point nearest the origin (0: unbounded).
         extent: f32 = "float",
-        /// The technique ([`super::brdf::technique`]).
+        /// The technique (`abi::brdf::technique`).
         technique: u32 = "uint",
-        /// The BRDF ([`super::brdf::ids`]).
+        /// The BRDF (`abi::brdf::ids`).
         brdf: u32 = "uint",
         /// The BRDF's parameters: Phong and Blinn (n, 0), GGX (α, 1 if height-correlated),
         /// Ward (αx, αy).
@@ -74,7 +74,7 @@ records! {
         table_offset: u32 = "uint",
         /// SH-BRDF: the BRDF table's grid side.
         grid: u32 = "uint",
-        /// [`super::object::ROTATE`] and [`super::object::LIGHTS`] bits.
+        /// `abi::object::ROTATE` and `abi::object::LIGHTS` bits.
         flags: u32 = "uint",
     }
 }

@@ -180,7 +180,7 @@ pub fn convert_with(
 /// Whether [`latlong_area`] serves a `width` × `height` lat-long → `to` at `size` conversion: a
 /// cube, or a dual paraboloid whose axis is the lat-long's polar axis (`world_to_file` keeps
 /// +Y), so that its rim is the equator, the line z = 0 of the (U, z) plane; and polygon walks
-/// that stay within [`area::WALK_STEPS`] ([`area_walk_steps`]).
+/// that stay within `area::WALK_STEPS` ([`area_walk_steps`]).
 pub fn area_serves(width: u32, height: u32, to: Mapping, size: u32, world_to_file: DMat3) -> bool {
     let mapped = match to {
         Mapping::Cube => true,
@@ -235,8 +235,8 @@ pub fn paraboloid_source_halves(width: u32, height: u32, size: u32) -> bool {
 }
 
 /// Points per edge of a paraboloid texel of side `size`'s polygon where the source is a
-/// residual, its lights taken out: [`area::RESIDUAL_EDGE_STEPS`] from
-/// [`area::RESIDUAL_EDGE_MIN_SIZE`] up, else [`area::PARABOLOID_EDGE_STEPS`].
+/// residual, its lights taken out: `area::RESIDUAL_EDGE_STEPS` from
+/// `area::RESIDUAL_EDGE_MIN_SIZE` up, else `area::PARABOLOID_EDGE_STEPS`.
 pub fn residual_edge_points(size: u32) -> u32 {
     match size >= area::RESIDUAL_EDGE_MIN_SIZE {
         true => area::RESIDUAL_EDGE_STEPS,
@@ -248,7 +248,7 @@ pub fn residual_edge_points(size: u32) -> u32 {
 /// conversion (llvmpipe ends an invocation's loops after 65 535 steps in all): the texel with
 /// a corner on a pole, which meets the rows down to its far corner (2√2/size of a face's
 /// side, 2× that on a paraboloid, whose texels are twice as wide there), and in each clips
-/// its polygon twice (2 · [`area::MAX_VERTICES`] steps) and walks a quarter of the row's
+/// its polygon twice (2 · `area::MAX_VERTICES` steps) and walks a quarter of the row's
 /// columns along each of its two edges that leave the pole.
 pub fn area_walk_steps(width: u32, height: u32, to: Mapping, size: u32) -> f64 {
     let reach = match to {
@@ -262,7 +262,7 @@ pub fn area_walk_steps(width: u32, height: u32, to: Mapping, size: u32) -> f64 {
 /// Whether the area conversion to a cube or dual paraboloid of side `n` leaves texel
 /// (`i`, `j`) of `layer` to the general walk rather than its fast path
 /// (glsl/convert_area.glsl, twin of `general_texel`): every texel below
-/// [`area::FAST_MIN_SIZE`]; the window of [`area::FAST_WINDOW`] texels about the centre of
+/// `area::FAST_MIN_SIZE`; the window of `area::FAST_WINDOW` texels about the centre of
 /// the layers that hold the poles (the cube's +Y and −Y faces, each paraboloid half), where
 /// the polygons meet the pole's axis or come near it; and a paraboloid's texels that the rim
 /// of its disc cuts or that lie outside it (a corner outside the disc), whose polygons are
@@ -333,7 +333,7 @@ pub fn latlong_area(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3) 
 }
 
 /// [`latlong_area`] with `edge_points` points per edge of a paraboloid texel's polygon away
-/// from the poles (1 to [`area::POLE_STEPS`]; the converter's `ConvertOptions::edge_points`).
+/// from the poles (1 to `area::POLE_STEPS`; the converter's `ConvertOptions::edge_points`).
 pub fn latlong_area_points(
     map: &EnvMap,
     to: Mapping,

@@ -9,8 +9,8 @@
 //! MIP chain by a grid of taps over the pixel ([`lookup`]), each a sub-pixel camera ray
 //! reflected off the object exactly ([`camera_tap`], so a pixel on a silhouette mixes the
 //! mirror and the background as its area does):
-//! [`crate::abi::footprint::MIN_TAPS`] across the minor axis and as many at that
-//! spacing along the major one, up to [`crate::abi::footprint::MAX_TAPS`], each
+//! `crate::abi::footprint::MIN_TAPS` across the minor axis and as many at that
+//! spacing along the major one, up to `crate::abi::footprint::MAX_TAPS`, each
 //! trilinear at the lod whose texel is the taps' spacing.
 //!
 //! With light texels extracted the chain holds the residual, and each light texel adds its
@@ -73,8 +73,8 @@ pub fn pixel_footprint(
     (what, r, a, b)
 }
 
-/// Taps along `a` and `b`: the tap spacing is the footprint's minor axis over [`MIN_TAPS`],
-/// or its major axis over [`MAX_TAPS`] where that is longer.
+/// Taps along `a` and `b`: the tap spacing is the footprint's minor axis over `MIN_TAPS`,
+/// or its major axis over `MAX_TAPS` where that is longer.
 pub fn taps(la: f64, lb: f64) -> (u32, u32) {
     let s = (la.max(lb) / MAX_TAPS as f64).max(la.min(lb) / MIN_TAPS as f64);
     let n = |l: f64| {
@@ -247,7 +247,7 @@ fn overlap(s: f64, h: f64) -> f64 {
 }
 
 /// Σ over `lights` of the excess radiance times the share of the pixel (footprint `a`, `b`
-/// about `r`) the texel covers. A footprint of area below [`MIN_SPREAD`]² is a point, which
+/// about `r`) the texel covers. A footprint of area below `MIN_SPREAD`² is a point, which
 /// a texel covers wholly or not at all.
 pub fn light_overlap(lights: &[PreparedLight], r: DVec3, a: DVec3, b: DVec3) -> [f64; 3] {
     OverlapShape::new(r, a, b).sum(lights)

@@ -636,9 +636,9 @@ pub struct PreparedLight {
     /// `nodes`, turned to the world.
     pub nodes: Vec<(DVec3, f64)>,
     /// The quadratures of fewer cells, 1 to those of `nodes` less one ((2c)² nodes each,
-    /// coarsest first, set c from [`coarse_offset`]`(c)`), turned to the world: where they
-    /// are kept ([`prepare_local`]) a texel's integral takes only as many cells as the
-    /// kernel's scale at it asks ([`local_nodes`]); empty: always `nodes`.
+    /// coarsest first, set c from `coarse_offset``(c)`), turned to the world: where they
+    /// are kept (`prepare_local`) a texel's integral takes only as many cells as the
+    /// kernel's scale at it asks (`local_nodes`); empty: always `nodes`.
     pub coarse: Vec<(DVec3, f64)>,
 }
 
@@ -650,7 +650,7 @@ pub fn coarse_offset(cells: u32) -> usize {
 }
 
 /// [`prepare_cells`] with every coarser quadrature kept ([`PreparedLight::coarse`]), for the
-/// local rule ([`local_nodes`]; a bake's `glsl/lights.comp`): in GGX's tail, where the
+/// local rule (`local_nodes`; a bake's `glsl/lights.comp`): in GGX's tail, where the
 /// kernel is wider than at its peak, a texel takes 4 nodes instead of (2·cells)², by the same
 /// rule per node ([`light_sum_local`]'s).
 pub fn prepare_local(
@@ -794,7 +794,7 @@ pub(crate) fn kernel_of(kernel: LightKernel, r: DVec3) -> (f64, impl Fn(DVec3) -
 
 /// ∫_t K dω over light texel `t` (radiance not applied) for a kernel `kern` of scale `scale`
 /// about `r`: by its centre where [`PER_WIDTH`]·ρ < [`CENTRE_BELOW`]·w (w the scale, or
-/// [`TAIL_FRACTION`] of the chord to `r` in the tail), else by its nodes ([`local_nodes`]).
+/// [`TAIL_FRACTION`] of the chord to `r` in the tail), else by its nodes (`local_nodes`).
 pub fn texel_integral(t: &PreparedLight, scale: f64, r: DVec3, kern: impl Fn(DVec3) -> f64) -> f64 {
     let width = scale_at(scale, (r - t.dir).length());
     if centre_only(t, width) {
@@ -849,7 +849,7 @@ pub fn light_sum_brdf(
 }
 
 /// The GPU's list: per light texel (centre, Ω), (excess, ρ), then its nodes (direction,
-/// weight), [`crate::abi::lights::HEADER_VEC4S`] + `nodes` vec4s each.
+/// weight), `crate::abi::lights::HEADER_VEC4S` + `nodes` vec4s each.
 pub fn gpu_list(lights: &[PreparedLight]) -> Vec<[f32; 4]> {
     let mut v = Vec::new();
     for t in lights {

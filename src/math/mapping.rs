@@ -367,7 +367,7 @@ impl Mapping {
     /// Lat-long and cube texels have closed forms; for angular and paraboloid texels the part
     /// inside the unit disc is integrated with the divergence theorem, which is exact for the
     /// paraboloid and leaves a smooth 1D integral (Gauss–Legendre,
-    /// [`super::quadrature::integrate_smooth`]) for the angular map.
+    /// `math::quadrature::integrate_smooth`) for the angular map.
     pub fn texel_solid_angle(self, w: u32, h: u32, i: u32, j: u32) -> f64 {
         let (wf, hf) = (w as f64, h as f64);
         match self {

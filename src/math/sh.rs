@@ -183,7 +183,7 @@ pub struct PackEntry {
 }
 
 /// The entries of an irradiance set to band `order` (Â_l folded in, as
-/// [`irradiance_coeffs`]), of the radiance less the second set where `residual` (an
+/// `irradiance_coeffs`), of the radiance less the second set where `residual` (an
 /// extraction's light texels: the residual's irradiance).
 pub fn irradiance_entries(order: u32, residual: bool) -> Vec<PackEntry> {
     (0..=order)

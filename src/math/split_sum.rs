@@ -319,7 +319,7 @@ pub fn shade(
     p.map(|x| x * (ab[0] + ab[1]))
 }
 
-/// The α a lobe tap reads the chain at: [`crate::abi::split_sum::TAP_SCALE`]·√(Ωs/4π), Ωs =
+/// The α a lobe tap reads the chain at: `crate::abi::split_sum::TAP_SCALE`·√(Ωs/4π), Ωs =
 /// 1/(taps·pdf) the tap's share of the lobe, at most 1.
 pub fn tap_alpha(taps: u32, pdf: f64) -> f64 {
     let omega = 1.0 / (taps as f64 * pdf);

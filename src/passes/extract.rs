@@ -1,5 +1,5 @@
 //! Light extraction on the GPU (`glsl/extract.comp`, float64 twin
-//! [`crate::math::lights::extract`]): the light texels of a map that lives on the GPU — an
+//! `crate::math::lights::extract`): the light texels of a map that lives on the GPU — an
 //! engine's own image that changes every frame — found, capped and compacted into a bounded
 //! record buffer with an indirect-dispatch count, and the residual map written beside them,
 //! with nothing read back and nothing waited for.

@@ -234,7 +234,7 @@ impl GpuLights {
     }
 
     /// [`GpuLights::of_extractions`] of light texel lists (the extractions' `lights`), each
-    /// texel with its coarser quadratures ([`crate::math::lights::prepare_local`]): the
+    /// texel with its coarser quadratures (`crate::math::lights::prepare_local`): the
     /// lights pass then gives each texel only as many nodes as the kernel's scale at it asks.
     pub fn of_lights(
         ctx: &Context,

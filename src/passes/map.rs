@@ -362,7 +362,7 @@ impl Sanitizer {
 /// A map clamped in place at a luminance (glsl/clamp.comp): every texel of the mapping's
 /// domain whose luminance Y exceeds τ keeps L·τ/Y, so that a bake makes the clamp rule's
 /// residual of a light extraction from the source it already uploaded (float64-rule twin:
-/// [`crate::math::lights::clamp_residual`]).
+/// `crate::math::lights::clamp_residual`).
 pub struct LuminanceClamp {
     pipeline: crate::gpu::Pipeline,
 }

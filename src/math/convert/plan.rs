@@ -108,7 +108,7 @@ fn texel_entries(
 /// oriented by `world_to_file`, with `edge_points` points per paraboloid texel edge (see
 /// [`super::latlong_area_points`], which it reproduces to float32 weights), on every core.
 /// Panics where [`super::area_serves`] refuses the conversion, or the source is wider or
-/// taller than 2^[`area::PLAN_ROW_SHIFT`] texels.
+/// taller than 2^`area::PLAN_ROW_SHIFT` texels.
 pub fn area_plan(
     (width, height): (u32, u32),
     to: Mapping,

@@ -11,7 +11,7 @@ use crate::math::mapping::Mapping;
 use crate::EnvMap;
 
 /// The side, in texels, of the blocks whose light one record gathers on `map`, for records
-/// no finer than a lat-long map `width` columns wide ([`RECORD_WIDTH`] in bakes): the
+/// no finer than a lat-long map `width` columns wide (`RECORD_WIDTH` in bakes): the
 /// largest k dividing both sides of `map` that leaves the grid of blocks at least `width`
 /// columns wide (lat-long) or a quarter of that a face (cube); 1 on smaller maps, on sizes
 /// with no such divisor, and on the mappings whose rims read other texels (angular,

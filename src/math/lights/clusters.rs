@@ -104,7 +104,7 @@ pub fn light_sh_of(
     c
 }
 
-/// The GPU's list of clusters: [`crate::abi::lights::CLUSTER_VEC4S`] vec4s each, (V, 0) per
+/// The GPU's list of clusters: `crate::abi::lights::CLUSTER_VEC4S` vec4s each, (V, 0) per
 /// channel.
 pub fn cluster_list(clusters: &[Cluster]) -> Vec<[f32; 4]> {
     clusters

@@ -1,7 +1,7 @@
 //! Poisoned passes (feature `test-hooks`): a test asks a context's passes to corrupt what one
 //! of them writes — one NaN, every value scaled, or the output mirrored — and shows that its
 //! comparisons catch each corruption (`tests/mutation.rs`). A pass calls [`image`] or
-//! [`buffer`] right after recording its output; with no poison set on the context, and always
+//! `buffer` right after recording its output; with no poison set on the context, and always
 //! without the feature, they record nothing.
 
 use crate::error::Result;
