@@ -221,7 +221,11 @@ fn run(task: &str, rest: &[String]) -> Result<(), String> {
                 "--",
                 "-D",
                 "warnings",
-            ])
+            ])?;
+            // The library's docs with every module public (`reference`): no broken or
+            // private intra-doc link.
+            std::env::set_var("RUSTDOCFLAGS", "-D warnings");
+            cargo(&["doc", "--no-deps", "-p", "envlight", "--all-features"])
         }
         _ => Err(format!(
             "unknown task '{task}'; tasks: setup, test, demo, bench, shaders, gen-assets, lint"
