@@ -19,7 +19,7 @@ fn quick_report_writes_its_three_files() {
     }
     let o = cmd
         .args(["--validation", "--device", "cpu", "report", "--quick"])
-        .args(["--size", "12", "--reference", "64", "--probes"])
+        .args(["--size", "12", "--probes"])
         .arg(&dir)
         .arg("--out")
         .arg(&out)
@@ -61,7 +61,7 @@ fn quick_report_writes_its_three_files() {
         }
     }
     // Monte Carlo at 4x the samples halves its noise: at 256 it must beat 64 on each probe
-    // and material (the reference's own noise, at 2 × 64 spp, is below either's).
+    // and material (against the exact reference, which has none).
     for probe in ["venice_sunset_1k", "spiaggia_di_mondello_1k"] {
         for material in ["diffuse", "ggx 0.3"] {
             let mc = |n: &str| {
@@ -129,9 +129,16 @@ fn quick_report_writes_its_three_files() {
         md.contains("## Headline")
             && md.contains("llvmpipe")
             && md.contains("**The environment changes every frame**")
-            && md.contains("**One environment, many frames**"),
+            && md.contains("**One environment, many frames**")
+            && md.contains("reference the exact sum over the map's texels")
+            && md.contains("Reference: exact texel sums, no sampling noise")
+            && !md.contains("Reference noise"),
         "{md}"
     );
+    let noise = col("reference_noise");
+    assert!(rows
+        .iter()
+        .all(|r| r[noise] == "0" || r[noise].parse::<f64>() == Ok(0.0)));
     let png = image::open(out.join("report.png")).unwrap();
     assert_eq!((png.width(), png.height()), (2 * 620, 520 + 90));
     let _ = std::fs::remove_dir_all(&out);

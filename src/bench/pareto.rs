@@ -183,12 +183,19 @@ pub fn markdown(rows: &[Row], settings: &str) -> String {
             .filter(|r| &r.material == m)
             .map(|r| r.noise)
             .fold(0.0, f64::max);
-        let _ = writeln!(
-            md,
-            "\nReference noise (worst probe): {:.3}% relative RMS; errors near it are at the \
-             reference's floor.",
-            100.0 * noise
-        );
+        let _ = match noise > 0.0 {
+            true => writeln!(
+                md,
+                "\nReference noise (worst probe): {:.3}% relative RMS; errors near it are at \
+                 the reference's floor.",
+                100.0 * noise
+            ),
+            false => writeln!(
+                md,
+                "\nReference: exact texel sums, no sampling noise (its own error below \
+                 1e-4 of a pixel)."
+            ),
+        };
     }
     md.push_str("\n## Per probe\n\n| probe | kind | material | technique | rel. RMS | bias | worst tile | GPU ms | render wall s | whole process s |\n|---|---|---|---|---|---|---|---|---|---|\n");
     for r in rows {

@@ -1,13 +1,15 @@
-//! How a technique is scored against converged Monte Carlo (`envlight report`, the
-//! benchmarks): the sphere scene rendered, the pixels scored, the errors reported, and the
-//! two-seed Monte Carlo reference with its own noise.
+//! How a technique is scored (`envlight report`, the benchmarks): the sphere scene rendered,
+//! the pixels scored, the errors reported, and the references: the exact texel sums (no
+//! noise) or the two-seed Monte Carlo reference with its own noise.
 
 use crate::error::Result;
 use crate::math::brdf::Brdf;
 use crate::math::camera::{trace, Camera, Shape};
+use crate::math::exact::{ExactFilter, Query};
 use crate::render::Renderer;
 use crate::scene::{Material, Scene, SceneObject, SplitSumSettings, Technique};
 use crate::EnvMap;
+use glam::DMat3;
 
 /// The report's scene: `brdf` on a unit sphere at the origin under technique `t`, seen by
 /// `cam`, with the FIS paraboloid size `dp`, the MC seed and split-sum settings given.
@@ -103,6 +105,40 @@ pub fn truth(
     let (r1, r2) = (mc(1)?, mc(2)?);
     let noise = errors(&r1.frame, &r2.frame, &sphere_pixels(&cam)).0 / 2.0;
     Ok((average(&r1.frame, &r2.frame), noise))
+}
+
+/// The reference frame of `brdf` on the sphere with no noise: each pixel that sees it away
+/// from its silhouette ([`sphere_pixels`], the ones scored) shaded by the exact sum over
+/// `env`'s texels (`math::exact::ExactFilter::shade`, float64: every texel's ∫ f·cos, nothing
+/// sampled; the sphere alone shadows nothing), the others black. `world_to_file` turns world
+/// directions into the map's (the scene's orientation). Its own error is the texel rule's,
+/// below 1e-4 of a pixel (its tests); on the host, all pixels in one pass over the map.
+pub fn exact_truth(cam: &Camera, brdf: Brdf, env: &EnvMap, world_to_file: DMat3) -> EnvMap {
+    let sphere = [Shape::Sphere {
+        center: [0.0; 3],
+        radius: 1.0,
+    }];
+    let mut at = Vec::new();
+    let mut queries = Vec::new();
+    for j in 0..cam.height {
+        for i in 0..cam.width {
+            let (o, d) = cam.ray(i, j);
+            if let Some(h) = trace(&sphere, o, d).filter(|h| h.margin >= 1e-3) {
+                at.push((j * cam.width + i) as usize);
+                queries.push(Query::Shade {
+                    brdf,
+                    n: h.normal,
+                    v: -d,
+                });
+            }
+        }
+    }
+    let values = ExactFilter::new(env, world_to_file.transpose()).evaluate(&queries);
+    let mut texels = vec![[0.0f32; 3]; (cam.width * cam.height) as usize];
+    for (k, v) in at.into_iter().zip(values) {
+        texels[k] = v.map(|x| x as f32);
+    }
+    EnvMap::new(crate::Mapping::LatLong, cam.width, cam.height, texels)
 }
 
 /// The texel-wise mean of two frames of one size.

@@ -1,5 +1,5 @@
-//! `envlight report`: every technique on real probes and several materials, scored against a
-//! converged Monte Carlo reference, with its GPU time (`envlight::bench::report`): report.md
+//! `envlight report`: every technique on real probes and several materials, scored against the
+//! exact texel sums (`--reference N`: two Monte Carlo renders), with its GPU time (`envlight::bench::report`): report.md
 //! (tables, the Pareto front per material and a headline), report.csv (one row per technique
 //! × parameters × probe × material) and report.png (error against time, one panel per
 //! material); or prefiltered cubes a user has, scored (`envlight::bench::cubes`).
@@ -20,7 +20,7 @@ mod plot;
 
 use plot::plot;
 
-/// Every technique against converged Monte Carlo on real probes: error and GPU time, with a
+/// Every technique against a noise-free reference on real probes: error and GPU time, with a
 /// Pareto chart (report.md, report.csv, report.png)
 #[derive(Args)]
 pub struct ReportArgs {
@@ -37,8 +37,9 @@ pub struct ReportArgs {
     /// Side of the sphere image (default 64, quick 24)
     #[arg(long)]
     size: Option<u32>,
-    /// Samples per pixel of each of the two Monte Carlo reference renders (default 16384,
-    /// quick 1024)
+    /// Score against two Monte Carlo renders of this many samples per pixel each instead of
+    /// the exact texel sums (the reference by default: no noise); also the --cube scores'
+    /// reference (default 16384, quick 1024)
     #[arg(long)]
     reference: Option<u32>,
     /// Instead: score these prefiltered cubes (KTX2 or DDS) as split-sum shading against
@@ -163,6 +164,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     let mut o = ReportOptions::new(args.quick);
     o.size = args.size.unwrap_or(o.size);
     o.reference = args.reference.unwrap_or(o.reference);
+    o.exact = args.reference.is_none();
     o.split = args.split();
     let ctx = context(g)?;
     let device = format!("{} ({})", ctx.info().name, ctx.info().driver.trim());
@@ -209,13 +211,21 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
     let path = out.join("report.csv");
     std::fs::write(&path, csv(&rows)).with_context(|| path.display().to_string())?;
+    let reference = match o.exact {
+        true => "the exact sum over the map's texels at each pixel (`ExactFilter::shade`, \
+                 float64 on the host: no sampling noise; its own error below 1e-4 of a pixel)"
+            .to_string(),
+        false => format!(
+            "2 × {} spp MIS Monte Carlo (their mean; its noise is half their relative RMS \
+             difference)",
+            o.reference
+        ),
+    };
     let settings = format!(
         "Device: {device}. Sphere {}² (orthographic, normal to grazing incidence), \
-         reference 2 × {} spp MIS Monte Carlo (their mean; its noise is half their \
-         relative RMS difference). FIS paraboloid {}; split-sum {:?}; sh_brdf grid 32, no \
+         reference {reference}. FIS paraboloid {}; split-sum {:?}; sh_brdf grid 32, no \
          window; commit {}. Run took {:.0} s{}.",
         o.size,
-        o.reference,
         o.paraboloid()
             .map(|d| format!("{d}²"))
             .unwrap_or_else(|| "sized by the source (1024² for a 1k lat-long)".into()),
