@@ -131,7 +131,7 @@ fn quick_report_writes_its_three_files() {
             && md.contains("**The environment changes every frame**")
             && md.contains("**One environment, many frames**")
             && md.contains("reference the exact sum over the map's texels")
-            && md.contains("Reference: exact texel sums, no sampling noise")
+            && md.contains("Reference: no sampling noise (exact texel sums")
             && !md.contains("Reference noise"),
         "{md}"
     );

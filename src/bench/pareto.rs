@@ -192,8 +192,8 @@ pub fn markdown(rows: &[Row], settings: &str) -> String {
             ),
             false => writeln!(
                 md,
-                "\nReference: exact texel sums, no sampling noise (its own error below \
-                 1e-4 of a pixel)."
+                "\nReference: no sampling noise (exact texel sums, their own error below \
+                 1e-4 of a pixel; a mirror, the GPU's texel reads)."
             ),
         };
     }

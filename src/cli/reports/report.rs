@@ -213,7 +213,8 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     std::fs::write(&path, csv(&rows)).with_context(|| path.display().to_string())?;
     let reference = match o.exact {
         true => "the exact sum over the map's texels at each pixel (`ExactFilter::shade`, \
-                 float64 on the host: no sampling noise; its own error below 1e-4 of a pixel)"
+                 float64 on the host: no sampling noise; its own error below 1e-4 of a pixel; \
+                 the mirror against the GPU's own texel reads)"
             .to_string(),
         false => format!(
             "2 × {} spp MIS Monte Carlo (their mean; its noise is half their relative RMS \
