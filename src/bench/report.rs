@@ -404,8 +404,8 @@ pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Resul
         for (name, brdf) in materials(quick) {
             // The mirror keeps the GPU's own reads: a lookup of a map with a sun is a point
             // sample of a step, where float32 and float64 directions pick different texels
-            // at the sun's edge (the full set's lookup erred 880% against the float64 texels,
-            // all of it in the few pixels at the sun's rim); its Monte Carlo has no noise.
+            // for the few pixels at the sun's rim, each worth the sun; its Monte Carlo reads
+            // the one texel, with no noise.
             let exact = o.exact && !matches!(brdf, Brdf::Mirror);
             let (truth, noise) = match exact {
                 // The report's scenes take the map as loaded (the default orientation).

@@ -586,17 +586,7 @@ mod tests {
     /// doubling the cells per lobe scale moves the shade by < 1e-4, at a grazing view too.
     #[test]
     fn shade_converges_in_its_cells() {
-        let turn = DMat3::from_rotation_z(0.7);
-        let sun_file = DVec3::new(0.3, 0.5, 0.8).normalize();
-        let sun = turn * sun_file;
-        let env = EnvMap::from_fn(Mapping::LatLong, 128, 64, 1, |d| {
-            let v = if d.dot(sun_file) > 0.9995 {
-                1e5
-            } else {
-                1.0 + d.y.max(0.0)
-            };
-            [v; 3]
-        });
+        let (env, turn, sun) = turned_sun_sky();
         let f = ExactFilter::new(&env, turn);
         let n = (sun + DVec3::Y).normalize();
         let frame = Frame::new(n);
@@ -660,14 +650,11 @@ mod tests {
         }
     }
 
-    /// A sun 10⁵ × the sky, a few texels wide, under a lobe narrower than a texel, one a few
-    /// texels wide, and one whose tail alone sees it: doubling the cells per lobe scale moves
-    /// the result by < 1e-4. The map is turned, so sub-cells are found in the file frame.
-    #[test]
-    fn exact_ggx_converges_in_its_cells() {
+    /// A 128 × 64 sky with a sun 10⁵ × it a few texels wide, its file turned about z: the
+    /// map, its file-to-world turn and the sun's world direction.
+    fn turned_sun_sky() -> (EnvMap, DMat3, DVec3) {
         let turn = DMat3::from_rotation_z(0.7);
         let sun_file = DVec3::new(0.3, 0.5, 0.8).normalize();
-        let sun = turn * sun_file;
         let env = EnvMap::from_fn(Mapping::LatLong, 128, 64, 1, |d| {
             let v = if d.dot(sun_file) > 0.9995 {
                 1e5
@@ -676,6 +663,15 @@ mod tests {
             };
             [v; 3]
         });
+        (env, turn, turn * sun_file)
+    }
+
+    /// A sun 10⁵ × the sky, a few texels wide, under a lobe narrower than a texel, one a few
+    /// texels wide, and one whose tail alone sees it: doubling the cells per lobe scale moves
+    /// the result by < 1e-4. The map is turned, so sub-cells are found in the file frame.
+    #[test]
+    fn exact_ggx_converges_in_its_cells() {
+        let (env, turn, sun) = turned_sun_sky();
         let f = ExactFilter::new(&env, turn);
         assert!(f.brightest().dot(sun) > 0.999);
         for alpha in [0.005, 0.02, 0.1] {
