@@ -19,7 +19,9 @@ fn quick_report_writes_its_three_files() {
     }
     let o = cmd
         .args(["--validation", "--device", "cpu", "report", "--quick"])
-        .args(["--size", "12", "--probes"])
+        // The GPU's exact sums (lavapipe's default is the float64 twin on the host), each
+        // material's checked against that twin at a dozen pixels.
+        .args(["--exact-on", "gpu", "--size", "12", "--probes"])
         .arg(&dir)
         .arg("--out")
         .arg(&out)
@@ -131,7 +133,7 @@ fn quick_report_writes_its_three_files() {
             && md.contains("**The environment changes every frame**")
             && md.contains("**One environment, many frames**")
             && md.contains("reference the exact sum over the map's texels")
-            && md.contains("Reference: no sampling noise (exact texel sums")
+            && md.contains("Reference: no sampling noise (exact texel sums on the GPU; against their float64 twin")
             && !md.contains("Reference noise"),
         "{md}"
     );
@@ -139,6 +141,19 @@ fn quick_report_writes_its_three_files() {
     assert!(rows
         .iter()
         .all(|r| r[noise] == "0" || r[noise].parse::<f64>() == Ok(0.0)));
+    // Every row against the GPU's sums, within 1e-4 of the float64 twin where checked (the
+    // issue's bound), and checked: a twin error of exactly 0 everywhere would mean no check.
+    let (reference, twin) = (col("reference"), col("reference_twin_error"));
+    assert!(rows.iter().all(|r| r[reference] == "exact (gpu)"), "{csv}");
+    let twins: Vec<f64> = rows
+        .iter()
+        .map(|r| r[twin].parse::<f64>().unwrap())
+        .collect();
+    assert!(
+        twins.iter().all(|e| e.is_finite() && *e <= 1e-4),
+        "{twins:?}"
+    );
+    assert!(twins.iter().any(|e| *e > 0.0), "{twins:?}");
     let png = image::open(out.join("report.png")).unwrap();
     assert_eq!((png.width(), png.height()), (2 * 620, 520 + 90));
     let _ = std::fs::remove_dir_all(&out);

@@ -1,4 +1,4 @@
-//! The mutation matrix: each of the thirteen passes corrupts its own output three ways — one
+//! The mutation matrix: each of the fifteen passes corrupts its own output three ways — one
 //! NaN, every value scaled by 1 + 10 × its twin test's bound, the output mirrored
 //! (`passes::testing::poison`, feature `test-hooks`) — and its twin test's comparisons, the
 //! ones `tests/<pass>.rs` runs, must fail on every one. A comparison that a NaN or a mirrored
@@ -10,6 +10,8 @@ mod common;
 mod brute;
 #[path = "twins/convert.rs"]
 mod convert;
+#[path = "twins/exact.rs"]
+mod exact;
 #[path = "twins/extract.rs"]
 mod extract;
 #[path = "twins/gbuffer.rs"]
@@ -44,11 +46,12 @@ use std::sync::{Arc, Mutex};
 type Row = (PassId, fn(&Context), f64);
 
 /// Each pass with its twin test and that test's bound.
-fn rows() -> [Row; 15] {
+fn rows() -> [Row; 16] {
     [
         (PassId::Brute, brute::check, brute::BOUND),
         (PassId::Convert, convert::check, convert::BOUND),
         (PassId::Convert, convert::check_split, convert::BOUND),
+        (PassId::Exact, exact::check, exact::BOUND),
         (PassId::Extract, extract::check, extract::BOUND),
         (PassId::GBuffer, gbuffer::check, gbuffer::BOUND),
         (PassId::Lights, lights::check, lights::BOUND),

@@ -17,6 +17,10 @@
 #define BINDING_SANITIZE_COUNT 2
 #define BINDING_CLAMP_MAP 0
 #define BINDING_BUSY_OUT 0
+#define BINDING_EXACT_MAP 0
+#define BINDING_EXACT_OMEGA 1
+#define BINDING_EXACT_QUERIES 2
+#define BINDING_EXACT_PARTIALS 3
 #define BINDING_POISON_IMAGE 0
 #define BINDING_POISON_BUFFER 0
 #define BINDING_SH_SRC 0
@@ -106,6 +110,7 @@
 #define SH_MAX_LMAX 8
 #define SH_MAX_COEFFS 81
 #define SH_WORKGROUP 64
+#define EXACT_WORKGROUP 64u
 #define BRUTE_TILE 16u
 #define LIGHT_HEADER_VEC4S 2u
 #define LIGHT_STEP_NODES 4u
@@ -264,6 +269,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_ShEvalPush layout(push_constant) uniform Push { uvec2 dst_size; uint dst_mapping; uint lmax; } pc;
 #define PUSH_GBufferPush layout(push_constant) uniform Push { vec4 eye; vec4 forward; vec4 right; vec4 up; uvec2 size; uint ortho; uint count; } pc;
 #define PUSH_ShadePush layout(push_constant) uniform Push { vec4[3] world_to_file; uvec2 env_size; uint env_mapping; uint count; uint dp_size; float max_lod; uint shadows; uint mc_samples; uint sh_rotation; uint lights; uint light_stride; uint footprint; uint clusters; uint cluster_at; uint tree_nodes; uint tree_at; } pc;
+#define PUSH_ExactShadePush layout(push_constant) uniform Push { uvec2 size; uint mapping; uint texels; uint run; uint groups; uint first; uint brdf; float p0; float p1; float per_width; uint count; } pc;
 #define PUSH_ShBrdfPush layout(push_constant) uniform Push { uint grid; float p0; float p1; uint offset; uint panel; uint[3] pad; } pc;
 #define PUSH_DfgPush layout(push_constant) uniform Push { uint size; uint correlated; uint offset; uint panel; uint centres; } pc;
 #define PUSH_PrefilterGgxPush layout(push_constant) uniform Push { uint size; uint src_size; float src_max_lod; float alpha; uint samples; float bias; uint dst_mapping; uint layer; } pc;

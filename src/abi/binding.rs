@@ -46,6 +46,15 @@ bindings! {
     CLAMP_MAP = 0;
     /// busy: the buffer the costly loop writes to.
     BUSY_OUT = 0;
+    /// exact_shade: the map (sampler2DArray, read with texelFetch).
+    EXACT_MAP = 0;
+    /// exact_shade: each texel's solid angle, a lat-long's one a row (float storage buffer).
+    EXACT_OMEGA = 1;
+    /// exact_shade: per query its lobe, [`crate::passes::exact::QUERY_VEC4S`] vec4 (storage
+    /// buffer).
+    EXACT_QUERIES = 2;
+    /// exact_shade: per query and workgroup its partial sum, vec4 (rgb used; storage buffer).
+    EXACT_PARTIALS = 3;
     /// poison_image: the level a pass wrote, corrupted in place (rgba32f image2DArray).
     POISON_IMAGE = 0;
     /// poison_buffer: the floats a pass wrote, corrupted in place (float storage buffer).

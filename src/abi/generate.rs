@@ -33,6 +33,7 @@ fn define_sizes_and_lights(s: &mut String) {
     let n = (SH_MAX_LMAX + 1) * (SH_MAX_LMAX + 1);
     let _ = writeln!(s, "#define SH_MAX_COEFFS {n}");
     let _ = writeln!(s, "#define SH_WORKGROUP {SH_WORKGROUP}");
+    let _ = writeln!(s, "#define EXACT_WORKGROUP {EXACT_WORKGROUP}u");
     let _ = writeln!(s, "#define BRUTE_TILE {BRUTE_TILE}u");
     let _ = writeln!(s, "#define LIGHT_HEADER_VEC4S {}u", lights::HEADER_VEC4S);
     let _ = writeln!(s, "#define LIGHT_STEP_NODES {}u", lights::STEP_NODES);

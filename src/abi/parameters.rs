@@ -490,6 +490,10 @@ pub const SH_WORKGROUP: u32 = 64;
 /// f32 sum SH_RUN long. Disc mappings take one (their rim rule is long; see sh_project.comp).
 pub const SH_RUN: u32 = 16;
 
+/// Workgroup size of the exact reference pass (`glsl/exact_shade.comp`, specialization
+/// constant 0): its shared-memory tree adds this many lanes' sums.
+pub const EXACT_WORKGROUP: u32 = 64;
+
 /// Workgroup size of 2D compute passes (specialization constants 0 and 1).
 pub const WORKGROUP_2D: [u32; 2] = [8, 8];
 /// Workgroup size of 1D compute passes (specialization constant 0).

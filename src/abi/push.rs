@@ -281,6 +281,31 @@ push_blocks! {
         /// Where they start in the lights buffer, in vec4s.
         tree_at: u32 = "uint",
     }
+    /// `glsl/exact_shade.comp`.
+    ExactShadePush {
+        /// Layer size.
+        size: [u32; 2] = "uvec2",
+        /// Mapping id.
+        mapping: u32 = "uint",
+        /// Texels in all layers.
+        texels: u32 = "uint",
+        /// Texels an invocation sums.
+        run: u32 = "uint",
+        /// Workgroups a query takes (its partial sums).
+        groups: u32 = "uint",
+        /// The dispatch's first query.
+        first: u32 = "uint",
+        /// The BRDF's id.
+        brdf: u32 = "uint",
+        /// The BRDF's first parameter.
+        p0: f32 = "float",
+        /// Its second.
+        p1: f32 = "float",
+        /// Gauss cells per lobe scale (`math::exact::PER_WIDTH`).
+        per_width: f32 = "float",
+        /// Queries in all (the last workgroup's lanes past it write nothing).
+        count: u32 = "uint",
+    }
     /// `glsl/sh_brdf.comp`.
     ShBrdfPush {
         /// Views per side of the grid.

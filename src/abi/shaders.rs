@@ -144,6 +144,11 @@ macro_rules! shader_table {
             /// A plain texel copy (the benchmark floor).
             Copy = "copy", "copy.comp", Compute, [], CopyPush,
                 [(COPY_SRC, Sampled, Read), (COPY_DST, StorageImage, Write)];
+            /// The exact reference: the radiance a BRDF reflects at each query, summed over
+            /// every texel (twin: `ExactFilter::shade`), a partial sum per workgroup.
+            ExactShade = "exact_shade", "exact_shade.comp", Compute, [], ExactShadePush,
+                [(EXACT_MAP, Sampled, Read), (EXACT_OMEGA, StorageBuffer, Read),
+                 (EXACT_QUERIES, StorageBuffer, Read), (EXACT_PARTIALS, StorageBuffer, Write)];
             /// A deliberately costly dispatch (timestamp test).
             Busy = "busy", "busy.comp", Compute, [], BusyPush,
                 [(BUSY_OUT, StorageBuffer, Write)];

@@ -109,6 +109,32 @@ pub fn material_names(rows: &[Row]) -> Vec<String> {
     v
 }
 
+/// What `material`'s rows were scored against, in a sentence.
+fn reference_note(rows: &[Row], material: &str) -> String {
+    let of: Vec<&Row> = rows.iter().filter(|r| r.material == material).collect();
+    let worst = |f: fn(&Row) -> f64| of.iter().map(|r| f(r)).fold(0.0, f64::max);
+    let kind = of.first().map_or("", |r| r.reference);
+    match kind {
+        "exact (gpu)" => format!(
+            "Reference: no sampling noise (exact texel sums on the GPU; against their float64 \
+             twin at {} pixels a probe, worst {:.1e} relative).",
+            super::report::TWIN_PIXELS,
+            worst(|r| r.twin)
+        ),
+        "exact (host float64)" => "Reference: no sampling noise (exact texel sums in float64 \
+             on the host; their own error, the texel rule's, below 1e-4 of a pixel)."
+            .to_string(),
+        "texel reads" => "Reference: no sampling noise (a mirror: the GPU's own texel reads, \
+             exact for a lookup)."
+            .to_string(),
+        _ => format!(
+            "Reference noise (worst probe): {:.3}% relative RMS; errors near it are at the \
+             reference's floor.",
+            100.0 * worst(|r| r.noise)
+        ),
+    }
+}
+
 /// report.md: the headline, a table and a front per material, under `settings`.
 pub fn markdown(rows: &[Row], settings: &str) -> String {
     let mut md = String::from("# envlight report: accuracy against time\n\n");
@@ -178,24 +204,7 @@ pub fn markdown(rows: &[Row], settings: &str) -> String {
                 if f.contains(&i) { "yes" } else { "" }
             );
         }
-        let noise = rows
-            .iter()
-            .filter(|r| &r.material == m)
-            .map(|r| r.noise)
-            .fold(0.0, f64::max);
-        let _ = match noise > 0.0 {
-            true => writeln!(
-                md,
-                "\nReference noise (worst probe): {:.3}% relative RMS; errors near it are at \
-                 the reference's floor.",
-                100.0 * noise
-            ),
-            false => writeln!(
-                md,
-                "\nReference: no sampling noise (exact texel sums, their own error below \
-                 1e-4 of a pixel; a mirror, the GPU's texel reads)."
-            ),
-        };
+        let _ = writeln!(md, "\n{}", reference_note(rows, m));
     }
     md.push_str("\n## Per probe\n\n| probe | kind | material | technique | rel. RMS | bias | worst tile | GPU ms | render wall s | whole process s |\n|---|---|---|---|---|---|---|---|---|---|\n");
     for r in rows {

@@ -9,14 +9,57 @@ use crate::error::Result;
 use crate::gpu::Context;
 use crate::math::brdf::Brdf;
 use crate::math::camera::{sphere_camera, Camera};
+use crate::passes::ExactShader;
 use crate::passes::GpuEnvMap;
-use crate::render::score::{errors, exact_truth, scene, sphere_pixels, truth};
+use crate::render::score::{errors, exact_truth, exact_truth_gpu, scene, sphere_pixels, truth};
 use crate::render::{PassKind, Renderer};
 use crate::scene::{LightsMode, Scene, SplitSumSettings, Technique};
 use crate::EnvMap;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
+
+/// Pixels of each exact reference frame (a probe and a material) taken again by the float64
+/// twin, spread over the sphere.
+pub const TWIN_PIXELS: usize = 12;
+
+/// Which reference a material's rows are scored against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reference {
+    /// The exact texel sums on the GPU (`passes::ExactShader`), a few pixels checked
+    /// against the float64 twin.
+    ExactGpu,
+    /// The exact texel sums in float64 on the host (`ExactFilter::shade`, the twin itself).
+    ExactHost,
+    /// Two Monte Carlo renders (their mean; half their difference its noise).
+    MonteCarlo,
+    /// A mirror's own texel reads (Monte Carlo of a delta BRDF: one texel, no noise).
+    TexelReads,
+}
+
+impl Reference {
+    /// Its name in report.csv.
+    pub fn name(self) -> &'static str {
+        match self {
+            Reference::ExactGpu => "exact (gpu)",
+            Reference::ExactHost => "exact (host float64)",
+            Reference::MonteCarlo => "monte carlo",
+            Reference::TexelReads => "texel reads",
+        }
+    }
+}
+
+/// Where the exact reference's sums run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExactOn {
+    /// On the GPU, unless the device is the CPU (lavapipe), where the float64 twin on the
+    /// same cores is the faster (a 16² GGX 0.3 sphere of a 1k map: 3.1 s against 0.74 s).
+    Auto,
+    /// On the GPU.
+    Gpu,
+    /// On the host.
+    Host,
+}
 
 /// What a report measures.
 #[derive(Clone, Copy, Debug)]
@@ -35,6 +78,8 @@ pub struct ReportOptions {
     pub exact: bool,
     /// Split-sum's chain.
     pub split: SplitSumSettings,
+    /// Where the exact reference is summed.
+    pub exact_on: ExactOn,
 }
 
 impl ReportOptions {
@@ -47,6 +92,16 @@ impl ReportOptions {
             reference: if quick { 1024 } else { 16384 },
             exact: true,
             split: SplitSumSettings::default(),
+            exact_on: ExactOn::Auto,
+        }
+    }
+
+    /// Whether the exact reference is summed on `ctx`'s GPU ([`ExactOn`]).
+    pub fn exact_on_gpu(&self, ctx: &Context) -> bool {
+        match self.exact_on {
+            ExactOn::Gpu => true,
+            ExactOn::Host => false,
+            ExactOn::Auto => ctx.info().device_type != ash::vk::PhysicalDeviceType::CPU,
         }
     }
 
@@ -96,8 +151,14 @@ pub struct Row {
     pub wall_s: f64,
     /// Wall seconds of `envlight render` as its own process.
     pub process_s: f64,
-    /// The reference's own noise (half its two renders' relative RMS difference).
+    /// The reference's own noise (half its two renders' relative RMS difference; 0 for the
+    /// exact sums).
     pub noise: f64,
+    /// The exact reference's worst relative error against its float64 twin at the pixels
+    /// checked ([`TWIN_PIXELS`] a probe and material) where the GPU summed it; 0 otherwise.
+    pub twin: f64,
+    /// What the reference is: [`Reference::name`].
+    pub reference: &'static str,
     /// GPU ms of a frame when the environment changes every frame: the resident path's
     /// whole frame (projection, extraction, chains, shading); Monte Carlo's host render
     /// (its sampling tables, rebuilt on the host at each change, not counted); a peer's
@@ -248,7 +309,9 @@ struct Against<'a> {
     absolute: &'a Path,
     env: &'a EnvMap,
     gpu: &'a GpuEnvMap,
-    truth: (&'a EnvMap, f64),
+    /// The reference: its frame, its noise and its error against its float64 twin.
+    truth: (&'a EnvMap, f64, f64),
+    reference: Reference,
     pixels: &'a [(usize, u32)],
 }
 
@@ -298,6 +361,8 @@ fn measure(a: &Against<'_>, sc: &Scene, t: Technique, params: String) -> Result<
         wall_s,
         process_s,
         noise: a.truth.1,
+        twin: a.truth.2,
+        reference: a.reference.name(),
         frame_ms,
         frame_rms,
     };
@@ -341,8 +406,7 @@ fn peer_rows(
     (file, kind, material): (&str, &'static str, &str),
     brdf: Brdf,
     cam: &Camera,
-    truth: &EnvMap,
-    noise: f64,
+    (truth, noise, twin, reference): (&EnvMap, f64, f64, Reference),
     shading: f64,
 ) -> Vec<Row> {
     let Brdf::Ggx { alpha, .. } = brdf else {
@@ -369,6 +433,8 @@ fn peer_rows(
                 wall_s: p.seconds,
                 process_s: p.seconds,
                 noise,
+                twin,
+                reference: reference.name(),
                 frame_ms: 1e3 * p.seconds + shading,
                 frame_rms: rms,
             }
@@ -381,6 +447,8 @@ fn peer_rows(
 /// material.
 pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Result<Vec<Row>> {
     let renderer = Renderer::new(ctx);
+    let exact_pass = ExactShader::new(ctx)?;
+    let on_gpu = o.exact_on_gpu(ctx);
     let cam = sphere_camera(o.size);
     let pixels = sphere_pixels(&cam);
     let (split, dp, quick) = (o.split, o.paraboloid(), o.quick);
@@ -407,13 +475,30 @@ pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Resul
             // for the few pixels at the sun's rim, each worth the sun; its Monte Carlo reads
             // the one texel, with no noise.
             let exact = o.exact && !matches!(brdf, Brdf::Mirror);
-            let (truth, noise) = match exact {
+            let world_to_file = crate::math::Orientation::default().world_to_file();
+            let reference = match (exact, on_gpu) {
+                (true, true) => Reference::ExactGpu,
+                (true, false) => Reference::ExactHost,
+                (false, _) if matches!(brdf, Brdf::Mirror) => Reference::TexelReads,
+                (false, _) => Reference::MonteCarlo,
+            };
+            let (truth, noise, twin) = match reference {
                 // The report's scenes take the map as loaded (the default orientation).
-                true => {
-                    let world_to_file = crate::math::Orientation::default().world_to_file();
-                    (exact_truth(&cam, brdf, &env, world_to_file), 0.0)
+                Reference::ExactGpu => {
+                    let maps = (&env, &gpu);
+                    let e =
+                        exact_truth_gpu(&exact_pass, &cam, brdf, maps, world_to_file, TWIN_PIXELS)?;
+                    (hooks.progress)(&format!(
+                        "{file} {name}: exact reference {:.0} GPU ms, {} pixels against the float64 twin: worst {:.1e}",
+                        e.ms, e.checked, e.twin
+                    ));
+                    (e.frame, 0.0, e.twin)
                 }
-                false => truth(&renderer, cam, brdf, dp, split, o.reference, &env)?,
+                Reference::ExactHost => (exact_truth(&cam, brdf, &env, world_to_file), 0.0, 0.0),
+                _ => {
+                    let (t, n) = truth(&renderer, cam, brdf, dp, split, o.reference, &env)?;
+                    (t, n, 0.0)
+                }
             };
             for (t, params, taps, extract) in cases(&brdf, quick) {
                 let mut sc = scene(cam, brdf, t, dp, 7, SplitSumSettings { taps, ..split });
@@ -429,7 +514,8 @@ pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Resul
                     absolute: &absolute,
                     env: &env,
                     gpu: &gpu,
-                    truth: (&truth, noise),
+                    truth: (&truth, noise, twin),
+                    reference,
                     pixels: &pixels,
                 };
                 rows.push(measure(&at, &sc, t, params)?);
@@ -445,7 +531,8 @@ pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Resul
                 })
                 .map_or(0.0, |r| r.gpu_ms - r.pre_ms);
             let at = (file, kind, name);
-            rows.extend(peer_rows(&peers, at, brdf, &cam, &truth, noise, shading));
+            let scored = (&truth, noise, twin, reference);
+            rows.extend(peer_rows(&peers, at, brdf, &cam, scored, shading));
         }
     }
     Ok(rows)
@@ -454,12 +541,12 @@ pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Resul
 /// report.csv: a row per measurement.
 pub fn csv(rows: &[Row]) -> String {
     let mut s = String::from(
-        "technique,params,probe,probe_kind,material,relative_rms,mean_bias,worst_tile,gpu_ms,precompute_gpu_ms,render_wall_s,process_s,reference_noise,changing_frame_gpu_ms,changing_frame_relative_rms\n",
+        "technique,params,probe,probe_kind,material,relative_rms,mean_bias,worst_tile,gpu_ms,precompute_gpu_ms,render_wall_s,process_s,reference,reference_noise,reference_twin_error,changing_frame_gpu_ms,changing_frame_relative_rms\n",
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.4},{:.4},{:.4},{:.4},{:.3e},{:.4},{:.6e}",
+            "{},{},{},{},{},{:.6e},{:.6e},{:.6e},{:.4},{:.4},{:.4},{:.4},{},{:.3e},{:.3e},{:.4},{:.6e}",
             r.technique,
             r.params,
             r.probe,
@@ -472,7 +559,9 @@ pub fn csv(rows: &[Row]) -> String {
             r.pre_ms,
             r.wall_s,
             r.process_s,
+            r.reference,
             r.noise,
+            r.twin,
             r.frame_ms,
             r.frame_rms
         );

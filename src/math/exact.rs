@@ -84,6 +84,58 @@ struct ShadeLobe {
     squeeze: f64,
 }
 
+impl ShadeLobe {
+    /// The lobe of `brdf` at normal `n` seen along `v` (world, unit); its reflected texel
+    /// is set by [`ExactFilter::shade_lobe`].
+    fn new(brdf: Brdf, n: DVec3, v: DVec3) -> ShadeLobe {
+        let frame = Frame::new(n);
+        let wo = local_view(&frame, v);
+        let axis = match brdf {
+            Brdf::Lambert => n,
+            _ => frame.to_world(DVec3::new(-wo.x, -wo.y, wo.z)),
+        };
+        ShadeLobe {
+            brdf,
+            frame,
+            wo,
+            axis,
+            scale: lobe_scale(&brdf),
+            reflected: (0, 0, 0),
+            squeeze: match brdf {
+                Brdf::Lambert => 1.0,
+                _ => (2.0 * wo.z).clamp(0.02, 1.0),
+            },
+        }
+    }
+
+    /// The scale its texels' rule starts from: [`lobe_scale`] capped at
+    /// [`SHADE_SCALE_MAX`], squeezed at grazing views; `None` for a mirror.
+    fn rule_scale(&self) -> Option<f64> {
+        self.scale.map(|a| a.min(SHADE_SCALE_MAX) * self.squeeze)
+    }
+}
+
+/// Gauss cells per lobe scale in [`ExactFilter::shade`]'s texel rule.
+pub const PER_WIDTH: f64 = 4.0;
+
+/// The lobe of a [`Query::Shade`] as the GPU's exact pass reads it
+/// (`glsl/exact_shade.comp`, [`crate::passes::ExactShader`]): the surface's tangent,
+/// bitangent and normal, the lobe's axis (each turned into the map's file frame by
+/// `world_to_file`), the view in the surface's frame, and in the last word the scale its
+/// texels' rule starts from; `None` for a mirror, whose lobe is no integral.
+pub fn gpu_lobe(brdf: Brdf, n: DVec3, v: DVec3, world_to_file: DMat3) -> Option<[[f32; 4]; 5]> {
+    let lobe = ShadeLobe::new(brdf, n, v);
+    let a = lobe.rule_scale()?;
+    let f = |d: DVec3, w: f64| [d.x as f32, d.y as f32, d.z as f32, w as f32];
+    Some([
+        f(world_to_file * lobe.frame.t, 0.0),
+        f(world_to_file * lobe.frame.b, 0.0),
+        f(world_to_file * lobe.frame.n, 0.0),
+        f(lobe.wo, 0.0),
+        f(world_to_file * lobe.axis, a),
+    ])
+}
+
 /// The largest lobe scale [`ExactFilter::shade`] takes, radians: the diffuse lobe's (1) would
 /// leave a texel of a 128-wide map to its centre node, whose error (ρ/w)²/24 there is 1e-4 of
 /// a sun's term; at 0.25 such texels take 2 × 2 Gauss points, while a 1k map's (ρ ≈ 0.006)
@@ -252,7 +304,7 @@ impl<'a> ExactFilter<'a> {
     /// Every query's value ([`ExactFilter::ggx`], [`ExactFilter::irradiance`]) in one pass
     /// over the map, in the queries' order.
     pub fn evaluate(&self, queries: &[Query]) -> Vec<[f64; 3]> {
-        self.evaluate_with(queries, 4.0)
+        self.evaluate_with(queries, PER_WIDTH)
     }
 
     /// [`ExactFilter::evaluate`] with `per_width` cells per lobe scale in the GGX sums.
@@ -373,7 +425,7 @@ impl<'a> ExactFilter<'a> {
     /// horizon is lifted as FIS lifts it; a mirror reflects the texel its reflected direction
     /// falls in (the map's constant radiance over a texel, exactly).
     pub fn shade(&self, brdf: &Brdf, n: DVec3, v: DVec3) -> [f64; 3] {
-        self.shade_with(brdf, n, v, 4.0)
+        self.shade_with(brdf, n, v, PER_WIDTH)
     }
 
     /// [`ExactFilter::shade`] with `per_width` cells per lobe scale (the tests refine it).
@@ -382,35 +434,22 @@ impl<'a> ExactFilter<'a> {
         self.evaluate_with(&[q], per_width)[0]
     }
 
-    /// A shade query's lobe.
+    /// A shade query's lobe, with the texel its reflected direction falls in.
     fn shade_lobe(&self, brdf: Brdf, n: DVec3, v: DVec3) -> ShadeLobe {
-        let frame = Frame::new(n);
-        let wo = local_view(&frame, v);
-        let axis = match brdf {
-            Brdf::Lambert => n,
-            _ => frame.to_world(DVec3::new(-wo.x, -wo.y, wo.z)),
-        };
-        let axis_file = self.file_to_world.transpose() * axis;
+        let lobe = ShadeLobe::new(brdf, n, v);
+        let axis_file = self.file_to_world.transpose() * lobe.axis;
         let (w, h) = (self.map.width, self.map.height);
         let c = self.map.mapping.dir_to_coord(axis_file);
         let at = |x: f64, n: u32| ((x * n as f64).floor().max(0.0) as u32).min(n - 1);
         ShadeLobe {
-            brdf,
-            frame,
-            wo,
-            axis,
-            scale: lobe_scale(&brdf),
             reflected: (c.layer, at(c.u, w), at(c.v, h)),
-            squeeze: match brdf {
-                Brdf::Lambert => 1.0,
-                _ => (2.0 * wo.z).clamp(0.02, 1.0),
-            },
+            ..lobe
         }
     }
 
     /// Texel `t`'s ∫_t f·cos dω for `lobe` ([`ExactFilter::shade`]).
     fn shade_weight(&self, t: &Texel, lobe: &ShadeLobe, per_width: f64) -> f64 {
-        let Some(a) = lobe.scale else {
+        let Some(a) = lobe.rule_scale() else {
             // The mirror: the whole lobe where the texel holds the reflected direction.
             return f64::from(u8::from((t.layer, t.i, t.j) == lobe.reflected));
         };
@@ -419,7 +458,6 @@ impl<'a> ExactFilter<'a> {
         // ExactFilter::ggx's; and near the horizon, where Smith's masking takes f·cos to 0
         // over an angle of about α (and the cosine kinks), the same scale within a few
         // texels of it (its sine there standing for the angle as the chord does in the tail).
-        let a = a.min(SHADE_SCALE_MAX) * lobe.squeeze;
         let chord2 = (t.dir - lobe.axis).length_squared();
         let horizon = lobe.frame.n.dot(t.dir);
         let tail2 = TAIL_FRACTION * TAIL_FRACTION * chord2.min(horizon * horizon);

@@ -7,6 +7,7 @@
 
 pub mod brute;
 pub mod convert;
+pub mod exact;
 pub mod extract;
 pub mod gbuffer;
 pub mod lights;
@@ -27,6 +28,7 @@ pub(crate) mod testing;
 
 pub use brute::{BruteFilter, FilterTarget};
 pub use convert::{ConvertOptions, ConvertPlan, Converter};
+pub use exact::{ExactInputs, ExactShader};
 pub use extract::{Extractor, GpuExtraction};
 pub use gbuffer::{GBuffer, GBufferPass};
 pub use lights::{GpuLights, LightsPass};

@@ -6,10 +6,11 @@ use crate::error::Result;
 use crate::math::brdf::Brdf;
 use crate::math::camera::{trace, Camera, Shape};
 use crate::math::exact::{ExactFilter, Query};
+use crate::passes::{ExactShader, GpuEnvMap};
 use crate::render::Renderer;
 use crate::scene::{Material, Scene, SceneObject, SplitSumSettings, Technique};
 use crate::EnvMap;
-use glam::DMat3;
+use glam::{DMat3, DVec3};
 
 /// The report's scene: `brdf` on a unit sphere at the origin under technique `t`, seen by
 /// `cam`, with the FIS paraboloid size `dp`, the MC seed and split-sum settings given.
@@ -114,6 +115,18 @@ pub fn truth(
 /// directions into the map's (the scene's orientation). Its own error is the texel rule's,
 /// below 1e-4 of a pixel (its tests); on the host, all pixels in one pass over the map.
 pub fn exact_truth(cam: &Camera, brdf: Brdf, env: &EnvMap, world_to_file: DMat3) -> EnvMap {
+    let (at, queries) = sphere_queries(cam);
+    let queries: Vec<Query> = queries
+        .into_iter()
+        .map(|(n, v)| Query::Shade { brdf, n, v })
+        .collect();
+    let values = ExactFilter::new(env, world_to_file.transpose()).evaluate(&queries);
+    frame_of(cam, &at, &values)
+}
+
+/// The pixels [`exact_truth`] shades (their index in the frame) with their (normal, towards
+/// the eye), world.
+fn sphere_queries(cam: &Camera) -> (Vec<usize>, Vec<(DVec3, DVec3)>) {
     let sphere = [Shape::Sphere {
         center: [0.0; 3],
         radius: 1.0,
@@ -125,20 +138,83 @@ pub fn exact_truth(cam: &Camera, brdf: Brdf, env: &EnvMap, world_to_file: DMat3)
             let (o, d) = cam.ray(i, j);
             if let Some(h) = trace(&sphere, o, d).filter(|h| h.margin >= 1e-3) {
                 at.push((j * cam.width + i) as usize);
-                queries.push(Query::Shade {
-                    brdf,
-                    n: h.normal,
-                    v: -d,
-                });
+                queries.push((h.normal, -d));
             }
         }
     }
-    let values = ExactFilter::new(env, world_to_file.transpose()).evaluate(&queries);
+    (at, queries)
+}
+
+/// A frame of the camera's size holding `values` at pixels `at`, black elsewhere.
+fn frame_of(cam: &Camera, at: &[usize], values: &[[f64; 3]]) -> EnvMap {
     let mut texels = vec![[0.0f32; 3]; (cam.width * cam.height) as usize];
-    for (k, v) in at.into_iter().zip(values) {
+    for (&k, v) in at.iter().zip(values) {
         texels[k] = v.map(|x| x as f32);
     }
     EnvMap::new(crate::Mapping::LatLong, cam.width, cam.height, texels)
+}
+
+/// [`exact_truth`] on the GPU: the frame, its GPU ms, and the worst relative error of its
+/// values against the float64 twin's at `checked` pixels spread over the sphere (all where
+/// fewer), each against at least 1e-4 of the frame's largest value.
+pub struct ExactFrame {
+    /// The frame.
+    pub frame: EnvMap,
+    /// GPU milliseconds of the sums.
+    pub ms: f64,
+    /// Worst relative error of the checked pixels against the float64 twin.
+    pub twin: f64,
+    /// How many pixels were checked.
+    pub checked: usize,
+}
+
+/// [`exact_truth`] of `env` (on the GPU as `gpu`) by [`ExactShader`], with `checked` of its
+/// pixels taken again by the float64 twin ([`ExactFrame`]).
+pub fn exact_truth_gpu(
+    pass: &ExactShader,
+    cam: &Camera,
+    brdf: Brdf,
+    (env, gpu): (&EnvMap, &GpuEnvMap),
+    world_to_file: DMat3,
+    checked: usize,
+) -> Result<ExactFrame> {
+    let (at, queries) = sphere_queries(cam);
+    let got = pass.run(gpu, world_to_file, brdf, &queries)?;
+    let ms = crate::gpu::total_ms(&got.timings);
+    let step = queries.len().div_ceil(checked.max(1)).max(1);
+    let picked: Vec<usize> = (0..queries.len()).step_by(step).collect();
+    let twin: Vec<Query> = picked
+        .iter()
+        .map(|&k| Query::Shade {
+            brdf,
+            n: queries[k].0,
+            v: queries[k].1,
+        })
+        .collect();
+    let want = ExactFilter::new(env, world_to_file.transpose()).evaluate(&twin);
+    let top = got
+        .value
+        .iter()
+        .flatten()
+        .fold(0.0f64, |a, &b| a.max(b.abs()));
+    let mut worst = 0.0f64;
+    for (&k, w) in picked.iter().zip(&want) {
+        for (g, w) in got.value[k].iter().zip(w) {
+            let e = (g - w).abs() / w.abs().max(1e-4 * top);
+            // A NaN is the worst error there is.
+            worst = if e.is_nan() {
+                f64::INFINITY
+            } else {
+                worst.max(e)
+            };
+        }
+    }
+    Ok(ExactFrame {
+        frame: frame_of(cam, &at, &got.value),
+        ms,
+        twin: worst,
+        checked: picked.len(),
+    })
 }
 
 /// The texel-wise mean of two frames of one size.

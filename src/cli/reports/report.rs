@@ -7,7 +7,7 @@
 use super::super::{context, Global};
 use crate::bench::cubes::{CubeConvention, PeerCube};
 use crate::bench::pareto::markdown;
-use crate::bench::report::{csv, ReportOptions};
+use crate::bench::report::{csv, ExactOn, ReportOptions};
 use crate::math::camera::sphere_camera;
 use crate::render::Renderer;
 use crate::scene::{Scene, SplitSumSettings};
@@ -42,6 +42,11 @@ pub struct ReportArgs {
     /// reference (default 16384, quick 1024)
     #[arg(long)]
     reference: Option<u32>,
+    /// Where the exact reference is summed: gpu (`passes::ExactShader`, a dozen pixels of
+    /// each probe and material checked against its float64 twin), host (the float64 twin),
+    /// or auto: the GPU unless the device is the CPU, where the host is the faster
+    #[arg(long, default_value = "auto", value_parser = ["auto", "gpu", "host"])]
+    exact_on: String,
     /// Instead: score these prefiltered cubes (KTX2 or DDS) as split-sum shading against
     /// Monte Carlo on --cube-probe, beside envlight's own renders (cubes.md, cubes.csv)
     #[arg(long)]
@@ -166,6 +171,11 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     o.reference = args.reference.unwrap_or(o.reference);
     o.exact = args.reference.is_none();
     o.split = args.split();
+    o.exact_on = match args.exact_on.as_str() {
+        "gpu" => ExactOn::Gpu,
+        "host" => ExactOn::Host,
+        _ => ExactOn::Auto,
+    };
     let ctx = context(g)?;
     let device = format!("{} ({})", ctx.info().name, ctx.info().driver.trim());
     eprintln!("device: {device}");
@@ -211,12 +221,18 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
     let path = out.join("report.csv");
     std::fs::write(&path, csv(&rows)).with_context(|| path.display().to_string())?;
-    let reference = match o.exact {
-        true => "the exact sum over the map's texels at each pixel (`ExactFilter::shade`, \
-                 float64 on the host: no sampling noise; its own error below 1e-4 of a pixel; \
-                 the mirror against the GPU's own texel reads)"
+    let reference = match (o.exact, o.exact_on_gpu(&ctx)) {
+        (true, true) => "the exact sum over the map's texels at each pixel, on the GPU \
+                 (`passes::ExactShader`: no sampling noise; checked against its float64 twin \
+                 `ExactFilter::shade` at a dozen pixels of each probe and material, the worst \
+                 error stated under each material; the mirror against the GPU's own texel reads)"
             .to_string(),
-        false => format!(
+        (true, false) => "the exact sum over the map's texels at each pixel, in float64 on the \
+                 host (`ExactFilter::shade`, the GPU pass's twin, the faster on a CPU device: no \
+                 sampling noise, its own error below 1e-4 of a pixel; the mirror against the \
+                 GPU's own texel reads)"
+            .to_string(),
+        (false, _) => format!(
             "2 × {} spp MIS Monte Carlo (their mean; its noise is half their relative RMS \
              difference)",
             o.reference

@@ -15,6 +15,8 @@ pub enum PassId {
     Brute,
     /// `passes::convert`: the converted map.
     Convert,
+    /// `passes::exact`: the exact reference's partial sums.
+    Exact,
     /// `passes::extract`: the residual map and the light records.
     Extract,
     /// `passes::gbuffer`: normals, positions and view directions.
@@ -43,9 +45,10 @@ pub enum PassId {
 
 impl PassId {
     /// Every pass, in the order above.
-    pub const ALL: [PassId; 14] = [
+    pub const ALL: [PassId; 15] = [
         PassId::Brute,
         PassId::Convert,
+        PassId::Exact,
         PassId::Extract,
         PassId::GBuffer,
         PassId::Lights,
@@ -65,6 +68,7 @@ impl PassId {
         match self {
             PassId::Brute => "brute",
             PassId::Convert => "convert",
+            PassId::Exact => "exact",
             PassId::Extract => "extract",
             PassId::GBuffer => "gbuffer",
             PassId::Lights => "lights",
