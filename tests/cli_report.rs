@@ -423,3 +423,51 @@ fn bench_dynamic(more: &[&str]) -> String {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     String::from_utf8(o.stdout).unwrap()
 }
+
+/// A probe that cannot be read is left out of the report and named with the reason in the
+/// page; the others are measured; and the page says which techniques cannot shade each
+/// material. Here the sun probe is a file of garbage beside the real venice_sunset.
+#[test]
+fn report_leaves_out_an_unreadable_probe_and_says_why() {
+    let Some(dir) = common::probes() else {
+        return;
+    };
+    let tmp = std::env::temp_dir().join(format!("envlight-report-bad-{}", std::process::id()));
+    let probes = tmp.join("probes");
+    std::fs::create_dir_all(&probes).unwrap();
+    std::os::unix::fs::symlink(
+        dir.join("venice_sunset_1k.hdr").canonicalize().unwrap(),
+        probes.join("venice_sunset_1k.hdr"),
+    )
+    .unwrap();
+    std::fs::write(
+        probes.join("spiaggia_di_mondello_1k.hdr"),
+        b"#?RADIANCE\nnot a header\n",
+    )
+    .unwrap();
+    let out = tmp.join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .env_remove("ENVLIGHT_IBLSAMPLER")
+        .args([
+            "--device", "cpu", "report", "--quick", "--size", "8", "--probes",
+        ])
+        .arg(&probes)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("report.csv")).unwrap();
+    assert!(
+        csv.contains("venice_sunset_1k") && !csv.contains("spiaggia"),
+        "{csv}"
+    );
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    let left = md.split("Probes left out:").nth(1).unwrap_or_default();
+    assert!(left.contains("spiaggia_di_mondello_1k.hdr: "), "{md}");
+    // The quick set's materials: the diffuse lobe takes every technique but the lookup; GGX
+    // every technique but the lookup, SH and the prefiltered maps.
+    assert!(md.contains("| diffuse | lookup |"), "{md}");
+    assert!(md.contains("| ggx 0.3 | lookup, sh, prefiltered |"), "{md}");
+    let _ = std::fs::remove_dir_all(&tmp);
+}

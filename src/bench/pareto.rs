@@ -124,9 +124,12 @@ fn reference_note(rows: &[Row], material: &str) -> String {
         "exact (host float64)" => "Reference: no sampling noise (exact texel sums in float64 \
              on the host; their own error, the texel rule's, below 1e-4 of a pixel)."
             .to_string(),
-        "texel reads" => "Reference: no sampling noise (a mirror: the GPU's own texel reads, \
-             exact for a lookup)."
-            .to_string(),
+        "pixel-area mean" => {
+            "Reference: the pixel-area mean (16 × 16 reflected rays a pixel, each \
+             reading its texel): what a footprint lookup estimates; \"point\" reads the one texel \
+             at the pixel's centre, and errs by the pixel's aliasing."
+                .to_string()
+        }
         _ => format!(
             "Reference noise (worst probe): {:.3}% relative RMS; errors near it are at the \
              reference's floor.",

@@ -13,7 +13,7 @@ use crate::passes::ExactShader;
 use crate::passes::GpuEnvMap;
 use crate::render::score::{errors, exact_truth, exact_truth_gpu, scene, sphere_pixels, truth};
 use crate::render::{PassKind, Renderer};
-use crate::scene::{LightsMode, Scene, SplitSumSettings, Technique};
+use crate::scene::{LightsMode, LookupFilter, Scene, SplitSumSettings, Technique};
 use crate::EnvMap;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -33,8 +33,10 @@ pub enum Reference {
     ExactHost,
     /// Two Monte Carlo renders (their mean; half their difference its noise).
     MonteCarlo,
-    /// A mirror's own texel reads (Monte Carlo of a delta BRDF: one texel, no noise).
-    TexelReads,
+    /// A mirror's pixel-area mean: 16 × 16 rays a pixel, each reading the texel its
+    /// reflection falls in (`math::footprint::supersampled`), what a footprint lookup
+    /// estimates.
+    PixelAreaMean,
 }
 
 impl Reference {
@@ -44,7 +46,7 @@ impl Reference {
             Reference::ExactGpu => "exact (gpu)",
             Reference::ExactHost => "exact (host float64)",
             Reference::MonteCarlo => "monte carlo",
-            Reference::TexelReads => "texel reads",
+            Reference::PixelAreaMean => "pixel-area mean",
         }
     }
 }
@@ -192,6 +194,8 @@ fn probes(quick: bool) -> Vec<(&'static str, &'static str)> {
     v
 }
 
+/// The materials: diffuse and GGX 0.3 in quick runs; else diffuse, the mirror, Phong 64,
+/// GGX 0.05–0.6 and anisotropic Ward (αx 0.1, αy 0.4).
 fn materials(quick: bool) -> Vec<(&'static str, Brdf)> {
     let ggx = |alpha| Brdf::Ggx {
         alpha,
@@ -202,27 +206,88 @@ fn materials(quick: bool) -> Vec<(&'static str, Brdf)> {
     }
     vec![
         ("diffuse", Brdf::Lambert),
+        ("mirror", Brdf::Mirror),
+        ("phong 64", Brdf::Phong { n: 64.0 }),
+        ("ggx 0.05", ggx(0.05)),
         ("ggx 0.1", ggx(0.1)),
         ("ggx 0.3", ggx(0.3)),
         ("ggx 0.6", ggx(0.6)),
-        ("phong 50", Brdf::Phong { n: 50.0 }),
-        ("mirror", Brdf::Mirror),
+        ("ward 0.1x0.4", Brdf::Ward { ax: 0.1, ay: 0.4 }),
     ]
 }
 
-/// A technique to score: its label, split-sum taps, and whether the probe's lights are
-/// extracted (the default) or left in the map.
-type Case = (Technique, String, u32, bool);
+/// Every technique kind a report knows, with a scene's technique of that kind: what
+/// [`cannot_shade`] tries on each material.
+fn every_technique() -> Vec<Technique> {
+    vec![
+        Technique::Lookup,
+        Technique::Sh { order: 2 },
+        Technique::Prefiltered { size: 32 },
+        Technique::Fis {
+            samples: 64,
+            bias: None,
+            rotate: true,
+        },
+        Technique::ShBrdf {
+            order: 2,
+            grid: crate::math::sh_brdf::DEFAULT_GRID,
+            window: None,
+        },
+        Technique::SplitSum,
+        Technique::Mc {
+            samples: 64,
+            error: None,
+        },
+    ]
+}
+
+/// The report's materials (`quick`'s or the full set's), each with the techniques that cannot
+/// shade it (the scene's own check refuses them), named.
+pub fn cannot_shade(quick: bool) -> Vec<(&'static str, Vec<&'static str>)> {
+    let cam = sphere_camera(8);
+    materials(quick)
+        .into_iter()
+        .map(|(name, brdf)| {
+            let refused = every_technique()
+                .into_iter()
+                .filter(|&t| {
+                    let sc = scene(cam, brdf, t, None, 1, SplitSumSettings::default());
+                    sc.validate().is_err()
+                })
+                .map(|t| t.name())
+                .collect();
+            (name, refused)
+        })
+        .collect()
+}
+
+/// A technique to score: its label, split-sum taps, whether the probe's lights are
+/// extracted (the default) or left in the map, and whether a mirror reads one texel a pixel
+/// (else the pixel's footprint).
+struct Case {
+    technique: Technique,
+    label: String,
+    taps: u32,
+    extract: bool,
+    point: bool,
+}
 
 /// The techniques that apply to `brdf`, each with light extraction and, where a technique
-/// reads it (not the Monte Carlo reference, not the mirror lookup), without; quick runs take
-/// the second row for SH order 2, FIS 64 and split-sum only.
+/// reads it (not the Monte Carlo reference), without; quick runs take the second row for SH
+/// order 2, FIS 64 and split-sum only. The mirror's lookup also reads one texel a pixel.
 fn cases(brdf: &Brdf, quick: bool) -> Vec<Case> {
     let with: Vec<(Technique, String, u32)> = techniques(brdf, quick);
     let mut v = Vec::new();
+    let case = |technique, label, taps, extract| Case {
+        technique,
+        label,
+        taps,
+        extract,
+        point: false,
+    };
     for (t, label, taps) in with {
         let both = match t {
-            Technique::Mc { .. } | Technique::Lookup => false,
+            Technique::Mc { .. } => false,
             _ if !quick => true,
             Technique::Sh { order } => order == 2,
             Technique::Fis { samples, .. } => samples == 64,
@@ -235,9 +300,15 @@ fn cases(brdf: &Brdf, quick: bool) -> Vec<Case> {
                 true => "(no lights)".to_string(),
                 false => format!("{label} (no lights)"),
             };
-            v.push((t, off, taps, false));
+            v.push(case(t, off, taps, false));
         }
-        v.push((t, label, taps, true));
+        v.push(case(t, label, taps, true));
+    }
+    if matches!(brdf, Brdf::Mirror) {
+        v.push(Case {
+            point: true,
+            ..case(Technique::Lookup, "point".into(), 1, false)
+        });
     }
     v
 }
@@ -313,14 +384,32 @@ struct Against<'a> {
     truth: (&'a EnvMap, f64, f64),
     reference: Reference,
     pixels: &'a [(usize, u32)],
+    /// The pipeline sets already built ([`warm_key`]).
+    warmed: &'a std::cell::RefCell<std::collections::HashSet<String>>,
+}
+
+/// What decides the pipelines a case's render builds: its technique, BRDF, lights and
+/// lookup filter, on the host path or the resident one.
+fn warm_key(sc: &Scene, resident: bool) -> String {
+    let o = &sc.objects[0].material;
+    format!(
+        "{resident} {:?} {} {:?} {:?}",
+        o.technique,
+        o.kind.id(),
+        sc.environment.lights,
+        sc.environment.filter
+    )
 }
 
 /// One case's row: the host path's render timed and scored, the whole process timed, and
 /// the frame of a changing environment (the resident path, except Monte Carlo's).
 fn measure(a: &Against<'_>, sc: &Scene, t: Technique, params: String) -> Result<Row> {
     let truth = a.truth.0;
-    // One untimed render first: pipelines are built on first use.
-    a.renderer.render(sc, a.env)?;
+    // One untimed render first where this case's pipelines are not built yet (they are
+    // built on first use).
+    if a.warmed.borrow_mut().insert(warm_key(sc, false)) {
+        a.renderer.render(sc, a.env)?;
+    }
     let t0 = Instant::now();
     let r = a.renderer.render(sc, a.env)?;
     let wall_s = t0.elapsed().as_secs_f64();
@@ -345,7 +434,10 @@ fn measure(a: &Against<'_>, sc: &Scene, t: Technique, params: String) -> Result<
         + 0.0;
     let (frame_ms, frame_rms) = match t {
         Technique::Mc { .. } => (gpu_ms, rms),
-        _ => changing_frame(a.renderer, sc, a.gpu, truth, a.pixels)?,
+        _ => {
+            let warm = a.warmed.borrow_mut().insert(warm_key(sc, true));
+            changing_frame(a.renderer, sc, a.gpu, truth, a.pixels, warm)?
+        }
     };
     let row = Row {
         probe: a.probe.0.trim_end_matches(".hdr").to_string(),
@@ -374,13 +466,15 @@ fn measure(a: &Against<'_>, sc: &Scene, t: Technique, params: String) -> Result<
 }
 
 /// The resident path's frame of `sc` from `gpu` (`Renderer::resident`, one untimed frame
-/// first: pipelines are built on first use): its GPU ms and its relative RMS against `truth`.
+/// first where `warm`: pipelines are built on first use): its GPU ms and its relative RMS
+/// against `truth`.
 fn changing_frame(
     renderer: &Renderer,
     sc: &Scene,
     gpu: &GpuEnvMap,
     truth: &EnvMap,
     pixels: &[(usize, u32)],
+    warm: bool,
 ) -> Result<(f64, f64)> {
     let prepared = renderer.resident(
         sc,
@@ -390,7 +484,9 @@ fn changing_frame(
             height: gpu.height,
         },
     )?;
-    renderer.render_resident(&prepared, gpu)?;
+    if warm {
+        renderer.render_resident(&prepared, gpu)?;
+    }
     let r = renderer.render_resident(&prepared, gpu)?;
     let ms = r.records.iter().map(|p| p.ms()).sum();
     Ok((ms, errors(&r.frame, truth, pixels).0))
@@ -442,100 +538,199 @@ fn peer_rows(
         .collect()
 }
 
+/// What [`run`] measured: the rows, and the probes left out with the reason.
+pub struct Report {
+    /// One row per technique × parameters × probe × material.
+    pub rows: Vec<Row>,
+    /// "file: why" for each probe that could not be read.
+    pub skipped: Vec<String>,
+}
+
+/// What every probe's measurements share: the passes, the camera and its scored pixels, the
+/// options, and the pipeline sets already built (a case whose set is built needs no untimed
+/// render first).
+struct Session<'a> {
+    ctx: &'a Context,
+    renderer: Renderer,
+    exact_pass: ExactShader,
+    cam: Camera,
+    pixels: Vec<(usize, u32)>,
+    o: &'a ReportOptions,
+    hooks: &'a Hooks<'a>,
+    warmed: std::cell::RefCell<std::collections::HashSet<String>>,
+}
+
 /// Measures every case on the probes of `dir` (venice_sunset and spiaggia_di_mondello, and in
 /// full runs studio_small_08 and quarry_01): one row per technique × parameters × probe ×
-/// material.
-pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Result<Vec<Row>> {
-    let renderer = Renderer::new(ctx);
-    let exact_pass = ExactShader::new(ctx)?;
-    let on_gpu = o.exact_on_gpu(ctx);
+/// material. A probe that cannot be read is left out and named with the reason; an error
+/// where none can be.
+pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Result<Report> {
     let cam = sphere_camera(o.size);
-    let pixels = sphere_pixels(&cam);
-    let (split, dp, quick) = (o.split, o.paraboloid(), o.quick);
-    let mut rows = Vec::new();
-    for (file, kind) in probes(quick) {
+    let session = Session {
+        ctx,
+        renderer: Renderer::new(ctx),
+        exact_pass: ExactShader::new(ctx)?,
+        cam,
+        pixels: sphere_pixels(&cam),
+        o,
+        hooks,
+        warmed: Default::default(),
+    };
+    let mut report = Report {
+        rows: Vec::new(),
+        skipped: Vec::new(),
+    };
+    for (file, kind) in probes(o.quick) {
         let path = dir.join(file);
-        let within =
-            |e: crate::Error| e.context(format!("report: probe {} (set --probes)", path.display()));
-        let absolute = path.canonicalize().map_err(|source| {
-            within(crate::Error::Io {
+        let loaded = path
+            .canonicalize()
+            .map_err(|source| crate::Error::Io {
                 path: path.clone(),
                 source,
             })
-        })?;
-        let env = crate::io::load(&path, &crate::io::LoadOptions::default()).map_err(within)?;
-        let peers = (hooks.peers)(&path)?;
-        // The map on the GPU once, for the resident path's frames (the paraboloid sized by
-        // the source there: the resident path follows the scene, and quick runs' 256² is
-        // the host path's setting).
-        let gpu = GpuEnvMap::upload(ctx, &env)?;
-        for (name, brdf) in materials(quick) {
-            // The mirror keeps the GPU's own reads: a lookup of a map with a sun is a point
-            // sample of a step, where float32 and float64 directions pick different texels
-            // for the few pixels at the sun's rim, each worth the sun; its Monte Carlo reads
-            // the one texel, with no noise.
-            let exact = o.exact && !matches!(brdf, Brdf::Mirror);
-            let world_to_file = crate::math::Orientation::default().world_to_file();
-            let reference = match (exact, on_gpu) {
-                (true, true) => Reference::ExactGpu,
-                (true, false) => Reference::ExactHost,
-                (false, _) if matches!(brdf, Brdf::Mirror) => Reference::TexelReads,
-                (false, _) => Reference::MonteCarlo,
-            };
-            let (truth, noise, twin) = match reference {
-                // The report's scenes take the map as loaded (the default orientation).
-                Reference::ExactGpu => {
-                    let maps = (&env, &gpu);
-                    let e =
-                        exact_truth_gpu(&exact_pass, &cam, brdf, maps, world_to_file, TWIN_PIXELS)?;
-                    (hooks.progress)(&format!(
-                        "{file} {name}: exact reference {:.0} GPU ms, {} pixels against the float64 twin: worst {:.1e}",
-                        e.ms, e.checked, e.twin
-                    ));
-                    (e.frame, 0.0, e.twin)
-                }
-                Reference::ExactHost => (exact_truth(&cam, brdf, &env, world_to_file), 0.0, 0.0),
-                _ => {
-                    let (t, n) = truth(&renderer, cam, brdf, dp, split, o.reference, &env)?;
-                    (t, n, 0.0)
-                }
-            };
-            for (t, params, taps, extract) in cases(&brdf, quick) {
-                let mut sc = scene(cam, brdf, t, dp, 7, SplitSumSettings { taps, ..split });
-                if !extract {
-                    sc.environment.lights = LightsMode::None;
-                }
-                let at = Against {
-                    process: hooks.process,
-                    progress: hooks.progress,
-                    renderer: &renderer,
-                    probe: (file, kind),
-                    material: name,
-                    absolute: &absolute,
-                    env: &env,
-                    gpu: &gpu,
-                    truth: (&truth, noise, twin),
-                    reference,
-                    pixels: &pixels,
-                };
-                rows.push(measure(&at, &sc, t, params)?);
+            .and_then(|absolute| {
+                let env = crate::io::load(&path, &crate::io::LoadOptions::default())?;
+                Ok((absolute, env))
+            });
+        let (absolute, env) = match loaded {
+            Ok(l) => l,
+            Err(e) => {
+                (hooks.progress)(&format!("report: {} left out: {e}", path.display()));
+                report.skipped.push(format!("{file}: {e}"));
+                continue;
             }
-            // The peers' cubes are shaded by split-sum: its per-frame shading cost here.
-            let shading = rows
-                .iter()
-                .find(|r| {
-                    r.probe == file.trim_end_matches(".hdr")
-                        && r.material == name
-                        && r.technique == "split_sum"
-                        && r.params.is_empty()
-                })
-                .map_or(0.0, |r| r.gpu_ms - r.pre_ms);
-            let at = (file, kind, name);
-            let scored = (&truth, noise, twin, reference);
-            rows.extend(peer_rows(&peers, at, brdf, &cam, scored, shading));
+        };
+        let probe = LoadedProbe {
+            file,
+            kind,
+            absolute: &absolute,
+            env: &env,
+            peers: (hooks.peers)(&path)?,
+            // The map on the GPU once, for the resident path's frames and the exact sums.
+            gpu: GpuEnvMap::upload(ctx, &env)?,
+        };
+        for (name, brdf) in materials(o.quick) {
+            report
+                .rows
+                .extend(session.material_rows(&probe, name, brdf)?);
         }
     }
-    Ok(rows)
+    if report.rows.is_empty() && !report.skipped.is_empty() {
+        return Err(crate::Error::Invalid(format!(
+            "report: no probe could be read (set --probes): {}",
+            report.skipped.join("; ")
+        )));
+    }
+    Ok(report)
+}
+
+/// A probe read for a report: its file name and kind, where it is, the map in memory and on
+/// the GPU, and the peers' cubes of it.
+struct LoadedProbe<'a> {
+    file: &'static str,
+    kind: &'static str,
+    absolute: &'a Path,
+    env: &'a EnvMap,
+    gpu: GpuEnvMap,
+    peers: Vec<PeerCube>,
+}
+
+impl Session<'_> {
+    /// `brdf`'s reference frame on `p` (the report's scenes take the map as loaded, the
+    /// default orientation): which it is, the frame, its noise and its twin error.
+    fn reference(
+        &self,
+        p: &LoadedProbe,
+        name: &str,
+        brdf: Brdf,
+    ) -> Result<(Reference, EnvMap, f64, f64)> {
+        let (o, cam) = (self.o, self.cam);
+        let world_to_file = crate::math::Orientation::default().world_to_file();
+        // The mirror's is the pixel-area mean its footprint lookup estimates (a pixel
+        // centre's texel is a point sample of a step at a sun's rim).
+        let reference = match (o.exact, o.exact_on_gpu(self.ctx)) {
+            _ if matches!(brdf, Brdf::Mirror) => Reference::PixelAreaMean,
+            (true, true) => Reference::ExactGpu,
+            (true, false) => Reference::ExactHost,
+            (false, _) => Reference::MonteCarlo,
+        };
+        let (frame, noise, twin) = match reference {
+            Reference::ExactGpu => {
+                let maps = (p.env, &p.gpu);
+                let e = exact_truth_gpu(
+                    &self.exact_pass,
+                    &cam,
+                    brdf,
+                    maps,
+                    world_to_file,
+                    TWIN_PIXELS,
+                )?;
+                (self.hooks.progress)(&format!(
+                    "{} {name}: exact reference {:.0} GPU ms, {} pixels against the float64 twin: worst {:.1e}",
+                    p.file, e.ms, e.checked, e.twin
+                ));
+                (e.frame, 0.0, e.twin)
+            }
+            Reference::ExactHost => (exact_truth(&cam, brdf, p.env, world_to_file), 0.0, 0.0),
+            Reference::PixelAreaMean => {
+                let sphere = [crate::math::camera::Shape::Sphere {
+                    center: [0.0; 3],
+                    radius: 1.0,
+                }];
+                // The map as loaded: its file frame is the world's.
+                let mean = crate::math::footprint::supersampled(p.env, &cam, &sphere, 16);
+                (mean, 0.0, 0.0)
+            }
+            Reference::MonteCarlo => {
+                let (dp, split) = (o.paraboloid(), o.split);
+                let (t, n) = truth(&self.renderer, cam, brdf, dp, split, o.reference, p.env)?;
+                (t, n, 0.0)
+            }
+        };
+        Ok((reference, frame, noise, twin))
+    }
+
+    /// Every case of material `name` (`brdf`) on probe `p`, and the peers' cubes beside them.
+    fn material_rows(&self, p: &LoadedProbe, name: &str, brdf: Brdf) -> Result<Vec<Row>> {
+        let (o, cam) = (self.o, self.cam);
+        let (split, dp) = (o.split, o.paraboloid());
+        let (reference, truth, noise, twin) = self.reference(p, name, brdf)?;
+        let mut rows = Vec::new();
+        for c in cases(&brdf, o.quick) {
+            let (t, params, taps) = (c.technique, c.label, c.taps);
+            let mut sc = scene(cam, brdf, t, dp, 7, SplitSumSettings { taps, ..split });
+            if !c.extract {
+                sc.environment.lights = LightsMode::None;
+            }
+            if c.point {
+                sc.environment.filter = LookupFilter::Point;
+            }
+            let at = Against {
+                process: self.hooks.process,
+                progress: self.hooks.progress,
+                renderer: &self.renderer,
+                probe: (p.file, p.kind),
+                material: name,
+                absolute: p.absolute,
+                env: p.env,
+                gpu: &p.gpu,
+                truth: (&truth, noise, twin),
+                reference,
+                pixels: &self.pixels,
+                warmed: &self.warmed,
+            };
+            rows.push(measure(&at, &sc, t, params)?);
+        }
+        // The peers' cubes are shaded by split-sum: its per-frame shading cost here.
+        let shading = rows
+            .iter()
+            .find(|r| r.technique == "split_sum" && r.params.is_empty())
+            .map_or(0.0, |r| r.gpu_ms - r.pre_ms);
+        let at = (p.file, p.kind, name);
+        let scored = (&truth, noise, twin, reference);
+        rows.extend(peer_rows(&p.peers, at, brdf, &cam, scored, shading));
+        Ok(rows)
+    }
 }
 
 /// report.csv: a row per measurement.

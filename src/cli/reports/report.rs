@@ -164,6 +164,28 @@ fn sampler_cubes(
     Ok(out)
 }
 
+/// The page's last section: the techniques that cannot shade each material (the scene's
+/// own check refuses them), and the probes left out with the reason.
+fn limits(quick: bool, skipped: &[String]) -> String {
+    let mut s = String::from(
+        "\n## What is not measured\n\n| material | techniques that cannot shade it |\n|---|---|\n",
+    );
+    for (material, refused) in crate::bench::report::cannot_shade(quick) {
+        let list = match refused.is_empty() {
+            true => "—".to_string(),
+            false => refused.join(", "),
+        };
+        s.push_str(&format!("| {material} | {list} |\n"));
+    }
+    if !skipped.is_empty() {
+        s.push_str("\nProbes left out:\n\n");
+        for k in skipped {
+            s.push_str(&format!("- {k}\n"));
+        }
+    }
+    s
+}
+
 /// Runs the report.
 pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     let mut o = ReportOptions::new(args.quick);
@@ -215,7 +237,8 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         peers: &peers,
         progress: &progress,
     };
-    let rows = crate::bench::report::run(&ctx, &dir, &o, &hooks)?;
+    let crate::bench::report::Report { rows, skipped } =
+        crate::bench::report::run(&ctx, &dir, &o, &hooks)?;
     let _ = std::fs::remove_dir_all(&scratch);
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
@@ -225,12 +248,12 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         (true, true) => "the exact sum over the map's texels at each pixel, on the GPU \
                  (`passes::ExactShader`: no sampling noise; checked against its float64 twin \
                  `ExactFilter::shade` at a dozen pixels of each probe and material, the worst \
-                 error stated under each material; the mirror against the GPU's own texel reads)"
+                 error stated under each material; the mirror against its pixel-area mean)"
             .to_string(),
         (true, false) => "the exact sum over the map's texels at each pixel, in float64 on the \
                  host (`ExactFilter::shade`, the GPU pass's twin, the faster on a CPU device: no \
-                 sampling noise, its own error below 1e-4 of a pixel; the mirror against the \
-                 GPU's own texel reads)"
+                 sampling noise, its own error below 1e-4 of a pixel; the mirror against its \
+                 pixel-area mean)"
             .to_string(),
         (false, _) => format!(
             "2 × {} spp MIS Monte Carlo (their mean; its noise is half their relative RMS \
@@ -251,7 +274,8 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         started.elapsed().as_secs_f64(),
         if o.quick { " (--quick)" } else { "" }
     );
-    let md = markdown(&rows, &settings);
+    let mut md = markdown(&rows, &settings);
+    md.push_str(&limits(o.quick, &skipped));
     std::fs::write(out.join("report.md"), md).with_context(|| "report.md")?;
     plot(&out.join("report.png"), &rows, &device)?;
     println!(
