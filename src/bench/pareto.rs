@@ -124,18 +124,118 @@ fn reference_note(rows: &[Row], material: &str) -> String {
         "exact (host float64)" => "Reference: no sampling noise (exact texel sums in float64 \
              on the host; their own error, the texel rule's, below 1e-4 of a pixel)."
             .to_string(),
-        "pixel-area mean" => {
-            "Reference: the pixel-area mean (16 × 16 reflected rays a pixel, each \
-             reading its texel): what a footprint lookup estimates; \"point\" reads the one texel \
-             at the pixel's centre, and errs by the pixel's aliasing."
-                .to_string()
-        }
+        "pixel-area mean" => format!(
+            "Reference: the pixel-area mean (n × n reflected rays a pixel, each reading its \
+             texel; n = 8192 / the image's side, 128 at 64²): what a footprint lookup estimates; its own error, \
+             estimated as its change from n/2: {:.2}% relative RMS on the worst probe (a sun's \
+             reflection is a step the rays converge on as 1/n). \"point\" reads the one texel at \
+             the pixel's centre and errs by the pixel's aliasing.",
+            100.0 * worst(|r| r.noise)
+        ),
         _ => format!(
             "Reference noise (worst probe): {:.3}% relative RMS; errors near it are at the \
              reference's floor.",
             100.0 * worst(|r| r.noise)
         ),
     }
+}
+
+/// An accuracy goal: (goal, material, technique, parameters, bound on the relative RMS,
+/// bound on |bias| if any).
+type Goal = (
+    &'static str,
+    &'static str,
+    &'static str,
+    &'static str,
+    f64,
+    Option<f64>,
+);
+
+/// The accuracy goals read from a report's rows, per probe.
+const GOALS: [Goal; 6] = [
+    (
+        "Diffuse by SH order 2 plus lights ≤ 1.5%",
+        "diffuse",
+        "sh",
+        "l=2",
+        0.015,
+        None,
+    ),
+    (
+        "GGX α 0.05 by FIS-64 plus lights ≤ 3%, |bias| ≤ 1%",
+        "ggx 0.05",
+        "fis",
+        "N=64",
+        0.03,
+        Some(0.01),
+    ),
+    (
+        "GGX α 0.1 by FIS-64 plus lights ≤ 3%, |bias| ≤ 1%",
+        "ggx 0.1",
+        "fis",
+        "N=64",
+        0.03,
+        Some(0.01),
+    ),
+    (
+        "GGX α 0.3 by FIS-64 plus lights ≤ 3%, |bias| ≤ 1%",
+        "ggx 0.3",
+        "fis",
+        "N=64",
+        0.03,
+        Some(0.01),
+    ),
+    (
+        "GGX α 0.6 by FIS-64 plus lights ≤ 3%, |bias| ≤ 1%",
+        "ggx 0.6",
+        "fis",
+        "N=64",
+        0.03,
+        Some(0.01),
+    ),
+    (
+        "Mirror, footprint lookup plus lights, ≤ 3% against the pixel-area mean",
+        "mirror",
+        "lookup",
+        "",
+        0.03,
+        None,
+    ),
+];
+
+/// The accuracy goals (docs/accuracy/table.md's) checked on `rows`, each per probe: met or
+/// not, with each probe's error and bias; a goal whose rows the run lacks (a quick run's
+/// materials) is said to be unmeasured.
+pub fn goals_markdown(rows: &[Row]) -> String {
+    let mut md = String::from("\n## Goals, read from this run\n\n");
+    for (goal, material, technique, params, bound, bias) in GOALS {
+        let of: Vec<&Row> = rows
+            .iter()
+            .filter(|r| r.material == material && r.technique == technique && r.params == params)
+            .collect();
+        if of.is_empty() {
+            let _ = writeln!(md, "- {goal}: not measured in this run");
+            continue;
+        }
+        let met = of
+            .iter()
+            .all(|r| r.rms <= bound && bias.is_none_or(|b| r.bias.abs() <= b));
+        let each: Vec<String> = of
+            .iter()
+            .map(|r| {
+                format!(
+                    "{} {:.2}% ({:+.2}%)",
+                    r.probe,
+                    100.0 * r.rms,
+                    100.0 * r.bias
+                )
+            })
+            .collect();
+        let verdict = if met { "met" } else { "not met" };
+        let _ = writeln!(md, "- {goal}: **{verdict}**: {}", each.join(", "));
+    }
+    md.push_str("\nIn parentheses: the mean bias.\n");
+    md
 }
 
 /// report.md: the headline, a table and a front per material, under `settings`.
@@ -247,6 +347,50 @@ mod tests {
             frame: ms,
             frame_rms: rms,
         }
+    }
+
+    fn row(material: &str, technique: &'static str, params: &str, probe: &str, rms: f64) -> Row {
+        Row {
+            probe: probe.into(),
+            kind: "sun",
+            material: material.into(),
+            technique,
+            params: params.into(),
+            rms,
+            bias: 0.001,
+            tile: 0.0,
+            gpu_ms: 1.0,
+            pre_ms: 0.0,
+            wall_s: 0.0,
+            process_s: 0.0,
+            noise: 0.0,
+            twin: 0.0,
+            reference: "exact (gpu)",
+            frame_ms: 1.0,
+            frame_rms: rms,
+        }
+    }
+
+    #[test]
+    fn goals_are_read_per_probe_from_the_rows() {
+        let rows = vec![
+            row("diffuse", "sh", "l=2", "a", 0.010),
+            row("diffuse", "sh", "l=2 (no lights)", "a", 0.100),
+            row("diffuse", "sh", "l=2", "b", 0.020),
+            row("ggx 0.3", "fis", "N=64", "a", 0.020),
+            row("ggx 0.3", "fis", "N=64", "b", 0.025),
+        ];
+        let md = goals_markdown(&rows);
+        // One probe over 1.5% fails the diffuse goal; the no-lights row is not its row.
+        assert!(
+            md.contains("SH order 2 plus lights ≤ 1.5%: **not met**: a 1.00% (+0.10%), b 2.00%"),
+            "{md}"
+        );
+        assert!(
+            md.contains("GGX α 0.3 by FIS-64 plus lights ≤ 3%, |bias| ≤ 1%: **met**"),
+            "{md}"
+        );
+        assert!(md.contains("GGX α 0.05 by FIS-64 plus lights ≤ 3%, |bias| ≤ 1%: not measured"));
     }
 
     #[test]

@@ -23,6 +23,12 @@ use std::time::Instant;
 /// twin, spread over the sphere.
 pub const TWIN_PIXELS: usize = 12;
 
+/// Rays a side of each pixel for the mirror's pixel-area mean of an image `size` pixels wide:
+/// 8192 across the image (128 at 64², 16 at 512²), within 16 to 256.
+pub fn mirror_rays(size: u32) -> u32 {
+    (8192 / size.max(1)).clamp(16, 256)
+}
+
 /// Which reference a material's rows are scored against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reference {
@@ -33,9 +39,9 @@ pub enum Reference {
     ExactHost,
     /// Two Monte Carlo renders (their mean; half their difference its noise).
     MonteCarlo,
-    /// A mirror's pixel-area mean: 16 × 16 rays a pixel, each reading the texel its
-    /// reflection falls in (`math::footprint::supersampled`), what a footprint lookup
-    /// estimates.
+    /// A mirror's pixel-area mean: n × n rays a pixel ([`mirror_rays`]), each reading the
+    /// texel its reflection falls in (`math::footprint::supersampled`), what a footprint
+    /// lookup estimates; its noise the rms change from n/2 × n/2 rays.
     PixelAreaMean,
 }
 
@@ -64,7 +70,7 @@ pub enum ExactOn {
 }
 
 /// What a report measures.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct ReportOptions {
     /// The reduced set (two probes, two materials, fewer parameters, a 256² FIS paraboloid)
     /// that runs in a few minutes on lavapipe.
@@ -82,6 +88,8 @@ pub struct ReportOptions {
     pub split: SplitSumSettings,
     /// Where the exact reference is summed.
     pub exact_on: ExactOn,
+    /// Only the probe of this file name (with or without .hdr); all of the set where `None`.
+    pub probe: Option<String>,
 }
 
 impl ReportOptions {
@@ -95,6 +103,7 @@ impl ReportOptions {
             exact: true,
             split: SplitSumSettings::default(),
             exact_on: ExactOn::Auto,
+            probe: None,
         }
     }
 
@@ -153,8 +162,8 @@ pub struct Row {
     pub wall_s: f64,
     /// Wall seconds of `envlight render` as its own process.
     pub process_s: f64,
-    /// The reference's own noise (half its two renders' relative RMS difference; 0 for the
-    /// exact sums).
+    /// The reference's own noise (half its two renders' relative RMS difference; for the
+    /// mirror's pixel-area mean its change from half the rays; 0 for the exact sums).
     pub noise: f64,
     /// The exact reference's worst relative error against its float64 twin at the pixels
     /// checked ([`TWIN_PIXELS`] a probe and material) where the GPU summed it; 0 otherwise.
@@ -580,7 +589,27 @@ pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Resul
         rows: Vec::new(),
         skipped: Vec::new(),
     };
-    for (file, kind) in probes(o.quick) {
+    let chosen = |file: &str| {
+        o.probe
+            .as_deref()
+            .is_none_or(|p| file == p || file.trim_end_matches(".hdr") == p)
+    };
+    let set: Vec<_> = probes(o.quick)
+        .into_iter()
+        .filter(|p| chosen(p.0))
+        .collect();
+    if set.is_empty() {
+        return Err(crate::Error::Invalid(format!(
+            "report: no probe of the set is named {:?} (the set: {})",
+            o.probe.as_deref().unwrap_or_default(),
+            probes(o.quick)
+                .iter()
+                .map(|p| p.0)
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    for (file, kind) in set {
         let path = dir.join(file);
         let loaded = path
             .canonicalize()
@@ -677,9 +706,15 @@ impl Session<'_> {
                     center: [0.0; 3],
                     radius: 1.0,
                 }];
-                // The map as loaded: its file frame is the world's.
-                let mean = crate::math::footprint::supersampled(p.env, &cam, &sphere, 16);
-                (mean, 0.0, 0.0)
+                // The map as loaded: its file frame is the world's. A sun's reflection is a
+                // step a few texels wide: the rays' mean converges as 1/n, so n is sized by
+                // the image (16 a pixel of the 512² this rule would give) and the mean's own
+                // error is estimated by its change from n/2 (the error at n/2 is twice n's).
+                let n = mirror_rays(cam.width);
+                let mean = crate::math::footprint::supersampled(p.env, &cam, &sphere, n);
+                let half = crate::math::footprint::supersampled(p.env, &cam, &sphere, n / 2);
+                let own = errors(&half, &mean, &self.pixels).0;
+                (mean, own, 0.0)
             }
             Reference::MonteCarlo => {
                 let (dp, split) = (o.paraboloid(), o.split);

@@ -42,6 +42,9 @@ pub struct ReportArgs {
     /// reference (default 16384, quick 1024)
     #[arg(long)]
     reference: Option<u32>,
+    /// Only this probe of the set (its file name, with or without .hdr)
+    #[arg(long)]
+    probe: Option<String>,
     /// Where the exact reference is summed: gpu (`passes::ExactShader`, a dozen pixels of
     /// each probe and material checked against its float64 twin), host (the float64 twin),
     /// or auto: the GPU unless the device is the CPU, where the host is the faster
@@ -193,6 +196,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     o.reference = args.reference.unwrap_or(o.reference);
     o.exact = args.reference.is_none();
     o.split = args.split();
+    o.probe = args.probe.clone();
     o.exact_on = match args.exact_on.as_str() {
         "gpu" => ExactOn::Gpu,
         "host" => ExactOn::Host,
@@ -275,6 +279,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         if o.quick { " (--quick)" } else { "" }
     );
     let mut md = markdown(&rows, &settings);
+    md.push_str(&crate::bench::pareto::goals_markdown(&rows));
     md.push_str(&limits(o.quick, &skipped));
     std::fs::write(out.join("report.md"), md).with_context(|| "report.md")?;
     plot(&out.join("report.png"), &rows, &device)?;
