@@ -156,6 +156,16 @@ fn quick_report_writes_its_three_files() {
     assert!(twins.iter().any(|e| *e > 0.0), "{twins:?}");
     let png = image::open(out.join("report.png")).unwrap();
     assert_eq!((png.width(), png.height()), (2 * 620, 520 + 90));
+    // The chart redrawn from report.csv alone, nothing measured.
+    std::fs::remove_file(out.join("report.png")).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_envlight"))
+        .args(["report", "--replot", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let again = image::open(out.join("report.png")).unwrap();
+    assert_eq!((again.width(), again.height()), (png.width(), png.height()));
     let _ = std::fs::remove_dir_all(&out);
 }
 

@@ -768,6 +768,73 @@ impl Session<'_> {
     }
 }
 
+/// The rows of a report.csv that [`csv`] wrote (to redraw its chart without measuring again);
+/// an error naming the line where one cannot be read.
+pub fn parse_csv(text: &str) -> Result<Vec<Row>> {
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or_else(|| crate::Error::Invalid(format!("report.csv: no column {name}")))
+    };
+    let named = |v: &str, known: &[&'static str], what: &str| {
+        known
+            .iter()
+            .copied()
+            .find(|k| *k == v)
+            .ok_or_else(|| crate::Error::Invalid(format!("report.csv: unknown {what} {v:?}")))
+    };
+    let techniques: Vec<&'static str> = every_technique()
+        .iter()
+        .map(|t| t.name())
+        .chain([super::cubes::PEER])
+        .collect();
+    let kinds = ["soft", "sun", "studio"];
+    let references = [
+        Reference::ExactGpu,
+        Reference::ExactHost,
+        Reference::MonteCarlo,
+        Reference::PixelAreaMean,
+    ]
+    .map(Reference::name);
+    let mut rows = Vec::new();
+    for (k, line) in lines.enumerate() {
+        let f: Vec<&str> = line.split(',').collect();
+        let at = |name: &str| -> Result<&str> {
+            f.get(col(name)?).copied().ok_or_else(|| {
+                crate::Error::Invalid(format!("report.csv line {}: too few fields", k + 2))
+            })
+        };
+        let num = |name: &str| -> Result<f64> {
+            at(name)?.parse::<f64>().map_err(|_| {
+                crate::Error::Invalid(format!("report.csv line {}: {name} is not a number", k + 2))
+            })
+        };
+        rows.push(Row {
+            probe: at("probe")?.to_string(),
+            kind: named(at("probe_kind")?, &kinds, "probe kind")?,
+            material: at("material")?.to_string(),
+            technique: named(at("technique")?, &techniques, "technique")?,
+            params: at("params")?.to_string(),
+            rms: num("relative_rms")?,
+            bias: num("mean_bias")?,
+            tile: num("worst_tile")?,
+            gpu_ms: num("gpu_ms")?,
+            pre_ms: num("precompute_gpu_ms")?,
+            wall_s: num("render_wall_s")?,
+            process_s: num("process_s")?,
+            noise: num("reference_noise")?,
+            twin: num("reference_twin_error")?,
+            reference: named(at("reference")?, &references, "reference")?,
+            frame_ms: num("changing_frame_gpu_ms")?,
+            frame_rms: num("changing_frame_relative_rms")?,
+        });
+    }
+    Ok(rows)
+}
+
 /// report.csv: a row per measurement.
 pub fn csv(rows: &[Row]) -> String {
     let mut s = String::from(
@@ -797,4 +864,52 @@ pub fn csv(rows: &[Row]) -> String {
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// report.csv read back is the rows written (to the digits the CSV keeps), and a row that
+    /// names what no report writes is refused by line.
+    #[test]
+    fn csv_reads_back_what_it_wrote() {
+        let row = Row {
+            probe: "quarry_01_1k".into(),
+            kind: "sun",
+            material: "ggx 0.05".into(),
+            technique: "fis",
+            params: "N=64 (no lights)".into(),
+            rms: 0.0123,
+            bias: -0.0004,
+            tile: 0.05,
+            gpu_ms: 12.5,
+            pre_ms: 10.25,
+            wall_s: 0.5,
+            process_s: 0.75,
+            noise: 0.0,
+            twin: 2.5e-7,
+            reference: Reference::ExactGpu.name(),
+            frame_ms: 30.0,
+            frame_rms: 0.0125,
+        };
+        let mirror = Row {
+            material: "mirror".into(),
+            technique: "lookup",
+            params: "point".into(),
+            reference: Reference::PixelAreaMean.name(),
+            ..row.clone()
+        };
+        let text = csv(&[row.clone(), mirror]);
+        let back = parse_csv(&text).unwrap();
+        assert_eq!(back.len(), 2);
+        assert_eq!(csv(&back), text);
+        assert_eq!(
+            (back[0].label(), back[1].reference),
+            (row.label(), "pixel-area mean")
+        );
+        let bad = text.replace("fis,", "nonsense,");
+        let e = parse_csv(&bad).unwrap_err().to_string();
+        assert!(e.contains("unknown technique \"nonsense\""), "{e}");
+    }
 }

@@ -42,6 +42,10 @@ pub struct ReportArgs {
     /// reference (default 16384, quick 1024)
     #[arg(long)]
     reference: Option<u32>,
+    /// Only redraw OUT/report.png from OUT/report.csv (and the device its report.md names),
+    /// measuring nothing
+    #[arg(long)]
+    replot: bool,
     /// Only this probe of the set (its file name, with or without .hdr)
     #[arg(long)]
     probe: Option<String>,
@@ -189,8 +193,29 @@ fn limits(quick: bool, skipped: &[String]) -> String {
     s
 }
 
+/// Redraws `out`/report.png from its report.csv, with the device its report.md names.
+fn replot(out: &Path) -> Result<()> {
+    let path = out.join("report.csv");
+    let text = std::fs::read_to_string(&path).with_context(|| path.display().to_string())?;
+    let rows =
+        crate::bench::report::parse_csv(&text).with_context(|| path.display().to_string())?;
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap_or_default();
+    let device = md
+        .split("Device: ")
+        .nth(1)
+        .and_then(|d| d.split(". Sphere").next())
+        .unwrap_or("(not named in report.md)")
+        .to_string();
+    plot(&out.join("report.png"), &rows, &device)?;
+    println!("wrote {}/report.png ({} rows)", out.display(), rows.len());
+    Ok(())
+}
+
 /// Runs the report.
 pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
+    if args.replot {
+        return replot(&args.out);
+    }
     let mut o = ReportOptions::new(args.quick);
     o.size = args.size.unwrap_or(o.size);
     o.reference = args.reference.unwrap_or(o.reference);

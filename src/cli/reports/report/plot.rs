@@ -101,7 +101,7 @@ pub(super) fn plot(path: &Path, rows: &[Row], device: &str) -> Result<()> {
     root.fill(&WHITE).map_err(|x| e(&x))?;
     let root = root
         .titled(
-            "envlight: error against converged Monte Carlo vs GPU time (mean over the probes)",
+            "envlight: error against the reference vs GPU time (mean over the probes)",
             ("sans-serif", 22),
         )
         .map_err(|x| e(&x))?;
@@ -154,7 +154,7 @@ pub(super) fn plot(path: &Path, rows: &[Row], device: &str) -> Result<()> {
         chart
             .configure_mesh()
             .x_desc("GPU ms per render (precomputation included)")
-            .y_desc("relative RMS vs MC")
+            .y_desc("relative RMS vs the reference")
             .label_style(("sans-serif", 13))
             .axis_desc_style(("sans-serif", 14))
             .draw()
