@@ -40,7 +40,7 @@ struct Lobe {
 };
 
 Lobe read_lobe(uint q) {
-    uint o = 5u * q;
+    uint o = EXACT_QUERY_VEC4S * q;
     Lobe l;
     l.t = queries[o].xyz;
     l.b = queries[o + 1u].xyz;
@@ -65,10 +65,10 @@ float texel_weight(Lobe l, Brdf br, uint layer, ivec2 p, vec3 dir, float om) {
     float tail = LIGHT_TAIL_FRACTION * LIGHT_TAIL_FRACTION * min(chord2, horizon * horizon);
     float w2 = max(l.a * l.a, tail);
     // The horizon crosses the texel: f·cos kinks there; a quarter of the scale.
-    if (abs(horizon) < rho) w2 *= 1.0 / 16.0;
+    if (abs(horizon) < rho) w2 /= EXACT_HORIZON_SHRINK * EXACT_HORIZON_SHRINK;
     float size = pc.per_width * rho;
     if (size * size < LIGHT_CENTRE_BELOW * LIGHT_CENTRE_BELOW * w2) return f_cos(l, br, dir) * om;
-    uint s = uint(min(ceil(size / sqrt(w2)), 8.0 * pc.per_width));
+    uint s = uint(min(ceil(size / sqrt(w2)), EXACT_MAX_CELLS_PER_WIDTH * pc.per_width));
     const float g = GAUSS2_OFFSET;  // 0.5 / √3: a cell's 2-point Gauss nodes
     float kw = 0.0, ww = 0.0;
     vec2 inv = 1.0 / vec2(pc.size);

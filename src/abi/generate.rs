@@ -24,6 +24,22 @@ pub fn generated_header() -> String {
     s
 }
 
+/// The exact reference pass's workgroup and rule (`glsl/exact_shade.comp`).
+fn define_exact(s: &mut String) {
+    let _ = writeln!(s, "#define EXACT_WORKGROUP {EXACT_WORKGROUP}u");
+    let _ = writeln!(s, "#define EXACT_QUERY_VEC4S {}u", exact::QUERY_VEC4S);
+    let _ = writeln!(
+        s,
+        "#define EXACT_HORIZON_SHRINK {:?}",
+        exact::HORIZON_SHRINK as f32
+    );
+    let _ = writeln!(
+        s,
+        "#define EXACT_MAX_CELLS_PER_WIDTH {:?}",
+        exact::MAX_CELLS_PER_WIDTH as f32
+    );
+}
+
 /// Bindings, SH and tile sizes, the light walk's parameters.
 fn define_sizes_and_lights(s: &mut String) {
     for (name, v) in binding::ALL {
@@ -33,7 +49,7 @@ fn define_sizes_and_lights(s: &mut String) {
     let n = (SH_MAX_LMAX + 1) * (SH_MAX_LMAX + 1);
     let _ = writeln!(s, "#define SH_MAX_COEFFS {n}");
     let _ = writeln!(s, "#define SH_WORKGROUP {SH_WORKGROUP}");
-    let _ = writeln!(s, "#define EXACT_WORKGROUP {EXACT_WORKGROUP}u");
+    define_exact(s);
     let _ = writeln!(s, "#define BRUTE_TILE {BRUTE_TILE}u");
     let _ = writeln!(s, "#define LIGHT_HEADER_VEC4S {}u", lights::HEADER_VEC4S);
     let _ = writeln!(s, "#define LIGHT_STEP_NODES {}u", lights::STEP_NODES);

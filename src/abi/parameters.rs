@@ -490,6 +490,18 @@ pub const SH_WORKGROUP: u32 = 64;
 /// f32 sum SH_RUN long. Disc mappings take one (their rim rule is long; see sh_project.comp).
 pub const SH_RUN: u32 = 16;
 
+/// The exact texel sums' rule (`math::exact::ExactFilter::shade` and
+/// `glsl/exact_shade.comp`).
+pub mod exact {
+    /// vec4s a query's lobe takes in the GPU pass's queries buffer.
+    pub const QUERY_VEC4S: u32 = 5;
+    /// Where the horizon crosses a texel, the lobe's scale is taken this much smaller
+    /// (f·cos kinks there, which Gauss points integrate to the square of their cells only).
+    pub const HORIZON_SHRINK: f64 = 4.0;
+    /// Most cells a side of a texel, per cell a lobe scale (`PER_WIDTH`).
+    pub const MAX_CELLS_PER_WIDTH: f64 = 8.0;
+}
+
 /// Workgroup size of the exact reference pass (`glsl/exact_shade.comp`, specialization
 /// constant 0): its shared-memory tree adds this many lanes' sums.
 pub const EXACT_WORKGROUP: u32 = 64;

@@ -113,18 +113,19 @@ pub fn material_names(rows: &[Row]) -> Vec<String> {
 fn reference_note(rows: &[Row], material: &str) -> String {
     let of: Vec<&Row> = rows.iter().filter(|r| r.material == material).collect();
     let worst = |f: fn(&Row) -> f64| of.iter().map(|r| f(r)).fold(0.0, f64::max);
+    use super::report::Reference;
     let kind = of.first().map_or("", |r| r.reference);
     match kind {
-        "exact (gpu)" => format!(
+        k if k == Reference::ExactGpu.name() => format!(
             "Reference: no sampling noise (exact texel sums on the GPU; against their float64 \
              twin at {} pixels a probe, worst {:.1e} relative).",
             super::report::TWIN_PIXELS,
             worst(|r| r.twin)
         ),
-        "exact (host float64)" => "Reference: no sampling noise (exact texel sums in float64 \
+        k if k == Reference::ExactHost.name() => "Reference: no sampling noise (exact texel sums in float64 \
              on the host; their own error, the texel rule's, below 1e-4 of a pixel)."
             .to_string(),
-        "pixel-area mean" => format!(
+        k if k == Reference::PixelAreaMean.name() => format!(
             "Reference: the pixel-area mean (n × n reflected rays a pixel, each reading its \
              texel; n = 8192 / the image's side, 128 at 64²): what a footprint lookup estimates; its own error, \
              estimated as its change from n/2: {:.2}% relative RMS on the worst probe (a sun's \

@@ -13,6 +13,7 @@ use super::brdf::{local_view, Brdf, Frame};
 use super::lights::lobe_scale;
 use super::mapping::{Coord, Mapping};
 use super::split_sum::chain_kernel;
+use crate::abi::exact::{HORIZON_SHRINK, MAX_CELLS_PER_WIDTH};
 use crate::abi::lights::{CENTRE_BELOW, TAIL_FRACTION};
 use crate::EnvMap;
 use glam::{DMat3, DVec3};
@@ -465,13 +466,15 @@ impl<'a> ExactFilter<'a> {
         if horizon.abs() < t.rho {
             // The horizon crosses the texel: f·cos kinks there, which Gauss points
             // integrate to the square of their cells only; a quarter of the scale.
-            w2 *= 1.0 / 16.0;
+            w2 /= HORIZON_SHRINK * HORIZON_SHRINK;
         }
         let size = per_width * t.rho;
         if size * size < CENTRE_BELOW * CENTRE_BELOW * w2 {
             return f(t.dir) * t.omega;
         }
-        let s = (size / w2.sqrt()).ceil().min(8.0 * per_width) as u32;
+        let s = (size / w2.sqrt())
+            .ceil()
+            .min(MAX_CELLS_PER_WIDTH * per_width) as u32;
         let mean = self.cell_mean(t, s, |d_file| f(self.file_to_world * d_file));
         mean.map_or(f(t.dir) * t.omega, |m| m * t.omega)
     }

@@ -10,6 +10,7 @@
 //! at most a workgroup's compensated sums). The lobes are prepared on the host
 //! ([`crate::math::exact::gpu_lobe`]) as the twin prepares them.
 
+use crate::abi::exact::{HORIZON_SHRINK, MAX_CELLS_PER_WIDTH};
 use crate::abi::{binding, push::ExactShadePush, ShaderId};
 use crate::error::{Error, Result};
 use crate::gpu::{Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timed, Usage};
@@ -23,7 +24,7 @@ use glam::{DMat3, DVec3};
 use gpu_allocator::MemoryLocation;
 
 /// vec4s a query's lobe takes in the queries' buffer.
-pub const QUERY_VEC4S: usize = 5;
+pub const QUERY_VEC4S: usize = crate::abi::exact::QUERY_VEC4S as usize;
 /// Invocations a workgroup.
 const WORKGROUP: u32 = crate::abi::EXACT_WORKGROUP;
 /// Texels an invocation sums where the device has no loop limit.
@@ -109,9 +110,9 @@ impl ExactShader {
         let Some(limit) = self.ctx.info().loop_iteration_limit else {
             return RUN;
         };
-        let s = (PER_WIDTH * rho_max / (0.25 * scale_min).max(1e-12))
+        let s = (PER_WIDTH * rho_max * HORIZON_SHRINK / scale_min.max(1e-12))
             .ceil()
-            .clamp(1.0, 8.0 * PER_WIDTH);
+            .clamp(1.0, MAX_CELLS_PER_WIDTH * PER_WIDTH);
         let tree = f64::from(WORKGROUP.ilog2());
         ((0.9 * limit as f64 - tree) / (1.0 + s * s)).max(1.0) as u32
     }
