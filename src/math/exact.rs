@@ -30,6 +30,13 @@ struct Texel {
     /// Its square root, the texel's angular size.
     rho: f64,
     radiance: [f64; 3],
+    /// A bound on the chord from its centre to any of its points (∞ where not known): no
+    /// point of a texel whose centre lies further than this below a surface's horizon is
+    /// above it.
+    reach: f64,
+    /// A lat-long texel's centre (sin θ, cos θ, sin φ, cos φ), from which its Gauss points'
+    /// directions follow by angle addition ([`ExactFilter::cell_mean`]); `None` elsewhere.
+    angles: Option<[f64; 4]>,
 }
 
 /// One filter value [`ExactFilter::evaluate`] finds.
@@ -147,6 +154,43 @@ const SHADE_SCALE_MAX: f64 = 0.25;
 /// the results do not depend on the number of threads.
 const ROWS_PER_CHUNK: usize = 8;
 
+/// The most cells a side [`ExactFilter::cell_offsets`] keeps tables for (the rule takes at
+/// most [`MAX_CELLS_PER_WIDTH`] × the cells per scale, 64 at the tests' finest).
+const MAX_TABLED_CELLS: usize = 128;
+
+/// Where Gauss point `n` (of 2s along a side) of a texel cut into s cells a side lies, in
+/// texels from the texel's start.
+fn gauss_node(n: u32, s: u32) -> f64 {
+    let g = 0.5 / 3f64.sqrt();
+    ((n / 2) as f64 + 0.5 + if n.is_multiple_of(2) { -g } else { g }) / s as f64
+}
+
+/// The (sine, cosine) of a lat-long texel's Gauss points' offsets from its centre, in polar
+/// angle (`theta`) and azimuth (`phi`), for one number of cells a side: the same for every
+/// texel of the map.
+struct CellOffsets {
+    theta: Vec<(f64, f64)>,
+    phi: Vec<(f64, f64)>,
+}
+
+/// [`Texel::reach`] for row `j` of a `w × h` lat-long map: the chord from a texel's centre to
+/// its furthest corner (the angle from the centre along an edge of constant azimuth is a
+/// sinusoid in θ, so no inner point lies further), with room for rounding.
+fn latlong_reach(w: u32, h: u32, j: u32) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    let dir = |theta: f64, phi: f64| {
+        let (st, ct) = theta.sin_cos();
+        DVec3::new(st * phi.sin(), ct, -st * phi.cos())
+    };
+    let (dt, dp) = (PI / h as f64, TAU / w as f64);
+    let centre = dir(dt * (j as f64 + 0.5), 0.0);
+    let far = [dt * j as f64, dt * (j + 1) as f64]
+        .map(|theta| (dir(theta, 0.5 * dp) - centre).length())
+        .into_iter()
+        .fold(0.0, f64::max);
+    far * (1.0 + 1e-9) + 1e-12
+}
+
 /// A map prepared for exact filters: its texels' world directions, solid angles and values,
 /// found as the sums visit them.
 pub struct ExactFilter<'a> {
@@ -159,6 +203,12 @@ pub struct ExactFilter<'a> {
     /// Other mappings' texel solid angles ([`Mapping::texel_solid_angles`]; empty for a
     /// lat-long, whose rows share one).
     omega: Vec<f64>,
+    /// A lat-long map's Gauss point offsets by cells a side, made on first use (empty for
+    /// other mappings).
+    cells: Vec<std::sync::OnceLock<CellOffsets>>,
+    /// Whether lat-long texels carry their reach and angles (the tests turn it off to check
+    /// those shortcuts against the general rule).
+    shortcuts: bool,
 }
 
 impl<'a> ExactFilter<'a> {
@@ -177,11 +227,17 @@ impl<'a> ExactFilter<'a> {
             Mapping::LatLong => Vec::new(),
             m => m.texel_solid_angles(map.width, map.height),
         };
+        let cells = match map.mapping {
+            Mapping::LatLong => (0..=MAX_TABLED_CELLS).map(|_| Default::default()).collect(),
+            _ => Vec::new(),
+        };
         ExactFilter {
             map,
             file_to_world,
             columns,
             omega,
+            cells,
+            shortcuts: true,
         }
     }
 
@@ -195,6 +251,10 @@ impl<'a> ExactFilter<'a> {
             let v = Mapping::texel_center(w, h, 0, 0, j).v;
             let (st, ct) = (std::f64::consts::PI * v).sin_cos();
             let omega = map.mapping.texel_solid_angle(w, h, 0, j);
+            let reach = match self.shortcuts {
+                true => latlong_reach(w, h, j),
+                false => f64::INFINITY,
+            };
             for (i, &(sp, cp)) in (0..w).zip(&self.columns) {
                 out.push(Texel {
                     layer,
@@ -204,6 +264,8 @@ impl<'a> ExactFilter<'a> {
                     omega,
                     rho: omega.sqrt(),
                     radiance: map.texel(layer, i, j).map(f64::from),
+                    reach,
+                    angles: self.shortcuts.then_some([st, ct, sp, cp]),
                 });
             }
             return;
@@ -227,6 +289,8 @@ impl<'a> ExactFilter<'a> {
                 omega,
                 rho: omega.sqrt(),
                 radiance: map.texel(layer, si, sj).map(f64::from),
+                reach: f64::INFINITY,
+                angles: None,
             });
         }
     }
@@ -459,8 +523,12 @@ impl<'a> ExactFilter<'a> {
         // ExactFilter::ggx's; and near the horizon, where Smith's masking takes f·cos to 0
         // over an angle of about α (and the cosine kinks), the same scale within a few
         // texels of it (its sine there standing for the angle as the chord does in the tail).
-        let chord2 = (t.dir - lobe.axis).length_squared();
         let horizon = lobe.frame.n.dot(t.dir);
+        if horizon < -t.reach {
+            // Wholly below the surface: f·cos is 0 at every point.
+            return 0.0;
+        }
+        let chord2 = (t.dir - lobe.axis).length_squared();
         let tail2 = TAIL_FRACTION * TAIL_FRACTION * chord2.min(horizon * horizon);
         let mut w2 = (a * a).max(tail2);
         if horizon.abs() < t.rho {
@@ -481,19 +549,31 @@ impl<'a> ExactFilter<'a> {
 
     /// The mean of `k` (a function of file-frame directions) over texel `t` by s × s cells
     /// of 2 × 2 Gauss points weighted by the mapping's density; `None` where no node holds
-    /// part of the sphere.
+    /// part of the sphere. A lat-long texel's points are found from its centre's angles by
+    /// angle addition ([`CellOffsets`]): no sine per point.
     fn cell_mean(&self, t: &Texel, s: u32, k: impl Fn(DVec3) -> f64) -> Option<f64> {
+        if let (Some([st, ct, sp, cp]), Some(cells)) = (t.angles, self.cell_offsets(s)) {
+            let (mut kw, mut ww) = (0.0, 0.0);
+            for &(sd, cd) in &cells.theta {
+                // sin θ ≥ 0 inside the map; the density 2π² sin θ up to its constant.
+                let (stb, ctb) = (st * cd + ct * sd, ct * cd - st * sd);
+                for &(sq, cq) in &cells.phi {
+                    let (spq, cpq) = (sp * cq + cp * sq, cp * cq - sp * sq);
+                    kw += stb * k(DVec3::new(stb * spq, ctb, -stb * cpq));
+                    ww += stb;
+                }
+            }
+            return (ww > 0.0).then(|| kw / ww);
+        }
         let map = self.map;
         let (w, h) = (map.width, map.height);
-        let g = 0.5 / 3f64.sqrt();
-        let node = |n: u32| (n / 2) as f64 + 0.5 + if n.is_multiple_of(2) { -g } else { g };
         let (mut kw, mut ww) = (0.0, 0.0);
         for b in 0..2 * s {
             for q in 0..2 * s {
                 let cc = Coord {
                     layer: t.layer,
-                    u: (t.i as f64 + node(q) / s as f64) / w as f64,
-                    v: (t.j as f64 + node(b) / s as f64) / h as f64,
+                    u: (t.i as f64 + gauss_node(q, s)) / w as f64,
+                    v: (t.j as f64 + gauss_node(b, s)) / h as f64,
                 };
                 let wt = map.mapping.footprint_weight(cc);
                 kw += wt * k(map.mapping.coord_to_dir(cc));
@@ -501,6 +581,24 @@ impl<'a> ExactFilter<'a> {
             }
         }
         (ww > 0.0).then(|| kw / ww)
+    }
+
+    /// A lat-long map's [`CellOffsets`] for `s` × `s` cells a texel, made on first use;
+    /// `None` for other mappings and for `s` above [`MAX_TABLED_CELLS`].
+    fn cell_offsets(&self, s: u32) -> Option<&CellOffsets> {
+        let slot = self.cells.get(s as usize)?;
+        let (w, h) = (self.map.width as f64, self.map.height as f64);
+        Some(slot.get_or_init(|| {
+            let side = |span: f64, n: f64| {
+                (0..2 * s)
+                    .map(|q| (span * (gauss_node(q, s) - 0.5) / n).sin_cos())
+                    .collect()
+            };
+            CellOffsets {
+                theta: side(std::f64::consts::PI, h),
+                phi: side(std::f64::consts::TAU, w),
+            }
+        }))
     }
 
     /// Irradiance E(n) = ∫ L·max(0, n·ω) dω, one node per texel: the cosine's scale is a
@@ -724,6 +822,50 @@ mod tests {
                 let a = f.ggx(r, alpha)[0];
                 let b = f.ggx_with(r, alpha, 8.0)[0];
                 assert!((a - b).abs() <= 1e-4 * b, "α {alpha} r {r}: {a} vs {b}");
+            }
+        }
+    }
+
+    /// A lat-long map's shortcuts (texels wholly below the horizon skipped, Gauss points by
+    /// angle addition) change no sum beyond rounding: every BRDF, views from head-on to
+    /// grazing, the sun in the lobe, in its tail and just below the horizon, within 1e-12
+    /// of the general rule's sums.
+    #[test]
+    fn lat_long_shortcuts_keep_the_sums() {
+        let (env, turn, sun) = turned_sun_sky();
+        let fast = ExactFilter::new(&env, turn);
+        let general = ExactFilter {
+            shortcuts: false,
+            cells: Vec::new(),
+            ..ExactFilter::new(&env, turn)
+        };
+        let mut brdfs = brdfs();
+        brdfs.push(Brdf::Ward { ax: 0.1, ay: 0.4 });
+        // Normals: the sun's mirror direction about a view, the sun 0.02 rad below the
+        // horizon (its texels straddle it), and one far from it.
+        let tilt = DVec3::new(0.0, 0.0, 1.0).cross(sun).normalize();
+        let below = DMat3::from_axis_angle(tilt, std::f64::consts::FRAC_PI_2 + 0.02) * sun;
+        for n in [
+            sun,
+            below.normalize(),
+            DVec3::new(-0.5, 0.2, 0.3).normalize(),
+        ] {
+            for brdf in &brdfs {
+                for (_, v) in views() {
+                    // views() turns about its own normal; carry it to n.
+                    let frame = Frame::new(n);
+                    let local = Frame::new(DVec3::new(0.2, 0.9, -0.3).normalize()).to_local(v);
+                    let v = frame.to_world(local);
+                    let (a, b) = (fast.shade(brdf, n, v), general.shade(brdf, n, v));
+                    for c in 0..3 {
+                        assert!(
+                            (a[c] - b[c]).abs() <= 1e-12 * b[c].abs().max(1e-300),
+                            "{brdf:?} n {n} v {v}: {} vs {}",
+                            a[c],
+                            b[c]
+                        );
+                    }
+                }
             }
         }
     }
