@@ -72,3 +72,48 @@ fn a_mis_scaled_sh_moves_its_rows_and_no_other() {
     assert!(moved >= 2, "no SH row");
     common::finish(ctx);
 }
+
+/// A technique's spheres are drawn together (one render: the same wall time in both rows),
+/// and each scores as its sphere alone does: SH-BRDF l = 2 on GGX 0.3 rendered alone,
+/// scored against the same exact sums, gives the row's relative RMS to 1e-6 (seen 1e-8:
+/// the float32 ray setup of a wider frame moves normals by an ulp or so).
+#[test]
+fn spheres_drawn_together_score_as_alone() {
+    use envlight::math::brdf::Brdf;
+    use envlight::render::score::{errors, exact_truth, scene, sphere_pixels};
+    use envlight::scene::{SplitSumSettings, Technique};
+    let Some(dir) = common::probes() else {
+        return;
+    };
+    let ctx = common::ctx();
+    let rows = rows(&ctx, &dir);
+    let pick = |material: &str| {
+        rows.iter()
+            .find(|r| r.material == material && r.label() == "sh_brdf l=2")
+            .unwrap_or_else(|| panic!("no sh_brdf l=2 row for {material}"))
+    };
+    let (diffuse, ggx) = (pick("diffuse"), pick("ggx 0.3"));
+    assert_eq!(diffuse.wall_s, ggx.wall_s, "drawn apart");
+    let env = envlight::io::load(dir.join("venice_sunset_1k.hdr"), &Default::default()).unwrap();
+    let cam = envlight::math::camera::sphere_camera(8);
+    let brdf = Brdf::Ggx {
+        alpha: 0.3,
+        correlated: true,
+    };
+    let w2f = envlight::math::Orientation::default().world_to_file();
+    let truth = exact_truth(&cam, brdf, &env, w2f);
+    let t = Technique::ShBrdf {
+        order: 2,
+        grid: envlight::math::sh_brdf::DEFAULT_GRID,
+        window: None,
+    };
+    let o = ReportOptions::new(true);
+    let sc = scene(cam, brdf, t, o.paraboloid(), 7, SplitSumSettings::default());
+    let r = envlight::render::Renderer::new(&ctx)
+        .render(&sc, &env)
+        .unwrap();
+    let alone = errors(&r.frame, &truth, &sphere_pixels(&cam)).0;
+    eprintln!("alone {alone:.6e}, drawn together {:.6e}", ggx.rms);
+    assert!((alone - ggx.rms).abs() <= 1e-6, "{alone} vs {}", ggx.rms);
+    common::finish(ctx);
+}

@@ -281,7 +281,14 @@ pub fn markdown(rows: &[Row], settings: &str) -> String {
          split_sum taps=8 is the lobe taps recipe. gltf-ibl-sampler rows are \
          glTF-IBL-Sampler's GGX cube of the probe (its defaults, N samples) shaded by \
          split-sum in float64. \"GPU ms\" below is the host path's whole render, \
-         precomputation included (\"of it precompute\"), as the chart plots it.\n\n\
+         precomputation included (\"of it precompute\"), as the chart plots it. A \
+         technique's materials are drawn together, as a renderer shades several materials \
+         from one environment's precomputation: one sphere per material side by side in one \
+         frame, each in a cell whose pixels see it as the sphere alone; what the spheres \
+         share (conversions, chains, SH projection, lights, prefiltered maps) counts whole in \
+         each row, the passes over pixels (G-buffer, shading, Monte Carlo) and the SH-BRDF \
+         tables (one per BRDF) a share per sphere. \"Whole process s\" and the render's \
+         wall time are that frame's, all its spheres together.\n\n\
          ![Pareto chart](report.png)\n",
     );
     for m in &mats {

@@ -154,13 +154,15 @@ pub struct Row {
     pub bias: f64,
     /// The worst 8 × 8 tile's |ratio − 1|.
     pub tile: f64,
-    /// GPU ms of the render (precomputation and shading).
+    /// GPU ms of the render (precomputation and shading) that falls to this material's
+    /// sphere: what its technique's spheres share counted whole, passes over pixels a share
+    /// (`share`).
     pub gpu_ms: f64,
     /// Of which precomputation.
     pub pre_ms: f64,
-    /// Wall seconds of the render in this process.
+    /// Wall seconds of the render in this process (the technique's spheres together).
     pub wall_s: f64,
-    /// Wall seconds of `envlight render` as its own process.
+    /// Wall seconds of `envlight render` as its own process (the same frame).
     pub process_s: f64,
     /// The reference's own noise (half its two renders' relative RMS difference; for the
     /// mirror's pixel-area mean its change from half the rays; 0 for the exact sums).
@@ -273,6 +275,7 @@ pub fn cannot_shade(quick: bool) -> Vec<(&'static str, Vec<&'static str>)> {
 /// A technique to score: its label, split-sum taps, whether the probe's lights are
 /// extracted (the default) or left in the map, and whether a mirror reads one texel a pixel
 /// (else the pixel's footprint).
+#[derive(Clone)]
 struct Case {
     technique: Technique,
     label: String,
@@ -378,42 +381,178 @@ fn techniques(brdf: &Brdf, quick: bool) -> Vec<(Technique, String, u32)> {
     v
 }
 
-/// What a case is measured against: a probe (file, kind; on disk at `absolute`, in memory
-/// and on the GPU), a material and its reference (with its noise).
+/// One render's cases: a case and the materials it shades, each drawn as its own sphere
+/// beside the others in one frame ([`group_scene`]), as a renderer shades several
+/// materials from one environment's precomputation.
+struct Group {
+    case: Case,
+    /// (index of the material in [`materials`], index of the case in its [`cases`]).
+    members: Vec<(usize, usize)>,
+}
+
+/// The cases of every material of the set, grouped: one group per technique, parameters,
+/// taps, lights and lookup filter and per `shared(material's BRDF, case)`, what the
+/// material's render would precompute ([`shared_work`]): materials whose precomputation
+/// differs (a finer lobe asks for a larger paraboloid) are drawn apart.
+fn groups(quick: bool, shared: impl Fn(Brdf, &Case) -> String) -> Vec<Group> {
+    let mut groups: Vec<(String, Group)> = Vec::new();
+    for (m, (_, brdf)) in materials(quick).into_iter().enumerate() {
+        for (c, case) in cases(&brdf, quick).into_iter().enumerate() {
+            let key = format!(
+                "{:?} {} {} {} {} {}",
+                case.technique,
+                case.label,
+                case.taps,
+                case.extract,
+                case.point,
+                shared(brdf, &case)
+            );
+            match groups.iter_mut().find(|(k, _)| *k == key) {
+                Some((_, g)) => g.members.push((m, c)),
+                None => groups.push((
+                    key,
+                    Group {
+                        case,
+                        members: vec![(m, c)],
+                    },
+                )),
+            }
+        }
+    }
+    groups.into_iter().map(|(_, g)| g).collect()
+}
+
+/// What a render of `sc` on a map of shape `map` precomputes, in words: its passes, the
+/// paraboloid's conversion, the lights' extractions, the split-sum chain, the SH order and
+/// Monte Carlo's budget (not the per-object SH-BRDF tables, split among the spheres).
+fn shared_work(sc: &Scene, map: crate::render::MapShape) -> String {
+    let plan = crate::render::plan::plan_for(sc, map);
+    let kinds: Vec<PassKind> = plan.passes.iter().map(|p| p.kind).collect();
+    format!(
+        "{kinds:?} {:?} {:?} {:?} {} {:?}",
+        plan.dp, plan.lights, plan.split, plan.lmax, plan.mc
+    )
+}
+
+/// `base` (a scene of one sphere at the origin seen by the report's camera) with one sphere
+/// per BRDF of `brdfs` side by side along the camera's right axis, each in a cell of the
+/// camera's size: the frame is `brdfs.len()` cells wide and each cell's pixels see their
+/// sphere exactly as the one camera sees the one sphere (an orthographic view, offsets of a
+/// whole cell).
+fn group_scene(base: &Scene, brdfs: &[Brdf]) -> Scene {
+    let mut sc = base.clone();
+    let cam = &mut sc.camera;
+    let n = brdfs.len();
+    let cell = match cam.projection {
+        crate::math::camera::Projection::Orthographic { height } => {
+            height * cam.width as f64 / cam.height as f64
+        }
+        crate::math::camera::Projection::Perspective { .. } => 0.0,
+    };
+    cam.width *= n as u32;
+    let template = base.objects[0].clone();
+    sc.objects = brdfs
+        .iter()
+        .enumerate()
+        .map(|(k, &brdf)| {
+            let mut o = template.clone();
+            o.shape = crate::math::camera::Shape::Sphere {
+                center: [(k as f64 - 0.5 * (n as f64 - 1.0)) * cell, 0.0, 0.0],
+                radius: 1.0,
+            };
+            o.material.kind = brdf;
+            o
+        })
+        .collect();
+    sc
+}
+
+/// Cell `k` (of `size` × `size` pixels) of a frame of cells side by side.
+fn cell_of(frame: &EnvMap, k: usize, size: u32) -> EnvMap {
+    let (w, s) = (frame.width as usize, size as usize);
+    let texels = (0..s)
+        .flat_map(|j| {
+            frame.texels[j * w + k * s..j * w + (k + 1) * s]
+                .iter()
+                .copied()
+        })
+        .collect();
+    EnvMap::new(crate::Mapping::LatLong, size, size, texels)
+}
+
+/// One material's sphere of a group: its name, its reference (which, frame, noise, twin
+/// error) and where its row goes.
+struct Member<'a> {
+    material: &'a str,
+    truth: &'a (Reference, EnvMap, f64, f64),
+    order: (usize, usize),
+}
+
+/// What a group is measured against: a probe (file, kind; on disk at `absolute`, in memory
+/// and on the GPU) and each member's reference.
 struct Against<'a> {
     process: &'a dyn Fn(&Scene) -> Result<f64>,
     progress: &'a dyn Fn(&str),
     renderer: &'a Renderer,
     probe: (&'a str, &'static str),
-    material: &'a str,
     absolute: &'a Path,
     env: &'a EnvMap,
     gpu: &'a GpuEnvMap,
-    /// The reference: its frame, its noise and its error against its float64 twin.
-    truth: (&'a EnvMap, f64, f64),
-    reference: Reference,
+    /// The side of each member's cell, and its scored pixels.
+    size: u32,
     pixels: &'a [(usize, u32)],
     /// The pipeline sets already built ([`warm_key`]).
     warmed: &'a std::cell::RefCell<std::collections::HashSet<String>>,
 }
 
-/// What decides the pipelines a case's render builds: its technique, BRDF, lights and
+/// What decides the pipelines a case's render builds: its technique, BRDFs, lights and
 /// lookup filter, on the host path or the resident one.
 fn warm_key(sc: &Scene, resident: bool) -> String {
     let o = &sc.objects[0].material;
+    let kinds: Vec<u32> = sc.objects.iter().map(|o| o.material.kind.id()).collect();
     format!(
-        "{resident} {:?} {} {:?} {:?}",
-        o.technique,
-        o.kind.id(),
-        sc.environment.lights,
-        sc.environment.filter
+        "{resident} {:?} {kinds:?} {:?} {:?}",
+        o.technique, sc.environment.lights, sc.environment.filter
     )
 }
 
-/// One case's row: the host path's render timed and scored, the whole process timed, and
-/// the frame of a changing environment (the resident path, except Monte Carlo's).
-fn measure(a: &Against<'_>, sc: &Scene, t: Technique, params: String) -> Result<Row> {
-    let truth = a.truth.0;
+/// GPU ms of `records` that fall to one of `n` spheres drawn together, and of it the
+/// precomputation: passes over the frame's pixels (G-buffer, shading, Monte Carlo) and the
+/// SH-BRDF tables (one per sphere's BRDF) split evenly, what the spheres share (conversions,
+/// chains, projections, lights, prefiltered maps) counted whole.
+fn share(records: &[crate::render::PassRecord], n: usize) -> (f64, f64) {
+    let per_frame = |k: PassKind| {
+        matches!(
+            k,
+            PassKind::GBuffer | PassKind::Shade | PassKind::MonteCarlo
+        )
+    };
+    let split = |k: PassKind| per_frame(k) || k == PassKind::ShBrdfTable;
+    let ms = |p: &crate::render::PassRecord| match split(p.kind) {
+        true => p.ms() / n as f64,
+        false => p.ms(),
+    };
+    let gpu: f64 = records.iter().map(ms).sum();
+    // (+ 0.0: an empty float sum is −0.)
+    let pre = records
+        .iter()
+        .filter(|p| !per_frame(p.kind))
+        .map(ms)
+        .sum::<f64>()
+        + 0.0;
+    (gpu, pre)
+}
+
+/// A group's rows: the host path's render of its spheres timed and each cell scored, the
+/// whole process timed, and the frame of a changing environment (the resident path, except
+/// Monte Carlo's).
+fn measure(
+    a: &Against<'_>,
+    sc: &Scene,
+    (t, params): (Technique, &str),
+    members: &[Member<'_>],
+) -> Result<Vec<((usize, usize), Row)>> {
+    let n = members.len();
     // One untimed render first where this case's pipelines are not built yet (they are
     // built on first use).
     if a.warmed.borrow_mut().insert(warm_key(sc, false)) {
@@ -422,69 +561,64 @@ fn measure(a: &Against<'_>, sc: &Scene, t: Technique, params: String) -> Result<
     let t0 = Instant::now();
     let r = a.renderer.render(sc, a.env)?;
     let wall_s = t0.elapsed().as_secs_f64();
-    let (rms, bias, tile) = errors(&r.frame, truth, a.pixels);
     let mut on_disk = sc.clone();
     on_disk.environment.file = a.absolute.to_path_buf();
     let process_s = (a.process)(&on_disk)?;
-    let per_frame = |k: PassKind| {
-        matches!(
-            k,
-            PassKind::GBuffer | PassKind::Shade | PassKind::MonteCarlo
-        )
-    };
-    let gpu_ms: f64 = r.records.iter().map(|p| p.ms()).sum();
-    // (+ 0.0: an empty float sum is −0.)
-    let pre_ms: f64 = r
-        .records
-        .iter()
-        .filter(|p| !per_frame(p.kind))
-        .map(|p| p.ms())
-        .sum::<f64>()
-        + 0.0;
-    let (frame_ms, frame_rms) = match t {
-        Technique::Mc { .. } => (gpu_ms, rms),
+    let (gpu_ms, pre_ms) = share(&r.records, n);
+    let changing = match t {
+        Technique::Mc { .. } => None,
         _ => {
             let warm = a.warmed.borrow_mut().insert(warm_key(sc, true));
-            changing_frame(a.renderer, sc, a.gpu, truth, a.pixels, warm)?
+            Some(changing_frame(a.renderer, sc, a.gpu, warm)?)
         }
     };
-    let row = Row {
-        probe: a.probe.0.trim_end_matches(".hdr").to_string(),
-        kind: a.probe.1,
-        material: a.material.to_string(),
-        technique: t.name(),
-        params,
-        rms,
-        bias,
-        tile,
-        gpu_ms,
-        pre_ms,
-        wall_s,
-        process_s,
-        noise: a.truth.1,
-        twin: a.truth.2,
-        reference: a.reference.name(),
-        frame_ms,
-        frame_rms,
-    };
-    (a.progress)(&format!(
-        "{:>28} {:>9} {:<16} rms {:>8.2e} bias {:>+9.2e} tile {:>8.2e} gpu {:>9.2} ms (pre {:>8.2}) wall {:.3} s; changing: {:>9.2} ms rms {:>8.2e}",
-        row.probe, row.material, row.label(), rms, bias, tile, gpu_ms, pre_ms, wall_s, frame_ms, frame_rms
-    ));
-    Ok(row)
+    let mut rows = Vec::new();
+    for (k, m) in members.iter().enumerate() {
+        let (reference, truth, noise, twin) = m.truth;
+        let (rms, bias, tile) = errors(&cell_of(&r.frame, k, a.size), truth, a.pixels);
+        let (frame_ms, frame_rms) = match &changing {
+            None => (gpu_ms, rms),
+            Some((records, frame)) => (
+                share(records, n).0,
+                errors(&cell_of(frame, k, a.size), truth, a.pixels).0,
+            ),
+        };
+        let row = Row {
+            probe: a.probe.0.trim_end_matches(".hdr").to_string(),
+            kind: a.probe.1,
+            material: m.material.to_string(),
+            technique: t.name(),
+            params: params.to_string(),
+            rms,
+            bias,
+            tile,
+            gpu_ms,
+            pre_ms,
+            wall_s,
+            process_s,
+            noise: *noise,
+            twin: *twin,
+            reference: reference.name(),
+            frame_ms,
+            frame_rms,
+        };
+        (a.progress)(&format!(
+            "{:>28} {:>12} {:<16} rms {:>8.2e} bias {:>+9.2e} tile {:>8.2e} gpu {:>9.2} ms (pre {:>8.2}) wall {:.3} s ({n} spheres); changing: {:>9.2} ms rms {:>8.2e}",
+            row.probe, row.material, row.label(), rms, bias, tile, gpu_ms, pre_ms, wall_s, frame_ms, frame_rms
+        ));
+        rows.push((m.order, row));
+    }
+    Ok(rows)
 }
 
 /// The resident path's frame of `sc` from `gpu` (`Renderer::resident`, one untimed frame
-/// first where `warm`: pipelines are built on first use): its GPU ms and its relative RMS
-/// against `truth`.
+/// first where `warm`: pipelines are built on first use): its pass records and its frame.
 fn changing_frame(
     renderer: &Renderer,
     sc: &Scene,
     gpu: &GpuEnvMap,
-    truth: &EnvMap,
-    pixels: &[(usize, u32)],
     warm: bool,
-) -> Result<(f64, f64)> {
+) -> Result<(Vec<crate::render::PassRecord>, EnvMap)> {
     let prepared = renderer.resident(
         sc,
         crate::render::MapShape {
@@ -497,8 +631,7 @@ fn changing_frame(
         renderer.render_resident(&prepared, gpu)?;
     }
     let r = renderer.render_resident(&prepared, gpu)?;
-    let ms = r.records.iter().map(|p| p.ms()).sum();
-    Ok((ms, errors(&r.frame, truth, pixels).0))
+    Ok((r.records, r.frame))
 }
 
 /// The rows of glTF-IBL-Sampler's cubes of `file` (`at`: file, probe kind, material) for a
@@ -638,11 +771,7 @@ pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Resul
             // The map on the GPU once, for the resident path's frames and the exact sums.
             gpu: GpuEnvMap::upload(ctx, &env)?,
         };
-        for (name, brdf) in materials(o.quick) {
-            report
-                .rows
-                .extend(session.material_rows(&probe, name, brdf)?);
-        }
+        report.rows.extend(session.probe_rows(&probe)?);
     }
     if report.rows.is_empty() && !report.skipped.is_empty() {
         return Err(crate::Error::Invalid(format!(
@@ -725,46 +854,90 @@ impl Session<'_> {
         Ok((reference, frame, noise, twin))
     }
 
-    /// Every case of material `name` (`brdf`) on probe `p`, and the peers' cubes beside them.
-    fn material_rows(&self, p: &LoadedProbe, name: &str, brdf: Brdf) -> Result<Vec<Row>> {
+    /// Every case of every material on probe `p`, a group's materials rendered together
+    /// ([`groups`]), in the order of the materials and their cases, each material's peers'
+    /// cubes after its cases.
+    fn probe_rows(&self, p: &LoadedProbe) -> Result<Vec<Row>> {
         let (o, cam) = (self.o, self.cam);
         let (split, dp) = (o.split, o.paraboloid());
-        let (reference, truth, noise, twin) = self.reference(p, name, brdf)?;
-        let mut rows = Vec::new();
-        for c in cases(&brdf, o.quick) {
-            let (t, params, taps) = (c.technique, c.label, c.taps);
-            let mut sc = scene(cam, brdf, t, dp, 7, SplitSumSettings { taps, ..split });
+        let set = materials(o.quick);
+        let truths = set
+            .iter()
+            .map(|&(name, brdf)| self.reference(p, name, brdf))
+            .collect::<Result<Vec<_>>>()?;
+        let one = |brdf: Brdf, c: &Case| {
+            let split = SplitSumSettings {
+                taps: c.taps,
+                ..split
+            };
+            let mut sc = scene(cam, brdf, c.technique, dp, 7, split);
             if !c.extract {
                 sc.environment.lights = LightsMode::None;
             }
             if c.point {
                 sc.environment.filter = LookupFilter::Point;
             }
+            sc
+        };
+        let shape = crate::render::MapShape::of(p.env);
+        let mut rows = Vec::new();
+        for g in groups(o.quick, |brdf, c| shared_work(&one(brdf, c), shape)) {
+            let c = &g.case;
+            let brdfs: Vec<Brdf> = g.members.iter().map(|&(m, _)| set[m].1).collect();
+            let sc = group_scene(&one(brdfs[0], c), &brdfs);
+            // Drawn together, the spheres precompute what each would alone.
+            let alone = shared_work(&one(brdfs[0], c), shape);
+            if shared_work(&sc, shape) != alone {
+                return Err(crate::Error::Invalid(format!(
+                    "report: {} {} on {} spheres plans other precomputation than one alone",
+                    c.technique.name(),
+                    c.label,
+                    brdfs.len()
+                )));
+            }
+            let members: Vec<Member> = g
+                .members
+                .iter()
+                .map(|&(m, k)| Member {
+                    material: set[m].0,
+                    truth: &truths[m],
+                    order: (m, k),
+                })
+                .collect();
             let at = Against {
                 process: self.hooks.process,
                 progress: self.hooks.progress,
                 renderer: &self.renderer,
                 probe: (p.file, p.kind),
-                material: name,
                 absolute: p.absolute,
                 env: p.env,
                 gpu: &p.gpu,
-                truth: (&truth, noise, twin),
-                reference,
+                size: cam.width,
                 pixels: &self.pixels,
                 warmed: &self.warmed,
             };
-            rows.push(measure(&at, &sc, t, params)?);
+            rows.extend(measure(&at, &sc, (c.technique, &c.label), &members)?);
         }
-        // The peers' cubes are shaded by split-sum: its per-frame shading cost here.
-        let shading = rows
-            .iter()
-            .find(|r| r.technique == "split_sum" && r.params.is_empty())
-            .map_or(0.0, |r| r.gpu_ms - r.pre_ms);
-        let at = (p.file, p.kind, name);
-        let scored = (&truth, noise, twin, reference);
-        rows.extend(peer_rows(&p.peers, at, brdf, &cam, scored, shading));
-        Ok(rows)
+        rows.sort_by_key(|(order, _)| *order);
+        let mut out = Vec::new();
+        for (m, &(name, brdf)) in set.iter().enumerate() {
+            let mine: Vec<Row> = rows
+                .iter()
+                .filter(|(order, _)| order.0 == m)
+                .map(|(_, r)| r.clone())
+                .collect();
+            // The peers' cubes are shaded by split-sum: its per-frame shading cost here.
+            let shading = mine
+                .iter()
+                .find(|r| r.technique == "split_sum" && r.params.is_empty())
+                .map_or(0.0, |r| r.gpu_ms - r.pre_ms);
+            let (reference, truth, noise, twin) = &truths[m];
+            let at = (p.file, p.kind, name);
+            let scored = (truth, *noise, *twin, *reference);
+            out.extend(mine);
+            out.extend(peer_rows(&p.peers, at, brdf, &cam, scored, shading));
+        }
+        Ok(out)
     }
 }
 
@@ -869,6 +1042,48 @@ pub fn csv(rows: &[Row]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Spheres drawn together: each cell's pixels see their own sphere, with the normal the
+    /// one camera sees on the one sphere (to 1e-12), and the same pixels miss (an odd and an
+    /// even count; a layout off by half a cell fails).
+    #[test]
+    fn each_cell_sees_its_sphere_as_alone() {
+        use crate::math::camera::trace;
+        let cam = sphere_camera(16);
+        let one = scene(
+            cam,
+            Brdf::Lambert,
+            Technique::Sh { order: 2 },
+            None,
+            1,
+            Default::default(),
+        );
+        let alone: Vec<_> = one.objects.iter().map(|o| o.shape).collect();
+        for n in [2usize, 3] {
+            let brdfs = vec![Brdf::Lambert; n];
+            let sc = group_scene(&one, &brdfs);
+            assert_eq!((sc.camera.width, sc.camera.height), (16 * n as u32, 16));
+            let shapes: Vec<_> = sc.objects.iter().map(|o| o.shape).collect();
+            for k in 0..n {
+                for j in 0..16 {
+                    for i in 0..16 {
+                        let (o, d) = cam.ray(i, j);
+                        let want = trace(&alone, o, d);
+                        let (o, d) = sc.camera.ray(i + 16 * k as u32, j);
+                        let got = trace(&shapes, o, d);
+                        match (want, got) {
+                            (None, None) => {}
+                            (Some(w), Some(g)) => {
+                                assert_eq!(g.index, k, "cell {k} pixel ({i}, {j})");
+                                assert!((w.normal - g.normal).length() < 1e-12);
+                            }
+                            (w, g) => panic!("n {n} cell {k} ({i}, {j}): {w:?} vs {g:?}"),
+                        }
+                    }
+                }
+            }
+        }
+    }
 
     /// report.csv read back is the rows written (to the digits the CSV keeps), and a row that
     /// names what no report writes is refused by line.
