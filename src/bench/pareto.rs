@@ -54,7 +54,7 @@ pub fn points(rows: &[Row], material: &str) -> Vec<Point> {
                 bias: v.iter().map(|r| r.bias.abs()).sum::<f64>() / n,
                 tile: v.iter().map(|r| r.tile).fold(0.0, f64::max),
                 pre: v.iter().map(|r| r.pre_ms).sum::<f64>() / n,
-                process: v.iter().map(|r| r.process_s).sum::<f64>() / n,
+                process: finite_mean(v.iter().map(|r| r.process_s)),
                 frame: v.iter().map(|r| r.frame_ms).sum::<f64>() / n,
                 frame_rms: v.iter().map(|r| r.frame_rms).sum::<f64>() / n,
                 label,
@@ -62,6 +62,23 @@ pub fn points(rows: &[Row], material: &str) -> Vec<Point> {
             }
         })
         .collect()
+}
+
+/// The mean of the finite values (a process is timed on the first probe only); NaN where
+/// there is none.
+fn finite_mean(v: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = v
+        .filter(|x| x.is_finite())
+        .fold((0.0, 0u32), |(s, n), x| (s + x, n + 1));
+    sum / n as f64
+}
+
+/// Seconds to 3 decimals, "—" for NaN (not measured).
+fn seconds(s: f64) -> String {
+    match s.is_nan() {
+        true => "—".to_string(),
+        false => format!("{s:.3}"),
+    }
 }
 
 /// Indices of the Pareto front, fastest first: each is more accurate than everything faster.
@@ -288,7 +305,9 @@ pub fn markdown(rows: &[Row], settings: &str) -> String {
          share (conversions, chains, SH projection, lights, prefiltered maps) counts whole in \
          each row, the passes over pixels (G-buffer, shading, Monte Carlo) and the SH-BRDF \
          tables (one per BRDF) a share per sphere. \"Whole process s\" and the render's \
-         wall time are that frame's, all its spheres together.\n\n\
+         wall time are that frame's, all its spheres together; the process is timed on the \
+         first probe only (it renders the frame again, and takes about as long on each 1k \
+         probe).\n\n\
          ![Pareto chart](report.png)\n",
     );
     for m in &mats {
@@ -301,7 +320,7 @@ pub fn markdown(rows: &[Row], settings: &str) -> String {
         for (i, q) in p.iter().enumerate() {
             let _ = writeln!(
                 md,
-                "| {} | {:.2}% | {:.2}% | {:.2}% | {:.2}% | {:.2} | {:.2} | {:.3} | {:.2} | {:.2}% | {} |",
+                "| {} | {:.2}% | {:.2}% | {:.2}% | {:.2}% | {:.2} | {:.2} | {} | {:.2} | {:.2}% | {} |",
                 q.label,
                 100.0 * q.rms,
                 100.0 * q.worst,
@@ -309,7 +328,7 @@ pub fn markdown(rows: &[Row], settings: &str) -> String {
                 100.0 * q.tile,
                 q.ms,
                 q.pre,
-                q.process,
+                seconds(q.process),
                 q.frame,
                 100.0 * q.frame_rms,
                 if f.contains(&i) { "yes" } else { "" }
@@ -321,7 +340,7 @@ pub fn markdown(rows: &[Row], settings: &str) -> String {
     for r in rows {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {:.2}% | {:+.2}% | {:.2}% | {:.2} | {:.3} | {:.3} |",
+            "| {} | {} | {} | {} | {:.2}% | {:+.2}% | {:.2}% | {:.2} | {:.3} | {} |",
             r.probe,
             r.kind,
             r.material,
@@ -331,7 +350,7 @@ pub fn markdown(rows: &[Row], settings: &str) -> String {
             100.0 * r.tile,
             r.gpu_ms,
             r.wall_s,
-            r.process_s
+            seconds(r.process_s)
         );
     }
     md

@@ -392,28 +392,55 @@ impl OverlapShape {
 /// its direction falls in (no filtering: [`super::convert::sample_nearest`]). `env` in its
 /// file's frame (no orientation). The reference of the footprint filter's accuracy.
 pub fn supersampled(env: &crate::EnvMap, cam: &Camera, shapes: &[Shape], n: u32) -> crate::EnvMap {
-    let mut texels = Vec::with_capacity((cam.width * cam.height) as usize);
-    for j in 0..cam.height {
-        for i in 0..cam.width {
-            let mut acc = [0.0; 3];
-            for s in 0..n * n {
-                let x = i as f64 + ((s % n) as f64 + 0.5) / n as f64;
-                let y = j as f64 + ((s / n) as f64 + 0.5) / n as f64;
-                let (o, d) = cam.ray_at(x, y);
-                let dir = match trace(shapes, o, d) {
-                    Some(h) => d - 2.0 * h.normal.dot(d) * h.normal,
-                    None => d,
-                };
-                let l = super::convert::sample_nearest(env, dir);
-                for c in 0..3 {
-                    acc[c] += l[c];
+    let row = |j: u32| -> Vec<[f32; 3]> {
+        (0..cam.width)
+            .map(|i| {
+                let mut acc = [0.0; 3];
+                for s in 0..n * n {
+                    let x = i as f64 + ((s % n) as f64 + 0.5) / n as f64;
+                    let y = j as f64 + ((s / n) as f64 + 0.5) / n as f64;
+                    let (o, d) = cam.ray_at(x, y);
+                    let dir = match trace(shapes, o, d) {
+                        Some(h) => d - 2.0 * h.normal.dot(d) * h.normal,
+                        None => d,
+                    };
+                    let l = super::convert::sample_nearest(env, dir);
+                    for c in 0..3 {
+                        acc[c] += l[c];
+                    }
                 }
-            }
-            let k = (n * n) as f64;
-            texels.push(acc.map(|a| (a / k) as f32));
-        }
-    }
-    crate::EnvMap::new(super::Mapping::LatLong, cam.width, cam.height, texels)
+                let k = (n * n) as f64;
+                acc.map(|a| (a / k) as f32)
+            })
+            .collect()
+    };
+    // Rows on every core, each pixel's sum in the same order as on one.
+    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()) as u32;
+    let rows: Vec<Vec<[f32; 3]>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..threads)
+            .map(|t| {
+                let row = &row;
+                scope.spawn(move || {
+                    (t..cam.height)
+                        .step_by(threads as usize)
+                        .map(|j| (j, row(j)))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        let mut all: Vec<(u32, Vec<[f32; 3]>)> = handles
+            .into_iter()
+            .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect();
+        all.sort_by_key(|(j, _)| *j);
+        all.into_iter().map(|(_, r)| r).collect()
+    });
+    crate::EnvMap::new(
+        super::Mapping::LatLong,
+        cam.width,
+        cam.height,
+        rows.concat(),
+    )
 }
 
 #[cfg(test)]
