@@ -62,7 +62,8 @@ float texel_weight(Lobe l, Brdf br, uint layer, ivec2 p, vec3 dir, float om) {
     vec3 e = dir - l.axis;
     float chord2 = dot(e, e);
     float horizon = dot(l.n, dir);
-    float tail = LIGHT_TAIL_FRACTION * LIGHT_TAIL_FRACTION * min(chord2, horizon * horizon);
+    float reach = EXACT_HORIZON_REACH * horizon;
+    float tail = LIGHT_TAIL_FRACTION * LIGHT_TAIL_FRACTION * min(chord2, reach * reach);
     float w2 = max(l.a * l.a, tail);
     // The horizon crosses the texel: f·cos kinks there; a quarter of the scale.
     if (abs(horizon) < rho) w2 /= EXACT_HORIZON_SHRINK * EXACT_HORIZON_SHRINK;

@@ -35,6 +35,11 @@ fn define_exact(s: &mut String) {
     );
     let _ = writeln!(
         s,
+        "#define EXACT_HORIZON_REACH {:?}",
+        exact::HORIZON_REACH as f32
+    );
+    let _ = writeln!(
+        s,
         "#define EXACT_MAX_CELLS_PER_WIDTH {:?}",
         exact::MAX_CELLS_PER_WIDTH as f32
     );

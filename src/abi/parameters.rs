@@ -498,6 +498,11 @@ pub mod exact {
     /// Where the horizon crosses a texel, the lobe's scale is taken this much smaller
     /// (f·cos kinks there, which Gauss points integrate to the square of their cells only).
     pub const HORIZON_SHRINK: f64 = 4.0;
+    /// Near a surface's horizon the lobe's scale is at most this many times the tail's
+    /// fraction of the horizon's sine: the cosine and Smith's masking vary over that distance
+    /// itself (the cosine is its sine, linear; the masking over about α), not over an eighth
+    /// of it as a θ⁻⁴ tail does. With the tail's 1/8 it is the sine.
+    pub const HORIZON_REACH: f64 = 8.0;
     /// Most cells a side of a texel, per cell a lobe scale (`PER_WIDTH`).
     pub const MAX_CELLS_PER_WIDTH: f64 = 8.0;
 }

@@ -13,7 +13,7 @@ use super::brdf::{local_view, Brdf, Frame};
 use super::lights::lobe_scale;
 use super::mapping::{Coord, Mapping};
 use super::split_sum::chain_kernel;
-use crate::abi::exact::{HORIZON_SHRINK, MAX_CELLS_PER_WIDTH};
+use crate::abi::exact::{HORIZON_REACH, HORIZON_SHRINK, MAX_CELLS_PER_WIDTH};
 use crate::abi::lights::{CENTRE_BELOW, TAIL_FRACTION};
 use crate::EnvMap;
 use glam::{DMat3, DVec3};
@@ -521,15 +521,17 @@ impl<'a> ExactFilter<'a> {
         let f = |d: DVec3| lobe.brdf.eval_cos(lobe.wo, lobe.frame.to_local(d));
         // The lobe's scale, at most SHADE_SCALE_MAX, about its axis and in its tail as
         // ExactFilter::ggx's; and near the horizon, where Smith's masking takes f·cos to 0
-        // over an angle of about α (and the cosine kinks), the same scale within a few
-        // texels of it (its sine there standing for the angle as the chord does in the tail).
+        // over an angle of about α (and the cosine kinks), at most the horizon's sine
+        // (HORIZON_REACH × the tail's fraction of it): the cosine is that sine, linear, and
+        // the masking varies over about α.
         let horizon = lobe.frame.n.dot(t.dir);
         if horizon < -t.reach {
             // Wholly below the surface: f·cos is 0 at every point.
             return 0.0;
         }
         let chord2 = (t.dir - lobe.axis).length_squared();
-        let tail2 = TAIL_FRACTION * TAIL_FRACTION * chord2.min(horizon * horizon);
+        let reach2 = HORIZON_REACH * HORIZON_REACH * horizon * horizon;
+        let tail2 = TAIL_FRACTION * TAIL_FRACTION * chord2.min(reach2);
         let mut w2 = (a * a).max(tail2);
         if horizon.abs() < t.rho {
             // The horizon crosses the texel: f·cos kinks there, which Gauss points
