@@ -141,10 +141,15 @@ fn quick_report_writes_its_three_files() {
             && !md.contains("Reference noise"),
         "{md}"
     );
+    // The exact sums' own error, by doubling their cells: finite and within the issue's
+    // 0.05% (that it refines is render::score's unit test).
     let noise = col("reference_noise");
-    assert!(rows
+    let own: Vec<f64> = rows
         .iter()
-        .all(|r| r[noise] == "0" || r[noise].parse::<f64>() == Ok(0.0)));
+        .filter(|r| r[0] != "lookup")
+        .map(|r| r[noise].parse::<f64>().unwrap())
+        .collect();
+    assert!(own.iter().all(|e| e.is_finite() && *e <= 5e-4), "{own:?}");
     // Every row against the GPU's sums, within 1e-4 of the float64 twin where checked (the
     // issue's bound), and checked: a twin error of exactly 0 everywhere would mean no check.
     let (reference, twin) = (col("reference"), col("reference_twin_error"));

@@ -135,13 +135,20 @@ fn reference_note(rows: &[Row], material: &str) -> String {
     match kind {
         k if k == Reference::ExactGpu.name() => format!(
             "Reference: no sampling noise (exact texel sums on the GPU; against their float64 \
-             twin at {} pixels a probe, worst {:.1e} relative).",
+             twin at {} pixels a probe, worst {:.1e} relative; their own error, the texel \
+             rule's, estimated by doubling its cells at {} pixels a probe: worst {:.1e}).",
             super::report::TWIN_PIXELS,
-            worst(|r| r.twin)
+            worst(|r| r.twin),
+            super::report::REFINED_PIXELS,
+            worst(|r| r.noise)
         ),
-        k if k == Reference::ExactHost.name() => "Reference: no sampling noise (exact texel sums in float64 \
-             on the host; their own error, the texel rule's, below 1e-4 of a pixel)."
-            .to_string(),
+        k if k == Reference::ExactHost.name() => format!(
+            "Reference: no sampling noise (exact texel sums in float64 on the host; their own \
+             error, the texel rule's, estimated by doubling its cells at {} pixels a probe: \
+             worst {:.1e} relative).",
+            super::report::REFINED_PIXELS,
+            worst(|r| r.noise)
+        ),
         k if k == Reference::PixelAreaMean.name() => format!(
             "Reference: the pixel-area mean (n × n reflected rays a pixel, each reading its \
              texel; n = 8192 / the image's side, 128 at 64²): what a footprint lookup estimates; its own error, \

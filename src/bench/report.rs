@@ -11,7 +11,9 @@ use crate::math::brdf::Brdf;
 use crate::math::camera::{sphere_camera, Camera};
 use crate::passes::ExactShader;
 use crate::passes::GpuEnvMap;
-use crate::render::score::{errors, exact_truth, exact_truth_gpu, scene, sphere_pixels, truth};
+use crate::render::score::{
+    errors, exact_own_error, exact_truth, exact_truth_gpu, scene, sphere_pixels, truth,
+};
 use crate::render::{PassKind, Renderer};
 use crate::scene::{LightsMode, LookupFilter, Scene, SplitSumSettings, Technique};
 use crate::EnvMap;
@@ -22,6 +24,10 @@ use std::time::Instant;
 /// Pixels of each exact reference frame (a probe and a material) taken again by the float64
 /// twin, spread over the sphere.
 pub const TWIN_PIXELS: usize = 12;
+
+/// Pixels of each exact reference frame taken again with twice the cells per lobe scale, the
+/// change estimating the rule's own error (`render::score::exact_own_error`).
+pub const REFINED_PIXELS: usize = 48;
 
 /// Rays a side of each pixel for the mirror's pixel-area mean of an image `size` pixels wide:
 /// 8192 across the image (128 at 64², 16 at 512²), within 16 to 256.
@@ -166,8 +172,9 @@ pub struct Row {
     /// probe a run reads (its frame's process takes about as long on each 1k probe); NaN on
     /// the others.
     pub process_s: f64,
-    /// The reference's own noise (half its two renders' relative RMS difference; for the
-    /// mirror's pixel-area mean its change from half the rays; 0 for the exact sums).
+    /// The reference's own noise or error: half its two renders' relative RMS difference
+    /// (Monte Carlo); the mirror's pixel-area mean's change from half the rays; the exact
+    /// sums' worst change at [`REFINED_PIXELS`] pixels when their cells are doubled.
     pub noise: f64,
     /// The exact reference's worst relative error against its float64 twin at the pixels
     /// checked ([`TWIN_PIXELS`] a probe and material) where the GPU summed it; 0 otherwise.
@@ -829,6 +836,14 @@ impl Session<'_> {
             (true, false) => Reference::ExactHost,
             (false, _) => Reference::MonteCarlo,
         };
+        let own_error = |frame: &EnvMap| {
+            let own = exact_own_error(&cam, brdf, p.env, world_to_file, frame, REFINED_PIXELS);
+            (self.hooks.progress)(&format!(
+                "{} {name}: exact reference, its own error by refinement at {REFINED_PIXELS} pixels: {own:.1e}",
+                p.file
+            ));
+            own
+        };
         let (frame, noise, twin) = match reference {
             Reference::ExactGpu => {
                 let maps = (p.env, &p.gpu);
@@ -844,9 +859,14 @@ impl Session<'_> {
                     "{} {name}: exact reference {:.0} GPU ms, {} pixels against the float64 twin: worst {:.1e}",
                     p.file, e.ms, e.checked, e.twin
                 ));
-                (e.frame, 0.0, e.twin)
+                let own = own_error(&e.frame);
+                (e.frame, own, e.twin)
             }
-            Reference::ExactHost => (exact_truth(&cam, brdf, p.env, world_to_file), 0.0, 0.0),
+            Reference::ExactHost => {
+                let frame = exact_truth(&cam, brdf, p.env, world_to_file);
+                let own = own_error(&frame);
+                (frame, own, 0.0)
+            }
             Reference::PixelAreaMean => {
                 let sphere = [crate::math::camera::Shape::Sphere {
                     center: [0.0; 3],

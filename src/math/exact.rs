@@ -372,8 +372,9 @@ impl<'a> ExactFilter<'a> {
         self.evaluate_with(queries, PER_WIDTH)
     }
 
-    /// [`ExactFilter::evaluate`] with `per_width` cells per lobe scale in the GGX sums.
-    fn evaluate_with(&self, queries: &[Query], per_width: f64) -> Vec<[f64; 3]> {
+    /// [`ExactFilter::evaluate`] with `per_width` cells per lobe scale ([`PER_WIDTH`] there):
+    /// twice as many estimate the rule's own error by its change.
+    pub fn evaluate_with(&self, queries: &[Query], per_width: f64) -> Vec<[f64; 3]> {
         let prepared: Vec<Prepared> = queries
             .iter()
             .map(|q| match *q {

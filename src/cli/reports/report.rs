@@ -277,12 +277,13 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         (true, true) => "the exact sum over the map's texels at each pixel, on the GPU \
                  (`passes::ExactShader`: no sampling noise; checked against its float64 twin \
                  `ExactFilter::shade` at a dozen pixels of each probe and material, the worst \
-                 error stated under each material; the mirror against its pixel-area mean)"
+                 error stated under each material, as is the sums' own error estimated by \
+                 doubling their cells; the mirror against its pixel-area mean)"
             .to_string(),
         (true, false) => "the exact sum over the map's texels at each pixel, in float64 on the \
                  host (`ExactFilter::shade`, the GPU pass's twin, the faster on a CPU device: no \
-                 sampling noise, its own error below 1e-4 of a pixel; the mirror against its \
-                 pixel-area mean)"
+                 sampling noise; its own error, estimated by doubling its cells, stated under \
+                 each material; the mirror against its pixel-area mean)"
             .to_string(),
         (false, _) => format!(
             "2 × {} spp MIS Monte Carlo (their mean; its noise is half their relative RMS \
