@@ -253,13 +253,18 @@ impl Brdf {
             }
             Brdf::Ggx { alpha, correlated } => {
                 let a = ggx_alpha(alpha);
-                let h = (wo + wi).normalize();
+                // D of the half vector unnormalised: D(h/|h|) = α²|h|⁴ / (π·(hx² + hy² +
+                // α²hz²)²), no root or division for the normalisation.
+                let h = wo + wi;
+                let s = h.x * h.x + h.y * h.y + a * a * h.z * h.z;
+                let h2 = h.length_squared();
+                let d = a * a * h2 * h2 / (PI * s * s);
                 let g = if correlated {
                     2.0 * wo.z * wi.z / (ggx_root(a, wo.z) * wi.z + ggx_root(a, wi.z) * wo.z)
                 } else {
                     ggx_g1(a, wo.z) * ggx_g1(a, wi.z)
                 };
-                ggx_d(a, h) * g / (4.0 * wo.z)
+                d * g / (4.0 * wo.z)
             }
             Brdf::Ward { ax, ay } => {
                 let h = (wo + wi).normalize();
