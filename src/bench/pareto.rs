@@ -314,7 +314,8 @@ pub fn markdown(rows: &[Row], settings: &str) -> String {
          tables (one per BRDF) a share per sphere. \"Whole process s\" and the render's \
          wall time are that frame's, all its spheres together; the process is timed on the \
          first probe only (it renders the frame again, and takes about as long on each 1k \
-         probe).\n\n\
+         probe), with the lights extracted as a user's render does by default (a dash \
+         elsewhere).\n\n\
          ![Pareto chart](report.png)\n",
     );
     for m in &mats {

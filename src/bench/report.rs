@@ -169,8 +169,8 @@ pub struct Row {
     /// Wall seconds of the render in this process (the technique's spheres together).
     pub wall_s: f64,
     /// Wall seconds of `envlight render` as its own process (the same frame), on the first
-    /// probe a run reads (its frame's process takes about as long on each 1k probe); NaN on
-    /// the others.
+    /// probe a run reads (its frame's process takes about as long on each 1k probe) and with
+    /// the lights extracted (the default); NaN on the others.
     pub process_s: f64,
     /// The reference's own noise or error: half its two renders' relative RMS difference
     /// (Monte Carlo); the mirror's pixel-area mean's change from half the rays; the exact
@@ -574,14 +574,16 @@ fn measure(
     let wall_s = t0.elapsed().as_secs_f64();
     let mut on_disk = sc.clone();
     on_disk.environment.file = a.absolute.to_path_buf();
-    // The process once per frame of the run (the first probe's): it renders the same
-    // frame again, and its time is the map's size's, not its content's.
+    // The process once per frame of the run (the first probe's), with the lights extracted
+    // as a user's render does by default: it renders the same frame again, and its time is
+    // the map's size's, not its content's.
     let brdfs: Vec<Brdf> = sc.objects.iter().map(|o| o.material.kind).collect();
-    let process_s = match a
+    let extracted = !matches!(sc.environment.lights, LightsMode::None);
+    let first = a
         .processed
         .borrow_mut()
-        .insert(format!("{} {params} {brdfs:?}", warm_key(sc, false)))
-    {
+        .insert(format!("{} {params} {brdfs:?}", warm_key(sc, false)));
+    let process_s = match first && extracted {
         true => (a.process)(&on_disk)?,
         false => f64::NAN,
     };
