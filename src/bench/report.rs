@@ -67,7 +67,7 @@ impl Reference {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ExactOn {
     /// On the GPU, unless the device is the CPU (lavapipe), where the float64 twin on the
-    /// same cores is the faster (a 16² GGX 0.3 sphere of a 1k map: 3.1 s against 0.74 s).
+    /// same cores is the faster (a 16² GGX 0.3 sphere of a 1k map: 3.0 s against 0.36 s).
     Auto,
     /// On the GPU.
     Gpu,
