@@ -154,6 +154,22 @@ fn frame_of(cam: &Camera, at: &[usize], values: &[[f64; 3]]) -> EnvMap {
     EnvMap::new(crate::Mapping::LatLong, cam.width, cam.height, texels)
 }
 
+/// `count` of the (normal, view) `queries` spread over them (all where fewer): their indices
+/// and their shade queries of `brdf`.
+fn spread(queries: &[(DVec3, DVec3)], brdf: Brdf, count: usize) -> (Vec<usize>, Vec<Query>) {
+    let step = queries.len().div_ceil(count.max(1)).max(1);
+    let picked: Vec<usize> = (0..queries.len()).step_by(step).collect();
+    let q = picked
+        .iter()
+        .map(|&k| Query::Shade {
+            brdf,
+            n: queries[k].0,
+            v: queries[k].1,
+        })
+        .collect();
+    (picked, q)
+}
+
 /// [`exact_truth`] on the GPU: the frame, its GPU ms, and the worst relative error of its
 /// values against the float64 twin's at `checked` pixels spread over the sphere (all where
 /// fewer), each against at least 1e-4 of the frame's largest value.
@@ -181,16 +197,7 @@ pub fn exact_truth_gpu(
     let (at, queries) = sphere_queries(cam);
     let got = pass.run(gpu, world_to_file, brdf, &queries)?;
     let ms = crate::gpu::total_ms(&got.timings);
-    let step = queries.len().div_ceil(checked.max(1)).max(1);
-    let picked: Vec<usize> = (0..queries.len()).step_by(step).collect();
-    let twin: Vec<Query> = picked
-        .iter()
-        .map(|&k| Query::Shade {
-            brdf,
-            n: queries[k].0,
-            v: queries[k].1,
-        })
-        .collect();
+    let (picked, twin) = spread(&queries, brdf, checked);
     let want = ExactFilter::new(env, world_to_file.transpose()).evaluate(&twin);
     let top = got
         .value
@@ -231,16 +238,7 @@ pub fn exact_own_error(
     count: usize,
 ) -> f64 {
     let (at, queries) = sphere_queries(cam);
-    let step = queries.len().div_ceil(count.max(1)).max(1);
-    let picked: Vec<usize> = (0..queries.len()).step_by(step).collect();
-    let q: Vec<Query> = picked
-        .iter()
-        .map(|&k| Query::Shade {
-            brdf,
-            n: queries[k].0,
-            v: queries[k].1,
-        })
-        .collect();
+    let (picked, q) = spread(&queries, brdf, count);
     let per_width = 2.0 * crate::math::exact::PER_WIDTH;
     let refined = ExactFilter::new(env, world_to_file.transpose()).evaluate_with(&q, per_width);
     let top = frame
