@@ -142,28 +142,7 @@ fn quick_report_writes_its_three_files() {
             && !md.contains("Reference noise"),
         "{md}"
     );
-    // The exact sums' own error, by doubling their cells: finite and within the issue's
-    // 0.05% (that it refines is render::score's unit test).
-    let noise = col("reference_noise");
-    let own: Vec<f64> = rows
-        .iter()
-        .filter(|r| r[0] != "lookup")
-        .map(|r| r[noise].parse::<f64>().unwrap())
-        .collect();
-    assert!(own.iter().all(|e| e.is_finite() && *e <= 5e-4), "{own:?}");
-    // Every row against the GPU's sums, within 1e-4 of the float64 twin where checked (the
-    // issue's bound), and checked: a twin error of exactly 0 everywhere would mean no check.
-    let (reference, twin) = (col("reference"), col("reference_twin_error"));
-    assert!(rows.iter().all(|r| r[reference] == "exact (gpu)"), "{csv}");
-    let twins: Vec<f64> = rows
-        .iter()
-        .map(|r| r[twin].parse::<f64>().unwrap())
-        .collect();
-    assert!(
-        twins.iter().all(|e| e.is_finite() && *e <= 1e-4),
-        "{twins:?}"
-    );
-    assert!(twins.iter().any(|e| *e > 0.0), "{twins:?}");
+    reference_checked(&rows, &col, &csv);
     let png = image::open(out.join("report.png")).unwrap();
     assert_eq!((png.width(), png.height()), (2 * 620, 520 + 90));
     // The chart redrawn from report.csv alone, nothing measured.
@@ -490,4 +469,31 @@ fn report_leaves_out_an_unreadable_probe_and_says_why() {
     assert!(md.contains("| diffuse | lookup |"), "{md}");
     assert!(md.contains("| ggx 0.3 | lookup, sh, prefiltered |"), "{md}");
     let _ = std::fs::remove_dir_all(&tmp);
+}
+
+/// The quick report's reference columns: the exact sums' own error by refinement and their
+/// error against the float64 twin, on every row.
+fn reference_checked(rows: &[Vec<&str>], col: &dyn Fn(&str) -> usize, csv: &str) {
+    // The exact sums' own error, by doubling their cells: finite and within the issue's
+    // 0.05% (that it refines is render::score's unit test).
+    let noise = col("reference_noise");
+    let own: Vec<f64> = rows
+        .iter()
+        .filter(|r| r[0] != "lookup")
+        .map(|r| r[noise].parse::<f64>().unwrap())
+        .collect();
+    assert!(own.iter().all(|e| e.is_finite() && *e <= 5e-4), "{own:?}");
+    // Every row against the GPU's sums, within 1e-4 of the float64 twin where checked (the
+    // issue's bound), and checked: a twin error of exactly 0 everywhere would mean no check.
+    let (reference, twin) = (col("reference"), col("reference_twin_error"));
+    assert!(rows.iter().all(|r| r[reference] == "exact (gpu)"), "{csv}");
+    let twins: Vec<f64> = rows
+        .iter()
+        .map(|r| r[twin].parse::<f64>().unwrap())
+        .collect();
+    assert!(
+        twins.iter().all(|e| e.is_finite() && *e <= 1e-4),
+        "{twins:?}"
+    );
+    assert!(twins.iter().any(|e| *e > 0.0), "{twins:?}");
 }

@@ -24,25 +24,18 @@ pub fn generated_header() -> String {
     s
 }
 
+/// `#define NAME v` with `v` as float32 prints it (the shaders' precision).
+fn define_f32(s: &mut String, name: &str, v: f64) {
+    let _ = writeln!(s, "#define {name} {:?}", v as f32);
+}
+
 /// The exact reference pass's workgroup and rule (`glsl/exact_shade.comp`).
 fn define_exact(s: &mut String) {
     let _ = writeln!(s, "#define EXACT_WORKGROUP {EXACT_WORKGROUP}u");
     let _ = writeln!(s, "#define EXACT_QUERY_VEC4S {}u", exact::QUERY_VEC4S);
-    let _ = writeln!(
-        s,
-        "#define EXACT_HORIZON_SHRINK {:?}",
-        exact::HORIZON_SHRINK as f32
-    );
-    let _ = writeln!(
-        s,
-        "#define EXACT_HORIZON_REACH {:?}",
-        exact::HORIZON_REACH as f32
-    );
-    let _ = writeln!(
-        s,
-        "#define EXACT_MAX_CELLS_PER_WIDTH {:?}",
-        exact::MAX_CELLS_PER_WIDTH as f32
-    );
+    define_f32(s, "EXACT_HORIZON_SHRINK", exact::HORIZON_SHRINK);
+    define_f32(s, "EXACT_HORIZON_REACH", exact::HORIZON_REACH);
+    define_f32(s, "EXACT_MAX_CELLS_PER_WIDTH", exact::MAX_CELLS_PER_WIDTH);
 }
 
 /// Bindings, SH and tile sizes, the light walk's parameters.
@@ -71,39 +64,15 @@ fn define_sizes_and_lights(s: &mut String) {
         "#define LIGHTS_KERNEL_CLUSTERS {}u",
         lights::KERNEL_CLUSTERS
     );
-    let _ = writeln!(s, "#define LIGHT_PER_WIDTH {:?}", lights::PER_WIDTH as f32);
-    let _ = writeln!(
-        s,
-        "#define LIGHT_CENTRE_BELOW {:?}",
-        lights::CENTRE_BELOW as f32
-    );
-    let _ = writeln!(
-        s,
-        "#define LIGHT_TAIL_FRACTION {:?}",
-        lights::TAIL_FRACTION as f32
-    );
-    let _ = writeln!(
-        s,
-        "#define LIGHT_TREE_BELOW {:?}",
-        lights::TREE_BELOW as f32
-    );
-    let _ = writeln!(
-        s,
-        "#define LIGHT_TREE_BUDGET {:?}",
-        lights::TREE_BUDGET as f32
-    );
-    let _ = writeln!(
-        s,
-        "#define LIGHT_TREE_BUDGET_REACH {:?}",
-        lights::TREE_BUDGET_REACH as f32
-    );
-    let _ = writeln!(
-        s,
-        "#define LIGHT_KERNEL_FADE {:?}",
-        lights::KERNEL_FADE as f32
-    );
+    define_f32(s, "LIGHT_PER_WIDTH", lights::PER_WIDTH);
+    define_f32(s, "LIGHT_CENTRE_BELOW", lights::CENTRE_BELOW);
+    define_f32(s, "LIGHT_TAIL_FRACTION", lights::TAIL_FRACTION);
+    define_f32(s, "LIGHT_TREE_BELOW", lights::TREE_BELOW);
+    define_f32(s, "LIGHT_TREE_BUDGET", lights::TREE_BUDGET);
+    define_f32(s, "LIGHT_TREE_BUDGET_REACH", lights::TREE_BUDGET_REACH);
+    define_f32(s, "LIGHT_KERNEL_FADE", lights::KERNEL_FADE);
     let _ = writeln!(s, "#define LIGHT_LEAF_TEXELS {}u", lights::LEAF_TEXELS);
-    let _ = writeln!(s, "#define LIGHT_TREE_TAIL {:?}", lights::TREE_TAIL as f32);
+    define_f32(s, "LIGHT_TREE_TAIL", lights::TREE_TAIL);
     let _ = writeln!(s, "#define LIGHT_TREE_VEC4S {}u", lights::TREE_VEC4S);
     let _ = writeln!(
         s,
@@ -201,7 +170,7 @@ fn define_sizes_and_lights(s: &mut String) {
 fn define_area_footprint_and_floats(s: &mut String) {
     let _ = writeln!(s, "#define AREA_EDGE_STEPS {}u", area::EDGE_STEPS);
     let _ = writeln!(s, "#define AREA_POLE_STEPS {}u", area::POLE_STEPS);
-    let _ = writeln!(s, "#define AREA_POLE_NEAR {:?}", area::POLE_NEAR as f32);
+    define_f32(s, "AREA_POLE_NEAR", area::POLE_NEAR);
     let _ = writeln!(s, "#define AREA_MAX_VERTICES {}u", area::MAX_VERTICES);
     let _ = writeln!(
         s,

@@ -448,16 +448,16 @@ fn shared_work(sc: &Scene, map: crate::render::MapShape) -> String {
 /// camera's size: the frame is `brdfs.len()` cells wide and each cell's pixels see their
 /// sphere exactly as the one camera sees the one sphere (an orthographic view, offsets of a
 /// whole cell).
-fn group_scene(base: &Scene, brdfs: &[Brdf]) -> Scene {
+fn group_scene(base: &Scene, brdfs: &[Brdf]) -> Result<Scene> {
     let mut sc = base.clone();
     let cam = &mut sc.camera;
     let n = brdfs.len();
-    let cell = match cam.projection {
-        crate::math::camera::Projection::Orthographic { height } => {
-            height * cam.width as f64 / cam.height as f64
-        }
-        crate::math::camera::Projection::Perspective { .. } => 0.0,
+    let crate::math::camera::Projection::Orthographic { height } = cam.projection else {
+        return Err(crate::Error::Invalid(
+            "report: spheres are drawn together under an orthographic camera only".into(),
+        ));
     };
+    let cell = height * cam.width as f64 / cam.height as f64;
     cam.width *= n as u32;
     let template = base.objects[0].clone();
     sc.objects = brdfs
@@ -473,7 +473,7 @@ fn group_scene(base: &Scene, brdfs: &[Brdf]) -> Scene {
             o
         })
         .collect();
-    sc
+    Ok(sc)
 }
 
 /// Cell `k` (of `size` × `size` pixels) of a frame of cells side by side.
@@ -923,7 +923,7 @@ impl Session<'_> {
         for g in groups(o.quick, |brdf, c| shared_work(&one(brdf, c), shape)) {
             let c = &g.case;
             let brdfs: Vec<Brdf> = g.members.iter().map(|&(m, _)| set[m].1).collect();
-            let sc = group_scene(&one(brdfs[0], c), &brdfs);
+            let sc = group_scene(&one(brdfs[0], c), &brdfs)?;
             // Drawn together, the spheres precompute what each would alone.
             let alone = shared_work(&one(brdfs[0], c), shape);
             if shared_work(&sc, shape) != alone {
@@ -1101,7 +1101,7 @@ mod tests {
         let alone: Vec<_> = one.objects.iter().map(|o| o.shape).collect();
         for n in [2usize, 3] {
             let brdfs = vec![Brdf::Lambert; n];
-            let sc = group_scene(&one, &brdfs);
+            let sc = group_scene(&one, &brdfs).unwrap();
             assert_eq!((sc.camera.width, sc.camera.height), (16 * n as u32, 16));
             let shapes: Vec<_> = sc.objects.iter().map(|o| o.shape).collect();
             for k in 0..n {
