@@ -150,12 +150,15 @@ fn reference_note(rows: &[Row], material: &str) -> String {
             worst(|r| r.noise)
         ),
         k if k == Reference::PixelAreaMean.name() => format!(
-            "Reference: the pixel-area mean (n × n reflected rays a pixel, each reading its \
-             texel; n = 8192 / the image's side, 128 at 64²): what a footprint lookup estimates; its own error, \
-             estimated as its change from n/2: {:.2}% relative RMS on the worst probe (a sun's \
-             reflection is a step the rays converge on as 1/n). \"point\" reads the one texel at \
-             the pixel's centre and errs by the pixel's aliasing.",
-            100.0 * worst(|r| r.noise)
+            "Reference: the pixel-area mean, what a footprint lookup estimates: each pixel's \
+             share of every texel its reflection covers, by area (the pixel cut into cells, \
+             each cell's corners mapped into the map and the quad they span clipped against \
+             its texel grid, cells split until their children agree within {:.0e} of the \
+             pixel); its own error, estimated as its change from a tolerance 10 times coarser: \
+             {:.1e} relative RMS on the worst probe. \"point\" reads the one texel at the \
+             pixel's centre and errs by the pixel's aliasing.",
+            super::report::MIRROR_TOL,
+            worst(|r| r.noise)
         ),
         _ => format!(
             "Reference noise (worst probe): {:.3}% relative RMS; errors near it are at the \

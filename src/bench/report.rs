@@ -29,11 +29,13 @@ pub const TWIN_PIXELS: usize = 12;
 /// change estimating the rule's own error (`render::score::exact_own_error`).
 pub const REFINED_PIXELS: usize = 48;
 
-/// Rays a side of each pixel for the mirror's pixel-area mean of an image `size` pixels wide:
-/// 8192 across the image (128 at 64², 16 at 512²), within 16 to 256.
-pub fn mirror_rays(size: u32) -> u32 {
-    (8192 / size.max(1)).clamp(16, 256)
-}
+/// Tolerance of the mirror's pixel-area mean (`math::area_mean`), relative to each pixel's
+/// mean; its own error is estimated by its change from [`MIRROR_CHECK_TOL`]. On the four 1k
+/// probes at 64² it is within 1.3e-5 relative RMS of the mean refined to a third of it.
+pub const MIRROR_TOL: f64 = 3e-4;
+
+/// The coarser tolerance the mirror's reference is taken again at, the change its own error.
+pub const MIRROR_CHECK_TOL: f64 = 10.0 * MIRROR_TOL;
 
 /// Which reference a material's rows are scored against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -45,9 +47,9 @@ pub enum Reference {
     ExactHost,
     /// Two Monte Carlo renders (their mean; half their difference its noise).
     MonteCarlo,
-    /// A mirror's pixel-area mean: n × n rays a pixel ([`mirror_rays`]), each reading the
-    /// texel its reflection falls in (`math::footprint::supersampled`), what a footprint
-    /// lookup estimates; its noise the rms change from n/2 × n/2 rays.
+    /// A mirror's pixel-area mean, what a footprint lookup estimates: each pixel's mean of
+    /// the texels its reflection covers, by area (`math::area_mean`, to [`MIRROR_TOL`]); its
+    /// noise the rms change from [`MIRROR_CHECK_TOL`].
     PixelAreaMean,
 }
 
@@ -173,7 +175,7 @@ pub struct Row {
     /// the lights extracted (the default); NaN on the others.
     pub process_s: f64,
     /// The reference's own noise or error: half its two renders' relative RMS difference
-    /// (Monte Carlo); the mirror's pixel-area mean's change from half the rays; the exact
+    /// (Monte Carlo); the mirror's pixel-area mean's change from a 10× coarser tolerance; the exact
     /// sums' worst change at [`REFINED_PIXELS`] pixels when their cells are doubled.
     pub noise: f64,
     /// The exact reference's worst relative error against its float64 twin at the pixels
@@ -874,14 +876,10 @@ impl Session<'_> {
                     center: [0.0; 3],
                     radius: 1.0,
                 }];
-                // The map as loaded: its file frame is the world's. A sun's reflection is a
-                // step a few texels wide: the rays' mean converges as 1/n, so n is sized by
-                // the image (16 a pixel of the 512² this rule would give) and the mean's own
-                // error is estimated by its change from n/2 (the error at n/2 is twice n's).
-                let n = mirror_rays(cam.width);
-                let mean = crate::math::footprint::supersampled(p.env, &cam, &sphere, n);
-                let half = crate::math::footprint::supersampled(p.env, &cam, &sphere, n / 2);
-                let own = errors(&half, &mean, &self.pixels).0;
+                // The map as loaded: its file frame is the world's.
+                let mean = |tol| crate::math::area_mean::area_mean(p.env, &cam, &sphere, tol).0;
+                let (mean, coarse) = (mean(MIRROR_TOL), mean(MIRROR_CHECK_TOL));
+                let own = errors(&coarse, &mean, &self.pixels).0;
                 (mean, own, 0.0)
             }
             Reference::MonteCarlo => {

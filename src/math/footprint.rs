@@ -414,27 +414,7 @@ pub fn supersampled(env: &crate::EnvMap, cam: &Camera, shapes: &[Shape], n: u32)
             })
             .collect()
     };
-    // Rows on every core, each pixel's sum in the same order as on one.
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()) as u32;
-    let rows: Vec<Vec<[f32; 3]>> = std::thread::scope(|scope| {
-        let handles: Vec<_> = (0..threads)
-            .map(|t| {
-                let row = &row;
-                scope.spawn(move || {
-                    (t..cam.height)
-                        .step_by(threads as usize)
-                        .map(|j| (j, row(j)))
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        let mut all: Vec<(u32, Vec<[f32; 3]>)> = handles
-            .into_iter()
-            .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-            .collect();
-        all.sort_by_key(|(j, _)| *j);
-        all.into_iter().map(|(_, r)| r).collect()
-    });
+    let rows = super::rows_on_every_core(cam.height, row);
     crate::EnvMap::new(
         super::Mapping::LatLong,
         cam.width,
