@@ -14,7 +14,7 @@ fn rows(ctx: &envlight::gpu::Context, dir: &std::path::Path) -> Vec<Row> {
     let mut o = ReportOptions::new(true);
     o.size = 8;
     o.exact_on = ExactOn::Host;
-    o.probe = Some("venice_sunset_1k".into());
+    o.probes = vec!["venice_sunset_1k".into()];
     let hooks = Hooks {
         // The whole-process time is not what this test checks.
         process: &|_| Ok(1.0),

@@ -231,7 +231,7 @@ const GOALS: [Goal; 6] = [
     ),
 ];
 
-/// The accuracy goals (docs/accuracy/table.md's) checked on `rows`, each per probe: met or
+/// The accuracy goals checked on `rows`, each per probe: met or
 /// not, with each probe's error and bias; a goal whose rows the run lacks (a quick run's
 /// materials) is said to be unmeasured.
 pub fn goals_markdown(rows: &[Row]) -> String {
@@ -364,6 +364,57 @@ pub fn markdown(rows: &[Row], settings: &str) -> String {
             seconds(r.process_s)
         );
     }
+    md
+}
+
+/// table.md: the accuracy table, a view of the same rows as report.md: per material, each
+/// technique's relative RMS, bias and worst tile on each probe (the probes as columns), then
+/// the goals read from them. `settings` is report.md's first paragraph.
+pub fn table_markdown(rows: &[Row], settings: &str) -> String {
+    let mut md = String::from("# envlight report: accuracy on each probe\n\n");
+    let _ = writeln!(
+        md,
+        "The accuracy table: a view of [report.md](report.md)'s run (report.csv), each \
+         technique's error on each probe instead of its mean and time. {settings}\n\n\
+         Each cell: per-pixel relative RMS · mean bias · worst 8×8 tile's |ratio − 1|. Rows \
+         marked \"(no lights)\" leave the probe's lights in the map."
+    );
+    let mut probes: Vec<&str> = Vec::new();
+    for r in rows {
+        if !probes.contains(&r.probe.as_str()) {
+            probes.push(&r.probe);
+        }
+    }
+    for m in material_names(rows) {
+        let _ = write!(md, "\n## {m}\n\n| technique |");
+        for p in &probes {
+            let _ = write!(md, " {p} |");
+        }
+        md.push_str(" mean GPU ms |\n|---|");
+        md.push_str(&"---|".repeat(probes.len() + 1));
+        md.push('\n');
+        for point in points(rows, &m) {
+            let _ = write!(md, "| {} |", point.label);
+            for p in &probes {
+                let cell = rows
+                    .iter()
+                    .find(|r| r.material == m && r.label() == point.label && r.probe == *p)
+                    .map(|r| {
+                        format!(
+                            "{:.2}% · {:+.2}% · {:.1}%",
+                            100.0 * r.rms,
+                            100.0 * r.bias,
+                            100.0 * r.tile
+                        )
+                    })
+                    .unwrap_or_else(|| "—".to_string());
+                let _ = write!(md, " {cell} |");
+            }
+            let _ = writeln!(md, " {:.2} |", point.ms);
+        }
+        let _ = writeln!(md, "\n{}", reference_note(rows, &m));
+    }
+    md.push_str(&goals_markdown(rows));
     md
 }
 

@@ -96,8 +96,9 @@ pub struct ReportOptions {
     pub split: SplitSumSettings,
     /// Where the exact reference is summed.
     pub exact_on: ExactOn,
-    /// Only the probe of this file name (with or without .hdr); all of the set where `None`.
-    pub probe: Option<String>,
+    /// Only the probes of these file names (with or without .hdr); all of the set where
+    /// empty.
+    pub probes: Vec<String>,
 }
 
 impl ReportOptions {
@@ -111,7 +112,7 @@ impl ReportOptions {
             exact: true,
             split: SplitSumSettings::default(),
             exact_on: ExactOn::Auto,
-            probe: None,
+            probes: Vec::new(),
         }
     }
 
@@ -750,19 +751,14 @@ pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Resul
         rows: Vec::new(),
         skipped: Vec::new(),
     };
-    let chosen = |file: &str| {
-        o.probe
-            .as_deref()
-            .is_none_or(|p| file == p || file.trim_end_matches(".hdr") == p)
-    };
-    let set: Vec<_> = probes(o.quick)
-        .into_iter()
-        .filter(|p| chosen(p.0))
-        .collect();
-    if set.is_empty() {
+    let named = |file: &str, p: &str| file == p || file.trim_end_matches(".hdr") == p;
+    if let Some(p) = o
+        .probes
+        .iter()
+        .find(|p| !probes(o.quick).iter().any(|f| named(f.0, p)))
+    {
         return Err(crate::Error::Invalid(format!(
-            "report: no probe of the set is named {:?} (the set: {})",
-            o.probe.as_deref().unwrap_or_default(),
+            "report: no probe of the set is named {p:?} (the set: {})",
             probes(o.quick)
                 .iter()
                 .map(|p| p.0)
@@ -770,6 +766,10 @@ pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Resul
                 .join(", ")
         )));
     }
+    let set: Vec<_> = probes(o.quick)
+        .into_iter()
+        .filter(|f| o.probes.is_empty() || o.probes.iter().any(|p| named(f.0, p)))
+        .collect();
     for (file, kind) in set {
         let path = dir.join(file);
         let loaded = path

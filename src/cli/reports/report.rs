@@ -1,7 +1,8 @@
 //! `envlight report`: every technique on real probes and several materials, scored against the
 //! exact texel sums (`--reference N`: two Monte Carlo renders), with its GPU time (`envlight::bench::report`): report.md
-//! (tables, the Pareto front per material and a headline), report.csv (one row per technique
-//! × parameters × probe × material) and report.png (error against time, one panel per
+//! (tables, the Pareto front per material and a headline), table.md (the accuracy table: the
+//! same rows by probe), report.csv (one row per technique × parameters × probe × material)
+//! and report.png (error against time, one panel per
 //! material); or prefiltered cubes a user has, scored (`envlight::bench::cubes`).
 
 use super::super::{context, Global};
@@ -42,13 +43,14 @@ pub struct ReportArgs {
     /// reference (default 16384, quick 1024)
     #[arg(long)]
     reference: Option<u32>,
-    /// Only redraw OUT/report.png from OUT/report.csv (and the device its report.md names),
-    /// measuring nothing
+    /// Only redraw OUT/report.png and rewrite OUT/table.md from OUT/report.csv (and the
+    /// device and settings its report.md names), measuring nothing
     #[arg(long)]
     replot: bool,
-    /// Only this probe of the set (its file name, with or without .hdr)
-    #[arg(long)]
-    probe: Option<String>,
+    /// Only these probes of the set (their file names, with or without .hdr, separated by
+    /// commas)
+    #[arg(long, value_delimiter = ',')]
+    probe: Vec<String>,
     /// Where the exact reference is summed: gpu (`passes::ExactShader`, a dozen pixels of
     /// each probe and material checked against its float64 twin), host (the float64 twin),
     /// or auto: the GPU unless the device is the CPU, where the host is the faster
@@ -193,7 +195,8 @@ fn limits(quick: bool, skipped: &[String]) -> String {
     s
 }
 
-/// Redraws `out`/report.png from its report.csv, with the device its report.md names.
+/// Redraws `out`/report.png and rewrites table.md from its report.csv, with the device and
+/// settings its report.md names.
 fn replot(out: &Path) -> Result<()> {
     let path = out.join("report.csv");
     let text = std::fs::read_to_string(&path).with_context(|| path.display().to_string())?;
@@ -207,7 +210,14 @@ fn replot(out: &Path) -> Result<()> {
         .unwrap_or("(not named in report.md)")
         .to_string();
     plot(&out.join("report.png"), &rows, &device)?;
-    println!("wrote {}/report.png ({} rows)", out.display(), rows.len());
+    let settings = md.lines().nth(2).unwrap_or_default();
+    let table = crate::bench::pareto::table_markdown(&rows, settings);
+    std::fs::write(out.join("table.md"), table).context("table.md")?;
+    println!(
+        "wrote {}/report.png, table.md ({} rows)",
+        out.display(),
+        rows.len()
+    );
     Ok(())
 }
 
@@ -221,7 +231,7 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     o.reference = args.reference.unwrap_or(o.reference);
     o.exact = args.reference.is_none();
     o.split = args.split();
-    o.probe = args.probe.clone();
+    o.probes = args.probe.clone();
     o.exact_on = match args.exact_on.as_str() {
         "gpu" => ExactOn::Gpu,
         "host" => ExactOn::Host,
@@ -308,9 +318,11 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
     md.push_str(&crate::bench::pareto::goals_markdown(&rows));
     md.push_str(&limits(o.quick, &skipped));
     std::fs::write(out.join("report.md"), md).with_context(|| "report.md")?;
+    let table = crate::bench::pareto::table_markdown(&rows, &settings);
+    std::fs::write(out.join("table.md"), table).with_context(|| "table.md")?;
     plot(&out.join("report.png"), &rows, &device)?;
     println!(
-        "wrote {}/report.md, report.csv, report.png ({} rows)",
+        "wrote {}/report.md, table.md, report.csv, report.png ({} rows)",
         out.display(),
         rows.len()
     );

@@ -1,6 +1,6 @@
 //! `envlight-lab`: the project's own measurements, apart from the program users run. It
 //! times envlight against the peers users pick instead (cmft, glTF-IBL-Sampler), writes the
-//! accuracy table and the recipe sweep, and keeps the performance pages of docs/performance/.
+//! recipe sweep, and keeps the performance pages of docs/performance/.
 //! It uses the library's public API (with the float64 references of feature `reference`) and
 //! runs the `envlight` program where a whole process is timed. Run it as `cargo xtask lab
 //! COMMAND …`, which builds both; each module's doc names the page it writes.
@@ -17,7 +17,6 @@ mod peers;
 mod previews;
 mod recipes;
 mod scale;
-mod table;
 
 use clap::{Parser, Subcommand};
 use common::Global;
@@ -26,7 +25,7 @@ use std::path::PathBuf;
 #[derive(Parser)]
 #[command(
     name = "envlight-lab",
-    about = "envlight's benchmarks against its peers, its accuracy table and its performance pages"
+    about = "envlight's benchmarks against its peers, its recipe sweep and its performance pages"
 )]
 struct Lab {
     #[command(flatten)]
@@ -55,7 +54,6 @@ enum Command {
     Ibl(ibl::IblArgs),
     Scale(scale::ScaleArgs),
     Formats(formats::FormatsArgs),
-    Table(table::TableArgs),
     Recipes(recipes::RecipesArgs),
     Floors(own::FloorsArgs),
     Dynamic(own::DynamicArgs),
@@ -73,7 +71,6 @@ fn main() {
         Command::Ibl(a) => ibl::run(g, a),
         Command::Scale(a) => scale::bench_scale(g, &a.input, &a.factors, a.out.as_ref()),
         Command::Formats(a) => formats::run(g, a),
-        Command::Table(a) => table::run(g, a),
         Command::Recipes(a) => recipes::run(g, a),
         Command::Floors(a) => own::floors(g, a),
         Command::Dynamic(a) => own::dynamic(g, a),

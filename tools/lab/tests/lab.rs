@@ -1,6 +1,6 @@
 //! The lab's commands end to end, each as `cargo xtask lab` runs it: `accuracy`, `scale`
 //! (which bakes with the `envlight` program beside the lab), `formats`, `dynamic` and
-//! `peers`' refusal without a map. The accuracy table has its own file (tests/table.rs).
+//! `peers`' refusal without a map.
 
 use envlight::math::synth::smooth_env;
 use envlight::math::Mapping;
