@@ -130,13 +130,14 @@ fn fis_converges_towards_monte_carlo_on_real_probes() {
 }
 
 /// The report's noise-free reference (`render::score::exact_truth`: every texel's ∫ f·cos,
-/// nothing sampled) against two Monte Carlo renders of 8192 samples a pixel on a sun probe
-/// (a sun 10⁵× its sky) and a studio, diffuse, GGX 0.3 and 0.05, on a 16² sphere: the two
-/// target one integral, so the exact frame differs from the renders' mean by about the
-/// mean's own noise (`score::truth`'s, half their relative RMS difference), not more: bound
-/// 1.5× it (measured 0.81–1.07×; 0.14–0.87× at GGX 0.05, whose fireflies swell the noise
-/// estimate); mean bias within 0.4× it (measured 0.03–0.10%, 0.13–0.21× the noise, halving
-/// from 2048 samples: statistical).
+/// nothing sampled) against 2 × 65 536 samples a pixel of Monte Carlo (`score::truth`: 16
+/// independent renders of 8192) on a sun probe (a sun 10⁵× its sky) and a studio, diffuse,
+/// GGX 0.3 and 0.05, on a 32² sphere: the two target one integral, so the exact frame
+/// differs from the renders' mean by about that mean's own noise (the replicas' spread),
+/// not more. Bound 1.35× it: across 24 independent groups of 16 renders (4 seed sets × these
+/// 6 cases) the ratio read 0.65–1.17 (0.94–1.11 but for GGX 0.05 on the sun probe; this
+/// seed set 0.97–1.12). Mean bias within 0.4× the noise (measured −0.32 … +0.25×; this set
+/// −0.23 … +0.25×). A reference 0.3% too bright fails it.
 #[test]
 fn the_exact_reference_agrees_with_monte_carlo_within_its_noise() {
     use envlight::render::score::{errors, exact_truth, sphere_pixels, truth};
@@ -148,7 +149,7 @@ fn the_exact_reference_agrees_with_monte_carlo_within_its_noise() {
     let ctx = common::ctx();
     {
         let renderer = Renderer::new(&ctx);
-        let cam = sphere_camera(16);
+        let cam = sphere_camera(32);
         let pixels = sphere_pixels(&cam);
         let turn = envlight::math::Orientation::default().world_to_file();
         for file in ["spiaggia_di_mondello_1k.hdr", "studio_small_08_1k.hdr"] {
@@ -159,7 +160,7 @@ fn the_exact_reference_agrees_with_monte_carlo_within_its_noise() {
                 envlight::math::split_sum::ggx(0.05, true),
             ] {
                 let split = SplitSumSettings::default();
-                let (mc, noise) = truth(&renderer, cam, brdf, None, split, 8192, &env).unwrap();
+                let (mc, noise) = truth(&renderer, cam, brdf, None, split, 65536, &env).unwrap();
                 let exact = exact_truth(&cam, brdf, &env, turn);
                 let (rms, bias, _) = errors(&exact, &mc, &pixels);
                 eprintln!(
@@ -170,7 +171,7 @@ fn the_exact_reference_agrees_with_monte_carlo_within_its_noise() {
                     rms / noise
                 );
                 assert!(
-                    rms <= 1.5 * noise,
+                    rms <= 1.35 * noise,
                     "{file} {brdf:?}: {rms} against noise {noise}"
                 );
                 assert!(

@@ -210,14 +210,14 @@ pub struct CubeScores {
     pub probe: PathBuf,
     /// The sphere's side.
     pub size: u32,
-    /// Samples per pixel of each of the reference's two renders.
+    /// The Monte Carlo reference's samples per pixel, halved (`render::score::truth`).
     pub reference: u32,
     /// (label, α, relative RMS, mean bias).
     pub rows: Vec<(String, f64, f64, f64)>,
 }
 
 /// Scores the `cubes` (file, convention) of `probe` at GGX α 0.05, 0.1, 0.3, 0.6 on a sphere
-/// seen by `cam`, against two `reference`-spp MIS renders, beside envlight's own split-sum
+/// seen by `cam`, against MIS Monte Carlo of 2 × `reference` spp, beside envlight's own split-sum
 /// and lobe-taps renders; `progress` hears each score.
 pub fn score(
     renderer: &Renderer,

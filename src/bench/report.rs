@@ -45,7 +45,7 @@ pub enum Reference {
     ExactGpu,
     /// The exact texel sums in float64 on the host (`ExactFilter::shade`, the twin itself).
     ExactHost,
-    /// Two Monte Carlo renders (their mean; half their difference its noise).
+    /// Monte Carlo: the mean of 16 renders (`render::score::truth`; their spread its noise).
     MonteCarlo,
     /// A mirror's pixel-area mean, what a footprint lookup estimates: each pixel's mean of
     /// the texels its reflection covers, by area (`math::area_mean`, to [`MIRROR_TOL`]); its
@@ -85,11 +85,11 @@ pub struct ReportOptions {
     pub quick: bool,
     /// Side of the sphere image.
     pub size: u32,
-    /// Samples per pixel of each of the two Monte Carlo reference renders (used where
-    /// `exact` is off, and by the cube scores).
+    /// The Monte Carlo reference's samples per pixel, halved (`render::score::truth`; used
+    /// where `exact` is off, and by the cube scores).
     pub reference: u32,
     /// Score against the exact texel sums (`render::score::exact_truth`: no noise) instead
-    /// of two Monte Carlo renders; the mirror, a lookup with no integral, keeps the renders
+    /// of Monte Carlo renders; the mirror, a lookup with no integral, keeps the renders
     /// (which agree exactly).
     pub exact: bool,
     /// Split-sum's chain.
@@ -175,8 +175,8 @@ pub struct Row {
     /// probe a run reads (its frame's process takes about as long on each 1k probe) and with
     /// the lights extracted (the default); NaN on the others.
     pub process_s: f64,
-    /// The reference's own noise or error: half its two renders' relative RMS difference
-    /// (Monte Carlo); the mirror's pixel-area mean's change from a 10× coarser tolerance; the exact
+    /// The reference's own noise or error: its renders' standard error (Monte Carlo,
+    /// `render::score::truth`); the mirror's pixel-area mean's change from a 10× coarser tolerance; the exact
     /// sums' worst change at [`REFINED_PIXELS`] pixels when their cells are doubled.
     pub noise: f64,
     /// The exact reference's worst relative error against its float64 twin at the pixels

@@ -1,5 +1,5 @@
 //! `envlight report`: every technique on real probes and several materials, scored against the
-//! exact texel sums (`--reference N`: two Monte Carlo renders), with its GPU time (`envlight::bench::report`): report.md
+//! exact texel sums (`--reference N`: Monte Carlo of 2N samples a pixel), with its GPU time (`envlight::bench::report`): report.md
 //! (tables, the Pareto front per material and a headline), table.md (the accuracy table: the
 //! same rows by probe), report.csv (one row per technique × parameters × probe × material)
 //! and report.png (error against time, one panel per
@@ -38,8 +38,8 @@ pub struct ReportArgs {
     /// Side of the sphere image (default 64, quick 24)
     #[arg(long)]
     size: Option<u32>,
-    /// Score against two Monte Carlo renders of this many samples per pixel each instead of
-    /// the exact texel sums (the reference by default: no noise); also the --cube scores'
+    /// Score against Monte Carlo of twice this many samples per pixel (16 renders; their
+    /// spread is its noise) instead of the exact texel sums (the reference by default: no noise); also the --cube scores'
     /// reference (default 16384, quick 1024)
     #[arg(long)]
     reference: Option<u32>,
@@ -296,9 +296,10 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
                  each material; the mirror against its pixel-area mean)"
             .to_string(),
         (false, _) => format!(
-            "2 × {} spp MIS Monte Carlo (their mean; its noise is half their relative RMS \
-             difference)",
-            o.reference
+            "2 × {} spp MIS Monte Carlo (the mean of {} renders; its noise is that mean's \
+             standard error, from their spread)",
+            o.reference,
+            crate::render::score::REPLICAS
         ),
     };
     let settings = format!(

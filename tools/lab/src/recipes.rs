@@ -275,7 +275,7 @@ pub struct RecipesArgs {
     /// Side of the sphere image
     #[arg(long, default_value_t = 64)]
     size: u32,
-    /// Samples per pixel of each of the two Monte Carlo reference renders
+    /// The Monte Carlo reference's samples per pixel, halved (16 renders in all)
     #[arg(long, default_value_t = 16384)]
     reference: u32,
     /// Split-sum's roughness levels (default: the scene default)
