@@ -18,7 +18,7 @@ use crate::math::convert::sample;
 use crate::math::mip::Level;
 use crate::math::split_sum::{dfg_table, level_alpha, shade, shade_taps, texel_dir};
 use crate::math::Mapping;
-use crate::render::score::{errors, scene, sphere_pixels, truth};
+use crate::render::score::{errors, exact_own_error, exact_truth, scene, sphere_pixels, truth};
 use crate::render::Renderer;
 use crate::scene::{LightsMode, SplitSumSettings, Technique};
 use crate::{EnvMap, Orientation};
@@ -210,19 +210,22 @@ pub struct CubeScores {
     pub probe: PathBuf,
     /// The sphere's side.
     pub size: u32,
-    /// The Monte Carlo reference's samples per pixel, halved (`render::score::truth`).
-    pub reference: u32,
+    /// The reference: `None`, the exact texel sums (`render::score::exact_truth`, float64);
+    /// `Some(n)`, Monte Carlo of 2n samples a pixel (`render::score::truth`).
+    pub reference: Option<u32>,
     /// (label, α, relative RMS, mean bias).
     pub rows: Vec<(String, f64, f64, f64)>,
 }
 
 /// Scores the `cubes` (file, convention) of `probe` at GGX α 0.05, 0.1, 0.3, 0.6 on a sphere
-/// seen by `cam`, against MIS Monte Carlo of 2 × `reference` spp, beside envlight's own split-sum
-/// and lobe-taps renders; `progress` hears each score.
+/// seen by `cam`, against the exact texel sums (`reference` `None`) or MIS Monte Carlo of
+/// 2 × `reference` spp, beside envlight's own split-sum and lobe-taps renders; `progress`
+/// hears each score. The last row of each α is the reference's own error (the exact sums'
+/// change when their cells are doubled at 48 pixels) or noise (Monte Carlo's standard error).
 pub fn score(
     renderer: &Renderer,
     cam: Camera,
-    reference: u32,
+    reference: Option<u32>,
     probe: &Path,
     cubes: &[(PathBuf, CubeConvention)],
     progress: &dyn Fn(&str),
@@ -241,7 +244,15 @@ pub fn score(
             correlated: true,
         };
         let split = SplitSumSettings::default();
-        let (truth, noise) = truth(renderer, cam, b, None, split, reference, &env)?;
+        let (truth, noise) = match reference {
+            Some(n) => truth(renderer, cam, b, None, split, n, &env)?,
+            None => {
+                let turn = Orientation::default().world_to_file();
+                let frame = exact_truth(&cam, b, &env, turn);
+                let own = exact_own_error(&cam, b, &env, turn, &frame, 48);
+                (frame, own)
+            }
+        };
         let mut push = |label: String, frame: &EnvMap| {
             let (rms, bias, _) = errors(frame, &truth, &pixels);
             progress(&format!("α {alpha} {label}: {rms:.3e} (bias {bias:+.2e})"));
@@ -277,7 +288,11 @@ pub fn score(
             let label = format!("{name} ({conv:?}): split-sum");
             push(label, &shade_frame(&cam, chain, &table, alpha, 1));
         }
-        rows.push(("reference noise".into(), alpha, noise, 0.0));
+        let own = match reference {
+            Some(_) => "reference noise",
+            None => "reference error",
+        };
+        rows.push((own.into(), alpha, noise, 0.0));
     }
     Ok(CubeScores {
         probe: probe.to_path_buf(),
@@ -299,9 +314,19 @@ impl CubeScores {
 
     /// cubes.md, measured on `device`: a row per cube or render, a column per α.
     pub fn markdown(&self, device: &str) -> String {
+        let reference = match self.reference {
+            Some(n) => format!(
+                "Monte Carlo, 2 × {n} spp MIS (the mean of {} renders; its noise is their \
+                 standard error)",
+                crate::render::score::REPLICAS
+            ),
+            None => "the exact texel sums (every texel's ∫ f·cos in float64, nothing sampled; \
+                     its own error is its change when its cells are doubled)"
+                .to_string(),
+        };
         let mut md = format!(
-            "# Prefiltered cubes scored against Monte Carlo\n\nProbe {}; device {device}; sphere \
-             {}² from normal to grazing incidence; reference 2 × {} spp MIS. Each cube \
+            "# Prefiltered cubes scored against a reference\n\nProbe {}; device {device}; sphere \
+             {}² from normal to grazing incidence; reference {reference}. Each cube \
              is read from its file in its convention's frame, level k taken as GGX α = (k/(levels \
              − 1))², and shaded by split-sum (one read along r) times A + B from a float64 DFG \
              table; envlight's own split-sum and lobe-taps ({TAPS} taps) renders of the probe are \
@@ -310,7 +335,6 @@ impl CubeScores {
              |---|---|---|---|---|\n",
             self.probe.display(),
             self.size,
-            self.reference
         );
         let mut labels: Vec<&str> = Vec::new();
         for (l, ..) in &self.rows {

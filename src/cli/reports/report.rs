@@ -56,8 +56,9 @@ pub struct ReportArgs {
     /// or auto: the GPU unless the device is the CPU, where the host is the faster
     #[arg(long, default_value = "auto", value_parser = ["auto", "gpu", "host"])]
     exact_on: String,
-    /// Instead: score these prefiltered cubes (KTX2 or DDS) as split-sum shading against
-    /// Monte Carlo on --cube-probe, beside envlight's own renders (cubes.md, cubes.csv)
+    /// Instead: score these prefiltered cubes (KTX2 or DDS) as split-sum shading on
+    /// --cube-probe against the exact texel sums (or --reference's Monte Carlo), beside
+    /// envlight's own renders (cubes.md, cubes.csv)
     #[arg(long)]
     cube: Vec<PathBuf>,
     /// Each --cube's conventions, in order (the last repeats): envlight, khronos
@@ -248,7 +249,8 @@ pub fn report(g: &Global, args: &ReportArgs) -> Result<()> {
         let cubes = crate::bench::cubes::with_conventions(&args.cube, &args.cube_convention);
         let renderer = Renderer::new(&ctx);
         let cam = sphere_camera(o.size);
-        let s = crate::bench::cubes::score(&renderer, cam, o.reference, probe, &cubes, &progress)?;
+        let reference = (!o.exact).then_some(o.reference);
+        let s = crate::bench::cubes::score(&renderer, cam, reference, probe, &cubes, &progress)?;
         let out = &args.out;
         std::fs::create_dir_all(out).with_context(|| out.display().to_string())?;
         std::fs::write(out.join("cubes.csv"), s.csv()).context("cubes.csv")?;
