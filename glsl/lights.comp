@@ -128,7 +128,7 @@ vec3 tree_sum(vec3 r, float a, float a2, float allowance) {
 }
 
 void main() {
-    uvec3 id = gl_GlobalInvocationID;
+    uvec3 id = gl_GlobalInvocationID + uvec3(0u, 0u, pc.layer);
     if (any(greaterThanEqual(id.xy, uvec2(pc.size)))) return;
     Coord c;
     c.layer = id.z;

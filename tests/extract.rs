@@ -425,6 +425,125 @@ fn gpu_prepared_lights_match_the_float64_twin_on_every_mapping() {
     common::finish(ctx);
 }
 
+/// The GPU's own light texels summed into a cube level through the tree it builds over them
+/// (`Extractor::record_prepare`, then `LightsPass::record`, what `bench dynamic` adds to its
+/// irradiance cube and GGX chain), against the same records one by one
+/// (`Extractor::record_add`, held to the float64 twin in tests/lights.rs): a lat-long sun and
+/// glow sky (ratio 2, room for 4096 texels of which the extraction keeps far fewer, so the
+/// tree's room runs past its records), its directions turned, the level first cleared to a
+/// grey (each tree node's allowed error is 1% of it) on a 32² cube's level 1; cosine and GGX
+/// α 0.03 and 0.3. The tree's own error (nodes taken whole by their sigma points,
+/// `TREE_BELOW`): worst texel within 5e-3 of the level's largest and relative RMS within 4e-3
+/// (measured 0.4–3.0e-3 and 3.4e-4–2.6e-3, the most at α 0.03, a lobe far narrower than these
+/// 64-wide texels), and apart somewhere (the tree takes nodes whole). Faces 2–4 alone
+/// (`record_faces`, a time slice): those faces equal the whole level's bit for bit, the
+/// others keep the grey.
+#[test]
+fn lights_summed_through_the_gpu_tree_match_the_texels_one_by_one() {
+    use envlight::math::lights::LightKernel;
+    use envlight::math::split_sum::chain_norm;
+    use envlight::passes::{GpuLights, LightsPass, ShProjector, SplitSum, Subgroups};
+    use gpu_allocator::MemoryLocation;
+    let ctx = common::ctx();
+    {
+        let extractor = Extractor::new(&ctx).unwrap();
+        let pass = LightsPass::new(&ctx).unwrap();
+        let proj = ShProjector::new(&ctx, Subgroups::Auto).unwrap();
+        let map = twin::glow_sky(Mapping::LatLong, 64);
+        let gpu = GpuEnvMap::upload(&ctx, &map).unwrap();
+        let room = 4096;
+        let ex = GpuExtraction::new(&ctx, map.mapping, map.width, map.height, room).unwrap();
+        let lights = GpuLights::on_gpu(&ctx, room, 16, 0).unwrap();
+        let l00 = Buffer::new(
+            &ctx,
+            "L00",
+            ShProjector::output_bytes(0),
+            ash::vk::BufferUsageFlags::STORAGE_BUFFER | ash::vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )
+        .unwrap();
+        let f2w = glam::DMat3::from_rotation_y(0.7);
+        let opts = ExtractOptions {
+            ratio: 2.0,
+            max_texels: room as usize,
+            fill: None,
+        };
+        let kept = extract(&map, &opts).lights.len();
+        assert!(kept > 20 && kept < room as usize / 4, "{kept} light texels");
+        let grey = 0.5f32;
+        for kernel in [
+            LightKernel::Cosine,
+            LightKernel::Ggx { alpha: 0.03 },
+            LightKernel::Ggx { alpha: 0.3 },
+        ] {
+            let norm = match kernel {
+                LightKernel::Cosine => 1.0,
+                LightKernel::Ggx { alpha } => chain_norm(alpha),
+            };
+            let cubes: Vec<GpuEnvMap> = (0..3)
+                .map(|_| SplitSum::cube_chain(&ctx, 32, 2).unwrap())
+                .collect();
+            let Timed { value: levels, .. } = ctx
+                .run("lights through the gpu tree", |rec| {
+                    let o = envlight::math::Orientation::default();
+                    proj.record_into(rec, &gpu, 0, &o, &l00)?;
+                    extractor.record(rec, &gpu, &l00, 2.0, &ex)?;
+                    extractor.record_prepare(rec, &ex, f2w, &lights)?;
+                    for c in &cubes {
+                        rec.clear(&c.image, [grey, grey, grey, 0.0]);
+                    }
+                    pass.record(rec, &lights, kernel, &cubes[0], 1)?;
+                    extractor.record_add(rec, &ex, f2w, kernel, norm, &cubes[1], 1)?;
+                    pass.record_faces(rec, &lights, kernel, &cubes[2], 1, 2..5)?;
+                    cubes
+                        .iter()
+                        .map(|c| c.record_download(rec, 1))
+                        .collect::<Result<Vec<_>, _>>()
+                })
+                .unwrap();
+            let [tree, brute, slice] = [0, 1, 2].map(|k| levels[k].read());
+            let top = brute.iter().flatten().fold(0.0f32, |a, &b| a.max(b)) as f64;
+            let apart = tree
+                .iter()
+                .zip(&brute)
+                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] as f64 - b[c] as f64).abs()))
+                .fold(0.0, f64::max)
+                / top;
+            let (se, s2) = tree
+                .iter()
+                .zip(&brute)
+                .fold((0.0, 0.0), |(se, s2), (a, b)| {
+                    let d: f64 = (0..3).map(|c| (a[c] as f64 - b[c] as f64).powi(2)).sum();
+                    (
+                        se + d,
+                        s2 + (0..3).map(|c| (b[c] as f64).powi(2)).sum::<f64>(),
+                    )
+                });
+            let rms = (se / s2).sqrt();
+            eprintln!(
+                "{kernel:?}: tree against the texels one by one: worst {apart:.2e} of the \
+                 largest ({top:.3e}), relative RMS {rms:.2e}"
+            );
+            assert!(apart < 5e-3 && rms < 4e-3, "{kernel:?}: {apart:e}, {rms:e}");
+            assert!(apart > 0.0, "{kernel:?}: the tree took no node whole");
+            let face = tree.len() / 6;
+            for (t, (s, w)) in slice.iter().zip(&tree).enumerate() {
+                let want = match (2..5).contains(&(t / face)) {
+                    true => [w[0], w[1], w[2]],
+                    false => [grey; 3],
+                };
+                assert_eq!(
+                    s[..3],
+                    want[..],
+                    "{kernel:?}: texel {t} of face {}",
+                    t / face
+                );
+            }
+        }
+    }
+    common::finish(ctx);
+}
+
 /// The spatial key of `glsl/extract_prepare.comp` in float64: a Morton code over the
 /// octahedral map of `d` (z folded), `TREE_KEY_AXIS_BITS` bits a side.
 fn spatial_key(d: glam::DVec3) -> u32 {

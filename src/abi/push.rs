@@ -456,6 +456,9 @@ push_blocks! {
         /// are added, in the sum's units: `lights::TREE_BUDGET` · ∫ K dω (0: the geometric
         /// rule alone).
         budget: f32 = "float",
+        /// The first face written: the dispatch's z counts faces from it (a time slice adds
+        /// the lights to some faces of a level).
+        layer: u32 = "uint",
     }
     /// `glsl/sh_rotate.comp`.
     ShRotatePush {

@@ -15,14 +15,15 @@ use crate::math::convert::residual_edge_points;
 use crate::math::envmap::luminance;
 use crate::math::exact::ExactFilter;
 use crate::math::lights::{extract, ExtractOptions, LightKernel};
-use crate::math::split_sum::{chain_norm, level_alpha};
+use crate::math::split_sum::level_alpha;
 use crate::math::synth::Sky;
 use crate::math::{Mapping, Orientation};
 use crate::passes::extract::Extracted;
 use crate::passes::testing::copy::CopyPass;
 use crate::passes::{
-    time_slices, ConvertOptions, ConvertPlan, Converter, Extractor, GpuExtraction, LevelLayers,
-    MipChain, PrefilterOptions, ShEvaluator, ShProjector, SplitSum, Subgroups,
+    time_slices, ConvertOptions, ConvertPlan, Converter, Extractor, GpuExtraction, GpuLights,
+    LevelLayers, LightsPass, MipChain, PrefilterOptions, ShEvaluator, ShProjector, SplitSum,
+    Subgroups,
 };
 use crate::{EnvMap, GpuEnvMap};
 use ash::vk;
@@ -71,7 +72,7 @@ impl FrameSettings {
 
 /// The stages, by the span that times each.
 const STAGES: [(&str, &str); 3] = [
-    ("frame: lights", "light extraction (L00 + extract)"),
+    ("frame: lights", "light extraction (L00 + extract + tree)"),
     (
         "frame: sh",
         "irradiance cube: SH 2 of the residual + the lights",
@@ -85,6 +86,9 @@ struct Frame {
     sh: Buffer,
     irradiance: GpuEnvMap,
     lights: GpuExtraction,
+    /// The frame's light texels prepared on the GPU for the chain (headers, quadratures
+    /// and the tree over them: `Extractor::record_prepare`).
+    prepared: GpuLights,
     dp: GpuEnvMap,
     chain: GpuEnvMap,
     /// The residual's conversion to the paraboloid, planned once where it takes areas
@@ -100,8 +104,7 @@ struct Passes {
     conv: Converter,
     mip: MipChain,
     split: SplitSum,
-    /// ∫K dω of each chain level's GGX kernel (`chain_norm`), found once.
-    norms: Vec<f64>,
+    lights: LightsPass,
 }
 
 /// The sun sky with its sun at `azimuth` degrees (10⁵ × the zenith, 1.5° across).
@@ -145,21 +148,15 @@ fn record_frame(
     let residual = f.lights.residual();
     rec.span(STAGES[0].0, |rec| {
         p.proj.record_into(rec, env, 0, &o, &f.l00)?;
-        p.extractor.record(rec, env, &f.l00, s.ratio, &f.lights)
+        p.extractor.record(rec, env, &f.l00, s.ratio, &f.lights)?;
+        p.extractor
+            .record_prepare(rec, &f.lights, DMat3::IDENTITY, &f.prepared)
     })?;
     rec.span(STAGES[1].0, |rec| {
         p.proj.record_into(rec, residual, 2, &o, &f.sh)?;
         p.eval.record_irradiance(rec, &f.sh, 2, &f.irradiance)?;
-        let cosine = LightKernel::Cosine;
-        p.extractor.record_add(
-            rec,
-            &f.lights,
-            DMat3::IDENTITY,
-            cosine,
-            1.0,
-            &f.irradiance,
-            0,
-        )
+        p.lights
+            .record(rec, &f.prepared, LightKernel::Cosine, &f.irradiance, 0)
     })?;
     rec.span(STAGES[2].0, |rec| {
         // The residual holds no sun for the rim's chords to misplace: fewer points per
@@ -193,9 +190,8 @@ fn record_frame(
                 let ggx = LightKernel::Ggx {
                     alpha: level_alpha(u.level, s.levels),
                 };
-                let norm = p.norms[u.level as usize];
-                p.extractor
-                    .record_add_to(rec, &f.lights, DMat3::IDENTITY, ggx, norm, &f.chain, &u)
+                p.lights
+                    .record_faces(rec, &f.prepared, ggx, &f.chain, u.level, u.layers.clone())
             })?;
         }
         Ok(())
@@ -256,6 +252,11 @@ fn frame_resources(
             s.irradiance,
         )?,
         lights: GpuExtraction::new(ctx, mapping, w, h, s.max_lights)?,
+        prepared: {
+            let rho = crate::math::lights::largest_rho(mapping, w, h);
+            let cells = crate::math::lights::cells_for_rho(rho, level_alpha(1, s.levels));
+            GpuLights::on_gpu(ctx, s.max_lights, 4 * cells * cells, 0)?
+        },
         dp: GpuEnvMap::with_mips(
             ctx,
             "frame paraboloid",
@@ -534,9 +535,7 @@ pub fn dynamic(
         conv: Converter::new(ctx)?,
         mip: MipChain::new(ctx)?,
         split: SplitSum::new(ctx)?,
-        norms: (0..s.levels)
-            .map(|k| chain_norm(level_alpha(k, s.levels)))
-            .collect(),
+        lights: LightsPass::new(ctx)?,
     };
     let mut body = String::from(
         "| input | stage | GPU ms | floor ms | ratio | error |\n|---|---|---|---|---|---|\n",
@@ -594,8 +593,9 @@ pub fn dynamic(
          filtered read of the paraboloid, where the floor reads and writes each texel once; \
          the lights \
          added back at level 1 (α ≈ 0.03) take their texels' node quadratures near the peak. \
-         The extraction stage is L00 (on a cube, per-texel Gauss–Legendre solid angles) and \
-         two passes over the map, each specialised to its mapping.\n",
+         The extraction stage is L00 (on a cube, per-texel Gauss–Legendre solid angles), \
+         two passes over the map, each specialised to its mapping, and the light texels' \
+         preparation (sorted by a spatial key, their quadratures and the tree over them).\n",
         shares.join("; "),
         n = s.samples,
         sliced = match sliced {
@@ -622,8 +622,10 @@ pub fn dynamic(
          {l} GGX levels ({c}² at level 0), {n} samples a texel. Floor: copies of the source, of the chain's cube (its levels: 4/3 of \
          level 0) and of the irradiance cube, in the same run. Errors on the last frame, \
          against the map's exact irradiance and exact GGX prefilter (float64): the lights are \
-         filtered exactly from the GPU's records (`Extractor::record_add`), the residual by SH 2 \
-         and by the chain.",
+         added through the tree the GPU builds over its records (`Extractor::record_prepare`, \
+         `LightsPass`: a node taken whole where it is small next to the kernel's scale there or \
+         its bound error is within 1% of the texel before the lights, `LightTree::sum`), the \
+         residual by SH 2 and by the chain.",
         i = s.irradiance,
         ratio = s.ratio,
         max = s.max_lights,

@@ -325,6 +325,21 @@ impl LightsPass {
         dst: &GpuEnvMap,
         level: u32,
     ) -> Result<()> {
+        self.record_faces(rec, lights, kernel, dst, level, 0..6)
+    }
+
+    /// As [`LightsPass::record`], to the faces `faces` of the level only (a time slice of a
+    /// chain, `super::time_slices`), the others left as they were. Faces beyond the cube's
+    /// six, or none, are refused.
+    pub fn record_faces(
+        &self,
+        rec: &mut Recorder,
+        lights: &GpuLights,
+        kernel: LightKernel,
+        dst: &GpuEnvMap,
+        level: u32,
+        faces: std::ops::Range<u32>,
+    ) -> Result<()> {
         let (kind, alpha, inv_norm) = match kernel {
             LightKernel::Cosine => (KERNEL_COSINE, 0.0, 1.0),
             LightKernel::Ggx { alpha } => (KERNEL_GGX, alpha, 1.0 / chain_norm(alpha)),
@@ -342,8 +357,9 @@ impl LightsPass {
             tree_at: lights.tree_at(),
             tree_nodes: lights.tree_nodes,
             budget: (TREE_BUDGET / inv_norm) as f32,
+            layer: 0,
         };
-        self.dispatch(rec, "lights", lights, push, dst, level)
+        self.dispatch(rec, "lights", lights, push, dst, (level, faces))
     }
 
     /// Records the addition of `lights`' clusters' irradiance
@@ -369,11 +385,13 @@ impl LightsPass {
             tree_at: 0,
             tree_nodes: 0,
             budget: 0.0,
+            layer: 0,
         };
-        self.dispatch(rec, "light clusters", lights, push, dst, level)
+        self.dispatch(rec, "light clusters", lights, push, dst, (level, 0..6))
     }
 
-    /// One dispatch over level `level` of the cube `dst` (nothing where `push.count` is 0).
+    /// One dispatch over the faces `faces` of level `level` of the cube `dst` (nothing where
+    /// `push.count` is 0), `push`'s size and first face set here.
     fn dispatch(
         &self,
         rec: &mut Recorder,
@@ -381,7 +399,7 @@ impl LightsPass {
         lights: &GpuLights,
         mut push: LightsPush,
         dst: &GpuEnvMap,
-        level: u32,
+        (level, faces): (u32, std::ops::Range<u32>),
     ) -> Result<()> {
         if dst.mapping != Mapping::Cube || level >= dst.mips() {
             return Err(Error::Invalid(format!(
@@ -390,11 +408,17 @@ impl LightsPass {
                 dst.mips()
             )));
         }
+        if faces.start >= faces.end || faces.end > 6 {
+            return Err(Error::Invalid(format!(
+                "{span}: faces {faces:?} of a cube's six"
+            )));
+        }
         if push.count == 0 {
             return Ok(());
         }
         let size = dst.level_size(level).0;
         push.size = size;
+        push.layer = faces.start;
         let (pipeline, list) = match lights.view {
             true => (&self.view, Bind::Texels(&lights.buffer)),
             false => (
@@ -410,7 +434,7 @@ impl LightsPass {
                     (binding::LIGHTS_DST, Bind::StorageLevel(&dst.image, level)),
                 ],
                 &push,
-                groups_2d(size, size, 6),
+                groups_2d(size, size, faces.end - faces.start),
             )
         })?;
         poison::image(rec, PassId::Lights, &dst.image, level..level + 1)
