@@ -502,23 +502,17 @@ fn lights_summed_through_the_gpu_tree_match_the_texels_one_by_one() {
                 })
                 .unwrap();
             let [tree, brute, slice] = [0, 1, 2].map(|k| levels[k].read());
-            let top = brute.iter().flatten().fold(0.0f32, |a, &b| a.max(b)) as f64;
-            let apart = tree
-                .iter()
-                .zip(&brute)
-                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] as f64 - b[c] as f64).abs()))
-                .fold(0.0, f64::max)
-                / top;
-            let (se, s2) = tree
-                .iter()
-                .zip(&brute)
-                .fold((0.0, 0.0), |(se, s2), (a, b)| {
-                    let d: f64 = (0..3).map(|c| (a[c] as f64 - b[c] as f64).powi(2)).sum();
-                    (
-                        se + d,
-                        s2 + (0..3).map(|c| (b[c] as f64).powi(2)).sum::<f64>(),
-                    )
-                });
+            let top = common::compare::max_of(brute.iter().flat_map(|b| b[..3].to_vec()));
+            let mut errors = common::compare::Errors::new();
+            let mut s2 = 0.0;
+            for (t, (a, b)) in tree.iter().zip(&brute).enumerate() {
+                for c in 0..3 {
+                    errors.abs(a[c], b[c], (t, c));
+                    s2 += (b[c] as f64).powi(2);
+                }
+            }
+            let apart = errors.worst() / top;
+            let se = errors.rms().powi(2) * errors.count() as f64;
             let rms = (se / s2).sqrt();
             eprintln!(
                 "{kernel:?}: tree against the texels one by one: worst {apart:.2e} of the \
