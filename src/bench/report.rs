@@ -149,7 +149,7 @@ pub struct Hooks<'a> {
 pub struct Row {
     /// The probe (file name without .hdr).
     pub probe: String,
-    /// What kind of light it is ("soft", "sun", "studio").
+    /// What kind of light it is ("soft", "sun", "studio", "interior").
     pub kind: &'static str,
     /// The material's name.
     pub material: String,
@@ -212,7 +212,9 @@ fn probes(quick: bool) -> Vec<(&'static str, &'static str)> {
     ];
     if !quick {
         v.push(("studio_small_08_1k.hdr", "studio"));
-        v.push(("quarry_01_1k.hdr", "sun"));
+        // Grace Cathedral's interior, stored nadir-first (../shared/probes/SOURCES.md) and
+        // scored as stored: every technique and the reference read the same map.
+        v.push(("grace_latlong.exr", "interior"));
     }
     v
 }
@@ -731,7 +733,7 @@ struct Session<'a> {
 }
 
 /// Measures every case on the probes of `dir` (venice_sunset and spiaggia_di_mondello, and in
-/// full runs studio_small_08 and quarry_01): one row per technique × parameters × probe ×
+/// full runs studio_small_08 and grace_latlong): one row per technique × parameters × probe ×
 /// material. A probe that cannot be read is left out and named with the reason; an error
 /// where none can be.
 pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Result<Report> {
@@ -751,7 +753,7 @@ pub fn run(ctx: &Context, dir: &Path, o: &ReportOptions, hooks: &Hooks) -> Resul
         rows: Vec::new(),
         skipped: Vec::new(),
     };
-    let named = |file: &str, p: &str| file == p || file.trim_end_matches(".hdr") == p;
+    let named = |file: &str, p: &str| file == p || file.rsplit_once('.').map(|f| f.0) == Some(p);
     if let Some(p) = o
         .probes
         .iter()
@@ -1002,7 +1004,7 @@ pub fn parse_csv(text: &str) -> Result<Vec<Row>> {
         .map(|t| t.name())
         .chain([super::cubes::PEER])
         .collect();
-    let kinds = ["soft", "sun", "studio"];
+    let kinds = ["soft", "sun", "studio", "interior"];
     let references = [
         Reference::ExactGpu,
         Reference::ExactHost,
