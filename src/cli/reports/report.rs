@@ -139,7 +139,9 @@ fn probes_dir(args: &ReportArgs) -> Result<PathBuf> {
 
 /// Runs glTF-IBL-Sampler (`sampler`, its wrapper) on the lat-long `probe` once per sample
 /// count and a cube of `size` (its default, half the panorama's height, where `None`), with
-/// its defaults otherwise (log2 of the size levels, rgba16f), in `scratch`.
+/// its defaults otherwise (log2 of the size levels, rgba16f), in `scratch`. It reads Radiance
+/// files only (stb_image): any other probe is handed to it written as one in `scratch` (RGBE,
+/// a shared 8-bit exponent: within 0.4% of each texel), outside its timed runs.
 fn sampler_cubes(
     sampler: &Path,
     probe: &Path,
@@ -147,6 +149,19 @@ fn sampler_cubes(
     counts: &[u32],
     size: Option<u32>,
 ) -> Result<Vec<PeerCube>> {
+    let radiance = probe
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("hdr"));
+    let probe = match radiance {
+        true => probe.to_path_buf(),
+        false => {
+            let input = scratch.join("iblsampler-input.hdr");
+            let map = crate::io::load(probe, &Default::default())?;
+            crate::io::save_map(&map, &input)?;
+            input
+        }
+    };
+    let probe = probe.as_path();
     let mut out = Vec::new();
     for &n in counts {
         let cube = scratch.join(format!("iblsampler-{n}.ktx2"));
