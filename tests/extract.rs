@@ -437,7 +437,7 @@ fn gpu_prepared_lights_match_the_float64_twin_on_every_mapping() {
 /// (measured 0.4–3.0e-3 and 3.4e-4–2.6e-3, the most at α 0.03, a lobe far narrower than these
 /// 64-wide texels), and apart somewhere (the tree takes nodes whole). Faces 2–4 alone
 /// (`record_faces`, a time slice): those faces equal the whole level's bit for bit, the
-/// others keep the grey.
+/// others keep the grey; faces past the sixth, or none, are refused by name.
 #[test]
 fn lights_summed_through_the_gpu_tree_match_the_texels_one_by_one() {
     use envlight::math::lights::LightKernel;
@@ -533,6 +533,18 @@ fn lights_summed_through_the_gpu_tree_match_the_texels_one_by_one() {
                     t / face
                 );
             }
+        }
+        // Faces a cube has not, or none, are refused before anything is recorded.
+        let cube = SplitSum::cube_chain(&ctx, 32, 2).unwrap();
+        for faces in [4..7, 3..3] {
+            let e = ctx
+                .run("faces refused", |rec| {
+                    pass.record_faces(rec, &lights, LightKernel::Cosine, &cube, 1, faces.clone())
+                })
+                .err()
+                .map(|e| e.to_string())
+                .unwrap_or_default();
+            assert!(e.contains("faces") && e.contains("six"), "{faces:?}: {e:?}");
         }
     }
     common::finish(ctx);
