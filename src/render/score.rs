@@ -92,9 +92,9 @@ pub const REPLICAS: u32 = 16;
 /// drawn as [`REPLICAS`] independent MIS renders (seeds 1 …) of `2 × samples / REPLICAS`
 /// each, rounded up. Their mean is the reference; its noise is the relative RMS standard
 /// error of that mean, from the replicas' spread at each pixel (`sqrt(Σ s² / K / Σ mean²)`
-/// over the scored pixels and channels). Two renders' half difference, the estimate this
-/// replaced, has one sample of spread per pixel: at a sharp lobe on a sun probe, where a few
-/// pixels carry the error, it read 0.17–11.9× the true noise across 16 independent pairs.
+/// over the scored pixels and channels). Two renders would give one sample of spread per
+/// pixel, no estimate at a sharp lobe on a sun probe, where a few pixels carry the error:
+/// across 16 independent pairs their half difference read 0.17–11.9× their error.
 pub fn truth(
     renderer: &Renderer,
     cam: Camera,
@@ -115,10 +115,8 @@ pub fn truth(
         frames.push(r.frame);
     }
     let mean = mean_of(&frames);
-    Ok((
-        mean.clone(),
-        spread_noise(&frames, &mean, &sphere_pixels(&cam)),
-    ))
+    let noise = spread_noise(&frames, &mean, &sphere_pixels(&cam));
+    Ok((mean, noise))
 }
 
 /// The texel-wise mean of frames of one size.
