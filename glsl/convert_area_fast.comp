@@ -83,20 +83,22 @@ void main() {
     int w = int(pc.src_size.x), h = int(pc.src_size.y);
     float wf = float(w), scale = wf / (2.0 * PI);
 
-    // The boundary points, U unwrapped from the first (as general()).
+    // The boundary points, U in columns from a reference column near them (c_ref, the first
+    // point's): float32 then holds U to ~1e-7 of the texel's reach rather than of the map's
+    // width. No unwrapping: the fast path's texels lie away from the poles, so their points
+    // lie within a few columns of the reference, far from the turned seam at ±π.
     const uvec2 steps[4] = uvec2[4](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 1));
+    vec3 d_first = point(face, i * SIDE_POINTS, j * SIDE_POINTS, SIDE_POINTS);
+    int c_ref = int(floor(atan(d_first.x, -d_first.z) * scale));
+    float phi_ref = float(c_ref) / scale;
+    float sr = sin(phi_ref), cr = cos(phi_ref);
     vec2 v[FAST_POINTS];
     [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
         uint e = k / SIDE_POINTS, q = k % SIDE_POINTS, m = SIDE_POINTS;
         uvec2 e0 = uvec2(i, j) + steps[e], e1 = uvec2(i, j) + steps[(e + 1u) % 4u];
         uvec2 ab = e0 * (m - q) + e1 * q;
-        vec3 d = point(face, ab.x, ab.y, m);
-        float u = atan(d.x, -d.z) * scale;
-        if (k > 0u) {
-            float dd = u - v[k - 1u].x;
-            u = v[k - 1u].x + (dd - wf * round(dd / wf));
-        }
-        v[k] = vec2(u, d.y);
+        vec3 d = k == 0u ? d_first : point(face, ab.x, ab.y, m);
+        v[k] = vec2(local_u(d, sr, cr) * scale, d.y);
     }
     vec2 lo = v[0], hi = v[0];
     [[unroll]] for (uint k = 1u; k < FAST_POINTS; k++) {
@@ -106,7 +108,7 @@ void main() {
     ivec2 rows = rows_met(lo.y, hi.y, h);
     int c0 = int(floor(lo.x)), c1 = int(floor(hi.x));
     vec3 l0 = vec3(3.4e38);
-    [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) l0 = min(l0, texel_under(v[k], w, h));
+    [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) l0 = min(l0, texel_under(v[k] + vec2(float(c_ref), 0.0), w, h));
 
     Edge edges[FAST_POINTS];
     [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) edges[k] = edge_of(v[k], v[(k + 1u) % FAST_POINTS]);
@@ -124,7 +126,7 @@ void main() {
         [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
             m += edge_cell(edges[k], cf, uc, zlo, zhi, zc);
         }
-        int col = wrap_column(c, w);
+        int col = wrap_column(c + c_ref, w);
         uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
         num += m.x * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) +
                m.y * texelFetch(slopes, int(o)).xyz + m.z * texelFetch(slopes, int(o + 1u)).xyz;

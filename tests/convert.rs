@@ -8,7 +8,7 @@ use twin::{convert, src_size, texel_angle};
 
 use common::compare::{max_abs, max_of, rel_err, Errors};
 use envlight::gpu::Timed;
-use envlight::math::synth::smooth_env;
+use envlight::math::synth::{smooth_env, Sky};
 use envlight::math::Mapping;
 use envlight::passes::{ConvertOptions, Converter};
 use envlight::GpuEnvMap;
@@ -683,38 +683,70 @@ fn fewer_edge_points_follow_their_twin_and_keep_power() {
     common::finish(ctx);
 }
 
-/// The area conversion conserves power: with suns 10⁵ × the sky at both poles, on the seam
-/// and mid-sky, the cube's and the dual paraboloid's power is the map's to 2e-5 (float64
-/// twin: 5e-6 at 1024 → cube 256, the chords of the footprint polygons; supersampling erred
-/// by 2.2e-3 on this map); at sizes as small as FIS's lobe-sized paraboloids (cube 16,
-/// paraboloid 32), whose texels hold the pole suns on a corner, to 1.5e-4 (twin: the chords,
-/// 1.0e-4 and 5.5e-5; GPU 1.1e-4 and 5.9e-5; it was 1.9e-3 when a sun that only touched a
-/// footprint could be the texel its sums were taken relative to); and a constant map stays
-/// constant to float32 rounding.
+/// The area conversion conserves power to the 1e-5: with suns 10⁵ × the sky at both
+/// poles, on the seam and mid-sky, at 1024 → cube and paraboloid 256 and 255/127 turned
+/// (float64 twin: 5e-6 at cube 256, the chords of the footprint polygons; GPU 6.3e-7, 7.5e-6,
+/// 6.3e-7, 7.5e-7; supersampling erred by 2.2e-3 on this map), and on the analytic sky, whose
+/// sun disc (5·10⁴ × the zenith) lies at 40° of azimuth, where float32 held U = φ·W/2π, a
+/// column index in the hundreds, to ~1e-4 of a texel: its sun texels' areas, and the power,
+/// were 3e-5 off (twin 5e-7; GPU now 4.8e-7 and 1.1e-6, U taken from a column near each
+/// footprint). At sizes as small as FIS's lobe-sized paraboloids (cube 16, paraboloid 32),
+/// whose texels hold the pole suns on a corner, to 1.5e-4 (twin: the chords, 1.0e-4 and
+/// 5.5e-5; GPU 9.5e-5 and 1.7e-5; it was 1.9e-3 when a sun that only touched a footprint could
+/// be the texel its sums were taken relative to); and a constant map stays constant to
+/// float32 rounding.
 #[test]
 fn area_conversion_conserves_power() {
     let ctx = common::ctx();
     {
         let conv = Converter::new(&ctx).unwrap();
         let src = suns_at_poles_and_seam(1024);
+        let sky = EnvMap::from_fn(Mapping::LatLong, 1024, 512, 2, |d| {
+            Sky::default().radiance(d)
+        });
         let turned = |flip_v| Orientation {
             flip_u: false,
             flip_v,
             rotate_y_degrees: 17.0,
         };
-        for (to, size, o, bound) in [
-            (Mapping::Cube, 256, Orientation::default(), 2e-5),
-            (Mapping::Cube, 255, turned(true), 2e-5),
-            (Mapping::DualParaboloid, 256, Orientation::default(), 2e-5),
-            (Mapping::DualParaboloid, 127, turned(false), 2e-5),
-            (Mapping::Cube, 16, Orientation::default(), 1.5e-4),
-            (Mapping::DualParaboloid, 32, Orientation::default(), 1.5e-4),
+        for (src, to, size, o, bound) in [
+            (&src, Mapping::Cube, 256, Orientation::default(), 1e-5),
+            (&src, Mapping::Cube, 255, turned(true), 1e-5),
+            (
+                &src,
+                Mapping::DualParaboloid,
+                256,
+                Orientation::default(),
+                1e-5,
+            ),
+            (&src, Mapping::DualParaboloid, 127, turned(false), 1e-5),
+            (&sky, Mapping::Cube, 256, Orientation::default(), 1e-5),
+            (
+                &sky,
+                Mapping::DualParaboloid,
+                256,
+                Orientation::default(),
+                1e-5,
+            ),
+            (&src, Mapping::Cube, 16, Orientation::default(), 1.5e-4),
+            (
+                &src,
+                Mapping::DualParaboloid,
+                32,
+                Orientation::default(),
+                1.5e-4,
+            ),
         ] {
             assert!(conv.uses_area((Mapping::LatLong, 1024, 512), &default_opts(to, size, o)));
-            let out = convert(&ctx, &conv, &src, to, size, o);
+            let out = convert(&ctx, &conv, src, to, size, o);
             let (p, q) = (out.power(), src.power());
             let worst = max_of((0..3).map(|c| rel_err(p[c], q[c], 0.0, c)));
-            eprintln!("area, {to:?} {size}: power error {worst:.2e}");
+            let what = if std::ptr::eq(src, &sky) {
+                "sky"
+            } else {
+                "suns"
+            };
+            eprintln!("area, {what}, {to:?} {size}: power error {worst:.2e}");
             assert!(worst <= bound, "{to:?} {size}: power off by {worst:e}");
             assert!(out
                 .texels

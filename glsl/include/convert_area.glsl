@@ -27,6 +27,8 @@ const uint DST_MAPPING = DST;
 // keeps a constant bound (as a push constant it cost the default conversion 6%).
 layout(constant_id = 2) const uint EDGE_POINTS = AREA_PARABOLOID_EDGE_STEPS;
 
+// Columns a footprint may reach across and still take U from a column near it (general()).
+const float AREA_LOCAL_REACH = 8.0;
 const uint MAXV = 2u * AREA_MAX_VERTICES;  // a clip at most doubles a polygon
 vec2 poly[MAXV];
 vec2 tmp[MAXV];
@@ -84,6 +86,13 @@ ivec2 rows_met(float zmin, float zmax, int h) {
     return ivec2(r0, r1);
 }
 
+// The azimuth of direction d from the azimuth whose sine and cosine are sr and cr, in
+// (−π, π]: the direction turned by that azimuth, then atan, so that a point near it comes out
+// to ~1e-7 of its distance from it (atan of d itself would round it to ~1e-7 of π).
+float local_u(vec3 d, float sr, float cr) {
+    return atan(d.x * cr + d.z * sr, -d.z * cr + d.x * sr);
+}
+
 // The source texel under point v of the (U, z) plane.
 vec3 texel_under(vec2 v, int w, int h) {
     int row = clamp(int(floor(acos(clamp(v.y, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
@@ -130,20 +139,45 @@ void general(uvec3 id) {
             ds[count++] = point(face, ab.x, ab.y, m);
         }
     }
+    // U in columns from a reference column near the points (c_ref, that of the first), as the
+    // fast path: float32 then holds U to ~1e-7 of the footprint's reach. Not where the
+    // footprint holds a pole or wraps round one, or reaches across more than
+    // AREA_LOCAL_REACH columns: there the reference gains little and its rounding would part
+    // the points that neighbours share, so U is the map's own (c_ref 0, no turn), as theirs.
+    bool pole = false;
+    for (uint k = 0u; k < count; k++) pole = pole || on_pole(ds[k]);
+    int c_ref = 0;
+    float sr = 0.0, cr = 1.0;
+    if (!pole) {
+        c_ref = int(floor(atan(ds[0].x, -ds[0].z) * scale));
+        float phi_ref = float(c_ref) / scale;
+        sr = sin(phi_ref);
+        cr = cos(phi_ref);
+    }
     float us[4u * AREA_POLE_STEPS];
-    bool have_prev = false, pole = false;
-    float prev = 0.0;
-    for (uint k = 0u; k < count; k++) {
-        us[k] = 0.0;
-        if (on_pole(ds[k])) continue;
-        float u = atan(ds[k].x, -ds[k].z) * scale;
-        if (have_prev) {
-            float d = u - prev;
-            u = prev + (d - wf * round(d / wf));
+    for (uint attempt = 0u; attempt < 2u; attempt++) {
+        bool have_prev = false;
+        float prev = 0.0, lo = 3.4e38, hi = -3.4e38;
+        for (uint k = 0u; k < count; k++) {
+            us[k] = 0.0;
+            if (on_pole(ds[k])) continue;
+            float u = local_u(ds[k], sr, cr) * scale;
+            if (have_prev) {
+                float d = u - prev;
+                u = prev + (d - wf * round(d / wf));
+            }
+            us[k] = u;
+            prev = u;
+            have_prev = true;
+            lo = min(lo, u);
+            hi = max(hi, u);
         }
-        us[k] = u;
-        prev = u;
-        have_prev = true;
+        float d = us[0] - us[count - 1u];
+        bool wraps = round(d / wf) != 0.0;
+        if (sr == 0.0 || !(wraps || hi - lo > AREA_LOCAL_REACH)) break;
+        c_ref = 0;
+        sr = 0.0;
+        cr = 1.0;
     }
     npoly = 0u;
     for (uint k = 0u; k < count; k++) {
@@ -196,7 +230,7 @@ void general(uvec3 id) {
     // that merely touches the footprint may be a sun 1e5 × the mean, whose cancellation would
     // cost float32 its digits; the least is at most the mean.
     vec3 l0 = vec3(3.4e38);
-    for (uint k = 0u; k < npoly; k++) l0 = min(l0, texel_under(poly[k], w, h));
+    for (uint k = 0u; k < npoly; k++) l0 = min(l0, texel_under(poly[k] + vec2(float(c_ref), 0.0), w, h));
     vec3 num = vec3(0.0);
     float den = 0.0;
     for (int row = r0; row <= r1; row++) {
@@ -243,7 +277,7 @@ void general(uvec3 id) {
                 float mz = d / 6.0 * 0.5 *
                            (((z0 - zc) * (z0 - zc) - base) + 4.0 * ((zm - zc) * (zm - zc) - base) +
                             ((z1 - zc) * (z1 - zc) - base));
-                int col = wrap_column(c, w);
+                int col = wrap_column(c + c_ref, w);
                 uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
                 vec3 gu = texelFetch(slopes, int(o)).xyz, gz = texelFetch(slopes, int(o + 1u)).xyz;
                 num += area * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + mu * gu +

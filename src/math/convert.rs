@@ -324,8 +324,9 @@ pub fn area_general_texels(to: Mapping, n: u32) -> Vec<[u32; 4]> {
 /// points bit for bit, so the polygons tile the plane: every source texel's power lands in
 /// the output, once. Shared edges are split at band and column lines from a canonical
 /// endpoint order, so both sides compute the same pieces (glsl/convert_area.comp is the
-/// float32 twin, step for step, except on the cube's fast path, which takes the same
-/// integrals edge by edge clamped to each band; see [`area_general_texel`]). Paraboloid texels wholly outside their disc hold the source
+/// float32 twin, step for step, U counted from a column near each footprint, except on the
+/// cube's fast path, which takes the same integrals edge by edge clamped to each band; see
+/// [`area_general_texel`]). Paraboloid texels wholly outside their disc hold the source
 /// texel at their own half's rim nearest their centre, as the sampled conversion's do.
 /// Panics unless [`area_serves`] maps `to` with `world_to_file`.
 pub fn latlong_area(map: &EnvMap, to: Mapping, size: u32, world_to_file: DMat3) -> EnvMap {
