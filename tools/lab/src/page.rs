@@ -1,6 +1,7 @@
 //! Performance pages (`docs/performance/<device>.md`), one per device, written only by
-//! `cargo xtask lab … --out PAGE`: a header naming the device, its driver and the CPU, then one
-//! section per job, headed by the commit, date, command and method that measured it. A rerun
+//! `cargo xtask lab … --out PAGE`: a header naming the device and its driver, then one section
+//! per job, headed by the commit, date, CPU, command and method that measured it (lavapipe
+//! rasterises on the host's cores, so one device's page may hold several machines' figures). A rerun
 //! of a bench replaces its own section and leaves the others; the history of the figures is
 //! `git log -p` of the page. A page of one device refuses a run on another.
 
@@ -93,15 +94,34 @@ pub struct Section<'a> {
     pub body: &'a str,
 }
 
-/// The page's header for `p`'s device.
-fn header(p: &Provenance) -> String {
+/// What a header says of CPUs: each section names its own.
+const CPU_PER_SECTION: &str = "each section names the one it ran on";
+
+/// What a header adds of the CPU that sections naming none ran on.
+const CPU_OF_THE_REST: &str = "; those that name none ran on ";
+
+/// The page's header for `p`'s device; `unnamed` is the CPU of the sections that name none
+/// (written before sections named theirs), if any.
+fn header(p: &Provenance, unnamed: Option<&str>) -> String {
+    let rest = unnamed.map_or(String::new(), |cpu| format!("{CPU_OF_THE_REST}{cpu}"));
     format!(
-        "# envlight on {0}\n\nDevice: {0}. CPU: {1}.\n\n\
-         Written by `cargo xtask lab … --out` only: each section names the commit, date, \
+        "# envlight on {0}\n\nDevice: {0}. CPU: {CPU_PER_SECTION}{rest}.\n\n\
+         Written by `cargo xtask lab … --out` only: each section names the commit, date, CPU, \
          command and method that measured it, and a rerun of its bench replaces it. Earlier \
          figures: `git log -p` of this file.\n",
-        p.device, p.cpu
+        p.device
     )
+}
+
+/// The CPU that `old`'s sections naming none ran on: a page's header named one CPU for the
+/// whole page before sections named theirs.
+fn unnamed_cpu(old: &str) -> Option<String> {
+    let line = old.lines().find(|l| l.starts_with("Device: "))?;
+    let cpu = line.split_once(". CPU: ")?.1.trim_end_matches('.');
+    match cpu.strip_prefix(CPU_PER_SECTION) {
+        Some(rest) => rest.strip_prefix(CPU_OF_THE_REST).map(str::to_string),
+        None => Some(cpu.to_string()),
+    }
 }
 
 fn markers(job: &str) -> (String, String) {
@@ -155,10 +175,11 @@ pub fn write_section(path: &Path, s: &Section<'_>, p: &Provenance) -> Result<()>
     let mut mine = String::new();
     let _ = write!(
         mine,
-        "{open}\n## {}\n\nCommit {}, {}: `{}`.\n\nMethod: {}\n\n{}\n{close}",
+        "{open}\n## {}\n\nCommit {}, {}, {}: `{}`.\n\nMethod: {}\n\n{}\n{close}",
         s.title,
         p.commit,
         p.date,
+        p.cpu,
         p.command,
         s.method,
         s.body.trim_end()
@@ -170,7 +191,7 @@ pub fn write_section(path: &Path, s: &Section<'_>, p: &Provenance) -> Result<()>
     all.push((s.job.to_string(), mine));
     let rank = |job: &str| ORDER.iter().position(|j| *j == job).unwrap_or(ORDER.len());
     all.sort_by(|a, b| (rank(&a.0), &a.0).cmp(&(rank(&b.0), &b.0)));
-    let mut page = header(p);
+    let mut page = header(p, unnamed_cpu(&old).as_deref());
     for (_, text) in &all {
         let _ = write!(page, "\n{text}\n");
     }
@@ -239,10 +260,43 @@ mod tests {
             text.find("| p 1 |") < text.find("| f 2 |"),
             "peers come first:\n{text}"
         );
-        assert!(text.contains("Commit b2, 2026-11-28: `envlight bench x`."));
+        assert!(text.contains("Commit b2, 2026-11-28, a cpu, 2 cores: `envlight bench x`."));
+        assert!(
+            text.contains("CPU: each section names the one it ran on.\n"),
+            "{text}"
+        );
         assert_eq!(text.matches("<!-- bench:formats -->").count(), 1);
         let other = write_section(&page, &sec("peers", "x"), &prov("other (driver 2)", "c3"));
         assert!(other.unwrap_err().to_string().contains("another device"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A page whose header named one CPU for all its sections keeps that CPU for the sections
+    /// that name none, through any number of reruns; a new section names its own.
+    #[test]
+    fn sections_name_their_cpu_and_older_ones_keep_the_headers() {
+        let dir = std::env::temp_dir().join(format!("envlight-cpu-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let page = dir.join("dev.md");
+        let old = "# envlight on gpu (driver 1)\n\nDevice: gpu (driver 1). CPU: Old CPU, 2 \
+                   cores.\n\n<!-- bench:peers -->\n## P\n\nCommit a1, 2026-11-01: `x`.\n\
+                   <!-- /bench:peers -->\n";
+        std::fs::write(&page, old).unwrap();
+        let sec = Section {
+            job: "floors",
+            title: "F",
+            method: "m",
+            body: "| f |",
+        };
+        for _ in 0..2 {
+            write_section(&page, &sec, &prov("gpu (driver 1)", "b2")).unwrap();
+            let text = std::fs::read_to_string(&page).unwrap();
+            let want = "CPU: each section names the one it ran on; those that name none ran on \
+                        Old CPU, 2 cores.\n";
+            assert!(text.contains(want), "{text}");
+            assert!(text.contains("Commit b2, 2026-11-28, a cpu, 2 cores: `envlight bench x`."));
+            assert!(text.contains("Commit a1, 2026-11-01: `x`."), "{text}");
+        }
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
