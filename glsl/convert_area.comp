@@ -9,11 +9,11 @@
 // along the polygon clipped to the band (Green's theorem). Neighbours share their edge points
 // and split shared edges from a canonical endpoint order, so the polygons tile the plane and
 // each source texel's power is counted once. Each footprint takes U from a column near it
-// (local_u): held at the map's own U, a column index in the thousands, float32 rounded the
-// points by ~1e-4 of a texel and a sun's texels' areas with them (power off by 3e-5);
-// neighbours' shared points then agree to ~1e-7 of a texel instead of bit for bit, except
-// where the general walk keeps the map's own U (footprints on a pole or wide ones), as its
-// neighbours there do. The float64 twin is
+// (local_u): at the map's own U, a column index in the thousands, float32 would round the
+// points by ~1e-4 of a texel, and a sun's texels' areas with them; neighbours' shared points
+// agree to ~1e-7 of a texel rather than bit for bit, except where the general walk keeps the
+// map's own U (footprints on a pole or wide ones), as its neighbours there do. The float64
+// twin is
 // math::convert::latlong_area, step for step for the general walk; the cube's fast path (FAST,
 // below) takes the same integrals over the same polygons without clipping.
 #extension GL_GOOGLE_include_directive : require

@@ -89,9 +89,8 @@ void main() {
     // lie within a few columns of the reference, far from the turned seam at ±π.
     const uvec2 steps[4] = uvec2[4](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 1));
     vec3 d_first = point(face, i * SIDE_POINTS, j * SIDE_POINTS, SIDE_POINTS);
-    int c_ref = int(floor(atan(d_first.x, -d_first.z) * scale));
-    float phi_ref = float(c_ref) / scale;
-    float sr = sin(phi_ref), cr = cos(phi_ref);
+    float sr, cr;
+    int c_ref = reference_column(d_first, scale, sr, cr);
     vec2 v[FAST_POINTS];
     [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
         uint e = k / SIDE_POINTS, q = k % SIDE_POINTS, m = SIDE_POINTS;

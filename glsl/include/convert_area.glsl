@@ -34,6 +34,9 @@ vec2 poly[MAXV];
 vec2 tmp[MAXV];
 vec2 band[MAXV];
 uint npoly;
+// The general walk's boundary points: their directions and their U (footprint_u).
+vec3 ds[4u * AREA_POLE_STEPS];
+float us[4u * AREA_POLE_STEPS];
 
 vec3 point(uint face, uint a, uint b, uint m) {
     Coord c;
@@ -93,6 +96,16 @@ float local_u(vec3 d, float sr, float cr) {
     return atan(d.x * cr + d.z * sr, -d.z * cr + d.x * sr);
 }
 
+// The column under direction d (`scale` columns a radian), the reference U is counted from
+// near d, and the sine and cosine of its azimuth for local_u.
+int reference_column(vec3 d, float scale, out float sr, out float cr) {
+    int c = int(floor(atan(d.x, -d.z) * scale));
+    float phi = float(c) / scale;
+    sr = sin(phi);
+    cr = cos(phi);
+    return c;
+}
+
 // The source texel under point v of the (U, z) plane.
 vec3 texel_under(vec2 v, int w, int h) {
     int row = clamp(int(floor(acos(clamp(v.y, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
@@ -113,48 +126,18 @@ void store_rim(uvec3 id) {
     imageStore(dst, ivec3(id), vec4(texelFetch(src, ivec3(p, 0), 0).rgb, 1.0));
 }
 
-// The texel's footprint walked band by band (any texel: a pole on its boundary or inside it,
-// a paraboloid's rim).
-void general(uvec3 id) {
-    if (DST_MAPPING == MAPPING_DUAL_PARABOLOID && !texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy))) {
-        store_rim(id);
-        return;
-    }
-    uint face = id.z, i = id.x, j = id.y, n = pc.dst_size.x;
-    int w = int(pc.src_size.x), h = int(pc.src_size.y);
-    float wf = float(w), scale = wf / (2.0 * PI);
-
-    // The boundary points and their unwrapped U (as area_polygon in math/convert.rs).
-    const uvec2 steps[4] = uvec2[4](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 1));
-    vec3 ds[4u * AREA_POLE_STEPS];
-    uint count = 0u;
-    for (uint k = 0u; k < 4u; k++) {
-        uvec2 e0 = uvec2(i, j) + steps[k], e1 = uvec2(i, j) + steps[(k + 1u) % 4u];
-        vec3 pa = point(face, e0.x, e0.y, 1u), pb = point(face, e1.x, e1.y, 1u);
-        bool near = min(length(pa.xz), length(pb.xz)) < AREA_POLE_NEAR / float(n);
-        uint m = near ? AREA_POLE_STEPS
-                      : (DST_MAPPING == MAPPING_DUAL_PARABOLOID ? EDGE_POINTS : AREA_EDGE_STEPS);
-        for (uint q = 0u; q < m; q++) {
-            uvec2 ab = e0 * (m - q) + e1 * q;
-            ds[count++] = point(face, ab.x, ab.y, m);
-        }
-    }
-    // U in columns from a reference column near the points (c_ref, that of the first), as the
-    // fast path: float32 then holds U to ~1e-7 of the footprint's reach. Not where the
-    // footprint holds a pole or wraps round one, or reaches across more than
-    // AREA_LOCAL_REACH columns: there the reference gains little and its rounding would part
-    // the points that neighbours share, so U is the map's own (c_ref 0, no turn), as theirs.
-    bool pole = false;
+// U of the general walk's `count` points ds into us, unwrapped from the first, in columns from
+// a reference column near them (returned; `scale` columns a radian, the map `wf` wide), as the
+// fast path: float32 then holds U to ~1e-7 of the footprint's reach. Not where the footprint
+// holds a pole (`pole`) or wraps round one, or reaches across more than AREA_LOCAL_REACH
+// columns: there the reference gains little and its rounding would part the points that
+// neighbours share, so U is the map's own (reference 0, no turn), as theirs.
+int footprint_u(uint count, float scale, float wf, out bool pole) {
+    pole = false;
     for (uint k = 0u; k < count; k++) pole = pole || on_pole(ds[k]);
     int c_ref = 0;
     float sr = 0.0, cr = 1.0;
-    if (!pole) {
-        c_ref = int(floor(atan(ds[0].x, -ds[0].z) * scale));
-        float phi_ref = float(c_ref) / scale;
-        sr = sin(phi_ref);
-        cr = cos(phi_ref);
-    }
-    float us[4u * AREA_POLE_STEPS];
+    if (!pole) c_ref = reference_column(ds[0], scale, sr, cr);
     for (uint attempt = 0u; attempt < 2u; attempt++) {
         bool have_prev = false;
         float prev = 0.0, lo = 3.4e38, hi = -3.4e38;
@@ -179,6 +162,36 @@ void general(uvec3 id) {
         sr = 0.0;
         cr = 1.0;
     }
+    return c_ref;
+}
+
+// The texel's footprint walked band by band (any texel: a pole on its boundary or inside it,
+// a paraboloid's rim).
+void general(uvec3 id) {
+    if (DST_MAPPING == MAPPING_DUAL_PARABOLOID && !texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy))) {
+        store_rim(id);
+        return;
+    }
+    uint face = id.z, i = id.x, j = id.y, n = pc.dst_size.x;
+    int w = int(pc.src_size.x), h = int(pc.src_size.y);
+    float wf = float(w), scale = wf / (2.0 * PI);
+
+    // The boundary points and their unwrapped U (as area_polygon in math/convert.rs).
+    const uvec2 steps[4] = uvec2[4](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 1));
+    uint count = 0u;
+    for (uint k = 0u; k < 4u; k++) {
+        uvec2 e0 = uvec2(i, j) + steps[k], e1 = uvec2(i, j) + steps[(k + 1u) % 4u];
+        vec3 pa = point(face, e0.x, e0.y, 1u), pb = point(face, e1.x, e1.y, 1u);
+        bool near = min(length(pa.xz), length(pb.xz)) < AREA_POLE_NEAR / float(n);
+        uint m = near ? AREA_POLE_STEPS
+                      : (DST_MAPPING == MAPPING_DUAL_PARABOLOID ? EDGE_POINTS : AREA_EDGE_STEPS);
+        for (uint q = 0u; q < m; q++) {
+            uvec2 ab = e0 * (m - q) + e1 * q;
+            ds[count++] = point(face, ab.x, ab.y, m);
+        }
+    }
+    bool pole = false;
+    int c_ref = footprint_u(count, scale, wf, pole);
     npoly = 0u;
     for (uint k = 0u; k < count; k++) {
         if (on_pole(ds[k])) {
