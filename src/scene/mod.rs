@@ -578,6 +578,15 @@ mod tests {
         let bad = GLOSSY_TEST_SCENE.replace("kind = \"fis\", samples = 32", "kind = \"sh\"");
         let e = Scene::parse(&bad).unwrap_err().to_string();
         assert!(e.contains("object 0") && e.contains("sh"), "{e}");
+        // Split-sum's chain and DFG table are GGX's: a diffuse object is refused by name, not
+        // left to fail later on an empty DFG table.
+        let bad = GLOSSY_TEST_SCENE.replace(
+            "albedo = [0.5, 0.5, 0.5] }",
+            "albedo = [0.5, 0.5, 0.5], technique = { kind = \"split_sum\" } }",
+        );
+        assert_ne!(bad, GLOSSY_TEST_SCENE);
+        let e = Scene::parse(&bad).unwrap_err().to_string();
+        assert!(e.contains("object 1") && e.contains("split_sum"), "{e}");
         let bad = GLOSSY_TEST_SCENE.replace("alpha = 0.3", "alpha = 1.5");
         let e = Scene::parse(&bad).unwrap_err().to_string();
         assert!(e.contains("GGX alpha"), "{e}");

@@ -74,7 +74,8 @@ impl Scene {
             let t = o.material.technique();
             let allowed = match o.material.kind {
                 Brdf::Mirror => matches!(t, Technique::Lookup | Technique::Mc { .. }),
-                Brdf::Lambert => !matches!(t, Technique::Lookup),
+                // Split-sum's chain and DFG table are GGX's alone.
+                Brdf::Lambert => !matches!(t, Technique::Lookup | Technique::SplitSum),
                 Brdf::Phong { .. } => !matches!(
                     t,
                     Technique::Lookup | Technique::Sh { .. } | Technique::SplitSum
