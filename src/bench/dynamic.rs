@@ -7,7 +7,7 @@
 //! timestamps, beside each stage's error and the frame's floor: a copy of the source and of
 //! every output texel (each read once, written once, no arithmetic).
 
-use super::floors::{copy_ms, probe_texels, rel_lum, worse};
+use super::floors::{copy_ms, rel_lum, spread_texels, worse};
 use super::{median, Report};
 use crate::error::Result;
 use crate::gpu::{Buffer, Context, Timing};
@@ -446,8 +446,12 @@ fn time_frames(
     Ok(timed)
 }
 
+/// Texels per level where the chain and the irradiance cube are scored (all of a level that
+/// has fewer, [`spread_texels`]).
+const ERROR_TEXELS: usize = 256;
+
 /// The chain's levels 1.. against the exact GGX prefilter (`exact`): each level's mean over
-/// eight texels.
+/// [`ERROR_TEXELS`] texels.
 fn chain_error(
     ctx: &Context,
     exact: &ExactFilter,
@@ -458,7 +462,7 @@ fn chain_error(
     for k in 1..s.levels {
         let side = (s.chain >> k).max(1);
         let level = f.chain.download_level(ctx, k)?;
-        let e: Vec<f64> = probe_texels(side)
+        let e: Vec<f64> = spread_texels(side, ERROR_TEXELS)
             .into_iter()
             .map(|(t, d)| rel_lum(level[t], exact.ggx(d, level_alpha(k, s.levels))))
             .collect();
@@ -469,7 +473,7 @@ fn chain_error(
 
 /// Each stage's error on the last frame: the extraction against the host's (count,
 /// threshold, power); the irradiance cube against the exact irradiance of the map; the chain's
-/// levels 1.. against the exact GGX prefilter of the map (mean over eight texels a level; the
+/// levels 1.. against the exact GGX prefilter of the map (mean over [`ERROR_TEXELS`] a level; the
 /// worst level), and each level's mean.
 fn frame_errors(
     ctx: &Context,
@@ -482,7 +486,7 @@ fn frame_errors(
     let irr = f.irradiance.download_level(ctx, 0)?;
     let exact = ExactFilter::new(map, DMat3::IDENTITY);
     let mut tech = Vec::new();
-    for (t, d) in probe_texels(s.irradiance) {
+    for (t, d) in spread_texels(s.irradiance, ERROR_TEXELS) {
         tech.push(rel_lum(irr[t], exact.irradiance(d)));
     }
     let opts = ExtractOptions {
@@ -506,7 +510,7 @@ fn frame_errors(
     let most = tech.into_iter().fold(0.0, worse);
     let strings = [
         lights,
-        format!("exact irradiance: mean {mean:.1e}, worst {most:.1e} (8 texels)"),
+        format!("exact irradiance: mean {mean:.1e}, worst {most:.1e} ({ERROR_TEXELS} texels)"),
         format!(
             "exact GGX prefilter, levels 1–{}: worst level's mean {worst_mean:.1e}",
             s.levels - 1
@@ -580,9 +584,10 @@ pub fn dynamic(
             .collect();
         body.push_str(&format!(
             "\nThe chain by part, GPU ms (the median frame) and, for the rough levels, the \
-             level's mean error against the exact GGX prefilter (8 texels): the paraboloid \
-             (the residual's conversion and MIP chain), then each level's FIS refilter with \
-             its lights added.\n\n| input | paraboloid + MIP | {} |\n|---|---|{}\n{level_rows}",
+             level's mean error against the exact GGX prefilter ({ERROR_TEXELS} texels a \
+             level, or all of a smaller one): the paraboloid (the residual's conversion and MIP \
+             chain), then each level's FIS refilter with its lights added.\n\n| input | \
+             paraboloid + MIP | {} |\n|---|---|{}\n{level_rows}",
             heads.join(" | "),
             "---|".repeat(s.levels as usize)
         ));
@@ -590,9 +595,10 @@ pub fn dynamic(
     body.push_str(&format!(
         "\nShare of the frame (lights / irradiance / chain): {}. The chain is the stage furthest \
          from the floor: {n} FIS samples for each of the 7 levels' texels{sliced}, each a \
-         filtered read of the paraboloid, where the floor reads and writes each texel once; \
-         the lights \
-         added back at level 1 (α ≈ 0.03) take their texels' node quadratures near the peak. \
+         filtered read of the paraboloid, where the floor reads and writes each texel once. \
+         A level's time goes as its texels times the samples (the reads, not the sampler's \
+         arithmetic, are the cost), so level 1, with 3/4 of the rough levels' texels, takes \
+         most of it; the lights added back there are under a tenth of its time. \
          The extraction stage is L00 (on a cube, per-texel Gauss–Legendre solid angles), \
          two passes over the map, each specialised to its mapping, and the light texels' \
          preparation (sorted by a spatial key, their quadratures and the tree over them).\n",

@@ -85,6 +85,30 @@ pub(super) fn rel_lum(got: [f32; 4], want: [f64; 3]) -> f64 {
     (y([got[0] as f64, got[1] as f64, got[2] as f64]) - w).abs() / w.abs().max(1e-30)
 }
 
+/// Texel centres of a cube level `s` a side where errors are measured: all of them when the
+/// level has at most `n`, else `n` spread evenly over the faces and within each face (the R2
+/// sequence: point k on face k mod 6 at the fractional parts of ½ + k·(1/g, 1/g²), g the
+/// plastic number), so no row, column or face is favoured.
+pub(super) fn spread_texels(s: u32, n: usize) -> Vec<(usize, DVec3)> {
+    let at = |face: u32, i: u32, j: u32| {
+        let d = Mapping::Cube.coord_to_dir(Mapping::texel_center(s, s, face, i, j));
+        (((face * s + j) * s + i) as usize, d)
+    };
+    let all = 6 * s as usize * s as usize;
+    if all <= n {
+        return (0..all as u32)
+            .map(|t| at(t / (s * s), t % s, (t / s) % s))
+            .collect();
+    }
+    const G: [f64; 2] = [0.754_877_666_246_692_7, 0.569_840_290_998_053_3];
+    (0..n)
+        .map(|k| {
+            let cell = |g: f64| ((((0.5 + k as f64 * g).fract()) * s as f64) as u32).min(s - 1);
+            at((k % 6) as u32, cell(G[0]), cell(G[1]))
+        })
+        .collect()
+}
+
 /// Eight texel centres of a cube level `s` a side, spread over the faces.
 pub(super) fn probe_texels(s: u32) -> Vec<(usize, DVec3)> {
     (0..8u32)
@@ -646,4 +670,44 @@ pub fn floors(
         method,
         body,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spread_texels_cover_small_levels_and_spread_over_large_ones() {
+        let check = |s: u32, set: &[(usize, DVec3)]| {
+            for &(t, d) in set {
+                let t = t as u32;
+                let (face, i, j) = (t / (s * s), t % s, (t / s) % s);
+                let want = Mapping::Cube.coord_to_dir(Mapping::texel_center(s, s, face, i, j));
+                assert!(d.distance(want) < 1e-12, "texel {t} of {s}");
+            }
+        };
+        let small = spread_texels(4, 256);
+        assert_eq!(small.len(), 96);
+        let mut seen: Vec<usize> = small.iter().map(|p| p.0).collect();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..96).collect::<Vec<_>>());
+        check(4, &small);
+        let large = spread_texels(64, 256);
+        assert_eq!(large.len(), 256);
+        check(64, &large);
+        let mut seen: Vec<usize> = large.iter().map(|p| p.0).collect();
+        seen.sort_unstable();
+        seen.dedup();
+        assert!(seen.len() > 250, "{} distinct", seen.len());
+        // Every face and every eighth of each axis is visited.
+        for part in 0..8 {
+            let on =
+                |axis: fn(usize) -> usize| large.iter().filter(|p| axis(p.0) / 8 == part).count();
+            assert!(on(|t| t % 64) > 16, "columns {part}");
+            assert!(on(|t| (t / 64) % 64) > 16, "rows {part}");
+        }
+        for face in 0..6 {
+            assert!(large.iter().filter(|p| p.0 / 4096 == face).count() >= 42);
+        }
+    }
 }
