@@ -249,6 +249,37 @@ fn halved(map: &EnvMap) -> EnvMap {
 /// sums from the map's own polar frame into the world's at the end (a reflection where the
 /// file is flipped, or not), every combination of flips and a turn, orders 2 and 8: within
 /// 1e-5 of |L00| of the f64 projection.
+/// Band 0 alone (what light extraction's threshold reads: `Extractor::record` takes L00) on
+/// the per-texel mappings, a sun sky: the float64 projection's L00 within 1e-5 of itself (the
+/// same bound as the other bands' tests: f32 sums over a sun 1e5 × the sky), and equal bit for
+/// bit to the first coefficient of a band-2 projection of the same map, which sums the same
+/// terms in the same order.
+#[test]
+fn band_zero_matches_the_float64_projection_on_every_mapping() {
+    let ctx = common::ctx();
+    {
+        let p = ShProjector::new(&ctx, Subgroups::Auto).unwrap();
+        let sky = Sky::default();
+        for (m, size) in [
+            (Mapping::Cube, 48),
+            (Mapping::Angular, 128),
+            (Mapping::DualParaboloid, 64),
+        ] {
+            let (w, h) = m.extent_for_size(size);
+            let map = EnvMap::from_fn(m, w, h, 2, |d| sky.radiance(d));
+            let g = GpuEnvMap::upload(&ctx, &map).unwrap();
+            let zero = p.run(&g, 0).unwrap().value;
+            assert_eq!(zero.coeffs.len(), 1, "{m:?}");
+            let cpu = sh::project(&map, 0);
+            let e = worst_vs_cpu(&zero.coeffs, &cpu);
+            assert!(e < 1e-5, "{m:?}: L00 off by {e:e}");
+            let two = p.run(&g, 2).unwrap().value;
+            assert_eq!(zero.coeffs[0], two.coeffs[0], "{m:?}");
+        }
+    }
+    common::finish(ctx);
+}
+
 #[test]
 fn oriented_projection_matches_and_flips_parity() {
     let ctx = common::ctx();
