@@ -405,17 +405,12 @@ pub fn dp_size(env: &EnvMap, opts: &BakeOptions) -> u32 {
     default_dp_size(env).min((2 * opts.specular_size).next_power_of_two().max(16))
 }
 
-/// Samples per axis per texel of the paraboloid's conversion: 1.5 per source texel spacing,
-/// at least 2 — a third of the general rule's 4 ([`Converter::supersampling`]). The
-/// paraboloid only feeds FIS's MIP chain and the mirror level; measured on four 1k probes,
-/// no spot-checked error moved in its first three digits, and the conversion costs a sixth.
+/// Samples per axis per texel of the paraboloid's conversion
+/// ([`Converter::chain_supersampling`]: 1.5 per source texel spacing, at least 2). The
+/// paraboloid only feeds FIS's MIP chain and the mirror level; measured on four 1k probes, no
+/// spot-checked error moved in its first three digits, and the conversion costs a sixth.
 pub fn supersample(env: &EnvMap, dp_size: u32) -> u32 {
-    let (w, h) = Mapping::DualParaboloid.extent_for_size(dp_size);
-    let r = Converter::ratio(
-        (env.mapping, env.width, env.height),
-        (Mapping::DualParaboloid, w, h),
-    );
-    ((1.5 * r).ceil() as u32).clamp(2, 64)
+    Converter::chain_supersampling((env.mapping, env.width, env.height), dp_size)
 }
 
 /// The most staging a bake's upload of its source takes (64 MiB, 4 Mi texels: a 2896 × 1448

@@ -159,10 +159,8 @@ fn record_frame(
             .record(rec, &f.prepared, LightKernel::Cosine, &f.irradiance, 0)
     })?;
     rec.span(STAGES[2].0, |rec| {
-        // The residual holds no sun for the rim's chords to misplace: fewer points per
-        // paraboloid texel edge, as the renderer's chain takes (`residual_edge_points`).
-        let opts = ConvertOptions::new(Mapping::DualParaboloid, s.paraboloid)
-            .with_edge_points(Some(residual_edge_points(s.paraboloid)));
+        let shape = (residual.mapping, residual.width, residual.height);
+        let opts = chain_convert_options(shape, s.paraboloid);
         rec.span(PARABOLOID_SPAN, |rec| {
             match &f.plan {
                 Some(plan) => p.conv.record_planned(rec, residual, &f.dp, plan)?,
@@ -196,6 +194,19 @@ fn record_frame(
         }
         Ok(())
     })
+}
+
+/// The residual's conversion to the chain's paraboloid `size` a side, as the renderer's
+/// (`render::plan`): fewer points per texel edge, the residual holding no sun for the rim's
+/// chords to misplace (`residual_edge_points`); a lat-long by exact areas, other mappings by
+/// samples at the chain's rate (`Converter::chain_supersampling`).
+fn chain_convert_options(src: (Mapping, u32, u32), size: u32) -> ConvertOptions {
+    let opts = ConvertOptions::new(Mapping::DualParaboloid, size)
+        .with_edge_points(Some(residual_edge_points(size)));
+    match src.0 {
+        Mapping::LatLong => opts,
+        _ => opts.with_supersample(Some(Converter::chain_supersampling(src, size))),
+    }
 }
 
 /// The span of the chain's conversion to the paraboloid and its MIP chain.
@@ -267,8 +278,7 @@ fn frame_resources(
         chain: SplitSum::cube_chain(ctx, s.chain, s.levels)?,
         plan: None,
     };
-    let dp_opts = ConvertOptions::new(Mapping::DualParaboloid, s.paraboloid)
-        .with_edge_points(Some(residual_edge_points(s.paraboloid)));
+    let dp_opts = chain_convert_options((mapping, w, h), s.paraboloid);
     let started = std::time::Instant::now();
     let frame = Frame {
         plan: match p.conv.plan_pays((mapping, w, h), &dp_opts) {
@@ -614,7 +624,8 @@ pub fn dynamic(
             "\nA lat-long residual's conversion to the paraboloid is planned once per input \
              before its frames (`Converter::plan`: the exact areas' geometry in float64 on the \
              host; each frame then gathers its texels' weights), host time and size: {}. Cube \
-             inputs convert by samples, unplanned.\n",
+             inputs convert by samples, 1.5 per source texel spacing and at least 2 per axis \
+             (`Converter::chain_supersampling`), unplanned.\n",
             plans.join("; ")
         ));
     }

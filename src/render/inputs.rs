@@ -383,10 +383,16 @@ pub(super) fn record(
 }
 
 /// The paraboloid's conversion options as `lit` leaves them: a residual holds no sun for the
-/// rim's chords to misplace, so fewer points (as predicted for the pipeline built meanwhile,
-/// unless the lobes were too narrow for the lights found, which leaves them in the chain).
+/// rim's chords to misplace, so fewer points, and a sampled conversion may take the chain's
+/// rate (as predicted for the pipeline built meanwhile, unless the lobes were too narrow for
+/// the lights found, which leaves them in the chain: then the general rate).
 pub(super) fn dp_convert_options(opts: &ConvertOptions, lit: &Lit) -> ConvertOptions {
-    opts.with_edge_points((lit.dp || lit.below_threshold).then(|| residual_edge_points(opts.size)))
+    let residual = lit.dp || lit.below_threshold;
+    let opts = opts.with_edge_points(residual.then(|| residual_edge_points(opts.size)));
+    match residual {
+        true => opts,
+        false => opts.with_supersample(None),
+    }
 }
 
 /// Records the paraboloid's conversion (from `env` or its residual), its MIP chain and the
