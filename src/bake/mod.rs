@@ -405,10 +405,9 @@ pub fn dp_size(env: &EnvMap, opts: &BakeOptions) -> u32 {
     default_dp_size(env).min((2 * opts.specular_size).next_power_of_two().max(16))
 }
 
-/// Samples per axis per texel of the paraboloid's conversion
-/// ([`Converter::chain_supersampling`]: 1.5 per source texel spacing, at least 2). The
-/// paraboloid only feeds FIS's MIP chain and the mirror level; measured on four 1k probes, no
-/// spot-checked error moved in its first three digits, and the conversion costs a sixth.
+/// Samples per axis per texel of the paraboloid's conversion: the chain's rate
+/// ([`Converter::chain_supersampling`]), the paraboloid feeding only FIS's MIP chain and the
+/// mirror level.
 pub fn supersample(env: &EnvMap, dp_size: u32) -> u32 {
     Converter::chain_supersampling((env.mapping, env.width, env.height), dp_size)
 }

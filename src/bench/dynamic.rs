@@ -11,7 +11,6 @@ use super::floors::{copy_ms, rel_lum, spread_texels, worse};
 use super::{median, Report};
 use crate::error::Result;
 use crate::gpu::{Buffer, Context, Timing};
-use crate::math::convert::residual_edge_points;
 use crate::math::envmap::luminance;
 use crate::math::exact::ExactFilter;
 use crate::math::lights::{extract, ExtractOptions, LightKernel};
@@ -197,16 +196,9 @@ fn record_frame(
 }
 
 /// The residual's conversion to the chain's paraboloid `size` a side, as the renderer's
-/// (`render::plan`): fewer points per texel edge, the residual holding no sun for the rim's
-/// chords to misplace (`residual_edge_points`); a lat-long by exact areas, other mappings by
-/// samples at the chain's rate (`Converter::chain_supersampling`).
+/// (`ConvertOptions::for_residual_chain`).
 fn chain_convert_options(src: (Mapping, u32, u32), size: u32) -> ConvertOptions {
-    let opts = ConvertOptions::new(Mapping::DualParaboloid, size)
-        .with_edge_points(Some(residual_edge_points(size)));
-    match src.0 {
-        Mapping::LatLong => opts,
-        _ => opts.with_supersample(Some(Converter::chain_supersampling(src, size))),
-    }
+    ConvertOptions::new(Mapping::DualParaboloid, size).for_residual_chain(src)
 }
 
 /// The span of the chain's conversion to the paraboloid and its MIP chain.

@@ -85,6 +85,20 @@ impl ConvertOptions {
             ..self
         }
     }
+
+    /// The same, for a FIS chain's paraboloid (these options' size) converted from the
+    /// light-free residual of a `src` map: the residual's points per texel edge (no sun for
+    /// the rim's chords to misplace, `math::convert::residual_edge_points`) and, unless a
+    /// lat-long converts by exact areas, samples at the chain's rate
+    /// ([`Converter::chain_supersampling`]).
+    pub fn for_residual_chain(self, src: (Mapping, u32, u32)) -> Self {
+        let size = self.size;
+        let opts = self.with_edge_points(Some(crate::math::convert::residual_edge_points(size)));
+        match src.0 {
+            Mapping::LatLong => opts,
+            _ => opts.with_supersample(Some(Converter::chain_supersampling(src, size))),
+        }
+    }
 }
 
 impl Default for ConvertOptions {
@@ -354,13 +368,10 @@ impl Converter {
     /// Samples per axis for a texel of the dual paraboloid `dp_size` a side that feeds a FIS
     /// MIP chain (split-sum, FIS, the mirror level), converted from `src` by samples: 1.5 per
     /// source texel spacing, at least 2 — three eighths of [`Converter::supersampling`]'s 4.
-    /// The chain's own filtering averages far more than a texel; measured on four 1k probes
-    /// (bakes) and on the dynamic page's cube inputs (128² chain, 256 texels a level), no
-    /// chain level's error against the exact prefilter moved in its first two digits, and the
-    /// conversion of a 256² cube costs a third. Its paraboloid itself, 256² from a 256² cube,
-    /// differs from one of 24² samples a texel by 0.07–0.11% a texel on average (venice,
-    /// grace) and by 2% rms where a sun is left in (spiaggia), so the renderer takes this
-    /// rate for a residual only.
+    /// The chain's own filtering averages far more than a texel, so its levels' error against
+    /// the exact prefilter does not depend on the rate. Level 0 does: at this rate a 256²
+    /// paraboloid from a 256² cube is within ~0.1% a texel of a converged one on a map
+    /// without a sun, but 2% rms with one, so renders take it for a light-free residual only.
     pub fn chain_supersampling(src: (Mapping, u32, u32), dp_size: u32) -> u32 {
         let (w, h) = Mapping::DualParaboloid.extent_for_size(dp_size);
         let r = Converter::ratio(src, (Mapping::DualParaboloid, w, h));

@@ -180,8 +180,8 @@ impl ShProjector {
     /// The band the projection of a `mapping` map up to `lmax` runs at: `lmax`, but band 1
     /// for band 0 of the per-texel path, whose first coefficient is the same sum in the same
     /// order. llvmpipe runs the band-0 specialisation of that shader 1.6–4× slower than band
-    /// 1 (cube 128: 21.1 against 5.3 ms), and elsewhere three more sums cost little next to
-    /// the texels' reads and quadratures.
+    /// 1, and elsewhere three more sums cost little next to the texels' reads and
+    /// quadratures.
     fn run_lmax(lmax: u32, mapping: Mapping) -> u32 {
         match mapping {
             Mapping::LatLong => lmax,

@@ -6,14 +6,13 @@
 
 use crate::abi::{split_sum, ShaderId};
 use crate::math::brdf::Brdf;
-use crate::math::convert::residual_edge_points;
 use crate::math::envmap::EnvMap;
 use crate::math::lights::{lobe_scale, ExtractOptions};
 use crate::math::sh_brdf::ViewGrid;
 use crate::math::Mapping;
 use crate::passes::gbuffer::brdf_bits;
 use crate::passes::shade::ShadeCode;
-use crate::passes::{ConvertOptions, Converter, ShBrdfProjector};
+use crate::passes::{ConvertOptions, ShBrdfProjector};
 use crate::scene::{
     LightsMode, LookupFilter, MapShape, Scene, SceneObject, SplitSumSettings, Technique,
 };
@@ -673,24 +672,18 @@ pub fn split_size(settings: &SplitSumSettings, dp_size: u32) -> u32 {
 }
 
 /// How `scene`'s FIS dual paraboloid is converted from `env`: [`fis_dp_size`], nearest reads
-/// where [`chain_of_texel_means`], the residual's points per texel edge where the chain is to
-/// take the lights ([`chain_takes_lights`]; the record takes the default's where the lights
-/// found are too small for its lobes' quadrature and so stay in the chain).
+/// where [`chain_of_texel_means`], and the residual's edge points and sampling rate
+/// (`ConvertOptions::for_residual_chain`) where the chain is to take the lights
+/// ([`chain_takes_lights`]; the record takes the defaults where the lights found are too
+/// small for its lobes' quadrature and so stay in the chain).
 fn dp_convert_options(scene: &Scene, env: MapShape) -> ConvertOptions {
     let size = scene.fis_dp_size(env);
-    let residual = chain_takes_lights(scene);
     let opts = ConvertOptions::new(Mapping::DualParaboloid, size)
         .with_orientation(scene.environment.orientation())
-        .with_nearest(scene.chain_of_texel_means())
-        .with_edge_points(residual.then(|| residual_edge_points(size)));
-    match env.mapping {
-        // A residual holds no sun: sampled at the chain's rate, its paraboloid differs from a
-        // converged one by ~0.1% a texel (a sun map's by 2% rms, which stays at the general
-        // rate). A lat-long converts by exact areas (or its texel means), not by samples.
-        m if residual && m != Mapping::LatLong => opts.with_supersample(Some(
-            Converter::chain_supersampling((m, env.width, env.height), size),
-        )),
-        _ => opts,
+        .with_nearest(scene.chain_of_texel_means());
+    match chain_takes_lights(scene) {
+        true => opts.for_residual_chain((env.mapping, env.width, env.height)),
+        false => opts,
     }
 }
 
@@ -779,7 +772,7 @@ mod tests {
             height: 256,
         };
         let size = s.fis_dp_size(cube);
-        let want = Converter::chain_supersampling((Mapping::Cube, 256, 256), size);
+        let want = crate::passes::Converter::chain_supersampling((Mapping::Cube, 256, 256), size);
         assert!(chain_takes_lights(&s));
         assert_eq!(dp_convert_options(&s, cube).supersample, Some(want));
         let latlong = MapShape {
