@@ -190,7 +190,7 @@ void grow_from(uint k0, uint ring) {
 }
 
 // Per texel: the histograms (HISTOGRAM, HISTOGRAM_LOW), ring 0 (MARK), the rims (RIMS) or the
-// records and residual (COMPACT).
+// records and residual (COMPACT; a clamped extraction's HISTOGRAM too, at τ).
 void per_texel() {
     uvec3 id = gl_GlobalInvocationID;
     if (any(greaterThanEqual(id.xy, pc.size)) || id.z >= mapping_layers(MAPPING)) return;
@@ -211,7 +211,10 @@ void per_texel() {
             // is found among them, not by another pass over the map.
             if (FILLED != 0u && k < pc.max) fill_[candidates_at() + k] = index_of(p, id.z);
         }
-        return;
+        // A clamped extraction goes on to write its records and residual at τ, the threshold
+        // wherever the cap does not bind: the COMPACT pass over the map then runs (an
+        // indirect dispatch, select_top's) only where it binds, and rewrites them all.
+        if (FILLED != 0u) return;
     }
     if (pc.mode == EXTRACT_MODE_HISTOGRAM_LOW) {
         uint key = floatBitsToUint(y);
@@ -220,7 +223,7 @@ void per_texel() {
         }
         return;
     }
-    float thr = uintBitsToFloat(state[EXTRACT_WORD_THRESHOLD]);
+    float thr = pc.mode == EXTRACT_MODE_HISTOGRAM ? t : uintBitsToFloat(state[EXTRACT_WORD_THRESHOLD]);
     if (pc.mode == EXTRACT_MODE_MARK) {
         if (counted && own && y > thr && y > t) list_member(index_of(p, id.z), 0u);
         return;
@@ -342,7 +345,13 @@ void select_top() {
     state[EXTRACT_WORD_MARK_ARGS] = binds ? groups.x : 0u;
     state[EXTRACT_WORD_MARK_ARGS + 1u] = groups.y;
     state[EXTRACT_WORD_MARK_ARGS + 2u] = groups.z;
+    // A clamped extraction's compaction, and the records HISTOGRAM wrote at τ discarded.
+    state[EXTRACT_WORD_COMPACT_ARGS] = binds ? groups.x : 0u;
+    state[EXTRACT_WORD_COMPACT_ARGS + 1u] = groups.y;
+    state[EXTRACT_WORD_COMPACT_ARGS + 2u] = groups.z;
     if (binds) {
+        state[EXTRACT_WORD_COUNTER] = 0u;
+        state[EXTRACT_WORD_OMEGA_MAX] = 0u;
         state[EXTRACT_WORD_RANK] = pc.max - above;
         // Texels of the bins above; the low select adds those above the threshold in b.
         state[EXTRACT_WORD_KEPT] = above;

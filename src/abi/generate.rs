@@ -161,6 +161,7 @@ fn define_sizes_and_lights(s: &mut String) {
         ("RIMS", w::RIMS),
         ("MARK_LIST_ARGS", w::MARK_LIST_ARGS),
         ("MARK_ARGS", w::MARK_ARGS),
+        ("COMPACT_ARGS", w::COMPACT_ARGS),
     ] {
         let _ = writeln!(s, "#define EXTRACT_WORD_{name} {v}u");
     }

@@ -437,9 +437,13 @@ pub mod lights {
         /// Filled extractions: workgroups (x, y, z) of the per-texel MARK, none unless the
         /// cap binds.
         pub const MARK_ARGS: u32 = 41;
+        /// Clamped extractions: workgroups (x, y, z) of the per-texel COMPACT, none unless
+        /// the cap binds (where it does not, HISTOGRAM has written the records and residual).
+        pub const COMPACT_ARGS: u32 = 44;
         // The header holds them all.
         const _: () = assert!(RIMS + super::FILL_MAX_RINGS < MARK_LIST_ARGS);
-        const _: () = assert!(MARK_ARGS + 3 <= super::EXTRACT_HEADER_WORDS);
+        const _: () = assert!(MARK_ARGS + 3 <= COMPACT_ARGS);
+        const _: () = assert!(COMPACT_ARGS + 3 <= super::EXTRACT_HEADER_WORDS);
     }
 }
 

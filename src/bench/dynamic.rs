@@ -602,7 +602,8 @@ pub fn dynamic(
          arithmetic, are the cost), so level 1, with 3/4 of the rough levels' texels, takes \
          most of it; the lights added back there are under a tenth of its time. \
          The extraction stage is L00 (on a cube, per-texel Gauss–Legendre solid angles), \
-         two passes over the map, each specialised to its mapping, and the light texels' \
+         one pass over the map specialised to its mapping (the histogram's, which writes \
+         the records and residual at τ; a second only where the cap binds), and the light texels' \
          preparation (sorted by a spatial key, their quadratures and the tree over them).\n",
         shares.join("; "),
         n = s.samples,

@@ -25,7 +25,9 @@
 //! an indirect dispatch (no workgroups unless the cap binds) histograms that bin's low bits; one
 //! workgroup selects the exact threshold; where filled, the set's ring 0 is listed, each ring
 //! grows from the last, one invocation decides which rings fit and one workgroup runs the
-//! fill's rounds; the compaction writes records and residual.
+//! fill's rounds; the compaction writes records and residual. A clamped extraction's histogram
+//! pass writes its records and residual at τ as it goes, so that its compaction, an indirect
+//! dispatch, runs over the map only where the cap binds: one pass over the map, not two.
 
 use crate::abi::lights::{
     clusters_mode, prepare_mode, CLUSTER_SORT_CELL_ARRAYS, CLUSTER_SORT_RECORD_ARRAYS,
@@ -369,7 +371,15 @@ impl Extractor {
                 rec.dispatch(&self.select, &binds, &push(mode::DECIDE, rings), [1, 1, 1])?;
                 rec.dispatch(&self.select, &binds, &push(mode::FILL, rings), [1, 1, 1])?;
             }
-            rec.dispatch(pipeline, &binds, &push(mode::COMPACT, 0), per_texel)
+            let compact = push(mode::COMPACT, 0);
+            if out.fill.is_some() {
+                rec.dispatch(pipeline, &binds, &compact, per_texel)
+            } else {
+                // HISTOGRAM wrote the records and residual at τ; this rewrites them where
+                // the cap binds (no workgroups elsewhere).
+                let args = (&out.state, word::COMPACT_ARGS as u64 * 4);
+                rec.dispatch_indirect(pipeline, &binds, &compact, args)
+            }
         })?;
         poison::image(rec, PassId::Extract, &out.residual.image, 0..1)?;
         // Excess radiance scaled; the direction's x and the excess's red negated by the mirror.
