@@ -450,7 +450,7 @@ fn time_frames(
 
 /// Texels per level where the chain and the irradiance cube are scored (all of a level that
 /// has fewer, [`spread_texels`]).
-const ERROR_TEXELS: usize = 256;
+pub(super) const ERROR_TEXELS: usize = 256;
 
 /// The chain's levels 1.. against the exact GGX prefilter (`exact`): each level's mean over
 /// [`ERROR_TEXELS`] texels.

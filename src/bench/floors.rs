@@ -376,24 +376,26 @@ fn filter_rows(
             error: format!("exact {worst:.1e} (8 texels)"),
         });
     }
-    rows.push(ggx_chain_row(ctx, map, src, &exact, reps)?);
+    rows.push(ggx_chain_row(ctx, map, reps)?);
     rows.push(lights_row(ctx, map, reps)?);
     Ok(rows)
 }
 
-/// The split-sum GGX chain (7 levels of a 128² cube, 64 samples) from the map's paraboloid
-/// with its MIP chain, against the exact GGX lobe at eight texels of each level from 1.
-fn ggx_chain_row(
-    ctx: &Context,
-    map: &EnvMap,
-    src: &GpuEnvMap,
-    exact: &ExactFilter<'_>,
-    reps: usize,
-) -> Result<Row> {
+/// The split-sum GGX chain (7 levels of a 128² cube, 64 samples) as the product runs it:
+/// from the paraboloid (with its MIP chain) of the map's residual, its lights taken out (the
+/// default rule, on the host; the lights row prices them), against the exact GGX prefilter of
+/// that residual at [`super::dynamic::ERROR_TEXELS`] texels of each level from 1.
+fn ggx_chain_row(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Row> {
     let size = (map.width / 2).min(512);
+    let residual = extract(map, &ExtractOptions::default()).residual;
+    let src = GpuEnvMap::upload(ctx, &residual)?;
     let conv = Converter::new(ctx)?;
-    let Timed { value: dp, .. } =
-        conv.run_mipped(src, &ConvertOptions::new(Mapping::DualParaboloid, size))?;
+    let opts = ConvertOptions::new(Mapping::DualParaboloid, size).for_residual_chain((
+        map.mapping,
+        map.width,
+        map.height,
+    ));
+    let Timed { value: dp, .. } = conv.run_mipped(&src, &opts)?;
     MipChain::new(ctx)?.run(&dp)?;
     let pass = SplitSum::new(ctx)?;
     let levels = 7;
@@ -408,12 +410,13 @@ fn ggx_chain_row(
             .timings)
     };
     let ms = time(reps, record)?;
-    // Per level the mean over its eight texels; the worst level's mean, and the worst texel.
+    // Per level the mean over its texels; the worst level's mean, and the worst texel.
+    let exact = ExactFilter::new(&residual, DMat3::IDENTITY);
     let (mut worst_mean, mut worst) = (0.0f64, 0.0f64);
     for k in 1..levels {
         let s = (128u32 >> k).max(1);
         let got = chain.download_level(ctx, k)?;
-        let e: Vec<f64> = probe_texels(s)
+        let e: Vec<f64> = spread_texels(s, super::dynamic::ERROR_TEXELS)
             .into_iter()
             .map(|(t, d)| rel_lum(got[t], exact.ggx(d, level_alpha(k, levels))))
             .collect();
@@ -429,13 +432,14 @@ fn ggx_chain_row(
         reps,
     )?;
     Ok(Row {
-        input: format!("dual paraboloid {size} with its chain"),
+        input: format!("dual paraboloid {size} of the residual, with its chain"),
         pass: format!("GGX chain, cube 128², {levels} levels, 64 samples"),
         ms,
         floor,
         error: format!(
-            "exact: worst level's mean {worst_mean:.1e}, worst texel {worst:.1e} (8 a level; \
-             the sun in the chain)"
+            "exact (of the residual): worst level's mean {worst_mean:.1e}, worst texel \
+             {worst:.1e} ({} a level, or all of a smaller one)",
+            super::dynamic::ERROR_TEXELS
         ),
     })
 }
@@ -642,7 +646,9 @@ pub fn floors(
          paraboloid, or of the output where the input is small (coefficients, lights, the \
          G-buffer); the ratio is the pass's time over it. Errors: power (conversions), the \
          float64 twin (upload, MIP chain, SH, lights), the exact filter at 8 texels \
-         (brute force, GGX chain), the technique against Monte Carlo (shading). Source: the \
+         (brute force) or at 256 a level (the GGX chain, which filters the map's residual, \
+         its lights taken out as the product does, against that residual's exact prefilter), \
+         the technique against Monte Carlo (shading). Source: the \
          analytic sky, its sun ~10⁵ × the zenith, at each width. A conversion by areas \
          \"planned\" gathers each output texel's source texels by weights worked out once \
          for its sizes (`Converter::plan`, in float64 on the host's cores, timed apart): \
