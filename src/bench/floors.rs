@@ -382,12 +382,13 @@ fn filter_rows(
 }
 
 /// The split-sum GGX chain (7 levels of a 128² cube, 64 samples) as the product runs it:
-/// from the paraboloid (with its MIP chain) of the map's residual, its lights taken out (the
-/// default rule, on the host; the lights row prices them), against the exact GGX prefilter of
-/// that residual at [`super::dynamic::ERROR_TEXELS`] texels of each level from 1.
+/// from the paraboloid (with its MIP chain) of the map's residual, its lights taken out on the
+/// host by the renderer's chain rule ([`ExtractOptions::chain`]: above twice the mean, the
+/// residual filled under them), against the exact GGX prefilter of that residual at
+/// [`super::dynamic::ERROR_TEXELS`] texels of each level from 1.
 fn ggx_chain_row(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Row> {
     let size = (map.width / 2).min(512);
-    let residual = extract(map, &ExtractOptions::default()).residual;
+    let residual = extract(map, &ExtractOptions::chain()).residual;
     let src = GpuEnvMap::upload(ctx, &residual)?;
     let conv = Converter::new(ctx)?;
     let opts = ConvertOptions::new(Mapping::DualParaboloid, size).for_residual_chain((
@@ -647,7 +648,8 @@ pub fn floors(
          G-buffer); the ratio is the pass's time over it. Errors: power (conversions), the \
          float64 twin (upload, MIP chain, SH, lights), the exact filter at 8 texels \
          (brute force) or at 256 a level (the GGX chain, which filters the map's residual, \
-         its lights taken out as the product does, against that residual's exact prefilter), \
+         its lights taken out as the renderer's chain does, against that residual's exact \
+         prefilter), \
          the technique against Monte Carlo (shading). Source: the \
          analytic sky, its sun ~10⁵ × the zenith, at each width. A conversion by areas \
          \"planned\" gathers each output texel's source texels by weights worked out once \
