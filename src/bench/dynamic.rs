@@ -7,7 +7,7 @@
 //! timestamps, beside each stage's error and the frame's floor: a copy of the source and of
 //! every output texel (each read once, written once, no arithmetic).
 
-use super::floors::{copy_ms, rel_lum, spread_texels, worse};
+use super::floors::{copy_ms, rel_lum, spread_texels, worse, ERROR_TEXELS};
 use super::{median, Report};
 use crate::error::Result;
 use crate::gpu::{Buffer, Context, Timing};
@@ -447,10 +447,6 @@ fn time_frames(
     }
     Ok(timed)
 }
-
-/// Texels per level where the chain and the irradiance cube are scored (all of a level that
-/// has fewer, [`spread_texels`]).
-pub(super) const ERROR_TEXELS: usize = 256;
 
 /// The chain's levels 1.. against the exact GGX prefilter (`exact`): each level's mean over
 /// [`ERROR_TEXELS`] texels.

@@ -85,6 +85,10 @@ pub(super) fn rel_lum(got: [f32; 4], want: [f64; 3]) -> f64 {
     (y([got[0] as f64, got[1] as f64, got[2] as f64]) - w).abs() / w.abs().max(1e-30)
 }
 
+/// Texels per level where a GGX chain and an irradiance cube are scored (all of a level that
+/// has fewer, [`spread_texels`]).
+pub(super) const ERROR_TEXELS: usize = 256;
+
 /// Texel centres of a cube level `s` a side where errors are measured: all of them when the
 /// level has at most `n`, else `n` spread evenly over the faces and within each face (the R2
 /// sequence: point k on face k mod 6 at the fractional parts of ½ + k·(1/g, 1/g²), g the
@@ -385,7 +389,7 @@ fn filter_rows(
 /// from the paraboloid (with its MIP chain) of the map's residual, its lights taken out on the
 /// host by the renderer's chain rule ([`ExtractOptions::chain`]: above twice the mean, the
 /// residual filled under them), against the exact GGX prefilter of that residual at
-/// [`super::dynamic::ERROR_TEXELS`] texels of each level from 1.
+/// [`ERROR_TEXELS`] texels of each level from 1.
 fn ggx_chain_row(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Row> {
     let size = (map.width / 2).min(512);
     let residual = extract(map, &ExtractOptions::chain()).residual;
@@ -417,7 +421,7 @@ fn ggx_chain_row(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Row> {
     for k in 1..levels {
         let s = (128u32 >> k).max(1);
         let got = chain.download_level(ctx, k)?;
-        let e: Vec<f64> = spread_texels(s, super::dynamic::ERROR_TEXELS)
+        let e: Vec<f64> = spread_texels(s, ERROR_TEXELS)
             .into_iter()
             .map(|(t, d)| rel_lum(got[t], exact.ggx(d, level_alpha(k, levels))))
             .collect();
@@ -440,7 +444,7 @@ fn ggx_chain_row(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Row> {
         error: format!(
             "exact (of the residual): worst level's mean {worst_mean:.1e}, worst texel \
              {worst:.1e} ({} a level, or all of a smaller one)",
-            super::dynamic::ERROR_TEXELS
+            ERROR_TEXELS
         ),
     })
 }
