@@ -651,7 +651,7 @@ pub fn floors(
          paraboloid, or of the output where the input is small (coefficients, lights, the \
          G-buffer); the ratio is the pass's time over it. Errors: power (conversions), the \
          float64 twin (upload, MIP chain, SH, lights), the exact filter at 8 texels \
-         (brute force) or at 256 a level (the GGX chain, which filters the map's residual, \
+         (brute force) or at {ERROR_TEXELS} a level (the GGX chain, which filters the map's residual, \
          its lights taken out as the renderer's chain does, against that residual's exact \
          prefilter), \
          the technique against Monte Carlo (shading). Source: the \

@@ -27,7 +27,8 @@
 //! grows from the last, one invocation decides which rings fit and one workgroup runs the
 //! fill's rounds; the compaction writes records and residual. A clamped extraction's histogram
 //! pass writes its records and residual at τ as it goes, so that its compaction, an indirect
-//! dispatch, runs over the map only where the cap binds: one pass over the map, not two.
+//! dispatch, runs over the map only where the cap binds: one pass over the map where it does
+//! not, two where it does.
 
 use crate::abi::lights::{
     clusters_mode, prepare_mode, CLUSTER_SORT_CELL_ARRAYS, CLUSTER_SORT_RECORD_ARRAYS,
