@@ -444,6 +444,19 @@ fn degenerate_scenes_are_refused() {
         Err(e) => e,
     };
     assert!(e.to_string().contains("normal"), "{e}");
+    for boost in [0, 257] {
+        let chain = format!("{good}\n[split_sum]\nrough_boost = {boost}\n");
+        let e = match envlight::scene::Scene::parse(&chain) {
+            Ok(_) => panic!("rough_boost {boost}"),
+            Err(e) => e,
+        };
+        assert!(e.to_string().contains("rough_boost"), "{e}");
+    }
+    let boosted = format!("{good}\n[split_sum]\nrough_boost = 8\n");
+    assert_eq!(
+        envlight::scene::Scene::parse(&boosted).map(|s| s.split_sum.rough_boost).ok(),
+        Some(8)
+    );
 }
 
 /// Sizes beyond the device are refused with the limit named, before anything is created:

@@ -7,7 +7,7 @@ use common::bake::{probes, small_options, temp};
 use common::compare::{rel_err, Errors};
 
 use envlight::bake::{BakeOptions, Baker};
-use envlight::math::split_sum::prefiltered_cube;
+use envlight::math::split_sum::{prefiltered_cube, LevelSamples};
 use envlight::math::synth::Sky;
 use envlight::math::{mip, Mapping, Orientation};
 use envlight::EnvMap;
@@ -108,8 +108,8 @@ fn specular_cube_matches_its_float64_twin() {
             let full = mip::chain(&common::dp_f64_with(&env, size, ss));
             let res = mip::chain(&common::dp_f64_with(filtered, size, ss));
             let levels = opts.specular_levels;
-            let from_full = prefiltered_cube(&full, 16, levels, 16, opts.bias);
-            let from_res = prefiltered_cube(&res, 16, levels, 16, opts.bias);
+            let from_full = prefiltered_cube(&full, 16, levels, LevelSamples::flat(16), opts.bias);
+            let from_res = prefiltered_cube(&res, 16, levels, LevelSamples::flat(16), opts.bias);
             let tree = LightTree::new(light_list.clone());
             for (k, res_level) in from_res.iter().enumerate() {
                 let s = (16u32 >> k).max(1);

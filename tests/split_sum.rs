@@ -9,7 +9,7 @@ mod twin;
 use common::compare::Errors;
 use common::scenes::{object, rel_rms, scene, sphere_camera, sphere_pixels, unit_sphere};
 use envlight::math::brdf::{local_view, Brdf, Frame};
-use envlight::math::split_sum::{self, dfg_table, prefiltered_chain};
+use envlight::math::split_sum::{self, dfg_table, prefiltered_chain, LevelSamples};
 use envlight::math::synth::{smooth_env, Sky};
 use envlight::math::{mip, Mapping};
 use envlight::render::Renderer;
@@ -76,6 +76,7 @@ fn render_matches_its_float64_twin() {
             size: Some(32),
             levels: 3,
             samples: 16,
+            rough_boost: 1,
             bias: None,
             dfg_size: 16,
             taps: 1,
@@ -84,7 +85,7 @@ fn render_matches_its_float64_twin() {
             &mip::chain(&dp),
             32,
             3,
-            16,
+            LevelSamples::flat(16),
             envlight::scene::defaults::FIS_BIAS,
         );
         let cam = sphere_camera(24);
@@ -268,6 +269,7 @@ fn render_with_lights_matches_its_float64_twin() {
             size: Some(32),
             levels: 3,
             samples: 16,
+            rough_boost: 1,
             bias: None,
             dfg_size: 16,
             taps: 1,
@@ -276,7 +278,7 @@ fn render_with_lights_matches_its_float64_twin() {
             &mip::chain(&dp),
             32,
             3,
-            16,
+            LevelSamples::flat(16),
             envlight::scene::defaults::FIS_BIAS,
         );
         let cam = sphere_camera(24);

@@ -753,9 +753,9 @@ impl Baker {
             .with_orientation(*orientation)
             .with_supersample(Some(supersample(from_map, dp_size)));
         let p = PrefilterOptions {
-            levels: opts.specular_levels,
             samples: opts.samples,
             bias: opts.bias,
+            ..PrefilterOptions::new(opts.specular_levels)
         };
         let (Some((residual, rdp)), Some(lights)) = (&i.residual, lights) else {
             self.convert.record(rec, from, &i.dp, &c)?;

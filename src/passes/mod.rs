@@ -40,4 +40,4 @@ pub use sh_eval::ShEvaluator;
 pub use sh_pack::ShPacker;
 pub use sh_project::{ShCoefficients, ShProjector, ShReadback, Subgroups};
 pub use shade::Shade;
-pub use split_sum::{time_slices, LevelLayers, PrefilterOptions, SplitSum};
+pub use split_sum::{time_slices, LevelLayers, LevelSamples, PrefilterOptions, SplitSum};

@@ -11,6 +11,7 @@ use crate::gpu::{
     groups, groups_2d, Bind, Buffer, Context, Pipeline, Recorder, Sampler, Timed, Usage,
 };
 pub use crate::math::split_sum::DfgAxes;
+pub use crate::math::split_sum::LevelSamples;
 use crate::math::split_sum::{level_alpha, level_size};
 use crate::math::Mapping;
 use crate::passes::testing::poison::{self, PassId};
@@ -26,6 +27,9 @@ pub struct PrefilterOptions {
     pub levels: u32,
     /// FIS samples per texel.
     pub samples: u32,
+    /// The most times `samples` the roughest levels take, whose texels are few
+    /// ([`LevelSamples`]); 1, the default: `samples` at every level.
+    pub rough_boost: u32,
     /// Lod bias of the FIS reads.
     pub bias: f64,
 }
@@ -37,7 +41,17 @@ impl PrefilterOptions {
         PrefilterOptions {
             levels,
             samples: split_sum::DEFAULT_SAMPLES,
+            rough_boost: 1,
             bias: crate::math::fis::DEFAULT_BIAS,
+        }
+    }
+
+    /// Samples per texel by level: `samples`, boosted at the roughest levels by up to
+    /// `rough_boost`.
+    pub fn level_samples(&self) -> LevelSamples {
+        LevelSamples {
+            base: self.samples,
+            rough_boost: self.rough_boost,
         }
     }
 }
@@ -64,16 +78,23 @@ pub struct LevelLayers {
 /// slice `f mod slices` (after one that refilters everything) keeps every level at most
 /// `slices` − 1 frames behind its map. Level 0, the mirror, is in no slice: one read a texel,
 /// it is cheap and the sharpest, so a frame refilters it whole. The cost of a unit is its
-/// texels (each level takes the same samples); units go, largest first, to the slice with the
+/// texels times its level's `samples` ([`LevelSamples::at`]); units go, largest first, to the slice with the
 /// least so far (ties: the lowest level and layer, the first slice), so no slice costs more
 /// than the even share plus the largest unit. Each slice lists its units by level and layer,
 /// a level's neighbouring layers merged.
-pub fn time_slices(size: u32, layers: u32, levels: u32, slices: u32) -> Vec<Vec<LevelLayers>> {
+pub fn time_slices(
+    size: u32,
+    layers: u32,
+    levels: u32,
+    samples: LevelSamples,
+    slices: u32,
+) -> Vec<Vec<LevelLayers>> {
     let slices = slices.max(1) as usize;
     let mut units: Vec<(u64, u32, u32)> = (1..levels)
         .flat_map(|k| {
             let side = level_size(size, k) as u64;
-            (0..layers).map(move |l| (side * side, k, l))
+            let cost = side * side * u64::from(samples.at(size, k));
+            (0..layers).map(move |l| (cost, k, l))
         })
         .collect();
     units.sort_by_key(|&(cost, k, l)| (std::cmp::Reverse(cost), k, l));
@@ -299,11 +320,16 @@ impl SplitSum {
                 "split-sum prefilters a dual paraboloid into a dual paraboloid or a cube".into(),
             ));
         }
-        if opts.levels == 0 || opts.levels > dst.mips() || opts.samples == 0 {
+        if opts.levels == 0
+            || opts.levels > dst.mips()
+            || opts.samples == 0
+            || opts.rough_boost == 0
+        {
             return Err(Error::Invalid(format!(
-                "split-sum: {} levels of {} samples into a chain of {} levels",
+                "split-sum: {} levels of {} samples (rough levels up to {}×) into a chain of {} levels",
                 opts.levels,
                 opts.samples,
+                opts.rough_boost,
                 dst.mips()
             )));
         }
@@ -324,7 +350,7 @@ impl SplitSum {
                 src_size: src.width,
                 src_max_lod: (src.mips() - 1) as f32,
                 alpha: level_alpha(k, opts.levels) as f32,
-                samples: opts.samples,
+                samples: opts.level_samples().at(dst.width, k),
                 bias: opts.bias as f32,
                 dst_mapping: dst.mapping.id(),
                 layer: u.layers.start,
@@ -375,21 +401,29 @@ impl SplitSum {
 
 #[cfg(test)]
 mod tests {
-    use super::{time_slices, LevelLayers};
+    use super::{time_slices, LevelLayers, LevelSamples};
 
     /// Every (level ≥ 1, layer) of the chain lands in exactly one slice, level 0 in none,
     /// and no slice costs more than the even share plus the largest unit; one slice holds
     /// every rough level whole.
     #[test]
     fn time_slices_deal_every_unit_once_evenly() {
-        for (size, layers, levels) in [(128, 6, 7), (32, 2, 3), (256, 2, 8), (64, 6, 2)] {
+        let boosted = LevelSamples {
+            base: 64,
+            rough_boost: 8,
+        };
+        let cases = [(128, 6, 7), (32, 2, 3), (256, 2, 8), (64, 6, 2)];
+        for ((size, layers, levels), samples) in cases
+            .into_iter()
+            .flat_map(|c| [(c, LevelSamples::flat(64)), (c, boosted)])
+        {
             for slices in 1..=8u32 {
-                let dealt = time_slices(size, layers, levels, slices);
+                let dealt = time_slices(size, layers, levels, samples, slices);
                 assert_eq!(dealt.len(), slices as usize);
                 let mut seen = Vec::new();
                 let cost = |u: &LevelLayers| {
                     let side = (size >> u.level).max(1) as u64;
-                    side * side * u.layers.len() as u64
+                    side * side * u.layers.len() as u64 * u64::from(samples.at(size, u.level))
                 };
                 let loads: Vec<u64> = dealt.iter().map(|s| s.iter().map(cost).sum()).collect();
                 for u in dealt.iter().flatten() {
@@ -402,7 +436,10 @@ mod tests {
                     .collect();
                 assert_eq!(seen, want, "{size} {layers} {levels} in {slices}");
                 let total: u64 = loads.iter().sum();
-                let largest = ((size >> 1).max(1) as u64).pow(2);
+                let largest = (1..levels)
+                    .map(|k| ((size >> k).max(1) as u64).pow(2) * u64::from(samples.at(size, k)))
+                    .max()
+                    .unwrap_or(0);
                 let most = loads.iter().copied().max().unwrap_or(0);
                 assert!(
                     most <= total / slices as u64 + largest,
@@ -410,7 +447,7 @@ mod tests {
                 );
             }
         }
-        let one = time_slices(128, 6, 7, 1);
+        let one = time_slices(128, 6, 7, LevelSamples::flat(64), 1);
         assert_eq!(one[0].len(), 6);
         assert!(one[0].iter().all(|u| u.layers == (0..6)));
     }

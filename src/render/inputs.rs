@@ -433,9 +433,10 @@ fn record_chain(
     let ss = &job.scene.split_sum;
     marks.record(rec, PassKind::SplitSum, |rec| {
         let opts = PrefilterOptions {
-            levels: ss.levels,
             samples: ss.samples,
+            rough_boost: ss.rough_boost,
             bias: ss.bias.unwrap_or(DEFAULT_FIS_BIAS),
+            ..PrefilterOptions::new(ss.levels)
         };
         match &work.split {
             Some(units) => p.record_prefilter_slice(rec, map, chain, &opts, units),

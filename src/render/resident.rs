@@ -23,7 +23,7 @@ use crate::passes::gbuffer::{target, GBuffer};
 use crate::passes::map::Sanitizer;
 use crate::passes::{
     time_slices, ConvertPlan, Extractor, GpuEnvMap, GpuExtraction, GpuLights, LevelLayers,
-    ShProjector, Subgroups,
+    LevelSamples, ShProjector, Subgroups,
 };
 use crate::scene::MapShape;
 use crate::scene::{LightsMode, Scene};
@@ -110,8 +110,13 @@ impl Resident {
         if slices == 0 {
             return Err(Error::Invalid("time slicing over 0 frames".into()));
         }
-        let levels = self.scene.split_sum.levels;
-        self.slices = time_slices(split.size, Mapping::DualParaboloid.layers(), levels, slices);
+        let ss = &self.scene.split_sum;
+        let samples = LevelSamples {
+            base: ss.samples,
+            rough_boost: ss.rough_boost,
+        };
+        let layers = Mapping::DualParaboloid.layers();
+        self.slices = time_slices(split.size, layers, ss.levels, samples, slices);
         self.refilter_all();
         Ok(())
     }

@@ -198,6 +198,11 @@ pub struct SplitSumSettings {
     /// FIS samples per prefiltered texel.
     #[serde(default = "split_samples")]
     pub samples: u32,
+    /// The most times `samples` the roughest levels take, those whose layers hold 8² texels
+    /// or fewer (`crate::math::split_sum::LevelSamples`): 1, the default, keeps `samples` at
+    /// every level.
+    #[serde(default = "split_rough_boost")]
+    pub rough_boost: u32,
     /// Lod bias of those samples; [`DEFAULT_FIS_BIAS`] when absent.
     #[serde(default)]
     pub bias: Option<f64>,
@@ -227,6 +232,9 @@ fn split_samples() -> u32 {
 fn dfg_size() -> u32 {
     crate::abi::split_sum::DEFAULT_DFG_SIZE
 }
+fn split_rough_boost() -> u32 {
+    1
+}
 
 impl Default for SplitSumSettings {
     fn default() -> Self {
@@ -234,6 +242,7 @@ impl Default for SplitSumSettings {
             size: None,
             levels: split_levels(),
             samples: split_samples(),
+            rough_boost: split_rough_boost(),
             bias: None,
             dfg_size: dfg_size(),
             taps: split_taps(),

@@ -2,6 +2,10 @@
 //! the object and the setting.
 
 use super::{Scene, SplitSumSettings, Technique, MAX_FIS_SAMPLES};
+
+/// The most times its samples a scene's chain gives its roughest levels
+/// (`SplitSumSettings::rough_boost`): beyond a 16² layer's reads nothing more is boosted.
+const MAX_ROUGH_BOOST: u32 = 256;
 use crate::math::brdf::Brdf;
 
 impl Scene {
@@ -170,6 +174,12 @@ impl SplitSumSettings {
             return Err(format!(
                 "split_sum samples {} outside 1 to {MAX_FIS_SAMPLES}",
                 self.samples
+            ));
+        }
+        if !(1..=MAX_ROUGH_BOOST).contains(&self.rough_boost) {
+            return Err(format!(
+                "split_sum rough_boost {} outside 1 to {MAX_ROUGH_BOOST}",
+                self.rough_boost
             ));
         }
         if self.bias.is_some_and(|b| !b.is_finite() || b.abs() > 16.0) {

@@ -38,8 +38,12 @@ pub struct DynamicArgs {
     #[arg(long, value_delimiter = ',', default_value = "128")]
     chain: Vec<u32>,
     /// FIS samples per chain texel
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = envlight::bench::FrameSettings::DEFAULT_SAMPLES)]
     samples: u32,
+    /// The most times the samples the chain's roughest levels take (1: the same at every
+    /// level)
+    #[arg(long, default_value_t = envlight::bench::FrameSettings::DEFAULT_ROUGH_BOOST)]
+    rough_boost: u32,
     /// Spread the chain's rough levels over this many frames
     #[arg(long, default_value_t = 1)]
     slices: u32,
@@ -74,7 +78,7 @@ pub fn floors(g: &Global, a: &FloorsArgs) -> Result<()> {
 /// Runs `envlight-lab dynamic`.
 pub fn dynamic(g: &Global, a: &DynamicArgs) -> Result<()> {
     let ctx = context(g)?;
-    let settings = envlight::bench::FrameSettings::new(a.samples, a.slices);
+    let settings = envlight::bench::FrameSettings::new(a.samples, a.rough_boost, a.slices);
     let report = envlight::bench::dynamic(
         &ctx,
         &a.cubes,
