@@ -454,7 +454,9 @@ fn degenerate_scenes_are_refused() {
     }
     let boosted = format!("{good}\n[split_sum]\nrough_boost = 8\n");
     assert_eq!(
-        envlight::scene::Scene::parse(&boosted).map(|s| s.split_sum.rough_boost).ok(),
+        envlight::scene::Scene::parse(&boosted)
+            .map(|s| s.split_sum.rough_boost)
+            .ok(),
         Some(8)
     );
 }
