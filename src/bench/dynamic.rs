@@ -1,8 +1,9 @@
 //! What refiltering an environment that changes every frame costs.
 //! Each frame's map is an image already on the GPU (as an engine renders its sky or a
 //! reflection probe), its sun at another azimuth each frame; the whole refilter — SH 2 with
-//! its 32² irradiance cube, light extraction, and the GGX chain of the residual (conversion to a
-//! dual paraboloid, its MIP chain, a 128² cube of 7 roughness levels) — is recorded into one
+//! its 32² irradiance cube, light extraction, and the GGX chain of the residual (a 128² cube of 7
+//! roughness levels filtered from a dual paraboloid and its MIP chain, level 0 from the
+//! residual itself where that is no finer) — is recorded into one
 //! command buffer per frame, one submission, nothing read back. Per-stage GPU times come from
 //! timestamps, beside each stage's error and the frame's floor: a copy of the source and of
 //! every output texel (each read once, written once, no arithmetic).
@@ -43,7 +44,8 @@ pub struct FrameSettings {
     pub rough_boost: u32,
     /// Frames the chain's rough levels are spread over (1: every level every frame).
     pub slices: u32,
-    /// Side of the paraboloid the chain filters.
+    /// Side of the paraboloid the chain's rough levels filter (its level 0 is converted from
+    /// the residual directly).
     pub paraboloid: u32,
     /// Side of the irradiance cube.
     pub irradiance: u32,
@@ -187,6 +189,16 @@ fn record_frame(
         (chain.samples, chain.rough_boost) = (s.samples, s.rough_boost);
         for u in chain_units(s, index) {
             rec.span(&level_span(u.level), |rec| {
+                // Level 0, the mirror, from the residual itself where that holds it whole
+                // (mirror_direct), else from the paraboloid. Its lights are the records
+                // themselves, which mirror lookups take directly (a GGX lobe at α → 0 would
+                // need every light's finest nodes at every texel, more than the rest of the
+                // frame).
+                if u.level == 0 && mirror_direct(shape, s.chain) {
+                    let opts =
+                        ConvertOptions::new(Mapping::Cube, s.chain).with_supersample(Some(1));
+                    return p.conv.record(rec, residual, &f.chain, &opts);
+                }
                 p.split.record_prefilter_slice(
                     rec,
                     &f.dp,
@@ -194,9 +206,6 @@ fn record_frame(
                     &chain,
                     std::slice::from_ref(&u),
                 )?;
-                // Level 0 is the mirror: its lights are the records themselves, which mirror
-                // lookups take directly (a GGX lobe at α → 0 would need every light's finest
-                // nodes at every texel, more than the rest of the frame).
                 if u.level == 0 {
                     return Ok(());
                 }
@@ -246,6 +255,27 @@ fn boost_text(s: &FrameSettings, chains: &[u32]) -> String {
 /// (`ConvertOptions::for_residual_chain`).
 fn chain_convert_options(src: (Mapping, u32, u32), size: u32) -> ConvertOptions {
     ConvertOptions::new(Mapping::DualParaboloid, size).for_residual_chain(src)
+}
+
+/// Whether the chain's level 0, the mirror, is converted from the residual (`src`) itself: where
+/// it has no more texels than level 0 (a cube of the chain's side or smaller), so one
+/// bilinear read a texel holds all of it (for a cube of the chain's side, its texels exactly).
+/// The paraboloid then only feeds the rough levels' lobes, and the chain's side is enough
+/// (their errors do not change). Finer sources would need several reads a texel here, more
+/// than their level 0 costs read from a paraboloid of twice the chain's side.
+fn mirror_direct(src: (Mapping, u32, u32), chain: u32) -> bool {
+    Converter::ratio(src, (Mapping::Cube, chain, chain)) <= 1.0 + 1e-9
+}
+
+/// Side of the paraboloid the chain of side `chain` filters from `src`: the chain's where
+/// level 0 comes from the source ([`mirror_direct`]), else twice it, so that level 0, read
+/// from it, keeps the cube's resolution (a paraboloid's texels span twice the angle at its
+/// centre as at its rim).
+fn paraboloid_side(src: (Mapping, u32, u32), chain: u32) -> u32 {
+    match mirror_direct(src, chain) {
+        true => chain,
+        false => 2 * chain,
+    }
 }
 
 /// The span of the chain's conversion to the paraboloid and its MIP chain.
@@ -432,8 +462,8 @@ fn input_rows(
     let parts: Vec<f64> = timed.parts.into_iter().map(median).collect();
     let levels: Vec<String> = (0..s.levels as usize)
         .map(|k| match k {
-            0 => format!("{:.1}", parts[1]),
-            _ => format!("{:.1} ({:.1e})", parts[k + 1], level_errors[k - 1]),
+            0 => format!("{:.1} (texel {:.1e})", parts[1], level_errors[0]),
+            _ => format!("{:.1} ({:.1e})", parts[k + 1], level_errors[k]),
         })
         .collect();
     let level_row = format!("| {input} | {:.1} | {} |\n", parts[0], levels.join(" | "));
@@ -516,10 +546,28 @@ fn chain_error(
     Ok(means)
 }
 
+/// The chain's level 0, the mirror, against the host's residual (`residual`): the mean over
+/// [`ERROR_TEXELS`] texels of the relative error against the residual's texel holding each
+/// texel's centre (the exact prefilter's limit at α → 0, the map's texels taken as constant).
+fn mirror_error(ctx: &Context, f: &Frame, s: &FrameSettings, residual: &EnvMap) -> Result<f64> {
+    let level = f.chain.download_level(ctx, 0)?;
+    let texels = spread_texels(s.chain, ERROR_TEXELS);
+    let sum: f64 = texels
+        .iter()
+        .map(|&(t, d)| {
+            let c = residual.coord(d);
+            let i = ((c.u * residual.width as f64) as u32).min(residual.width - 1);
+            let j = ((c.v * residual.height as f64) as u32).min(residual.height - 1);
+            rel_lum(level[t], residual.texel(c.layer, i, j).map(f64::from))
+        })
+        .sum();
+    Ok(sum / texels.len() as f64)
+}
+
 /// Each stage's error on the last frame: the extraction against the host's (count,
 /// threshold, power); the irradiance cube against the exact irradiance of the map; the chain's
 /// levels 1.. against the exact GGX prefilter of the map (mean over [`ERROR_TEXELS`] a level; the
-/// worst level), and each level's mean.
+/// worst level), and each level's mean, level 0's against the residual ([`mirror_error`]).
 fn frame_errors(
     ctx: &Context,
     p: &Passes,
@@ -549,8 +597,9 @@ fn frame_errors(
         (got.stats.threshold as f64 / want.threshold - 1.0).abs(),
         (split / luminance(map.power()) - 1.0).abs()
     );
-    let level_means = chain_error(ctx, &exact, f, s)?;
+    let mut level_means = chain_error(ctx, &exact, f, s)?;
     let worst_mean = level_means.iter().copied().fold(0.0, worse);
+    level_means.insert(0, mirror_error(ctx, f, s, &want.residual)?);
     let mean = tech.iter().sum::<f64>() / tech.len() as f64;
     let most = tech.into_iter().fold(0.0, worse);
     let strings = [
@@ -565,7 +614,7 @@ fn frame_errors(
 }
 
 /// Runs the benchmark: cube inputs of `cubes` sides and lat-long inputs of `widths`, each
-/// refiltered with `s` into a chain of each side in `chains` (its paraboloid twice that), in
+/// refiltered with `s` into a chain of each side in `chains` (its paraboloid: [`paraboloid_side`]), in
 /// `reps` timed rounds; `progress` hears of each input done. The report's job is "dynamic",
 /// or "dynamic-sliced" where `s.slices` is above 1.
 pub fn dynamic(
@@ -602,9 +651,10 @@ pub fn dynamic(
         .iter()
         .flat_map(|c| inputs.iter().map(move |i| (c, i)))
     {
+        let (w, h) = mapping.extent_for_size(size);
         let s = &FrameSettings {
             chain: c,
-            paraboloid: 2 * c,
+            paraboloid: paraboloid_side((mapping, w, h), c),
             ..*s
         };
         let (rows, share, level_row, plan) = input_rows(ctx, &passes, mapping, size, s, reps)?;
@@ -631,7 +681,9 @@ pub fn dynamic(
             "\nThe chain by part, GPU ms (the median frame) and, for the rough levels, the \
              level's mean error against the exact GGX prefilter ({ERROR_TEXELS} texels a \
              level, or all of a smaller one): the paraboloid (the residual's conversion and MIP \
-             chain), then each level's FIS refilter with its lights added.\n\n| input | \
+             chain), level 0 (the mirror, converted from the residual; its mean error against \
+             the residual's texel holding each texel's centre), then each rough level's FIS \
+             refilter with its lights added.\n\n| input | \
              paraboloid + MIP | {} |\n|---|---|{}\n{level_rows}",
             heads.join(" | "),
             "---|".repeat(s.levels as usize)
@@ -671,9 +723,13 @@ pub fn dynamic(
          frame's refilter recorded into one command buffer and submitted once, nothing read \
          back (counted). GPU time from timestamps per stage, the median of {reps} rounds \
          after an untimed one. Settings: SH 2 and a {i}² irradiance cube; lights above \
-         {ratio}× the mean luminance, at most {max}; the residual converted to a dual \
-         paraboloid (twice the chain's side) with its MIP chain and filtered into a cube of \
-         {l} GGX levels ({c}² at level 0), {n} samples a texel{boost}. Floor: copies of the source, of the chain's cube (its levels: 4/3 of \
+         {ratio}× the mean luminance, at most {max}; a cube of {l} GGX levels ({c}² at \
+         level 0) filtered by FIS, {n} samples a texel{boost}, from the residual converted to \
+         a dual paraboloid with its MIP chain. Level 0, the mirror, is converted from the \
+         residual itself where it has no more texels (a cube of the chain's side or smaller: \
+         one bilinear read a texel), and the paraboloid is then of the chain's side; for \
+         finer sources level 0 is read from a paraboloid of twice the chain's side, which \
+         keeps the cube's resolution. Floor: copies of the source, of the chain's cube (its levels: 4/3 of \
          level 0) and of the irradiance cube, in the same run. Errors on the last frame, \
          against the map's exact irradiance and exact GGX prefilter (float64): the lights are \
          added through the tree the GPU builds over its records (`Extractor::record_prepare`, \
