@@ -44,8 +44,8 @@ pub struct FrameSettings {
     pub rough_boost: u32,
     /// Frames the chain's rough levels are spread over (1: every level every frame).
     pub slices: u32,
-    /// Side of the paraboloid the chain's rough levels filter (its level 0 is converted from
-    /// the residual directly).
+    /// Side of the paraboloid the chain filters (its rough levels; level 0 too where the
+    /// residual is finer than the chain, [`dynamic`] sets it per input).
     pub paraboloid: u32,
     /// Side of the irradiance cube.
     pub irradiance: u32,
@@ -614,7 +614,7 @@ fn frame_errors(
 }
 
 /// Runs the benchmark: cube inputs of `cubes` sides and lat-long inputs of `widths`, each
-/// refiltered with `s` into a chain of each side in `chains` (its paraboloid: [`paraboloid_side`]), in
+/// refiltered with `s` into a chain of each side in `chains` (its paraboloid: `paraboloid_side`), in
 /// `reps` timed rounds; `progress` hears of each input done. The report's job is "dynamic",
 /// or "dynamic-sliced" where `s.slices` is above 1.
 pub fn dynamic(

@@ -241,10 +241,10 @@ pub const ROUGH_TEXELS: u64 = 16 * 16;
 /// are the widest, read from the coarsest MIP levels, where a set of `base` Hammersley
 /// samples errs most (`bench dynamic` measures it: at 64 samples a 128² chain's α = 1 level
 /// errs 1.9e-2 against the exact prefilter, at 512 1.3e-3). A level of side s takes
-/// `base`·f, f the largest power of two up to `rough_boost` with s²·f ≤ [`ROUGH_TEXELS`]:
+/// `base`·f, f the largest power of two up to `rough_boost` with s²·f ≤ `ROUGH_TEXELS` (16²):
 /// each boosted level's layer costs at most what a 16² layer costs at `base`, so the boost
 /// adds at most a few such layers to a chain whose level 1 alone is (side/2)². Capped at
-/// [`MAX_LEVEL_SAMPLES`]. `rough_boost` 1: the same samples at every level.
+/// `MAX_LEVEL_SAMPLES`. `rough_boost` 1: the same samples at every level.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LevelSamples {
     /// Samples per texel of every level.
