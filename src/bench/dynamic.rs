@@ -356,14 +356,18 @@ fn frame_resources(
         },
         ..frame
     };
-    let plan_note = frame.plan.as_ref().map(|plan| {
-        format!(
-            "{} {w}x{h}: {:.0} ms, {:.1} MB",
-            mapping.name(),
+    let to = format!("{} {w}x{h} to {}", mapping.name(), s.paraboloid);
+    let plan_note = match (&frame.plan, p.conv.uses_area((mapping, w, h), &dp_opts)) {
+        (Some(plan), _) => Some(format!(
+            "{to}: {:.0} ms, {:.1} MB",
             started.elapsed().as_secs_f64() * 1e3,
             plan.bytes() as f64 / 1e6
-        )
-    });
+        )),
+        (None, true) => Some(format!(
+            "{to}: not planned (its plan over `Converter::plan_pays`' budget): areas each frame"
+        )),
+        (None, false) => None,
+    };
     Ok((frame, plan_note))
 }
 
@@ -712,7 +716,8 @@ pub fn dynamic(
         body.push_str(&format!(
             "\nA lat-long residual's conversion to the paraboloid is planned once per input \
              before its frames (`Converter::plan`: the exact areas' geometry in float64 on the \
-             host; each frame then gathers its texels' weights), host time and size: {}. Cube \
+             host; each frame then gathers its texels' weights), host time and size by input \
+             and paraboloid side: {}. Cube \
              inputs convert by samples, 1.5 per source texel spacing and at least 2 per axis \
              (`Converter::chain_supersampling`), unplanned.\n",
             plans.join("; ")
