@@ -63,6 +63,14 @@ impl FrameSettings {
     /// 64 samples leave α = 1 at 1.9%).
     pub const DEFAULT_ROUGH_BOOST: u32 = 8;
 
+    /// The chain's samples per texel by level.
+    pub fn level_samples(&self) -> LevelSamples {
+        LevelSamples {
+            base: self.samples,
+            rough_boost: self.rough_boost,
+        }
+    }
+
     /// `samples` FIS samples per chain texel, up to `rough_boost` times that at its roughest
     /// levels, and the chain's rough levels over `slices` frames; the rest as an engine's frame
     /// would have it: 7 levels, a 32² irradiance cube,
@@ -141,11 +149,7 @@ fn chain_units(s: &FrameSettings, index: usize) -> Vec<LevelLayers> {
     if s.slices <= 1 || index == 0 {
         return (0..s.levels).map(all).collect();
     }
-    let samples = LevelSamples {
-        base: s.samples,
-        rough_boost: s.rough_boost,
-    };
-    let slices = time_slices(s.chain, 6, s.levels, samples, s.slices);
+    let slices = time_slices(s.chain, 6, s.levels, s.level_samples(), s.slices);
     let slice = &slices[(index - 1) % slices.len()];
     std::iter::once(all(0))
         .chain(slice.iter().cloned())
@@ -226,16 +230,12 @@ fn boost_text(s: &FrameSettings, chains: &[u32]) -> String {
     if s.rough_boost <= 1 {
         return String::new();
     }
-    let opts = PrefilterOptions {
-        samples: s.samples,
-        rough_boost: s.rough_boost,
-        ..PrefilterOptions::new(s.levels)
-    };
+    let samples = s.level_samples();
     let per_chain: Vec<String> = chains
         .iter()
         .map(|&c| {
             let n: Vec<String> = (1..s.levels)
-                .map(|k| opts.level_samples().at(c, k).to_string())
+                .map(|k| samples.at(c, k).to_string())
                 .collect();
             format!(
                 "levels 1–{} of a {c}² chain take {}",

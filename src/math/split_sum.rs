@@ -239,8 +239,7 @@ pub const ROUGH_TEXELS: u64 = 16 * 16;
 /// FIS samples per texel at each level of a prefiltered chain: `base` at every level, more at
 /// the roughest. Their texels are few (the chain halves its side a level) while their lobes
 /// are the widest, read from the coarsest MIP levels, where a set of `base` Hammersley
-/// samples errs most (`bench dynamic` measures it: at 64 samples a 128² chain's α = 1 level
-/// errs 1.9e-2 against the exact prefilter, at 512 1.3e-3). A level of side s takes
+/// samples errs most (`bench dynamic` publishes each level's error). A level of side s takes
 /// `base`·f, f the largest power of two up to `rough_boost` with s²·f ≤ `ROUGH_TEXELS` (16²):
 /// each boosted level's layer costs at most what a 16² layer costs at `base`, so the boost
 /// adds at most a few such layers to a chain whose level 1 alone is (side/2)². Capped at
