@@ -3,18 +3,21 @@
 // math::split_sum::prefilter: texel t of a dual paraboloid (directions continued past the
 // rim) or of a cube (bakes) holds P(r, α) = Σ w·L / Σ w over N Hammersley samples of GGX α with n = v = r, w the
 // sampler's weight f·cos/pdf, each sample read from the source chain at
-// lod = ½·log2(Ωs/Ωp) + bias (filtered importance sampling, as shade.frag's fis()).
+// lod = ½·log2(Ωs/Ωp) + bias (filtered importance sampling, as shade.frag's fis()). At n = v a
+// sample's direction in the texel's frame, weight and Ωs are the level's alone: they come from
+// the taps table (math::split_sum::taps), leaving a texel the frame, Ωp and the reads.
 #extension GL_GOOGLE_include_directive : require
 
 layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 
 #include "mappings.glsl"
 #include "brdf.glsl"
-#include "sequence.glsl"
 #include "fis.glsl"
 
 layout(set = 0, binding = BINDING_PREFILTER_GGX_SRC) uniform sampler2DArray src;
 layout(rgba32f, set = 0, binding = BINDING_PREFILTER_GGX_DST) uniform writeonly image2DArray dst;
+// Two vec4s a tap: (wi, w), then (lod before the texel term, 0, 0, 0).
+layout(std430, set = 0, binding = BINDING_PREFILTER_GGX_TAPS) readonly buffer Taps { vec4 taps[]; };
 
 // The push block, generated from src/abi/push.rs.
 PUSH_PrefilterGgxPush
@@ -36,19 +39,15 @@ void main() {
     } else {
         vec3 t, bt;
         shading_frame(r, t, bt);
-        Brdf b = Brdf(BRDF_GGX, pc.alpha, 0.0);
-        const vec3 wo = vec3(0.0, 0.0, 1.0);
+        // Ωp = (1 + |d.y|)²·(2/size)²: its ½·log2 is log2(1 + |d.y|) past the tap's lod.
         vec3 sum = vec3(0.0);
         float total = 0.0;
-        for (uint i = 0u; i < pc.samples; i++) {
-            vec3 wi = brdf_sample(b, wo, hammersley(i, pc.samples));
-            if (wi.z <= 0.0) continue;
-            float w = brdf_weight(b, wo, wi);
-            float pdf = brdf_pdf(b, wo, wi);
-            vec3 d = normalize(t * wi.x + bt * wi.y + r * wi.z);
-            float lod = fis_lod(pdf, pc.samples, d, pc.src_size, pc.bias, pc.src_max_lod);
-            sum += w * src_lookup(d, lod);
-            total += w;
+        for (uint i = 0u; i < pc.taps; i++) {
+            vec4 tap = taps[2u * i];
+            vec3 d = normalize(t * tap.x + bt * tap.y + r * tap.z);
+            float lod = clamp(taps[2u * i + 1u].x - log2(1.0 + abs(d.y)), 0.0, pc.src_max_lod);
+            sum += tap.w * src_lookup(d, lod);
+            total += tap.w;
         }
         color = total > 0.0 ? sum / total : vec3(0.0);
     }

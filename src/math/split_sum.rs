@@ -152,6 +152,47 @@ pub fn dfg_lookup(table: &[[f64; 2]], size: u32, mu: f64, alpha: f64) -> [f64; 2
     out
 }
 
+/// One FIS sample of a prefilter level ([`prefilter`]'s rule): at n = v the sample's direction
+/// in the texel's frame, its weight and its density depend on the level alone, so the GPU pass
+/// reads them from a table instead of sampling GGX again in every texel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tap {
+    /// The direction in the frame of the texel's r (z along r).
+    pub wi: DVec3,
+    /// The sampler's weight f·cos/pdf.
+    pub weight: f64,
+    /// The lod before the direction's texel term: ½·log2(1/(N·pdf)) + bias − log2(2/size),
+    /// so that [`super::fis::sample_lod`] is clamp(lod − log2(1 + |d.y|), 0, max lod) at the
+    /// sample's world direction d; +∞ where the pdf is 0 (the last level).
+    pub lod: f64,
+}
+
+/// The taps of a level of GGX `alpha` filtered by `samples` Hammersley samples with lod
+/// `bias` from a chain whose level 0 is `src_size` a side: the samples of [`prefilter`] in
+/// its order, those below the horizon (which it skips) left out.
+pub fn taps(alpha: f64, samples: u32, bias: f64, src_size: u32) -> Vec<Tap> {
+    let brdf = ggx(alpha, false);
+    let texel = (2.0 / src_size as f64).log2();
+    (0..samples)
+        .filter_map(|i| {
+            let wi = brdf.sample(DVec3::Z, hammersley(i, samples));
+            if wi.z <= 0.0 {
+                return None;
+            }
+            let pdf = brdf.pdf(DVec3::Z, wi);
+            let lod = match pdf > 0.0 {
+                true => 0.5 * (1.0 / (samples as f64 * pdf)).log2() + bias - texel,
+                false => f64::INFINITY,
+            };
+            Some(Tap {
+                wi: wi.normalize(),
+                weight: brdf.weight(DVec3::Z, wi),
+                lod,
+            })
+        })
+        .collect()
+}
+
 /// P(r, α): the prefiltered radiance along `r` read from the source chain by `samples` FIS
 /// samples with lod `bias` (see the module docs). α = 0 is one bilinear read at lod 0.
 pub fn prefilter(chain: &[Level], alpha: f64, r: DVec3, samples: u32, bias: f64) -> [f64; 3] {
@@ -593,6 +634,49 @@ mod tests {
             rough_boost: 8,
         };
         assert_eq!(huge.at(8, 3), 20_000);
+    }
+
+    /// The taps the GPU reads reproduce `prefilter` (its samples, weights and lods) on a
+    /// chain with detail at every lod, for α from the narrowest level to 1, where the pdf
+    /// vanishes at the horizon and a sample's lod is the chain's last.
+    #[test]
+    fn taps_reproduce_the_prefilter() {
+        use super::super::envmap::EnvMap;
+        use super::super::mapping::Mapping;
+        let map = EnvMap::from_fn(Mapping::DualParaboloid, 32, 32, 2, |d| {
+            let x = (7.0 * d.x).sin() * (5.0 * d.z).cos();
+            [
+                1.0 + 0.5 * x,
+                1.0 + d.y.max(0.0).powi(8) * 30.0,
+                0.2 + d.z * d.z,
+            ]
+        });
+        let chain = super::super::mip::chain(&map);
+        let max_lod = (chain.len() - 1) as f64;
+        for (alpha, samples, bias) in [(0.0278, 64, 1.0), (0.25, 37, 0.0), (1.0, 256, 1.0)] {
+            let taps = taps(alpha, samples, bias, 32);
+            assert!(!taps.is_empty() && taps.len() <= samples as usize);
+            for r in super::super::synth::stress_directions() {
+                let frame = Frame::new(r);
+                let (mut sum, mut total) = ([0.0; 3], 0.0);
+                for t in &taps {
+                    let d = frame.to_world(t.wi).normalize();
+                    let lod = (t.lod - (1.0 + d.y.abs()).log2()).clamp(0.0, max_lod);
+                    let l = lookup(&chain, d, lod);
+                    (0..3).for_each(|c| sum[c] += t.weight * l[c]);
+                    total += t.weight;
+                }
+                let want = prefilter(&chain, alpha, r, samples, bias);
+                for c in 0..3 {
+                    let got = sum[c] / total;
+                    assert!(
+                        (got - want[c]).abs() <= 1e-12 * want[c].abs().max(1.0),
+                        "α {alpha} r {r}: {got} against {}",
+                        want[c]
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -342,16 +342,27 @@ impl SplitSum {
                 u.level, u.layers, opts.levels
             )));
         }
+        let mut tables: Vec<(u32, std::sync::Arc<Buffer>, u32)> = Vec::new();
         for u in units {
             let k = u.level;
             let size = level_size(dst.width, k);
+            let alpha = level_alpha(k, opts.levels);
+            if !tables.iter().any(|t| t.0 == k) {
+                let samples = opts.level_samples().at(dst.width, k);
+                let (words, count) = tap_words(alpha, samples, opts.bias, src.width);
+                tables.push((k, rec.upload("split-sum taps", &words)?, count));
+            }
+            let (_, table, taps) = tables
+                .iter()
+                .find(|t| t.0 == k)
+                .cloned()
+                .unwrap_or_else(|| unreachable!("pushed above"));
             let push = PrefilterGgxPush {
                 size,
                 src_size: src.width,
                 src_max_lod: (src.mips() - 1) as f32,
-                alpha: level_alpha(k, opts.levels) as f32,
-                samples: opts.level_samples().at(dst.width, k),
-                bias: opts.bias as f32,
+                alpha: alpha as f32,
+                taps,
                 dst_mapping: dst.mapping.id(),
                 layer: u.layers.start,
             };
@@ -371,6 +382,7 @@ impl SplitSum {
                             binding::PREFILTER_GGX_DST,
                             Bind::StorageLevel(&dst.image, k),
                         ),
+                        (binding::PREFILTER_GGX_TAPS, Bind::Buffer(&table)),
                     ],
                     &push,
                     groups_2d(size, size, u.layers.len() as u32),
@@ -397,6 +409,30 @@ impl SplitSum {
             Mapping::Cube,
         )
     }
+}
+
+/// A level's taps ([`crate::math::split_sum::taps`]) as `glsl/prefilter_ggx.comp` reads them:
+/// (wi, w) then (lod, 0, 0, 0), the pdf's +∞ lod as 1e30 (clamped to the chain's last level),
+/// and their count. α = 0 reads no taps; the binding still takes a buffer.
+fn tap_words(alpha: f64, samples: u32, bias: f64, src_size: u32) -> (Vec<[f32; 4]>, u32) {
+    let taps = match alpha > 0.0 {
+        true => crate::math::split_sum::taps(alpha, samples, bias, src_size),
+        false => Vec::new(),
+    };
+    let mut words: Vec<[f32; 4]> = taps
+        .iter()
+        .flat_map(|t| {
+            [
+                [t.wi.x as f32, t.wi.y as f32, t.wi.z as f32, t.weight as f32],
+                [t.lod.min(1e30) as f32, 0.0, 0.0, 0.0],
+            ]
+        })
+        .collect();
+    let count = taps.len() as u32;
+    if words.is_empty() {
+        words.resize(2, [0.0; 4]);
+    }
+    (words, count)
 }
 
 #[cfg(test)]
