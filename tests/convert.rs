@@ -396,6 +396,79 @@ fn copy_pass_is_exact() {
     common::finish(ctx);
 }
 
+/// A cube or lat-long converted to itself at its own size with one sample a texel, in the
+/// file's own orientation, reads each texel's own centre: the pass copies it (what the dynamic
+/// path's mirror level takes from a residual of the chain's side), so every texel must come
+/// back bit for bit, a 1e5 sun and odd sizes included. Turned 90° about y the same conversion
+/// must still be the sampled one: it matches its float64 twin and moves the sun.
+#[test]
+fn same_mapping_at_one_sample_is_a_copy() {
+    let ctx = common::ctx();
+    {
+        let conv = Converter::new(&ctx).unwrap();
+        for (mapping, size) in [(Mapping::Cube, 13), (Mapping::LatLong, 58)] {
+            let (w, h) = mapping.extent_for_size(size);
+            let mut src = EnvMap::from_fn(mapping, w, h, 2, smooth_env);
+            src.texels[(w * h / 2 + w / 3) as usize] = [1e5, 9e4, 8e4];
+            let g = GpuEnvMap::upload(&ctx, &src).unwrap();
+            for nearest in [false, true] {
+                let opts = ConvertOptions::new(mapping, size)
+                    .with_supersample(Some(1))
+                    .with_nearest(nearest);
+                let Timed {
+                    value: out,
+                    timings,
+                } = conv.run(&g, &opts).unwrap();
+                assert!(
+                    timings.iter().any(|t| t.label.ends_with("(a copy)")),
+                    "{mapping:?}"
+                );
+                assert_eq!(
+                    out.download(&ctx).unwrap(),
+                    src,
+                    "{mapping:?} nearest {nearest}"
+                );
+            }
+            let turned = Orientation {
+                rotate_y_degrees: 90.0,
+                ..Orientation::default()
+            };
+            let mut opts = ConvertOptions::new(mapping, size).with_supersample(Some(1));
+            opts.orientation = turned;
+            let Timed {
+                value: out,
+                timings,
+            } = conv.run(&g, &opts).unwrap();
+            assert!(
+                !timings.iter().any(|t| t.label.ends_with("(a copy)")),
+                "{mapping:?}"
+            );
+            let out = out.download(&ctx).unwrap();
+            let want = envlight::math::convert::convert_with(
+                &src,
+                mapping,
+                size,
+                turned.world_to_file(),
+                1,
+                false,
+            );
+            let mut errors = Errors::new();
+            for (k, (a, b)) in out.texels.iter().zip(&want.texels).enumerate() {
+                for c in 0..3 {
+                    errors.rel(a[c], b[c], 1e-3, (k, c));
+                }
+            }
+            assert!(
+                errors.worst() < 1e-4,
+                "{mapping:?} turned: {:e}",
+                errors.worst()
+            );
+            assert_ne!(out, src, "{mapping:?}: turning moved nothing");
+        }
+    }
+    common::finish(ctx);
+}
+
 /// The nearest-texel conversion (`ConvertOptions::nearest`, what footprint-filtered mirrors'
 /// chain is built from) against its float64 twin (`math::convert::convert_with`), on maps
 /// whose every texel differs from its neighbours (a hash), so any sample reading the wrong

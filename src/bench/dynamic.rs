@@ -731,8 +731,8 @@ pub fn dynamic(
          {ratio}× the mean luminance, at most {max}; a cube of {l} GGX levels ({c}² at \
          level 0) filtered by FIS, {n} samples a texel{boost}, from the residual converted to \
          a dual paraboloid with its MIP chain. Level 0, the mirror, is converted from the \
-         residual itself where it has no more texels (a cube of the chain's side or smaller: \
-         one bilinear read a texel), and the paraboloid is then of the chain's side; for \
+         residual itself where it has no more texels (a cube of the chain's side: a copy of its \
+         texels; a smaller one: one bilinear read a texel), and the paraboloid is then of the chain's side; for \
          finer sources level 0 is read from a paraboloid of twice the chain's side, which \
          keeps the cube's resolution. Floor: copies of the source, of the chain's cube (its levels: 4/3 of \
          level 0) and of the irradiance cube, in the same run. Errors on the last frame, \

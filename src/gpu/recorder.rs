@@ -494,6 +494,51 @@ impl Recorder {
         };
     }
 
+    /// Copies MIP level `src_level` of `src` into level `dst_level` of `dst`, every layer: the
+    /// two must share a format and the levels' extents and layer counts. The other levels of
+    /// `dst` keep their contents.
+    pub fn copy_image_level(&mut self, src: &Image, src_level: u32, dst: &Image, dst_level: u32) {
+        let (a, b) = (src.desc(), dst.desc());
+        let extent = |d: &super::ImageDesc, l: u32| ((d.width >> l).max(1), (d.height >> l).max(1));
+        assert!(
+            a.format == b.format
+                && a.layers == b.layers
+                && extent(a, src_level) == extent(b, dst_level)
+                && src_level < a.mips
+                && dst_level < b.mips,
+            "copy_image_level: the levels differ in format, extent or layers"
+        );
+        self.use_image(src, Usage::TransferSrc);
+        self.use_image(dst, Usage::TransferDst);
+        let layers = |l: u32| {
+            vk::ImageSubresourceLayers::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .mip_level(l)
+                .layer_count(a.layers)
+        };
+        let (w, h) = extent(a, src_level);
+        let region = vk::ImageCopy::default()
+            .src_subresource(layers(src_level))
+            .dst_subresource(layers(dst_level))
+            .extent(vk::Extent3D {
+                width: w,
+                height: h,
+                depth: 1,
+            });
+        // SAFETY: cmd is recording outside a render pass; both images are live, in
+        // TRANSFER_SRC_OPTIMAL and TRANSFER_DST_OPTIMAL, and the region lies within both.
+        unsafe {
+            self.ctx.device().cmd_copy_image(
+                self.cmd,
+                src.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            )
+        };
+    }
+
     /// Copies the first `bytes` of `src` to the start of `dst`.
     pub fn copy_buffer(&mut self, src: &Buffer, dst: &Buffer, bytes: u64) {
         assert!(bytes <= src.size() && bytes <= dst.size());

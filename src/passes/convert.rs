@@ -170,6 +170,28 @@ fn sampled_push(src: &GpuEnvMap, opts: &ConvertOptions, threshold: f64) -> Resul
     })
 }
 
+/// Whether converting `src` into `dst` by `opts` reads each output texel's own source texel at
+/// its centre and nothing else: a cube or lat-long to the same mapping at the same size, the
+/// file's orientation the world's, one bilinear (or nearest) sample a texel. The texels are
+/// then the source's, and the pass copies level 0 where both images allow a transfer and share
+/// a format.
+fn identity_copy(
+    src: &GpuEnvMap,
+    dst: &GpuEnvMap,
+    opts: &ConvertOptions,
+    push: &ConvertPush,
+) -> bool {
+    let (a, b) = (src.image.desc(), dst.image.desc());
+    matches!(opts.to, Mapping::Cube | Mapping::LatLong)
+        && src.mapping == opts.to
+        && (src.width, src.height) == (dst.width, dst.height)
+        && push.ss == 1
+        && opts.orientation.checked_world_to_file().ok() == Some(glam::DMat3::IDENTITY)
+        && a.format == b.format
+        && a.usage.contains(vk::ImageUsageFlags::TRANSFER_SRC)
+        && b.usage.contains(vk::ImageUsageFlags::TRANSFER_DST)
+}
+
 /// The conversion pass. Pipelines are built on first use, one per source kind.
 pub struct Converter {
     ctx: Context,
@@ -401,6 +423,18 @@ impl Converter {
         );
         let push = sampled_push(src, opts, 0.0)?;
         let points = edge_points(opts)?;
+        if identity_copy(src, dst, opts, &push) {
+            let label = format!(
+                "convert {} -> {} {w}x{h} (a copy)",
+                src.mapping.name(),
+                opts.to.name()
+            );
+            rec.span(&label, |rec| {
+                rec.copy_image_level(&src.image, 0, &dst.image, 0);
+                Ok(())
+            })?;
+            return poison::image(rec, PassId::Convert, &dst.image, 0..1);
+        }
         if self.uses_area((src.mapping, src.width, src.height), opts) {
             let split = split_area(opts)?;
             self.record_area(rec, src, dst, &push, (w, h), (split, points))?;
