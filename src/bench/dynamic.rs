@@ -53,6 +53,9 @@ pub struct FrameSettings {
     pub ratio: f64,
     /// Most light texels.
     pub max_lights: u32,
+    /// Each FIS sample reads the paraboloid's MIP level nearest its lod
+    /// (`PrefilterOptions::nearest_mip`) rather than blending the two about it.
+    pub nearest_mip: bool,
 }
 
 impl FrameSettings {
@@ -73,7 +76,8 @@ impl FrameSettings {
 
     /// `samples` FIS samples per chain texel, up to `rough_boost` times that at its roughest
     /// levels, and the chain's rough levels over `slices` frames; the rest as an engine's frame
-    /// would have it: 7 levels, a 32² irradiance cube,
+    /// would have it: 7 levels, each sample read from the MIP level nearest its lod, a 32²
+    /// irradiance cube,
     /// lights above the diffuse ratio × the mean, at most as many as the chain extracts. The
     /// chain's side (and its paraboloid's) are set per run by [`dynamic`].
     pub fn new(samples: u32, rough_boost: u32, slices: u32) -> FrameSettings {
@@ -87,6 +91,7 @@ impl FrameSettings {
             irradiance: 32,
             ratio: crate::abi::lights::DIFFUSE_RATIO,
             max_lights: crate::abi::lights::CHAIN_MAX_TEXELS,
+            nearest_mip: true,
         }
     }
 }
@@ -191,6 +196,7 @@ fn record_frame(
         })?;
         let mut chain = PrefilterOptions::new(s.levels);
         (chain.samples, chain.rough_boost) = (s.samples, s.rough_boost);
+        chain.nearest_mip = s.nearest_mip;
         for u in chain_units(s, index) {
             rec.span(&level_span(u.level), |rec| {
                 // Level 0, the mirror, from the residual itself where that holds it whole
@@ -730,7 +736,7 @@ pub fn dynamic(
          after an untimed one. Settings: SH 2 and a {i}² irradiance cube; lights above \
          {ratio}× the mean luminance, at most {max}; a cube of {l} GGX levels ({c}² at \
          level 0) filtered by FIS, {n} samples a texel{boost}, from the residual converted to \
-         a dual paraboloid with its MIP chain. Level 0, the mirror, is converted from the \
+         a dual paraboloid with its MIP chain, {read}. Level 0, the mirror, is converted from the \
          residual itself where it has no more texels (a cube of the chain's side: a copy of its \
          texels; a smaller one: one bilinear read a texel), and the paraboloid is then of the chain's side; for \
          finer sources level 0 is read from a paraboloid of twice the chain's side, which \
@@ -752,6 +758,10 @@ pub fn dynamic(
         l = s.levels,
         n = s.samples,
         boost = boost_text(s, chains),
+        read = match s.nearest_mip {
+            true => "each sample read from the level nearest its lod (`PrefilterOptions::nearest_mip`: a bilinear read)",
+            false => "each sample read trilinearly between the two levels about its lod",
+        },
     );
     let method = match sliced {
         false => method,

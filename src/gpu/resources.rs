@@ -503,6 +503,18 @@ impl Sampler {
         )
     }
 
+    /// [`Sampler::trilinear_border`] reading the one MIP level nearest the lod (mipmap mode
+    /// NEAREST): a bilinear read where the trilinear one blends two levels.
+    pub fn nearest_mip_border(ctx: &Context, name: &str) -> Result<Sampler> {
+        Sampler::create(
+            ctx,
+            name,
+            vk::SamplerMipmapMode::NEAREST,
+            vk::LOD_CLAMP_NONE,
+            vk::SamplerAddressMode::CLAMP_TO_BORDER,
+        )
+    }
+
     fn clamped(
         ctx: &Context,
         name: &str,

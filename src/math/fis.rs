@@ -71,6 +71,20 @@ pub fn lookup(chain: &[Level], d: DVec3, lod: f64) -> [f64; 3] {
     trilinear(chain, d, lod, &read)
 }
 
+/// The level a sampler whose mipmap mode is NEAREST reads at `lod` (Vulkan's rule,
+/// ⌈lod + ½⌉ − 1: the nearest level, a tie to the finer), `lod` first clamped to the chain's
+/// `max_lod`.
+pub fn nearest_level(lod: f64, max_lod: f64) -> f64 {
+    ((lod.clamp(0.0, max_lod) + 0.5).ceil() - 1.0).max(0.0)
+}
+
+/// [`lookup`] through a sampler whose mipmap mode is NEAREST: one bilinear read of both
+/// halves at the level nearest `lod` ([`nearest_level`]) instead of a blend of the two about
+/// it.
+pub fn lookup_nearest_mip(chain: &[Level], d: DVec3, lod: f64) -> [f64; 3] {
+    lookup(chain, d, nearest_level(lod, (chain.len() - 1) as f64))
+}
+
 /// [`lookup`] of d's own half alone, clamped to the edge: how a clamp-to-edge sampler reads a
 /// chain whose texels past the rim hold directions continued there (the split-sum chain).
 pub fn lookup_own_half(chain: &[Level], d: DVec3, lod: f64) -> [f64; 3] {
@@ -203,6 +217,30 @@ pub fn default_dp_size_of(width: u32, height: u32, layers: u32) -> u32 {
 mod tests {
     use super::*;
     use crate::math::envmap::{luminance, EnvMap};
+
+    /// Vulkan's NEAREST mipmap rule: the nearest level, a tie to the finer, within the chain.
+    #[test]
+    fn nearest_level_rounds_as_vulkan_does() {
+        let at = |lod: f64| nearest_level(lod, 3.0);
+        for (lod, level) in [
+            (-1.0, 0.0),
+            (0.0, 0.0),
+            (0.49, 0.0),
+            (0.5, 0.0),
+            (0.51, 1.0),
+        ] {
+            assert_eq!(at(lod), level, "lod {lod}");
+        }
+        for (lod, level) in [
+            (1.5, 1.0),
+            (1.5001, 2.0),
+            (2.7, 3.0),
+            (3.0, 3.0),
+            (9.0, 3.0),
+        ] {
+            assert_eq!(at(lod), level, "lod {lod}");
+        }
+    }
 
     /// A sunset-like sky: a bright band along the horizon (the paraboloid's rim), brighter on
     /// one side, over a dim sky and a dimmer ground.

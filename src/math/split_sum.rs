@@ -20,7 +20,7 @@
 //!   sampler's unit square, 4 × 4 Gauss–Legendre nodes a panel).
 
 use super::brdf::{local_view, Brdf, Frame};
-use super::fis::{lookup, lookup_own_half, sample_lod};
+use super::fis::{lookup, lookup_nearest_mip, lookup_own_half, sample_lod};
 use super::mapping::{Coord, Mapping};
 use super::mip::Level;
 use super::sequence::hammersley;
@@ -196,14 +196,29 @@ pub fn taps(alpha: f64, samples: u32, bias: f64, src_size: u32) -> Vec<Tap> {
 /// P(r, α): the prefiltered radiance along `r` read from the source chain by `samples` FIS
 /// samples with lod `bias` (see the module docs). α = 0 is one bilinear read at lod 0.
 pub fn prefilter(chain: &[Level], alpha: f64, r: DVec3, samples: u32, bias: f64) -> [f64; 3] {
+    prefilter_read(chain, alpha, r, samples, bias, false).0
+}
+
+/// [`prefilter`], each sample read from the level nearest its lod where `nearest_mip`
+/// (`PrefilterOptions::nearest_mip`, [`super::fis::lookup_nearest_mip`]), with the number of
+/// samples whose lod lies within 1e-4 of a tie between two levels (where float32 may pick the
+/// other one; 0 for trilinear reads, which are continuous in the lod).
+pub fn prefilter_read(
+    chain: &[Level],
+    alpha: f64,
+    r: DVec3,
+    samples: u32,
+    bias: f64,
+    nearest_mip: bool,
+) -> ([f64; 3], u32) {
     if alpha <= 0.0 {
-        return lookup(chain, r, 0.0);
+        return (lookup(chain, r, 0.0), 0);
     }
     let frame = Frame::new(r);
     let brdf = ggx(alpha, false);
     let size = chain[0].size;
     let max_lod = (chain.len() - 1) as f64;
-    let (mut sum, mut total) = ([0.0; 3], 0.0);
+    let (mut sum, mut total, mut ties) = ([0.0; 3], 0.0, 0);
     for i in 0..samples {
         let wi = brdf.sample(DVec3::Z, hammersley(i, samples));
         if wi.z <= 0.0 {
@@ -212,17 +227,23 @@ pub fn prefilter(chain: &[Level], alpha: f64, r: DVec3, samples: u32, bias: f64)
         let w = brdf.weight(DVec3::Z, wi);
         let d = frame.to_world(wi).normalize();
         let lod = sample_lod(brdf.pdf(DVec3::Z, wi), samples, d, size, bias, max_lod);
-        let l = lookup(chain, d, lod);
+        let l = match nearest_mip {
+            true => {
+                ties += u32::from(lod < max_lod && ((lod - lod.floor()) - 0.5).abs() < 1e-4);
+                lookup_nearest_mip(chain, d, lod)
+            }
+            false => lookup(chain, d, lod),
+        };
         for c in 0..3 {
             sum[c] += w * l[c];
         }
         total += w;
     }
-    if total > 0.0 {
-        sum.map(|s| s / total)
-    } else {
-        [0.0; 3]
-    }
+    let mean = match total > 0.0 {
+        true => sum.map(|s| s / total),
+        false => [0.0; 3],
+    };
+    (mean, ties)
 }
 
 /// The direction of texel (i, j) of `layer` of a dual paraboloid `size` a side, extended past

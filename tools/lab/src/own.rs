@@ -44,6 +44,9 @@ pub struct DynamicArgs {
     /// level)
     #[arg(long, default_value_t = envlight::bench::FrameSettings::DEFAULT_ROUGH_BOOST)]
     rough_boost: u32,
+    /// Read each FIS sample trilinearly instead of from the nearest MIP level
+    #[arg(long)]
+    trilinear: bool,
     /// Spread the chain's rough levels over this many frames
     #[arg(long, default_value_t = 1)]
     slices: u32,
@@ -78,7 +81,8 @@ pub fn floors(g: &Global, a: &FloorsArgs) -> Result<()> {
 /// Runs `envlight-lab dynamic`.
 pub fn dynamic(g: &Global, a: &DynamicArgs) -> Result<()> {
     let ctx = context(g)?;
-    let settings = envlight::bench::FrameSettings::new(a.samples, a.rough_boost, a.slices);
+    let mut settings = envlight::bench::FrameSettings::new(a.samples, a.rough_boost, a.slices);
+    settings.nearest_mip = !a.trilinear;
     let report = envlight::bench::dynamic(
         &ctx,
         &a.cubes,
