@@ -159,20 +159,28 @@ void orthonormal_pair(vec3 n, out vec3 t1, out vec3 t2) {
     t2 = vec3(b, s + n.y * n.y * a, -n.y);
 }
 
-// Node p of the tree over n texels: its range of texels and its statistics
-// (math::light_tree's node_of), or the end node at p = 2·leaves − 1.
+// The tree over n texels ends at node 2·leaves − 1 (0 where there are none).
+uint end_node(uint n) {
+    uint leaves = (n + LIGHT_LEAF_TEXELS - 1u) / LIGHT_LEAF_TEXELS;
+    return leaves == 0u ? 0u : 2u * leaves - 1u;
+}
+
+// The end node of the tree over n texels: written by the scan, so that a tree of no texels
+// (whose node pass the indirect dispatch starts no workgroup for) has it too.
+void write_end_node(uint n) {
+    uint at = node_at(end_node(n));
+    prepared[at] = vec4(0.0, 0.0, 1.0, 0.0);
+    prepared[at + 1u] = vec4(0.0);
+    prepared[at + 2u] = vec4(0.0);
+    prepared[at + 3u] = vec4(0.0);
+    prepared[at + 4u] = vec4(0.0, 0.0, float(pc.tree_room), 0.0);
+}
+
+// Node p (below the end node) of the tree over n texels: its range of texels and its
+// statistics (math::light_tree's node_of).
 void write_node(uint p, uint n) {
     uint leaves = (n + LIGHT_LEAF_TEXELS - 1u) / LIGHT_LEAF_TEXELS;
-    uint end_node = leaves == 0u ? 0u : 2u * leaves - 1u;
     uint at = node_at(p);
-    if (p == end_node) {
-        prepared[at] = vec4(0.0, 0.0, 1.0, 0.0);
-        prepared[at + 1u] = vec4(0.0);
-        prepared[at + 2u] = vec4(0.0);
-        prepared[at + 3u] = vec4(0.0);
-        prepared[at + 4u] = vec4(0.0, 0.0, float(pc.tree_room), 0.0);
-        return;
-    }
     // Descend from the root: a node of m leaves has its left child next (⌈m/2⌉ leaves) and
     // its right child after the left's 2⌈m/2⌉ − 1 nodes.
     uint q = 0u, lo = 0u, m = leaves;
@@ -233,12 +241,14 @@ void write_node(uint p, uint n) {
 void main() {
     if (pc.mode == PREPARE_MODE_SCAN) {
         scan();
+        if (gl_LocalInvocationID.x == 0u) write_end_node(kept());
         return;
     }
     uint i = gl_GlobalInvocationID.x, n = kept();
     if (pc.mode == PREPARE_MODE_NODES) {
-        uint leaves = (n + LIGHT_LEAF_TEXELS - 1u) / LIGHT_LEAF_TEXELS;
-        if (i <= (leaves == 0u ? 0u : 2u * leaves - 1u)) write_node(i, n);
+        // Dispatched per record: 2·⌈n/LEAF⌉ − 1 nodes below the end never outnumber the
+        // 64·⌈n/64⌉ invocations (LEAF ≥ 2).
+        if (i < end_node(n)) write_node(i, n);
         return;
     }
     if (i >= n) return;

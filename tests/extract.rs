@@ -534,8 +534,27 @@ fn lights_summed_through_the_gpu_tree_match_the_texels_one_by_one() {
                 );
             }
         }
-        // Faces a cube has not, or none, are refused before anything is recorded.
+        // A frame with no light texels (a flat map: none above twice the mean) through the
+        // same buffers: its tree is the end node alone, which the preparation writes though
+        // it starts no workgroup over records, so the last frame's sun adds nothing.
+        let flat = EnvMap::from_fn(map.mapping, map.width, map.height, 1, |_| [0.3; 3]);
+        assert!(extract(&flat, &opts).lights.is_empty());
+        let flat_gpu = GpuEnvMap::upload(&ctx, &flat).unwrap();
         let cube = SplitSum::cube_chain(&ctx, 32, 2).unwrap();
+        let Timed { value: level, .. } = ctx
+            .run("no light texels through the gpu tree", |rec| {
+                let o = envlight::math::Orientation::default();
+                proj.record_into(rec, &flat_gpu, 0, &o, &l00)?;
+                extractor.record(rec, &flat_gpu, &l00, 2.0, &ex)?;
+                extractor.record_prepare(rec, &ex, f2w, &lights)?;
+                rec.clear(&cube.image, [grey, grey, grey, 0.0]);
+                pass.record(rec, &lights, LightKernel::Cosine, &cube, 1)?;
+                cube.record_download(rec, 1)
+            })
+            .unwrap();
+        let moved = level.read().iter().filter(|t| t[..3] != [grey; 3]).count();
+        assert_eq!(moved, 0, "no light texels, yet {moved} texels moved");
+        // Faces a cube has not, or none, are refused before anything is recorded.
         for faces in [4..7, 3..3] {
             let e = ctx
                 .run("faces refused", |rec| {

@@ -282,6 +282,9 @@ pub mod lights {
     pub const KERNEL_FADE: f64 = 1.0;
     /// A light tree's leaves hold at most this many texels.
     pub const LEAF_TEXELS: u32 = 4;
+    // The GPU's node pass runs one invocation per record for the nodes below the end node
+    // (`prepare_mode::NODES`): at least two texels a leaf keep those fewer than the records.
+    const _: () = assert!(LEAF_TEXELS >= 2);
     /// vec4s per light tree node in the GPU's list (math::light_tree::LightTree::gpu_nodes).
     pub const TREE_VEC4S: u32 = 5;
     /// The GPU extraction's state buffer (`passes::extract`): words before its histograms.
@@ -368,16 +371,17 @@ pub mod lights {
     pub const TREE_SORT_RECORD_ARRAYS: u32 = 2;
     /// Steps of `glsl/extract_prepare.comp` (`ExtractPreparePush::mode`), in recording order.
     pub mod prepare_mode {
-        /// Per record: its spatial key, its bucket counted.
+        /// Per record (indirect): its spatial key, its bucket counted.
         pub const KEYS: u32 = 0;
-        /// One workgroup: each bucket's first slot.
+        /// One workgroup: each bucket's first slot; and the tree's end node.
         pub const SCAN: u32 = 1;
-        /// Per record: its slot in its bucket's run.
+        /// Per record (indirect): its slot in its bucket's run.
         pub const SCATTER: u32 = 2;
-        /// Per record: its place (bucket's first slot + its rank in the bucket by key, then
-        /// texel position) and its texel written there.
+        /// Per record (indirect): its place (bucket's first slot + its rank in the bucket by
+        /// key, then texel position) and its texel written there.
         pub const TEXELS: u32 = 3;
-        /// Per tree node: its range of texels, its statistics; and the end node.
+        /// Per record (indirect; the nodes below the end, 2·⌈n/LEAF_TEXELS⌉ − 1, never
+        /// outnumber the records' invocations): a node's range of texels, its statistics.
         pub const NODES: u32 = 4;
     }
     /// Steps of `glsl/extract_clusters.comp` (`ExtractClustersPush::mode`), in recording

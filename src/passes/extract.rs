@@ -589,15 +589,17 @@ impl Extractor {
             (binding::PREPARE_SORT, Bind::Buffer(&sort)),
         ];
         let p = &self.prepare;
-        let per_record = [groups(from.max, WORKGROUP_1D), 1, 1];
+        // The passes over the records take the extraction's own workgroup count (a dispatch
+        // sized by the cap would start its workgroups for nothing: 256 of them at the chain's
+        // 16384).
+        let records = (&from.state, GpuExtraction::light_args());
         rec.span("prepare lights (gpu)", |rec| {
             rec.fill_buffer(&sort, buckets * 4, 0);
-            rec.dispatch(p, &binds, &push(prepare_mode::KEYS), per_record)?;
+            rec.dispatch_indirect(p, &binds, &push(prepare_mode::KEYS), records)?;
             rec.dispatch(p, &binds, &push(prepare_mode::SCAN), [1, 1, 1])?;
-            rec.dispatch(p, &binds, &push(prepare_mode::SCATTER), per_record)?;
-            rec.dispatch(p, &binds, &push(prepare_mode::TEXELS), per_record)?;
-            let per_node = [groups(room, WORKGROUP_1D), 1, 1];
-            rec.dispatch(p, &binds, &push(prepare_mode::NODES), per_node)
+            rec.dispatch_indirect(p, &binds, &push(prepare_mode::SCATTER), records)?;
+            rec.dispatch_indirect(p, &binds, &push(prepare_mode::TEXELS), records)?;
+            rec.dispatch_indirect(p, &binds, &push(prepare_mode::NODES), records)
         })
     }
 
