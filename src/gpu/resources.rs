@@ -494,22 +494,22 @@ impl Sampler {
     /// image: premultiplied dual-paraboloid chains read along a direction continued past a
     /// half's rim (`dp_chain_lookup`), where repeating the edge texel would count it twice.
     pub fn trilinear_border(ctx: &Context, name: &str) -> Result<Sampler> {
-        Sampler::create(
-            ctx,
-            name,
-            vk::SamplerMipmapMode::LINEAR,
-            vk::LOD_CLAMP_NONE,
-            vk::SamplerAddressMode::CLAMP_TO_BORDER,
-        )
+        Sampler::border(ctx, name, vk::SamplerMipmapMode::LINEAR)
     }
 
     /// [`Sampler::trilinear_border`] reading the one MIP level nearest the lod (mipmap mode
     /// NEAREST): a bilinear read where the trilinear one blends two levels.
     pub fn nearest_mip_border(ctx: &Context, name: &str) -> Result<Sampler> {
+        Sampler::border(ctx, name, vk::SamplerMipmapMode::NEAREST)
+    }
+
+    /// Bilinear within a level, `mipmap` between levels, every level, transparent black
+    /// beyond the image.
+    fn border(ctx: &Context, name: &str, mipmap: vk::SamplerMipmapMode) -> Result<Sampler> {
         Sampler::create(
             ctx,
             name,
-            vk::SamplerMipmapMode::NEAREST,
+            mipmap,
             vk::LOD_CLAMP_NONE,
             vk::SamplerAddressMode::CLAMP_TO_BORDER,
         )
