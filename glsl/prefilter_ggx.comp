@@ -5,7 +5,8 @@
 // sampler's weight f·cos/pdf, each sample read from the source chain at
 // lod = ½·log2(Ωs/Ωp) + bias (filtered importance sampling, as shade.frag's fis()). At n = v a
 // sample's direction in the texel's frame, weight and Ωs are the level's alone: they come from
-// the taps table (math::split_sum::taps), leaving a texel the frame, Ωp and the reads.
+// the level's sample table (math::split_sum::prefilter_samples), leaving a texel the frame, Ωp
+// and the reads.
 #extension GL_GOOGLE_include_directive : require
 
 layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
@@ -16,8 +17,8 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 
 layout(set = 0, binding = BINDING_PREFILTER_GGX_SRC) uniform sampler2DArray src;
 layout(rgba32f, set = 0, binding = BINDING_PREFILTER_GGX_DST) uniform writeonly image2DArray dst;
-// Two vec4s a tap: (wi, w), then (lod before the texel term, 0, 0, 0).
-layout(std430, set = 0, binding = BINDING_PREFILTER_GGX_TAPS) readonly buffer Taps { vec4 taps[]; };
+// PREFILTER_SAMPLE_VEC4S (2) vec4s a sample: (wi, w), then (lod before the texel term, 0, 0, 0).
+layout(std430, set = 0, binding = BINDING_PREFILTER_GGX_SAMPLES) readonly buffer Samples { vec4 table[]; };
 
 // The push block, generated from src/abi/push.rs.
 PUSH_PrefilterGgxPush
@@ -42,12 +43,13 @@ void main() {
         // Ωp = (1 + |d.y|)²·(2/size)²: its ½·log2 is log2(1 + |d.y|) past the tap's lod.
         vec3 sum = vec3(0.0);
         float total = 0.0;
-        for (uint i = 0u; i < pc.taps; i++) {
-            vec4 tap = taps[2u * i];
-            vec3 d = normalize(t * tap.x + bt * tap.y + r * tap.z);
-            float lod = clamp(taps[2u * i + 1u].x - log2(1.0 + abs(d.y)), 0.0, pc.src_max_lod);
-            sum += tap.w * src_lookup(d, lod);
-            total += tap.w;
+        for (uint i = 0u; i < pc.samples; i++) {
+            uint at = PREFILTER_SAMPLE_VEC4S * i;
+            vec4 s = table[at];
+            vec3 d = normalize(t * s.x + bt * s.y + r * s.z);
+            float lod = clamp(table[at + 1u].x - log2(1.0 + abs(d.y)), 0.0, pc.src_max_lod);
+            sum += s.w * src_lookup(d, lod);
+            total += s.w;
         }
         color = total > 0.0 ? sum / total : vec3(0.0);
     }

@@ -88,7 +88,7 @@
 #define BINDING_DFG_TABLE 0
 #define BINDING_PREFILTER_GGX_SRC 0
 #define BINDING_PREFILTER_GGX_DST 1
-#define BINDING_PREFILTER_GGX_TAPS 2
+#define BINDING_PREFILTER_GGX_SAMPLES 2
 #define BINDING_LIGHTS_TEXELS 0
 #define BINDING_LIGHTS_DST 1
 #define BINDING_EXTRACT_MAP 0
@@ -186,6 +186,7 @@
 #define EXTRACT_WORD_MARK_ARGS 41u
 #define EXTRACT_WORD_COMPACT_ARGS 44u
 #define AREA_EDGE_STEPS 2u
+#define PREFILTER_SAMPLE_VEC4S 2u
 #define AREA_POLE_STEPS 8u
 #define AREA_POLE_NEAR 8.0
 #define AREA_MAX_VERTICES 35u
@@ -278,7 +279,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_ExactShadePush layout(push_constant) uniform Push { uvec2 size; uint mapping; uint texels; uint run; uint groups; uint first; uint brdf; float p0; float p1; float per_width; uint count; } pc;
 #define PUSH_ShBrdfPush layout(push_constant) uniform Push { uint grid; float p0; float p1; uint offset; uint panel; uint[3] pad; } pc;
 #define PUSH_DfgPush layout(push_constant) uniform Push { uint size; uint correlated; uint offset; uint panel; uint centres; } pc;
-#define PUSH_PrefilterGgxPush layout(push_constant) uniform Push { uint size; uint src_size; float src_max_lod; float alpha; uint taps; uint dst_mapping; uint layer; } pc;
+#define PUSH_PrefilterGgxPush layout(push_constant) uniform Push { uint size; uint src_size; float src_max_lod; float alpha; uint samples; uint dst_mapping; uint layer; } pc;
 #define PUSH_ExtractPush layout(push_constant) uniform Push { uvec2 size; uint mapping; uint mode; uint max; float ratio; uint fill; uint grow; } pc;
 #define PUSH_ExtractAddPush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 map_size; uint mapping; uint size; uint kernel; float alpha; float inv_norm; uint layer; } pc;
 #define PUSH_ExtractClustersPush layout(push_constant) uniform Push { vec4[3] file_to_world; uint mode; uint grid; uint at; uint max; } pc;

@@ -199,9 +199,10 @@ bindings! {
     PREFILTER_GGX_SRC = 0;
     /// prefilter_ggx: the level written (rgba32f storage image).
     PREFILTER_GGX_DST = 1;
-    /// prefilter_ggx: the level's taps (vec4 buffer, two a tap: the direction in the texel's
-    /// frame and the weight; the lod before the texel term), [`crate::math::split_sum::taps`].
-    PREFILTER_GGX_TAPS = 2;
+    /// prefilter_ggx: the level's samples (vec4 buffer, `split_sum::PREFILTER_SAMPLE_VEC4S` a
+    /// sample: the direction in the texel's frame and the weight; the lod before the texel
+    /// term), [`crate::math::split_sum::prefilter_samples`].
+    PREFILTER_GGX_SAMPLES = 2;
     /// lights: the light texels (float buffer, LIGHT_STRIDE vec4 each).
     LIGHTS_TEXELS = 0;
     /// lights: the level their light is added to (rgba32f storage image).

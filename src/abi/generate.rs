@@ -170,6 +170,11 @@ fn define_sizes_and_lights(s: &mut String) {
 /// The area conversion's and the footprint's parameters, and every shared float.
 fn define_area_footprint_and_floats(s: &mut String) {
     let _ = writeln!(s, "#define AREA_EDGE_STEPS {}u", area::EDGE_STEPS);
+    let _ = writeln!(
+        s,
+        "#define PREFILTER_SAMPLE_VEC4S {}u",
+        split_sum::PREFILTER_SAMPLE_VEC4S
+    );
     let _ = writeln!(s, "#define AREA_POLE_STEPS {}u", area::POLE_STEPS);
     define_f32(s, "AREA_POLE_NEAR", area::POLE_NEAR);
     let _ = writeln!(s, "#define AREA_MAX_VERTICES {}u", area::MAX_VERTICES);

@@ -192,6 +192,9 @@ pub mod split_sum {
     /// touch. 0.7 was the best of 0.5, 0.7 and 1 at 4, 8 and 16 taps on the sun and
     /// studio probes (float64, converged truth).
     pub const TAP_SCALE: f64 = 0.7;
+    /// vec4s a prefilter sample takes in `glsl/prefilter_ggx.comp`'s table: (wi, weight),
+    /// (lod before the texel term, 0, 0, 0).
+    pub const PREFILTER_SAMPLE_VEC4S: u32 = 2;
 }
 
 /// Light extraction ([`crate::math::lights`]).

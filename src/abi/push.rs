@@ -344,8 +344,8 @@ push_blocks! {
         src_max_lod: f32 = "float",
         /// GGX α of this level (0: a bilinear read of the source's level 0).
         alpha: f32 = "float",
-        /// Taps per texel (the level's FIS samples above the horizon).
-        taps: u32 = "uint",
+        /// Samples per texel in the level's table (its FIS samples above the horizon).
+        samples: u32 = "uint",
         /// Mapping of the chain written: dual paraboloid (the shading's) or cube (bakes).
         dst_mapping: u32 = "uint",
         /// The first layer written: the dispatch's z counts layers from it (a time slice

@@ -260,7 +260,7 @@ macro_rules! shader_table {
             /// One roughness level of the split-sum prefiltered GGX chain.
             PrefilterGgx = "prefilter_ggx", "prefilter_ggx.comp", Compute, [], PrefilterGgxPush,
                 [(PREFILTER_GGX_SRC, Sampled, Read), (PREFILTER_GGX_DST, StorageImage, Write),
-                 (PREFILTER_GGX_TAPS, StorageBuffer, Read)];
+                 (PREFILTER_GGX_SAMPLES, StorageBuffer, Read)];
             /// Light texels (extracted from a map) added exactly to a cube level.
             Lights = "lights", "lights.comp", Compute, [], LightsPush,
                 [(LIGHTS_TEXELS, StorageBuffer, Read), (LIGHTS_DST, StorageImage, ReadWrite)];

@@ -714,8 +714,8 @@ pub fn dynamic(
          A level's time goes as its texels times the samples (the reads, not the sampler's \
          arithmetic, are the cost), so level 1, with 3/4 of the rough levels' texels, takes \
          most of it, the lights added back there included (next to a sun the tree is walked \
-         to its texels' quadratures, the lobe at α 0.028 being narrower than the light texels' \
-         spread: about a quarter of level 1 on lavapipe). \
+         down to its texels' quadratures, the lobe at α 0.028 being narrower than the light \
+         texels' spread). \
          The extraction stage is L00 (on a cube, per-texel Gauss–Legendre solid angles), \
          one pass over the map specialised to its mapping (the histogram's, which writes \
          the records and residual at τ; a second only where the cap binds), and the light texels' \

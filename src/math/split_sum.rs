@@ -156,7 +156,7 @@ pub fn dfg_lookup(table: &[[f64; 2]], size: u32, mu: f64, alpha: f64) -> [f64; 2
 /// in the texel's frame, its weight and its density depend on the level alone, so the GPU pass
 /// reads them from a table instead of sampling GGX again in every texel.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Tap {
+pub struct PrefilterSample {
     /// The direction in the frame of the texel's r (z along r).
     pub wi: DVec3,
     /// The sampler's weight f·cos/pdf.
@@ -167,10 +167,15 @@ pub struct Tap {
     pub lod: f64,
 }
 
-/// The taps of a level of GGX `alpha` filtered by `samples` Hammersley samples with lod
+/// The samples of a level of GGX `alpha` filtered by `samples` Hammersley samples with lod
 /// `bias` from a chain whose level 0 is `src_size` a side: the samples of [`prefilter`] in
 /// its order, those below the horizon (which it skips) left out.
-pub fn taps(alpha: f64, samples: u32, bias: f64, src_size: u32) -> Vec<Tap> {
+pub fn prefilter_samples(
+    alpha: f64,
+    samples: u32,
+    bias: f64,
+    src_size: u32,
+) -> Vec<PrefilterSample> {
     let brdf = ggx(alpha, false);
     let texel = (2.0 / src_size as f64).log2();
     (0..samples)
@@ -184,7 +189,7 @@ pub fn taps(alpha: f64, samples: u32, bias: f64, src_size: u32) -> Vec<Tap> {
                 true => 0.5 * (1.0 / (samples as f64 * pdf)).log2() + bias - texel,
                 false => f64::INFINITY,
             };
-            Some(Tap {
+            Some(PrefilterSample {
                 wi: wi.normalize(),
                 weight: brdf.weight(DVec3::Z, wi),
                 lod,
@@ -657,11 +662,11 @@ mod tests {
         assert_eq!(huge.at(8, 3), 20_000);
     }
 
-    /// The taps the GPU reads reproduce `prefilter` (its samples, weights and lods) on a
+    /// The samples the GPU reads from its table reproduce `prefilter` (its samples, weights and lods) on a
     /// chain with detail at every lod, for α from the narrowest level to 1, where the pdf
     /// vanishes at the horizon and a sample's lod is the chain's last.
     #[test]
-    fn taps_reproduce_the_prefilter() {
+    fn prefilter_samples_reproduce_the_prefilter() {
         use super::super::envmap::EnvMap;
         use super::super::mapping::Mapping;
         let map = EnvMap::from_fn(Mapping::DualParaboloid, 32, 32, 2, |d| {
@@ -675,12 +680,12 @@ mod tests {
         let chain = super::super::mip::chain(&map);
         let max_lod = (chain.len() - 1) as f64;
         for (alpha, samples, bias) in [(0.0278, 64, 1.0), (0.25, 37, 0.0), (1.0, 256, 1.0)] {
-            let taps = taps(alpha, samples, bias, 32);
-            assert!(!taps.is_empty() && taps.len() <= samples as usize);
+            let table = prefilter_samples(alpha, samples, bias, 32);
+            assert!(!table.is_empty() && table.len() <= samples as usize);
             for r in super::super::synth::stress_directions() {
                 let frame = Frame::new(r);
                 let (mut sum, mut total) = ([0.0; 3], 0.0);
-                for t in &taps {
+                for t in &table {
                     let d = frame.to_world(t.wi).normalize();
                     let lod = (t.lod - (1.0 + d.y.abs()).log2()).clamp(0.0, max_lod);
                     let l = lookup(&chain, d, lod);

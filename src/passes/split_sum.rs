@@ -33,9 +33,9 @@ pub struct PrefilterOptions {
     /// Lod bias of the FIS reads.
     pub bias: f64,
     /// Each sample reads the source chain's level nearest its lod (a bilinear read) instead
-    /// of blending the two about it (trilinear, the default): about a quarter less time on
-    /// the narrow levels on lavapipe, the levels' errors against the exact prefilter within
-    /// 1% either way (`envlight bench dynamic` publishes both). Twin:
+    /// of blending the two about it (trilinear, the default): one level's texels read a
+    /// sample instead of two levels', the levels' errors against the exact prefilter within
+    /// 1% either way (`envlight bench dynamic` publishes its time and errors). Twin:
     /// [`crate::math::split_sum::prefilter_read`].
     pub nearest_mip: bool,
 }
@@ -363,10 +363,10 @@ impl SplitSum {
             let alpha = level_alpha(k, opts.levels);
             if !tables.iter().any(|t| t.0 == k) {
                 let samples = opts.level_samples().at(dst.width, k);
-                let (words, count) = tap_words(alpha, samples, opts.bias, src.width);
-                tables.push((k, rec.upload("split-sum taps", &words)?, count));
+                let (words, count) = sample_words(alpha, samples, opts.bias, src.width);
+                tables.push((k, rec.upload("split-sum samples", &words)?, count));
             }
-            let (_, table, taps) = tables
+            let (_, table, count) = tables
                 .iter()
                 .find(|t| t.0 == k)
                 .cloned()
@@ -376,7 +376,7 @@ impl SplitSum {
                 src_size: src.width,
                 src_max_lod: (src.mips() - 1) as f32,
                 alpha: alpha as f32,
-                taps,
+                samples: count,
                 dst_mapping: dst.mapping.id(),
                 layer: u.layers.start,
             };
@@ -396,7 +396,7 @@ impl SplitSum {
                             binding::PREFILTER_GGX_DST,
                             Bind::StorageLevel(&dst.image, k),
                         ),
-                        (binding::PREFILTER_GGX_TAPS, Bind::Buffer(&table)),
+                        (binding::PREFILTER_GGX_SAMPLES, Bind::Buffer(&table)),
                     ],
                     &push,
                     groups_2d(size, size, u.layers.len() as u32),
@@ -425,15 +425,18 @@ impl SplitSum {
     }
 }
 
-/// A level's taps ([`crate::math::split_sum::taps`]) as `glsl/prefilter_ggx.comp` reads them:
+/// A level's samples ([`crate::math::split_sum::prefilter_samples`]) as
+/// `glsl/prefilter_ggx.comp` reads them:
 /// (wi, w) then (lod, 0, 0, 0), the pdf's +∞ lod as 1e30 (clamped to the chain's last level),
-/// and their count. α = 0 reads no taps; the binding still takes a buffer.
-fn tap_words(alpha: f64, samples: u32, bias: f64, src_size: u32) -> (Vec<[f32; 4]>, u32) {
-    let taps = match alpha > 0.0 {
-        true => crate::math::split_sum::taps(alpha, samples, bias, src_size),
+/// and their count. α = 0 reads none; the binding still takes a buffer.
+fn sample_words(alpha: f64, samples: u32, bias: f64, src_size: u32) -> (Vec<[f32; 4]>, u32) {
+    let table = match alpha > 0.0 {
+        true => crate::math::split_sum::prefilter_samples(alpha, samples, bias, src_size),
         false => Vec::new(),
     };
-    let mut words: Vec<[f32; 4]> = taps
+    // One [f32; 4] pair a sample: the table's layout.
+    const _: () = assert!(split_sum::PREFILTER_SAMPLE_VEC4S == 2);
+    let mut words: Vec<[f32; 4]> = table
         .iter()
         .flat_map(|t| {
             [
@@ -442,9 +445,9 @@ fn tap_words(alpha: f64, samples: u32, bias: f64, src_size: u32) -> (Vec<[f32; 4
             ]
         })
         .collect();
-    let count = taps.len() as u32;
+    let count = table.len() as u32;
     if words.is_empty() {
-        words.resize(2, [0.0; 4]);
+        words.resize(split_sum::PREFILTER_SAMPLE_VEC4S as usize, [0.0; 4]);
     }
     (words, count)
 }
