@@ -1,6 +1,7 @@
 #version 460
 // ConvertArea's fast path (convert_area.comp has the method): one invocation per cube or
-// paraboloid texel away from the poles (and inside a paraboloid's disc).
+// paraboloid texel away from the poles (and inside a paraboloid's disc); it also writes a
+// paraboloid's texels outside the disc, their rim texel's copy.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #include "convert_area.glsl"
@@ -79,7 +80,14 @@ void main() {
     uvec3 id = gl_GlobalInvocationID;
     if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
     uint face = id.z, i = id.x, j = id.y, n = pc.dst_size.x;
-    if (general_texel(face, i, j, n)) return;
+    if (general_texel(face, i, j, n)) {
+        // The general walk's list leaves a paraboloid's texels outside its disc to this
+        // dispatch (math::convert::area_general_texels).
+        if (DST_MAPPING == MAPPING_DUAL_PARABOLOID && !texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy))) {
+            store_rim(id);
+        }
+        return;
+    }
     int w = int(pc.src_size.x), h = int(pc.src_size.y);
     float wf = float(w), scale = wf / (2.0 * PI);
 

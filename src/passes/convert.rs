@@ -586,6 +586,7 @@ impl Converter {
             let texels = crate::math::convert::area_general_texels(to, w);
             let list = rec.upload("convert general texels", &texels)?;
             rec.span(&label, |rec| {
+                // The fast path's texels, and a paraboloid's outside its disc.
                 if texels.len() < (w * h * to.layers()) as usize {
                     over_map(rec, fast)?;
                 }

@@ -38,6 +38,15 @@ pub fn texel_angle(m: Mapping, size: u32) -> f64 {
     }
 }
 
+/// What [`convert`]'s output holds before the conversion: no conversion of the tests' maps
+/// (a 10⁵ sun at most) writes it, and every comparison's error is then ~1e25 (an upload
+/// refuses NaN).
+pub const UNWRITTEN: f32 = 1e30;
+
+/// `src` converted on the GPU to `to` at `size`, the source oriented as `o`, into a map
+/// that holds [`UNWRITTEN`] before the conversion, so that a texel the conversion leaves
+/// unwritten fails its test (lavapipe keeps an image's memory through the pass's discard; a
+/// fresh image there may hold the bytes of a freed staging buffer: the source's own texels).
 pub fn convert(
     ctx: &Context,
     conv: &Converter,
@@ -47,11 +56,15 @@ pub fn convert(
     o: Orientation,
 ) -> EnvMap {
     let g = GpuEnvMap::upload(ctx, src).unwrap();
-    let Timed {
-        value: out,
-        timings: t,
-    } = conv
-        .run(&g, &ConvertOptions::new(to, size).with_orientation(o))
+    let (w, h) = to.extent_for_size(size);
+    let unwritten = [UNWRITTEN; 3];
+    let before = EnvMap::new(to, w, h, vec![unwritten; (w * h * to.layers()) as usize]);
+    let out = GpuEnvMap::upload(ctx, &before).unwrap();
+    let opts = ConvertOptions::new(to, size).with_orientation(o);
+    let Timed { timings: t, .. } = ctx
+        .run("converting over a sentinel", |rec| {
+            conv.record(rec, &g, &out, &opts)
+        })
         .unwrap();
     assert!(t.iter().all(|t| t.ms >= 0.0 && t.ms.is_finite()));
     out.download(ctx).unwrap()
