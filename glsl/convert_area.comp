@@ -6,7 +6,9 @@
 // the texel's edges (with the pole's line where a point sits on a pole or the texel holds
 // one; a paraboloid texel's clipped to its half, z >= 0 or z <= 0, the rim being the equator),
 // and its overlap with each source texel is integrated exactly, band of rows by band,
-// along the polygon clipped to the band (Green's theorem). Neighbours share their edge points
+// along the polygon clipped to the band (Green's theorem); a paraboloid's chords inside its
+// disc add their slivers (the parabolic segment between chord and curve, each to the source
+// texel under the curve's midpoint: AREA_PARABOLOID_EDGE_STEPS). Neighbours share their edge points
 // and split shared edges from a canonical endpoint order, so the polygons tile the plane and
 // each source texel's power is counted once. Each footprint takes U from a column near it
 // (local_u): at the map's own U, a column index in the thousands, float32 would round the

@@ -100,13 +100,30 @@ void main() {
     float sr, cr;
     int c_ref = reference_column(d_first, scale, sr, cr);
     vec2 v[FAST_POINTS];
+    vec3 dirs[FAST_POINTS];
     [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
         uint e = k / SIDE_POINTS, q = k % SIDE_POINTS, m = SIDE_POINTS;
         uvec2 e0 = uvec2(i, j) + steps[e], e1 = uvec2(i, j) + steps[(e + 1u) % 4u];
         uvec2 ab = e0 * (m - q) + e1 * q;
         vec3 d = k == 0u ? d_first : point(face, ab.x, ab.y, m);
+        dirs[k] = d;
         v[k] = vec2(local_u(d, sr, cr) * scale, d.y);
     }
+    // A paraboloid's chords' slivers (its fast texels' edges all lie in the disc, away from
+    // the poles): their areas, and their areas times the source texel under each.
+    vec3 sl_num = vec3(0.0);
+    float sl_den = 0.0;
+#ifdef SIDE_EDGE_POINTS
+    [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
+        uint e = k / SIDE_POINTS, q = k % SIDE_POINTS, m = SIDE_POINTS;
+        uvec2 e0 = uvec2(i, j) + steps[e], e1 = uvec2(i, j) + steps[(e + 1u) % 4u];
+        uvec2 mid = e0 * (2u * (m - q) - 1u) + e1 * (2u * q + 1u);
+        vec3 dm = point(face, mid.x, mid.y, 2u * m);
+        float s = sliver(dirs[k], dm, dirs[(k + 1u) % FAST_POINTS], scale);
+        sl_num += s * sliver_texel(dm, c_ref, sr, cr, scale, w, h);
+        sl_den += s;
+    }
+#endif
     vec2 lo = v[0], hi = v[0];
     [[unroll]] for (uint k = 1u; k < FAST_POINTS; k++) {
         lo = min(lo, v[k]);
@@ -145,6 +162,8 @@ void main() {
             zlo = latlong_band_edge(row + 1, h);
         }
     }
+    num += sl_num - sl_den * l0;
+    den += sl_den;
     vec3 result = den != 0.0 ? l0 + num / den : l0;
     imageStore(dst, ivec3(id), vec4(max(result, vec3(0.0)), 1.0));
 }

@@ -423,12 +423,11 @@ fn halved_residual_costs_little_against_the_whole() {
 }
 
 /// The render builds the paraboloid's conversion pipelines (the fast path and the general
-/// walk's list) before the lights are extracted, specialised on the residual's points per
-/// texel edge where the chain is to take the lights; the record takes the same ones, so one of
-/// each is built: GGX α 0.3 with 64 samples (a
-/// paraboloid of 128) on the sky with its sun (a residual), on a smooth map with no texel
-/// above the lights' threshold (the whole map, as sunless), and with the lights left in the
-/// map (the default's 8 points).
+/// walk's list) before the lights are extracted, specialised on the residual's chords per
+/// texel edge where the chain is to take the lights; the record takes the same ones, so one
+/// of each is built: GGX α 0.3 with 64 samples (a paraboloid of 128) on the sky with its sun
+/// (a residual), on a smooth map with no texel above the lights' threshold (the whole map,
+/// as sunless), and with the lights left in the map (the default's chords).
 #[test]
 fn the_paraboloid_pipeline_built_early_is_the_one_recorded() {
     use envlight::scene::LightsMode;
@@ -456,9 +455,6 @@ fn the_paraboloid_pipeline_built_early_is_the_one_recorded() {
             );
             sc.fis.size = None;
             sc.environment.lights = lights;
-            // A size the residual's 2 points serve.
-            let size = sc.fis_dp_size(envlight::scene::MapShape::of(env));
-            assert!(size >= common::abi::area::RESIDUAL_EDGE_MIN_SIZE, "{size}");
             let r = render(&ctx, &sc, env).unwrap();
             assert!(r.frame.texels.iter().flatten().all(|v| v.is_finite()));
             let created = envlight::passes::testing::pipelines_created(&ctx);

@@ -106,10 +106,54 @@ int reference_column(vec3 d, float scale, out float sr, out float cr) {
     return c;
 }
 
+// The azimuth from direction u to direction v, in (−π, π]: the angle between their (−z, x),
+// which no column count rounds.
+float azimuth_between(vec3 u, vec3 v) {
+    return atan(u.x * v.z - u.z * v.x, u.z * v.z + u.x * v.x);
+}
+
+// A chord's sliver (twin: math::convert::sliver; AREA_PARABOLOID_EDGE_STEPS): the signed area
+// in the (U, z) plane (`scale` columns a radian) between the chord from a to b and the
+// parabola through a, the curve's midpoint m and b, as ∫ z dU along a → b adds it:
+// (2/3)·(ΔU·δz − Δz·δU), δ the midpoint's offset from the chord's. Taken from the lesser of a
+// and b and signed, so that the two texels sharing the chord add opposite amounts.
+float sliver(vec3 a, vec3 m, vec3 b, float scale) {
+    bool fwd = a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z <= b.z)));
+    vec3 p = fwd ? a : b, q = fwd ? b : a;
+    float du = azimuth_between(p, q) * scale;
+    float du_mid = azimuth_between(p, m) * scale - 0.5 * du;
+    float dz_mid = m.y - 0.5 * (p.y + q.y);
+    float s = (2.0 / 3.0) * (du * dz_mid - (q.y - p.y) * du_mid);
+    return fwd ? s : -s;
+}
+
+// Whether corner (a, b) of a paraboloid of side n lies in the closed disc (integers, as
+// math::convert::edge_steps decides).
+bool corner_in_disc(uvec2 e, uint n) {
+    int s = 2 * int(e.x) - int(n), t = 2 * int(e.y) - int(n);
+    return s * s + t * t <= int(n) * int(n);
+}
+
 // The source texel under point v of the (U, z) plane.
 vec3 texel_under(vec2 v, int w, int h) {
     int row = clamp(int(floor(acos(clamp(v.y, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
     return texelFetch(src, ivec3(wrap_column(int(floor(v.x)), w), row, 0), 0).rgb;
+}
+
+// The source texel that takes the sliver whose curve's midpoint is m (twin:
+// math::convert::cell_under), its U counted from column c_ref (whose azimuth's sine and cosine
+// are sr and cr; the column holding m or one near it), so that float32 places it to ~1e-7 of
+// a column, then nudged off the columns' edges, where midpoints lie by symmetry; its row
+// checked against the band edges the clip takes (llvmpipe's acos errs by ~1e-4 rad).
+vec3 sliver_texel(vec3 m, int c_ref, float sr, float cr, float scale, int w, int h) {
+    int c = c_ref + int(floor(local_u(m, sr, cr) * scale + AREA_SLIVER_NUDGE));
+    int row = clamp(int(floor(acos(clamp(m.y, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
+    if (row > 0 && m.y > latlong_band_edge(row, h)) {
+        row--;
+    } else if (row < h - 1 && m.y <= latlong_band_edge(row + 1, h)) {
+        row++;
+    }
+    return texelFetch(src, ivec3(wrap_column(c, w), row, 0), 0).rgb;
 }
 
 // A paraboloid texel outside its disc: the source texel at its own half's rim nearest its
@@ -178,16 +222,36 @@ void general(uvec3 id) {
 
     // The boundary points and their unwrapped U (as area_polygon in math/convert.rs).
     const uvec2 steps[4] = uvec2[4](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 1));
+    // Each edge's points as math::convert::edge_steps picks them, from the edge alone; a
+    // paraboloid's edges within the disc take chords with slivers, whose areas (sl_den) and
+    // areas times the source texel under each (sl_num) are summed here.
     uint count = 0u;
+    vec3 sl_num = vec3(0.0);
+    float sl_den = 0.0;
     for (uint k = 0u; k < 4u; k++) {
         uvec2 e0 = uvec2(i, j) + steps[k], e1 = uvec2(i, j) + steps[(k + 1u) % 4u];
         vec3 pa = point(face, e0.x, e0.y, 1u), pb = point(face, e1.x, e1.y, 1u);
         bool near = min(length(pa.xz), length(pb.xz)) < AREA_POLE_NEAR / float(n);
+        bool disc = DST_MAPPING == MAPPING_DUAL_PARABOLOID && corner_in_disc(e0, n) &&
+                    corner_in_disc(e1, n);
         uint m = near ? AREA_POLE_STEPS
-                      : (DST_MAPPING == MAPPING_DUAL_PARABOLOID ? EDGE_POINTS : AREA_EDGE_STEPS);
+                      : (DST_MAPPING == MAPPING_DUAL_PARABOLOID
+                             ? (disc ? EDGE_POINTS : AREA_PARABOLOID_RIM_STEPS)
+                             : AREA_EDGE_STEPS);
         for (uint q = 0u; q < m; q++) {
             uvec2 ab = e0 * (m - q) + e1 * q;
             ds[count++] = point(face, ab.x, ab.y, m);
+            if (disc) {
+                // A chord from a pole is a meridian, and the polygon meets the pole's line.
+                uvec2 nx = e0 * (m - q - 1u) + e1 * (q + 1u), mid = e0 * (2u * (m - q) - 1u) + e1 * (2u * q + 1u);
+                vec3 a = ds[count - 1u], b = point(face, nx.x, nx.y, m);
+                vec3 dm = point(face, mid.x, mid.y, 2u * m);
+                float s = on_pole(a) || on_pole(b) ? 0.0 : sliver(a, dm, b, scale);
+                float sr, cr;
+                int c = reference_column(dm, scale, sr, cr);
+                sl_num += s * sliver_texel(dm, c, sr, cr, scale, w, h);
+                sl_den += s;
+            }
         }
     }
     bool pole = false;
@@ -301,6 +365,8 @@ void general(uvec3 id) {
             if (float(c) >= q.x) walking = false;
         }
     }
+    num += sl_num - sl_den * l0;
+    den += sl_den;
     vec3 result = den != 0.0 ? l0 + num / den : l0;
     imageStore(dst, ivec3(id), vec4(max(result, vec3(0.0)), 1.0));
 }

@@ -536,34 +536,44 @@ pub mod area {
     /// err by about 1e-4 of a texel's area away from the poles (measured 5e-6 of the power of
     /// a map with suns at the poles and the seam, 1024 x 512 to cube 256).
     pub const EDGE_STEPS: u32 = 2;
-    /// Points per edge of a dual-paraboloid texel's polygon: z = cos θ bends across its
-    /// texels as much at the rim as anywhere, and a sun there lands whole in one rim texel, so
-    /// that its power errs by that texel's chord error: 3.8e-5 of a map with a sun on the
-    /// equator at 2 points, 9.5e-6 at 4 and 2.4e-6 at 8 (1024 x 512 to paraboloid 256,
-    /// float64), the cube's 5e-6 at 2.
-    pub const PARABOLOID_EDGE_STEPS: u32 = 8;
-    /// Points per edge of a dual-paraboloid texel's polygon where the source is a residual,
-    /// its lights taken out (FIS's chain), from [`RESIDUAL_EDGE_MIN_SIZE`] up: no sun lands
-    /// in a rim texel, and the chords keep power as 8 points do with suns (1024 × 512 with
-    /// suns at the poles and seam, to paraboloid 128: the residual 1.1e-5, the suns 1.2e-5 at
-    /// 8 points, 1.3e-4 at 2); fewer points, a faster conversion.
-    pub const RESIDUAL_EDGE_STEPS: u32 = 2;
-    /// See [`RESIDUAL_EDGE_STEPS`]: the chords' error grows about as 1/size² (the residual
-    /// above: 2.7e-6 at 256, 1.2e-4 at 32), and smaller paraboloids cost little anyway.
-    pub const RESIDUAL_EDGE_MIN_SIZE: u32 = 128;
+    /// Chords per edge of a dual-paraboloid texel's polygon where both of the edge's ends lie
+    /// in the disc (away from the poles), each with its sliver: the area between the chord and
+    /// the edge's curve (the parabolic segment through the curve's midpoint), given whole to
+    /// the source texel under that midpoint. The footprint's area is then its texel's solid
+    /// angle to 2.5e-6 of the texel at 1 chord, 3e-8 at 3 (48², worst texel), and the
+    /// shared chords and slivers still tile the plane, so power is kept wherever a sun lies.
+    /// What fewer chords cost is placement: a sliver that spans several source texels lands
+    /// in one, which moves a texel next to a sun by up to 2.5e-2 of its value at 2 chords
+    /// (9.8e-2 at 1; the sun sky 512 × 256 to 128², against 8 chords; 1.9e-3 and 4.6e-3 from
+    /// 1024 × 512).
+    pub const PARABOLOID_EDGE_STEPS: u32 = 2;
+    /// Chords per edge, as [`PARABOLOID_EDGE_STEPS`], where the source is a residual, its
+    /// lights taken out (FIS's chain): no sun for a sliver to misplace, so one chord.
+    pub const RESIDUAL_EDGE_STEPS: u32 = 1;
+    /// Columns the U of a sliver's curve midpoint is moved by before its source texel is found
+    /// (`math::convert::cell_under`, glsl/include/convert_area.glsl): off the columns' edges,
+    /// where midpoints lie by symmetry, by ~4 float32 ulps of U in a 4k map.
+    pub const SLIVER_NUDGE: f64 = 1e-3;
+    /// Points per edge of a dual-paraboloid texel's polygon where the edge crosses the rim,
+    /// which the polygon is clipped at: no slivers there, so that the chords alone follow
+    /// z = cos θ, which bends across rim texels as much as anywhere (a sun on the equator
+    /// errs by 2.4e-6 of the map's power at 8 points, 3.8e-5 at 2: 1024 x 512 to paraboloid
+    /// 256, float64).
+    pub const PARABOLOID_RIM_STEPS: u32 = 8;
     /// Points per edge whose nearer end is within [`POLE_NEAR`] / size of the pole's axis,
     /// where great circles curve strongly in (U, z).
     pub const POLE_STEPS: u32 = 8;
     /// See [`POLE_STEPS`].
     pub const POLE_NEAR: f64 = 8.0;
-    /// Most polygon vertices: four edges of [`POLE_STEPS`] (or [`PARABOLOID_EDGE_STEPS`])
-    /// points, and three closing the polygon along a pole's line.
+    /// Most polygon vertices: four edges of [`POLE_STEPS`] (or fewer) points, and three closing the polygon along a pole's line.
     pub const MAX_VERTICES: u32 = 4 * POLE_STEPS + 3;
     const _: () = assert!(
-        PARABOLOID_EDGE_STEPS <= POLE_STEPS
-            && EDGE_STEPS <= POLE_STEPS
+        PARABOLOID_EDGE_STEPS >= 1
+            && PARABOLOID_EDGE_STEPS <= POLE_STEPS
             && RESIDUAL_EDGE_STEPS >= 1
             && RESIDUAL_EDGE_STEPS <= POLE_STEPS
+            && PARABOLOID_RIM_STEPS <= POLE_STEPS
+            && EDGE_STEPS <= POLE_STEPS
     );
     /// vec4s of limited slopes per source texel (dL/dU rgb, then dL/dz rgb), the layout of
     /// the buffer convert_slopes.comp writes and convert_area.comp reads.

@@ -234,16 +234,6 @@ pub fn paraboloid_source_halves(width: u32, height: u32, size: u32) -> bool {
         && PI / f64::from(height / 2) <= finest
 }
 
-/// Points per edge of a paraboloid texel of side `size`'s polygon where the source is a
-/// residual, its lights taken out: `area::RESIDUAL_EDGE_STEPS` from
-/// `area::RESIDUAL_EDGE_MIN_SIZE` up, else `area::PARABOLOID_EDGE_STEPS`.
-pub fn residual_edge_points(size: u32) -> u32 {
-    match size >= area::RESIDUAL_EDGE_MIN_SIZE {
-        true => area::RESIDUAL_EDGE_STEPS,
-        false => area::PARABOLOID_EDGE_STEPS,
-    }
-}
-
 /// Loop steps of the longest polygon walk of a `width` × `height` lat-long → `to` at `size`
 /// conversion (llvmpipe ends an invocation's loops after 65 535 steps in all): the texel with
 /// a corner on a pole, which meets the rows down to its far corner (2√2/size of a face's
@@ -323,7 +313,9 @@ pub fn area_general_texels(to: Mapping, n: u32) -> Vec<[u32; 4]> {
 /// footprint is the polygon of points along its edges there (with the pole's line where a
 /// point sits on a pole or the texel holds one; a paraboloid texel's clipped to its half, z ≥ 0
 /// or z ≤ 0), and its overlap with each source texel is integrated exactly, row band by row
-/// band, along the clipped polygon's edges (Green's theorem). Neighbouring texels share their
+/// band, along the clipped polygon's edges (Green's theorem); a paraboloid's chords inside
+/// its disc add their slivers ([`sliver`], each to the source texel under its curve's
+/// midpoint, [`area::PARABOLOID_EDGE_STEPS`]). Neighbouring texels share their
 /// points bit for bit, so the polygons tile the plane: every source texel's power lands in
 /// the output, once. Shared edges are split at band and column lines from a canonical
 /// endpoint order, so both sides compute the same pieces (glsl/convert_area.comp is the
@@ -368,18 +360,18 @@ pub fn latlong_area_points(
                     texels.push(sample_nearest(map, d).map(|x| x as f32));
                     continue;
                 }
-                let mut poly = area_polygon(to, layer, i, j, size, w, world_to_file, edge_points);
+                let mut f = area_polygon(to, layer, i, j, size, w, world_to_file, edge_points);
                 if to == Mapping::DualParaboloid {
-                    poly = cut(&poly, 0.0, layer == 0);
+                    f.poly = cut(&f.poly, 0.0, layer == 0);
                 }
-                if poly.len() < 3 {
+                if f.poly.len() < 3 {
                     // Inside the disc by less than the chords' error.
                     let c = rim_nearest(ow, oh, layer, i, j);
                     let d = world_to_file * to.coord_to_dir(c);
                     texels.push(sample_nearest(map, d).map(|x| x as f32));
                     continue;
                 }
-                texels.push(area_mean(&poly, w, h, cell));
+                texels.push(area_mean(&f, w, h, cell));
             }
         }
     }
@@ -454,9 +446,99 @@ pub fn area_slopes(map: &EnvMap) -> Vec<[[f64; 3]; 2]> {
     out
 }
 
+/// A chord's sliver ([`area::PARABOLOID_EDGE_STEPS`]): the signed area in the (U, z) plane
+/// (`scale` columns a radian) between the chord from `a` to `b` and the parabola through
+/// `a`, the curve's midpoint `m` and `b`, as ∫ z dU along a → b adds it to the polygon's:
+/// (2/3)·(ΔU·δz − Δz·δU), δ the midpoint's offset from the chord's. U differences are the
+/// angles between the points' (−z, x), so that no column count rounds them. Taken from the
+/// lesser of `a` and `b` (their coordinates in order) and signed, so that the two texels
+/// that share the chord add opposite amounts (glsl/include/convert_area.glsl's `sliver`).
+pub(crate) fn sliver(a: DVec3, m: DVec3, b: DVec3, scale: f64) -> f64 {
+    let fwd = (a.x, a.y, a.z) <= (b.x, b.y, b.z);
+    let (p, q) = if fwd { (a, b) } else { (b, a) };
+    let angle = |u: DVec3, v: DVec3| (u.x * v.z - u.z * v.x).atan2(u.z * v.z + u.x * v.x);
+    let du = angle(p, q) * scale;
+    let du_mid = angle(p, m) * scale - 0.5 * du;
+    let dz_mid = m.y - 0.5 * (p.y + q.y);
+    let area = 2.0 / 3.0 * (du * dz_mid - (q.y - p.y) * du_mid);
+    if fwd {
+        area
+    } else {
+        -area
+    }
+}
+
+/// Whether direction `d` lies on a pole (the lat-long's Y axis), where U is undefined.
+fn on_pole(d: DVec3) -> bool {
+    d.x == 0.0 && d.z == 0.0
+}
+
+/// The source texel (row, column) of a `w` × `h` lat-long map that takes the sliver whose
+/// curve's midpoint is `d`: its row the band (between [`band_edge`]s, as the clip's) that
+/// holds z, its U nudged by `area::SLIVER_NUDGE` columns, so that a midpoint on a column's
+/// edge by symmetry (x = ±0 on the seam, where atan's sign may differ in float32) lands in
+/// one column in both twins.
+fn cell_under(d: DVec3, w: i64, h: i64) -> (i64, i64) {
+    let u = d.x.atan2(-d.z) * w as f64 / std::f64::consts::TAU + area::SLIVER_NUDGE;
+    let z = d.y.clamp(-1.0, 1.0);
+    let mut row = ((z.acos() / PI * h as f64).floor() as i64).clamp(0, h - 1);
+    if row > 0 && z > band_edge(row, h) {
+        row -= 1;
+    } else if row < h - 1 && z <= band_edge(row + 1, h) {
+        row += 1;
+    }
+    (row, (u.floor() as i64).rem_euclid(w))
+}
+
+/// A texel's footprint in the (U, z) plane ([`area_polygon`]): its polygon and its chords'
+/// slivers, each with the direction whose source texel takes it.
+pub(crate) struct Footprint {
+    pub poly: Vec<[f64; 2]>,
+    pub slivers: Vec<(DVec3, f64)>,
+}
+
+/// Points along an edge of a `to` texel of side `n` (its ends `e` in integer texel
+/// coordinates, `ends` their directions), and whether its chords take slivers: on a
+/// paraboloid, where both ends lie in the disc, slivers, with [`area::POLE_STEPS`] chords
+/// where its nearer end is near the pole's axis (where z = cos θ bends most) and
+/// `edge_points` elsewhere; [`area::PARABOLOID_RIM_STEPS`] points without slivers where an
+/// end lies outside; a cube's [`area::EDGE_STEPS`], or [`area::POLE_STEPS`] near a pole.
+/// Decided from the edge alone, so that both texels that share it agree.
+fn edge_steps(
+    to: Mapping,
+    n: u32,
+    e: [(u32, u32); 2],
+    ends: [DVec3; 2],
+    edge_points: u32,
+) -> (u32, bool) {
+    let reach = ends[0].x.hypot(ends[0].z).min(ends[1].x.hypot(ends[1].z));
+    let near = reach < area::POLE_NEAR / n as f64;
+    if to != Mapping::DualParaboloid {
+        return (
+            if near {
+                area::POLE_STEPS
+            } else {
+                area::EDGE_STEPS
+            },
+            false,
+        );
+    }
+    let inside = |(a, b): (u32, u32)| {
+        let (s, t, n) = (2 * a as i64 - n as i64, 2 * b as i64 - n as i64, n as i64);
+        s * s + t * t <= n * n
+    };
+    match (inside(e[0]) && inside(e[1]), near) {
+        (true, true) => (area::POLE_STEPS, true),
+        (true, false) => (edge_points, true),
+        (false, true) => (area::POLE_STEPS, false),
+        (false, false) => (area::PARABOLOID_RIM_STEPS, false),
+    }
+}
+
 /// The footprint of texel (face, i, j) of a `to` map of side `n` (a cube or a dual
-/// paraboloid) in the (U, z) plane of a `w`-wide lat-long map: at most
-/// [`area::MAX_VERTICES`] vertices, U unwrapped continuously from the first point.
+/// paraboloid) in the (U, z) plane of a `w`-wide lat-long map: a polygon of at most
+/// [`area::MAX_VERTICES`] vertices, U unwrapped continuously from the first point, and its
+/// slivers ([`edge_steps`]).
 #[allow(clippy::too_many_arguments)]
 fn area_polygon(
     to: Mapping,
@@ -467,12 +549,7 @@ fn area_polygon(
     w: i64,
     world_to_file: DMat3,
     edge_points: u32,
-) -> Vec<[f64; 2]> {
-    let m = if to == Mapping::DualParaboloid {
-        edge_points
-    } else {
-        area::EDGE_STEPS
-    };
+) -> Footprint {
     // Boundary points: the corners and m − 1 points along each edge (straight lines in the
     // map's (s, t): great circles for a cube, circles for a paraboloid), from integer
     // coordinates so that the neighbour sharing an edge computes the same points.
@@ -485,27 +562,37 @@ fn area_polygon(
         };
         world_to_file * to.coord_to_dir(c)
     };
+    let scale = w as f64 / std::f64::consts::TAU;
     let mut ds = Vec::with_capacity(area::MAX_VERTICES as usize);
+    let mut slivers = Vec::new();
     for k in 0..4 {
         let (a0, b0) = steps[k];
         let (a1, b1) = steps[(k + 1) % 4];
-        // Edges near a pole curve strongly in (U, z): more points there, chosen from the
-        // edge's own ends so that both texels that share it agree.
-        let (pa, pb) = (point(i + a0, j + b0, 1), point(i + a1, j + b1, 1));
-        let near = pa.x.hypot(pa.z).min(pb.x.hypot(pb.z)) < area::POLE_NEAR / n as f64;
-        let m = if near { area::POLE_STEPS } else { m };
+        let e = [(i + a0, j + b0), (i + a1, j + b1)];
+        let ends = [point(e[0].0, e[0].1, 1), point(e[1].0, e[1].1, 1)];
+        let (m, with_slivers) = edge_steps(to, n, e, ends, edge_points);
+        let at = |q: u32, m: u32| {
+            point(
+                e[0].0 * (m - q) + e[1].0 * q,
+                e[0].1 * (m - q) + e[1].1 * q,
+                m,
+            )
+        };
         for q in 0..m {
-            let a = (i + a0) * (m - q) + (i + a1) * q;
-            let b = (j + b0) * (m - q) + (j + b1) * q;
-            ds.push(point(a, b, m));
+            let (a, b) = (at(q, m), at(q + 1, m));
+            ds.push(a);
+            // The chord from point q to q + 1; its curve's midpoint is point 2q + 1 of 2m. A
+            // chord from a pole is a meridian, and the polygon meets the pole's line there.
+            if with_slivers && !on_pole(a) && !on_pole(b) {
+                let mid = at(2 * q + 1, 2 * m);
+                slivers.push((mid, sliver(a, mid, b, scale)));
+            }
         }
     }
     let count = ds.len();
-    let scale = w as f64 / std::f64::consts::TAU;
     let wf = w as f64;
     let wrap = |d: f64| d - wf * (d / wf).round();
     // U of each point, unwrapped against the previous point off the pole.
-    let on_pole = |d: DVec3| d.x == 0.0 && d.z == 0.0;
     let mut us = vec![0.0f64; count];
     let mut prev: Option<f64> = None;
     for k in 0..count {
@@ -551,13 +638,14 @@ fn area_polygon(
             poly.push([first, zp]);
         }
     }
-    poly
+    Footprint { poly, slivers }
 }
 
 /// The mean of the reconstructed source `cell(row, col)` over polygon `poly` in the (U, z)
 /// plane of a `w` × `h` lat-long map (U may run past [0, w): columns wrap): the pieces
 /// [`area_walk`] finds, summed.
-fn area_mean(poly: &[[f64; 2]], w: i64, h: i64, cell: impl Fn(i64, i64) -> Cell) -> [f32; 3] {
+fn area_mean(f: &Footprint, w: i64, h: i64, cell: impl Fn(i64, i64) -> Cell) -> [f32; 3] {
+    let poly = &f.poly;
     // Sums of (L − L0), as the GLSL (where a constant map then comes out exact). L0 is the
     // least, per channel, of the texels under the polygon's points: a texel that merely
     // touches the footprint may be a sun 1e5 × the mean, whose cancellation would cost float32
@@ -577,6 +665,15 @@ fn area_mean(poly: &[[f64; 2]], w: i64, h: i64, cell: impl Fn(i64, i64) -> Cell)
         }
         den += area;
     });
+    // The slivers: each its area at the mean of the source texel under its curve's midpoint.
+    for &(d, area) in &f.slivers {
+        let (row, col) = cell_under(d, w, h);
+        let t = cell(row, col);
+        for ch in 0..3 {
+            num[ch] += (t.l[ch] - l0[ch]) * area;
+        }
+        den += area;
+    }
     if den == 0.0 {
         return l0.map(|x| x as f32);
     }

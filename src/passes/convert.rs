@@ -33,11 +33,11 @@ pub struct ConvertOptions {
     /// output texels are then the means of the source texels under them (a box
     /// reconstruction), and a bright texel stays within its own footprint.
     pub nearest: bool,
-    /// Points per edge of a dual-paraboloid texel's footprint polygon in the area conversion,
-    /// away from the poles (which take `area::POLE_STEPS`); 1 to that. `None`:
-    /// `area::PARABOLOID_EDGE_STEPS`. Fewer are faster and keep power less well where suns
-    /// lie in rim texels (1024 × 512 with suns at the poles and seam to 256: 9.9e-6 at 8, 8.7e-5
-    /// at 2; tests/convert.rs). Other conversions ignore it.
+    /// Chords per edge of a dual-paraboloid texel's footprint polygon in the area conversion
+    /// where both of the edge's ends lie in the disc away from the poles, each with its sliver
+    /// (`area::PARABOLOID_EDGE_STEPS`, the default where `None`; 1 to `area::POLE_STEPS`).
+    /// Power is kept at any count; more chords only place the slivers' areas more finely
+    /// among the source texels, and cost time. Other conversions ignore it.
     pub edge_points: Option<u32>,
 }
 
@@ -87,13 +87,13 @@ impl ConvertOptions {
     }
 
     /// The same, for a FIS chain's paraboloid (these options' size) converted from the
-    /// light-free residual of a `src` map: the residual's points per texel edge (no sun for
-    /// the rim's chords to misplace, `math::convert::residual_edge_points`) and, unless a
-    /// lat-long converts by exact areas, samples at the chain's rate
+    /// light-free residual of a `src` map: the residual's chords per texel edge
+    /// (`area::RESIDUAL_EDGE_STEPS`: no sun for a sliver to misplace) and, unless a lat-long
+    /// converts by exact areas, samples at the chain's rate
     /// ([`Converter::chain_supersampling`]).
     pub fn for_residual_chain(self, src: (Mapping, u32, u32)) -> Self {
         let size = self.size;
-        let opts = self.with_edge_points(Some(crate::math::convert::residual_edge_points(size)));
+        let opts = self.with_edge_points(Some(area::RESIDUAL_EDGE_STEPS));
         match src.0 {
             Mapping::LatLong => opts,
             _ => opts.with_supersample(Some(Converter::chain_supersampling(src, size))),

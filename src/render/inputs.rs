@@ -9,7 +9,6 @@ use super::Job;
 use crate::error::Result;
 use crate::gpu::{Buffer, Context, Recorder, Usage};
 use crate::math::brdf::Brdf;
-use crate::math::convert::residual_edge_points;
 use crate::math::filter::Kernel;
 use crate::math::sh::Window;
 use crate::math::Mapping;
@@ -382,15 +381,14 @@ pub(super) fn record(
     })
 }
 
-/// The paraboloid's conversion options as `lit` leaves them: a residual holds no sun for the
-/// rim's chords to misplace, so fewer points, and a sampled conversion may take the chain's
-/// rate (as predicted for the pipeline built meanwhile, unless the lobes were too narrow for
+/// The paraboloid's conversion options as `lit` leaves them: a residual holds no sun for a
+/// sliver to misplace, so fewer chords (`area::RESIDUAL_EDGE_STEPS`), and a sampled
+/// conversion may take the chain's rate (as predicted for the pipeline built meanwhile, unless the lobes were too narrow for
 /// the lights found, which leaves them in the chain: then the general rate).
 pub(super) fn dp_convert_options(opts: &ConvertOptions, lit: &Lit) -> ConvertOptions {
     let residual = lit.dp || lit.below_threshold;
-    let opts = opts.with_edge_points(residual.then(|| residual_edge_points(opts.size)));
     match residual {
-        true => opts,
+        true => opts.with_edge_points(Some(crate::abi::area::RESIDUAL_EDGE_STEPS)),
         false => opts.with_supersample(None),
     }
 }

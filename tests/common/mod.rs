@@ -83,11 +83,10 @@ pub fn dp_f64(env: &envlight::EnvMap, size: u32) -> envlight::EnvMap {
 }
 
 /// [`dp_f64`] of a residual, its lights taken out, as a render converts it for its chain
-/// (`math::convert::residual_edge_points` per texel edge).
+/// (`area::RESIDUAL_EDGE_STEPS` chords per texel edge).
 #[allow(dead_code)]
 pub fn dp_f64_residual(residual: &envlight::EnvMap, size: u32) -> envlight::EnvMap {
-    let points = envlight::math::convert::residual_edge_points(size);
-    dp_f64_points(residual, size, points)
+    dp_f64_points(residual, size, abi::area::RESIDUAL_EDGE_STEPS)
 }
 
 /// [`dp_f64`] with `points` per paraboloid texel edge in the area conversion.

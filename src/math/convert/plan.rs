@@ -6,7 +6,7 @@
 //! handful of texels and their slopes per output texel. Weights are the float64 walk's, merged
 //! per source texel and rounded once to float32.
 
-use super::{area_polygon, area_walk, cut, point_cells, rim_nearest, Mapping};
+use super::{area_polygon, area_walk, cell_under, cut, point_cells, rim_nearest, Mapping};
 use crate::abi::area;
 use crate::math::envmap::EnvMap;
 use glam::DMat3;
@@ -76,25 +76,31 @@ fn texel_entries(
     if !to.texel_in_domain(ow, oh, i, j) {
         return nearest(out);
     }
-    let mut poly = area_polygon(to, layer, i, j, size, w, world_to_file, edge_points);
+    let mut f = area_polygon(to, layer, i, j, size, w, world_to_file, edge_points);
     if to == Mapping::DualParaboloid {
-        poly = cut(&poly, 0.0, layer == 0);
+        f.poly = cut(&f.poly, 0.0, layer == 0);
     }
+    let poly = &f.poly;
     if poly.len() < 3 {
         return nearest(out);
     }
     let mut cells: Vec<((i64, i64), [f64; 3])> = Vec::with_capacity(16);
     let mut den = 0.0;
-    area_walk(&poly, w, h, |row, col, m| {
+    let mut add = |row, col, m: [f64; 3]| {
         den += m[0];
         match cells.iter_mut().find(|(c, _)| *c == (row, col)) {
             Some((_, s)) => (0..3).for_each(|k| s[k] += m[k]),
             None => cells.push(((row, col), m)),
         }
-    });
+    };
+    area_walk(poly, w, h, &mut add);
+    for &(d, area) in &f.slivers {
+        let (row, col) = cell_under(d, w, h);
+        add(row, col, [area, 0.0, 0.0]);
+    }
     if den == 0.0 {
         // No area: the texel under its first point (the twin takes the least under all).
-        let (row, col) = point_cells(&poly, w, h).next().unwrap_or((0, 0));
+        let (row, col) = point_cells(poly, w, h).next().unwrap_or((0, 0));
         out.push(entry(row, col, [1.0, 0.0, 0.0]));
         return;
     }
