@@ -423,11 +423,11 @@ fn halved_residual_costs_little_against_the_whole() {
 }
 
 /// The render builds the paraboloid's conversion pipelines (the fast path and the general
-/// walk's list) before the lights are extracted, specialised on the residual's chords per
-/// texel edge where the chain is to take the lights; the record takes the same ones, so one
-/// of each is built: GGX α 0.3 with 64 samples (a paraboloid of 128) on the sky with its sun
-/// (a residual), on a smooth map with no texel above the lights' threshold (the whole map,
-/// as sunless), and with the lights left in the map (the default's chords).
+/// walk's list) before the lights are extracted, specialised on the chords per texel edge;
+/// the record takes the same ones, so one of each is built: GGX α 0.3 with 64 samples (a
+/// paraboloid of 128) on the sky with its sun (a residual), on a smooth map with no texel
+/// above the lights' threshold (the whole map, as sunless), and with the lights left in the
+/// map.
 #[test]
 fn the_paraboloid_pipeline_built_early_is_the_one_recorded() {
     use envlight::scene::LightsMode;

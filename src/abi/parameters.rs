@@ -547,9 +547,6 @@ pub mod area {
     /// (9.8e-2 at 1; the sun sky 512 × 256 to 128², against 8 chords; 1.9e-3 and 4.6e-3 from
     /// 1024 × 512).
     pub const PARABOLOID_EDGE_STEPS: u32 = 2;
-    /// Chords per edge, as [`PARABOLOID_EDGE_STEPS`], where the source is a residual, its
-    /// lights taken out (FIS's chain): no sun for a sliver to misplace, so one chord.
-    pub const RESIDUAL_EDGE_STEPS: u32 = 1;
     /// Columns the U of a sliver's curve midpoint is moved by before its source texel is found
     /// (`math::convert::cell_under`, glsl/include/convert_area.glsl): off the columns' edges,
     /// where midpoints lie by symmetry, by ~4 float32 ulps of U in a 4k map.
@@ -570,8 +567,6 @@ pub mod area {
     const _: () = assert!(
         PARABOLOID_EDGE_STEPS >= 1
             && PARABOLOID_EDGE_STEPS <= POLE_STEPS
-            && RESIDUAL_EDGE_STEPS >= 1
-            && RESIDUAL_EDGE_STEPS <= POLE_STEPS
             && PARABOLOID_RIM_STEPS <= POLE_STEPS
             && EDGE_STEPS <= POLE_STEPS
     );

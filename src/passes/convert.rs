@@ -87,16 +87,15 @@ impl ConvertOptions {
     }
 
     /// The same, for a FIS chain's paraboloid (these options' size) converted from the
-    /// light-free residual of a `src` map: the residual's chords per texel edge
-    /// (`area::RESIDUAL_EDGE_STEPS`: no sun for a sliver to misplace) and, unless a lat-long
-    /// converts by exact areas, samples at the chain's rate
-    /// ([`Converter::chain_supersampling`]).
+    /// light-free residual of a `src` map: unless a lat-long converts by exact areas, samples
+    /// at the chain's rate ([`Converter::chain_supersampling`]). The chords per texel edge
+    /// stay the default's, so that a plan made for the residual also serves the whole map
+    /// where the lights found stay in it (a render's lobes too narrow for them).
     pub fn for_residual_chain(self, src: (Mapping, u32, u32)) -> Self {
         let size = self.size;
-        let opts = self.with_edge_points(Some(area::RESIDUAL_EDGE_STEPS));
         match src.0 {
-            Mapping::LatLong => opts,
-            _ => opts.with_supersample(Some(Converter::chain_supersampling(src, size))),
+            Mapping::LatLong => self,
+            _ => self.with_supersample(Some(Converter::chain_supersampling(src, size))),
         }
     }
 }

@@ -381,14 +381,13 @@ pub(super) fn record(
     })
 }
 
-/// The paraboloid's conversion options as `lit` leaves them: a residual holds no sun for a
-/// sliver to misplace, so fewer chords (`area::RESIDUAL_EDGE_STEPS`), and a sampled
+/// The paraboloid's conversion options as `lit` leaves them: from a residual a sampled
 /// conversion may take the chain's rate (as predicted for the pipeline built meanwhile, unless the lobes were too narrow for
 /// the lights found, which leaves them in the chain: then the general rate).
 pub(super) fn dp_convert_options(opts: &ConvertOptions, lit: &Lit) -> ConvertOptions {
     let residual = lit.dp || lit.below_threshold;
     match residual {
-        true => opts.with_edge_points(Some(crate::abi::area::RESIDUAL_EDGE_STEPS)),
+        true => *opts,
         false => opts.with_supersample(None),
     }
 }

@@ -83,10 +83,10 @@ pub fn dp_f64(env: &envlight::EnvMap, size: u32) -> envlight::EnvMap {
 }
 
 /// [`dp_f64`] of a residual, its lights taken out, as a render converts it for its chain
-/// (`area::RESIDUAL_EDGE_STEPS` chords per texel edge).
+/// (the default's chords per texel edge).
 #[allow(dead_code)]
 pub fn dp_f64_residual(residual: &envlight::EnvMap, size: u32) -> envlight::EnvMap {
-    dp_f64_points(residual, size, abi::area::RESIDUAL_EDGE_STEPS)
+    dp_f64(residual, size)
 }
 
 /// [`dp_f64`] with `points` per paraboloid texel edge in the area conversion.
