@@ -209,25 +209,16 @@ int footprint_u(uint count, float scale, float wf, out bool pole) {
     return c_ref;
 }
 
-// The texel's footprint walked band by band (any texel: a pole on its boundary or inside it,
-// a paraboloid's rim).
-void general(uvec3 id) {
-    if (DST_MAPPING == MAPPING_DUAL_PARABOLOID && !texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy))) {
-        store_rim(id);
-        return;
-    }
-    uint face = id.z, i = id.x, j = id.y, n = pc.dst_size.x;
-    int w = int(pc.src_size.x), h = int(pc.src_size.y);
-    float wf = float(w), scale = wf / (2.0 * PI);
-
-    // The boundary points and their unwrapped U (as area_polygon in math/convert.rs).
+// The general walk's boundary points of texel (i, j) of layer `face` (side n) into ds, their
+// count returned: each edge's points as math::convert::edge_steps picks them, from the edge
+// alone; a paraboloid's edges within the disc take chords with slivers, whose areas (sl_den)
+// and areas times the source texel under each (sl_num) are summed.
+uint boundary_points(uint face, uint i, uint j, uint n, float scale, int w, int h,
+                     out vec3 sl_num, out float sl_den) {
     const uvec2 steps[4] = uvec2[4](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 1));
-    // Each edge's points as math::convert::edge_steps picks them, from the edge alone; a
-    // paraboloid's edges within the disc take chords with slivers, whose areas (sl_den) and
-    // areas times the source texel under each (sl_num) are summed here.
     uint count = 0u;
-    vec3 sl_num = vec3(0.0);
-    float sl_den = 0.0;
+    sl_num = vec3(0.0);
+    sl_den = 0.0;
     for (uint k = 0u; k < 4u; k++) {
         uvec2 e0 = uvec2(i, j) + steps[k], e1 = uvec2(i, j) + steps[(k + 1u) % 4u];
         vec3 pa = point(face, e0.x, e0.y, 1u), pb = point(face, e1.x, e1.y, 1u);
@@ -254,6 +245,24 @@ void general(uvec3 id) {
             }
         }
     }
+    return count;
+}
+
+// The texel's footprint walked band by band (any texel: a pole on its boundary or inside it,
+// a paraboloid's rim).
+void general(uvec3 id) {
+    if (DST_MAPPING == MAPPING_DUAL_PARABOLOID && !texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy))) {
+        store_rim(id);
+        return;
+    }
+    uint face = id.z, i = id.x, j = id.y, n = pc.dst_size.x;
+    int w = int(pc.src_size.x), h = int(pc.src_size.y);
+    float wf = float(w), scale = wf / (2.0 * PI);
+
+    // The boundary points and their unwrapped U (as area_polygon in math/convert.rs).
+    vec3 sl_num;
+    float sl_den;
+    uint count = boundary_points(face, i, j, n, scale, w, h, sl_num, sl_den);
     bool pole = false;
     int c_ref = footprint_u(count, scale, wf, pole);
     npoly = 0u;

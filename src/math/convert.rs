@@ -280,8 +280,8 @@ pub fn area_general_texel(to: Mapping, layer: u32, i: u32, j: u32, n: u32) -> bo
 /// The texels of a cube or dual paraboloid of side `n` that [`area_general_texel`] leaves to
 /// the general walk, as (i, j, layer, 0), layer by layer and row by row: on a paraboloid, only
 /// those that overlap its disc. Those wholly outside it take the nearest rim texel's copy
-/// in the fast path's dispatch: in the general walk's (whose module holds the clip's
-/// arrays) their lanes cost 8 times the rims' walks at 1024 × 512 to 512².
+/// in the fast path's dispatch, whose module lacks the clip's arrays that make every lane
+/// of the general walk's dear.
 pub fn area_general_texels(to: Mapping, n: u32) -> Vec<[u32; 4]> {
     let mut list = Vec::new();
     for layer in 0..to.layers() {
