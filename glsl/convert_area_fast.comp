@@ -107,7 +107,7 @@ void main() {
         uvec2 ab = e0 * (m - q) + e1 * q;
         vec3 d = k == 0u ? d_first : point(face, ab.x, ab.y, m);
         dirs[k] = d;
-        v[k] = vec2(local_u(d, sr, cr) * scale, d.y);
+        v[k] = vec2(local_u_near(d, sr, cr) * scale, d.y);
     }
     // A paraboloid's chords' slivers (its fast texels' edges all lie in the disc, away from
     // the poles): their areas, and their areas times the source texel under each.
@@ -119,8 +119,10 @@ void main() {
         uvec2 e0 = uvec2(i, j) + steps[e], e1 = uvec2(i, j) + steps[(e + 1u) % 4u];
         uvec2 mid = e0 * (2u * (m - q) - 1u) + e1 * (2u * q + 1u);
         vec3 dm = point(face, mid.x, mid.y, 2u * m);
-        float s = sliver(dirs[k], dm, dirs[(k + 1u) % FAST_POINTS], scale);
-        sl_num += s * sliver_texel(dm, c_ref, sr, cr, scale, w, h);
+        uint k1 = (k + 1u) % FAST_POINTS;
+        vec2 vm = vec2(local_u_near(dm, sr, cr) * scale, dm.y);
+        float s = sliver_local(dirs[k], dirs[k1], v[k], vm, v[k1]);
+        sl_num += s * cell_value(vm, c_ref, w, h);
         sl_den += s;
     }
 #endif

@@ -58,6 +58,10 @@ int wrap_column(int c, int w) {
 bool on_pole(vec3 d) { return d.x == 0.0 && d.z == 0.0; }
 
 bool before(vec2 a, vec2 b) { return a.x < b.x || (a.x == b.x && a.y <= b.y); }
+// Directions in their coordinates' order (twin: the tuples'): a chord's canonical order.
+bool before(vec3 a, vec3 b) {
+    return a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z <= b.z)));
+}
 
 // src clipped to z >= bound (above) or z <= bound, into dst; returns the vertex count. A
 // macro, so that the arrays stay globals instead of copies.
@@ -89,11 +93,32 @@ ivec2 rows_met(float zmin, float zmax, int h) {
     return ivec2(r0, r1);
 }
 
+// atan(y / x) for |y| ≤ x (within 45°): one half-angle step (|t| ≤ tan 22.5°), then its odd
+// series to t¹⁵ (error below 4e-8 rad at 45°, 1e-13 at 22°, the most the fast path's points
+// turn from their reference; area::FAST_MIN_SOURCE_WIDTH): cheaper on llvmpipe than GLSL's two-argument atan, whose
+// quadrant logic and reduction it runs for every lane, and nearer the true angle (lavapipe's
+// atan errs by ~1e-6 rad), so that the fast path and the general walk place the points they
+// share alike.
+float atan_near(float y, float x) {
+    float t = y / x;
+    t = t / (1.0 + sqrt(1.0 + t * t));
+    float t2 = t * t;
+    return 2.0 * t * (1.0 + t2 * (-1.0 / 3.0 + t2 * (1.0 / 5.0 + t2 * (-1.0 / 7.0 + t2 * (1.0 / 9.0
+        + t2 * (-1.0 / 11.0 + t2 * (1.0 / 13.0 + t2 * (-1.0 / 15.0))))))));
+}
+
+// local_u for a direction within 45° of the reference azimuth (the fast path's points, within
+// a column and a texel's reach of it), without local_u's test of that.
+float local_u_near(vec3 d, float sr, float cr) {
+    return atan_near(d.x * cr + d.z * sr, -d.z * cr + d.x * sr);
+}
+
 // The azimuth of direction d from the azimuth whose sine and cosine are sr and cr, in
 // (−π, π]: the direction turned by that azimuth, then atan, so that a point near it comes out
 // to ~1e-7 of its distance from it (atan of d itself would round it to ~1e-7 of π).
 float local_u(vec3 d, float sr, float cr) {
-    return atan(d.x * cr + d.z * sr, -d.z * cr + d.x * sr);
+    float y = d.x * cr + d.z * sr, x = -d.z * cr + d.x * sr;
+    return abs(y) <= x ? atan_near(y, x) : atan2_precise(y, x);
 }
 
 // The column under direction d (`scale` columns a radian), the reference U is counted from
@@ -109,7 +134,18 @@ int reference_column(vec3 d, float scale, out float sr, out float cr) {
 // The azimuth from direction u to direction v, in (−π, π]: the angle between their (−z, x),
 // which no column count rounds.
 float azimuth_between(vec3 u, vec3 v) {
-    return atan(u.x * v.z - u.z * v.x, u.z * v.z + u.x * v.x);
+    float y = u.x * v.z - u.z * v.x, x = u.z * v.z + u.x * v.x;
+    return abs(y) <= x ? atan_near(y, x) : atan2_precise(y, x);
+}
+
+// sliver() from the (U, z) of the chord's ends and its curve's midpoint, their U from one
+// reference column (the fast path's; the ends' directions a and b give the canonical order).
+float sliver_local(vec3 a, vec3 b, vec2 va, vec2 vm, vec2 vb) {
+    bool fwd = before(a, b);
+    vec2 p = fwd ? va : vb, q = fwd ? vb : va;
+    vec2 d = q - p, o = vm - 0.5 * (p + q);
+    float s = (2.0 / 3.0) * (d.x * o.y - d.y * o.x);
+    return fwd ? s : -s;
 }
 
 // A chord's sliver (twin: math::convert::sliver; AREA_PARABOLOID_EDGE_STEPS): the signed area
@@ -118,13 +154,26 @@ float azimuth_between(vec3 u, vec3 v) {
 // (2/3)·(ΔU·δz − Δz·δU), δ the midpoint's offset from the chord's. Taken from the lesser of a
 // and b and signed, so that the two texels sharing the chord add opposite amounts.
 float sliver(vec3 a, vec3 m, vec3 b, float scale) {
-    bool fwd = a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z <= b.z)));
+    bool fwd = before(a, b);
     vec3 p = fwd ? a : b, q = fwd ? b : a;
-    float du = azimuth_between(p, q) * scale;
-    float du_mid = azimuth_between(p, m) * scale - 0.5 * du;
-    float dz_mid = m.y - 0.5 * (p.y + q.y);
-    float s = (2.0 / 3.0) * (du * dz_mid - (q.y - p.y) * du_mid);
+    float s = sliver_local(p, q, vec2(0.0, p.y), vec2(azimuth_between(p, m) * scale, m.y),
+                           vec2(azimuth_between(p, q) * scale, q.y));
     return fwd ? s : -s;
+}
+
+// The source texel that takes a sliver whose curve's midpoint is v in the (U, z) plane, U
+// counted from column c_ref (twin: math::convert::cell_under): U nudged off the columns'
+// edges, where midpoints lie by symmetry; the row checked against the band edges the clip
+// takes (llvmpipe's acos errs by ~1e-4 rad).
+vec3 cell_value(vec2 v, int c_ref, int w, int h) {
+    int c = c_ref + int(floor(v.x + AREA_SLIVER_NUDGE));
+    int row = clamp(int(floor(acos(clamp(v.y, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
+    if (row > 0 && v.y > latlong_band_edge(row, h)) {
+        row--;
+    } else if (row < h - 1 && v.y <= latlong_band_edge(row + 1, h)) {
+        row++;
+    }
+    return texelFetch(src, ivec3(wrap_column(c, w), row, 0), 0).rgb;
 }
 
 // Whether corner (a, b) of a paraboloid of side n lies in the closed disc (integers, as
@@ -143,17 +192,9 @@ vec3 texel_under(vec2 v, int w, int h) {
 // The source texel that takes the sliver whose curve's midpoint is m (twin:
 // math::convert::cell_under), its U counted from column c_ref (whose azimuth's sine and cosine
 // are sr and cr; the column holding m or one near it), so that float32 places it to ~1e-7 of
-// a column, then nudged off the columns' edges, where midpoints lie by symmetry; its row
-// checked against the band edges the clip takes (llvmpipe's acos errs by ~1e-4 rad).
+// a column (cell_value).
 vec3 sliver_texel(vec3 m, int c_ref, float sr, float cr, float scale, int w, int h) {
-    int c = c_ref + int(floor(local_u(m, sr, cr) * scale + AREA_SLIVER_NUDGE));
-    int row = clamp(int(floor(acos(clamp(m.y, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
-    if (row > 0 && m.y > latlong_band_edge(row, h)) {
-        row--;
-    } else if (row < h - 1 && m.y <= latlong_band_edge(row + 1, h)) {
-        row++;
-    }
-    return texelFetch(src, ivec3(wrap_column(c, w), row, 0), 0).rgb;
+    return cell_value(vec2(local_u(m, sr, cr) * scale, m.y), c_ref, w, h);
 }
 
 // A paraboloid texel outside its disc: the source texel at its own half's rim nearest its

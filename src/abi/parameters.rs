@@ -580,6 +580,11 @@ pub mod area {
     /// Cube outputs at least this large take the fast path (glsl/convert_area.comp, FAST)
     /// away from the poles; smaller ones take the general walk everywhere.
     pub const FAST_MIN_SIZE: u32 = 32;
+    /// Lat-long sources at least this many columns wide take the fast path: its points' U
+    /// comes from an arctangent valid within 45° of the reference column's edge (a column,
+    /// 11.25° here, plus a fast texel's reach, 10.6° at most; glsl/include/convert_area.glsl's
+    /// `atan_near`).
+    pub const FAST_MIN_SOURCE_WIDTH: u32 = 32;
     /// On the cube faces that hold the poles, the texels within this many texels of the
     /// centre (Chebyshev, from the texel's centre) take the general walk: at size ≥
     /// [`FAST_MIN_SIZE`] every texel with a corner nearer the pole's axis than

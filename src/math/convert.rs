@@ -450,7 +450,8 @@ pub fn area_slopes(map: &EnvMap) -> Vec<[[f64; 3]; 2]> {
 /// (`scale` columns a radian) between the chord from `a` to `b` and the parabola through
 /// `a`, the curve's midpoint `m` and `b`, as ∫ z dU along a → b adds it to the polygon's:
 /// (2/3)·(ΔU·δz − Δz·δU), δ the midpoint's offset from the chord's. U differences are the
-/// angles between the points' (−z, x), so that no column count rounds them. Taken from the
+/// angles between the points' (−z, x), so that no column count rounds them (the GPU's fast
+/// path counts U from a column next to the texel instead, as precise in float32). Taken from the
 /// lesser of `a` and `b` (their coordinates in order) and signed, so that the two texels
 /// that share the chord add opposite amounts (glsl/include/convert_area.glsl's `sliver`).
 pub(crate) fn sliver(a: DVec3, m: DVec3, b: DVec3, scale: f64) -> f64 {

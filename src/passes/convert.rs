@@ -138,11 +138,14 @@ fn slopes_bytes(w: u32, h: u32) -> u64 {
     w as u64 * h as u64 * 16 * crate::abi::area::SLOPE_VEC4S as u64
 }
 
-/// Whether an area conversion with `opts` takes the fast path and a list for the general
-/// walk: the fast path's windows sit where the poles are for orientations that keep the Y
-/// axis (all that Orientation makes).
-fn split_area(opts: &ConvertOptions) -> Result<bool> {
+/// Whether an area conversion with `opts` from a lat-long `src_width` texels wide takes the
+/// fast path and a list for the general walk: the fast path's windows sit where the poles are
+/// for orientations that keep the Y axis (all that Orientation makes), and its angles from a
+/// column's edge stay within 45° only where columns are narrow enough
+/// (`area::FAST_MIN_SOURCE_WIDTH`).
+fn split_area(opts: &ConvertOptions, src_width: u32) -> Result<bool> {
     Ok(matches!(opts.to, Mapping::Cube | Mapping::DualParaboloid)
+        && src_width >= area::FAST_MIN_SOURCE_WIDTH
         && opts.orientation.checked_world_to_file()?.y_axis.abs() == glam::DVec3::Y)
 }
 
@@ -281,7 +284,7 @@ impl Converter {
         if !self.uses_area(src, opts) {
             return self.pipeline(src.0, opts.to).map(|_| ());
         }
-        self.prepare_area(opts.to, split_area(opts)?, edge_points(opts)?)
+        self.prepare_area(opts.to, split_area(opts, src.1)?, edge_points(opts)?)
     }
 
     /// The slopes pipeline and the area pipelines to `to`: the cube's fast path and list
@@ -435,7 +438,7 @@ impl Converter {
             return poison::image(rec, PassId::Convert, &dst.image, 0..1);
         }
         if self.uses_area((src.mapping, src.width, src.height), opts) {
-            let split = split_area(opts)?;
+            let split = split_area(opts, src.width)?;
             self.record_area(rec, src, dst, &push, (w, h), (split, points))?;
             return poison::image(rec, PassId::Convert, &dst.image, 0..1);
         }
