@@ -82,30 +82,41 @@ bool before(vec3 a, vec3 b) {
     out = k_; \
 }
 
+// The row whose band holds z (edge row + 1 < z <= edge row, the clip's band edges), by the
+// band edge nearest acos's estimate (llvmpipe's acos errs by ~1e-4 rad, under half a row up
+// to 15 000 rows).
+int row_of(float z, int h) {
+    int edge = int(round(acos(clamp(z, -1.0, 1.0)) / PI * float(h)));
+    return clamp(z > latlong_band_edge(edge, h) ? edge - 1 : edge, 0, h - 1);
+}
+
 // The rows a polygon spanning z in [zmin, zmax] meets, by the same band edges as the clip:
-// row r0 holds zmax (edge r0 + 1 < zmax <= edge r0), row r1 zmin (edge r1 + 1 <= zmin <
-// edge r1), each decided by the band edge nearest acos's estimate (llvmpipe's acos errs by
-// ~1e-4 rad, under half a row up to 15 000 rows), as cell_value.
+// row r0 holds zmax (row_of), row r1 zmin with its band's top edge open (edge r1 + 1 <= zmin
+// < edge r1).
 ivec2 rows_met(float zmin, float zmax, int h) {
-    int e0 = int(round(acos(clamp(zmax, -1.0, 1.0)) / PI * float(h)));
+    int r0 = row_of(zmax, h);
     int e1 = int(round(acos(clamp(zmin, -1.0, 1.0)) / PI * float(h)));
-    int r0 = clamp(zmax > latlong_band_edge(e0, h) ? e0 - 1 : e0, 0, h - 1);
     int r1 = clamp(zmin < latlong_band_edge(e1, h) ? e1 : e1 - 1, r0, h - 1);
     return ivec2(r0, r1);
 }
 
 // atan(y / x) for |y| ≤ x (within 45°): one half-angle step (|t| ≤ tan 22.5°), then its odd
 // series to t¹⁵ (error below 4e-8 rad at 45°, 1e-13 at 22°, the most the fast path's points
-// turn from their reference; area::FAST_MIN_SOURCE_WIDTH): cheaper on llvmpipe than GLSL's two-argument atan, whose
-// quadrant logic and reduction it runs for every lane, and nearer the true angle (lavapipe's
-// atan errs by ~1e-6 rad), so that the fast path and the general walk place the points they
-// share alike.
+// turn from their reference; area::FAST_MIN_SOURCE_WIDTH). Cheaper on llvmpipe than GLSL's
+// two-argument atan, whose quadrant logic and reduction it runs for every lane, and nearer
+// the true angle (lavapipe's atan errs by ~1e-6 rad), so that the fast path and the general
+// walk place the points they share alike.
 float atan_near(float y, float x) {
     float t = y / x;
     t = t / (1.0 + sqrt(1.0 + t * t));
     float t2 = t * t;
     return 2.0 * t * (1.0 + t2 * (-1.0 / 3.0 + t2 * (1.0 / 5.0 + t2 * (-1.0 / 7.0 + t2 * (1.0 / 9.0
         + t2 * (-1.0 / 11.0 + t2 * (1.0 / 13.0 + t2 * (-1.0 / 15.0))))))));
+}
+
+// atan(y, x) in (−π, π]: atan_near within 45° of x's axis, atan2_precise beyond.
+float atan2_near(float y, float x) {
+    return abs(y) <= x ? atan_near(y, x) : atan2_precise(y, x);
 }
 
 // local_u for a direction within 45° of the reference azimuth (the fast path's points, within
@@ -118,8 +129,7 @@ float local_u_near(vec3 d, float sr, float cr) {
 // (−π, π]: the direction turned by that azimuth, then atan, so that a point near it comes out
 // to ~1e-7 of its distance from it (atan of d itself would round it to ~1e-7 of π).
 float local_u(vec3 d, float sr, float cr) {
-    float y = d.x * cr + d.z * sr, x = -d.z * cr + d.x * sr;
-    return abs(y) <= x ? atan_near(y, x) : atan2_precise(y, x);
+    return atan2_near(d.x * cr + d.z * sr, -d.z * cr + d.x * sr);
 }
 
 // The column under direction d (`scale` columns a radian), the reference U is counted from
@@ -135,8 +145,7 @@ int reference_column(vec3 d, float scale, out float sr, out float cr) {
 // The azimuth from direction u to direction v, in (−π, π]: the angle between their (−z, x),
 // which no column count rounds.
 float azimuth_between(vec3 u, vec3 v) {
-    float y = u.x * v.z - u.z * v.x, x = u.z * v.z + u.x * v.x;
-    return abs(y) <= x ? atan_near(y, x) : atan2_precise(y, x);
+    return atan2_near(u.x * v.z - u.z * v.x, u.z * v.z + u.x * v.x);
 }
 
 // sliver() from the (U, z) of the chord's ends and its curve's midpoint, their U from one
@@ -164,13 +173,10 @@ float sliver(vec3 a, vec3 m, vec3 b, float scale) {
 
 // The source texel that takes a sliver whose curve's midpoint is v in the (U, z) plane, U
 // counted from column c_ref (twin: math::convert::cell_under): U nudged off the columns'
-// edges, where midpoints lie by symmetry; the row by the band edge the clip takes nearest
-// acos's estimate (llvmpipe's acos errs by ~1e-4 rad, under half a row up to 15 000 rows).
+// edges, where midpoints lie by symmetry; its row the band that holds z (row_of).
 vec3 cell_value(vec2 v, int c_ref, int w, int h) {
     int c = c_ref + int(floor(v.x + AREA_SLIVER_NUDGE));
-    int edge = int(round(acos(clamp(v.y, -1.0, 1.0)) / PI * float(h)));
-    int row = clamp(v.y > latlong_band_edge(edge, h) ? edge - 1 : edge, 0, h - 1);
-    return texelFetch(src, ivec3(wrap_column(c, w), row, 0), 0).rgb;
+    return texelFetch(src, ivec3(wrap_column(c, w), row_of(v.y, h), 0), 0).rgb;
 }
 
 // Whether corner (a, b) of a paraboloid of side n lies in the closed disc (integers, as
