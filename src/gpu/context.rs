@@ -20,6 +20,20 @@ const HOST_BLOCK_MAX: u64 = 64 * MB;
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
+/// Held while envlight creates or destroys an instance and device, so that no two contexts
+/// do either at once in one process. The spec lets threads create and destroy devices
+/// concurrently, but the Vulkan loader keeps every instance's devices on process-wide lists
+/// that `vkCreateDevice` walks and `vkDestroyDevice` frees from without a common lock
+/// (KhronosGroup/Vulkan-Loader#2018, present through 1.4.341; Debian 12 ships 1.3.239): one
+/// thread's teardown can free a node another thread's device creation is reading, which
+/// crashes the process. Contexts an engine adopts are its own to order.
+static LIFECYCLE: Mutex<()> = Mutex::new(());
+
+/// [`LIFECYCLE`], taken; a panic while it was held poisons nothing that it guards.
+fn lifecycle() -> MutexGuard<'static, ()> {
+    LIFECYCLE.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 mod options;
 
 pub use options::{parse_uuid, uuid_text, AdoptInfo, ContextOptions, DeviceSelector};
@@ -230,6 +244,7 @@ impl Context {
         // SAFETY: loading the system's Vulkan loader runs its initialisers; nothing else to uphold.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::NoLoader(e.to_string()))?;
         let loader_ms = lap();
+        let _lifecycle = lifecycle();
         let sink = Arc::<MessageSink>::default();
 
         let mut layers = Vec::new();
@@ -733,6 +748,7 @@ impl Drop for Shared {
             self.device.destroy_command_pool(pool, None);
             ManuallyDrop::drop(&mut self.allocator);
             if self.owns_device {
+                let _lifecycle = lifecycle();
                 self.device.destroy_device(None);
                 if let Some((di, m)) = self.debug_instance.take() {
                     di.destroy_debug_utils_messenger(m, None);
@@ -852,4 +868,58 @@ fn create_device(
         .push_next(&mut enable13);
     // SAFETY: valid physical device; the create info lives across the call.
     unsafe { instance.create_device(physical, &create, None) }.vk("creating the device")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::mpsc;
+    use std::time::Duration;
+
+    /// How long a context's creation or teardown is given to show it waits for the lock: it
+    /// takes tens of milliseconds on lavapipe, so one that ignored the lock would be done.
+    const WAITS: Duration = Duration::from_millis(1500);
+
+    fn validated() -> ContextOptions {
+        let mut o = ContextOptions::new(DeviceSelector::from_env());
+        o.validation = true;
+        o
+    }
+
+    /// Creating a context and destroying one both wait while another thread holds
+    /// [`LIFECYCLE`] (the loader's device lists are not safe to change from two threads at
+    /// once), and go on once it is let go.
+    #[test]
+    fn contexts_are_created_and_destroyed_one_at_a_time() {
+        let held = lifecycle();
+        let (tx, rx) = mpsc::channel();
+        let maker = std::thread::spawn(move || {
+            let ctx = Context::new(&validated());
+            let _ = tx.send(());
+            ctx
+        });
+        // Let go of the lock before asserting, so that a failure unwinds without deadlock.
+        let early = rx.recv_timeout(WAITS).is_ok();
+        drop(held);
+        assert!(!early, "a context was created while the lock was held");
+        rx.recv_timeout(Duration::from_secs(120))
+            .expect("creation went on once the lock was let go");
+        let ctx = maker.join().unwrap().expect("a Vulkan context");
+        let log = ctx.validation_log();
+
+        let held = lifecycle();
+        let (tx, rx) = mpsc::channel();
+        let dropper = std::thread::spawn(move || {
+            drop(ctx);
+            let _ = tx.send(());
+        });
+        let early = rx.recv_timeout(WAITS).is_ok() || log.complete();
+        drop(held);
+        assert!(!early, "a context was destroyed while the lock was held");
+        rx.recv_timeout(Duration::from_secs(120))
+            .expect("teardown went on once the lock was let go");
+        dropper.join().unwrap();
+        assert!(log.complete());
+        assert!(log.messages().is_empty(), "{:?}", log.messages());
+    }
 }
