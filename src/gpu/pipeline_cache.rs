@@ -107,13 +107,37 @@ impl DiskCache {
     }
 }
 
+/// A temporary file beside `file`, named for this process and this call: two contexts of one
+/// process closing at once each write their own before renaming.
+fn temporary_beside(file: &Path) -> PathBuf {
+    static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    file.with_extension(format!("tmp{}-{n}", std::process::id()))
+}
+
 fn write_atomically(file: &Path, data: &[u8]) -> std::io::Result<()> {
     if let Some(dir) = file.parent() {
         std::fs::create_dir_all(dir)?;
     }
-    let tmp = file.with_extension(format!("tmp{}", std::process::id()));
+    let tmp = temporary_beside(file);
     std::fs::write(&tmp, data)?;
     std::fs::rename(&tmp, file).inspect_err(|_| {
         let _ = std::fs::remove_file(&tmp);
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each write goes through a temporary file of its own, beside the cache file.
+    #[test]
+    fn each_write_has_its_own_temporary_file() {
+        let file = Path::new("/cache/pipelines-1-2-3-abc.bin");
+        let names: Vec<PathBuf> = (0..4).map(|_| temporary_beside(file)).collect();
+        for (i, a) in names.iter().enumerate() {
+            assert_eq!(a.parent(), file.parent(), "{a:?}");
+            assert!(names[i + 1..].iter().all(|b| b != a), "{names:?}");
+        }
+    }
 }
