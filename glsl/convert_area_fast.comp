@@ -1,7 +1,7 @@
 #version 460
 // ConvertArea's fast path (convert_area.comp has the method): one invocation per cube or
-// paraboloid texel away from the poles (and inside a paraboloid's disc); it also writes a
-// paraboloid's texels outside the disc, their rim texel's copy.
+// paraboloid texel away from the poles (and inside a paraboloid's disc), over the tiles that
+// hold such texels.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #include "convert_area.glsl"
@@ -76,18 +76,18 @@ vec3 edge_cell(Edge e, float c, float uc, float zlo, float zhi, float zc) {
     return acc;
 }
 
+layout(std430, set = 0, binding = BINDING_CONVERT_LIST) readonly buffer Tiles {
+    uvec4 tiles[];  // (tile column, tile row, layer, 0) of each tile holding a fast texel
+};
+
 void main() {
-    uvec3 id = gl_GlobalInvocationID;
+    // One workgroup per tile of the list (math::convert::area_tiles): the texels of the
+    // others are the general walk's, or outside a paraboloid's disc (convert_area_rim.comp).
+    uvec4 tile = tiles[gl_WorkGroupID.x];
+    uvec3 id = uvec3(tile.xy * gl_WorkGroupSize.xy + gl_LocalInvocationID.xy, tile.z);
     if (any(greaterThanEqual(id.xy, pc.dst_size))) return;
     uint face = id.z, i = id.x, j = id.y, n = pc.dst_size.x;
-    if (general_texel(face, i, j, n)) {
-        // The general walk's list leaves a paraboloid's texels outside its disc to this
-        // dispatch (math::convert::area_general_texels).
-        if (DST_MAPPING == MAPPING_DUAL_PARABOLOID && !texel_in_domain(DST_MAPPING, pc.dst_size, ivec2(id.xy))) {
-            store_rim(id);
-        }
-        return;
-    }
+    if (general_texel(face, i, j, n)) return;
     int w = int(pc.src_size.x), h = int(pc.src_size.y);
     float wf = float(w), scale = wf / (2.0 * PI);
 

@@ -100,17 +100,23 @@ macro_rules! shader_table {
                 [("DST", "MAPPING_DUAL_PARABOLOID")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
                  (CONVERT_SLOPES, TexelBuffer, Read)];
-            /// ConvertArea's fast path for cube texels away from the poles.
+            /// ConvertArea's fast path for cube texels away from the poles, over a list of tiles.
             ConvertAreaFast = "convert_area_fast", "convert_area_fast.comp", Compute,
                 [("DST", "MAPPING_CUBE")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, TexelBuffer, Read)];
+                 (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
             /// ConvertAreaParaboloid's fast path for texels inside the disc away from the poles.
             ConvertAreaFastParaboloid = "convert_area_fast_paraboloid", "convert_area_fast.comp",
                 Compute, [("DST", "MAPPING_DUAL_PARABOLOID"), ("SIDE_EDGE_POINTS", "1")],
                 ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, TexelBuffer, Read)];
+                 (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
+            /// ConvertAreaParaboloid's texels outside the disc (their rim's source texel), over
+            /// a list of tiles.
+            ConvertAreaRim = "convert_area_rim", "convert_area_rim.comp", Compute,
+                [("DST", "MAPPING_DUAL_PARABOLOID")], ConvertPush,
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
+                 (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
             /// ConvertAreaParaboloid's general walk over the texels its fast path leaves.
             ConvertAreaListParaboloid = "convert_area_list_paraboloid", "convert_area_list.comp",
                 Compute, [("DST", "MAPPING_DUAL_PARABOLOID")], ConvertPush,

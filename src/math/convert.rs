@@ -306,6 +306,38 @@ pub fn area_general_texels(to: Mapping, n: u32) -> Vec<[u32; 4]> {
     list
 }
 
+/// The workgroup tiles (`WORKGROUP_2D` texels, (tile column, tile row, layer, 0)) the split
+/// area conversion to a cube or dual paraboloid of side `n` dispatches over: first those
+/// holding a texel its fast path computes, then a paraboloid's holding a texel outside its
+/// disc (none for a cube). The fast path's cost is per tile whatever its texels do (llvmpipe
+/// runs a returned lane's straight-line code), so tiles with no fast texel, a fifth of a
+/// paraboloid's at 512², are left out; the texels outside the disc take their rim's source
+/// texel in a dispatch of their own.
+pub fn area_tiles(to: Mapping, n: u32) -> (Vec<[u32; 4]>, Vec<[u32; 4]>) {
+    let [tw, th] = crate::abi::WORKGROUP_2D;
+    let (mut fast, mut rim) = (Vec::new(), Vec::new());
+    for layer in 0..to.layers() {
+        for ty in 0..n.div_ceil(th) {
+            for tx in 0..n.div_ceil(tw) {
+                let texels = (ty * th..((ty + 1) * th).min(n))
+                    .flat_map(|j| (tx * tw..((tx + 1) * tw).min(n)).map(move |i| (i, j)));
+                let (mut has_fast, mut has_rim) = (false, false);
+                for (i, j) in texels {
+                    has_fast |= !area_general_texel(to, layer, i, j, n);
+                    has_rim |= !to.texel_in_domain(n, n, i, j);
+                }
+                if has_fast {
+                    fast.push([tx, ty, layer, 0]);
+                }
+                if has_rim {
+                    rim.push([tx, ty, layer, 0]);
+                }
+            }
+        }
+    }
+    (fast, rim)
+}
+
 /// A lat-long → cube or dual-paraboloid conversion that conserves power: each output texel
 /// holds the mean of the source over its footprint, the source reconstructed per texel as its
 /// value plus its limited slopes ([`area_slopes`]). Lat-long texels are rectangles in the
@@ -866,6 +898,48 @@ pub fn reduce_to_fit(map: &EnvMap, max_side: u32) -> Option<(EnvMap, Reduction)>
 mod reduce_tests {
     use super::*;
     use crate::math::synth::Sky;
+
+    /// The split conversion's tile lists cover every fast texel and every texel outside a
+    /// paraboloid's disc, and hold no tile without one; at 512² a paraboloid's fast path
+    /// leaves out a fifth of its tiles.
+    #[test]
+    fn tiles_cover_the_fast_and_rim_texels_and_no_more() {
+        let [tw, th] = crate::abi::WORKGROUP_2D;
+        for to in [Mapping::Cube, Mapping::DualParaboloid] {
+            for n in [13, 32, 40, 67, 128] {
+                let (fast, rim) = area_tiles(to, n);
+                let tile = |i: u32, j: u32, layer: u32| [i / tw, j / th, layer, 0];
+                let (mut want_fast, mut want_rim) = (Vec::new(), Vec::new());
+                for layer in 0..to.layers() {
+                    for j in 0..n {
+                        for i in 0..n {
+                            if !area_general_texel(to, layer, i, j, n) {
+                                want_fast.push(tile(i, j, layer));
+                            }
+                            if !to.texel_in_domain(n, n, i, j) {
+                                want_rim.push(tile(i, j, layer));
+                            }
+                        }
+                    }
+                }
+                want_fast.dedup();
+                want_fast.sort();
+                want_fast.dedup();
+                want_rim.sort();
+                want_rim.dedup();
+                let (mut fast, mut rim) = (fast.clone(), rim.clone());
+                fast.sort();
+                rim.sort();
+                assert_eq!(fast, want_fast, "{to:?} {n}: fast tiles");
+                assert_eq!(rim, want_rim, "{to:?} {n}: rim tiles");
+                assert_eq!(rim.is_empty(), to == Mapping::Cube, "{to:?} {n}");
+            }
+        }
+        let (fast, _) = area_tiles(Mapping::DualParaboloid, 512);
+        let all = 2 * (512 / tw) * (512 / th);
+        let left = 1.0 - fast.len() as f64 / all as f64;
+        assert!((0.15..0.25).contains(&left), "{left}");
+    }
 
     fn rel(a: f64, b: f64) -> f64 {
         (a - b).abs() / b.abs().max(1e-300)

@@ -205,13 +205,16 @@ pub struct Converter {
     /// Lat-long to dual paraboloid by exact footprint areas, one per count of points per
     /// texel edge (`ConvertOptions::edge_points`, a specialisation constant; index count − 1).
     area_paraboloid: [OnceLock<Pipeline>; area::POLE_STEPS as usize],
-    /// Lat-long to cube by areas in two dispatches: the fast path, then the general walk over
-    /// the texels it leaves (`math::convert::area_general_texels`).
+    /// Lat-long to cube by areas in two dispatches: the fast path over the tiles holding its
+    /// texels (`math::convert::area_tiles`), then the general walk over the texels it leaves
+    /// (`math::convert::area_general_texels`).
     area_fast: OnceLock<Pipeline>,
     area_list: OnceLock<Pipeline>,
     /// The same to a dual paraboloid, one pair per count of points per texel edge.
     area_fast_paraboloid: [OnceLock<Pipeline>; area::POLE_STEPS as usize],
     area_list_paraboloid: [OnceLock<Pipeline>; area::POLE_STEPS as usize],
+    /// A split paraboloid's texels outside its disc.
+    area_rim: OnceLock<Pipeline>,
     slopes: OnceLock<Pipeline>,
     /// The gather of a [`ConvertPlan`].
     planned: OnceLock<Pipeline>,
@@ -232,6 +235,7 @@ impl Converter {
             area_list: OnceLock::new(),
             area_fast_paraboloid: Default::default(),
             area_list_paraboloid: Default::default(),
+            area_rim: OnceLock::new(),
             slopes: OnceLock::new(),
             planned: OnceLock::new(),
             split: Default::default(),
@@ -291,10 +295,22 @@ impl Converter {
     /// where `split`, else the one walk (a paraboloid's with `points` per texel edge).
     fn prepare_area(&self, to: Mapping, split: bool, points: u32) -> Result<()> {
         self.slopes_pipeline()?;
+        if split && to == Mapping::DualParaboloid {
+            self.rim_pipeline()?;
+        }
         match split {
             true => self.area_split_pipelines(to, points).map(|_| ()),
             false => self.area_pipeline(to, points).map(|_| ()),
         }
+    }
+
+    fn rim_pipeline(&self) -> Result<&Pipeline> {
+        Pipeline::compute_once(
+            &self.area_rim,
+            &self.ctx,
+            ShaderId::ConvertAreaRim,
+            &WORKGROUP_2D,
+        )
     }
 
     fn slopes_pipeline(&self) -> Result<&Pipeline> {
@@ -567,7 +583,7 @@ impl Converter {
             )
         })?;
         let label = format!("convert latlong -> {} {w}x{h} (areas)", to.name());
-        // One invocation per output texel: the whole walk, or the fast path.
+        // One invocation per output texel: the whole walk.
         let over_map = |rec: &mut Recorder, pipeline: &Pipeline| {
             rec.dispatch(
                 pipeline,
@@ -586,23 +602,48 @@ impl Converter {
         } else {
             let (fast, general) = self.area_split_pipelines(to, points)?;
             let texels = crate::math::convert::area_general_texels(to, w);
-            let list = rec.upload("convert general texels", &texels)?;
-            rec.span(&label, |rec| {
-                // The fast path's texels, and a paraboloid's outside its disc.
-                if texels.len() < (w * h * to.layers()) as usize {
-                    over_map(rec, fast)?;
+            let (fast_tiles, rim_tiles) = crate::math::convert::area_tiles(to, w);
+            let rim = match rim_tiles.is_empty() {
+                true => None,
+                false => Some(self.rim_pipeline()?),
+            };
+            // A paraboloid's texels outside its disc and the fast path's, one workgroup per
+            // tile; then the general walk's texels, LIST_GROUP to a workgroup.
+            let mut lists = Vec::new();
+            for (pipeline, list, what, groups) in [
+                (rim, &rim_tiles, "convert rim tiles", rim_tiles.len() as u32),
+                (
+                    Some(fast),
+                    &fast_tiles,
+                    "convert fast tiles",
+                    fast_tiles.len() as u32,
+                ),
+                (
+                    Some(general),
+                    &texels,
+                    "convert general texels",
+                    groups(texels.len() as u32, LIST_GROUP),
+                ),
+            ] {
+                if let Some(pipeline) = pipeline.filter(|_| groups > 0) {
+                    lists.push((pipeline, rec.upload(what, list)?, groups));
                 }
-                rec.dispatch(
-                    general,
-                    &[
-                        source(),
-                        (binding::CONVERT_DST, Bind::Storage(&dst.image)),
-                        (binding::CONVERT_SLOPES, Bind::Texels(&slopes)),
-                        (binding::CONVERT_LIST, Bind::Buffer(&list)),
-                    ],
-                    push,
-                    [groups(texels.len() as u32, LIST_GROUP), 1, 1],
-                )
+            }
+            rec.span(&label, |rec| {
+                for (pipeline, list, groups) in &lists {
+                    rec.dispatch(
+                        pipeline,
+                        &[
+                            source(),
+                            (binding::CONVERT_DST, Bind::Storage(&dst.image)),
+                            (binding::CONVERT_SLOPES, Bind::Texels(&slopes)),
+                            (binding::CONVERT_LIST, Bind::Buffer(list)),
+                        ],
+                        push,
+                        [*groups, 1, 1],
+                    )?;
+                }
+                Ok(())
             })?;
         }
         Ok(())

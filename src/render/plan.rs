@@ -616,6 +616,7 @@ impl PassKind {
                 ConvertAreaParaboloid,
                 ConvertAreaFastParaboloid,
                 ConvertAreaListParaboloid,
+                ConvertAreaRim,
                 ConvertPlanned,
             ],
             PassKind::LatLong => &[Convert2d, ConvertCube],
