@@ -255,8 +255,8 @@ int footprint_u(uint count, float scale, float wf, out bool pole) {
 
 // The general walk's boundary points of texel (i, j) of layer `face` (side n) into ds, their
 // count returned: each edge's points as math::convert::edge_steps picks them, from the edge
-// alone; a paraboloid's edges within the disc take chords with slivers, whose areas (sl_den)
-// and areas times the source texel under each (sl_num) are summed.
+// alone; a paraboloid's edges within the disc and a small cube's take chords with slivers,
+// whose areas (sl_den) and areas times the source texel under each (sl_num) are summed.
 uint boundary_points(uint face, uint i, uint j, uint n, float scale, int w, int h,
                      out vec3 sl_num, out float sl_den) {
     const uvec2 steps[4] = uvec2[4](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 1));
@@ -267,16 +267,19 @@ uint boundary_points(uint face, uint i, uint j, uint n, float scale, int w, int 
         uvec2 e0 = uvec2(i, j) + steps[k], e1 = uvec2(i, j) + steps[(k + 1u) % 4u];
         vec3 pa = point(face, e0.x, e0.y, 1u), pb = point(face, e1.x, e1.y, 1u);
         bool near = min(length(pa.xz), length(pb.xz)) < AREA_POLE_NEAR / float(n);
-        bool disc = DST_MAPPING == MAPPING_DUAL_PARABOLOID && corner_in_disc(e0, n) &&
-                    corner_in_disc(e1, n);
+        // Chords with slivers: a paraboloid's within the disc, a cube's below the fast path's
+        // size (math::convert::edge_steps).
+        bool chords = DST_MAPPING == MAPPING_DUAL_PARABOLOID
+                          ? corner_in_disc(e0, n) && corner_in_disc(e1, n)
+                          : n < AREA_FAST_MIN_SIZE;
         uint m = near ? AREA_POLE_STEPS
                       : (DST_MAPPING == MAPPING_DUAL_PARABOLOID
-                             ? (disc ? EDGE_POINTS : AREA_PARABOLOID_RIM_STEPS)
+                             ? (chords ? EDGE_POINTS : AREA_PARABOLOID_RIM_STEPS)
                              : AREA_EDGE_STEPS);
         for (uint q = 0u; q < m; q++) {
             uvec2 ab = e0 * (m - q) + e1 * q;
             ds[count++] = point(face, ab.x, ab.y, m);
-            if (disc) {
+            if (chords) {
                 // A chord from a pole is a meridian, and the polygon meets the pole's line.
                 uvec2 nx = e0 * (m - q - 1u) + e1 * (q + 1u), mid = e0 * (2u * (m - q) - 1u) + e1 * (2u * q + 1u);
                 vec3 a = ds[count - 1u], b = point(face, nx.x, nx.y, m);
