@@ -116,7 +116,7 @@ macro_rules! shader_table {
             ConvertAreaRim = "convert_area_rim", "convert_area_rim.comp", Compute,
                 [("DST", "MAPPING_DUAL_PARABOLOID")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
+                 (CONVERT_LIST, StorageBuffer, Read)];
             /// ConvertAreaParaboloid's general walk over the texels its fast path leaves.
             ConvertAreaListParaboloid = "convert_area_list_paraboloid", "convert_area_list.comp",
                 Compute, [("DST", "MAPPING_DUAL_PARABOLOID")], ConvertPush,

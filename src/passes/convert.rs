@@ -609,39 +609,40 @@ impl Converter {
             };
             // A paraboloid's texels outside its disc and the fast path's, one workgroup per
             // tile; then the general walk's texels, LIST_GROUP to a workgroup.
+            // (pipeline, list, workgroups, whether it reads the slopes: the rim does not)
             let mut lists = Vec::new();
-            for (pipeline, list, what, groups) in [
-                (rim, &rim_tiles, "convert rim tiles", rim_tiles.len() as u32),
+            for (pipeline, list, what, groups, slopes) in [
+                (rim, &rim_tiles, "convert rim tiles", rim_tiles.len(), false),
                 (
                     Some(fast),
                     &fast_tiles,
                     "convert fast tiles",
-                    fast_tiles.len() as u32,
+                    fast_tiles.len(),
+                    true,
                 ),
                 (
                     Some(general),
                     &texels,
                     "convert general texels",
-                    groups(texels.len() as u32, LIST_GROUP),
+                    groups(texels.len() as u32, LIST_GROUP) as usize,
+                    true,
                 ),
             ] {
                 if let Some(pipeline) = pipeline.filter(|_| groups > 0) {
-                    lists.push((pipeline, rec.upload(what, list)?, groups));
+                    lists.push((pipeline, rec.upload(what, list)?, groups as u32, slopes));
                 }
             }
             rec.span(&label, |rec| {
-                for (pipeline, list, groups) in &lists {
-                    rec.dispatch(
-                        pipeline,
-                        &[
-                            source(),
-                            (binding::CONVERT_DST, Bind::Storage(&dst.image)),
-                            (binding::CONVERT_SLOPES, Bind::Texels(&slopes)),
-                            (binding::CONVERT_LIST, Bind::Buffer(list)),
-                        ],
-                        push,
-                        [*groups, 1, 1],
-                    )?;
+                for (pipeline, list, groups, reads_slopes) in &lists {
+                    let mut binds = vec![
+                        source(),
+                        (binding::CONVERT_DST, Bind::Storage(&dst.image)),
+                        (binding::CONVERT_LIST, Bind::Buffer(list)),
+                    ];
+                    if *reads_slopes {
+                        binds.push((binding::CONVERT_SLOPES, Bind::Texels(&slopes)));
+                    }
+                    rec.dispatch(pipeline, &binds, push, [*groups, 1, 1])?;
                 }
                 Ok(())
             })?;
