@@ -31,8 +31,8 @@ void main() {
     uint t = (id.z * pc.dst_size.y + id.y) * pc.dst_size.x + id.x;
     uint w = pc.src_size.x;
     // Summed with Kahan's compensation: a small texel's terms are a few, but a large one's
-    // (a cube of side 1, or slivers of either sign) are hundreds, and float32's running sum
-    // alone lost 1.4e-5 of a sun's value at cube 1.
+    // (a cube of side 1, with slivers of either sign) are hundreds, more than float32's
+    // running sum holds to the twin's 5e-6.
     precise vec3 sum = vec3(0.0), lost = vec3(0.0);
     for (uint k = offsets[t]; k < offsets[t + 1u]; k++) {
         uvec4 e = entries[k];

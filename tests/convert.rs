@@ -758,8 +758,8 @@ fn chords_follow_their_twin_and_keep_power() {
 /// of a texel and the sun texels' areas with them, so footprints count U from a column near
 /// them (twin 5e-7; GPU measured 4.3e-7 and 6.6e-7). At sizes as small as FIS's lobe-sized
 /// paraboloids, whose texels hold the pole suns on a corner: a cube of 16 to 1e-5 (its chords
-/// take slivers, as every cube below the fast path's size; GPU measured 4.1e-6, 1.4e-4 with
-/// chords alone), a paraboloid of 32 to 1.5e-4 (twin 5.5e-5 from its rim's chords; GPU
+/// take slivers, as every cube below the fast path's size; GPU measured 4.1e-6; chords
+/// alone would lose 1.4e-4), a paraboloid of 32 to 1.5e-4 (twin 5.5e-5 from its rim's chords; GPU
 /// measured 1.6e-5; a sun that only touches a footprint is never the texel its sums are
 /// taken relative to, which cost 1.9e-3 here); and a constant map stays constant to float32
 /// rounding.

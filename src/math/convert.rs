@@ -536,8 +536,8 @@ pub(crate) struct Footprint {
 /// where its nearer end is near the pole's axis (where z = cos θ bends most) and
 /// `edge_points` elsewhere; [`area::PARABOLOID_RIM_STEPS`] points without slivers where an
 /// end lies outside; a cube's [`area::EDGE_STEPS`], or [`area::POLE_STEPS`] near a pole, with
-/// slivers below [`area::FAST_MIN_SIZE`] (all general walk there; at 16, the sky's chords
-/// alone left 1.4e-4 of a sun's power out).
+/// slivers below [`area::FAST_MIN_SIZE`], where every texel takes the general walk (the fast
+/// path has none, so above that size neither side of an edge takes them).
 /// Decided from the edge alone, so that both texels that share it agree.
 fn edge_steps(
     to: Mapping,
