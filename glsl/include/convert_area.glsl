@@ -186,6 +186,73 @@ bool corner_in_disc(uvec2 e, uint n) {
     return s * s + t * t <= int(n) * int(n);
 }
 
+// kept_sliver's antiderivative of z·U' along the parabola z = a + b·t + c·t², U' = e + f·t.
+float kept_big(float t, vec3 abc, vec2 ef) {
+    float a = abc.x, b = abc.y, c = abc.z, e = ef.x, f = ef.y;
+    return t * (a * e + t * ((a * f + b * e) / 2.0 + t * ((b * f + c * e) / 3.0 + t * c * f / 4.0)));
+}
+
+// The part of a chord's sliver on its half's side of the rim, z ≥ 0 (`above`) or z ≤ 0, in
+// the chord's frame: the chord from (0, z0) by d, the parabola's midpoint o off the chord's
+// (twin: math::convert's kept_sliver). Returns (U from the chord's start, z) of the parabola's
+// point midway along its kept part and the kept area; area 0 where nothing is kept.
+vec3 kept_sliver(vec2 d, vec2 o, float z0, bool above) {
+    float sgn = above ? 1.0 : -1.0;
+    vec3 abc = vec3(z0, d.y + 4.0 * o.y, -4.0 * o.y);
+    vec2 ef = vec2(d.x + 4.0 * o.x, -8.0 * o.x);
+    // Breakpoints where the chord or the parabola crosses z = 0 (1.0 where none).
+    float s0 = d.y != 0.0 ? -z0 / d.y : 1.0, s1 = 1.0, s2 = 1.0;
+    if (abc.z != 0.0) {
+        float disc = abc.y * abc.y - 4.0 * abc.x * abc.z;
+        if (disc >= 0.0) {
+            float hh = -0.5 * (abc.y + (abc.y < 0.0 ? -1.0 : 1.0) * sqrt(disc));
+            s1 = hh / abc.z;
+            s2 = hh != 0.0 ? abc.x / hh : 1.0;
+        }
+    } else if (abc.y != 0.0) {
+        s1 = -abc.x / abc.y;
+    }
+    s0 = clamp(s0, 0.0, 1.0);
+    s1 = clamp(s1, 0.0, 1.0);
+    s2 = clamp(s2, 0.0, 1.0);
+    float lo = min(s0, min(s1, s2)), hi = max(s0, max(s1, s2));
+    float ts[5] = float[5](0.0, lo, s0 + s1 + s2 - lo - hi, hi, 1.0);
+    float area = 0.0, k0 = 2.0, k1 = -1.0;
+    for (uint k = 0u; k < 4u; k++) {
+        float t0 = ts[k], t1 = ts[k + 1u];
+        if (!(t1 > t0)) continue;
+        float tm = 0.5 * (t0 + t1);
+        if (sgn * (abc.x + tm * (abc.y + tm * abc.z)) > 0.0) {
+            area += kept_big(t1, abc, ef) - kept_big(t0, abc, ef);
+            k0 = min(k0, t0);
+            k1 = t1;
+        }
+        if (sgn * (z0 + tm * d.y) > 0.0) {
+            area -= d.x * (t1 * (z0 + 0.5 * d.y * t1) - t0 * (z0 + 0.5 * d.y * t0));
+        }
+    }
+    if (!(k1 > k0)) return vec3(0.0);
+    float t = 0.5 * (k0 + k1);
+    return vec3(d.x * t + 4.0 * o.x * t * (1.0 - t), abc.x + t * (abc.y + t * abc.z), area);
+}
+
+// A chord's sliver on a paraboloid edge that the rim cuts (twin: math::convert::sliver_kept):
+// its part on the half's side of the rim, z ≥ 0 (`above`) or z ≤ 0, signed as sliver()'s,
+// and that area times the source texel under the parabola's point midway along its kept part
+// (value).
+float sliver_kept(vec3 a, vec3 m, vec3 b, float scale, bool above, int w, int h, out vec3 value) {
+    bool fwd = before(a, b);
+    vec3 p = fwd ? a : b, q = fwd ? b : a;
+    float du = azimuth_between(p, q) * scale, du_mid = azimuth_between(p, m) * scale;
+    vec3 k = kept_sliver(vec2(du, q.y - p.y), vec2(du_mid - 0.5 * du, m.y - 0.5 * (p.y + q.y)),
+                         p.y, above);
+    float sr, cr;
+    int c = reference_column(p, scale, sr, cr);
+    float s = fwd ? k.z : -k.z;
+    value = s * cell_value(vec2(local_u(p, sr, cr) * scale + k.x, k.y), c, w, h);
+    return s;
+}
+
 // The source texel under point v of the (U, z) plane.
 vec3 texel_under(vec2 v, int w, int h) {
     int row = clamp(int(floor(acos(clamp(v.y, -1.0, 1.0)) / PI * float(h))), 0, h - 1);
@@ -255,8 +322,9 @@ int footprint_u(uint count, float scale, float wf, out bool pole) {
 
 // The general walk's boundary points of texel (i, j) of layer `face` (side n) into ds, their
 // count returned: each edge's points as math::convert::edge_steps picks them, from the edge
-// alone; a paraboloid's edges within the disc and a small cube's take chords with slivers,
-// whose areas (sl_den) and areas times the source texel under each (sl_num) are summed.
+// alone; a paraboloid's edges take chords with slivers (clipped to the half where the rim cuts
+// the edge), and so do a small cube's, whose areas (sl_den) and areas times the source texel
+// under each (sl_num) are summed.
 uint boundary_points(uint face, uint i, uint j, uint n, float scale, int w, int h,
                      out vec3 sl_num, out float sl_den) {
     const uvec2 steps[4] = uvec2[4](uvec2(0, 0), uvec2(1, 0), uvec2(1, 1), uvec2(0, 1));
@@ -267,15 +335,14 @@ uint boundary_points(uint face, uint i, uint j, uint n, float scale, int w, int 
         uvec2 e0 = uvec2(i, j) + steps[k], e1 = uvec2(i, j) + steps[(k + 1u) % 4u];
         vec3 pa = point(face, e0.x, e0.y, 1u), pb = point(face, e1.x, e1.y, 1u);
         bool near = min(length(pa.xz), length(pb.xz)) < AREA_POLE_NEAR / float(n);
-        // Chords with slivers: a paraboloid's within the disc, a cube's below the fast path's
-        // size (math::convert::edge_steps).
-        bool chords = DST_MAPPING == MAPPING_DUAL_PARABOLOID
-                          ? corner_in_disc(e0, n) && corner_in_disc(e1, n)
-                          : n < AREA_FAST_MIN_SIZE;
+        // Chords with slivers: a paraboloid's (kept to the half where an end lies outside the
+        // disc), a cube's below the fast path's size (math::convert::edge_steps).
+        bool parab = DST_MAPPING == MAPPING_DUAL_PARABOLOID;
+        bool in_disc = corner_in_disc(e0, n) && corner_in_disc(e1, n);
+        bool chords = parab || n < AREA_FAST_MIN_SIZE, kept = parab && !in_disc;
         uint m = near ? AREA_POLE_STEPS
-                      : (DST_MAPPING == MAPPING_DUAL_PARABOLOID
-                             ? (chords ? EDGE_POINTS : AREA_PARABOLOID_RIM_STEPS)
-                             : AREA_EDGE_STEPS);
+                      : (parab ? (in_disc ? EDGE_POINTS : AREA_PARABOLOID_RIM_STEPS)
+                               : AREA_EDGE_STEPS);
         for (uint q = 0u; q < m; q++) {
             uvec2 ab = e0 * (m - q) + e1 * q;
             ds[count++] = point(face, ab.x, ab.y, m);
@@ -284,7 +351,14 @@ uint boundary_points(uint face, uint i, uint j, uint n, float scale, int w, int 
                 uvec2 nx = e0 * (m - q - 1u) + e1 * (q + 1u), mid = e0 * (2u * (m - q) - 1u) + e1 * (2u * q + 1u);
                 vec3 a = ds[count - 1u], b = point(face, nx.x, nx.y, m);
                 vec3 dm = point(face, mid.x, mid.y, 2u * m);
-                float s = on_pole(a) || on_pole(b) ? 0.0 : sliver(a, dm, b, scale);
+                if (on_pole(a) || on_pole(b)) continue;
+                if (kept) {
+                    vec3 value;
+                    sl_den += sliver_kept(a, dm, b, scale, face == 0u, w, h, value);
+                    sl_num += value;
+                    continue;
+                }
+                float s = sliver(a, dm, b, scale);
                 float sr, cr;
                 int c = reference_column(dm, scale, sr, cr);
                 sl_num += s * sliver_texel(dm, c, sr, cr, scale, w, h);

@@ -345,9 +345,10 @@ pub fn area_tiles(to: Mapping, n: u32) -> (Vec<[u32; 4]>, Vec<[u32; 4]>) {
 /// footprint is the polygon of points along its edges there (with the pole's line where a
 /// point sits on a pole or the texel holds one; a paraboloid texel's clipped to its half, z ≥ 0
 /// or z ≤ 0), and its overlap with each source texel is integrated exactly, row band by row
-/// band, along the clipped polygon's edges (Green's theorem); a paraboloid's chords inside
-/// its disc add their slivers ([`sliver`], each to the source texel under its curve's
-/// midpoint, [`area::PARABOLOID_EDGE_STEPS`]). Neighbouring texels share their
+/// band, along the clipped polygon's edges (Green's theorem); a paraboloid's chords add their
+/// slivers ([`sliver`], each to the source texel under its curve's midpoint,
+/// [`area::PARABOLOID_EDGE_STEPS`]; on edges the rim cuts, their parts inside the half,
+/// [`sliver_kept`]). Neighbouring texels share their
 /// points bit for bit, so the polygons tile the plane: every source texel's power lands in
 /// the output, once. Shared edges are split at band and column lines from a canonical
 /// endpoint order, so both sides compute the same pieces (glsl/convert_area.comp is the
@@ -501,6 +502,91 @@ pub(crate) fn sliver(a: DVec3, m: DVec3, b: DVec3, scale: f64) -> f64 {
     }
 }
 
+/// A chord's sliver on a paraboloid edge that the rim cuts ([`edge_steps`]): the part of
+/// [`sliver`]'s region on the half's side of the rim, z ≥ 0 (`keep_above`) or z ≤ 0, as
+/// ∫ z dU along the parabola's kept part less along the chord's (Green's theorem with z
+/// clamped at the rim, z = 0 in the (U, z) plane), and the direction of the parabola's point
+/// midway along its kept part, whose source texel takes it ([`sliver`] itself, at `m`, where
+/// the rim cuts neither). Canonical order and sign as [`sliver`]'s
+/// (glsl/include/convert_area.glsl's `sliver_kept`).
+pub(crate) fn sliver_kept(
+    a: DVec3,
+    m: DVec3,
+    b: DVec3,
+    scale: f64,
+    keep_above: bool,
+) -> (DVec3, f64) {
+    let fwd = (a.x, a.y, a.z) <= (b.x, b.y, b.z);
+    let (p, q) = if fwd { (a, b) } else { (b, a) };
+    let angle = |u: DVec3, v: DVec3| (u.x * v.z - u.z * v.x).atan2(u.z * v.z + u.x * v.x);
+    let (du, du_mid) = (angle(p, q) * scale, angle(p, m) * scale);
+    let k = kept_sliver(
+        [du, q.y - p.y],
+        [du_mid - 0.5 * du, m.y - 0.5 * (p.y + q.y)],
+        p.y,
+        keep_above,
+    );
+    let Some((u, z, area)) = k else {
+        return (m, 0.0);
+    };
+    // The kept point's direction, at U = the lesser end's U + u (columns) and z.
+    let phi = p.x.atan2(-p.z) + u / scale;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let d = DVec3::new(phi.sin() * r, z, -phi.cos() * r);
+    (d, if fwd { area } else { -area })
+}
+
+/// [`sliver_kept`] in the chord's frame: the chord from (0, `z0`) by `d`, the parabola's
+/// midpoint `o` off the chord's; `None` where nothing of either lies on the kept side, else
+/// the kept point's (U from the chord's start, z) and the kept area.
+fn kept_sliver(d: [f64; 2], o: [f64; 2], z0: f64, keep_above: bool) -> Option<(f64, f64, f64)> {
+    let sign = if keep_above { 1.0 } else { -1.0 };
+    // The parabola: U(t) = d.U·t + 4·o.U·t(1 − t), z(t) = a + b·t + c·t²; the chord: o = 0.
+    let (a, b, c) = (z0, d[1] + 4.0 * o[1], -4.0 * o[1]);
+    let (e, f) = (d[0] + 4.0 * o[0], -8.0 * o[0]);
+    let z = |t: f64| a + t * (b + t * c);
+    let zc = |t: f64| z0 + t * d[1];
+    // Breakpoints where either crosses z = 0 inside the chord.
+    let mut ts = vec![0.0, 1.0];
+    if d[1] != 0.0 {
+        ts.push(-z0 / d[1]);
+    }
+    if c != 0.0 {
+        let disc = b * b - 4.0 * a * c;
+        if disc >= 0.0 {
+            let h = -0.5 * (b + b.signum() * disc.sqrt());
+            ts.push(h / c);
+            if h != 0.0 {
+                ts.push(a / h);
+            }
+        }
+    } else if b != 0.0 {
+        ts.push(-a / b);
+    }
+    ts.retain(|t| (0.0..=1.0).contains(t));
+    ts.sort_by(f64::total_cmp);
+    // ∫ z·U' dt's antiderivative along the parabola, and along the chord.
+    let big = |t: f64| {
+        t * (a * e + t * ((a * f + b * e) / 2.0 + t * ((b * f + c * e) / 3.0 + t * c * f / 4.0)))
+    };
+    let small = |t: f64| d[0] * t * (z0 + 0.5 * d[1] * t);
+    let (mut area, mut kept) = (0.0, None::<(f64, f64)>);
+    for w in ts.windows(2) {
+        let (t0, t1) = (w[0], w[1]);
+        let tm = 0.5 * (t0 + t1);
+        if sign * z(tm) > 0.0 {
+            area += big(t1) - big(t0);
+            kept = Some(kept.map_or((t0, t1), |k| (k.0, t1)));
+        }
+        if sign * zc(tm) > 0.0 {
+            area -= small(t1) - small(t0);
+        }
+    }
+    let (t0, t1) = kept?;
+    let t = 0.5 * (t0 + t1);
+    Some((d[0] * t + 4.0 * o[0] * t * (1.0 - t), z(t), area))
+}
+
 /// Whether direction `d` lies on a pole (the lat-long's Y axis), where U is undefined.
 fn on_pole(d: DVec3) -> bool {
     d.x == 0.0 && d.z == 0.0
@@ -530,44 +616,58 @@ pub(crate) struct Footprint {
     pub slivers: Vec<(DVec3, f64)>,
 }
 
+/// Which slivers an edge's chords take ([`edge_steps`]).
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Slivers {
+    /// None: the chords alone.
+    None,
+    /// Each chord's whole sliver ([`sliver`]).
+    Whole,
+    /// Each chord's sliver on its half's side of the rim ([`sliver_kept`]).
+    Kept,
+}
+
 /// Points along an edge of a `to` texel of side `n` (its ends `e` in integer texel
-/// coordinates, `ends` their directions), and whether its chords take slivers: on a
-/// paraboloid, where both ends lie in the disc, slivers, with [`area::POLE_STEPS`] chords
-/// where its nearer end is near the pole's axis (where z = cos θ bends most) and
-/// `edge_points` elsewhere; [`area::PARABOLOID_RIM_STEPS`] points without slivers where an
-/// end lies outside; a cube's [`area::EDGE_STEPS`], or [`area::POLE_STEPS`] near a pole, with
-/// slivers below [`area::FAST_MIN_SIZE`], where every texel takes the general walk (the fast
-/// path has none, so above that size neither side of an edge takes them).
-/// Decided from the edge alone, so that both texels that share it agree.
+/// coordinates, `ends` their directions), and which slivers its chords take: on a
+/// paraboloid, [`area::POLE_STEPS`] chords where its nearer end is near the pole's axis (where
+/// z = cos θ bends most), else `edge_points` where both ends lie in the disc and
+/// [`area::PARABOLOID_RIM_STEPS`] where one lies outside; whole slivers where both ends lie
+/// in the disc, else their parts inside the half; a cube's [`area::EDGE_STEPS`], or
+/// [`area::POLE_STEPS`] near a pole, with slivers below [`area::FAST_MIN_SIZE`], where every
+/// texel takes the general walk (the fast path has none, so above that size neither side of
+/// an edge takes them). Decided from the edge alone, so that both texels that share it agree.
 fn edge_steps(
     to: Mapping,
     n: u32,
     e: [(u32, u32); 2],
     ends: [DVec3; 2],
     edge_points: u32,
-) -> (u32, bool) {
+) -> (u32, Slivers) {
     let reach = ends[0].x.hypot(ends[0].z).min(ends[1].x.hypot(ends[1].z));
     let near = reach < area::POLE_NEAR / n as f64;
     if to != Mapping::DualParaboloid {
         // Slivers where every texel takes the general walk: the fast path has none.
-        return (
-            if near {
-                area::POLE_STEPS
-            } else {
-                area::EDGE_STEPS
-            },
-            n < area::FAST_MIN_SIZE,
-        );
+        let m = if near {
+            area::POLE_STEPS
+        } else {
+            area::EDGE_STEPS
+        };
+        let slivers = if n < area::FAST_MIN_SIZE {
+            Slivers::Whole
+        } else {
+            Slivers::None
+        };
+        return (m, slivers);
     }
     let inside = |(a, b): (u32, u32)| {
         let (s, t, n) = (2 * a as i64 - n as i64, 2 * b as i64 - n as i64, n as i64);
         s * s + t * t <= n * n
     };
     match (inside(e[0]) && inside(e[1]), near) {
-        (true, true) => (area::POLE_STEPS, true),
-        (true, false) => (edge_points, true),
-        (false, true) => (area::POLE_STEPS, false),
-        (false, false) => (area::PARABOLOID_RIM_STEPS, false),
+        (true, true) => (area::POLE_STEPS, Slivers::Whole),
+        (true, false) => (edge_points, Slivers::Whole),
+        (false, true) => (area::POLE_STEPS, Slivers::Kept),
+        (false, false) => (area::PARABOLOID_RIM_STEPS, Slivers::Kept),
     }
 }
 
@@ -606,7 +706,7 @@ fn area_polygon(
         let (a1, b1) = steps[(k + 1) % 4];
         let e = [(i + a0, j + b0), (i + a1, j + b1)];
         let ends = [point(e[0].0, e[0].1, 1), point(e[1].0, e[1].1, 1)];
-        let (m, with_slivers) = edge_steps(to, n, e, ends, edge_points);
+        let (m, kind) = edge_steps(to, n, e, ends, edge_points);
         let at = |q: u32, m: u32| {
             point(
                 e[0].0 * (m - q) + e[1].0 * q,
@@ -619,9 +719,12 @@ fn area_polygon(
             ds.push(a);
             // The chord from point q to q + 1; its curve's midpoint is point 2q + 1 of 2m. A
             // chord from a pole is a meridian, and the polygon meets the pole's line there.
-            if with_slivers && !on_pole(a) && !on_pole(b) {
+            if kind != Slivers::None && !on_pole(a) && !on_pole(b) {
                 let mid = at(2 * q + 1, 2 * m);
-                slivers.push((mid, sliver(a, mid, b, scale)));
+                slivers.push(match kind {
+                    Slivers::Kept => sliver_kept(a, mid, b, scale, face == 0),
+                    _ => (mid, sliver(a, mid, b, scale)),
+                });
             }
         }
     }

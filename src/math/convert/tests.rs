@@ -515,6 +515,63 @@ fn slivers_make_footprints_their_solid_angles() {
     }
 }
 
+/// The rim's texels too: a paraboloid texel that the rim cuts has for its footprint its
+/// chords' polygon clipped to its half plus its chords' slivers clipped there
+/// ([`sliver_kept`]), against `Mapping::texel_solid_angle` (the square's part inside the disc),
+/// for every such texel of 32² and 48² paraboloids, upright and turned about the axis, the
+/// error relative to a whole rim texel's solid angle. Measured, worst texel: 2.7e-6 at
+/// `area::PARABOLOID_RIM_STEPS` = 2 (the parabolas' error; 2.1e-7 at 4); the clipped chords
+/// alone 1.7e-3.
+#[test]
+fn kept_slivers_make_rim_footprints_their_solid_angles() {
+    let turned = crate::Orientation {
+        flip_u: true,
+        flip_v: false,
+        rotate_y_degrees: 33.0,
+    };
+    let (mut worst, mut chords_only, mut texels) = (0.0f64, 0.0f64, 0);
+    for (n, w) in [(32u32, 1024i64), (48, 512)] {
+        for w2f in [DMat3::IDENTITY, turned.world_to_file()] {
+            for layer in 0..2 {
+                for j in 0..n {
+                    for i in 0..n {
+                        let in_disc = |a: u32, b: u32| {
+                            let (s, t) = (2 * a as i64 - n as i64, 2 * b as i64 - n as i64);
+                            s * s + t * t <= (n * n) as i64
+                        };
+                        let corners = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)];
+                        let inside = corners.iter().filter(|&&(a, b)| in_disc(a, b)).count();
+                        if inside == 0 || inside == 4 {
+                            continue;
+                        }
+                        let f = area_polygon(Mapping::DualParaboloid, layer, i, j, n, w, w2f, 2);
+                        let p = cut(&f.poly, 0.0, layer == 0);
+                        let shoelace: f64 = (0..p.len())
+                            .map(|k| {
+                                let (a, b) = (p[k], p[(k + 1) % p.len()]);
+                                0.5 * (b[0] - a[0]) * (a[1] + b[1])
+                            })
+                            .sum();
+                        let slivers: f64 = f.slivers.iter().map(|s| s.1).sum();
+                        let scale = std::f64::consts::TAU / w as f64;
+                        let want = Mapping::DualParaboloid.texel_solid_angle(n, n, i, j);
+                        // Of a whole texel at the rim, (2/n)² (dω = ds dt there): some
+                        // texels keep a sliver of themselves inside the disc.
+                        let full = (2.0 / n as f64).powi(2);
+                        let rel = |a: f64| ((a * scale).abs() - want).abs() / full;
+                        worst = worst.max(rel(shoelace + slivers));
+                        chords_only = chords_only.max(rel(shoelace));
+                        texels += 1;
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("{texels} rim texels, footprint vs solid angle {worst:.1e} (chords alone {chords_only:.1e})");
+    assert!(texels > 500 && worst <= 3.5e-6, "{worst:e}");
+    assert!(chords_only > 100.0 * worst, "chords alone: {chords_only:e}");
+}
+
 /// What fewer chords cost ([`area::PARABOLOID_EDGE_STEPS`]): each sliver lands whole in the
 /// source texel under its curve's midpoint, so a texel next to a sun moves against 8 chords
 /// (whose slivers are 1/64 as large) by at most, measured on the sun sky: 512 × 256 to 128²,
