@@ -57,22 +57,20 @@ vec3 edge_cell(Edge e, float c, float uc, float zlo, float zhi, float zc) {
     float ulo = clamp(e.p.x + (zlo - e.p.y) * e.ik, u0, u1);
     float uhi = clamp(e.p.x + (zhi - e.p.y) * e.ik, u0, u1);
     float ua = e.level ? u0 : min(ulo, uhi), ub = e.level ? u1 : max(ulo, uhi);
-    float base = (zlo - zc) * (zlo - zc);
     // Outside [ua, ub] the clamped z is constant, at zlo or zhi: ∫∫(z − zc) vanishes there, and
     // the area and ∫∫(U − uc) are a rectangle's.
     float ga = clamp(z0, zlo, zhi), gb = clamp(z1, zlo, zhi);
     float ha = e.sgn * (ua - u0) * (ga - zlo), hb = e.sgn * (u1 - ub) * (gb - zlo);
     vec3 acc = vec3(ha + hb, ha * (0.5 * (u0 + ua) - uc) + hb * (0.5 * (ub + u1) - uc), 0.0);
-    // Within [ua, ub], z itself: Simpson's rule, exact for these quadratics.
-    float um = 0.5 * (ua + ub);
-    float za = clamp(e.p.y + e.k * (ua - e.p.x), zlo, zhi);
-    float zb = clamp(e.p.y + e.k * (ub - e.p.x), zlo, zhi);
-    float zm = clamp(e.p.y + e.k * (um - e.p.x), zlo, zhi);
+    // Within [ua, ub], z itself, linear (its ends in the band): the trapezoid's integrals, in
+    // closed form (Simpson's rule's with the midpoint's z the ends' mean).
+    float za = clamp(e.p.y + e.k * (ua - e.p.x), zlo, zhi) - zlo;
+    float zb = clamp(e.p.y + e.k * (ub - e.p.x), zlo, zhi) - zlo;
     float d = e.sgn * (ub - ua);
-    acc.x += d * (0.5 * (za + zb) - zlo);
-    acc.y += d / 6.0 * ((ua - uc) * (za - zlo) + 4.0 * (um - uc) * (zm - zlo) + (ub - uc) * (zb - zlo));
-    acc.z += d / 12.0 * (((za - zc) * (za - zc) - base) + 4.0 * ((zm - zc) * (zm - zc) - base) +
-                         ((zb - zc) * (zb - zc) - base));
+    float a = za + (zlo - zc), b = zb + (zlo - zc), base = (zlo - zc) * (zlo - zc);
+    acc.x += d * 0.5 * (za + zb);
+    acc.y += d / 6.0 * ((ua - uc) * (2.0 * za + zb) + (ub - uc) * (za + 2.0 * zb));
+    acc.z += d / 6.0 * (a * a + a * b + b * b - 3.0 * base);
     return acc;
 }
 
@@ -109,32 +107,40 @@ void main() {
         dirs[k] = d;
         v[k] = vec2(local_u_near(d, sr, cr) * scale, d.y);
     }
-    // A paraboloid's chords' slivers (its fast texels' edges all lie in the disc, away from
-    // the poles): their areas, and their areas times the source texel under each.
-    vec3 sl_num = vec3(0.0);
-    float sl_den = 0.0;
+    vec2 lo = v[0], hi = v[0];
+    [[unroll]] for (uint k = 1u; k < FAST_POINTS; k++) {
+        lo = min(lo, v[k]);
+        hi = max(hi, v[k]);
+    }
+    int c0 = int(floor(lo.x)), c1 = int(floor(hi.x));
 #ifdef SIDE_EDGE_POINTS
+    // A paraboloid's chords' slivers (its fast texels' edges all lie in the disc, away from
+    // the poles): their areas, their curves' midpoints and the columns under those (as
+    // cell_value: U nudged). The box walk below hands each to the cell holding its midpoint
+    // (its band and column), which the box grows to hold: no row's arccosine, no fetch.
+    float sl[FAST_POINTS];
+    vec2 sv[FAST_POINTS];
+    int scol[FAST_POINTS];
     [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
         uint e = k / SIDE_POINTS, q = k % SIDE_POINTS, m = SIDE_POINTS;
         uvec2 e0 = uvec2(i, j) + steps[e], e1 = uvec2(i, j) + steps[(e + 1u) % 4u];
         uvec2 mid = e0 * (2u * (m - q) - 1u) + e1 * (2u * q + 1u);
         vec3 dm = point(face, mid.x, mid.y, 2u * m);
         uint k1 = (k + 1u) % FAST_POINTS;
-        vec2 vm = vec2(local_u_near(dm, sr, cr) * scale, dm.y);
-        float s = sliver_local(dirs[k], dirs[k1], v[k], vm, v[k1]);
-        sl_num += s * cell_value(vm, c_ref, w, h);
-        sl_den += s;
+        sv[k] = vec2(local_u_near(dm, sr, cr) * scale, dm.y);
+        sl[k] = sliver_local(dirs[k], dirs[k1], v[k], sv[k], v[k1]);
+        scol[k] = int(floor(sv[k].x + AREA_SLIVER_NUDGE));
+        lo.y = min(lo.y, sv[k].y);
+        hi.y = max(hi.y, sv[k].y);
+        c0 = min(c0, scol[k]);
+        c1 = max(c1, scol[k]);
     }
 #endif
-    vec2 lo = v[0], hi = v[0];
-    [[unroll]] for (uint k = 1u; k < FAST_POINTS; k++) {
-        lo = min(lo, v[k]);
-        hi = max(hi, v[k]);
-    }
     ivec2 rows = rows_met(lo.y, hi.y, h);
-    int c0 = int(floor(lo.x)), c1 = int(floor(hi.x));
+    // Sums relative to L0 (as general()'s): here the least of the texels under the corners,
+    // which a sun merely touching the footprint cannot be unless it holds all four.
     vec3 l0 = vec3(3.4e38);
-    [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) l0 = min(l0, texel_under(v[k] + vec2(float(c_ref), 0.0), w, h));
+    [[unroll]] for (uint k = 0u; k < FAST_POINTS; k += SIDE_POINTS) l0 = min(l0, texel_under(v[k] + vec2(float(c_ref), 0.0), w, h));
 
     Edge edges[FAST_POINTS];
     [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) edges[k] = edge_of(v[k], v[(k + 1u) % FAST_POINTS]);
@@ -152,6 +158,12 @@ void main() {
         [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
             m += edge_cell(edges[k], cf, uc, zlo, zhi, zc);
         }
+#ifdef SIDE_EDGE_POINTS
+        // The slivers whose midpoints this cell holds (row_of's band: zlo < z <= zhi).
+        [[unroll]] for (uint k = 0u; k < FAST_POINTS; k++) {
+            m.x += scol[k] == c && sv[k].y > zlo && sv[k].y <= zhi ? sl[k] : 0.0;
+        }
+#endif
         int col = wrap_column(c + c_ref, w);
         uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
         num += m.x * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) +
@@ -164,8 +176,6 @@ void main() {
             zlo = latlong_band_edge(row + 1, h);
         }
     }
-    num += sl_num - sl_den * l0;
-    den += sl_den;
     vec3 result = den != 0.0 ? l0 + num / den : l0;
     imageStore(dst, ivec3(id), vec4(max(result, vec3(0.0)), 1.0));
 }

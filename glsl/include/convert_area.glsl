@@ -107,8 +107,8 @@ ivec2 rows_met(float zmin, float zmax, int h) {
 // the true angle (lavapipe's atan errs by ~1e-6 rad), so that the fast path and the general
 // walk place the points they share alike.
 float atan_near(float y, float x) {
-    float t = y / x;
-    t = t / (1.0 + sqrt(1.0 + t * t));
+    // tan of half the angle, y / (x + |(x, y)|): one division.
+    float t = y / (x + sqrt(x * x + y * y));
     float t2 = t * t;
     return 2.0 * t * (1.0 + t2 * (-1.0 / 3.0 + t2 * (1.0 / 5.0 + t2 * (-1.0 / 7.0 + t2 * (1.0 / 9.0
         + t2 * (-1.0 / 11.0 + t2 * (1.0 / 13.0 + t2 * (-1.0 / 15.0))))))));
