@@ -449,6 +449,27 @@ fn sampling_a_constant_map_is_exact_everywhere() {
     }
 }
 
+/// How many corners of texel (i, j) of a paraboloid of side `n` lie in the closed disc
+/// (integers, as [`edge_steps`] decides).
+fn corners_in_disc(n: u32, i: u32, j: u32) -> usize {
+    let in_disc = |a: u32, b: u32| {
+        let (s, t) = (2 * a as i64 - n as i64, 2 * b as i64 - n as i64);
+        s * s + t * t <= (n * n) as i64
+    };
+    let corners = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)];
+    corners.iter().filter(|&&(a, b)| in_disc(a, b)).count()
+}
+
+/// A polygon's signed area in the (U, z) plane (the shoelace formula, as ∫ z dU adds it).
+fn shoelace(p: &[[f64; 2]]) -> f64 {
+    (0..p.len())
+        .map(|k| {
+            let (a, b) = (p[k], p[(k + 1) % p.len()]);
+            0.5 * (b[0] - a[0]) * (a[1] + b[1])
+        })
+        .sum()
+}
+
 /// With its slivers a paraboloid texel's footprint is its solid angle: the chords' polygon
 /// (by the shoelace formula in the (U, z) plane, where dω = (2π/W)·dU·dz) plus the slivers,
 /// against `Mapping::texel_solid_angle`, for every texel of a 48² paraboloid whose edges all
@@ -469,12 +490,7 @@ fn slivers_make_footprints_their_solid_angles() {
             for layer in 0..2 {
                 for j in 0..n {
                     for i in 0..n {
-                        let in_disc = |a: u32, b: u32| {
-                            let (s, t) = (2 * a as i64 - n as i64, 2 * b as i64 - n as i64);
-                            s * s + t * t <= (n * n) as i64
-                        };
-                        let corners = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)];
-                        if !corners.iter().all(|&(a, b)| in_disc(a, b))
+                        if corners_in_disc(n, i, j) < 4
                             || area_general_texel(Mapping::DualParaboloid, layer, i, j, n)
                         {
                             continue;
@@ -482,13 +498,7 @@ fn slivers_make_footprints_their_solid_angles() {
                         let f =
                             area_polygon(Mapping::DualParaboloid, layer, i, j, n, w, w2f, chords);
                         assert_eq!(f.slivers.len(), 4 * chords as usize);
-                        let p = &f.poly;
-                        let shoelace: f64 = (0..p.len())
-                            .map(|k| {
-                                let (a, b) = (p[k], p[(k + 1) % p.len()]);
-                                0.5 * (b[0] - a[0]) * (a[1] + b[1])
-                            })
-                            .sum();
+                        let shoelace = shoelace(&f.poly);
                         let slivers: f64 = f.slivers.iter().map(|s| s.1).sum();
                         let scale = std::f64::consts::TAU / w as f64;
                         let want = Mapping::DualParaboloid.texel_solid_angle(n, n, i, j);
@@ -535,23 +545,11 @@ fn kept_slivers_make_rim_footprints_their_solid_angles() {
             for layer in 0..2 {
                 for j in 0..n {
                     for i in 0..n {
-                        let in_disc = |a: u32, b: u32| {
-                            let (s, t) = (2 * a as i64 - n as i64, 2 * b as i64 - n as i64);
-                            s * s + t * t <= (n * n) as i64
-                        };
-                        let corners = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)];
-                        let inside = corners.iter().filter(|&&(a, b)| in_disc(a, b)).count();
-                        if inside == 0 || inside == 4 {
+                        if matches!(corners_in_disc(n, i, j), 0 | 4) {
                             continue;
                         }
                         let f = area_polygon(Mapping::DualParaboloid, layer, i, j, n, w, w2f, 2);
-                        let p = cut(&f.poly, 0.0, layer == 0);
-                        let shoelace: f64 = (0..p.len())
-                            .map(|k| {
-                                let (a, b) = (p[k], p[(k + 1) % p.len()]);
-                                0.5 * (b[0] - a[0]) * (a[1] + b[1])
-                            })
-                            .sum();
+                        let shoelace = shoelace(&cut(&f.poly, 0.0, layer == 0));
                         let slivers: f64 = f.slivers.iter().map(|s| s.1).sum();
                         let scale = std::f64::consts::TAU / w as f64;
                         let want = Mapping::DualParaboloid.texel_solid_angle(n, n, i, j);
