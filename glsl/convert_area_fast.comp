@@ -165,9 +165,9 @@ void main() {
         }
 #endif
         int col = wrap_column(c + c_ref, w);
-        uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
+        int o = row * w + col;
         num += m.x * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) +
-               m.y * texelFetch(slopes, int(o)).xyz + m.z * texelFetch(slopes, int(o + 1u)).xyz;
+               m.y * texelFetch(slopes_u, o).xyz + m.z * texelFetch(slopes_z, o).xyz;
         den += m.x;
         if (++c > c1) {
             c = c0;

@@ -13,8 +13,9 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 
 layout(set = 0, binding = BINDING_CONVERT_SRC) uniform sampler2DArray src;
 layout(set = 0, binding = BINDING_CONVERT_DST, rgba32f) uniform writeonly image2DArray dst;
-// (dL/dU rgb, 0), (dL/dz rgb, 0) per source texel, through the buffer's texel view.
-layout(set = 0, binding = BINDING_CONVERT_SLOPES) uniform samplerBuffer slopes;
+// (dL/dU rgb, 0) and (dL/dz rgb, 0) per source texel, through the buffers' texel views.
+layout(set = 0, binding = BINDING_CONVERT_SLOPES_U) uniform samplerBuffer slopes_u;
+layout(set = 0, binding = BINDING_CONVERT_SLOPES_Z) uniform samplerBuffer slopes_z;
 layout(std430, set = 0, binding = BINDING_CONVERT_PLAN_OFFSETS) readonly buffer Offsets {
     uint offsets[];  // per output texel its first entry, then the entry count
 };
@@ -37,10 +38,10 @@ void main() {
     for (uint k = offsets[t]; k < offsets[t + 1u]; k++) {
         uvec4 e = entries[k];
         ivec2 cell = ivec2(e.x & ((1u << AREA_PLAN_ROW_SHIFT) - 1u), e.x >> AREA_PLAN_ROW_SHIFT);
-        int o = int(AREA_SLOPE_VEC4S * (uint(cell.y) * w + uint(cell.x)));
+        int o = int(uint(cell.y) * w + uint(cell.x));
         precise vec3 term = uintBitsToFloat(e.y) * texelFetch(src, ivec3(cell, 0), 0).rgb +
-                            uintBitsToFloat(e.z) * texelFetch(slopes, o).xyz +
-                            uintBitsToFloat(e.w) * texelFetch(slopes, o + 1).xyz;
+                            uintBitsToFloat(e.z) * texelFetch(slopes_u, o).xyz +
+                            uintBitsToFloat(e.w) * texelFetch(slopes_z, o).xyz;
         precise vec3 y = term - lost;
         precise vec3 next = sum + y;
         lost = (next - sum) - y;

@@ -11,8 +11,11 @@
 layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 
 layout(set = 0, binding = BINDING_CONVERT_SRC) uniform sampler2DArray src;
-layout(set = 0, binding = BINDING_CONVERT_SLOPES, std430) writeonly buffer Slopes {
-    vec4 slopes[];  // per texel: (dL/dU rgb, 0), (dL/dz rgb, 0)
+layout(set = 0, binding = BINDING_CONVERT_SLOPES_U, std430) writeonly buffer SlopesU {
+    vec4 slopes_u[];  // per texel: (dL/dU rgb, 0)
+};
+layout(set = 0, binding = BINDING_CONVERT_SLOPES_Z, std430) writeonly buffer SlopesZ {
+    vec4 slopes_z[];  // per texel: (dL/dz rgb, 0)
 };
 
 // The push block, generated from src/abi/push.rs (src_size only).
@@ -50,7 +53,7 @@ void main() {
     }
     gu *= phi;
     gz *= phi;
-    uint o = AREA_SLOPE_VEC4S * uint(r * w + c);
-    slopes[o] = vec4(gu, 0.0);
-    slopes[o + 1u] = vec4(gz, 0.0);
+    uint o = uint(r * w + c);
+    slopes_u[o] = vec4(gu, 0.0);
+    slopes_z[o] = vec4(gz, 0.0);
 }

@@ -9,10 +9,11 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 
 layout(set = 0, binding = BINDING_CONVERT_SRC) uniform sampler2DArray src;
 layout(set = 0, binding = BINDING_CONVERT_DST, rgba32f) uniform writeonly image2DArray dst;
-// Limited slopes of each source texel (convert_slopes.comp): (dL/dU rgb, 0), (dL/dz rgb, 0).
-// Through the buffer's texel view: llvmpipe reads a storage buffer at a per-lane address lane
-// by lane, a texel buffer as one gather.
-layout(set = 0, binding = BINDING_CONVERT_SLOPES) uniform samplerBuffer slopes;
+// Limited slopes of each source texel (convert_slopes.comp): (dL/dU rgb, 0) in one buffer,
+// (dL/dz rgb, 0) in another. Through the buffers' texel views: llvmpipe reads a storage
+// buffer at a per-lane address lane by lane, a texel buffer as one gather.
+layout(set = 0, binding = BINDING_CONVERT_SLOPES_U) uniform samplerBuffer slopes_u;
+layout(set = 0, binding = BINDING_CONVERT_SLOPES_Z) uniform samplerBuffer slopes_z;
 
 // The push block, generated from src/abi/push.rs.
 PUSH_ConvertPush
@@ -485,8 +486,8 @@ void general(uvec3 id) {
                            (((z0 - zc) * (z0 - zc) - base) + 4.0 * ((zm - zc) * (zm - zc) - base) +
                             ((z1 - zc) * (z1 - zc) - base));
                 int col = wrap_column(c + c_ref, w);
-                uint o = AREA_SLOPE_VEC4S * uint(row * w + col);
-                vec3 gu = texelFetch(slopes, int(o)).xyz, gz = texelFetch(slopes, int(o + 1u)).xyz;
+                int o = row * w + col;
+                vec3 gu = texelFetch(slopes_u, o).xyz, gz = texelFetch(slopes_z, o).xyz;
                 num += area * (texelFetch(src, ivec3(col, row, 0), 0).rgb - l0) + mu * gu +
                        mz * gz;
                 den += area;

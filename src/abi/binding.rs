@@ -13,9 +13,10 @@ bindings! {
     CONVERT_SRC = 0;
     /// convert: the destination map (rgba32f image2DArray).
     CONVERT_DST = 1;
-    /// convert_slopes, convert_area: per lat-long texel its limited slopes dL/dU, dL/dz
-    /// (two vec4, rgb used; storage buffer).
-    CONVERT_SLOPES = 2;
+    /// convert_slopes, convert_area: per lat-long texel its limited slope dL/dU (one vec4,
+    /// rgb used; storage buffer). A buffer of its own, as is dL/dz's: each then spans 16 B a
+    /// texel, so that a 4096 × 2048 source's fits a device's 128 MiB storage buffer range.
+    CONVERT_SLOPES_U = 2;
     /// convert_area (LIST): the texels the general walk takes, (i, j, layer, 0) each
     /// (uvec4 storage buffer).
     CONVERT_LIST = 3;
@@ -28,6 +29,9 @@ bindings! {
     CONVERT_PLAN_ENTRIES = 5;
     /// convert (SPLIT): the residual's paraboloid (rgba32f image2DArray).
     CONVERT_RESIDUAL = 6;
+    /// convert_slopes, convert_area: per lat-long texel its limited slope dL/dz (one vec4,
+    /// rgb used; storage buffer).
+    CONVERT_SLOPES_Z = 7;
     /// mapping_probe: input directions (vec4 storage buffer).
     PROBE_IN = 0;
     /// mapping_probe: results (vec4 storage buffer).

@@ -189,7 +189,6 @@ fn define_area_footprint_and_floats(s: &mut String) {
         area::PARABOLOID_RIM_STEPS
     );
     define_f32(s, "AREA_SLIVER_NUDGE", area::SLIVER_NUDGE);
-    let _ = writeln!(s, "#define AREA_SLOPE_VEC4S {}u", area::SLOPE_VEC4S);
     let _ = writeln!(s, "#define AREA_PLAN_ROW_SHIFT {}u", area::PLAN_ROW_SHIFT);
     let _ = writeln!(s, "#define AREA_FAST_WINDOW {}u", area::FAST_WINDOW);
     let _ = writeln!(s, "#define AREA_FAST_MIN_SIZE {}u", area::FAST_MIN_SIZE);

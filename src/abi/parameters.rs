@@ -570,9 +570,6 @@ pub mod area {
             && PARABOLOID_RIM_STEPS <= POLE_STEPS
             && EDGE_STEPS <= POLE_STEPS
     );
-    /// vec4s of limited slopes per source texel (dL/dU rgb, then dL/dz rgb), the layout of
-    /// the buffer convert_slopes.comp writes and convert_area.comp reads.
-    pub const SLOPE_VEC4S: u32 = 2;
     /// A conversion plan entry's source texel: its column in the low bits, its row shifted
     /// up by this many (math::convert::area_plan writes it, glsl/convert_planned.comp reads
     /// it); sources up to 2^PLAN_ROW_SHIFT texels wide and tall.

@@ -94,23 +94,25 @@ macro_rules! shader_table {
             /// Lat-long to cube by exact footprint areas (power-conserving): the general walk.
             ConvertArea = "convert_area", "convert_area.comp", Compute, [("DST", "MAPPING_CUBE")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, TexelBuffer, Read)];
+                 (CONVERT_SLOPES_U, TexelBuffer, Read), (CONVERT_SLOPES_Z, TexelBuffer, Read)];
             /// Lat-long to dual paraboloid by exact footprint areas.
             ConvertAreaParaboloid = "convert_area_paraboloid", "convert_area.comp", Compute,
                 [("DST", "MAPPING_DUAL_PARABOLOID")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, TexelBuffer, Read)];
+                 (CONVERT_SLOPES_U, TexelBuffer, Read), (CONVERT_SLOPES_Z, TexelBuffer, Read)];
             /// ConvertArea's fast path for cube texels away from the poles, over a list of tiles.
             ConvertAreaFast = "convert_area_fast", "convert_area_fast.comp", Compute,
                 [("DST", "MAPPING_CUBE")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
+                 (CONVERT_SLOPES_U, TexelBuffer, Read), (CONVERT_SLOPES_Z, TexelBuffer, Read),
+                 (CONVERT_LIST, StorageBuffer, Read)];
             /// ConvertAreaParaboloid's fast path for texels inside the disc away from the poles.
             ConvertAreaFastParaboloid = "convert_area_fast_paraboloid", "convert_area_fast.comp",
                 Compute, [("DST", "MAPPING_DUAL_PARABOLOID"), ("SIDE_EDGE_POINTS", "1")],
                 ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
+                 (CONVERT_SLOPES_U, TexelBuffer, Read), (CONVERT_SLOPES_Z, TexelBuffer, Read),
+                 (CONVERT_LIST, StorageBuffer, Read)];
             /// ConvertAreaParaboloid's texels outside the disc (their rim's source texel), over
             /// a list of tiles.
             ConvertAreaRim = "convert_area_rim", "convert_area_rim.comp", Compute,
@@ -121,21 +123,25 @@ macro_rules! shader_table {
             ConvertAreaListParaboloid = "convert_area_list_paraboloid", "convert_area_list.comp",
                 Compute, [("DST", "MAPPING_DUAL_PARABOLOID")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
+                 (CONVERT_SLOPES_U, TexelBuffer, Read), (CONVERT_SLOPES_Z, TexelBuffer, Read),
+                 (CONVERT_LIST, StorageBuffer, Read)];
             /// ConvertArea's general walk over a list of texels (those the fast path leaves).
             ConvertAreaList = "convert_area_list", "convert_area_list.comp", Compute,
                 [("DST", "MAPPING_CUBE")], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_LIST, StorageBuffer, Read)];
+                 (CONVERT_SLOPES_U, TexelBuffer, Read), (CONVERT_SLOPES_Z, TexelBuffer, Read),
+                 (CONVERT_LIST, StorageBuffer, Read)];
             /// Lat-long to cube or dual paraboloid by exact footprint areas from a plan: a
             /// gather of each output texel's source texels with their weights.
             ConvertPlanned = "convert_planned", "convert_planned.comp", Compute, [], ConvertPush,
                 [(CONVERT_SRC, Sampled, Read), (CONVERT_DST, StorageImage, Write),
-                 (CONVERT_SLOPES, TexelBuffer, Read), (CONVERT_PLAN_OFFSETS, StorageBuffer, Read),
+                 (CONVERT_SLOPES_U, TexelBuffer, Read), (CONVERT_SLOPES_Z, TexelBuffer, Read),
+                 (CONVERT_PLAN_OFFSETS, StorageBuffer, Read),
                  (CONVERT_PLAN_ENTRIES, StorageBuffer, Read)];
             /// The limited slopes of a lat-long source that ConvertArea integrates.
             ConvertSlopes = "convert_slopes", "convert_slopes.comp", Compute, [], ConvertPush,
-                [(CONVERT_SRC, Sampled, Read), (CONVERT_SLOPES, StorageBuffer, Write)];
+                [(CONVERT_SRC, Sampled, Read), (CONVERT_SLOPES_U, StorageBuffer, Write),
+                 (CONVERT_SLOPES_Z, StorageBuffer, Write)];
             /// Mapping functions exposed for tests.
             MappingProbe = "mapping_probe", "mapping_probe.comp", Compute, [], ProbePush,
                 [(PROBE_IN, StorageBuffer, Read), (PROBE_OUT, StorageBuffer, Write)];

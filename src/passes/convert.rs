@@ -133,9 +133,22 @@ fn texels_on_sphere(m: Mapping, w: u32, h: u32) -> f64 {
     }
 }
 
-/// Bytes of a `w` × `h` lat-long map's slopes (`abi::area::SLOPE_VEC4S` vec4s a texel).
-fn slopes_bytes(w: u32, h: u32) -> u64 {
-    w as u64 * h as u64 * 16 * crate::abi::area::SLOPE_VEC4S as u64
+/// Bytes of each of a `w` × `h` lat-long map's two slope buffers, dL/dU and dL/dz (a vec4 a
+/// texel each).
+fn slope_buffer_bytes(w: u32, h: u32) -> u64 {
+    w as u64 * h as u64 * 16
+}
+
+/// A lat-long source's limited slopes, [dL/dU, dL/dz], each in a buffer of its own (so that
+/// each fits one storage buffer range where both together would not).
+type Slopes = [std::sync::Arc<crate::gpu::Buffer>; 2];
+
+/// The walks' binds of `slopes`: their texel views.
+fn slope_texels(slopes: &Slopes) -> [(u32, Bind<'_>); 2] {
+    [
+        (binding::CONVERT_SLOPES_U, Bind::Texels(&slopes[0])),
+        (binding::CONVERT_SLOPES_Z, Bind::Texels(&slopes[1])),
+    ]
 }
 
 /// Whether an area conversion with `opts` from a lat-long `src_width` texels wide takes the
@@ -385,8 +398,8 @@ impl Converter {
     /// texel: lat-long to cube, or to dual paraboloid where the orientation keeps the
     /// paraboloid's axis on the lat-long's, with no sample count or nearest reads asked for,
     /// not so strongly minified that the walks at the poles grow long
-    /// (`math::convert::area_serves`), and a source whose slopes fit one storage buffer and
-    /// one texel buffer view.
+    /// (`math::convert::area_serves`), and a source each of whose slope buffers fits one
+    /// storage buffer and one texel buffer view.
     pub fn uses_area(&self, src: (Mapping, u32, u32), opts: &ConvertOptions) -> bool {
         let Ok(world_to_file) = opts.orientation.checked_world_to_file() else {
             return false;
@@ -395,8 +408,8 @@ impl Converter {
             && opts.supersample.is_none()
             && !opts.nearest
             && crate::math::convert::area_serves(src.1, src.2, opts.to, opts.size, world_to_file)
-            && slopes_bytes(src.1, src.2) <= self.ctx.info().max_storage_buffer_range
-            && slopes_bytes(src.1, src.2) / 16 <= self.ctx.info().max_texel_buffer_elements
+            && slope_buffer_bytes(src.1, src.2) <= self.ctx.info().max_storage_buffer_range
+            && slope_buffer_bytes(src.1, src.2) / 16 <= self.ctx.info().max_texel_buffer_elements
     }
 
     /// Samples per axis for an output texel: about two per source texel spacing, so that
@@ -547,6 +560,40 @@ impl Converter {
         Ok(())
     }
 
+    /// Records the limited slopes of lat-long `src` into two scratch buffers, written as
+    /// storage buffers and read through their texel views ([`slope_texels`]).
+    fn record_slopes(
+        &self,
+        rec: &mut Recorder,
+        src: &GpuEnvMap,
+        push: &ConvertPush,
+    ) -> Result<Slopes> {
+        let usage =
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+        let bytes = slope_buffer_bytes(src.width, src.height);
+        let slopes = [
+            rec.scratch("convert slopes dL/dU", bytes, usage)?,
+            rec.scratch("convert slopes dL/dz", bytes, usage)?,
+        ];
+        let pipeline = self.slopes_pipeline()?;
+        rec.span("convert slopes", |rec| {
+            rec.dispatch(
+                pipeline,
+                &[
+                    (
+                        binding::CONVERT_SRC,
+                        Bind::Sampled(&src.image, &self.sampler, false),
+                    ),
+                    (binding::CONVERT_SLOPES_U, Bind::Buffer(&slopes[0])),
+                    (binding::CONVERT_SLOPES_Z, Bind::Buffer(&slopes[1])),
+                ],
+                push,
+                groups_2d(src.width, src.height, 1),
+            )
+        })?;
+        Ok(slopes)
+    }
+
     /// The lat-long to cube or dual-paraboloid conversion by exact footprint areas: the
     /// source's limited slopes, then the footprints' integrals (`split`: the cube's fast path
     /// and list; `points`: a paraboloid's per texel edge).
@@ -559,13 +606,6 @@ impl Converter {
         (w, h): (u32, u32),
         (split, points): (bool, u32),
     ) -> Result<()> {
-        let slopes = rec.scratch(
-            "convert slopes",
-            slopes_bytes(src.width, src.height),
-            // Written as a storage buffer, read through its texel view.
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
-        )?;
-        let slopes_pipeline = self.slopes_pipeline()?;
         let to = dst.mapping;
         let source = || {
             (
@@ -574,23 +614,18 @@ impl Converter {
             )
         };
         rec.discard(&dst.image);
-        rec.span("convert slopes", |rec| {
-            rec.dispatch(
-                slopes_pipeline,
-                &[source(), (binding::CONVERT_SLOPES, Bind::Buffer(&slopes))],
-                push,
-                groups_2d(src.width, src.height, 1),
-            )
-        })?;
+        let slopes = self.record_slopes(rec, src, push)?;
         let label = format!("convert latlong -> {} {w}x{h} (areas)", to.name());
         // One invocation per output texel: the whole walk.
         let over_map = |rec: &mut Recorder, pipeline: &Pipeline| {
+            let [u, z] = slope_texels(&slopes);
             rec.dispatch(
                 pipeline,
                 &[
                     source(),
                     (binding::CONVERT_DST, Bind::Storage(&dst.image)),
-                    (binding::CONVERT_SLOPES, Bind::Texels(&slopes)),
+                    u,
+                    z,
                 ],
                 push,
                 groups_2d(w, h, to.layers()),
@@ -640,7 +675,7 @@ impl Converter {
                         (binding::CONVERT_LIST, Bind::Buffer(list)),
                     ];
                     if *reads_slopes {
-                        binds.push((binding::CONVERT_SLOPES, Bind::Texels(&slopes)));
+                        binds.extend(slope_texels(&slopes));
                     }
                     rec.dispatch(pipeline, &binds, push, [*groups, 1, 1])?;
                 }

@@ -3,7 +3,7 @@
 //! then a gather of a few source texels and their slopes per output texel
 //! (`glsl/convert_planned.comp`, twin `math::convert::apply_area_plan`).
 
-use super::{edge_points, slopes_bytes, ConvertOptions, Converter};
+use super::{edge_points, slope_texels, ConvertOptions, Converter};
 use crate::abi::{binding, push::ConvertPush, ShaderId, WORKGROUP_2D};
 use crate::error::{Error, Result};
 use crate::gpu::{groups_2d, mat3_rows, Bind, Buffer, Pipeline, Recorder, Timed};
@@ -181,27 +181,16 @@ impl Converter {
             threshold: 0.0,
         };
         debug_assert_eq!(plan.texels, w * h * plan.opts.to.layers());
-        let slopes = rec.scratch(
-            "convert slopes",
-            slopes_bytes(src.width, src.height),
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
-        )?;
         let source = || {
             (
                 binding::CONVERT_SRC,
                 Bind::Sampled(&src.image, &self.sampler, false),
             )
         };
-        let (slopes_pipeline, planned) = (self.slopes_pipeline()?, self.planned_pipeline()?);
+        let planned = self.planned_pipeline()?;
         rec.discard(&dst.image);
-        rec.span("convert slopes", |rec| {
-            rec.dispatch(
-                slopes_pipeline,
-                &[source(), (binding::CONVERT_SLOPES, Bind::Buffer(&slopes))],
-                &push,
-                groups_2d(src.width, src.height, 1),
-            )
-        })?;
+        let slopes = self.record_slopes(rec, src, &push)?;
+        let [slopes_u, slopes_z] = slope_texels(&slopes);
         let label = format!(
             "convert latlong -> {} {w}x{h} (planned)",
             dst.mapping.name()
@@ -212,7 +201,8 @@ impl Converter {
                 &[
                     source(),
                     (binding::CONVERT_DST, Bind::Storage(&dst.image)),
-                    (binding::CONVERT_SLOPES, Bind::Texels(&slopes)),
+                    slopes_u,
+                    slopes_z,
                     (binding::CONVERT_PLAN_OFFSETS, Bind::Buffer(&plan.offsets)),
                     (binding::CONVERT_PLAN_ENTRIES, Bind::Buffer(&plan.entries)),
                 ],
