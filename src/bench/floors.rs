@@ -167,9 +167,9 @@ fn map_rows(
     let mut dp = None;
     for (to, size, how) in cases {
         let opts = ConvertOptions::new(to, size);
-        // Where the area conversion does not serve this size on this device (its slopes
-        // buffer past the device's buffer range: a 4096 x 2048 source on lavapipe), the
-        // converter samples instead, and the row says so.
+        // Where the area conversion does not serve this size on this device (a slope
+        // buffer past the device's storage buffer range), the converter samples instead, and
+        // the row says so.
         let areas = how == "areas" && conv.uses_area((Mapping::LatLong, w, h), &opts);
         let how = match (how, areas) {
             ("areas", false) => "supersampled: areas do not serve this size on this device",
