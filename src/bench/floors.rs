@@ -10,7 +10,10 @@ use crate::math::brdf::Brdf;
 use crate::math::camera::{Camera, Projection};
 use crate::math::exact::ExactFilter;
 use crate::math::filter::{Kernel, Prepared};
-use crate::math::lights::{extract, light_sum, prepare, ExtractOptions, LightKernel};
+use crate::math::lights::{
+    extract, extract_blocks, light_sum, prepare, record_block, BlockExtraction, ExtractOptions,
+    LightKernel,
+};
 use crate::math::split_sum::level_alpha;
 use crate::math::synth::Sky;
 use crate::math::{mip, sh};
@@ -457,11 +460,26 @@ fn ggx_chain_row(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Row> {
     })
 }
 
-/// The lights pass: the map's extracted lights (the default rule, on the host) filtered by
-/// the cosine into a 32² cube, against their float64 sum at every texel.
+/// The lights pass: the map's extracted lights (the default rule, on the host, as a bake
+/// extracts them: records no finer than `RECORD_WIDTH`'s texels, so that a 4096 × 2048 sun
+/// is the same records as at 1024 × 512 rather than a plateau past the cap) filtered by the
+/// cosine into a 32² cube, against their float64 sum at every texel.
 fn lights_row(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Row> {
-    let ex = extract(map, &ExtractOptions::default());
-    let prepared = prepare(map, &ex, DMat3::IDENTITY, 0.02);
+    let block = record_block(map, crate::abi::lights::RECORD_WIDTH);
+    let BlockExtraction { grid, extraction } =
+        extract_blocks(map, &ExtractOptions::default(), block);
+    let prepared = prepare(
+        grid.as_ref().unwrap_or(map),
+        &extraction,
+        DMat3::IDENTITY,
+        0.02,
+    );
+    if prepared.is_empty() {
+        return Err(crate::Error::Invalid(format!(
+            "floors: the {}x{} source has no light texels to filter",
+            map.width, map.height
+        )));
+    }
     let gpu = GpuLights::upload(ctx, &prepared)?;
     let pass = LightsPass::new(ctx)?;
     let cube = SplitSum::cube_chain(ctx, 32, 1)?;
@@ -499,8 +517,12 @@ fn lights_row(ctx: &Context, map: &EnvMap, reps: usize) -> Result<Row> {
         }
     }
     let floor = copy_ms(ctx, &CopyPass::new(ctx)?, Mapping::Cube, 32, 32, reps)?;
+    let records = match block {
+        1 => format!("{} light texels", prepared.len()),
+        b => format!("{} light records ({b}² texels each)", prepared.len()),
+    };
     Ok(Row {
-        input: format!("{} light texels", prepared.len()),
+        input: records,
         pass: "lights (cosine) into a 32² cube".into(),
         ms,
         floor,
