@@ -9,7 +9,8 @@
 // compaction left them in): a counting sort by the key's top TREE_BUCKET_BITS (KEYS, SCAN,
 // SCATTER), then each record's rank within its bucket by counting (TEXELS), where its texel is
 // written: its centre turned to the world and its (2·cells)² quadrature nodes
-// (math::lights::nodes). NODES then builds the tree over that order: leaves of
+// (math::lights::nodes), and where the output keeps them (pc.coarse_at) its coarser ones
+// (math::lights::prepare_local). NODES then builds the tree over that order: leaves of
 // LIGHT_LEAF_TEXELS texels, each node over a run of leaves split in halves (the left one
 // larger), in pre-order, so node p's range and skip follow from p alone; each node's
 // statistics are math::light_tree's (power, luminance-weighted centre, reach, sigma axes),
@@ -17,6 +18,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "mappings.glsl"
 #include "extract.glsl"
+#include "lights.glsl"
 
 layout(local_size_x_id = 0, local_size_y = 1, local_size_z = 1) in;
 layout(std430, set = 0, binding = BINDING_PREPARE_STATE) readonly buffer State { uint state[]; };
@@ -72,12 +74,12 @@ uint kept() {
 }
 
 // Quadrature node (a, b)'s place in its texel, in texel units: two Gauss points a cell each
-// way (math::lights::nodes).
-vec2 node_offset(uint a, uint b) {
+// way, `cells` cells a side (math::lights::nodes).
+vec2 node_offset(uint a, uint b, uint cells) {
     float g = 0.5 / sqrt(3.0);
     vec2 cell = vec2(float(a / 2u), float(b / 2u)) + 0.5;
     vec2 side = vec2(a % 2u == 1u ? g : -g, b % 2u == 1u ? g : -g);
-    return (cell + side) / float(pc.cells);
+    return (cell + side) / float(cells);
 }
 
 // Where node n starts.
@@ -110,6 +112,31 @@ void scan() {
     }
 }
 
+// The (2·cells)² quadrature nodes of the texel at `texel` (layer, column, row; centre `dir`,
+// solid angle `omega`) from `at`: each node's world direction and its share of omega by the
+// mapping's footprint weight (math::lights::nodes).
+void write_nodes(uint at, uvec4 texel, vec3 dir, float omega, uint cells) {
+    uint side = 2u * cells;
+    float total = 0.0;
+    for (uint b = 0u; b < side; b++) {
+        for (uint a = 0u; a < side; a++) {
+            vec2 uv = (vec2(texel.yz) + node_offset(a, b, cells)) / vec2(pc.map_size);
+            total += footprint_weight(pc.mapping, uv);
+        }
+    }
+    for (uint b = 0u; b < side; b++) {
+        for (uint a = 0u; a < side; a++) {
+            Coord c;
+            c.layer = texel.x;
+            c.uv = (vec2(texel.yz) + node_offset(a, b, cells)) / vec2(pc.map_size);
+            vec4 node = total > 0.0
+                ? vec4(to_world(coord_to_dir(pc.mapping, c)), footprint_weight(pc.mapping, c.uv) * omega / total)
+                : vec4(dir, omega / float(side * side));
+            prepared[at + b * side + a] = node;
+        }
+    }
+}
+
 // Record i's texel, written at its place in the spatial order.
 void write_texel(uint i, uint n) {
     Record r = records[i];
@@ -129,23 +156,13 @@ void write_texel(uint i, uint n) {
     uint at = place * pc.stride;
     prepared[at] = vec4(dir, omega);
     prepared[at + 1u] = vec4(r.excess_y.rgb, sqrt(omega));
-    uint side = 2u * pc.cells;
-    float total = 0.0;
-    for (uint b = 0u; b < side; b++) {
-        for (uint a = 0u; a < side; a++) {
-            vec2 uv = (vec2(r.texel.yz) + node_offset(a, b)) / vec2(pc.map_size);
-            total += footprint_weight(pc.mapping, uv);
-        }
-    }
-    for (uint b = 0u; b < side; b++) {
-        for (uint a = 0u; a < side; a++) {
-            Coord c;
-            c.layer = r.texel.x;
-            c.uv = (vec2(r.texel.yz) + node_offset(a, b)) / vec2(pc.map_size);
-            vec4 node = total > 0.0
-                ? vec4(to_world(coord_to_dir(pc.mapping, c)), footprint_weight(pc.mapping, c.uv) * omega / total)
-                : vec4(dir, omega / float(side * side));
-            prepared[at + LIGHT_HEADER_VEC4S + b * side + a] = node;
+    write_nodes(at + LIGHT_HEADER_VEC4S, r.texel, dir, omega, pc.cells);
+    // Its coarser quadratures, coarsest first, where the output keeps them (the lights pass
+    // reads them; math::lights::prepare_local).
+    if (pc.coarse_at != 0u) {
+        uint first = pc.coarse_at + place * coarse_offset(pc.cells);
+        for (uint c = 1u; c < pc.cells; c++) {
+            write_nodes(first + coarse_offset(c), r.texel, dir, omega, c);
         }
     }
 }

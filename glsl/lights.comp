@@ -32,12 +32,6 @@ layout(set = 0, binding = BINDING_LIGHTS_DST, rgba32f) uniform image2DArray dst;
 // The push block, generated from src/abi/push.rs.
 PUSH_LightsPush
 
-// Where the quadrature of c cells starts among a texel's coarser ones: Σ (2k)², k < c
-// (math::lights::coarse_offset).
-uint coarse_offset(uint c) {
-    return 2u * (c - 1u) * c * (2u * c - 1u) / 3u;
-}
-
 float kern(float a2, vec3 r, vec3 w) {
     vec3 e = r - w;
     float g = 0.5 * dot(e, e);

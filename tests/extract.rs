@@ -292,16 +292,18 @@ fn gpu_clusters_match_the_host_clusters_on_every_mapping() {
 /// the kept records' (each once) sorted by the spatial key, up to the few pairs float32
 /// rounding may swap where keys are within a cell of the Morton grid (≤ 2 of 39 adjacent
 /// pairs out of order by the float64 key); over that order the host prepares the same
-/// records (`prepare_cells`) and builds `LightTree::implicit`; every float of the texels and
+/// records (`prepare_local`) and builds `LightTree::implicit`; every float of the texels, of
+/// their coarser quadratures (`GpuLights::on_gpu_local`: 1 cell, 4 nodes, after the tree) and
 /// of the tree's nodes, the end node included, agrees within 5e-6 relative to its own size,
 /// floor 1 (measured 3.9e-7: float32 against float64), the nodes' sigma axes compared as the
 /// covariance they stand for (their signs and, for a round node, their directions are a
 /// basis's choice) within 5e-4 of 1e-4 rad² (measured 5.6e-5: differences of nearby
-/// directions in float32).
+/// directions in float32). Room for 16384 texels of 8 cells keeps the coarser quadratures
+/// only where the 215 MB they make fit the device's storage range.
 #[test]
 fn gpu_prepared_lights_match_the_float64_twin_on_every_mapping() {
     use envlight::math::light_tree::{LightTree, TREE_VEC4S};
-    use envlight::math::lights::{gpu_list, prepare_cells, LightTexel};
+    use envlight::math::lights::{gpu_list, prepare_local, LightTexel};
     use envlight::passes::GpuLights;
     let ctx = common::ctx();
     {
@@ -317,7 +319,7 @@ fn gpu_prepared_lights_match_the_float64_twin_on_every_mapping() {
                 max_texels: room as usize,
                 fill: None,
             };
-            let lights = GpuLights::on_gpu(&ctx, room, nodes, 0).unwrap();
+            let lights = GpuLights::on_gpu_local(&ctx, room, nodes, 0).unwrap();
             let (ex, got) = extractor.run_prepared(&map, &opts, f2w, &lights).unwrap();
             let kept = ex.stats.kept;
             assert!(
@@ -370,7 +372,7 @@ fn gpu_prepared_lights_match_the_float64_twin_on_every_mapping() {
             );
             let texels: Vec<LightTexel> = order.iter().map(|&r| texel_of(&ex.lights[r])).collect();
             let tree = LightTree::implicit(
-                prepare_cells(&map, &texels, f2w, cells),
+                prepare_local(&map, &texels, f2w, cells),
                 lights.tree_nodes(),
             );
             let want_texels = gpu_list(&tree.lights);
@@ -418,23 +420,53 @@ fn gpu_prepared_lights_match_the_float64_twin_on_every_mapping() {
                     }
                 }
             }
-            errors.assert_within(5e-6, "GPU-prepared light texels and tree");
+            // Each texel's coarser quadrature (1 cell: 4 nodes), in the texels' order after
+            // everything else.
+            let want_coarse: Vec<[f32; 4]> = tree
+                .lights
+                .iter()
+                .flat_map(|t| t.coarse.iter())
+                .map(|&(d, w)| [d.x as f32, d.y as f32, d.z as f32, w as f32])
+                .collect();
+            let coarse_at = lights.coarse_at() as usize;
+            assert_eq!(want_coarse.len(), 4 * kept as usize);
+            assert_eq!(coarse_at + want_coarse.len(), got.len(), "{mapping:?}");
+            assert!(
+                coarse_at >= at + want_nodes.len(),
+                "{mapping:?}: {coarse_at}"
+            );
+            for (k, (g, w)) in got[coarse_at..].iter().zip(&want_coarse).enumerate() {
+                for c in 0..4 {
+                    errors.rel(g[c], w[c], 1.0, (mapping, "coarse", k, c));
+                }
+            }
+            errors.assert_within(
+                5e-6,
+                "GPU-prepared light texels, coarser quadratures and tree",
+            );
             spread.assert_within(5e-4, "GPU light tree's spread");
         }
+        // 16384 texels of 8 cells (256 nodes, 560 coarser ones) take 215 MB with their coarser
+        // quadratures, 67 MB without: past the device's storage range, the buffer keeps none.
+        let big = GpuLights::on_gpu_local(&ctx, 16384, 256, 0).unwrap();
+        let range = ctx.info().max_storage_buffer_range;
+        assert_eq!(big.coarse_at() == 0, 215_089_184 > range, "range {range}");
+        assert!(big.buffer().size() <= range, "{}", big.buffer().size());
     }
     common::finish(ctx);
 }
 
 /// The GPU's own light texels summed into a cube level through the tree it builds over them
-/// (`Extractor::record_prepare`, then `LightsPass::record`, what `bench dynamic` adds to its
-/// irradiance cube and GGX chain), against the same records one by one
+/// (`Extractor::record_prepare` into `GpuLights::on_gpu_local`, each texel's coarser
+/// quadratures kept, then `LightsPass::record`, what `bench dynamic` adds to its irradiance
+/// cube and GGX chain), against the same records one by one
 /// (`Extractor::record_add`, held to the float64 twin in tests/lights.rs): a lat-long sun and
 /// glow sky (ratio 2, room for 4096 texels of which the extraction keeps far fewer, so the
 /// tree's room runs past its records), its directions turned, the level first cleared to a
 /// grey (each tree node's allowed error is 1% of it) on a 32² cube's level 1; cosine and GGX
 /// α 0.03 and 0.3. The tree's own error (nodes taken whole by their sigma points,
 /// `TREE_BELOW`): worst texel within 5e-3 of the level's largest and relative RMS within 4e-3
-/// (measured 0.4–3.0e-3 and 3.4e-4–2.6e-3, the most at α 0.03, a lobe far narrower than these
+/// (measured 1.6e-4–3.0e-3 and 1.4e-4–2.6e-3, the most at α 0.03, a lobe far narrower than these
 /// 64-wide texels), and apart somewhere (the tree takes nodes whole). Faces 2–4 alone
 /// (`record_faces`, a time slice): those faces equal the whole level's bit for bit, the
 /// others keep the grey; faces past the sixth, or none, are refused by name.
@@ -453,7 +485,7 @@ fn lights_summed_through_the_gpu_tree_match_the_texels_one_by_one() {
         let gpu = GpuEnvMap::upload(&ctx, &map).unwrap();
         let room = 4096;
         let ex = GpuExtraction::new(&ctx, map.mapping, map.width, map.height, room).unwrap();
-        let lights = GpuLights::on_gpu(&ctx, room, 16, 0).unwrap();
+        let lights = GpuLights::on_gpu_local(&ctx, room, 16, 0).unwrap();
         let l00 = Buffer::new(
             &ctx,
             "L00",

@@ -285,7 +285,7 @@ const float SH_BRDF_GL_W[4] = float[4](3.478548451e-1, 6.521451549e-1, 6.5214515
 #define PUSH_ExtractPush layout(push_constant) uniform Push { uvec2 size; uint mapping; uint mode; uint max; float ratio; uint fill; uint grow; } pc;
 #define PUSH_ExtractAddPush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 map_size; uint mapping; uint size; uint kernel; float alpha; float inv_norm; uint layer; } pc;
 #define PUSH_ExtractClustersPush layout(push_constant) uniform Push { vec4[3] file_to_world; uint mode; uint grid; uint at; uint max; } pc;
-#define PUSH_ExtractPreparePush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 map_size; uint mapping; uint cells; uint stride; uint tree_at; uint max; uint mode; uint tree_room; uint[3] pad; } pc;
+#define PUSH_ExtractPreparePush layout(push_constant) uniform Push { vec4[3] file_to_world; uvec2 map_size; uint mapping; uint cells; uint stride; uint tree_at; uint max; uint mode; uint tree_room; uint coarse_at; uint[2] pad; } pc;
 #define PUSH_LightsPush layout(push_constant) uniform Push { uint size; uint count; uint nodes; uint kernel; float alpha; float inv_norm; uint at; uint coarse_at; uint cells; uint tree_at; uint tree_nodes; float budget; uint layer; } pc;
 #define PUSH_ShRotatePush layout(push_constant) uniform Push { uint count; uint lmax; uint method; uint pad; } pc;
 #define PUSH_MipPush layout(push_constant) uniform Push { uint src_size; uint dst_size; uint mode; uint pad; } pc;

@@ -12,6 +12,12 @@ float chain_kernel(float a2, float g) {
     return a2 * x / (2.0 * PI * s * s * (x + sqrt(a2 + (1.0 - a2) * x * x)));
 }
 
+// Where the quadrature of c cells starts among a light texel's coarser ones: Σ (2k)², k < c
+// (math::lights::coarse_offset).
+uint coarse_offset(uint c) {
+    return 2u * (c - 1u) * c * (2u * c - 1u) / 3u;
+}
+
 // The squared scale of a lobe of scale `lobe` at a light texel `e` = axis − centre away:
 // the lobe's own near the axis, TAIL_FRACTION of the chord in the tail (math::lights).
 float light_scale2(float lobe, vec3 e) {

@@ -421,8 +421,11 @@ push_blocks! {
         mode: u32 = "uint",
         /// The tree's room in nodes (the end node's skip).
         tree_room: u32 = "uint",
+        /// Where the texels' coarser quadratures start in the output, in vec4s (0: none
+        /// written): for each texel, in the texels' order, those of 1 … `cells` − 1 cells.
+        coarse_at: u32 = "uint",
         /// Padding.
-        pad: [u32; 3] = "uint[3]",
+        pad: [u32; 2] = "uint[2]",
     }
     /// `glsl/lights.comp`.
     LightsPush {

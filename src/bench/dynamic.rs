@@ -112,8 +112,8 @@ struct Frame {
     sh: Buffer,
     irradiance: GpuEnvMap,
     lights: GpuExtraction,
-    /// The frame's light texels prepared on the GPU for the chain (headers, quadratures
-    /// and the tree over them: `Extractor::record_prepare`).
+    /// The frame's light texels prepared on the GPU for the chain (headers, quadratures,
+    /// the coarser ones too, and the tree over them: `Extractor::record_prepare`).
     prepared: GpuLights,
     dp: GpuEnvMap,
     chain: GpuEnvMap,
@@ -349,7 +349,7 @@ fn frame_resources(
         prepared: {
             let rho = crate::math::lights::largest_rho(mapping, w, h);
             let cells = crate::math::lights::cells_for_rho(rho, level_alpha(1, s.levels));
-            GpuLights::on_gpu(ctx, s.max_lights, 4 * cells * cells, 0)?
+            GpuLights::on_gpu_local(ctx, s.max_lights, 4 * cells * cells, 0)?
         },
         dp: GpuEnvMap::with_mips(
             ctx,
@@ -755,8 +755,9 @@ pub fn dynamic(
          against the map's exact irradiance and exact GGX prefilter (float64): the lights are \
          added through the tree the GPU builds over its records (`Extractor::record_prepare`, \
          `LightsPass`: a node taken whole where it is small next to the kernel's scale there or \
-         its bound error is within 1% of the texel before the lights, `LightTree::sum`), the \
-         residual by SH 2 and by the chain.",
+         its bound error is within 1% of the texel before the lights, a texel by as few of its \
+         quadrature's nodes as the kernel's scale at it asks, its coarser quadratures kept, \
+         `GpuLights::on_gpu_local`; `LightTree::sum`), the residual by SH 2 and by the chain.",
         i = s.irradiance,
         ratio = s.ratio,
         max = s.max_lights,

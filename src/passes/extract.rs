@@ -538,8 +538,10 @@ impl Extractor {
     /// earlier, of a map whose file directions reach the world through `file_to_world`) for
     /// the shade pass's light walk, into `out` (made by [`super::GpuLights::on_gpu`] with room
     /// for `from.max()` texels): the records ordered by a spatial key, each texel's header
-    /// and quadrature of (2·cells)² nodes in that order, and the tree over them
-    /// (`crate::math::light_tree::LightTree::implicit`). The count is read on the GPU; a
+    /// and quadrature of (2·cells)² nodes in that order, the tree over them
+    /// (`crate::math::light_tree::LightTree::implicit`), and where `out` keeps them
+    /// ([`super::GpuLights::on_gpu_local`]) each texel's coarser quadratures
+    /// (`crate::math::lights::prepare_local`'s). The count is read on the GPU; a
     /// scratch buffer of the recorder's holds the sort. Span: "prepare lights (gpu)".
     pub fn record_prepare(
         &self,
@@ -580,7 +582,8 @@ impl Extractor {
             max: from.max,
             mode,
             tree_room: room,
-            pad: [0; 3],
+            coarse_at: out.coarse_at(),
+            pad: [0; 2],
         };
         let binds = [
             (binding::PREPARE_STATE, Bind::Buffer(&from.state)),

@@ -9,8 +9,8 @@ use crate::error::{Error, Result};
 use crate::gpu::{groups_2d, Bind, Buffer, Context, Pipeline, Recorder};
 use crate::math::light_tree::LightTree;
 use crate::math::lights::{
-    cells_for_rho, cluster_list, clusters, clusters_of, gpu_list, largest_light_rho, prepare,
-    prepare_local, CLUSTER_GRID,
+    cells_for_rho, cells_of_nodes, cluster_list, clusters, clusters_of, coarse_offset, gpu_list,
+    largest_light_rho, prepare, prepare_local, CLUSTER_GRID,
 };
 pub use crate::math::lights::{
     Cluster, ExtractOptions, Extraction, LightKernel, LightTexel, PreparedLight,
@@ -165,6 +165,28 @@ impl GpuLights {
     /// resident path's lights, where FIS, split-sum, Phong maps or footprint lookups add the
     /// light texels (and SH or prefiltered irradiance the clusters) of each frame's map.
     pub fn on_gpu(ctx: &Context, room: u32, nodes: u32, cells: u32) -> Result<GpuLights> {
+        Self::on_gpu_with(ctx, room, nodes, cells, false)
+    }
+
+    /// [`GpuLights::on_gpu`] with room for each texel's coarser quadratures too (those of
+    /// 1 … c − 1 cells, `nodes` being (2c)²; `super::Extractor::record_prepare` writes them,
+    /// as `crate::math::lights::prepare_local` does on the host): the lights pass then gives
+    /// each texel only as many nodes as the kernel's scale at it asks, 4 in GGX's tail
+    /// instead of `nodes`. For lights a chain's levels add (`LightsPass`); shade passes
+    /// read the texels' own quadratures alone. Where the coarser quadratures would take the
+    /// buffer past the device's `maxStorageBufferRange`, it is made without them
+    /// ([`GpuLights::coarse_at`] 0): the lights pass's sums are the same, only slower.
+    pub fn on_gpu_local(ctx: &Context, room: u32, nodes: u32, cells: u32) -> Result<GpuLights> {
+        Self::on_gpu_with(ctx, room, nodes, cells, true)
+    }
+
+    fn on_gpu_with(
+        ctx: &Context,
+        room: u32,
+        nodes: u32,
+        cells: u32,
+        coarse: bool,
+    ) -> Result<GpuLights> {
         use crate::abi::lights::{CLUSTER_VEC4S, HEADER_VEC4S, STEP_NODES, TREE_VEC4S};
         if room == 0 {
             return Self::clusters_on_gpu(ctx, cells);
@@ -172,11 +194,29 @@ impl GpuLights {
         let pad = (HEADER_VEC4S + STEP_NODES)
             .saturating_sub(TREE_VEC4S)
             .max(1) as u64;
-        let vec4s = room as u64 * (HEADER_VEC4S + nodes) as u64
+        let before = room as u64 * (HEADER_VEC4S + nodes) as u64
             + cells as u64 * CLUSTER_VEC4S as u64
             + 1
             + Self::tree_room(room) as u64 * TREE_VEC4S as u64
             + pad;
+        // The coarser quadratures only speed the lights pass up: where they would take the
+        // buffer past the device's storage range (a coarse map's largest cells for 16384
+        // texels), the texels keep their own alone.
+        let per_texel = match coarse {
+            true => coarse_offset(cells_of_nodes(nodes)) as u64,
+            false => 0,
+        };
+        let fits = (before + room as u64 * per_texel) * 16 <= ctx.info().max_storage_buffer_range;
+        let per_texel = if fits { per_texel } else { 0 };
+        let coarse_at = match per_texel {
+            0 => 0,
+            _ => u32::try_from(before).map_err(|_| {
+                Error::Invalid(format!(
+                    "lights: {before} vec4s before the coarser quadratures"
+                ))
+            })?,
+        };
+        let vec4s = before + room as u64 * per_texel;
         let (buffer, view) = light_buffer(
             ctx,
             "light texels and clusters",
@@ -190,9 +230,14 @@ impl GpuLights {
             nodes,
             clusters: cells,
             tree_nodes: Self::tree_room(room),
-            coarse_at: 0,
+            coarse_at,
             view,
         })
+    }
+
+    /// Where the texels' coarser quadratures start in the buffer, in vec4s (0: none kept).
+    pub fn coarse_at(&self) -> u32 {
+        self.coarse_at
     }
 
     /// Nodes of the tree the GPU builds over at most `room` texels
@@ -353,7 +398,7 @@ impl LightsPass {
             inv_norm: inv_norm as f32,
             at: 0,
             coarse_at: lights.coarse_at,
-            cells: crate::math::lights::cells_of_nodes(lights.nodes),
+            cells: cells_of_nodes(lights.nodes),
             tree_at: lights.tree_at(),
             tree_nodes: lights.tree_nodes,
             budget: (TREE_BUDGET / inv_norm) as f32,
