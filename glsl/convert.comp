@@ -157,7 +157,11 @@ void main() {
                 wsum += w;
             }
         }
-        if (wsum > 0.0) {
+        // Only disc mappings have texels whose samples may all weigh nothing: on a cube or a
+        // lat-long (every weight positive) the branch below is compiled out, which matters
+        // because llvmpipe runs both sides of a branch, here a second sample_src a texel.
+        bool may_be_empty = DST_MAPPING == MAPPING_DUAL_PARABOLOID || DST_MAPPING == MAPPING_ANGULAR;
+        if (wsum > 0.0 || !may_be_empty) {
             result = Sample(acc / wsum, acc_r / wsum);
         } else {
             // A paraboloid texel whose samples all fall outside its disc holds its own half's
