@@ -298,8 +298,7 @@ fn gpu_clusters_match_the_host_clusters_on_every_mapping() {
 /// floor 1 (measured 3.9e-7: float32 against float64), the nodes' sigma axes compared as the
 /// covariance they stand for (their signs and, for a round node, their directions are a
 /// basis's choice) within 5e-4 of 1e-4 rad² (measured 5.6e-5: differences of nearby
-/// directions in float32). Room for 16384 texels of 8 cells keeps the coarser quadratures
-/// only where the 215 MB they make fit the device's storage range.
+/// directions in float32).
 #[test]
 fn gpu_prepared_lights_match_the_float64_twin_on_every_mapping() {
     use envlight::math::light_tree::{LightTree, TREE_VEC4S};
@@ -446,12 +445,25 @@ fn gpu_prepared_lights_match_the_float64_twin_on_every_mapping() {
             );
             spread.assert_within(5e-4, "GPU light tree's spread");
         }
-        // 16384 texels of 8 cells (256 nodes, 560 coarser ones) take 215 MB with their coarser
-        // quadratures, 67 MB without: past the device's storage range, the buffer keeps none.
+    }
+    common::finish(ctx);
+}
+
+/// Room for 16384 texels of 8 cells (256 nodes, 560 coarser ones) takes 215 MB with the
+/// coarser quadratures, 67 MB without: `GpuLights::on_gpu_local` keeps them only where that
+/// fits the device's storage range, and the buffer never passes it.
+#[test]
+fn coarser_quadratures_are_kept_only_within_the_storage_range() {
+    use envlight::passes::GpuLights;
+    let ctx = common::ctx();
+    {
         let big = GpuLights::on_gpu_local(&ctx, 16384, 256, 0).unwrap();
         let range = ctx.info().max_storage_buffer_range;
         assert_eq!(big.coarse_at() == 0, 215_089_184 > range, "range {range}");
         assert!(big.buffer().size() <= range, "{}", big.buffer().size());
+        let small = GpuLights::on_gpu_local(&ctx, 40, 16, 0).unwrap();
+        assert!(small.coarse_at() > 0);
+        assert_eq!(GpuLights::on_gpu(&ctx, 40, 16, 0).unwrap().coarse_at(), 0);
     }
     common::finish(ctx);
 }
