@@ -159,7 +159,8 @@ void main() {
         }
         // Only disc mappings have texels whose samples may all weigh nothing: on a cube or a
         // lat-long (every weight positive) the branch below is compiled out, which matters
-        // because llvmpipe runs both sides of a branch, here a second sample_src a texel.
+        // because llvmpipe runs both sides of a branch whose condition differs between lanes:
+        // here a second sample_src a texel.
         bool may_be_empty = DST_MAPPING == MAPPING_DUAL_PARABOLOID || DST_MAPPING == MAPPING_ANGULAR;
         if (wsum > 0.0 || !may_be_empty) {
             result = Sample(acc / wsum, acc_r / wsum);
