@@ -256,8 +256,8 @@ const float GLS_W[5] = float[5](1.0, GL8_W[0], GL8_W[1], GL8_W[2], GL8_W[3]);
 
 // The solid angle of a cube texel, or a paraboloid's wholly inside its disc, [lo, hi] of a
 // layer `size` texels a side: gl8_square's integral, by 2 points each way from GL2_MIN_SIDE
-// on. The rule's size is a loop bound: written as a choice between the two rules' calls,
-// llvmpipe took the 8-point rule's time whatever the size.
+// on. The rule's size is the loops' bound, which llvmpipe runs only as far as it is (a
+// select between two calls would run both).
 float square_solid_angle(uint m, uvec2 size, vec2 lo, vec2 hi) {
     bool two = min(size.x, size.y) >= GL2_MIN_SIDE;
     uint n = two ? 2u : 8u, half_n = n / 2u, base = two ? 0u : 1u;
